@@ -1,0 +1,1 @@
+//! Reports: consumers of a finished [`crate::outcome::RunResult`] (filled in by its owner).

@@ -1,0 +1,147 @@
+//! The products the manuals describe, and the protocols they speak.
+//!
+//! Where two products differ, code takes a [`Product`] rather than guessing.
+
+use serde::{Deserialize, Serialize};
+
+/// A field-bus protocol of the manuals.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Protocol {
+    /// EtherCAT with CAN application protocol over EtherCAT (CoE). BU 0620 §2.2.
+    Ethercat,
+    /// EtherNet/IP (CIP). BU 0620 §2.3, BU 2100.
+    Ethernetip,
+    /// Ethernet POWERLINK. BU 0620 §2.4, BU 2200.
+    Powerlink,
+    /// PROFINET IO. BU 0620 §2.5, BU 0590.
+    Profinet,
+    /// NORD system bus (CANopen on CAN). BU 0620 §2.1.
+    Systembus,
+}
+
+impl Protocol {
+    /// All protocols, in the order the manuals list them.
+    pub const ALL: [Protocol; 5] = [
+        Protocol::Ethercat,
+        Protocol::Ethernetip,
+        Protocol::Powerlink,
+        Protocol::Profinet,
+        Protocol::Systembus,
+    ];
+}
+
+/// Product family: the parameter numbering scheme follows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Family {
+    /// SK 550P with the integrated Industrial Ethernet interface: bus parameters P850–P899
+    /// (BU 0620).
+    Integrated,
+    /// Plug-in bus modules SK TU3/TU4/CU4: bus parameters P150–P189 (BU 2100, BU 0590, BU 2200).
+    Module,
+}
+
+/// A bus-interface product the manuals describe.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Product {
+    /// NORDAC PRO SK 550P, integrated interface (BU 0620); protocol chosen with P899.
+    Sk550p,
+    /// SK TU3-EIP technology unit for SK 5xxE (BU 2100).
+    Tu3Eip,
+    /// SK TU4-EIP(-C) technology unit for SK 2xxE (BU 2100).
+    Tu4Eip,
+    /// SK CU4-EIP(-C) customer unit, installed in SK 2xxE / SK 1x0E (BU 2100).
+    Cu4Eip,
+    /// SK TU3-PNT technology unit for SK 5xxE (BU 0590).
+    Tu3Pnt,
+    /// SK TU3-POL technology unit (BU 2200).
+    Tu3Pol,
+    /// SK TU4-POL(-C) technology unit (BU 2200).
+    Tu4Pol,
+    /// SK CU4-POL(-C) customer unit (BU 2200).
+    Cu4Pol,
+}
+
+impl Product {
+    /// Every product, in a stable order.
+    pub const ALL: [Product; 8] = [
+        Product::Sk550p,
+        Product::Tu3Eip,
+        Product::Tu4Eip,
+        Product::Cu4Eip,
+        Product::Tu3Pnt,
+        Product::Tu3Pol,
+        Product::Tu4Pol,
+        Product::Cu4Pol,
+    ];
+
+    /// The product's short name as used by profiles and the CLI (`sk550p`, `tu3-eip`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Product::Sk550p => "sk550p",
+            Product::Tu3Eip => "tu3-eip",
+            Product::Tu4Eip => "tu4-eip",
+            Product::Cu4Eip => "cu4-eip",
+            Product::Tu3Pnt => "tu3-pnt",
+            Product::Tu3Pol => "tu3-pol",
+            Product::Tu4Pol => "tu4-pol",
+            Product::Cu4Pol => "cu4-pol",
+        }
+    }
+
+    /// Parses a short name (`sk550p`, `tu3-eip`, …).
+    pub fn from_name(name: &str) -> Option<Product> {
+        Product::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// The manual that describes the product.
+    pub fn manual(self) -> &'static str {
+        match self {
+            Product::Sk550p => "BU 0620",
+            Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => "BU 2100",
+            Product::Tu3Pnt => "BU 0590",
+            Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => "BU 2200",
+        }
+    }
+
+    /// Integrated interface or plug-in module.
+    pub fn family(self) -> Family {
+        match self {
+            Product::Sk550p => Family::Integrated,
+            _ => Family::Module,
+        }
+    }
+
+    /// The protocols the product speaks. The SK 550P speaks all four Industrial Ethernet
+    /// protocols (selected with P899, BU 0620 §3.3); every product reaches further inverters over
+    /// the NORD system bus.
+    pub fn protocols(self) -> &'static [Protocol] {
+        match self {
+            Product::Sk550p => &[
+                Protocol::Ethercat,
+                Protocol::Ethernetip,
+                Protocol::Powerlink,
+                Protocol::Profinet,
+                Protocol::Systembus,
+            ],
+            Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => {
+                &[Protocol::Ethernetip, Protocol::Systembus]
+            }
+            Product::Tu3Pnt => &[Protocol::Profinet, Protocol::Systembus],
+            Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => {
+                &[Protocol::Powerlink, Protocol::Systembus]
+            }
+        }
+    }
+
+    /// How many inverters the interface can address (FI 1 plus those on the system bus).
+    ///
+    /// BU 0620 §2.1.1: up to 8 inverters on the NORD system bus. The module manuals address
+    /// inverters the same way (BU 2100 classes 101–108, BU 2200 device ids, BU 0590 records
+    /// 101–108), hence 8 for every product.
+    pub fn max_inverters(self) -> u8 {
+        8
+    }
+}
