@@ -5,3 +5,5 @@ pub mod outcome;
 mod report;
 mod model;
 mod notation;
+mod profile;
+mod suite;

@@ -34,6 +34,12 @@ pub(crate) fn registry() -> impl Iterator<Item = &'static ComputeFn> {
         .chain(params::FNS)
 }
 
+impl std::fmt::Debug for ComputeFn {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name)
+    }
+}
+
 /// Looks a function up by name.
 pub(crate) fn find(name: &str) -> Option<&'static ComputeFn> {
     registry().find(|f| f.name == name)

@@ -1,0 +1,214 @@
+//! Loading a suites folder: every `*.yaml` below it, each checked in full.
+//!
+//! A file that does not load is reported with its path, line and what is wrong, and the run
+//! goes on with the files that did: a broken suite is never skipped silently.
+
+use std::collections::HashSet;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use super::case::{case_head, step, Case};
+use super::schema::FileDoc;
+use crate::outcome::Erratum;
+
+/// What a suites folder held.
+#[derive(Debug, Default)]
+pub(crate) struct Loaded {
+    /// Valid cases, in file order (files sorted by path).
+    pub(crate) cases: Vec<Case>,
+    /// Errata recorded by the loaded cases.
+    pub(crate) errata: Vec<Erratum>,
+    /// Files (or cases) that failed to load.
+    pub(crate) errors: Vec<LoadError>,
+    /// Files read.
+    pub(crate) files: usize,
+}
+
+/// A suite problem, placed in its file.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct LoadError {
+    pub(crate) file: PathBuf,
+    /// 1-based line, when known.
+    pub(crate) line: Option<u64>,
+    pub(crate) message: String,
+}
+
+impl fmt::Display for LoadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            Some(l) => write!(f, "{}:{l}: {}", self.file.display(), self.message),
+            None => write!(f, "{}: {}", self.file.display(), self.message),
+        }
+    }
+}
+
+fn yaml_files(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
+    for entry in std::fs::read_dir(dir)? {
+        let path = entry?.path();
+        if path.is_dir() {
+            yaml_files(&path, out)?;
+        } else if matches!(path.extension().and_then(|e| e.to_str()), Some("yaml" | "yml")) {
+            out.push(path);
+        }
+    }
+    Ok(())
+}
+
+/// Loads every suite file below `dir`. Only an unreadable folder is an `Err`.
+pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
+    let mut files = Vec::new();
+    yaml_files(dir, &mut files).map_err(|e| LoadError {
+        file: dir.to_path_buf(),
+        line: None,
+        message: format!("cannot read the suites folder: {e}"),
+    })?;
+    files.sort();
+    let mut loaded = Loaded { files: files.len(), ..Loaded::default() };
+    let mut ids = HashSet::new();
+    for file in files {
+        let rel = file.strip_prefix(dir).unwrap_or(&file).with_extension("");
+        let prefix = rel.to_string_lossy().replace('\\', "/");
+        match std::fs::read_to_string(&file) {
+            Ok(text) => load_text(&file, &prefix, &text, &mut ids, &mut loaded),
+            Err(e) => loaded.errors.push(LoadError { file: file.clone(), line: None, message: format!("cannot read: {e}") }),
+        }
+    }
+    Ok(loaded)
+}
+
+/// Loads one file's text. Cases with errors are dropped and reported; the others load.
+pub(crate) fn load_text(file: &Path, prefix: &str, text: &str, ids: &mut HashSet<String>, loaded: &mut Loaded) {
+    let err = |line: Option<u64>, message: String| LoadError { file: file.to_path_buf(), line, message };
+    let doc: FileDoc = match serde_saphyr::from_str(text) {
+        Ok(d) => d,
+        Err(e) => {
+            let line = e.location().map(|l| l.line());
+            let message = e.to_string().lines().next().unwrap_or("invalid YAML").to_string();
+            loaded.errors.push(err(line, message));
+            return;
+        }
+    };
+    if doc.cases.is_empty() {
+        loaded.errors.push(err(None, "the file has no cases".into()));
+    }
+    for spanned in doc.cases {
+        let line = Some(spanned.defined.line());
+        let case_doc = spanned.value;
+        let id = format!("{prefix}/{}", case_doc.id);
+        if !ids.insert(id.clone()) {
+            loaded.errors.push(err(line, format!("duplicate case id `{}`", case_doc.id)));
+            continue;
+        }
+        let mut case = match case_head(id, &case_doc, &doc.doc, &doc.edition) {
+            Ok(c) => c,
+            Err(m) => {
+                loaded.errors.push(err(line, format!("case `{}`: {m}", case_doc.id)));
+                continue;
+            }
+        };
+        if case_doc.steps.is_empty() {
+            loaded.errors.push(err(line, format!("case `{}` has no steps", case_doc.id)));
+            continue;
+        }
+        let mut ok = true;
+        for (i, s) in case_doc.steps.into_iter().enumerate() {
+            let step_line = Some(s.defined.line());
+            match step(s.value) {
+                Ok(st) => case.steps.push(st),
+                Err(m) => {
+                    loaded.errors.push(err(step_line, format!("case `{}`, step {}: {m}", case_doc.id, i + 1)));
+                    ok = false;
+                }
+            }
+        }
+        if !ok {
+            continue;
+        }
+        for e in case_doc.manual_says.into_vec() {
+            case.errata.push(Erratum {
+                doc: case.manual.doc.clone(),
+                edition: case.manual.edition.clone(),
+                section: case.manual.section.clone(),
+                page: case.manual.page,
+                case: case.id.clone(),
+                printed: e.printed,
+                correct: e.correct,
+                why: e.why,
+            });
+        }
+        loaded.errata.extend(case.errata.iter().cloned());
+        loaded.cases.push(case);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(text: &str) -> Loaded {
+        let mut loaded = Loaded::default();
+        load_text(Path::new("t.yaml"), "x/t", text, &mut HashSet::new(), &mut loaded);
+        loaded
+    }
+
+    const GOOD: &str = r#"
+doc: BU 0620
+edition: "2020-03 en"
+cases:
+  - id: coe-p102
+    title: P102 of FI 3 is 3066h
+    ref: { section: "2.2.7", page: 20 }
+    manual_says: { printed: "a", correct: "b", why: "c" }
+    steps:
+      - wait: 10ms
+        expect: { status: xx31h }
+"#;
+
+    #[test]
+    fn a_good_file_loads_with_its_errata() {
+        let l = load(GOOD);
+        assert!(l.errors.is_empty(), "{:?}", l.errors);
+        assert_eq!(l.cases.len(), 1);
+        assert_eq!(l.cases[0].id, "x/t/coe-p102");
+        assert_eq!(l.cases[0].manual.edition, "2020-03 en");
+        assert_eq!(l.errata[0].printed, "a");
+    }
+
+    #[test]
+    fn unknown_key_names_file_line_and_key() {
+        let l = load(&GOOD.replace("title:", "titel:"));
+        assert_eq!(l.cases.len(), 0);
+        let e = l.errors[0].to_string();
+        assert!(e.starts_with("t.yaml:"), "{e}");
+        assert!(e.contains("titel"), "{e}");
+        assert!(l.errors[0].line.is_some());
+    }
+
+    #[test]
+    fn bad_step_is_placed_on_its_line() {
+        let l = load(&GOOD.replace("wait: 10ms", "wait: 10 parsecs"));
+        assert_eq!(l.errors.len(), 1);
+        assert_eq!(l.errors[0].line, Some(10));
+        assert!(l.errors[0].message.contains("step 1"), "{}", l.errors[0]);
+    }
+
+    #[test]
+    fn two_actions_in_one_step_are_refused() {
+        let l = load(&GOOD.replace("wait: 10ms", "wait: 10ms\n        read: { param: 102 }"));
+        assert!(l.errors[0].message.contains("exactly one action"), "{}", l.errors[0]);
+    }
+
+    #[test]
+    fn out_of_range_values_are_refused_at_load() {
+        let l = load(&GOOD.replace("wait: 10ms", "read: { param: 1000, inverter: 9 }"));
+        assert!(l.errors[0].message.contains("out of range"), "{}", l.errors[0]);
+    }
+
+    #[test]
+    fn duplicate_ids_are_refused() {
+        let twice = GOOD.to_string() + &GOOD[GOOD.find("  - id").unwrap()..];
+        let l = load(&twice);
+        assert_eq!(l.cases.len(), 1);
+        assert!(l.errors[0].message.contains("duplicate"));
+    }
+}
