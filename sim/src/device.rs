@@ -1,1 +1,200 @@
-//! (filled in by its owner)
+//! The simulated bus interface with its inverters, fed link frames (sans-IO).
+//!
+//! One [`Device`] is one product (SK 550P or a TU3/TU4/CU4 module) with FI 1..=n behind it.
+//! Each link frame addresses the interface (data record 100) or one inverter (101..108) and
+//! carries a PPO telegram: the parameter channel (PKW) is served from that unit's parameter
+//! store, the process data (control word, setpoints) drives that inverter's drive model, and
+//! the answer goes back in the same PPO type.
+//!
+//! Parameter orders take a bus cycle to process, as on a real interface: the first cycle that
+//! carries a new order is answered with response label 0 ("no response"), and the order's
+//! answer follows in a later cycle — which is why the manuals require the master to repeat an
+//! order until its answer arrives (BU 0620 §2.5.6).
+
+use proto::nord::pkw::PkwRepr;
+use proto::nord::ppo::{PpoRepr, PpoType};
+use proto::nord::{Inverter, ParamNumber, Product};
+use std::time::Duration;
+
+use crate::drive::{Drive, DriveParams, FaultCode};
+use crate::link::{LinkFrameError, LinkRepr, Unit};
+use crate::pkw_server;
+use crate::store::{ParamStore, Target};
+
+/// How to build a device.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DeviceConfig {
+    /// The product simulated.
+    pub product: Product,
+    /// Inverters behind the interface, 1..=8.
+    pub inverters: u8,
+    /// Bus cycles a parameter order takes before its answer appears (at least 1).
+    pub answer_delay: u32,
+}
+
+impl DeviceConfig {
+    /// The product with its maximum inverter count and a one-cycle answer delay.
+    pub fn new(product: Product) -> Self {
+        DeviceConfig { product, inverters: product.max_inverters(), answer_delay: 1 }
+    }
+}
+
+/// A frame the device cannot answer; a real device drops it, and so does the driver.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum DeviceError {
+    /// The link frame is malformed.
+    #[error(transparent)]
+    Link(#[from] LinkFrameError),
+    /// The PPO telegram is malformed or of a type the device does not speak.
+    #[error("PPO telegram: {0}")]
+    Ppo(String),
+    /// The addressed inverter is not on the system bus.
+    #[error("FI {0} is not on the system bus (the device has {1} inverters)")]
+    NoSuchInverter(u8, u8),
+}
+
+/// A unit's parameter channel: the order being processed and the answer shown.
+#[derive(Debug)]
+struct ParamChannel {
+    store: ParamStore,
+    order: Option<PkwRepr>,
+    due: u32,
+    response: PkwRepr,
+}
+
+impl ParamChannel {
+    fn new(store: ParamStore) -> Self {
+        ParamChannel { store, order: None, due: 0, response: PkwRepr::default() }
+    }
+
+    /// One cycle of the parameter channel: a new order restarts processing and clears the
+    /// answer; a repeated order is answered once processed.
+    fn cycle(&mut self, order: PkwRepr, delay: u32, product: Product, unit: Unit) -> PkwRepr {
+        if order.ak == 0 {
+            self.order = None;
+            self.response = PkwRepr::default();
+        } else if self.order != Some(order) {
+            self.order = Some(order);
+            self.due = delay.max(1);
+            self.response = PkwRepr::default();
+        } else if self.due > 0 {
+            self.due -= 1;
+            if self.due == 0 {
+                let supported = proto::nord::pkw::supported_orders(product, unit_is_first(unit));
+                self.response = pkw_server::handle_order(&mut self.store, supported, &order);
+            }
+        }
+        self.response
+    }
+}
+
+/// FI 1 of the SK 550P (and the interface itself) is the device the bus interface is built
+/// into; inverters reached over the system bus support fewer order labels (BU 0620 §2.5.6.3).
+fn unit_is_first(unit: Unit) -> bool {
+    match unit {
+        Unit::Interface => true,
+        Unit::Inverter(i) => i.get() == 1,
+    }
+}
+
+/// One inverter: its parameters and its drive.
+#[derive(Debug)]
+struct InverterUnit {
+    params: ParamChannel,
+    drive: Drive,
+}
+
+/// Parameters the drive reads, from the inverter's store (parameter set 1).
+struct StoreView<'a>(&'a ParamStore);
+
+impl DriveParams for StoreView<'_> {
+    fn get(&self, number: u16, element: Option<u8>) -> Option<i32> {
+        let number = ParamNumber::new(i64::from(number)).ok()?;
+        let element = element.and_then(|e| proto::nord::ArrayElement::new(i64::from(e)).ok());
+        self.0.read(number, None, element).ok()
+    }
+}
+
+/// The simulated interface and its inverters.
+#[derive(Debug)]
+pub struct Device {
+    config: DeviceConfig,
+    interface: ParamChannel,
+    inverters: Vec<InverterUnit>,
+}
+
+impl Device {
+    /// A device in its power-on state.
+    pub fn new(config: DeviceConfig) -> Device {
+        let count = config.inverters.clamp(1, 8);
+        let inverters = (1..=count)
+            .filter_map(|n| Inverter::new(i64::from(n)).ok())
+            .map(|i| InverterUnit {
+                params: ParamChannel::new(ParamStore::new(config.product, Target::Inverter(i))),
+                drive: Drive::new(),
+            })
+            .collect();
+        Device {
+            config: DeviceConfig { inverters: count, ..config },
+            interface: ParamChannel::new(ParamStore::new(config.product, Target::Interface)),
+            inverters,
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> DeviceConfig {
+        self.config
+    }
+
+    fn inverter_mut(&mut self, i: Inverter) -> Result<&mut InverterUnit, DeviceError> {
+        let count = self.config.inverters;
+        self.inverters.get_mut(usize::from(i.get()) - 1).ok_or(DeviceError::NoSuchInverter(i.get(), count))
+    }
+
+    /// Handles one link frame at time `now`, returning the answer frame.
+    pub fn handle(&mut self, frame: &[u8], now: Duration) -> Result<Vec<u8>, DeviceError> {
+        let link = LinkRepr::parse(frame)?;
+        let ppo_type = PpoType::new(link.ppo_type).map_err(|e| DeviceError::Ppo(e.to_string()))?;
+        let ppo = PpoRepr::parse(&link.payload, ppo_type).map_err(|e| DeviceError::Ppo(e.to_string()))?;
+        let (product, delay) = (self.config.product, self.config.answer_delay);
+        let (pkw, pzd) = match link.unit {
+            Unit::Interface => {
+                let pkw = ppo.pkw.map(|o| self.interface.cycle(o, delay, product, link.unit));
+                (pkw, vec![0; ppo.pzd.len()])
+            }
+            Unit::Inverter(i) => {
+                let unit = self.inverter_mut(i)?;
+                let pkw = ppo.pkw.map(|o| unit.params.cycle(o, delay, product, link.unit));
+                let control = ppo.pzd.first().copied().unwrap_or(0);
+                let setpoints = ppo.pzd.get(1..).unwrap_or_default();
+                let out = unit.drive.cycle(control, setpoints, &StoreView(&unit.params.store), now);
+                let mut pzd = vec![out.status];
+                pzd.extend(out.actuals);
+                pzd.resize(ppo.pzd.len(), 0);
+                (pkw, pzd)
+            }
+        };
+        let answer = PpoRepr { pkw, pzd };
+        Ok(LinkRepr { unit: link.unit, ppo_type: link.ppo_type, payload: answer.emit(ppo_type) }.emit())
+    }
+
+    /// Raises an inverter error, as P700 shows it (`"10.0"`).
+    pub fn inject_fault(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
+        let code: FaultCode = error.parse().map_err(|e| format!("{e}"))?;
+        self.inverter_mut(inverter).map_err(|e| e.to_string())?.drive.inject_fault(code);
+        Ok(())
+    }
+
+    /// The status-machine state of an inverter, as the manual names it.
+    pub fn state_name(&mut self, inverter: Inverter) -> Result<String, String> {
+        Ok(self.inverter_mut(inverter).map_err(|e| e.to_string())?.drive.state().to_string())
+    }
+
+    /// EEPROM writes of an inverter's parameter store (the bus interface's for `None`).
+    pub fn eeprom_writes(&mut self, inverter: Option<Inverter>) -> Result<u64, String> {
+        Ok(match inverter {
+            None => self.interface.store.eeprom_writes(),
+            Some(i) => self.inverter_mut(i).map_err(|e| e.to_string())?.params.store.eeprom_writes(),
+        })
+    }
+}

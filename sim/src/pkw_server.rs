@@ -1,1 +1,144 @@
-//! (filled in by its owner)
+//! Serving parameter orders (PKW) from a parameter store.
+//!
+//! BU 0620 §2.5.6.3: the answer carries the positive response label of the order, or label 7
+//! with the error number in PWE2. PNU is accepted both plain (BU 0590 §4.2.4.4: `70 66 …` for
+//! P102 in the cyclic PKW) and with the +1000 offset (BU 0620 §2.5.6.2, data records); the
+//! answer echoes the order's PNU and IND.
+
+use proto::nord::params::Width;
+use proto::nord::pkw::{ErrorNumber, Ind, OrderLabel, PkwRepr, ResponseLabel};
+use proto::nord::{ArrayElement, ParamNumber, ParamSet};
+
+use crate::store::{AccessError, ParamStore, Persist};
+
+/// The parameter-channel error number of a refused access.
+pub fn error_number(e: AccessError) -> ErrorNumber {
+    match e {
+        AccessError::NoSuchParameter => ErrorNumber::INVALID_PNU,
+        AccessError::ReadOnly => ErrorNumber::NOT_CHANGEABLE,
+        AccessError::OutOfRange => ErrorNumber::LIMIT_EXCEEDED,
+        AccessError::BadSubIndex => ErrorNumber::BAD_SUBINDEX,
+        AccessError::NotAnArray => ErrorNumber::NO_ARRAY,
+        AccessError::OnlyResettable => ErrorNumber::ONLY_RESET,
+    }
+}
+
+fn refuse(order: &PkwRepr, e: ErrorNumber) -> PkwRepr {
+    PkwRepr { ak: ResponseLabel::CANNOT_EXECUTE.0, spm: false, pnu: order.pnu, ind: order.ind, pwe: u32::from(e.0) }
+}
+
+/// Processes one order; `supported` are the order labels this unit accepts.
+pub fn handle_order(store: &mut ParamStore, supported: &[OrderLabel], order: &PkwRepr) -> PkwRepr {
+    match serve(store, supported, order) {
+        Ok(r) => r,
+        Err(e) => refuse(order, e),
+    }
+}
+
+fn serve(store: &mut ParamStore, supported: &[OrderLabel], order: &PkwRepr) -> Result<PkwRepr, ErrorNumber> {
+    let ak = OrderLabel(order.ak);
+    if ak == OrderLabel::NONE {
+        return Ok(PkwRepr::default());
+    }
+    let positive = ak.positive_responses();
+    if positive.is_empty() || !supported.contains(&ak) {
+        return Err(ErrorNumber::INVALID_ORDER);
+    }
+    let plain = if order.pnu >= 1000 { order.pnu - 1000 } else { order.pnu };
+    let number = ParamNumber::new(i64::from(plain)).map_err(|_| ErrorNumber::INVALID_PNU)?;
+    let def = store.def(number).ok_or(ErrorNumber::INVALID_PNU)?;
+    let ind = Ind(order.ind);
+    let set = if def.set_dependent { ParamSet::new(i64::from(ind.set())).ok() } else { None };
+    // Array elements count only with the array labels (§2.5.6.3 "Parameter index IND").
+    let element = if ak.is_array() || ak == OrderLabel::REQUEST_ARRAY_LEN {
+        let index = if def.set_dependent { ind.element() } else { ind.subindex() + 1 };
+        match def.array {
+            Some(_) => Some(ArrayElement::new(i64::from(index)).map_err(|_| ErrorNumber::BAD_SUBINDEX)?),
+            None if index == 1 => None,
+            None => return Err(ErrorNumber::NO_ARRAY),
+        }
+    } else {
+        None
+    };
+    let dword = def.width == Width::Dword;
+    let label = |word: ResponseLabel, dw: ResponseLabel| if dword { dw } else { word };
+    let answer = |ak: ResponseLabel, value: i32| PkwRepr { ak: ak.0, spm: false, pnu: order.pnu, ind: order.ind, pwe: value as u32 };
+    let err = error_number;
+    match ak.0 {
+        9 => Ok(answer(ResponseLabel::ARRAY_LEN, i32::from(store.array_len(number).map_err(err)?))),
+        1 => Ok(answer(label(ResponseLabel::WORD, ResponseLabel::DWORD), store.read(number, set, element).map_err(err)?)),
+        6 => Ok(answer(label(ResponseLabel::ARRAY_WORD, ResponseLabel::ARRAY_DWORD), store.read(number, set, element).map_err(err)?)),
+        _ => {
+            if ak.is_dword() != dword {
+                return Err(ErrorNumber::BAD_TYPE);
+            }
+            let value = order.pwe as i32;
+            let persist = if ak.is_ram_only() { Persist::RamOnly } else { Persist::Eeprom };
+            store.write(number, set, element, value, persist).map_err(err)?;
+            Ok(answer(positive[0], value))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::store::Target;
+    use proto::nord::pkw::supported_orders;
+    use proto::nord::{Inverter, Product};
+
+    fn fi(n: i64) -> ParamStore {
+        ParamStore::new(Product::Sk550p, Target::Inverter(Inverter::new(n).unwrap()))
+    }
+
+    fn order(bytes: [u8; 8]) -> PkwRepr {
+        PkwRepr::parse(&bytes).unwrap()
+    }
+
+    #[test]
+    fn bu0590_p102_set3_example() {
+        // BU 0590 §4.2.4.4: 70 66 02 00 00 00 03 E8 → positive response "array word" = 4.
+        let mut s = fi(1);
+        let r = handle_order(&mut s, supported_orders(Product::Sk550p, true), &order([0x70, 0x66, 0x02, 0, 0, 0, 0x03, 0xE8]));
+        assert_eq!((r.ak, r.pnu, r.ind, r.pwe), (4, 0x66, 0x0200, 1000));
+        let read = handle_order(&mut s, supported_orders(Product::Sk550p, true), &order([0x14, 0x4E, 0x02, 0, 0, 0, 0, 0]));
+        assert_eq!((read.ak, read.value()), (1, 1000));
+    }
+
+    #[test]
+    fn bu0620_p102_write_example_answers_label_1() {
+        // BU 0620 §2.5.6.4: 24 4E 01 00 00 00 00 FA → response label 1 with P102 = 250 in set 2.
+        let mut s = fi(1);
+        let r = handle_order(&mut s, supported_orders(Product::Sk550p, true), &order([0x24, 0x4E, 0x01, 0, 0, 0, 0, 0xFA]));
+        assert_eq!((r.ak, r.pnu, r.value()), (1, 1102, 250));
+    }
+
+    #[test]
+    fn refusals_carry_the_manuals_error_numbers() {
+        let mut s = fi(1);
+        let all = supported_orders(Product::Sk550p, true);
+        let cases = [
+            (PkwRepr { ak: 1, pnu: 1999, ..Default::default() }, 0),
+            (PkwRepr { ak: 2, pnu: 1717, pwe: 1, ..Default::default() }, 1),
+            (PkwRepr { ak: 2, pnu: 1102, pwe: 40000, ..Default::default() }, 2),
+            (PkwRepr { ak: 6, pnu: 1543, ind: 0x0900, ..Default::default() }, 3),
+            (PkwRepr { ak: 9, pnu: 1102, ..Default::default() }, 4),
+            (PkwRepr { ak: 3, pnu: 1102, pwe: 5, ..Default::default() }, 5),
+            (PkwRepr { ak: 4, pnu: 1102, ..Default::default() }, 201),
+        ];
+        for (o, e) in cases {
+            let r = handle_order(&mut s, all, &o);
+            assert_eq!((r.ak, r.pwe), (7, e), "{o:?}");
+        }
+    }
+
+    #[test]
+    fn ram_only_labels_are_refused_on_the_system_bus_and_do_not_touch_eeprom() {
+        let mut fi2 = fi(2);
+        let o = PkwRepr { ak: 14, pnu: 1102, pwe: 300, ..Default::default() };
+        assert_eq!(handle_order(&mut fi2, supported_orders(Product::Sk550p, false), &o).ak, 7);
+        let mut fi1 = fi(1);
+        assert_eq!(handle_order(&mut fi1, supported_orders(Product::Sk550p, true), &o).ak, 1);
+        assert_eq!(fi1.eeprom_writes(), 0);
+    }
+}

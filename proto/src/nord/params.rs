@@ -1,1 +1,196 @@
-//! (filled in by its owner)
+//! The parameter catalogue: the parameters the manuals name, with their metadata.
+//!
+//! Inverter parameters come from the manuals' examples and tables (BU 0620 §4.5 "Frequency
+//! inverter parameter settings", §6.1.2.4, §2.5.6.4); the inverter's own manual (BU 0600) is not
+//! among the specification documents, so where a range or default is not printed in the five
+//! manuals the entry's `source` says which value was assumed. Bus-interface parameters of the
+//! SK 550P come from BU 0620 §4.2–§4.4 (the protocol-independent ones and the IP parameters).
+
+use super::product::{Family, Product};
+use super::types::ParamNumber;
+
+/// Transfer width in the parameter channel (BU 0620 §2.5.6.3 "Parameter value PWE").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Width {
+    /// 16 bits (order labels 2/7/12/14).
+    Word,
+    /// 32 bits (order labels 3/8/11/13): positions.
+    Dword,
+}
+
+/// Whether and how a parameter may be written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Access {
+    /// Setting parameter.
+    ReadWrite,
+    /// Information (display) parameter.
+    ReadOnly,
+    /// Only 0 may be written (resets a counter).
+    ResetOnly,
+}
+
+/// Which unit owns the parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Owner {
+    /// The bus interface (SK 550P: P850–P899, data record 100).
+    Interface,
+    /// Every inverter.
+    Inverter,
+}
+
+/// One parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct ParamDef {
+    /// P-number.
+    pub number: u16,
+    /// Name as the manual prints it.
+    pub name: &'static str,
+    /// Who owns it.
+    pub owner: Owner,
+    /// Products that have it (`None`: the family of [`ParamDef::family`]).
+    pub family: Option<Family>,
+    /// Transfer width.
+    pub width: Width,
+    /// Smallest value (raw, after resolution).
+    pub min: i32,
+    /// Largest value (raw).
+    pub max: i32,
+    /// Factory setting (raw), for every element.
+    pub default: i32,
+    /// Decimal places of the displayed value (0.01 s → 2; BU 0620 §2.5.6.3 99.99 s → 9999).
+    pub decimals: u8,
+    /// Array elements, if an array.
+    pub array: Option<u8>,
+    /// Depends on the parameter set (P1…P4).
+    pub set_dependent: bool,
+    /// Writability.
+    pub access: Access,
+    /// Where the manuals state it, and what was assumed.
+    pub source: &'static str,
+}
+
+const fn inv(number: u16, name: &'static str, min: i32, max: i32, default: i32, decimals: u8, source: &'static str) -> ParamDef {
+    ParamDef {
+        number,
+        name,
+        owner: Owner::Inverter,
+        family: None,
+        width: Width::Word,
+        min,
+        max,
+        default,
+        decimals,
+        array: None,
+        set_dependent: false,
+        access: Access::ReadWrite,
+        source,
+    }
+}
+
+const fn sets(p: ParamDef) -> ParamDef {
+    ParamDef { set_dependent: true, ..p }
+}
+
+const fn array(p: ParamDef, n: u8) -> ParamDef {
+    ParamDef { array: Some(n), ..p }
+}
+
+const fn ro(p: ParamDef) -> ParamDef {
+    ParamDef { access: Access::ReadOnly, ..p }
+}
+
+const fn iface(p: ParamDef) -> ParamDef {
+    ParamDef { owner: Owner::Interface, family: Some(Family::Integrated), ..p }
+}
+
+/// Every catalogued parameter.
+pub const CATALOGUE: &[ParamDef] = &[
+    sets(inv(102, "Acceleration time", 0, 32000, 200, 2, "BU 0620 §2.5.6.4 (P102 set 2 = 2.5 s = 250); range 0–320.00 s and default 2.00 s assumed from BU 0600")),
+    sets(inv(103, "Deceleration time", 0, 32000, 200, 2, "BU 0620 §2.5.6.3 (99.99 s run-up → 9999); range/default assumed from BU 0600")),
+    sets(inv(105, "Maximum frequency", 1, 4000, 500, 1, "BU 0620 §6.1.3 (P105 = 50 Hz); range 0.1–400.0 Hz assumed from BU 0600")),
+    sets(inv(112, "Torque current limit", 25, 400, 400, 0, "BU 0620 §6.1.2.4 (100 % of currents); range 25–400 % assumed")),
+    sets(array(inv(400, "Function setpoint inputs", 0, 80, 0, 0, "BU 0620 §2.3.5 (array depending on parameter sets); range assumed"), 9)),
+    array(inv(465, "Fixed frequency array", -4000, 4000, 0, 1, "BU 0620 §2.3.5 (array, not set-dependent); range assumed"), 31),
+    inv(509, "Control word source", 0, 10, 0, 0, "BU 0620 §4.5: 8 = Ethernet (FI 1), 6 = CANopen (further FIs)"),
+    inv(510, "Setpoint source", 0, 10, 0, 0, "BU 0620 §4.5: 8 = Ethernet, 6 = CANopen"),
+    array(inv(513, "Telegram timeout time", -1, 3200, 0, 1, "BU 0620 §4.5: [-03] CANopen, [-04] Ethernet, factory Off (0)"), 4),
+    inv(514, "CAN baud rate", 0, 7, 5, 0, "BU 0620 §4.5: 5 = 250 kBaud"),
+    array(inv(515, "CAN address", 0, 255, 32, 0, "BU 0620 §4.5: [-01] system bus address 32 (further FIs 34, 36, …)"), 3),
+    array(inv(543, "Actual bus value", 0, 60, 1, 0, "BU 0620 §6.1.2.4/§6.1.3: [-01]..[-05], 1 = actual frequency"), 5),
+    array(inv(546, "Function bus setpoint", 0, 60, 1, 0, "BU 0620 §6.1.2.4/§6.1.3: [-01]..[-05], 1 = setpoint frequency"), 5),
+    inv(560, "Save in EEPROM", 0, 1, 1, 0, "BU 0620 §2.5.6 (RAM-only saving via P560); 1 = save assumed default"),
+    ro(array(inv(700, "Present operating status", 0, 0xFFFF, 0, 0, "BU 0620 §5.3: [-01] present error (10.3 shown as 103)"), 4)),
+    ro(inv(717, "Current speed", -32768, 32767, 0, 0, "BU 0620 §2.5.6.4: read example, 1020 (03FCh)")),
+    ro(array(inv(740, "PZD bus in", 0, 0xFFFF, 0, 0, "BU 0620 §4.5: control word and setpoints as received"), 6)),
+    ro(array(inv(741, "PZD bus out", 0, 0xFFFF, 0, 0, "BU 0620 §4.5: status word and actual values as sent"), 6)),
+    iface(array(inv(850, "IP address", 0, 255, 0, 0, "BU 0620 §4.2.2: [-01]..[-04], factory 192.168.1.100"), 4)),
+    iface(array(inv(851, "IP sub-net mask", 0, 255, 0, 0, "BU 0620 §4.2.2: factory 255.255.255.0"), 4)),
+    iface(array(inv(852, "IP Gateway", 0, 255, 0, 0, "BU 0620 §4.2.2: factory 0.0.0.0"), 4)),
+    iface(inv(853, "Right TCP Ethernet", 0, 3, 0, 0, "BU 0620 §4.2.2: 0…3, factory 0")),
+    iface(ro(inv(870, "Present bus protocol", 0, 4, 0, 0, "BU 0620 §4.3: display 0…4"))),
+    iface(ro(inv(872, "Bus status", 0, 0xFFFF, 0, 0, "BU 0620 §4.3: bit 0 module ready … bits 8–15 FI 1..8 online"))),
+    iface(ro(array(inv(873, "Process data bus In", 0, 0xFFFF, 0, 0, "BU 0620 §4.3: [-01] control word, [-02]..[-06] setpoints to FI 1"), 6))),
+    iface(ro(array(inv(874, "Process data bus Out", 0, 0xFFFF, 0, 0, "BU 0620 §4.3: [-01] status word, [-02]..[-06] actual values of FI 1"), 6))),
+    iface(ro(array(inv(879, "PPO Type", 0, 255, 3, 0, "BU 0620 §4.4.3: [-01]..[-08] FI 1..8; 3 = empty slot, 6 PPO3, 7 PPO4, 8 PPO6, 9 PPO1, 10 PPO2"), 8))),
+    iface(inv(899, "Changing the bus protocol", 0, 4, 0, 0, "BU 0620 §4.2: 0…4, factory 0")),
+];
+
+/// Factory settings of array elements that differ from `default` (BU 0620 §4.2.2 IP factory
+/// settings; §4.5 CAN addresses). Indexed by (number, element 1-based).
+pub fn element_default(def: &ParamDef, element: u8) -> i32 {
+    match (def.number, element) {
+        (850, 1) => 192,
+        (850, 2) => 168,
+        (850, 3) => 1,
+        (850, 4) => 100,
+        (851, 1..=3) => 255,
+        _ => def.default,
+    }
+}
+
+/// The parameter `number` of a unit of `product`.
+pub fn lookup(product: Product, owner: Owner, number: ParamNumber) -> Option<&'static ParamDef> {
+    CATALOGUE.iter().find(|d| {
+        d.number == number.get() && d.owner == owner && d.family.is_none_or(|f| f == product.family())
+    })
+}
+
+/// A product's catalogue for one owner.
+pub fn of(product: Product, owner: Owner) -> impl Iterator<Item = &'static ParamDef> {
+    CATALOGUE.iter().filter(move |d| d.owner == owner && d.family.is_none_or(|f| f == product.family()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(n: i64) -> ParamNumber {
+        ParamNumber::new(n).unwrap()
+    }
+
+    #[test]
+    fn p102_has_resolution_0_01_and_four_sets() {
+        let d = lookup(Product::Sk550p, Owner::Inverter, p(102)).unwrap();
+        assert_eq!((d.decimals, d.set_dependent, d.width), (2, true, Width::Word));
+        // BU 0620 §2.5.6.3: 99.99 s is transferred as 9999: inside the range.
+        assert!((d.min..=d.max).contains(&9999));
+    }
+
+    #[test]
+    fn interface_parameters_belong_to_the_sk550p() {
+        assert!(lookup(Product::Sk550p, Owner::Interface, p(872)).is_some());
+        assert!(lookup(Product::Tu3Pnt, Owner::Interface, p(872)).is_none());
+        assert_eq!(element_default(lookup(Product::Sk550p, Owner::Interface, p(850)).unwrap(), 4), 100);
+    }
+
+    #[test]
+    fn catalogue_is_consistent() {
+        for d in CATALOGUE {
+            assert!(d.min <= d.default && d.default <= d.max, "P{} default outside range", d.number);
+            assert!(d.number <= 999 && !d.source.is_empty());
+        }
+    }
+}
