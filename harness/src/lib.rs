@@ -3,7 +3,18 @@
 pub mod cli;
 pub mod outcome;
 mod report;
+mod binding;
+mod cli_tools;
 mod model;
 mod notation;
 mod profile;
+mod runner;
 mod suite;
+
+/// Runs every suite below `suites` against the embedded simulator under every built-in profile
+/// (the default job, without writing reports). Used by the bench.
+pub fn run_embedded(suites: &std::path::Path) -> Result<outcome::RunResult, String> {
+    let loaded = suite::load_dir(suites).map_err(|e| e.to_string())?;
+    let opts = runner::RunOptions { profiles: profile::Profile::all(), filter: None, retries: 250 };
+    Ok(runner::run(&loaded, &opts, &mut binding::embedded::EmbeddedFactory))
+}

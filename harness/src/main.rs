@@ -1,1 +1,5 @@
-fn main() { std::process::exit(harness::cli::main()) }
+//! The `harness` binary: see `harness --help`.
+
+fn main() {
+    std::process::exit(harness::cli::main())
+}

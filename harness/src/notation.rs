@@ -160,7 +160,8 @@ impl fmt::Display for Mismatch {
     }
 }
 
-const OPERATORS: [&str; 6] = ["one_of", "range", "mask", "contains", "not", "value"];
+/// Keys that make a map an operator; `value` is one only beside `mask`, else a field name.
+const OPERATORS: [&str; 5] = ["one_of", "range", "mask", "contains", "not"];
 
 impl Matcher {
     /// Parses an expectation. The error says what is wrong, for the loader to place.
@@ -226,7 +227,7 @@ impl Matcher {
             only("not", 1)?;
             return Ok(Matcher::Not(Box::new(Matcher::parse(v)?)));
         }
-        Err("`value` goes with `mask`".into())
+        Err("unknown operator".into())
     }
 
     /// Checks `actual` against the expectation.
@@ -383,6 +384,7 @@ mod tests {
     #[case(json!({"status": "xx31h", "actuals": [0, "2000h"]}), json!({"status": 0x0B31, "actuals": [0, 0x2000], "extra": 1}), true)]
     #[case(json!({"status": "xx31h"}), json!({"actuals": []}), false)]
     #[case(json!({"error": null}), json!({"value": 3}), true)]
+    #[case(json!({"value": 1000, "ak": 1}), json!({"value": 1000, "ak": 1}), true)]
     #[case(json!(50.0), json!(50.0), true)]
     fn matching(#[case] expect: Value, #[case] actual: Value, #[case] ok: bool) {
         let m = Matcher::parse(&expect).unwrap();

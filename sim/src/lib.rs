@@ -8,7 +8,6 @@
 pub mod clock;
 pub mod device;
 pub mod drive;
-pub mod interface;
 pub mod link;
 pub mod pkw_server;
 pub mod store;

@@ -59,6 +59,23 @@ pub(crate) struct OrderSpec {
     pub(crate) dword: Option<bool>,
 }
 
+impl OrderSpec {
+    /// `P102 set 3 [-02] FI 5`, or `P850 interface`.
+    pub(crate) fn describe(&self) -> String {
+        let mut s = self.number.to_string();
+        if let Some(set) = self.set {
+            s += &format!(" set {}", set.get());
+        }
+        if let Some(e) = self.element {
+            s += &format!(" [-{:02}]", e.get());
+        }
+        match self.target {
+            Target::Interface => s + " interface",
+            Target::Inverter(i) => format!("{s} {i}"),
+        }
+    }
+}
+
 /// What a step does.
 #[derive(Debug)]
 pub(crate) enum Action {

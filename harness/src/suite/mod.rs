@@ -4,5 +4,5 @@ mod case;
 mod load;
 mod schema;
 
-pub(crate) use case::{Action, Case, OrderSpec, Step, Target};
+pub(crate) use case::{Action, Case, OrderSpec, Run, Step, Target};
 pub(crate) use load::{load_dir, Loaded};

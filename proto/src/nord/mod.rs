@@ -12,8 +12,6 @@
 pub mod addr;
 pub mod control;
 pub mod errors;
-pub mod led;
-pub mod nmt;
 pub mod params;
 pub mod pkw;
 pub mod ppo;

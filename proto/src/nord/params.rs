@@ -138,8 +138,8 @@ pub const CATALOGUE: &[ParamDef] = &[
     iface(inv(899, "Changing the bus protocol", 0, 4, 0, 0, "BU 0620 §4.2: 0…4, factory 0")),
 ];
 
-/// Factory settings of array elements that differ from `default` (BU 0620 §4.2.2 IP factory
-/// settings; §4.5 CAN addresses). Indexed by (number, element 1-based).
+/// Factory setting of one array element (BU 0620 §4.2.2 IP factory settings; §6.1.3 bus
+/// setpoint/actual value functions), `default` where the manuals give no per-element value.
 pub fn element_default(def: &ParamDef, element: u8) -> i32 {
     match (def.number, element) {
         (850, 1) => 192,
@@ -147,6 +147,8 @@ pub fn element_default(def: &ParamDef, element: u8) -> i32 {
         (850, 3) => 1,
         (850, 4) => 100,
         (851, 1..=3) => 255,
+        // Only the first setpoint and actual value carry a function from the factory (§6.1.3).
+        (543 | 546, 2..) => 0,
         _ => def.default,
     }
 }

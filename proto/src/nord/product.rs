@@ -138,10 +138,14 @@ impl Product {
 
     /// How many inverters the interface can address (FI 1 plus those on the system bus).
     ///
-    /// BU 0620 §2.1.1: up to 8 inverters on the NORD system bus. The module manuals address
-    /// inverters the same way (BU 2100 classes 101–108, BU 2200 device ids, BU 0590 records
-    /// 101–108), hence 8 for every product.
+    /// BU 0620 §2.1.1: up to 8 on the SK 550P's system bus. BU 2100 §6: classes 105–108 (FI 5..8)
+    /// "only bus interface SK TU3-EIP", so TU4/CU4-EIP reach 4. BU 2200 §6: SDO device ids for
+    /// FU1..FU4. BU 0590 §4.2.2.1: data record 101 is "the frequency inverter" — one.
     pub fn max_inverters(self) -> u8 {
-        8
+        match self {
+            Product::Sk550p | Product::Tu3Eip => 8,
+            Product::Tu4Eip | Product::Cu4Eip | Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => 4,
+            Product::Tu3Pnt => 1,
+        }
     }
 }

@@ -1,1 +1,107 @@
-//! (filled in by its owner)
+//! Configuration rules the manuals state: PROFINET device names.
+//!
+//! BU 0620 §3.8.1 (p. 71) and P854 (§4.2.4, p. 83) give the same conventions with different
+//! maximum lengths: 127 characters in §3.8.1, 240 in P854. PROFINET (IEC 61158-6-10, DNS rules)
+//! allows 240 characters, in labels of at most 63; the harness takes 240 and records 127 as an
+//! erratum (suites/bu0620/rules-device-name.yaml).
+
+/// Longest device name (P854; §3.8.1 prints 127).
+pub const DEVICE_NAME_MAX: usize = 240;
+/// Longest label between two dots or hyphens.
+pub const LABEL_MAX: usize = 63;
+
+/// Why a device name is refused, one variant per rule.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum NameError {
+    /// Empty.
+    #[error("the device name is empty")]
+    Empty,
+    /// Over 240 characters.
+    #[error("the device name has {0} characters, at most 240 are allowed")]
+    TooLong(usize),
+    /// A label over 63 characters.
+    #[error("`{0}` is longer than 63 characters between two hyphens or full stops")]
+    LabelTooLong(String),
+    /// A character other than a–z, 0–9, '-', '.'.
+    #[error("`{0}` is not allowed (only a…z, 0…9, '-' and '.')")]
+    BadCharacter(char),
+    /// Starts or ends with a hyphen.
+    #[error("the device name must not begin or end with a hyphen")]
+    HyphenAtEnd,
+    /// Starts or ends with a digit.
+    #[error("the device name must not begin or end with a number")]
+    DigitAtEnd,
+    /// Looks like an IP address.
+    #[error("the device name must not have the format n.n.n.n")]
+    IpFormat,
+    /// Starts with port-nnn.
+    #[error("the device name must not start with port-nnn")]
+    PortPrefix,
+}
+
+/// Checks a PROFINET device name against every rule of §3.8.1 / P854.
+pub fn validate_device_name(name: &str) -> Result<(), NameError> {
+    if name.is_empty() {
+        return Err(NameError::Empty);
+    }
+    let count = name.chars().count();
+    if count > DEVICE_NAME_MAX {
+        return Err(NameError::TooLong(count));
+    }
+    if let Some(c) = name.chars().find(|c| !(c.is_ascii_lowercase() || c.is_ascii_digit() || *c == '-' || *c == '.')) {
+        return Err(NameError::BadCharacter(c));
+    }
+    if let Some(l) = name.split(['.', '-']).find(|l| l.len() > LABEL_MAX) {
+        return Err(NameError::LabelTooLong(l.to_string()));
+    }
+    if name.starts_with('-') || name.ends_with('-') {
+        return Err(NameError::HyphenAtEnd);
+    }
+    let digit = |c: Option<char>| c.is_some_and(|c| c.is_ascii_digit());
+    if digit(name.chars().next()) || digit(name.chars().last()) {
+        return Err(NameError::DigitAtEnd);
+    }
+    let parts: Vec<&str> = name.split('.').collect();
+    if parts.len() == 4 && parts.iter().all(|p| !p.is_empty() && p.chars().all(|c| c.is_ascii_digit())) {
+        return Err(NameError::IpFormat);
+    }
+    if let Some(rest) = name.strip_prefix("port-") {
+        if rest.len() >= 3 && rest.chars().take(3).all(|c| c.is_ascii_digit()) {
+            return Err(NameError::PortPrefix);
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rstest::rstest;
+
+    #[rstest]
+    #[case("sk550p-conveyor.line-a", Ok(()))]
+    #[case("", Err(NameError::Empty))]
+    #[case("Drive", Err(NameError::BadCharacter('D')))]
+    #[case("drive_1a", Err(NameError::BadCharacter('_')))]
+    #[case("-drive", Err(NameError::HyphenAtEnd))]
+    #[case("1drive", Err(NameError::DigitAtEnd))]
+    #[case("drive1", Err(NameError::DigitAtEnd))]
+    #[case("port-123x", Err(NameError::PortPrefix))]
+    fn names(#[case] name: &str, #[case] want: Result<(), NameError>) {
+        assert_eq!(validate_device_name(name), want);
+    }
+
+    #[test]
+    fn lengths() {
+        let label = "a".repeat(63);
+        let ok = [label.as_str(); 3].join(".");
+        assert_eq!(validate_device_name(&ok), Ok(()));
+        assert!(matches!(validate_device_name(&"a".repeat(64)), Err(NameError::LabelTooLong(_))));
+        let sixty = "a".repeat(60);
+        let long = [sixty.as_str(); 4].join(".");
+        assert_eq!(long.len(), 243);
+        assert_eq!(validate_device_name(&long), Err(NameError::TooLong(243)));
+        // 127 < n ≤ 240 is allowed (§3.8.1 prints 127: erratum).
+        assert_eq!(validate_device_name(&[sixty.as_str(); 3].join(".")), Ok(()));
+    }
+}

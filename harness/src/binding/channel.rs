@@ -1,0 +1,262 @@
+//! The harness side of the NORD parameter channel and process data, over any [`Dut`].
+//!
+//! Sans-IO above the DUT: every bus cycle sends one link frame (data record + PPO telegram,
+//! see `sim::link`) and reads the answer. A parameter order is repeated every cycle until the
+//! answer carries it (BU 0620 §2.5.6: "A parameter order must be repeated until the inverter
+//! responds with the corresponding response telegram"), bounded by `retries`; process data
+//! keeps the last control word and setpoints of each inverter running.
+
+use proto::nord::pkw::{Ind, OrderLabel, PkwRepr};
+use proto::nord::ppo::{PpoRepr, PpoType};
+use proto::nord::{Inverter, Product};
+use serde_json::{json, Value};
+use sim::link::{LinkRepr, Unit};
+
+use super::Dut;
+use crate::outcome::{Exchange, Verdict};
+use crate::runner::{cycles_for, hex};
+use crate::suite::{Action, OrderSpec, Target};
+
+/// Why a DUT step produced no observation.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum StepError {
+    /// Nothing came back: the DUT is silent or hung.
+    #[error("no answer from the DUT within {cycles} bus cycles")]
+    Silent {
+        /// Cycles waited.
+        cycles: u32,
+    },
+    /// Answers came, but never the one the order asked for.
+    #[error("the DUT did not answer the order within {cycles} bus cycles (last answer: {last})")]
+    Unanswered {
+        /// Cycles waited.
+        cycles: u32,
+        /// The last answer, decoded.
+        last: String,
+    },
+    /// The DUT answered with bytes that break the protocol.
+    #[error("malformed answer from the DUT: {0}")]
+    Protocol(String),
+    /// The DUT (simulator) refused a harness request (`inject`, `observe`).
+    #[error("the DUT refused: {0}")]
+    Refused(String),
+    /// The suite asked for something impossible.
+    #[error("suite error: {0}")]
+    Suite(String),
+}
+
+impl StepError {
+    /// The verdict this error stands for.
+    pub(crate) fn verdict(&self) -> Verdict {
+        match self {
+            StepError::Unanswered { .. } | StepError::Protocol(_) => Verdict::Fail,
+            StepError::Silent { .. } | StepError::Refused(_) | StepError::Suite(_) => Verdict::Error,
+        }
+    }
+}
+
+/// Process data kept running per unit.
+#[derive(Debug, Clone, Default)]
+struct Process {
+    control: u16,
+    setpoints: Vec<u16>,
+}
+
+/// The harness's end of the link.
+pub(crate) struct Channel {
+    dut: Box<dyn Dut>,
+    product: Product,
+    retries: u32,
+    ppo: PpoType,
+    process: [Process; 9],
+    exchanges: Vec<Exchange>,
+}
+
+impl Channel {
+    /// A channel using the product's largest PPO type with a parameter channel.
+    pub(crate) fn new(dut: Box<dyn Dut>, product: Product, retries: u32) -> Channel {
+        Channel { dut, product, retries: retries.max(1), ppo: PpoType::TYPE_2, process: Default::default(), exchanges: Vec::new() }
+    }
+
+    /// The exchanges since the last call.
+    pub(crate) fn take_exchanges(&mut self) -> Vec<Exchange> {
+        std::mem::take(&mut self.exchanges)
+    }
+
+    /// Runs one DUT step.
+    pub(crate) fn perform(&mut self, action: &Action) -> Result<Value, StepError> {
+        match action {
+            Action::Compute { .. } => Err(StepError::Suite("compute is not a DUT step".into())),
+            Action::Read(o) | Action::Write(o) => {
+                let order = self.order_for(o)?;
+                let unit = unit(o.target);
+                let resp = self.param_order(unit, order)?;
+                Ok(pkw_result(&resp))
+            }
+            Action::Pkw { inverter, bytes } => {
+                let order = PkwRepr::parse(bytes).map_err(|e| StepError::Suite(format!("pkw bytes: {e}")))?;
+                let resp = self.param_order(Unit::Inverter(*inverter), order)?;
+                let mut v = pkw_result(&resp);
+                v["bytes"] = json!(hex(&resp.emit_bytes()));
+                v["pwe"] = json!(resp.pwe);
+                Ok(v)
+            }
+            Action::Process { inverter, control, setpoints, run } => {
+                let p = &mut self.process[usize::from(inverter.get())];
+                p.control = *control;
+                p.setpoints = setpoints.clone();
+                let cycles = match run {
+                    crate::suite::Run::Cycles(n) => *n,
+                    crate::suite::Run::For(d) => cycles_for(*d, self.dut.cycle_time()),
+                };
+                self.run_process(*inverter, cycles)
+            }
+            Action::Wait(d) => {
+                let cycles = cycles_for(*d, self.dut.cycle_time());
+                self.run_process(Inverter::new(1).expect("FI 1 exists"), cycles)
+            }
+            Action::Inject { inverter, error } => {
+                self.dut.inject(*inverter, error).map_err(StepError::Refused)?;
+                Ok(json!({}))
+            }
+            Action::Observe { what, inverter } => self.dut.observe(what, *inverter).map_err(StepError::Refused),
+        }
+    }
+
+    /// Builds the order for a `read`/`write` step (BU 0620 §2.5.6.3: array elements need the
+    /// array labels 6/7/8 (11/12 RAM only); RAM-only writes use 11–14).
+    fn order_for(&self, o: &OrderSpec) -> Result<PkwRepr, StepError> {
+        let dword = o.dword.unwrap_or_else(|| o.value.is_some_and(|v| v > i64::from(u16::MAX) || v < i64::from(i16::MIN)));
+        let ak = match (o.ak, o.value, o.element.is_some()) {
+            (Some(ak), _, _) => OrderLabel(ak),
+            (None, None, false) => OrderLabel::REQUEST_VALUE,
+            (None, None, true) => OrderLabel::REQUEST_ARRAY_VALUE,
+            (None, Some(_), array) => OrderLabel::change(array, dword, !o.eeprom),
+        };
+        let value = o.value.unwrap_or(0);
+        let pwe = i32::try_from(value).map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
+        Ok(PkwRepr {
+            ak: ak.0,
+            spm: false,
+            pnu: proto::nord::addr::profinet_pnu(self.product, o.number),
+            ind: Ind::for_address(o.set, o.element).raw(),
+            pwe: pwe as u32,
+        })
+    }
+
+    /// One bus cycle for `unit` with `pkw` and the unit's process data.
+    fn exchange(&mut self, unit: Unit, pkw: Option<PkwRepr>) -> Result<Option<PpoRepr>, StepError> {
+        let process = match unit {
+            Unit::Interface => Process::default(),
+            Unit::Inverter(i) => self.process[usize::from(i.get())].clone(),
+        };
+        let mut pzd = vec![process.control];
+        pzd.extend(process.setpoints.iter().copied());
+        pzd.resize(self.ppo.pzd_words(), 0);
+        let ppo = PpoRepr { pkw: self.ppo.has_pkw().then(|| pkw.unwrap_or_default()), pzd };
+        let frame = LinkRepr { unit, ppo_type: self.ppo.0, payload: ppo.emit(self.ppo) };
+        let sent_bytes = frame.emit();
+        let answer = self.dut.cycle(&sent_bytes);
+        let decoded = answer.as_deref().map(|b| decode_answer(b, unit, self.ppo));
+        self.exchanges.push(Exchange {
+            sent_hex: hex(&sent_bytes),
+            sent: ppo.describe_order(),
+            received_hex: answer.as_deref().map(hex).unwrap_or_default(),
+            received: match &decoded {
+                None => "(nothing)".into(),
+                Some(Ok(r)) => r.describe_response(),
+                Some(Err(e)) => format!("malformed: {e}"),
+            },
+        });
+        decoded.transpose().map_err(StepError::Protocol)
+    }
+
+    /// Repeats `order` every cycle until the answer carries its PNU with a response label.
+    fn param_order(&mut self, unit: Unit, order: PkwRepr) -> Result<PkwRepr, StepError> {
+        if !self.ppo.has_pkw() {
+            return Err(StepError::Suite(format!("PPO type {} has no parameter channel", self.ppo.0)));
+        }
+        let mut last = None;
+        for _ in 0..self.retries {
+            if let Some(ppo) = self.exchange(unit, Some(order))? {
+                if let Some(resp) = ppo.pkw {
+                    if resp.ak != 0 && resp.pnu == order.pnu {
+                        return Ok(resp);
+                    }
+                    last = Some(resp);
+                }
+            }
+        }
+        Err(match last {
+            None => StepError::Silent { cycles: self.retries },
+            Some(r) => StepError::Unanswered { cycles: self.retries, last: r.describe_response() },
+        })
+    }
+
+    /// Runs process data for `cycles`, returning the inverter's last status and actual values.
+    fn run_process(&mut self, inverter: Inverter, cycles: u32) -> Result<Value, StepError> {
+        let mut last = None;
+        let first = self.exchanges.len();
+        for _ in 0..cycles {
+            if let Some(ppo) = self.exchange(Unit::Inverter(inverter), None)? {
+                last = Some(ppo);
+            }
+        }
+        self.compact(first);
+        let ppo = last.ok_or(StepError::Silent { cycles })?;
+        let status = ppo.pzd.first().copied().ok_or_else(|| StepError::Protocol("answer without a status word".into()))?;
+        Ok(json!({ "status": status, "actuals": ppo.pzd.get(1..).unwrap_or_default() }))
+    }
+}
+
+impl Channel {
+    /// Keeps the first two and the last exchange of a long process-data run, so transcripts
+    /// stay readable; the note says how many cycles were left out.
+    fn compact(&mut self, from: usize) {
+        const KEEP_HEAD: usize = 2;
+        let n = self.exchanges.len().saturating_sub(from);
+        if n <= KEEP_HEAD + 2 {
+            return;
+        }
+        let skipped = n - KEEP_HEAD - 1;
+        let last = self.exchanges.pop();
+        self.exchanges.truncate(from + KEEP_HEAD);
+        self.exchanges.push(Exchange {
+            sent_hex: String::new(),
+            sent: format!("… {skipped} more cycles with the same process data …"),
+            received_hex: String::new(),
+            received: String::new(),
+        });
+        self.exchanges.extend(last);
+    }
+}
+
+fn unit(target: Target) -> Unit {
+    match target {
+        Target::Interface => Unit::Interface,
+        Target::Inverter(i) => Unit::Inverter(i),
+    }
+}
+
+fn decode_answer(bytes: &[u8], sent_to: Unit, ppo: PpoType) -> Result<PpoRepr, String> {
+    let frame = LinkRepr::parse(bytes).map_err(|e| e.to_string())?;
+    if frame.unit != sent_to {
+        return Err(format!("answer from data record {}, the order went to {}", frame.unit.record(), sent_to.record()));
+    }
+    if frame.ppo_type != ppo.0 {
+        return Err(format!("answer is PPO type {}, the order was PPO type {}", frame.ppo_type, ppo.0));
+    }
+    PpoRepr::parse(&frame.payload, ppo).map_err(|e| e.to_string())
+}
+
+/// A parameter response as step result fields (suites/README.md).
+fn pkw_result(r: &PkwRepr) -> Value {
+    let error = (r.ak == 7).then_some(r.pwe & 0xFFFF);
+    json!({
+        "ak": r.ak,
+        "pnu": r.pnu,
+        "ind": r.ind,
+        "value": r.pwe as i32,
+        "error": error,
+    })
+}

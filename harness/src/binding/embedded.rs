@@ -1,0 +1,85 @@
+//! The embedded DUT: the simulator in-process, behind an in-memory link that carries the same
+//! bytes a bus would, on a virtual clock (deterministic, instant).
+
+use serde_json::{json, Value};
+use sim::clock::{Clock, VirtualClock};
+use sim::device::{Device, DeviceConfig};
+use sim::link::{mem_pair, MemEnd};
+use std::time::Duration;
+
+use super::Dut;
+use crate::profile::{Capability, Profile};
+use crate::runner::DutFactory;
+use proto::nord::Inverter;
+
+/// Bus cycle of the embedded link: 4 ms, a common PROFINET send clock multiple.
+const CYCLE: Duration = Duration::from_millis(4);
+
+/// Opens a fresh simulator per case.
+pub(crate) struct EmbeddedFactory;
+
+impl DutFactory for EmbeddedFactory {
+    fn describe(&self) -> String {
+        "embedded simulator".into()
+    }
+
+    fn open(&mut self, profile: &Profile) -> Result<Box<dyn Dut>, String> {
+        let config = DeviceConfig { inverters: profile.inverters, ..DeviceConfig::new(profile.product) };
+        Ok(Box::new(Embedded::new(Device::new(config))))
+    }
+}
+
+/// The simulator and both ends of its link.
+struct Embedded {
+    device: Device,
+    clock: VirtualClock,
+    harness_end: MemEnd,
+    device_end: MemEnd,
+}
+
+impl Embedded {
+    fn new(device: Device) -> Self {
+        let (harness_end, device_end) = mem_pair();
+        Embedded { device, clock: VirtualClock::new(), harness_end, device_end }
+    }
+}
+
+impl Dut for Embedded {
+    fn describe(&self) -> String {
+        format!("embedded simulator ({}, {} inverters)", self.device.config().product.name(), self.device.config().inverters)
+    }
+
+    fn capabilities(&self) -> &[Capability] {
+        &Capability::ALL
+    }
+
+    fn cycle_time(&self) -> Duration {
+        CYCLE
+    }
+
+    fn cycle(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+        self.harness_end.send(frame.to_vec());
+        // The device side of the link: answer every frame; drop what it cannot answer, as a
+        // real device drops a malformed frame.
+        while let Some(f) = self.device_end.recv() {
+            if let Ok(answer) = self.device.handle(&f, self.clock.now()) {
+                self.device_end.send(answer);
+            }
+        }
+        self.clock.advance(CYCLE);
+        self.harness_end.recv()
+    }
+
+    fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
+        self.device.inject_fault(inverter, error)
+    }
+
+    fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, String> {
+        match what {
+            "state" => Ok(json!({ "state": self.device.state_name(inverter)? })),
+            "eeprom-writes" => Ok(json!({ "count": self.device.eeprom_writes(Some(inverter))? })),
+            "interface-eeprom-writes" => Ok(json!({ "count": self.device.eeprom_writes(None)? })),
+            other => Err(format!("cannot observe `{other}` (state, eeprom-writes, interface-eeprom-writes)")),
+        }
+    }
+}

@@ -1,0 +1,30 @@
+//! Bindings: how the harness reaches a DUT.
+//!
+//! A [`Dut`] moves link frames (real bytes) one bus cycle at a time; [`channel::Channel`] holds
+//! the protocol logic above it (parameter orders repeated until answered, process data), so the
+//! same logic drives the embedded simulator and any other DUT.
+
+pub(crate) mod channel;
+pub(crate) mod embedded;
+
+use serde_json::Value;
+use std::time::Duration;
+
+use crate::profile::Capability;
+use proto::nord::Inverter;
+
+/// A device under test, one bus cycle at a time.
+pub(crate) trait Dut {
+    /// What is being tested, for reports.
+    fn describe(&self) -> String;
+    /// What this DUT lets the harness do.
+    fn capabilities(&self) -> &[Capability];
+    /// The bus cycle time.
+    fn cycle_time(&self) -> Duration;
+    /// One bus cycle: sends `frame`, returns the frame the DUT answered within the cycle, if any.
+    fn cycle(&mut self, frame: &[u8]) -> Option<Vec<u8>>;
+    /// Raises an inverter error (`fault-injection`).
+    fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), String>;
+    /// Shows internal state (`observe`).
+    fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, String>;
+}

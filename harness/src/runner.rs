@@ -1,0 +1,200 @@
+//! The runner: every loaded case under every profile, step by step, into a [`RunResult`].
+//!
+//! Verdicts follow one rule set: a mismatch with the expectation is a failure (inconclusive in
+//! a setup step); a malformed answer from the DUT is a failure; a silent DUT or a broken link
+//! is an error; a suite bug (bad compute arguments) is an error; a case whose profile or
+//! capabilities do not fit is not applicable, with the reason.
+
+use serde_json::{json, Value};
+use std::time::{Duration, Instant};
+
+use crate::binding::channel::{Channel, StepError};
+use crate::binding::Dut;
+use crate::model::{Args, ComputeError, Ctx};
+use crate::outcome::{CaseResult, RunResult, StepResult, Verdict};
+use crate::profile::Profile;
+use crate::suite::{Action, Case, Loaded, Step};
+
+/// How to run.
+pub(crate) struct RunOptions {
+    /// Profiles to run every case under.
+    pub(crate) profiles: Vec<Profile>,
+    /// Only cases whose id contains this text.
+    pub(crate) filter: Option<String>,
+    /// Bus cycles a parameter order is repeated before the step times out.
+    pub(crate) retries: u32,
+}
+
+/// Opens a DUT for a profile; called once per case so every case starts from a known state.
+pub(crate) trait DutFactory {
+    /// What is tested, for reports.
+    fn describe(&self) -> String;
+    /// A DUT in its power-on state for the profile.
+    fn open(&mut self, profile: &Profile) -> Result<Box<dyn Dut>, String>;
+}
+
+/// Runs the loaded suites.
+pub(crate) fn run(loaded: &Loaded, opts: &RunOptions, factory: &mut dyn DutFactory) -> RunResult {
+    let start = Instant::now();
+    let mut cases = Vec::new();
+    for profile in &opts.profiles {
+        for case in &loaded.cases {
+            if opts.filter.as_deref().is_some_and(|f| !case.id.contains(f)) {
+                continue;
+            }
+            cases.push(run_case(case, profile, opts, factory));
+        }
+    }
+    RunResult {
+        dut: factory.describe(),
+        profiles: opts.profiles.iter().map(|p| p.name().to_string()).collect(),
+        cases,
+        errata: loaded.errata.clone(),
+        load_errors: loaded.errors.iter().map(|e| e.to_string()).collect(),
+        duration: start.elapsed(),
+    }
+}
+
+fn result(case: &Case, profile: &Profile, verdict: Verdict, message: String, steps: Vec<StepResult>, start: Instant) -> CaseResult {
+    CaseResult {
+        id: case.id.clone(),
+        title: case.title.clone(),
+        profile: profile.name().to_string(),
+        manual: case.manual.clone(),
+        verdict,
+        message,
+        steps,
+        duration: start.elapsed(),
+    }
+}
+
+/// Why a case does not apply to a profile, if it does not.
+fn not_applicable(case: &Case, profile: &Profile, dut: Option<&dyn Dut>) -> Option<String> {
+    if let Some(products) = &case.products {
+        if !products.contains(&profile.product) {
+            let names: Vec<&str> = products.iter().map(|p| p.name()).collect();
+            return Some(format!("the statement is about {}, this run is {}", names.join(", "), profile.name()));
+        }
+    }
+    let dut = dut?;
+    let needed = case.requires.iter().copied().chain(case.steps.iter().filter_map(|s| s.action.needs()));
+    for cap in needed {
+        if !dut.capabilities().contains(&cap) {
+            return Some(format!("needs `{cap}`, which {} does not offer", dut.describe()));
+        }
+    }
+    None
+}
+
+fn needs_dut(case: &Case) -> bool {
+    !case.requires.is_empty() || case.steps.iter().any(|s| s.action.needs().is_some())
+}
+
+fn run_case(case: &Case, profile: &Profile, opts: &RunOptions, factory: &mut dyn DutFactory) -> CaseResult {
+    let start = Instant::now();
+    if let Some(why) = not_applicable(case, profile, None) {
+        return result(case, profile, Verdict::NotApplicable, why, Vec::new(), start);
+    }
+    let mut channel = if needs_dut(case) {
+        match factory.open(profile) {
+            Ok(dut) => {
+                if let Some(why) = not_applicable(case, profile, Some(dut.as_ref())) {
+                    return result(case, profile, Verdict::NotApplicable, why, Vec::new(), start);
+                }
+                Some(Channel::new(dut, profile.product, opts.retries))
+            }
+            Err(e) => return result(case, profile, Verdict::Error, format!("cannot open the DUT: {e}"), Vec::new(), start),
+        }
+    } else {
+        None
+    };
+    let mut steps = Vec::new();
+    for step in &case.steps {
+        let r = run_step(step, profile, channel.as_mut());
+        let verdict = r.verdict;
+        let message = r.message.clone();
+        steps.push(r);
+        if verdict != Verdict::Pass {
+            return result(case, profile, verdict, message, steps, start);
+        }
+    }
+    result(case, profile, Verdict::Pass, String::new(), steps, start)
+}
+
+/// The step as one line, for reports.
+fn describe(action: &Action) -> String {
+    match action {
+        Action::Compute { func, args, product } => {
+            let p = product.map(|p| format!(" [{}]", p.name())).unwrap_or_default();
+            format!("compute {}{p} {}", func.name, Value::Object(args.clone()))
+        }
+        Action::Read(o) => format!("read {}", o.describe()),
+        Action::Write(o) => format!("write {} = {}", o.describe(), o.value.unwrap_or_default()),
+        Action::Pkw { inverter, bytes } => format!("pkw {inverter}: {}", hex(bytes)),
+        Action::Process { inverter, control, setpoints, run } => {
+            let sp: Vec<String> = setpoints.iter().map(|s| format!("{s:04X}h")).collect();
+            format!("process {inverter}: control {control:04X}h setpoints [{}] {run:?}", sp.join(", "))
+        }
+        Action::Wait(d) => format!("wait {d:?}"),
+        Action::Inject { inverter, error } => format!("inject {inverter}: error {error}"),
+        Action::Observe { what, inverter } => format!("observe {inverter}: {what}"),
+    }
+}
+
+/// Bytes as `"70 66 02 00"`.
+pub(crate) fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02X}")).collect::<Vec<_>>().join(" ")
+}
+
+fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Channel>) -> StepResult {
+    let line = describe(&step.action);
+    let (outcome, exchanges) = match (&step.action, channel) {
+        (Action::Compute { func, args, product }, _) => {
+            let ctx = Ctx { product: product.unwrap_or(profile.product) };
+            let out = match (func.run)(&ctx, &Args(args.clone())) {
+                Ok(v) => Ok(v),
+                Err(ComputeError::Refused(m)) => Ok(json!({ "error": m })),
+                Err(e @ ComputeError::BadArg { .. }) => Err(StepError::Suite(e.to_string())),
+            };
+            (out, Vec::new())
+        }
+        (action, Some(ch)) => {
+            let out = ch.perform(action);
+            (out, ch.take_exchanges())
+        }
+        (_, None) => (Err(StepError::Suite("a DUT step without a DUT".into())), Vec::new()),
+    };
+    let (verdict, observed, message) = match outcome {
+        Err(e) => (e.verdict(), Value::Null, e.to_string()),
+        Ok(observed) => {
+            let judged = match &step.expect {
+                Some(m) => m.check(&observed).map_err(|e| e.to_string()),
+                None => implicit_expectation(&step.action, &observed),
+            };
+            match judged {
+                Ok(()) => (Verdict::Pass, observed, String::new()),
+                Err(m) if step.setup => (Verdict::Inconclusive, observed, format!("setup step failed: {m}")),
+                Err(m) => (Verdict::Fail, observed, m),
+            }
+        }
+    };
+    StepResult { step: line, verdict, observed, message, exchanges }
+}
+
+/// A parameter order without `expect:` must be answered positively (BU 0620 §2.5.6.3: response
+/// label 7 = order cannot be executed).
+fn implicit_expectation(action: &Action, observed: &Value) -> Result<(), String> {
+    match action {
+        Action::Read(_) | Action::Write(_) if observed.get("ak").and_then(Value::as_i64) == Some(7) => Err(format!(
+            "the DUT refused the order: response label 7, error {}",
+            observed.get("error").cloned().unwrap_or(Value::Null)
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Virtual duration as bus cycles (at least one).
+pub(crate) fn cycles_for(d: Duration, cycle: Duration) -> u32 {
+    let n = d.as_nanos().div_ceil(cycle.as_nanos().max(1));
+    u32::try_from(n).unwrap_or(u32::MAX).max(1)
+}
