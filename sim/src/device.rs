@@ -168,6 +168,17 @@ impl Device {
                 let control = ppo.pzd.first().copied().unwrap_or(0);
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
                 let out = unit.drive.cycle(control, setpoints, &StoreView(&unit.params.store), now);
+                // Information parameters mirror the process data and the present error
+                // (BU 0620 §4.5: P740 PZD bus in, P741 PZD bus out, P700 [-01] present error).
+                let store = &mut unit.params.store;
+                for (i, w) in ppo.pzd.iter().enumerate() {
+                    store.set_info(740, i as u8 + 1, i32::from(*w));
+                }
+                store.set_info(741, 1, i32::from(out.status));
+                for (i, w) in out.actuals.iter().enumerate() {
+                    store.set_info(741, i as u8 + 2, i32::from(*w));
+                }
+                store.set_info(700, 1, unit.drive.fault().map_or(0, |f| i32::from(f.p700())));
                 let mut pzd = vec![out.status];
                 pzd.extend(out.actuals);
                 pzd.resize(ppo.pzd.len(), 0);

@@ -77,21 +77,4 @@ impl Args {
             Some(other) => Err(Self::bad(name, format!("expected true/false, got {other}"))),
         }
     }
-
-    /// A list of integers in the manuals' notation.
-    pub(crate) fn int_list(&self, name: &str) -> Result<Vec<i64>, ComputeError> {
-        match self.0.get(name) {
-            Some(Value::Array(items)) => items
-                .iter()
-                .map(|v| notation::int_of(v).map_err(|why| Self::bad(name, why)))
-                .collect(),
-            Some(other) => Err(Self::bad(name, format!("expected a list, got {other}"))),
-            None => Err(Self::bad(name, "missing")),
-        }
-    }
-
-    /// The raw value, for functions that take structured input.
-    pub(crate) fn raw(&self, name: &str) -> Option<&Value> {
-        self.0.get(name)
-    }
 }
