@@ -184,8 +184,9 @@ impl Drive {
         let (_, base) = self.state.status_pattern();
         let mut s = base;
         if !matches!(self.state, State::ReadyForSwitchOn | State::SwitchedOn | State::OperationEnabled | State::EmergencyStopActive) {
-            // Bits 4 and 5 are X in these states: they show the commands present (§6.1.2.2).
-            s |= u16::from(control.bit(1)) << 4 | u16::from(control.bit(2)) << 5;
+            // Bits 4 and 5 are X in these states: they show the commands present (§6.1.2.2) in
+            // the last control word the inverter evaluated (bit 10 set).
+            s |= u16::from(self.previous.bit(1)) << 4 | u16::from(self.previous.bit(2)) << 5;
         }
         let reached = (self.frequency - goal).abs() < 1e-6;
         s |= u16::from(reached) << 8;
