@@ -46,7 +46,7 @@ fn default_run_passes_every_applicable_case_and_writes_reports() {
     let never: Vec<_> = all_ids.difference(&passed_somewhere).collect();
     assert!(never.is_empty(), "cases that ran under no profile: {never:?}");
     assert!(!run["errata"].as_array().unwrap().is_empty(), "the suites record the manuals' errata");
-    insta::assert_yaml_snapshot!("verdict_counts", counts);
+    insta::assert_json_snapshot!("verdict_counts", counts);
     let _ = std::fs::remove_dir_all(&out);
 }
 
