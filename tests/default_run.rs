@@ -20,21 +20,48 @@ fn default_run_passes_every_applicable_case_and_writes_reports() {
     let _ = std::fs::remove_dir_all(&out);
     let o = harness(&["run", "--out", out.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&o.stdout);
-    assert_eq!(o.status.code(), Some(0), "default run failed:\n{stdout}\n{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "default run failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 
-    let run: Value = serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    let run: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
     assert!(out.join("junit.xml").is_file());
     assert!(out.join("summary.md").is_file());
-    assert_eq!(run["load_errors"].as_array().map(Vec::len), Some(0), "{}", run["load_errors"]);
+    assert_eq!(
+        run["load_errors"].as_array().map(Vec::len),
+        Some(0),
+        "{}",
+        run["load_errors"]
+    );
 
     let cases = run["cases"].as_array().expect("cases");
     let mut counts: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
     for c in cases {
-        assert!(c["id"].is_string() && c["manual"]["doc"].is_string() && c["manual"]["section"].is_string());
+        assert!(
+            c["id"].is_string()
+                && c["manual"]["doc"].is_string()
+                && c["manual"]["section"].is_string()
+        );
         let profile = c["profile"].as_str().unwrap().to_string();
-        *counts.entry(profile).or_default().entry(c["verdict"].as_str().unwrap().to_string()).or_default() += 1;
-        assert_ne!(c["verdict"], "error", "case {} ended in error: {}", c["id"], c["message"]);
-        assert_ne!(c["verdict"], "fail", "case {} failed: {}", c["id"], c["message"]);
+        *counts
+            .entry(profile)
+            .or_default()
+            .entry(c["verdict"].as_str().unwrap().to_string())
+            .or_default() += 1;
+        assert_ne!(
+            c["verdict"], "error",
+            "case {} ended in error: {}",
+            c["id"], c["message"]
+        );
+        assert_ne!(
+            c["verdict"], "fail",
+            "case {} failed: {}",
+            c["id"], c["message"]
+        );
     }
     // Every built-in profile ran, and every case ran (passed) under at least one of them.
     assert_eq!(counts.len(), 8, "{counts:?}");
@@ -42,10 +69,17 @@ fn default_run_passes_every_applicable_case_and_writes_reports() {
     for c in cases.iter().filter(|c| c["verdict"] == "pass") {
         passed_somewhere.insert(c["id"].as_str().unwrap());
     }
-    let all_ids: std::collections::HashSet<&str> = cases.iter().map(|c| c["id"].as_str().unwrap()).collect();
+    let all_ids: std::collections::HashSet<&str> =
+        cases.iter().map(|c| c["id"].as_str().unwrap()).collect();
     let never: Vec<_> = all_ids.difference(&passed_somewhere).collect();
-    assert!(never.is_empty(), "cases that ran under no profile: {never:?}");
-    assert!(!run["errata"].as_array().unwrap().is_empty(), "the suites record the manuals' errata");
+    assert!(
+        never.is_empty(),
+        "cases that ran under no profile: {never:?}"
+    );
+    assert!(
+        !run["errata"].as_array().unwrap().is_empty(),
+        "the suites record the manuals' errata"
+    );
     insta::assert_json_snapshot!("verdict_counts", counts);
     let _ = std::fs::remove_dir_all(&out);
 }
@@ -60,20 +94,41 @@ fn a_broken_suite_file_is_reported_with_file_and_line_and_exits_2() {
         "doc: BU 0620\nedition: \"2020-03 en\"\ncases:\n  - id: x\n    title: t\n    ref: { section: \"2.2.7\", page: 20 }\n    steps:\n      - wait: soon\n",
     )
     .unwrap();
-    let o = harness(&["run", "--suites", dir.to_str().unwrap(), "--out", out.to_str().unwrap(), "--profile", "sk550p"]);
+    let o = harness(&[
+        "run",
+        "--suites",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--profile",
+        "sk550p",
+    ]);
     assert_eq!(o.status.code(), Some(2));
-    let run: Value = serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    let run: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
     let err = run["load_errors"][0].as_str().unwrap();
-    assert!(err.contains("broken.yaml:8:") && err.contains("soon"), "{err}");
+    assert!(
+        err.contains("broken.yaml:8:") && err.contains("soon"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn cli_bad_input_is_one_line_naming_the_problem() {
     for (args, needle) in [
-        (vec!["addr", "P102", "--inverter", "9"], "inverter 9 is out of range"),
-        (vec!["addr", "P1000"], "parameter number 1000 is out of range"),
-        (vec!["decode", "pkw", "70", "66", "zz"], "`zz` is not a hex byte"),
+        (
+            vec!["addr", "P102", "--inverter", "9"],
+            "inverter 9 is out of range",
+        ),
+        (
+            vec!["addr", "P1000"],
+            "parameter number 1000 is out of range",
+        ),
+        (
+            vec!["decode", "pkw", "70", "66", "zz"],
+            "`zz` is not a hex byte",
+        ),
         (vec!["decode", "status", "12345h"], "does not fit 16 bits"),
         (vec!["run", "--profile", "sk999"], "unknown profile `sk999`"),
     ] {
@@ -92,7 +147,12 @@ fn decode_and_addr_speak_the_manuals_terms() {
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v.is_object());
     let o = harness(&["addr", "P102", "--inverter", "3", "--json"]);
-    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let text = String::from_utf8_lossy(&o.stdout);
     // BU 0620 §2.2.7: P102 on FI 3 is CoE index 2000h + 1000h + 66h = 3066h (12390).
     assert!(text.contains("12390"), "{text}");

@@ -21,7 +21,11 @@ pub const EXIT_FAIL: i32 = 1;
 pub const EXIT_USAGE: i32 = 2;
 
 #[derive(Parser, Debug)]
-#[command(name = "harness", version, about = "Conformance and HIL test harness for NORD bus interfaces")]
+#[command(
+    name = "harness",
+    version,
+    about = "Conformance and HIL test harness for NORD bus interfaces"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
@@ -99,12 +103,21 @@ pub fn main() -> i32 {
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
-            let code = if e.use_stderr() { EXIT_USAGE } else { EXIT_PASS };
+            let code = if e.use_stderr() {
+                EXIT_USAGE
+            } else {
+                EXIT_PASS
+            };
             let _ = e.print();
             return code;
         }
     };
-    let outcome = match cli.command.unwrap_or(Command::Run(RunArgs { out: "reports".into(), retries: 250, snapshot_dir: "vectors/snapshots".into(), ..RunArgs::default() })) {
+    let outcome = match cli.command.unwrap_or(Command::Run(RunArgs {
+        out: "reports".into(),
+        retries: 250,
+        snapshot_dir: "vectors/snapshots".into(),
+        ..RunArgs::default()
+    })) {
         Command::Run(a) => run(a),
         Command::List(a) => list(a),
         Command::Addr(a) => crate::cli_tools::addr(a),
@@ -123,15 +136,25 @@ fn run(a: RunArgs) -> Result<i32, String> {
     let profiles = if a.profiles.is_empty() {
         Profile::all()
     } else {
-        a.profiles.iter().map(|n| Profile::by_name(n)).collect::<Result<_, _>>()?
+        a.profiles
+            .iter()
+            .map(|n| Profile::by_name(n))
+            .collect::<Result<_, _>>()?
     };
     let profiles: Vec<Profile> = profiles
         .into_iter()
-        .map(|p| Profile { inverters: a.inverters.unwrap_or(p.inverters), ..p })
+        .map(|p| Profile {
+            inverters: a.inverters.unwrap_or(p.inverters),
+            ..p
+        })
         .collect();
     let dir = suites_dir(a.suites);
     let loaded = suite::load_dir(&dir).map_err(|e| e.to_string())?;
-    let opts = RunOptions { profiles, filter: a.filter, retries: a.retries };
+    let opts = RunOptions {
+        profiles,
+        filter: a.filter,
+        retries: a.retries,
+    };
     let mut run = runner::run(&loaded, &opts, &mut EmbeddedFactory);
     let mode = if a.accept {
         SnapshotMode::Accept(a.snapshot_dir)
@@ -172,12 +195,22 @@ fn list(a: ListArgs) -> Result<i32, String> {
             .unwrap_or_else(|| "all".into());
         println!(
             "{:<64} {} {} §{} p.{} [{}]  {}",
-            c.id, c.manual.doc, c.manual.edition, c.manual.section, c.manual.page, profiles, c.title
+            c.id,
+            c.manual.doc,
+            c.manual.edition,
+            c.manual.section,
+            c.manual.page,
+            profiles,
+            c.title
         );
     }
     for e in &loaded.errors {
         eprintln!("{e}");
     }
     println!("{} cases in {} files", loaded.cases.len(), loaded.files);
-    Ok(if loaded.errors.is_empty() { EXIT_PASS } else { EXIT_USAGE })
+    Ok(if loaded.errors.is_empty() {
+        EXIT_PASS
+    } else {
+        EXIT_USAGE
+    })
 }

@@ -78,17 +78,29 @@ fn word(text: &str) -> Result<u16, String> {
 
 /// Runs `harness addr`.
 pub(crate) fn addr(a: AddrArgs) -> Result<i32, String> {
-    let product = Product::from_name(&a.profile).ok_or_else(|| crate::profile::Profile::by_name(&a.profile).unwrap_err())?;
+    let product = Product::from_name(&a.profile)
+        .ok_or_else(|| crate::profile::Profile::by_name(&a.profile).unwrap_err())?;
     let p = a.param.strip_prefix(['P', 'p']).unwrap_or(&a.param);
     let address = ParamAddress {
         inverter: Inverter::new(number("inverter", &a.inverter)?).map_err(|e| e.to_string())?,
         number: ParamNumber::new(number("parameter", p)?).map_err(|e| e.to_string())?,
-        set: a.set.map(|s| number("set", &s).and_then(|v| ParamSet::new(v).map_err(|e| e.to_string()))).transpose()?,
-        element: a.index.map(|s| number("index", &s).and_then(|v| ArrayElement::new(v).map_err(|e| e.to_string()))).transpose()?,
+        set: a
+            .set
+            .map(|s| number("set", &s).and_then(|v| ParamSet::new(v).map_err(|e| e.to_string())))
+            .transpose()?,
+        element: a
+            .index
+            .map(|s| {
+                number("index", &s).and_then(|v| ArrayElement::new(v).map_err(|e| e.to_string()))
+            })
+            .transpose()?,
     };
     let all = addr::all(product, address).map_err(|e| e.to_string())?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&all).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&all).map_err(|e| e.to_string())?
+        );
     } else {
         print!("{all}");
     }
@@ -100,25 +112,44 @@ pub(crate) fn decode(a: DecodeArgs) -> Result<i32, String> {
     let (text, value) = match a.what {
         DecodeWhat::Status { word: w } => {
             let s = StatusWord(word(&w)?);
-            (s.describe(), serde_json::to_value(s.fields()).map_err(|e| e.to_string())?)
+            (
+                s.describe(),
+                serde_json::to_value(s.fields()).map_err(|e| e.to_string())?,
+            )
         }
         DecodeWhat::Control { word: w } => {
             let c = ControlWord(word(&w)?);
-            (c.describe(), serde_json::to_value(c.fields()).map_err(|e| e.to_string())?)
+            (
+                c.describe(),
+                serde_json::to_value(c.fields()).map_err(|e| e.to_string())?,
+            )
         }
         DecodeWhat::Pkw { bytes, response } => {
             let joined = bytes.join(" ");
             let raw: Vec<u8> = joined
                 .split_whitespace()
-                .map(|t| u8::from_str_radix(t.trim_end_matches(['h', 'H']), 16).map_err(|_| format!("pkw: `{t}` is not a hex byte")))
+                .map(|t| {
+                    u8::from_str_radix(t.trim_end_matches(['h', 'H']), 16)
+                        .map_err(|_| format!("pkw: `{t}` is not a hex byte"))
+                })
                 .collect::<Result<_, _>>()?;
             let r = PkwRepr::parse(&raw).map_err(|e| format!("pkw: {e}"))?;
-            let text = if response { r.describe_response() } else { r.describe_order() };
-            (text.clone(), json!({ "ak": r.ak, "spm": r.spm, "pnu": r.pnu, "ind": r.ind, "pwe": r.pwe, "meaning": text }))
+            let text = if response {
+                r.describe_response()
+            } else {
+                r.describe_order()
+            };
+            (
+                text.clone(),
+                json!({ "ak": r.ak, "spm": r.spm, "pnu": r.pnu, "ind": r.ind, "pwe": r.pwe, "meaning": text }),
+            )
         }
     };
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?
+        );
     } else {
         println!("{text}");
     }

@@ -1,13 +1,13 @@
 //! The tester side: suites, bindings, runner, reports and the `harness` CLI.
 
-pub mod cli;
-pub mod outcome;
-mod report;
 mod binding;
+pub mod cli;
 mod cli_tools;
 mod model;
 mod notation;
+pub mod outcome;
 mod profile;
+mod report;
 mod runner;
 mod suite;
 
@@ -15,6 +15,14 @@ mod suite;
 /// (the default job, without writing reports). Used by the bench.
 pub fn run_embedded(suites: &std::path::Path) -> Result<outcome::RunResult, String> {
     let loaded = suite::load_dir(suites).map_err(|e| e.to_string())?;
-    let opts = runner::RunOptions { profiles: profile::Profile::all(), filter: None, retries: 250 };
-    Ok(runner::run(&loaded, &opts, &mut binding::embedded::EmbeddedFactory))
+    let opts = runner::RunOptions {
+        profiles: profile::Profile::all(),
+        filter: None,
+        retries: 250,
+    };
+    Ok(runner::run(
+        &loaded,
+        &opts,
+        &mut binding::embedded::EmbeddedFactory,
+    ))
 }

@@ -12,10 +12,14 @@ use std::fmt;
 /// `0B31h`, `101b`).
 pub(crate) fn int_of(v: &Value) -> Result<i64, String> {
     match v {
-        Value::Number(n) => n.as_i64().ok_or_else(|| format!("{n} is not a whole number")),
+        Value::Number(n) => n
+            .as_i64()
+            .ok_or_else(|| format!("{n} is not a whole number")),
         Value::String(s) => match parse_scalar(s) {
             Scalar::Int(i) => Ok(i),
-            _ => Err(format!("`{s}` is not a number (write 1000, 0B31h or 1011b)")),
+            _ => Err(format!(
+                "`{s}` is not a number (write 1000, 0B31h or 1011b)"
+            )),
         },
         other => Err(format!("expected a number, got {other}")),
     }
@@ -26,7 +30,10 @@ pub(crate) fn int_of(v: &Value) -> Result<i64, String> {
 enum Scalar {
     Int(i64),
     /// Hex or binary with `x` digits: `(actual & mask) == value`.
-    Pattern { mask: u64, value: u64 },
+    Pattern {
+        mask: u64,
+        value: u64,
+    },
     /// Hex bytes with optional `x` nibbles, each byte as (mask, value).
     Bytes(Vec<(u8, u8)>),
     Text(String),
@@ -155,7 +162,11 @@ pub(crate) struct Mismatch {
 
 impl fmt::Display for Mismatch {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let at = if self.path.is_empty() { String::new() } else { format!("{}: ", self.path) };
+        let at = if self.path.is_empty() {
+            String::new()
+        } else {
+            format!("{}: ", self.path)
+        };
         write!(f, "{at}expected {}, got {}", self.expected, self.actual)
     }
 }
@@ -175,7 +186,11 @@ impl Matcher {
             },
             Value::String(s) => match parse_scalar(s) {
                 Scalar::Int(i) => Matcher::Int(i),
-                Scalar::Pattern { mask, value } => Matcher::Pattern { mask, value, text: s.clone() },
+                Scalar::Pattern { mask, value } => Matcher::Pattern {
+                    mask,
+                    value,
+                    text: s.clone(),
+                },
                 Scalar::Bytes(b) => Matcher::Bytes(b, s.clone()),
                 Scalar::Text(t) => Matcher::Text(t),
             },
@@ -187,29 +202,45 @@ impl Matcher {
     }
 
     fn parse_object(map: &Map<String, Value>) -> Result<Matcher, String> {
-        let op_keys: Vec<&String> = map.keys().filter(|k| OPERATORS.contains(&k.as_str())).collect();
+        let op_keys: Vec<&String> = map
+            .keys()
+            .filter(|k| OPERATORS.contains(&k.as_str()))
+            .collect();
         if op_keys.is_empty() {
             return Ok(Matcher::Object(
                 map.iter()
-                    .map(|(k, v)| Matcher::parse(v).map(|m| (k.clone(), m)).map_err(|e| format!("{k}: {e}")))
+                    .map(|(k, v)| {
+                        Matcher::parse(v)
+                            .map(|m| (k.clone(), m))
+                            .map_err(|e| format!("{k}: {e}"))
+                    })
                     .collect::<Result<_, _>>()?,
             ));
         }
         let only = |key: &str, n: usize| -> Result<(), String> {
             if map.len() != n {
-                return Err(format!("`{key}` takes no other keys beside it (found {:?})", map.keys().collect::<Vec<_>>()));
+                return Err(format!(
+                    "`{key}` takes no other keys beside it (found {:?})",
+                    map.keys().collect::<Vec<_>>()
+                ));
             }
             Ok(())
         };
         if let Some(v) = map.get("one_of") {
             only("one_of", 1)?;
-            let Value::Array(items) = v else { return Err("one_of takes a list".into()) };
-            return Ok(Matcher::OneOf(items.iter().map(Matcher::parse).collect::<Result<_, _>>()?));
+            let Value::Array(items) = v else {
+                return Err("one_of takes a list".into());
+            };
+            return Ok(Matcher::OneOf(
+                items.iter().map(Matcher::parse).collect::<Result<_, _>>()?,
+            ));
         }
         if let Some(v) = map.get("range") {
             only("range", 1)?;
             return match v {
-                Value::Array(b) if b.len() == 2 => Ok(Matcher::Range(int_of(&b[0])?, int_of(&b[1])?)),
+                Value::Array(b) if b.len() == 2 => {
+                    Ok(Matcher::Range(int_of(&b[0])?, int_of(&b[1])?))
+                }
                 _ => Err("range takes [min, max]".into()),
             };
         }
@@ -220,7 +251,9 @@ impl Matcher {
         }
         if let Some(v) = map.get("contains") {
             only("contains", 1)?;
-            let Value::String(s) = v else { return Err("contains takes text".into()) };
+            let Value::String(s) = v else {
+                return Err("contains takes text".into());
+            };
             return Ok(Matcher::Contains(s.clone()));
         }
         if let Some(v) = map.get("not") {
@@ -236,7 +269,11 @@ impl Matcher {
     }
 
     fn check_at(&self, path: &str, actual: &Value) -> Result<(), Mismatch> {
-        let miss = || Mismatch { path: path.to_string(), expected: self.to_string(), actual: show(actual) };
+        let miss = || Mismatch {
+            path: path.to_string(),
+            expected: self.to_string(),
+            actual: show(actual),
+        };
         let int = || int_of(actual).ok();
         let ok = match self {
             Matcher::Int(i) => int() == Some(*i),
@@ -245,12 +282,15 @@ impl Matcher {
                 int().is_some_and(|a| (a as u64) & mask == *value)
             }
             Matcher::Bytes(exp, _) => match actual {
-                Value::String(s) => match parse_bytes(s).or_else(|| parse_bytes(&format!("{s} "))) {
-                    Some(act) => {
-                        act.len() == exp.len() && exp.iter().zip(&act).all(|((m, v), (_, a))| a & m == *v)
+                Value::String(s) => {
+                    match parse_bytes(s).or_else(|| parse_bytes(&format!("{s} "))) {
+                        Some(act) => {
+                            act.len() == exp.len()
+                                && exp.iter().zip(&act).all(|((m, v), (_, a))| a & m == *v)
+                        }
+                        None => false,
                     }
-                    None => false,
-                },
+                }
                 _ => false,
             },
             Matcher::Text(t) => actual.as_str() == Some(t.as_str()),
@@ -261,21 +301,33 @@ impl Matcher {
             Matcher::Contains(t) => actual.as_str().is_some_and(|s| s.contains(t.as_str())),
             Matcher::Not(m) => m.check_at(path, actual).is_err(),
             Matcher::Object(fields) => {
-                let Value::Object(map) = actual else { return Err(miss()) };
+                let Value::Object(map) = actual else {
+                    return Err(miss());
+                };
                 for (k, m) in fields {
-                    let sub = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+                    let sub = if path.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{path}.{k}")
+                    };
                     match map.get(k) {
                         Some(v) => m.check_at(&sub, v)?,
                         None if *m == Matcher::Null => {}
                         None => {
-                            return Err(Mismatch { path: sub, expected: m.to_string(), actual: "no such field".into() })
+                            return Err(Mismatch {
+                                path: sub,
+                                expected: m.to_string(),
+                                actual: "no such field".into(),
+                            })
                         }
                     }
                 }
                 true
             }
             Matcher::List(items) => {
-                let Value::Array(act) = actual else { return Err(miss()) };
+                let Value::Array(act) = actual else {
+                    return Err(miss());
+                };
                 if act.len() != items.len() {
                     return Err(miss());
                 }
@@ -395,7 +447,10 @@ mod tests {
     fn mismatch_names_the_path_and_both_values() {
         let m = Matcher::parse(&json!({"status": "0B31h"})).unwrap();
         let e = m.check(&json!({"status": 0x0B37})).unwrap_err();
-        assert_eq!(e.to_string(), "status: expected 2865 (0B31h), got 2871 (0B37h)");
+        assert_eq!(
+            e.to_string(),
+            "status: expected 2865 (0B31h), got 2871 (0B37h)"
+        );
     }
 
     #[rstest]

@@ -62,7 +62,10 @@ pub(crate) struct Profile {
 impl Profile {
     /// The built-in profile of a product, with the product's maximum inverter count.
     pub(crate) fn builtin(product: Product) -> Profile {
-        Profile { product, inverters: product.max_inverters() }
+        Profile {
+            product,
+            inverters: product.max_inverters(),
+        }
     }
 
     /// Every built-in profile.
@@ -77,9 +80,14 @@ impl Profile {
 
     /// Looks a built-in profile up by name; the error lists the valid names.
     pub(crate) fn by_name(name: &str) -> Result<Profile, String> {
-        Product::from_name(name).map(Profile::builtin).ok_or_else(|| {
-            let names: Vec<&str> = Product::ALL.iter().map(|p| p.name()).collect();
-            format!("unknown profile `{name}` (built-in profiles: {})", names.join(", "))
-        })
+        Product::from_name(name)
+            .map(Profile::builtin)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Product::ALL.iter().map(|p| p.name()).collect();
+                format!(
+                    "unknown profile `{name}` (built-in profiles: {})",
+                    names.join(", ")
+                )
+            })
     }
 }

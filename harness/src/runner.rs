@@ -55,7 +55,14 @@ pub(crate) fn run(loaded: &Loaded, opts: &RunOptions, factory: &mut dyn DutFacto
     }
 }
 
-fn result(case: &Case, profile: &Profile, verdict: Verdict, message: String, steps: Vec<StepResult>, start: Instant) -> CaseResult {
+fn result(
+    case: &Case,
+    profile: &Profile,
+    verdict: Verdict,
+    message: String,
+    steps: Vec<StepResult>,
+    start: Instant,
+) -> CaseResult {
     CaseResult {
         id: case.id.clone(),
         title: case.title.clone(),
@@ -73,14 +80,25 @@ fn not_applicable(case: &Case, profile: &Profile, dut: Option<&dyn Dut>) -> Opti
     if let Some(products) = &case.products {
         if !products.contains(&profile.product) {
             let names: Vec<&str> = products.iter().map(|p| p.name()).collect();
-            return Some(format!("the statement is about {}, this run is {}", names.join(", "), profile.name()));
+            return Some(format!(
+                "the statement is about {}, this run is {}",
+                names.join(", "),
+                profile.name()
+            ));
         }
     }
     let dut = dut?;
-    let needed = case.requires.iter().copied().chain(case.steps.iter().filter_map(|s| s.action.needs()));
+    let needed = case
+        .requires
+        .iter()
+        .copied()
+        .chain(case.steps.iter().filter_map(|s| s.action.needs()));
     for cap in needed {
         if !dut.capabilities().contains(&cap) {
-            return Some(format!("needs `{cap}`, which {} does not offer", dut.describe()));
+            return Some(format!(
+                "needs `{cap}`, which {} does not offer",
+                dut.describe()
+            ));
         }
     }
     None
@@ -90,20 +108,48 @@ fn needs_dut(case: &Case) -> bool {
     !case.requires.is_empty() || case.steps.iter().any(|s| s.action.needs().is_some())
 }
 
-fn run_case(case: &Case, profile: &Profile, opts: &RunOptions, factory: &mut dyn DutFactory) -> CaseResult {
+fn run_case(
+    case: &Case,
+    profile: &Profile,
+    opts: &RunOptions,
+    factory: &mut dyn DutFactory,
+) -> CaseResult {
     let start = Instant::now();
     if let Some(why) = not_applicable(case, profile, None) {
-        return result(case, profile, Verdict::NotApplicable, why, Vec::new(), start);
+        return result(
+            case,
+            profile,
+            Verdict::NotApplicable,
+            why,
+            Vec::new(),
+            start,
+        );
     }
     let mut channel = if needs_dut(case) {
         match factory.open(profile) {
             Ok(dut) => {
                 if let Some(why) = not_applicable(case, profile, Some(dut.as_ref())) {
-                    return result(case, profile, Verdict::NotApplicable, why, Vec::new(), start);
+                    return result(
+                        case,
+                        profile,
+                        Verdict::NotApplicable,
+                        why,
+                        Vec::new(),
+                        start,
+                    );
                 }
                 Some(Channel::new(dut, profile.product, opts.retries))
             }
-            Err(e) => return result(case, profile, Verdict::Error, format!("cannot open the DUT: {e}"), Vec::new(), start),
+            Err(e) => {
+                return result(
+                    case,
+                    profile,
+                    Verdict::Error,
+                    format!("cannot open the DUT: {e}"),
+                    Vec::new(),
+                    start,
+                )
+            }
         }
     } else {
         None
@@ -124,16 +170,30 @@ fn run_case(case: &Case, profile: &Profile, opts: &RunOptions, factory: &mut dyn
 /// The step as one line, for reports.
 fn describe(action: &Action) -> String {
     match action {
-        Action::Compute { func, args, product } => {
-            let p = product.map(|p| format!(" [{}]", p.name())).unwrap_or_default();
+        Action::Compute {
+            func,
+            args,
+            product,
+        } => {
+            let p = product
+                .map(|p| format!(" [{}]", p.name()))
+                .unwrap_or_default();
             format!("compute {}{p} {}", func.name, Value::Object(args.clone()))
         }
         Action::Read(o) => format!("read {}", o.describe()),
         Action::Write(o) => format!("write {} = {}", o.describe(), o.value.unwrap_or_default()),
         Action::Pkw { inverter, bytes } => format!("pkw {inverter}: {}", hex(bytes)),
-        Action::Process { inverter, control, setpoints, run } => {
+        Action::Process {
+            inverter,
+            control,
+            setpoints,
+            run,
+        } => {
             let sp: Vec<String> = setpoints.iter().map(|s| format!("{s:04X}h")).collect();
-            format!("process {inverter}: control {control:04X}h setpoints [{}] {run:?}", sp.join(", "))
+            format!(
+                "process {inverter}: control {control:04X}h setpoints [{}] {run:?}",
+                sp.join(", ")
+            )
         }
         Action::Wait(d) => format!("wait {d:?}"),
         Action::Inject { inverter, error } => format!("inject {inverter}: error {error}"),
@@ -143,14 +203,27 @@ fn describe(action: &Action) -> String {
 
 /// Bytes as `"70 66 02 00"`.
 pub(crate) fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02X}")).collect::<Vec<_>>().join(" ")
+    bytes
+        .iter()
+        .map(|b| format!("{b:02X}"))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Channel>) -> StepResult {
     let line = describe(&step.action);
     let (outcome, exchanges) = match (&step.action, channel) {
-        (Action::Compute { func, args, product }, _) => {
-            let ctx = Ctx { product: product.unwrap_or(profile.product) };
+        (
+            Action::Compute {
+                func,
+                args,
+                product,
+            },
+            _,
+        ) => {
+            let ctx = Ctx {
+                product: product.unwrap_or(profile.product),
+            };
             let out = match (func.run)(&ctx, &Args(args.clone())) {
                 Ok(v) => Ok(v),
                 Err(ComputeError::Refused(m)) => Ok(json!({ "error": m })),
@@ -162,7 +235,10 @@ fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Channel>) -> St
             let out = ch.perform(action);
             (out, ch.take_exchanges())
         }
-        (_, None) => (Err(StepError::Suite("a DUT step without a DUT".into())), Vec::new()),
+        (_, None) => (
+            Err(StepError::Suite("a DUT step without a DUT".into())),
+            Vec::new(),
+        ),
     };
     let (verdict, observed, message) = match outcome {
         Err(e) => (e.verdict(), Value::Null, e.to_string()),
@@ -173,22 +249,36 @@ fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Channel>) -> St
             };
             match judged {
                 Ok(()) => (Verdict::Pass, observed, String::new()),
-                Err(m) if step.setup => (Verdict::Inconclusive, observed, format!("setup step failed: {m}")),
+                Err(m) if step.setup => (
+                    Verdict::Inconclusive,
+                    observed,
+                    format!("setup step failed: {m}"),
+                ),
                 Err(m) => (Verdict::Fail, observed, m),
             }
         }
     };
-    StepResult { step: line, verdict, observed, message, exchanges }
+    StepResult {
+        step: line,
+        verdict,
+        observed,
+        message,
+        exchanges,
+    }
 }
 
 /// A parameter order without `expect:` must be answered positively (BU 0620 §2.5.6.3: response
 /// label 7 = order cannot be executed).
 fn implicit_expectation(action: &Action, observed: &Value) -> Result<(), String> {
     match action {
-        Action::Read(_) | Action::Write(_) if observed.get("ak").and_then(Value::as_i64) == Some(7) => Err(format!(
-            "the DUT refused the order: response label 7, error {}",
-            observed.get("error").cloned().unwrap_or(Value::Null)
-        )),
+        Action::Read(_) | Action::Write(_)
+            if observed.get("ak").and_then(Value::as_i64) == Some(7) =>
+        {
+            Err(format!(
+                "the DUT refused the order: response label 7, error {}",
+                observed.get("error").cloned().unwrap_or(Value::Null)
+            ))
+        }
         _ => Ok(()),
     }
 }

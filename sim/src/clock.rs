@@ -46,7 +46,9 @@ pub struct RealClock {
 impl RealClock {
     /// A clock starting now.
     pub fn new() -> Self {
-        RealClock { start: Instant::now() }
+        RealClock {
+            start: Instant::now(),
+        }
     }
 }
 

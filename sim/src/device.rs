@@ -35,7 +35,11 @@ pub struct DeviceConfig {
 impl DeviceConfig {
     /// The product with its maximum inverter count and a one-cycle answer delay.
     pub fn new(product: Product) -> Self {
-        DeviceConfig { product, inverters: product.max_inverters(), answer_delay: 1 }
+        DeviceConfig {
+            product,
+            inverters: product.max_inverters(),
+            answer_delay: 1,
+        }
     }
 }
 
@@ -64,7 +68,12 @@ struct ParamChannel {
 
 impl ParamChannel {
     fn new(store: ParamStore) -> Self {
-        ParamChannel { store, order: None, due: 0, response: PkwRepr::default() }
+        ParamChannel {
+            store,
+            order: None,
+            due: 0,
+            response: PkwRepr::default(),
+        }
     }
 
     /// One cycle of the parameter channel: a new order restarts processing and clears the
@@ -135,7 +144,10 @@ impl Device {
             })
             .collect();
         Device {
-            config: DeviceConfig { inverters: count, ..config },
+            config: DeviceConfig {
+                inverters: count,
+                ..config
+            },
             interface: ParamChannel::new(ParamStore::new(config.product, Target::Interface)),
             inverters,
         }
@@ -148,26 +160,35 @@ impl Device {
 
     fn inverter_mut(&mut self, i: Inverter) -> Result<&mut InverterUnit, DeviceError> {
         let count = self.config.inverters;
-        self.inverters.get_mut(usize::from(i.get()) - 1).ok_or(DeviceError::NoSuchInverter(i.get(), count))
+        self.inverters
+            .get_mut(usize::from(i.get()) - 1)
+            .ok_or(DeviceError::NoSuchInverter(i.get(), count))
     }
 
     /// Handles one link frame at time `now`, returning the answer frame.
     pub fn handle(&mut self, frame: &[u8], now: Duration) -> Result<Vec<u8>, DeviceError> {
         let link = LinkRepr::parse(frame)?;
         let ppo_type = PpoType::new(link.ppo_type).map_err(|e| DeviceError::Ppo(e.to_string()))?;
-        let ppo = PpoRepr::parse(&link.payload, ppo_type).map_err(|e| DeviceError::Ppo(e.to_string()))?;
+        let ppo =
+            PpoRepr::parse(&link.payload, ppo_type).map_err(|e| DeviceError::Ppo(e.to_string()))?;
         let (product, delay) = (self.config.product, self.config.answer_delay);
         let (pkw, pzd) = match link.unit {
             Unit::Interface => {
-                let pkw = ppo.pkw.map(|o| self.interface.cycle(o, delay, product, link.unit));
+                let pkw = ppo
+                    .pkw
+                    .map(|o| self.interface.cycle(o, delay, product, link.unit));
                 (pkw, vec![0; ppo.pzd.len()])
             }
             Unit::Inverter(i) => {
                 let unit = self.inverter_mut(i)?;
-                let pkw = ppo.pkw.map(|o| unit.params.cycle(o, delay, product, link.unit));
+                let pkw = ppo
+                    .pkw
+                    .map(|o| unit.params.cycle(o, delay, product, link.unit));
                 let control = ppo.pzd.first().copied().unwrap_or(0);
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
-                let out = unit.drive.cycle(control, setpoints, &StoreView(&unit.params.store), now);
+                let out = unit
+                    .drive
+                    .cycle(control, setpoints, &StoreView(&unit.params.store), now);
                 // Information parameters mirror the process data and the present error
                 // (BU 0620 §4.5: P740 PZD bus in, P741 PZD bus out, P700 [-01] present error).
                 let store = &mut unit.params.store;
@@ -178,7 +199,11 @@ impl Device {
                 for (i, w) in out.actuals.iter().enumerate() {
                     store.set_info(741, i as u8 + 2, i32::from(*w));
                 }
-                store.set_info(700, 1, unit.drive.fault().map_or(0, |f| i32::from(f.p700())));
+                store.set_info(
+                    700,
+                    1,
+                    unit.drive.fault().map_or(0, |f| i32::from(f.p700())),
+                );
                 let mut pzd = vec![out.status];
                 pzd.extend(out.actuals);
                 pzd.resize(ppo.pzd.len(), 0);
@@ -186,26 +211,44 @@ impl Device {
             }
         };
         let answer = PpoRepr { pkw, pzd };
-        Ok(LinkRepr { unit: link.unit, ppo_type: link.ppo_type, payload: answer.emit(ppo_type) }.emit())
+        Ok(LinkRepr {
+            unit: link.unit,
+            ppo_type: link.ppo_type,
+            payload: answer.emit(ppo_type),
+        }
+        .emit())
     }
 
     /// Raises an inverter error, as P700 shows it (`"10.0"`).
     pub fn inject_fault(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
-        let code: FaultCode = error.parse().map_err(|e| format!("{e}"))?;
-        self.inverter_mut(inverter).map_err(|e| e.to_string())?.drive.inject_fault(code);
+        let code: FaultCode = error.parse()?;
+        self.inverter_mut(inverter)
+            .map_err(|e| e.to_string())?
+            .drive
+            .inject_fault(code);
         Ok(())
     }
 
     /// The status-machine state of an inverter, as the manual names it.
     pub fn state_name(&mut self, inverter: Inverter) -> Result<String, String> {
-        Ok(self.inverter_mut(inverter).map_err(|e| e.to_string())?.drive.state().to_string())
+        Ok(self
+            .inverter_mut(inverter)
+            .map_err(|e| e.to_string())?
+            .drive
+            .state()
+            .to_string())
     }
 
     /// EEPROM writes of an inverter's parameter store (the bus interface's for `None`).
     pub fn eeprom_writes(&mut self, inverter: Option<Inverter>) -> Result<u64, String> {
         Ok(match inverter {
             None => self.interface.store.eeprom_writes(),
-            Some(i) => self.inverter_mut(i).map_err(|e| e.to_string())?.params.store.eeprom_writes(),
+            Some(i) => self
+                .inverter_mut(i)
+                .map_err(|e| e.to_string())?
+                .params
+                .store
+                .eeprom_writes(),
         })
     }
 }

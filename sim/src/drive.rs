@@ -130,9 +130,18 @@ impl Drive {
     }
 
     /// One bus cycle: control word and setpoints in, status word and actual values out.
-    pub fn cycle(&mut self, control: u16, setpoints: &[u16], params: &dyn DriveParams, now: Duration) -> DriveOutput {
+    pub fn cycle(
+        &mut self,
+        control: u16,
+        setpoints: &[u16],
+        params: &dyn DriveParams,
+        now: Duration,
+    ) -> DriveOutput {
         let control = ControlWord(control);
-        let dt = self.last.map_or(Duration::ZERO, |l| now.saturating_sub(l)).as_secs_f64();
+        let dt = self
+            .last
+            .map_or(Duration::ZERO, |l| now.saturating_sub(l))
+            .as_secs_f64();
         self.last = Some(now);
         let max_hz = f64::from(params.get(105, None).unwrap_or(500)) / 10.0;
 
@@ -143,14 +152,18 @@ impl Drive {
         }
         match self.state {
             State::NotReadyForSwitchOn if now >= CHARGING => self.enter(State::SwitchOnBlock, now),
-            State::ErrorReactionActive if now.saturating_sub(self.entered) >= FAULT_REACTION => self.enter(State::Fault, now),
+            State::ErrorReactionActive if now.saturating_sub(self.entered) >= FAULT_REACTION => {
+                self.enter(State::Fault, now)
+            }
             _ => {}
         }
         // Commands chain within one telegram (047Fh from "Ready for switch-on" takes 3 then 4:
         // §6.1.3 answers it with xx37h); at most one pass per state.
         let mut previous = self.previous;
         for _ in 0..State::ALL.len() {
-            let Some(t) = state_machine::next(self.state, control, previous) else { break };
+            let Some(t) = state_machine::next(self.state, control, previous) else {
+                break;
+            };
             if t.number == 15 {
                 self.fault = None;
             }
@@ -165,25 +178,54 @@ impl Drive {
         if control.valid() {
             let raw = setpoints.first().copied().unwrap_or(0) as i16;
             let function = params.get(546, Some(1)).unwrap_or(1);
-            self.target = if function == 1 && control.bit(6) { f64::from(raw) * max_hz / FULL_SCALE } else { 0.0 };
+            self.target = if function == 1 && control.bit(6) {
+                f64::from(raw) * max_hz / FULL_SCALE
+            } else {
+                0.0
+            };
         }
-        let goal = if self.state == State::OperationEnabled { self.target } else { 0.0 };
-        let ramp_param = if goal.abs() > self.frequency.abs() { 102 } else { 103 };
+        let goal = if self.state == State::OperationEnabled {
+            self.target
+        } else {
+            0.0
+        };
+        let ramp_param = if goal.abs() > self.frequency.abs() {
+            102
+        } else {
+            103
+        };
         let ramp_s = f64::from(params.get(ramp_param, None).unwrap_or(200)) / 100.0;
-        let step = if ramp_s <= 0.0 { f64::INFINITY } else { max_hz * dt / ramp_s };
+        let step = if ramp_s <= 0.0 {
+            f64::INFINITY
+        } else {
+            max_hz * dt / ramp_s
+        };
         let diff = goal - self.frequency;
-        self.frequency = if diff.abs() <= step { goal } else { self.frequency + step * diff.signum() };
+        self.frequency = if diff.abs() <= step {
+            goal
+        } else {
+            self.frequency + step * diff.signum()
+        };
         if self.state == State::EmergencyStopActive && self.frequency == 0.0 {
             // F: "the drive is stopped, the frequency inverter changes to Switch-on block".
             self.enter(State::SwitchOnBlock, now);
         }
-        DriveOutput { status: self.status_word(control, goal), actuals: self.actuals(params, max_hz) }
+        DriveOutput {
+            status: self.status_word(control, goal),
+            actuals: self.actuals(params, max_hz),
+        }
     }
 
     fn status_word(&self, control: ControlWord, goal: f64) -> u16 {
         let (_, base) = self.state.status_pattern();
         let mut s = base;
-        if !matches!(self.state, State::ReadyForSwitchOn | State::SwitchedOn | State::OperationEnabled | State::EmergencyStopActive) {
+        if !matches!(
+            self.state,
+            State::ReadyForSwitchOn
+                | State::SwitchedOn
+                | State::OperationEnabled
+                | State::EmergencyStopActive
+        ) {
             // Bits 4 and 5 are X in these states: they show the commands present (§6.1.2.2) in
             // the last control word the inverter evaluated (bit 10 set).
             s |= u16::from(self.previous.bit(1)) << 4 | u16::from(self.previous.bit(2)) << 5;
@@ -200,7 +242,9 @@ impl Drive {
         (1..=5u8)
             .map(|i| match params.get(543, Some(i)).unwrap_or(0) {
                 // 1 = actual frequency, as a percentage of P105 (§6.1.3).
-                1 => (self.frequency * FULL_SCALE / max_hz).round().clamp(-32768.0, 32767.0) as i16 as u16,
+                1 => (self.frequency * FULL_SCALE / max_hz)
+                    .round()
+                    .clamp(-32768.0, 32767.0) as i16 as u16,
                 _ => 0,
             })
             .collect()

@@ -58,7 +58,10 @@ impl<T: AsRef<[u8]>> LinkFrame<T> {
     pub fn new_checked(buffer: T) -> Result<Self, LinkFrameError> {
         let b = buffer.as_ref();
         if b.len() < field::PAYLOAD {
-            return Err(LinkFrameError::Truncated { need: field::PAYLOAD, got: b.len() });
+            return Err(LinkFrameError::Truncated {
+                need: field::PAYLOAD,
+                got: b.len(),
+            });
         }
         let record = b[field::RECORD];
         if record != RECORD_INTERFACE && !(RECORD_FI1..RECORD_FI1 + 8).contains(&record) {
@@ -126,7 +129,11 @@ impl LinkRepr {
     /// Parses a frame.
     pub fn parse(bytes: &[u8]) -> Result<LinkRepr, LinkFrameError> {
         let f = LinkFrame::new_checked(bytes)?;
-        Ok(LinkRepr { unit: Unit::from_record(f.record())?, ppo_type: f.ppo_type(), payload: f.payload().to_vec() })
+        Ok(LinkRepr {
+            unit: Unit::from_record(f.record())?,
+            ppo_type: f.ppo_type(),
+            payload: f.payload().to_vec(),
+        })
     }
 
     /// Length of the emitted frame.
@@ -167,7 +174,13 @@ impl MemEnd {
 pub fn mem_pair() -> (MemEnd, MemEnd) {
     let a = Rc::new(RefCell::new(VecDeque::new()));
     let b = Rc::new(RefCell::new(VecDeque::new()));
-    (MemEnd { tx: a.clone(), rx: b.clone() }, MemEnd { tx: b, rx: a })
+    (
+        MemEnd {
+            tx: a.clone(),
+            rx: b.clone(),
+        },
+        MemEnd { tx: b, rx: a },
+    )
 }
 
 #[cfg(test)]
@@ -191,7 +204,10 @@ mod tests {
     #[test]
     fn truncation_at_every_length() {
         for n in 0..2 {
-            assert_eq!(LinkRepr::parse(&[100, 1][..n]), Err(LinkFrameError::Truncated { need: 2, got: n }));
+            assert_eq!(
+                LinkRepr::parse(&[100, 1][..n]),
+                Err(LinkFrameError::Truncated { need: 2, got: n })
+            );
         }
         assert!(LinkRepr::parse(&[100, 1]).is_ok());
     }
@@ -199,7 +215,10 @@ mod tests {
     #[test]
     fn unknown_records_are_refused() {
         for rec in [0, 99, 109, 255] {
-            assert_eq!(LinkRepr::parse(&[rec, 1]), Err(LinkFrameError::UnknownRecord(rec)));
+            assert_eq!(
+                LinkRepr::parse(&[rec, 1]),
+                Err(LinkFrameError::UnknownRecord(rec))
+            );
         }
     }
 

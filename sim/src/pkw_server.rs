@@ -24,7 +24,13 @@ pub fn error_number(e: AccessError) -> ErrorNumber {
 }
 
 fn refuse(order: &PkwRepr, e: ErrorNumber) -> PkwRepr {
-    PkwRepr { ak: ResponseLabel::CANNOT_EXECUTE.0, spm: false, pnu: order.pnu, ind: order.ind, pwe: u32::from(e.0) }
+    PkwRepr {
+        ak: ResponseLabel::CANNOT_EXECUTE.0,
+        spm: false,
+        pnu: order.pnu,
+        ind: order.ind,
+        pwe: u32::from(e.0),
+    }
 }
 
 /// Processes one order; `supported` are the order labels this unit accepts.
@@ -35,7 +41,11 @@ pub fn handle_order(store: &mut ParamStore, supported: &[OrderLabel], order: &Pk
     }
 }
 
-fn serve(store: &mut ParamStore, supported: &[OrderLabel], order: &PkwRepr) -> Result<PkwRepr, ErrorNumber> {
+fn serve(
+    store: &mut ParamStore,
+    supported: &[OrderLabel],
+    order: &PkwRepr,
+) -> Result<PkwRepr, ErrorNumber> {
     let ak = OrderLabel(order.ak);
     if ak == OrderLabel::NONE {
         return Ok(PkwRepr::default());
@@ -44,16 +54,30 @@ fn serve(store: &mut ParamStore, supported: &[OrderLabel], order: &PkwRepr) -> R
     if positive.is_empty() || !supported.contains(&ak) {
         return Err(ErrorNumber::INVALID_ORDER);
     }
-    let plain = if order.pnu >= 1000 { order.pnu - 1000 } else { order.pnu };
+    let plain = if order.pnu >= 1000 {
+        order.pnu - 1000
+    } else {
+        order.pnu
+    };
     let number = ParamNumber::new(i64::from(plain)).map_err(|_| ErrorNumber::INVALID_PNU)?;
     let def = store.def(number).ok_or(ErrorNumber::INVALID_PNU)?;
     let ind = Ind(order.ind);
-    let set = if def.set_dependent { ParamSet::new(i64::from(ind.set())).ok() } else { None };
+    let set = if def.set_dependent {
+        ParamSet::new(i64::from(ind.set())).ok()
+    } else {
+        None
+    };
     // Array elements count only with the array labels (§2.5.6.3 "Parameter index IND").
     let element = if ak.is_array() || ak == OrderLabel::REQUEST_ARRAY_LEN {
-        let index = if def.set_dependent { ind.element() } else { ind.subindex() + 1 };
+        let index = if def.set_dependent {
+            ind.element()
+        } else {
+            ind.subindex() + 1
+        };
         match def.array {
-            Some(_) => Some(ArrayElement::new(i64::from(index)).map_err(|_| ErrorNumber::BAD_SUBINDEX)?),
+            Some(_) => {
+                Some(ArrayElement::new(i64::from(index)).map_err(|_| ErrorNumber::BAD_SUBINDEX)?)
+            }
             None if index == 1 => None,
             None => return Err(ErrorNumber::NO_ARRAY),
         }
@@ -62,19 +86,40 @@ fn serve(store: &mut ParamStore, supported: &[OrderLabel], order: &PkwRepr) -> R
     };
     let dword = def.width == Width::Dword;
     let label = |word: ResponseLabel, dw: ResponseLabel| if dword { dw } else { word };
-    let answer = |ak: ResponseLabel, value: i32| PkwRepr { ak: ak.0, spm: false, pnu: order.pnu, ind: order.ind, pwe: value as u32 };
+    let answer = |ak: ResponseLabel, value: i32| PkwRepr {
+        ak: ak.0,
+        spm: false,
+        pnu: order.pnu,
+        ind: order.ind,
+        pwe: value as u32,
+    };
     let err = error_number;
     match ak.0 {
-        9 => Ok(answer(ResponseLabel::ARRAY_LEN, i32::from(store.array_len(number).map_err(err)?))),
-        1 => Ok(answer(label(ResponseLabel::WORD, ResponseLabel::DWORD), store.read(number, set, element).map_err(err)?)),
-        6 => Ok(answer(label(ResponseLabel::ARRAY_WORD, ResponseLabel::ARRAY_DWORD), store.read(number, set, element).map_err(err)?)),
+        9 => Ok(answer(
+            ResponseLabel::ARRAY_LEN,
+            i32::from(store.array_len(number).map_err(err)?),
+        )),
+        1 => Ok(answer(
+            label(ResponseLabel::WORD, ResponseLabel::DWORD),
+            store.read(number, set, element).map_err(err)?,
+        )),
+        6 => Ok(answer(
+            label(ResponseLabel::ARRAY_WORD, ResponseLabel::ARRAY_DWORD),
+            store.read(number, set, element).map_err(err)?,
+        )),
         _ => {
             if ak.is_dword() != dword {
                 return Err(ErrorNumber::BAD_TYPE);
             }
             let value = order.pwe as i32;
-            let persist = if ak.is_ram_only() { Persist::RamOnly } else { Persist::Eeprom };
-            store.write(number, set, element, value, persist).map_err(err)?;
+            let persist = if ak.is_ram_only() {
+                Persist::RamOnly
+            } else {
+                Persist::Eeprom
+            };
+            store
+                .write(number, set, element, value, persist)
+                .map_err(err)?;
             Ok(answer(positive[0], value))
         }
     }
@@ -99,9 +144,17 @@ mod tests {
     fn bu0590_p102_set3_example() {
         // BU 0590 §4.2.4.4: 70 66 02 00 00 00 03 E8 → positive response "array word" = 4.
         let mut s = fi(1);
-        let r = handle_order(&mut s, supported_orders(Product::Sk550p, true), &order([0x70, 0x66, 0x02, 0, 0, 0, 0x03, 0xE8]));
+        let r = handle_order(
+            &mut s,
+            supported_orders(Product::Sk550p, true),
+            &order([0x70, 0x66, 0x02, 0, 0, 0, 0x03, 0xE8]),
+        );
         assert_eq!((r.ak, r.pnu, r.ind, r.pwe), (4, 0x66, 0x0200, 1000));
-        let read = handle_order(&mut s, supported_orders(Product::Sk550p, true), &order([0x14, 0x4E, 0x02, 0, 0, 0, 0, 0]));
+        let read = handle_order(
+            &mut s,
+            supported_orders(Product::Sk550p, true),
+            &order([0x14, 0x4E, 0x02, 0, 0, 0, 0, 0]),
+        );
         assert_eq!((read.ak, read.value()), (1, 1000));
     }
 
@@ -109,7 +162,11 @@ mod tests {
     fn bu0620_p102_write_example_answers_label_1() {
         // BU 0620 §2.5.6.4: 24 4E 01 00 00 00 00 FA → response label 1 with P102 = 250 in set 2.
         let mut s = fi(1);
-        let r = handle_order(&mut s, supported_orders(Product::Sk550p, true), &order([0x24, 0x4E, 0x01, 0, 0, 0, 0, 0xFA]));
+        let r = handle_order(
+            &mut s,
+            supported_orders(Product::Sk550p, true),
+            &order([0x24, 0x4E, 0x01, 0, 0, 0, 0, 0xFA]),
+        );
         assert_eq!((r.ak, r.pnu, r.value()), (1, 1102, 250));
     }
 
@@ -118,13 +175,66 @@ mod tests {
         let mut s = fi(1);
         let all = supported_orders(Product::Sk550p, true);
         let cases = [
-            (PkwRepr { ak: 1, pnu: 1999, ..Default::default() }, 0),
-            (PkwRepr { ak: 2, pnu: 1717, pwe: 1, ..Default::default() }, 1),
-            (PkwRepr { ak: 2, pnu: 1102, pwe: 40000, ..Default::default() }, 2),
-            (PkwRepr { ak: 6, pnu: 1543, ind: 0x0900, ..Default::default() }, 3),
-            (PkwRepr { ak: 9, pnu: 1102, ..Default::default() }, 4),
-            (PkwRepr { ak: 3, pnu: 1102, pwe: 5, ..Default::default() }, 5),
-            (PkwRepr { ak: 4, pnu: 1102, ..Default::default() }, 201),
+            (
+                PkwRepr {
+                    ak: 1,
+                    pnu: 1999,
+                    ..Default::default()
+                },
+                0,
+            ),
+            (
+                PkwRepr {
+                    ak: 2,
+                    pnu: 1717,
+                    pwe: 1,
+                    ..Default::default()
+                },
+                1,
+            ),
+            (
+                PkwRepr {
+                    ak: 2,
+                    pnu: 1102,
+                    pwe: 40000,
+                    ..Default::default()
+                },
+                2,
+            ),
+            (
+                PkwRepr {
+                    ak: 6,
+                    pnu: 1543,
+                    ind: 0x0900,
+                    ..Default::default()
+                },
+                3,
+            ),
+            (
+                PkwRepr {
+                    ak: 9,
+                    pnu: 1102,
+                    ..Default::default()
+                },
+                4,
+            ),
+            (
+                PkwRepr {
+                    ak: 3,
+                    pnu: 1102,
+                    pwe: 5,
+                    ..Default::default()
+                },
+                5,
+            ),
+            (
+                PkwRepr {
+                    ak: 4,
+                    pnu: 1102,
+                    ..Default::default()
+                },
+                201,
+            ),
         ];
         for (o, e) in cases {
             let r = handle_order(&mut s, all, &o);
@@ -135,10 +245,21 @@ mod tests {
     #[test]
     fn ram_only_labels_are_refused_on_the_system_bus_and_do_not_touch_eeprom() {
         let mut fi2 = fi(2);
-        let o = PkwRepr { ak: 14, pnu: 1102, pwe: 300, ..Default::default() };
-        assert_eq!(handle_order(&mut fi2, supported_orders(Product::Sk550p, false), &o).ak, 7);
+        let o = PkwRepr {
+            ak: 14,
+            pnu: 1102,
+            pwe: 300,
+            ..Default::default()
+        };
+        assert_eq!(
+            handle_order(&mut fi2, supported_orders(Product::Sk550p, false), &o).ak,
+            7
+        );
         let mut fi1 = fi(1);
-        assert_eq!(handle_order(&mut fi1, supported_orders(Product::Sk550p, true), &o).ak, 1);
+        assert_eq!(
+            handle_order(&mut fi1, supported_orders(Product::Sk550p, true), &o).ak,
+            1
+        );
         assert_eq!(fi1.eeprom_writes(), 0);
     }
 }

@@ -67,7 +67,12 @@ impl ParamStore {
             Target::Interface => Owner::Interface,
             Target::Inverter(_) => Owner::Inverter,
         };
-        ParamStore { product, owner, values: BTreeMap::new(), eeprom_writes: 0 }
+        ParamStore {
+            product,
+            owner,
+            values: BTreeMap::new(),
+            eeprom_writes: 0,
+        }
     }
 
     /// The catalogue entry of a parameter this unit has.
@@ -76,9 +81,18 @@ impl ParamStore {
     }
 
     /// Resolves set and element to storage indices (set `None` = set 1; element `None` = 1).
-    fn key(&self, number: ParamNumber, set: Option<ParamSet>, element: Option<ArrayElement>) -> Result<(&'static ParamDef, (u16, u8, u8)), AccessError> {
+    fn key(
+        &self,
+        number: ParamNumber,
+        set: Option<ParamSet>,
+        element: Option<ArrayElement>,
+    ) -> Result<(&'static ParamDef, (u16, u8, u8)), AccessError> {
         let def = self.def(number).ok_or(AccessError::NoSuchParameter)?;
-        let set = if def.set_dependent { set.map_or(0, |s| s.get() - 1) } else { 0 };
+        let set = if def.set_dependent {
+            set.map_or(0, |s| s.get() - 1)
+        } else {
+            0
+        };
         let element = match (def.array, element) {
             (None, Some(e)) if e.get() > 1 => return Err(AccessError::NotAnArray),
             (None, _) => 0,
@@ -89,13 +103,29 @@ impl ParamStore {
     }
 
     /// Reads a value.
-    pub fn read(&self, number: ParamNumber, set: Option<ParamSet>, element: Option<ArrayElement>) -> Result<i32, AccessError> {
+    pub fn read(
+        &self,
+        number: ParamNumber,
+        set: Option<ParamSet>,
+        element: Option<ArrayElement>,
+    ) -> Result<i32, AccessError> {
         let (def, key) = self.key(number, set, element)?;
-        Ok(self.values.get(&key).copied().unwrap_or_else(|| params::element_default(def, key.2 + 1)))
+        Ok(self
+            .values
+            .get(&key)
+            .copied()
+            .unwrap_or_else(|| params::element_default(def, key.2 + 1)))
     }
 
     /// Writes a value through the parameter channel.
-    pub fn write(&mut self, number: ParamNumber, set: Option<ParamSet>, element: Option<ArrayElement>, value: i32, persist: Persist) -> Result<(), AccessError> {
+    pub fn write(
+        &mut self,
+        number: ParamNumber,
+        set: Option<ParamSet>,
+        element: Option<ArrayElement>,
+        value: i32,
+        persist: Persist,
+    ) -> Result<(), AccessError> {
         let (def, key) = self.key(number, set, element)?;
         match def.access {
             Access::ReadOnly => return Err(AccessError::ReadOnly),
@@ -114,13 +144,18 @@ impl ParamStore {
 
     /// Elements of an array parameter.
     pub fn array_len(&self, number: ParamNumber) -> Result<u8, AccessError> {
-        self.def(number).ok_or(AccessError::NoSuchParameter)?.array.ok_or(AccessError::NotAnArray)
+        self.def(number)
+            .ok_or(AccessError::NoSuchParameter)?
+            .array
+            .ok_or(AccessError::NotAnArray)
     }
 
     /// Sets an information parameter from the device's own state (actual values, status);
     /// ignores numbers the unit does not have.
     pub fn set_info(&mut self, number: u16, element: u8, value: i32) {
-        let Ok(n) = ParamNumber::new(i64::from(number)) else { return };
+        let Ok(n) = ParamNumber::new(i64::from(number)) else {
+            return;
+        };
         let e = ArrayElement::new(i64::from(element)).ok();
         if let Ok((_, key)) = self.key(n, None, e) {
             self.values.insert(key, value);
@@ -158,11 +193,26 @@ mod tests {
     #[test]
     fn refusals() {
         let mut s = ParamStore::new(Product::Sk550p, fi1());
-        assert_eq!(s.read(n(999), None, None), Err(AccessError::NoSuchParameter));
-        assert_eq!(s.write(n(717), None, None, 1, Persist::Eeprom), Err(AccessError::ReadOnly));
-        assert_eq!(s.write(n(102), None, None, 32001, Persist::Eeprom), Err(AccessError::OutOfRange));
-        assert_eq!(s.read(n(543), None, ArrayElement::new(6).ok()), Err(AccessError::BadSubIndex));
-        assert_eq!(s.read(n(102), None, ArrayElement::new(2).ok()), Err(AccessError::NotAnArray));
+        assert_eq!(
+            s.read(n(999), None, None),
+            Err(AccessError::NoSuchParameter)
+        );
+        assert_eq!(
+            s.write(n(717), None, None, 1, Persist::Eeprom),
+            Err(AccessError::ReadOnly)
+        );
+        assert_eq!(
+            s.write(n(102), None, None, 32001, Persist::Eeprom),
+            Err(AccessError::OutOfRange)
+        );
+        assert_eq!(
+            s.read(n(543), None, ArrayElement::new(6).ok()),
+            Err(AccessError::BadSubIndex)
+        );
+        assert_eq!(
+            s.read(n(102), None, ArrayElement::new(2).ok()),
+            Err(AccessError::NotAnArray)
+        );
         assert_eq!(s.array_len(n(543)), Ok(5));
         assert_eq!(s.eeprom_writes(), 0);
     }

@@ -50,7 +50,9 @@ impl StepError {
     pub(crate) fn verdict(&self) -> Verdict {
         match self {
             StepError::Unanswered { .. } | StepError::Protocol(_) => Verdict::Fail,
-            StepError::Silent { .. } | StepError::Refused(_) | StepError::Suite(_) => Verdict::Error,
+            StepError::Silent { .. } | StepError::Refused(_) | StepError::Suite(_) => {
+                Verdict::Error
+            }
         }
     }
 }
@@ -75,7 +77,14 @@ pub(crate) struct Channel {
 impl Channel {
     /// A channel using the product's largest PPO type with a parameter channel.
     pub(crate) fn new(dut: Box<dyn Dut>, product: Product, retries: u32) -> Channel {
-        Channel { dut, product, retries: retries.max(1), ppo: PpoType::TYPE_2, process: Default::default(), exchanges: Vec::new() }
+        Channel {
+            dut,
+            product,
+            retries: retries.max(1),
+            ppo: PpoType::TYPE_2,
+            process: Default::default(),
+            exchanges: Vec::new(),
+        }
     }
 
     /// The exchanges since the last call.
@@ -94,14 +103,20 @@ impl Channel {
                 Ok(pkw_result(&resp))
             }
             Action::Pkw { inverter, bytes } => {
-                let order = PkwRepr::parse(bytes).map_err(|e| StepError::Suite(format!("pkw bytes: {e}")))?;
+                let order = PkwRepr::parse(bytes)
+                    .map_err(|e| StepError::Suite(format!("pkw bytes: {e}")))?;
                 let resp = self.param_order(Unit::Inverter(*inverter), order)?;
                 let mut v = pkw_result(&resp);
                 v["bytes"] = json!(hex(&resp.emit_bytes()));
                 v["pwe"] = json!(resp.pwe);
                 Ok(v)
             }
-            Action::Process { inverter, control, setpoints, run } => {
+            Action::Process {
+                inverter,
+                control,
+                setpoints,
+                run,
+            } => {
                 let p = &mut self.process[usize::from(inverter.get())];
                 p.control = *control;
                 p.setpoints = setpoints.clone();
@@ -116,17 +131,25 @@ impl Channel {
                 self.run_process(Inverter::new(1).expect("FI 1 exists"), cycles)
             }
             Action::Inject { inverter, error } => {
-                self.dut.inject(*inverter, error).map_err(StepError::Refused)?;
+                self.dut
+                    .inject(*inverter, error)
+                    .map_err(StepError::Refused)?;
                 Ok(json!({}))
             }
-            Action::Observe { what, inverter } => self.dut.observe(what, *inverter).map_err(StepError::Refused),
+            Action::Observe { what, inverter } => self
+                .dut
+                .observe(what, *inverter)
+                .map_err(StepError::Refused),
         }
     }
 
     /// Builds the order for a `read`/`write` step (BU 0620 §2.5.6.3: array elements need the
     /// array labels 6/7/8 (11/12 RAM only); RAM-only writes use 11–14).
     fn order_for(&self, o: &OrderSpec) -> Result<PkwRepr, StepError> {
-        let dword = o.dword.unwrap_or_else(|| o.value.is_some_and(|v| v > i64::from(u16::MAX) || v < i64::from(i16::MIN)));
+        let dword = o.dword.unwrap_or_else(|| {
+            o.value
+                .is_some_and(|v| v > i64::from(u16::MAX) || v < i64::from(i16::MIN))
+        });
         let ak = match (o.ak, o.value, o.element.is_some()) {
             (Some(ak), _, _) => OrderLabel(ak),
             (None, None, false) => OrderLabel::REQUEST_VALUE,
@@ -134,7 +157,8 @@ impl Channel {
             (None, Some(_), array) => OrderLabel::change(array, dword, !o.eeprom),
         };
         let value = o.value.unwrap_or(0);
-        let pwe = i32::try_from(value).map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
+        let pwe = i32::try_from(value)
+            .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
         Ok(PkwRepr {
             ak: ak.0,
             spm: false,
@@ -153,8 +177,15 @@ impl Channel {
         let mut pzd = vec![process.control];
         pzd.extend(process.setpoints.iter().copied());
         pzd.resize(self.ppo.pzd_words(), 0);
-        let ppo = PpoRepr { pkw: self.ppo.has_pkw().then(|| pkw.unwrap_or_default()), pzd };
-        let frame = LinkRepr { unit, ppo_type: self.ppo.0, payload: ppo.emit(self.ppo) };
+        let ppo = PpoRepr {
+            pkw: self.ppo.has_pkw().then(|| pkw.unwrap_or_default()),
+            pzd,
+        };
+        let frame = LinkRepr {
+            unit,
+            ppo_type: self.ppo.0,
+            payload: ppo.emit(self.ppo),
+        };
         let sent_bytes = frame.emit();
         let answer = self.dut.cycle(&sent_bytes);
         let decoded = answer.as_deref().map(|b| decode_answer(b, unit, self.ppo));
@@ -174,7 +205,10 @@ impl Channel {
     /// Repeats `order` every cycle until the answer carries its PNU with a response label.
     fn param_order(&mut self, unit: Unit, order: PkwRepr) -> Result<PkwRepr, StepError> {
         if !self.ppo.has_pkw() {
-            return Err(StepError::Suite(format!("PPO type {} has no parameter channel", self.ppo.0)));
+            return Err(StepError::Suite(format!(
+                "PPO type {} has no parameter channel",
+                self.ppo.0
+            )));
         }
         let mut last = None;
         for _ in 0..self.retries {
@@ -188,8 +222,13 @@ impl Channel {
             }
         }
         Err(match last {
-            None => StepError::Silent { cycles: self.retries },
-            Some(r) => StepError::Unanswered { cycles: self.retries, last: r.describe_response() },
+            None => StepError::Silent {
+                cycles: self.retries,
+            },
+            Some(r) => StepError::Unanswered {
+                cycles: self.retries,
+                last: r.describe_response(),
+            },
         })
     }
 
@@ -204,7 +243,11 @@ impl Channel {
         }
         self.compact(first);
         let ppo = last.ok_or(StepError::Silent { cycles })?;
-        let status = ppo.pzd.first().copied().ok_or_else(|| StepError::Protocol("answer without a status word".into()))?;
+        let status = ppo
+            .pzd
+            .first()
+            .copied()
+            .ok_or_else(|| StepError::Protocol("answer without a status word".into()))?;
         Ok(json!({ "status": status, "actuals": ppo.pzd.get(1..).unwrap_or_default() }))
     }
 }
@@ -241,10 +284,17 @@ fn unit(target: Target) -> Unit {
 fn decode_answer(bytes: &[u8], sent_to: Unit, ppo: PpoType) -> Result<PpoRepr, String> {
     let frame = LinkRepr::parse(bytes).map_err(|e| e.to_string())?;
     if frame.unit != sent_to {
-        return Err(format!("answer from data record {}, the order went to {}", frame.unit.record(), sent_to.record()));
+        return Err(format!(
+            "answer from data record {}, the order went to {}",
+            frame.unit.record(),
+            sent_to.record()
+        ));
     }
     if frame.ppo_type != ppo.0 {
-        return Err(format!("answer is PPO type {}, the order was PPO type {}", frame.ppo_type, ppo.0));
+        return Err(format!(
+            "answer is PPO type {}, the order was PPO type {}",
+            frame.ppo_type, ppo.0
+        ));
     }
     PpoRepr::parse(&frame.payload, ppo).map_err(|e| e.to_string())
 }

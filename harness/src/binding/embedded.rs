@@ -24,7 +24,10 @@ impl DutFactory for EmbeddedFactory {
     }
 
     fn open(&mut self, profile: &Profile) -> Result<Box<dyn Dut>, String> {
-        let config = DeviceConfig { inverters: profile.inverters, ..DeviceConfig::new(profile.product) };
+        let config = DeviceConfig {
+            inverters: profile.inverters,
+            ..DeviceConfig::new(profile.product)
+        };
         Ok(Box::new(Embedded::new(Device::new(config))))
     }
 }
@@ -40,13 +43,22 @@ struct Embedded {
 impl Embedded {
     fn new(device: Device) -> Self {
         let (harness_end, device_end) = mem_pair();
-        Embedded { device, clock: VirtualClock::new(), harness_end, device_end }
+        Embedded {
+            device,
+            clock: VirtualClock::new(),
+            harness_end,
+            device_end,
+        }
     }
 }
 
 impl Dut for Embedded {
     fn describe(&self) -> String {
-        format!("embedded simulator ({}, {} inverters)", self.device.config().product.name(), self.device.config().inverters)
+        format!(
+            "embedded simulator ({}, {} inverters)",
+            self.device.config().product.name(),
+            self.device.config().inverters
+        )
     }
 
     fn capabilities(&self) -> &[Capability] {
@@ -79,7 +91,9 @@ impl Dut for Embedded {
             "state" => Ok(json!({ "state": self.device.state_name(inverter)? })),
             "eeprom-writes" => Ok(json!({ "count": self.device.eeprom_writes(Some(inverter))? })),
             "interface-eeprom-writes" => Ok(json!({ "count": self.device.eeprom_writes(None)? })),
-            other => Err(format!("cannot observe `{other}` (state, eeprom-writes, interface-eeprom-writes)")),
+            other => Err(format!(
+                "cannot observe `{other}` (state, eeprom-writes, interface-eeprom-writes)"
+            )),
         }
     }
 }

@@ -49,7 +49,11 @@ pub(super) const FNS: &[ComputeFn] = &[
     ComputeFn {
         name: "addr.can",
         doc: "System-bus CAN IDs of an inverter and its absolute encoder (BU 0620 §3.1)",
-        run: |_: &Ctx, a: &Args| to_json(addr::can(Inverter::new(a.opt_int("inverter")?.unwrap_or(1))?)),
+        run: |_: &Ctx, a: &Args| {
+            to_json(addr::can(Inverter::new(
+                a.opt_int("inverter")?.unwrap_or(1),
+            )?))
+        },
     },
     ComputeFn {
         name: "addr.all",

@@ -39,25 +39,32 @@ pub(crate) struct Args(pub(crate) Map<String, Value>);
 
 impl Args {
     fn bad(arg: &str, why: impl Into<String>) -> ComputeError {
-        ComputeError::BadArg { arg: arg.to_string(), why: why.into() }
+        ComputeError::BadArg {
+            arg: arg.to_string(),
+            why: why.into(),
+        }
     }
 
     /// A required integer, written as a number, `0B31h`, `1011b` or `-5`.
     pub(crate) fn int(&self, name: &str) -> Result<i64, ComputeError> {
-        self.opt_int(name)?.ok_or_else(|| Self::bad(name, "missing"))
+        self.opt_int(name)?
+            .ok_or_else(|| Self::bad(name, "missing"))
     }
 
     /// An optional integer in the manuals' notation.
     pub(crate) fn opt_int(&self, name: &str) -> Result<Option<i64>, ComputeError> {
         match self.0.get(name) {
             None | Some(Value::Null) => Ok(None),
-            Some(v) => notation::int_of(v).map(Some).map_err(|why| Self::bad(name, why)),
+            Some(v) => notation::int_of(v)
+                .map(Some)
+                .map_err(|why| Self::bad(name, why)),
         }
     }
 
     /// A required string.
     pub(crate) fn str(&self, name: &str) -> Result<&str, ComputeError> {
-        self.opt_str(name)?.ok_or_else(|| Self::bad(name, "missing"))
+        self.opt_str(name)?
+            .ok_or_else(|| Self::bad(name, "missing"))
     }
 
     /// An optional string.

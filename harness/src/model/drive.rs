@@ -19,17 +19,29 @@ fn to_json<T: serde::Serialize>(v: T) -> Result<Value, ComputeError> {
 
 fn next(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let from = a.str("state")?;
-    let state = State::from_name(from).ok_or_else(|| ComputeError::BadArg { arg: "state".into(), why: format!("no state `{from}`") })?;
+    let state = State::from_name(from).ok_or_else(|| ComputeError::BadArg {
+        arg: "state".into(),
+        why: format!("no state `{from}`"),
+    })?;
     let previous = ControlWord(a.opt_int("previous")?.unwrap_or(0) as u16);
-    Ok(match state_machine::next(state, ControlWord(word(a, "control")?), previous) {
-        Some(t) => json!({ "transition": t.number, "to": t.to.name(), "letter": t.to.letter().to_string() }),
-        None => json!({ "transition": null, "to": state.name(), "letter": state.letter().to_string() }),
-    })
+    Ok(
+        match state_machine::next(state, ControlWord(word(a, "control")?), previous) {
+            Some(t) => {
+                json!({ "transition": t.number, "to": t.to.name(), "letter": t.to.letter().to_string() })
+            }
+            None => {
+                json!({ "transition": null, "to": state.name(), "letter": state.letter().to_string() })
+            }
+        },
+    )
 }
 
 fn state_bits(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let name = a.str("state")?;
-    let s = State::from_name(name).ok_or_else(|| ComputeError::BadArg { arg: "state".into(), why: format!("no state `{name}`") })?;
+    let s = State::from_name(name).ok_or_else(|| ComputeError::BadArg {
+        arg: "state".into(),
+        why: format!("no state `{name}`"),
+    })?;
     let (mask, value) = s.status_pattern();
     Ok(json!({ "mask": mask, "value": value, "letter": s.letter().to_string(), "name": s.name() }))
 }
@@ -46,13 +58,23 @@ pub(super) const FNS: &[ComputeFn] = &[
         doc: "Status word bits by name and the decoded state (BU 0620 §6.1.2.2, §6.1.2.3)",
         run: |_: &Ctx, a: &Args| to_json(StatusWord(word(a, "word")?).fields()),
     },
-    ComputeFn { name: "drive.next", doc: "Transition a control word triggers from a state (§6.1.2.3)", run: next },
-    ComputeFn { name: "drive.state_bits", doc: "Status bits 0–6 (mask, value) of a state (§6.1.2.3)", run: state_bits },
+    ComputeFn {
+        name: "drive.next",
+        doc: "Transition a control word triggers from a state (§6.1.2.3)",
+        run: next,
+    },
+    ComputeFn {
+        name: "drive.state_bits",
+        doc: "Status bits 0–6 (mask, value) of a state (§6.1.2.3)",
+        run: state_bits,
+    },
     ComputeFn {
         name: "drive.percent",
         doc: "Raw process value of a percentage and back (4000h = 100 %, §6.1.2.4)",
         run: |_: &Ctx, a: &Args| match a.opt_int("raw")? {
-            Some(raw) => Ok(json!({ "percent": scaling::raw_to_percent(raw as i16), "raw": raw as i16 })),
+            Some(raw) => {
+                Ok(json!({ "percent": scaling::raw_to_percent(raw as i16), "raw": raw as i16 }))
+            }
             None => {
                 let p = a.int("percent")?;
                 Ok(json!({ "raw": scaling::percent_to_raw(p as f64) }))
@@ -80,9 +102,12 @@ pub(super) const FNS: &[ComputeFn] = &[
         name: "drive.position",
         doc: "A 32-bit position as low and high word (§6.1.2.4)",
         run: |_: &Ctx, a: &Args| {
-            let p = i32::try_from(a.int("position")?).map_err(|_| ComputeError::Refused("position does not fit 32 bits".into()))?;
+            let p = i32::try_from(a.int("position")?)
+                .map_err(|_| ComputeError::Refused("position does not fit 32 bits".into()))?;
             if p.abs() > scaling::POSITION_LIMIT {
-                return Err(ComputeError::Refused(format!("position {p} is beyond ±50000.00 rotations")));
+                return Err(ComputeError::Refused(format!(
+                    "position {p} is beyond ±50000.00 rotations"
+                )));
             }
             let (low, high) = scaling::position_words(p);
             Ok(json!({ "low": low, "high": high }))

@@ -23,7 +23,10 @@ fn decode(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
         .split_whitespace()
         .map(|t| u8::from_str_radix(t, 16))
         .collect::<Result<_, _>>()
-        .map_err(|_| ComputeError::BadArg { arg: "bytes".into(), why: format!("`{text}` is not hex bytes") })?;
+        .map_err(|_| ComputeError::BadArg {
+            arg: "bytes".into(),
+            why: format!("`{text}` is not hex bytes"),
+        })?;
     let r = PkwRepr::parse(&bytes).map_err(|e| ComputeError::Refused(e.to_string()))?;
     Ok(fields(&r))
 }
@@ -38,16 +41,33 @@ fn encode(c: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     };
     let pnu = match a.opt_int("pnu")? {
         Some(p) => p as u16,
-        None => proto::nord::addr::profinet_pnu(c.product, proto::nord::ParamNumber::new(a.int("param")?)?),
+        None => proto::nord::addr::profinet_pnu(
+            c.product,
+            proto::nord::ParamNumber::new(a.int("param")?)?,
+        ),
     };
-    let r = PkwRepr { ak: a.int("ak")? as u8, spm: false, pnu, ind, pwe: a.opt_int("value")?.unwrap_or(0) as u32 };
+    let r = PkwRepr {
+        ak: a.int("ak")? as u8,
+        spm: false,
+        pnu,
+        ind,
+        pwe: a.opt_int("value")?.unwrap_or(0) as u32,
+    };
     Ok(fields(&r))
 }
 
 /// The functions of this theme.
 pub(super) const FNS: &[ComputeFn] = &[
-    ComputeFn { name: "pkw.decode", doc: "Fields of an 8-byte PKW telegram (BU 0620 §2.5.6.3)", run: decode },
-    ComputeFn { name: "pkw.encode", doc: "PKW telegram from ak, param/pnu, set/element/ind, value", run: encode },
+    ComputeFn {
+        name: "pkw.decode",
+        doc: "Fields of an 8-byte PKW telegram (BU 0620 §2.5.6.3)",
+        run: decode,
+    },
+    ComputeFn {
+        name: "pkw.encode",
+        doc: "PKW telegram from ak, param/pnu, set/element/ind, value",
+        run: encode,
+    },
     ComputeFn {
         name: "pkw.ind",
         doc: "IND word of a parameter set / array element (BU 0620 §2.5.6.3)",
@@ -68,23 +88,32 @@ pub(super) const FNS: &[ComputeFn] = &[
     ComputeFn {
         name: "pkw.error",
         doc: "Meaning of a parameter-channel error number (PWE2 of AK 7)",
-        run: |_: &Ctx, a: &Args| Ok(json!({ "meaning": ErrorNumber(a.int("number")? as u16).meaning() })),
+        run: |_: &Ctx, a: &Args| {
+            Ok(json!({ "meaning": ErrorNumber(a.int("number")? as u16).meaning() }))
+        },
     },
     ComputeFn {
         name: "pkw.supported",
         doc: "Order labels a unit supports (first = FI 1 / the interface; else a system-bus FI)",
         run: |c: &Ctx, a: &Args| {
             let first = a.opt_bool("first")?.unwrap_or(true);
-            let labels: Vec<u8> = supported_orders(c.product, first).iter().map(|o| o.0).collect();
+            let labels: Vec<u8> = supported_orders(c.product, first)
+                .iter()
+                .map(|o| o.0)
+                .collect();
             Ok(json!({ "labels": labels }))
         },
     },
     ComputeFn {
         name: "ppo.layout",
-        doc: "PPO type layout: PKW, PZD words, bytes, display code (BU 0620 §2.5.4, BU 0590 §4.1.1)",
+        doc:
+            "PPO type layout: PKW, PZD words, bytes, display code (BU 0620 §2.5.4, BU 0590 §4.1.1)",
         run: |c: &Ctx, a: &Args| {
-            let t = PpoType::new(a.int("type")? as u8).map_err(|e| ComputeError::Refused(e.to_string()))?;
-            Ok(json!({ "pkw": t.has_pkw(), "pzd_words": t.pzd_words(), "bytes": t.byte_len(), "display_code": t.display_code(c.product) }))
+            let t = PpoType::new(a.int("type")? as u8)
+                .map_err(|e| ComputeError::Refused(e.to_string()))?;
+            Ok(
+                json!({ "pkw": t.has_pkw(), "pzd_words": t.pzd_words(), "bytes": t.byte_len(), "display_code": t.display_code(c.product) }),
+            )
         },
     },
 ];

@@ -10,7 +10,12 @@ fn sdo_abort(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let protocol = match a.str("protocol")? {
         "ethercat" => Protocol::Ethercat,
         "powerlink" => Protocol::Powerlink,
-        p => return Err(ComputeError::BadArg { arg: "protocol".into(), why: format!("`{p}` has no SDO abort list (ethercat, powerlink)") }),
+        p => {
+            return Err(ComputeError::BadArg {
+                arg: "protocol".into(),
+                why: format!("`{p}` has no SDO abort list (ethercat, powerlink)"),
+            })
+        }
     };
     let code = a.int("code")? as u32;
     Ok(match SdoAbort(code).describe(protocol) {
@@ -21,25 +26,40 @@ fn sdo_abort(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
 
 fn comm_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let ds402 = a.int("ds402")? as u16;
-    let e = errors::COMM_ERRORS.iter().find(|e| e.ds402 == ds402).ok_or_else(|| ComputeError::Refused(format!("{ds402:04X}h is not in BU 0620 §5.3")))?;
+    let e = errors::COMM_ERRORS
+        .iter()
+        .find(|e| e.ds402 == ds402)
+        .ok_or_else(|| ComputeError::Refused(format!("{ds402:04X}h is not in BU 0620 §5.3")))?;
     Ok(json!({ "p700": e.p700, "text": e.text, "profinet_alarm": errors::profinet_alarm(e.p700) }))
 }
 
 /// The functions of this theme.
 pub(super) const FNS: &[ComputeFn] = &[
-    ComputeFn { name: "tables.sdo_abort", doc: "Is an SDO abort code in the protocol's list, and its text (BU 0620 §2.2.7.2, §2.4.7)", run: sdo_abort },
-    ComputeFn { name: "tables.comm_error", doc: "P700 error and PROFINET alarm of a DS402 code (BU 0620 §5.3, §5.4.2)", run: comm_error },
+    ComputeFn {
+        name: "tables.sdo_abort",
+        doc: "Is an SDO abort code in the protocol's list, and its text (BU 0620 §2.2.7.2, §2.4.7)",
+        run: sdo_abort,
+    },
+    ComputeFn {
+        name: "tables.comm_error",
+        doc: "P700 error and PROFINET alarm of a DS402 code (BU 0620 §5.3, §5.4.2)",
+        run: comm_error,
+    },
     ComputeFn {
         name: "tables.profinet_alarm",
         doc: "PROFINET alarm number of a P700 value: 100h + P700 (BU 0620 §5.4.2)",
-        run: |_: &Ctx, a: &Args| Ok(json!({ "alarm": errors::profinet_alarm(a.int("p700")? as u16) })),
+        run: |_: &Ctx, a: &Args| {
+            Ok(json!({ "alarm": errors::profinet_alarm(a.int("p700")? as u16) }))
+        },
     },
     ComputeFn {
         name: "tables.device_name",
         doc: "Checks a PROFINET device name against the rules (BU 0620 §3.8.1, P854)",
-        run: |_: &Ctx, a: &Args| Ok(match rules::validate_device_name(a.str("name")?) {
-            Ok(()) => json!({ "valid": true }),
-            Err(e) => json!({ "valid": false, "rule": e.to_string() }),
-        }),
+        run: |_: &Ctx, a: &Args| {
+            Ok(match rules::validate_device_name(a.str("name")?) {
+                Ok(()) => json!({ "valid": true }),
+                Err(e) => json!({ "valid": false, "rule": e.to_string() }),
+            })
+        },
     },
 ];

@@ -21,8 +21,10 @@ pub(super) fn render(run: &RunResult) -> String {
             })
         })
         .collect();
-    let counts: serde_json::Map<String, Value> =
-        Verdict::ALL.iter().map(|v| (v.name().to_string(), json!(run.count(*v)))).collect();
+    let counts: serde_json::Map<String, Value> = Verdict::ALL
+        .iter()
+        .map(|v| (v.name().to_string(), json!(run.count(*v))))
+        .collect();
     let doc = json!({
         "dut": run.dut,
         "profiles": run.profiles,

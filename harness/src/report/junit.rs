@@ -42,7 +42,12 @@ pub(super) fn render(run: &RunResult) -> Vec<u8> {
     let mut report = Report::new();
     for profile in &run.profiles {
         let mut suite = TestSuite::new(profile);
-        suite.add_testcases(run.cases.iter().filter(|c| &c.profile == profile).map(|c| testcase(c, &run.dut)));
+        suite.add_testcases(
+            run.cases
+                .iter()
+                .filter(|c| &c.profile == profile)
+                .map(|c| testcase(c, &run.dut)),
+        );
         report.add_testsuite(suite);
     }
     let mut out = Vec::new();
@@ -61,16 +66,28 @@ mod tests {
         assert_eq!(junit_kind(Verdict::Pass), ("success", ""));
         assert_eq!(junit_kind(Verdict::Fail), ("failure", ""));
         assert_eq!(junit_kind(Verdict::Error), ("error", ""));
-        assert_eq!(junit_kind(Verdict::Inconclusive), ("skipped", "inconclusive: "));
-        assert_eq!(junit_kind(Verdict::NotApplicable), ("skipped", "not applicable: "));
+        assert_eq!(
+            junit_kind(Verdict::Inconclusive),
+            ("skipped", "inconclusive: ")
+        );
+        assert_eq!(
+            junit_kind(Verdict::NotApplicable),
+            ("skipped", "not applicable: ")
+        );
     }
 
     #[test]
     fn xml_has_one_suite_per_profile_and_each_verdict_mapped() {
         let xml = String::from_utf8(render(&sample_run())).unwrap();
         assert_eq!(xml.matches("<testsuite ").count(), 2, "{xml}");
-        assert!(xml.contains("<failure") && xml.contains("<error") && xml.contains("<skipped"), "{xml}");
-        assert!(xml.contains("not applicable: the statement is about"), "{xml}");
+        assert!(
+            xml.contains("<failure") && xml.contains("<error") && xml.contains("<skipped"),
+            "{xml}"
+        );
+        assert!(
+            xml.contains("not applicable: the statement is about"),
+            "{xml}"
+        );
         assert!(xml.contains("classname=\"BU 0620 §2.2.7\""), "{xml}");
         assert!(xml.contains("section: 2.2.7"), "{xml}");
     }

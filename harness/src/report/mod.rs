@@ -30,7 +30,10 @@ pub(crate) enum ReportError {
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_ {
-    move |source| ReportError::Io { path: path.to_path_buf(), source }
+    move |source| ReportError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
 }
 
 /// Writes a file, creating its folder.
@@ -56,7 +59,9 @@ pub(crate) fn write_all(run: &RunResult, out: &Path) -> Result<(), ReportError> 
     write(&out.join("run.json"), json::render(run).as_bytes())?;
     write(&out.join("summary.md"), summary::markdown(run).as_bytes())?;
     for case in &run.cases {
-        let path = transcripts.join(&case.profile).join(format!("{}.txt", case_file(&case.id)));
+        let path = transcripts
+            .join(&case.profile)
+            .join(format!("{}.txt", case_file(&case.id)));
         write(&path, transcript::render(case).as_bytes())?;
     }
     Ok(())
@@ -73,7 +78,12 @@ pub(crate) mod tests {
             id: id.into(),
             title: "t".into(),
             profile: profile.into(),
-            manual: ManualRef { doc: "BU 0620".into(), edition: "2020-03 en".into(), section: "2.2.7".into(), page: 20 },
+            manual: ManualRef {
+                doc: "BU 0620".into(),
+                edition: "2020-03 en".into(),
+                section: "2.2.7".into(),
+                page: 20,
+            },
             verdict,
             message: message.into(),
             steps: vec![StepResult {
@@ -99,9 +109,24 @@ pub(crate) mod tests {
             profiles: vec!["sk550p".into(), "tu3-eip".into()],
             cases: vec![
                 case("bu0620/addr/coe-p102", "sk550p", Verdict::Pass, ""),
-                case("bu0620/pkw/p102", "sk550p", Verdict::Fail, "status: expected 2865 (0B31h), got 2871 (0B37h)"),
-                case("bu0620/pkw/silent", "tu3-eip", Verdict::Error, "no answer from the DUT within 250 bus cycles"),
-                case("bu0620/addr/coe-p102", "tu3-eip", Verdict::NotApplicable, "the statement is about sk550p, this run is tu3-eip"),
+                case(
+                    "bu0620/pkw/p102",
+                    "sk550p",
+                    Verdict::Fail,
+                    "status: expected 2865 (0B31h), got 2871 (0B37h)",
+                ),
+                case(
+                    "bu0620/pkw/silent",
+                    "tu3-eip",
+                    Verdict::Error,
+                    "no answer from the DUT within 250 bus cycles",
+                ),
+                case(
+                    "bu0620/addr/coe-p102",
+                    "tu3-eip",
+                    Verdict::NotApplicable,
+                    "the statement is about sk550p, this run is tu3-eip",
+                ),
             ],
             errata: vec![Erratum {
                 doc: "BU 0620".into(),

@@ -49,20 +49,27 @@ pub(crate) fn redact(text: &str) -> String {
 }
 
 /// Applies the mode to the run.
-pub(crate) fn apply_snapshots(run: &mut RunResult, mode: &SnapshotMode) -> Result<SnapshotReport, ReportError> {
+pub(crate) fn apply_snapshots(
+    run: &mut RunResult,
+    mode: &SnapshotMode,
+) -> Result<SnapshotReport, ReportError> {
     let mut report = SnapshotReport::default();
     match mode {
         SnapshotMode::Off => {}
         SnapshotMode::Accept(dir) => {
             for c in &run.cases {
-                let path = dir.join(&c.profile).join(format!("{}.snap", case_file(&c.id)));
+                let path = dir
+                    .join(&c.profile)
+                    .join(format!("{}.snap", case_file(&c.id)));
                 write(&path, redact(&transcript::render(c)).as_bytes())?;
                 report.stored += 1;
             }
         }
         SnapshotMode::Compare(dir) => {
             for c in &mut run.cases {
-                let path = dir.join(&c.profile).join(format!("{}.snap", case_file(&c.id)));
+                let path = dir
+                    .join(&c.profile)
+                    .join(format!("{}.snap", case_file(&c.id)));
                 let stored = match std::fs::read_to_string(&path) {
                     Ok(s) => s,
                     Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -96,7 +103,9 @@ fn first_difference(a: &str, b: &str) -> Option<(usize, String, String)> {
     for n in 1.. {
         match (x.next(), y.next()) {
             (None, None) => return None,
-            (l, r) if l != r => return Some((n, l.unwrap_or("(end)").into(), r.unwrap_or("(end)").into())),
+            (l, r) if l != r => {
+                return Some((n, l.unwrap_or("(end)").into(), r.unwrap_or("(end)").into()))
+            }
             _ => {}
         }
     }
@@ -121,7 +130,11 @@ mod tests {
         let r = apply_snapshots(&mut run, &SnapshotMode::Compare(dir.clone())).unwrap();
         assert_eq!(r.changed, vec![run.cases[0].id.clone()]);
         assert_eq!(run.cases[0].verdict, Verdict::Fail);
-        assert!(run.cases[0].message.contains("first difference at line"), "{}", run.cases[0].message);
+        assert!(
+            run.cases[0].message.contains("first difference at line"),
+            "{}",
+            run.cases[0].message
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

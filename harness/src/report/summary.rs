@@ -7,11 +7,17 @@ use crate::outcome::{RunResult, Verdict};
 
 /// Sort key for sections: "2.10" after "2.2.7".
 fn section_key(s: &str) -> Vec<u32> {
-    s.split('.').map(|p| p.parse().unwrap_or(u32::MAX)).collect()
+    s.split('.')
+        .map(|p| p.parse().unwrap_or(u32::MAX))
+        .collect()
 }
 
 fn counts_row(counts: &[usize; 5]) -> String {
-    counts.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(" | ")
+    counts
+        .iter()
+        .map(|n| n.to_string())
+        .collect::<Vec<_>>()
+        .join(" | ")
 }
 
 fn index(v: Verdict) -> usize {
@@ -21,7 +27,13 @@ fn index(v: Verdict) -> usize {
 /// `summary.md`.
 pub(super) fn markdown(run: &RunResult) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# Run summary\n\nDUT: {}; profiles: {}; {:.3} s\n", run.dut, run.profiles.join(", "), run.duration.as_secs_f64());
+    let _ = writeln!(
+        s,
+        "# Run summary\n\nDUT: {}; profiles: {}; {:.3} s\n",
+        run.dut,
+        run.profiles.join(", "),
+        run.duration.as_secs_f64()
+    );
     if !run.load_errors.is_empty() {
         let _ = writeln!(s, "## Suite files that did not load\n");
         for e in &run.load_errors {
@@ -30,7 +42,10 @@ pub(super) fn markdown(run: &RunResult) -> String {
         s.push('\n');
     }
     let header = "| pass | fail | inconclusive | error | not applicable |";
-    let _ = writeln!(s, "## Verdicts per profile\n\n| profile {header}\n|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "## Verdicts per profile\n\n| profile {header}\n|---|---|---|---|---|---|"
+    );
     for p in &run.profiles {
         let mut c = [0usize; 5];
         for case in run.cases.iter().filter(|c| &c.profile == p) {
@@ -40,22 +55,49 @@ pub(super) fn markdown(run: &RunResult) -> String {
     }
     let mut by_section: BTreeMap<(String, Vec<u32>, String), [usize; 5]> = BTreeMap::new();
     for c in &run.cases {
-        let key = (c.manual.doc.clone(), section_key(&c.manual.section), c.manual.section.clone());
+        let key = (
+            c.manual.doc.clone(),
+            section_key(&c.manual.section),
+            c.manual.section.clone(),
+        );
         by_section.entry(key).or_default()[index(c.verdict)] += 1;
     }
     let _ = writeln!(s, "\n## Coverage by manual section\n\n| manual | section {header}\n|---|---|---|---|---|---|---|");
     for ((doc, _, section), c) in &by_section {
         let _ = writeln!(s, "| {doc} | {section} | {} |", counts_row(c));
     }
-    let _ = writeln!(s, "\n## Errata (what the manuals print, and what the cases test)\n");
+    let _ = writeln!(
+        s,
+        "\n## Errata (what the manuals print, and what the cases test)\n"
+    );
     for e in &run.errata {
-        let _ = writeln!(s, "- {} ({}) §{} p. {}: printed `{}` → correct `{}` — {}", e.doc, e.edition, e.section, e.page, e.printed, e.correct, e.why);
+        let _ = writeln!(
+            s,
+            "- {} ({}) §{} p. {}: printed `{}` → correct `{}` — {}",
+            e.doc, e.edition, e.section, e.page, e.printed, e.correct, e.why
+        );
     }
-    let bad: Vec<_> = run.cases.iter().filter(|c| matches!(c.verdict, Verdict::Fail | Verdict::Error | Verdict::Inconclusive)).collect();
+    let bad: Vec<_> = run
+        .cases
+        .iter()
+        .filter(|c| {
+            matches!(
+                c.verdict,
+                Verdict::Fail | Verdict::Error | Verdict::Inconclusive
+            )
+        })
+        .collect();
     if !bad.is_empty() {
         let _ = writeln!(s, "\n## Failed, errored and inconclusive cases\n");
         for c in bad {
-            let _ = writeln!(s, "- **{}** [{}] {}: {}", c.verdict.name(), c.profile, c.id, c.message);
+            let _ = writeln!(
+                s,
+                "- **{}** [{}] {}: {}",
+                c.verdict.name(),
+                c.profile,
+                c.id,
+                c.message
+            );
         }
     }
     s
@@ -67,8 +109,19 @@ pub(crate) fn terminal(run: &RunResult) -> String {
     for e in &run.load_errors {
         let _ = writeln!(s, "LOAD ERROR {e}");
     }
-    for c in run.cases.iter().filter(|c| matches!(c.verdict, Verdict::Fail | Verdict::Error)) {
-        let _ = writeln!(s, "{:<5} [{}] {}: {}", c.verdict.name().to_uppercase(), c.profile, c.id, c.message);
+    for c in run
+        .cases
+        .iter()
+        .filter(|c| matches!(c.verdict, Verdict::Fail | Verdict::Error))
+    {
+        let _ = writeln!(
+            s,
+            "{:<5} [{}] {}: {}",
+            c.verdict.name().to_uppercase(),
+            c.profile,
+            c.id,
+            c.message
+        );
     }
     let _ = writeln!(
         s,
@@ -92,16 +145,33 @@ mod tests {
 
     #[test]
     fn sections_sort_numerically() {
-        let mut v = vec![section_key("2.10"), section_key("2.2.7"), section_key("2.2")];
+        let mut v = vec![
+            section_key("2.10"),
+            section_key("2.2.7"),
+            section_key("2.2"),
+        ];
         v.sort();
-        assert_eq!(v, vec![section_key("2.2"), section_key("2.2.7"), section_key("2.10")]);
+        assert_eq!(
+            v,
+            vec![
+                section_key("2.2"),
+                section_key("2.2.7"),
+                section_key("2.10")
+            ]
+        );
     }
 
     #[test]
     fn summary_has_coverage_errata_and_failures() {
         let md = markdown(&sample_run());
-        assert!(md.contains("| BU 0620 | 2.2.7 | 1 | 1 | 0 | 1 | 1 |"), "{md}");
-        assert!(md.contains("printed `class 103` → correct `class 102`"), "{md}");
+        assert!(
+            md.contains("| BU 0620 | 2.2.7 | 1 | 1 | 0 | 1 | 1 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("printed `class 103` → correct `class 102`"),
+            "{md}"
+        );
         assert!(md.contains("**fail** [sk550p]"), "{md}");
         assert!(terminal(&sample_run()).contains("1 pass, 1 fail"));
     }

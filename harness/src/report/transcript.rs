@@ -9,13 +9,23 @@ use crate::outcome::CaseResult;
 pub(crate) fn render(c: &CaseResult) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "case: {}\ntitle: {}", c.id, c.title);
-    let _ = writeln!(s, "manual: {} ({}) §{} p. {}", c.manual.doc, c.manual.edition, c.manual.section, c.manual.page);
+    let _ = writeln!(
+        s,
+        "manual: {} ({}) §{} p. {}",
+        c.manual.doc, c.manual.edition, c.manual.section, c.manual.page
+    );
     let _ = writeln!(s, "profile: {}\nverdict: {}", c.profile, c.verdict.name());
     if !c.message.is_empty() {
         let _ = writeln!(s, "message: {}", c.message);
     }
     for (i, st) in c.steps.iter().enumerate() {
-        let _ = writeln!(s, "\nstep {}: {}\n  verdict: {}", i + 1, st.step, st.verdict.name());
+        let _ = writeln!(
+            s,
+            "\nstep {}: {}\n  verdict: {}",
+            i + 1,
+            st.step,
+            st.verdict.name()
+        );
         if !st.observed.is_null() {
             let _ = writeln!(s, "  observed: {}", st.observed);
         }
@@ -23,7 +33,11 @@ pub(crate) fn render(c: &CaseResult) -> String {
             let _ = writeln!(s, "  message: {}", st.message);
         }
         for x in &st.exchanges {
-            let _ = writeln!(s, "  -> {}\n     {}\n  <- {}\n     {}", x.sent_hex, x.sent, x.received_hex, x.received);
+            let _ = writeln!(
+                s,
+                "  -> {}\n     {}\n  <- {}\n     {}",
+                x.sent_hex, x.sent, x.received_hex, x.received
+            );
         }
     }
     s

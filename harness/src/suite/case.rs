@@ -80,7 +80,11 @@ impl OrderSpec {
 #[derive(Debug)]
 pub(crate) enum Action {
     /// Call a reference-model function.
-    Compute { func: &'static ComputeFn, args: Map<String, Value>, product: Option<Product> },
+    Compute {
+        func: &'static ComputeFn,
+        args: Map<String, Value>,
+        product: Option<Product>,
+    },
     /// Read a parameter.
     Read(OrderSpec),
     /// Write a parameter.
@@ -88,7 +92,12 @@ pub(crate) enum Action {
     /// Send one raw PKW order.
     Pkw { inverter: Inverter, bytes: [u8; 8] },
     /// Exchange process data.
-    Process { inverter: Inverter, control: u16, setpoints: Vec<u16>, run: Run },
+    Process {
+        inverter: Inverter,
+        control: u16,
+        setpoints: Vec<u16>,
+        run: Run,
+    },
     /// Keep the process data running.
     Wait(Duration),
     /// Raise an inverter error.
@@ -109,7 +118,9 @@ impl Action {
     pub(crate) fn needs(&self) -> Option<Capability> {
         match self {
             Action::Compute { .. } => None,
-            Action::Read(_) | Action::Write(_) | Action::Pkw { .. } => Some(Capability::ParameterChannel),
+            Action::Read(_) | Action::Write(_) | Action::Pkw { .. } => {
+                Some(Capability::ParameterChannel)
+            }
             Action::Process { .. } | Action::Wait(_) => Some(Capability::ProcessData),
             Action::Inject { .. } => Some(Capability::FaultInjection),
             Action::Observe { .. } => Some(Capability::Observe),
@@ -128,7 +139,9 @@ pub(crate) fn parse_duration(s: &str) -> Result<Duration, String> {
         return Err(format!("`{s}` is not a duration (write 200ms or 2s)"));
     };
     match num.trim().parse::<f64>() {
-        Ok(v) if v >= 0.0 && v.is_finite() && v * scale <= 3600.0 => Ok(Duration::from_secs_f64(v * scale)),
+        Ok(v) if v >= 0.0 && v.is_finite() && v * scale <= 3600.0 => {
+            Ok(Duration::from_secs_f64(v * scale))
+        }
         _ => Err(format!("`{s}` is not a duration between 0 and 1 h")),
     }
 }
@@ -140,9 +153,16 @@ struct Fields<'a> {
 }
 
 impl<'a> Fields<'a> {
-    fn new(action: &'static str, map: &'a Map<String, Value>, allowed: &[&str]) -> Result<Self, String> {
+    fn new(
+        action: &'static str,
+        map: &'a Map<String, Value>,
+        allowed: &[&str],
+    ) -> Result<Self, String> {
         if let Some(k) = map.keys().find(|k| !allowed.contains(&k.as_str())) {
-            return Err(format!("`{action}` has no field `{k}` (fields: {})", allowed.join(", ")));
+            return Err(format!(
+                "`{action}` has no field `{k}` (fields: {})",
+                allowed.join(", ")
+            ));
         }
         Ok(Fields { action, map })
     }
@@ -155,15 +175,24 @@ impl<'a> Fields<'a> {
     }
 
     fn req_int(&self, key: &str) -> Result<i64, String> {
-        self.int(key)?.ok_or_else(|| format!("`{}` needs `{key}`", self.action))
+        self.int(key)?
+            .ok_or_else(|| format!("`{}` needs `{key}`", self.action))
     }
 
-    fn ranged<T>(&self, key: &str, f: fn(i64) -> Result<T, proto::nord::RangeError>) -> Result<Option<T>, String> {
-        self.int(key)?.map(|v| f(v).map_err(|e| format!("`{}.{key}`: {e}", self.action))).transpose()
+    fn ranged<T>(
+        &self,
+        key: &str,
+        f: fn(i64) -> Result<T, proto::nord::RangeError>,
+    ) -> Result<Option<T>, String> {
+        self.int(key)?
+            .map(|v| f(v).map_err(|e| format!("`{}.{key}`: {e}", self.action)))
+            .transpose()
     }
 
     fn inverter(&self) -> Result<Inverter, String> {
-        Ok(self.ranged("inverter", Inverter::new)?.unwrap_or(Inverter::new(1).expect("FI 1 exists")))
+        Ok(self
+            .ranged("inverter", Inverter::new)?
+            .unwrap_or(Inverter::new(1).expect("FI 1 exists")))
     }
 
     fn word(&self, key: &str) -> Result<u16, String> {
@@ -176,7 +205,10 @@ impl<'a> Fields<'a> {
             None => Ok(None),
             Some(Value::String(s)) => Ok(Some(s.clone())),
             Some(Value::Number(n)) => Ok(Some(n.to_string())),
-            Some(other) => Err(format!("`{}.{key}`: expected text, got {other}", self.action)),
+            Some(other) => Err(format!(
+                "`{}.{key}`: expected text, got {other}",
+                self.action
+            )),
         }
     }
 
@@ -184,7 +216,10 @@ impl<'a> Fields<'a> {
         match self.map.get(key) {
             None => Ok(None),
             Some(Value::Bool(b)) => Ok(Some(*b)),
-            Some(other) => Err(format!("`{}.{key}`: expected true or false, got {other}", self.action)),
+            Some(other) => Err(format!(
+                "`{}.{key}`: expected true or false, got {other}",
+                self.action
+            )),
         }
     }
 }
@@ -198,19 +233,41 @@ fn order(action: &'static str, map: &Map<String, Value>, write: bool) -> Result<
     let target = match f.text("target")?.as_deref() {
         None | Some("inverter") => Target::Inverter(f.inverter()?),
         Some("interface") => Target::Interface,
-        Some(other) => return Err(format!("`{action}.target`: `{other}` is neither `interface` nor `inverter`")),
+        Some(other) => {
+            return Err(format!(
+                "`{action}.target`: `{other}` is neither `interface` nor `inverter`"
+            ))
+        }
     };
-    let ak = f.int("ak")?.map(|v| u8::try_from(v).ok().filter(|a| *a <= 15).ok_or(format!("`{action}.ak`: {v} is not 0..=15"))).transpose()?;
+    let ak = f
+        .int("ak")?
+        .map(|v| {
+            u8::try_from(v)
+                .ok()
+                .filter(|a| *a <= 15)
+                .ok_or(format!("`{action}.ak`: {v} is not 0..=15"))
+        })
+        .transpose()?;
     let dword = match f.text("width")?.as_deref() {
         None => None,
         Some("word") => Some(false),
         Some("dword") => Some(true),
-        Some(other) => return Err(format!("`{action}.width`: `{other}` is neither `word` nor `dword`")),
+        Some(other) => {
+            return Err(format!(
+                "`{action}.width`: `{other}` is neither `word` nor `dword`"
+            ))
+        }
     };
-    let value = if write { Some(f.req_int("value")?) } else { None };
+    let value = if write {
+        Some(f.req_int("value")?)
+    } else {
+        None
+    };
     Ok(OrderSpec {
         target,
-        number: f.ranged("param", ParamNumber::new)?.ok_or(format!("`{action}` needs `param`"))?,
+        number: f
+            .ranged("param", ParamNumber::new)?
+            .ok_or(format!("`{action}` needs `param`"))?,
         set: f.ranged("set", ParamSet::new)?,
         element: f.ranged("element", ArrayElement::new)?,
         ak,
@@ -221,11 +278,16 @@ fn order(action: &'static str, map: &Map<String, Value>, write: bool) -> Result<
 }
 
 fn hex8(text: &str) -> Result<[u8; 8], String> {
-    let bytes: Result<Vec<u8>, _> = text.split_whitespace().map(|t| u8::from_str_radix(t, 16)).collect();
+    let bytes: Result<Vec<u8>, _> = text
+        .split_whitespace()
+        .map(|t| u8::from_str_radix(t, 16))
+        .collect();
     match bytes {
         Ok(b) if b.len() == 8 => Ok(b.try_into().expect("length checked")),
         Ok(b) => Err(format!("`pkw.bytes` needs 8 bytes, got {}", b.len())),
-        Err(_) => Err(format!("`pkw.bytes`: `{text}` is not hex bytes like \"70 66 02 00 00 00 03 E8\"")),
+        Err(_) => Err(format!(
+            "`pkw.bytes`: `{text}` is not hex bytes like \"70 66 02 00 00 00 03 E8\""
+        )),
     }
 }
 
@@ -255,14 +317,26 @@ fn action(step: StepDoc) -> Result<Action, String> {
         return Err("`args` goes with `compute`".into());
     }
     if let Some(name) = step.compute {
-        let func = model::find(&name).ok_or_else(|| format!("no compute function `{name}` (see `harness list --functions`)"))?;
+        let func = model::find(&name).ok_or_else(|| {
+            format!("no compute function `{name}` (see `harness list --functions`)")
+        })?;
         let mut args = step.args.unwrap_or_default();
         let product = match args.remove("product") {
             None => None,
-            Some(Value::String(p)) => Some(Product::from_name(&p).ok_or(format!("`args.product`: unknown product `{p}`"))?),
-            Some(other) => return Err(format!("`args.product`: expected a product name, got {other}")),
+            Some(Value::String(p)) => Some(
+                Product::from_name(&p).ok_or(format!("`args.product`: unknown product `{p}`"))?,
+            ),
+            Some(other) => {
+                return Err(format!(
+                    "`args.product`: expected a product name, got {other}"
+                ))
+            }
         };
-        return Ok(Action::Compute { func, args, product });
+        return Ok(Action::Compute {
+            func,
+            args,
+            product,
+        });
     }
     if let Some(m) = step.read {
         return Ok(Action::Read(order("read", &m, false)?));
@@ -273,44 +347,84 @@ fn action(step: StepDoc) -> Result<Action, String> {
     if let Some(m) = step.pkw {
         let f = Fields::new("pkw", &m, &["inverter", "bytes"])?;
         let bytes = hex8(&f.text("bytes")?.ok_or("`pkw` needs `bytes`")?)?;
-        return Ok(Action::Pkw { inverter: f.inverter()?, bytes });
+        return Ok(Action::Pkw {
+            inverter: f.inverter()?,
+            bytes,
+        });
     }
     if let Some(m) = step.process {
-        let f = Fields::new("process", &m, &["inverter", "control", "setpoints", "cycles", "for"])?;
+        let f = Fields::new(
+            "process",
+            &m,
+            &["inverter", "control", "setpoints", "cycles", "for"],
+        )?;
         let setpoints = match m.get("setpoints") {
             None => Vec::new(),
             Some(Value::Array(items)) => items
                 .iter()
-                .map(|v| int_of(v).and_then(|i| u16::try_from(i).or_else(|_| i16::try_from(i).map(|s| s as u16)).map_err(|_| format!("{i} is not a 16-bit word"))))
+                .map(|v| {
+                    int_of(v).and_then(|i| {
+                        u16::try_from(i)
+                            .or_else(|_| i16::try_from(i).map(|s| s as u16))
+                            .map_err(|_| format!("{i} is not a 16-bit word"))
+                    })
+                })
                 .collect::<Result<_, _>>()
                 .map_err(|e| format!("`process.setpoints`: {e}"))?,
-            Some(other) => return Err(format!("`process.setpoints`: expected a list, got {other}")),
+            Some(other) => {
+                return Err(format!("`process.setpoints`: expected a list, got {other}"))
+            }
         };
         let run = match (f.int("cycles")?, f.text("for")?) {
             (Some(_), Some(_)) => return Err("`process` takes `cycles` or `for`, not both".into()),
-            (Some(c), None) => Run::Cycles(u32::try_from(c).ok().filter(|c| (1..=100_000).contains(c)).ok_or(format!("`process.cycles`: {c} is not 1..=100000"))?),
+            (Some(c), None) => Run::Cycles(
+                u32::try_from(c)
+                    .ok()
+                    .filter(|c| (1..=100_000).contains(c))
+                    .ok_or(format!("`process.cycles`: {c} is not 1..=100000"))?,
+            ),
             (None, Some(d)) => Run::For(parse_duration(&d)?),
             (None, None) => Run::Cycles(1),
         };
-        return Ok(Action::Process { inverter: f.inverter()?, control: f.word("control")?, setpoints, run });
+        return Ok(Action::Process {
+            inverter: f.inverter()?,
+            control: f.word("control")?,
+            setpoints,
+            run,
+        });
     }
     if let Some(d) = step.wait {
         return Ok(Action::Wait(parse_duration(&d)?));
     }
     if let Some(m) = step.inject {
         let f = Fields::new("inject", &m, &["inverter", "error"])?;
-        return Ok(Action::Inject { inverter: f.inverter()?, error: f.text("error")?.ok_or("`inject` needs `error`")? });
+        return Ok(Action::Inject {
+            inverter: f.inverter()?,
+            error: f.text("error")?.ok_or("`inject` needs `error`")?,
+        });
     }
     let m = step.observe.unwrap_or_default();
     let f = Fields::new("observe", &m, &["what", "inverter"])?;
-    Ok(Action::Observe { what: f.text("what")?.ok_or("`observe` needs `what`")?, inverter: f.inverter()? })
+    Ok(Action::Observe {
+        what: f.text("what")?.ok_or("`observe` needs `what`")?,
+        inverter: f.inverter()?,
+    })
 }
 
 /// Converts one step; the error text is placed by the loader.
 pub(super) fn step(doc: StepDoc) -> Result<Step, String> {
-    let expect = doc.expect.as_ref().map(Matcher::parse).transpose().map_err(|e| format!("expect: {e}"))?;
+    let expect = doc
+        .expect
+        .as_ref()
+        .map(Matcher::parse)
+        .transpose()
+        .map_err(|e| format!("expect: {e}"))?;
     let setup = doc.setup;
-    Ok(Step { action: action(doc)?, expect, setup })
+    Ok(Step {
+        action: action(doc)?,
+        expect,
+        setup,
+    })
 }
 
 /// Converts the case-level fields (not the steps).
@@ -320,12 +434,25 @@ pub(super) fn case_head(
     file_doc: &str,
     file_edition: &str,
 ) -> Result<Case, String> {
-    if doc.id.is_empty() || !doc.id.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '.' || c == '_') {
+    if doc.id.is_empty()
+        || !doc
+            .id
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '.' || c == '_')
+    {
         return Err(format!("case id `{}` must be non-empty kebab-case", doc.id));
     }
     let manual = ManualRef {
-        doc: doc.reference.doc.clone().unwrap_or_else(|| file_doc.to_string()),
-        edition: doc.reference.edition.clone().unwrap_or_else(|| file_edition.to_string()),
+        doc: doc
+            .reference
+            .doc
+            .clone()
+            .unwrap_or_else(|| file_doc.to_string()),
+        edition: doc
+            .reference
+            .edition
+            .clone()
+            .unwrap_or_else(|| file_edition.to_string()),
         section: doc.reference.section.clone(),
         page: doc.reference.page,
     };
@@ -335,7 +462,10 @@ pub(super) fn case_head(
         .map(|names| {
             names
                 .iter()
-                .map(|n| Product::from_name(n).ok_or_else(|| crate::profile::Profile::by_name(n).unwrap_err()))
+                .map(|n| {
+                    Product::from_name(n)
+                        .ok_or_else(|| crate::profile::Profile::by_name(n).unwrap_err())
+                })
                 .collect::<Result<Vec<_>, _>>()
         })
         .transpose()?;
@@ -344,7 +474,15 @@ pub(super) fn case_head(
         .iter()
         .map(|r| Capability::from_name(r).ok_or(format!("unknown capability `{r}` (parameter-channel, process-data, fault-injection, observe)")))
         .collect::<Result<_, _>>()?;
-    Ok(Case { id, title: doc.title.clone(), manual, products, requires, errata: Vec::new(), steps: Vec::new() })
+    Ok(Case {
+        id,
+        title: doc.title.clone(),
+        manual,
+        products,
+        requires,
+        errata: Vec::new(),
+        steps: Vec::new(),
+    })
 }
 
 #[cfg(test)]
@@ -370,7 +508,10 @@ mod tests {
 
     #[test]
     fn pkw_bytes_need_eight() {
-        assert_eq!(hex8("70 66 02 00 00 00 03 E8"), Ok([0x70, 0x66, 2, 0, 0, 0, 3, 0xE8]));
+        assert_eq!(
+            hex8("70 66 02 00 00 00 03 E8"),
+            Ok([0x70, 0x66, 2, 0, 0, 0, 3, 0xE8])
+        );
         assert!(hex8("70 66").unwrap_err().contains("8 bytes"));
         assert!(hex8("zz 66 02 00 00 00 03 E8").is_err());
     }

@@ -47,7 +47,10 @@ fn yaml_files(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
         let path = entry?.path();
         if path.is_dir() {
             yaml_files(&path, out)?;
-        } else if matches!(path.extension().and_then(|e| e.to_str()), Some("yaml" | "yml")) {
+        } else if matches!(
+            path.extension().and_then(|e| e.to_str()),
+            Some("yaml" | "yml")
+        ) {
             out.push(path);
         }
     }
@@ -63,51 +66,81 @@ pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
         message: format!("cannot read the suites folder: {e}"),
     })?;
     files.sort();
-    let mut loaded = Loaded { files: files.len(), ..Loaded::default() };
+    let mut loaded = Loaded {
+        files: files.len(),
+        ..Loaded::default()
+    };
     let mut ids = HashSet::new();
     for file in files {
         let rel = file.strip_prefix(dir).unwrap_or(&file).with_extension("");
         let prefix = rel.to_string_lossy().replace('\\', "/");
         match std::fs::read_to_string(&file) {
             Ok(text) => load_text(&file, &prefix, &text, &mut ids, &mut loaded),
-            Err(e) => loaded.errors.push(LoadError { file: file.clone(), line: None, message: format!("cannot read: {e}") }),
+            Err(e) => loaded.errors.push(LoadError {
+                file: file.clone(),
+                line: None,
+                message: format!("cannot read: {e}"),
+            }),
         }
     }
     Ok(loaded)
 }
 
 /// Loads one file's text. Cases with errors are dropped and reported; the others load.
-pub(crate) fn load_text(file: &Path, prefix: &str, text: &str, ids: &mut HashSet<String>, loaded: &mut Loaded) {
-    let err = |line: Option<u64>, message: String| LoadError { file: file.to_path_buf(), line, message };
+pub(crate) fn load_text(
+    file: &Path,
+    prefix: &str,
+    text: &str,
+    ids: &mut HashSet<String>,
+    loaded: &mut Loaded,
+) {
+    let err = |line: Option<u64>, message: String| LoadError {
+        file: file.to_path_buf(),
+        line,
+        message,
+    };
     let doc: FileDoc = match serde_saphyr::from_str(text) {
         Ok(d) => d,
         Err(e) => {
             let line = e.location().map(|l| l.line());
-            let message = e.to_string().lines().next().unwrap_or("invalid YAML").to_string();
+            let message = e
+                .to_string()
+                .lines()
+                .next()
+                .unwrap_or("invalid YAML")
+                .to_string();
             loaded.errors.push(err(line, message));
             return;
         }
     };
     if doc.cases.is_empty() {
-        loaded.errors.push(err(None, "the file has no cases".into()));
+        loaded
+            .errors
+            .push(err(None, "the file has no cases".into()));
     }
     for spanned in doc.cases {
         let line = Some(spanned.defined.line());
         let case_doc = spanned.value;
         let id = format!("{prefix}/{}", case_doc.id);
         if !ids.insert(id.clone()) {
-            loaded.errors.push(err(line, format!("duplicate case id `{}`", case_doc.id)));
+            loaded
+                .errors
+                .push(err(line, format!("duplicate case id `{}`", case_doc.id)));
             continue;
         }
         let mut case = match case_head(id, &case_doc, &doc.doc, &doc.edition) {
             Ok(c) => c,
             Err(m) => {
-                loaded.errors.push(err(line, format!("case `{}`: {m}", case_doc.id)));
+                loaded
+                    .errors
+                    .push(err(line, format!("case `{}`: {m}", case_doc.id)));
                 continue;
             }
         };
         if case_doc.steps.is_empty() {
-            loaded.errors.push(err(line, format!("case `{}` has no steps", case_doc.id)));
+            loaded
+                .errors
+                .push(err(line, format!("case `{}` has no steps", case_doc.id)));
             continue;
         }
         let mut ok = true;
@@ -116,7 +149,10 @@ pub(crate) fn load_text(file: &Path, prefix: &str, text: &str, ids: &mut HashSet
             match step(s.value) {
                 Ok(st) => case.steps.push(st),
                 Err(m) => {
-                    loaded.errors.push(err(step_line, format!("case `{}`, step {}: {m}", case_doc.id, i + 1)));
+                    loaded.errors.push(err(
+                        step_line,
+                        format!("case `{}`, step {}: {m}", case_doc.id, i + 1),
+                    ));
                     ok = false;
                 }
             }
@@ -147,7 +183,13 @@ mod tests {
 
     fn load(text: &str) -> Loaded {
         let mut loaded = Loaded::default();
-        load_text(Path::new("t.yaml"), "x/t", text, &mut HashSet::new(), &mut loaded);
+        load_text(
+            Path::new("t.yaml"),
+            "x/t",
+            text,
+            &mut HashSet::new(),
+            &mut loaded,
+        );
         loaded
     }
 
@@ -195,13 +237,21 @@ cases:
     #[test]
     fn two_actions_in_one_step_are_refused() {
         let l = load(&GOOD.replace("wait: 10ms", "wait: 10ms\n        read: { param: 102 }"));
-        assert!(l.errors[0].message.contains("exactly one action"), "{}", l.errors[0]);
+        assert!(
+            l.errors[0].message.contains("exactly one action"),
+            "{}",
+            l.errors[0]
+        );
     }
 
     #[test]
     fn out_of_range_values_are_refused_at_load() {
         let l = load(&GOOD.replace("wait: 10ms", "read: { param: 1000, inverter: 9 }"));
-        assert!(l.errors[0].message.contains("out of range"), "{}", l.errors[0]);
+        assert!(
+            l.errors[0].message.contains("out of range"),
+            "{}",
+            l.errors[0]
+        );
     }
 
     #[test]

@@ -46,10 +46,17 @@ pub enum AddrError {
 
 fn check(product: Product, protocol: Protocol, inverter: Inverter) -> Result<(), AddrError> {
     if !product.protocols().contains(&protocol) {
-        return Err(AddrError::NoProtocol { product: product.name(), protocol });
+        return Err(AddrError::NoProtocol {
+            product: product.name(),
+            protocol,
+        });
     }
     if inverter.get() > product.max_inverters() {
-        return Err(AddrError::NoSuchInverter { product: product.name(), inverter: inverter.get(), max: product.max_inverters() });
+        return Err(AddrError::NoSuchInverter {
+            product: product.name(),
+            inverter: inverter.get(),
+            max: product.max_inverters(),
+        });
     }
     Ok(())
 }
@@ -87,7 +94,10 @@ pub struct SdoAddress {
 pub fn coe(product: Product, a: ParamAddress) -> Result<SdoAddress, AddrError> {
     check(product, Protocol::Ethercat, a.inverter)?;
     let device = 0x800 * u16::from(a.inverter.get() - 1);
-    Ok(SdoAddress { index: 0x2000 + device + a.number.get(), subindex: sdo_subindex(a.set, a.element) })
+    Ok(SdoAddress {
+        index: 0x2000 + device + a.number.get(),
+        subindex: sdo_subindex(a.set, a.element),
+    })
 }
 
 /// POWERLINK SDO of an inverter parameter: the SK 550P's device-id table (600h steps) or the
@@ -99,7 +109,10 @@ pub fn powerlink(product: Product, a: ParamAddress) -> Result<SdoAddress, AddrEr
         Family::Integrated => 0x2000 + 0x600 * (fi - 1),
         Family::Module => 0x2000 + 0x800 * fi,
     };
-    Ok(SdoAddress { index: device + a.number.get(), subindex: sdo_subindex(a.set, a.element) })
+    Ok(SdoAddress {
+        index: device + a.number.get(),
+        subindex: sdo_subindex(a.set, a.element),
+    })
 }
 
 /// A CIP path to a parameter.
@@ -116,7 +129,11 @@ pub struct CipAddress {
 /// EtherNet/IP path of an inverter parameter.
 pub fn cip(product: Product, a: ParamAddress) -> Result<CipAddress, AddrError> {
     check(product, Protocol::Ethernetip, a.inverter)?;
-    Ok(CipAddress { class: 100 + u16::from(a.inverter.get()), instance: cip_instance(a.set, a.element), attribute: a.number.get() })
+    Ok(CipAddress {
+        class: 100 + u16::from(a.inverter.get()),
+        instance: cip_instance(a.set, a.element),
+        attribute: a.number.get(),
+    })
 }
 
 /// PNU of a parameter order in a data record: P + 1000 (BU 0620 §2.5.6.2 "1000 must be added";
@@ -159,7 +176,10 @@ pub struct CanIds {
 /// "Absolute encoder address = CAN ID of the frequency inverter + 1").
 pub fn can(inverter: Inverter) -> CanIds {
     let id = 32 + 2 * (inverter.get() - 1);
-    CanIds { inverter: id, encoder: id + 1 }
+    CanIds {
+        inverter: id,
+        encoder: id + 1,
+    }
 }
 
 /// Every protocol address of one parameter, for `harness addr`.
@@ -184,7 +204,11 @@ pub struct Addresses {
 /// All addresses of a parameter (protocols the product does not speak are `None`).
 pub fn all(product: Product, a: ParamAddress) -> Result<Addresses, AddrError> {
     if a.inverter.get() > product.max_inverters() {
-        return Err(AddrError::NoSuchInverter { product: product.name(), inverter: a.inverter.get(), max: product.max_inverters() });
+        return Err(AddrError::NoSuchInverter {
+            product: product.name(),
+            inverter: a.inverter.get(),
+            max: product.max_inverters(),
+        });
     }
     let mut parameter = format!("{} {}", a.number, a.inverter);
     if let Some(s) = a.set {
@@ -208,18 +232,38 @@ impl fmt::Display for Addresses {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "{} on {}", self.parameter, self.product)?;
         if let Some(c) = self.ethercat {
-            writeln!(f, "  EtherCAT CoE      index {:04X}h ({}) sub-index {}", c.index, c.index, c.subindex)?;
+            writeln!(
+                f,
+                "  EtherCAT CoE      index {:04X}h ({}) sub-index {}",
+                c.index, c.index, c.subindex
+            )?;
         }
         if let Some(p) = self.powerlink {
-            writeln!(f, "  POWERLINK SDO     index {:04X}h ({}) sub-index {}", p.index, p.index, p.subindex)?;
+            writeln!(
+                f,
+                "  POWERLINK SDO     index {:04X}h ({}) sub-index {}",
+                p.index, p.index, p.subindex
+            )?;
         }
         if let Some(e) = self.ethernetip {
-            writeln!(f, "  EtherNet/IP CIP   class {} instance {} attribute {}", e.class, e.instance, e.attribute)?;
+            writeln!(
+                f,
+                "  EtherNet/IP CIP   class {} instance {} attribute {}",
+                e.class, e.instance, e.attribute
+            )?;
         }
         if let Some(p) = self.profinet {
-            writeln!(f, "  PROFINET          data record {} PNU {} ({:04X}h) IND {:04X}h", p.record, p.pnu, p.pnu, p.ind)?;
+            writeln!(
+                f,
+                "  PROFINET          data record {} PNU {} ({:04X}h) IND {:04X}h",
+                p.record, p.pnu, p.pnu, p.ind
+            )?;
         }
-        writeln!(f, "  System bus        CAN ID {} (absolute encoder {})", self.systembus.inverter, self.systembus.encoder)
+        writeln!(
+            f,
+            "  System bus        CAN ID {} (absolute encoder {})",
+            self.systembus.inverter, self.systembus.encoder
+        )
     }
 }
 
@@ -240,16 +284,32 @@ mod tests {
     #[test]
     fn coe_example_p102_fi3() {
         // BU 0620 §2.2.7 p. 20: 2000h + 1000h + 66h = 3066h.
-        assert_eq!(coe(Product::Sk550p, a(3, 102, None, None)).unwrap().index, 0x3066);
-        assert_eq!(coe(Product::Sk550p, a(8, 999, None, None)).unwrap().index, 0x5800 + 999);
+        assert_eq!(
+            coe(Product::Sk550p, a(3, 102, None, None)).unwrap().index,
+            0x3066
+        );
+        assert_eq!(
+            coe(Product::Sk550p, a(8, 999, None, None)).unwrap().index,
+            0x5800 + 999
+        );
     }
 
     #[test]
     fn powerlink_examples_differ_by_manual() {
         // BU 0620 §2.4.6 p. 36: P102 on FI 5 = 3800h + 66h = 3866h.
-        assert_eq!(powerlink(Product::Sk550p, a(5, 102, None, None)).unwrap().index, 0x3866);
+        assert_eq!(
+            powerlink(Product::Sk550p, a(5, 102, None, None))
+                .unwrap()
+                .index,
+            0x3866
+        );
         // BU 2200: P102 on FU1 = 2800h + 66h = 2866h.
-        assert_eq!(powerlink(Product::Tu3Pol, a(1, 102, None, None)).unwrap().index, 0x2866);
+        assert_eq!(
+            powerlink(Product::Tu3Pol, a(1, 102, None, None))
+                .unwrap()
+                .index,
+            0x2866
+        );
     }
 
     #[rstest]
@@ -281,14 +341,31 @@ mod tests {
     fn profinet_and_can() {
         let p = profinet(Product::Sk550p, a(1, 717, None, None)).unwrap();
         assert_eq!((p.record, p.pnu), (101, 0x6B5));
-        assert_eq!(can(Inverter::new(3).unwrap()), CanIds { inverter: 36, encoder: 37 });
+        assert_eq!(
+            can(Inverter::new(3).unwrap()),
+            CanIds {
+                inverter: 36,
+                encoder: 37
+            }
+        );
     }
 
     #[test]
     fn refusals() {
-        assert!(matches!(coe(Product::Tu3Eip, a(1, 1, None, None)), Err(AddrError::NoProtocol { .. })));
-        assert!(matches!(cip(Product::Tu4Eip, a(5, 1, None, None)), Err(AddrError::NoSuchInverter { max: 4, .. })));
-        let all = all(Product::Sk550p, a(5, 102, Some(3), None)).unwrap().to_string();
-        assert!(all.contains("index 4066h") && all.contains("3866h"), "{all}");
+        assert!(matches!(
+            coe(Product::Tu3Eip, a(1, 1, None, None)),
+            Err(AddrError::NoProtocol { .. })
+        ));
+        assert!(matches!(
+            cip(Product::Tu4Eip, a(5, 1, None, None)),
+            Err(AddrError::NoSuchInverter { max: 4, .. })
+        ));
+        let all = all(Product::Sk550p, a(5, 102, Some(3), None))
+            .unwrap()
+            .to_string();
+        assert!(
+            all.contains("index 4066h") && all.contains("3866h"),
+            "{all}"
+        );
     }
 }

@@ -74,7 +74,10 @@ impl ControlWord {
         ControlFields {
             word: self.0,
             bits: (0..16).map(|n| u8::from(self.bit(n))).collect(),
-            set: (0..16).filter(|n| self.bit(*n)).map(|n| BIT_NAMES[usize::from(n)]).collect(),
+            set: (0..16)
+                .filter(|n| self.bit(*n))
+                .map(|n| BIT_NAMES[usize::from(n)])
+                .collect(),
             parameter_set: self.parameter_set(),
             valid: self.valid(),
         }
@@ -89,7 +92,11 @@ impl ControlWord {
             self.0,
             f.set.join(", "),
             f.parameter_set,
-            if f.valid { "" } else { "; control data NOT valid (bit 10 = 0): the inverter ignores it" }
+            if f.valid {
+                ""
+            } else {
+                "; control data NOT valid (bit 10 = 0): the inverter ignores it"
+            }
         )
     }
 }

@@ -18,26 +18,106 @@ pub struct CommError {
 
 /// BU 0620 §5.3 "Error messages – general communication errors" (p. 94).
 pub const COMM_ERRORS: &[CommError] = &[
-    CommError { p700: 100, ds402: 0x7580, text: "CAN /CANopen connection error" },
-    CommError { p700: 100, ds402: 0x7581, text: "CAN Broadcast telegram timeout" },
-    CommError { p700: 100, ds402: 0x7582, text: "CANopen NodeGuard telegram timeout" },
-    CommError { p700: 100, ds402: 0x7583, text: "CANopen HeartBeat monitoring telegram timeout" },
-    CommError { p700: 100, ds402: 0x7584, text: "USS telegram timeout" },
-    CommError { p700: 100, ds402: 0x7585, text: "CAN in Bus Off state" },
-    CommError { p700: 100, ds402: 0x7586, text: "USB telegram timeout" },
-    CommError { p700: 100, ds402: 0x7587, text: "Ini CAN Hardware Problem" },
-    CommError { p700: 101, ds402: 0x7590, text: "Reserve" },
-    CommError { p700: 102, ds402: 0x7591, text: "Telegram timeout for field bus interface (Time-out through PLC)" },
-    CommError { p700: 103, ds402: 0x7592, text: "Telegram timeout for field bus interface (Time-out through P513)" },
-    CommError { p700: 104, ds402: 0x7593, text: "External bus module initialisation failure" },
-    CommError { p700: 105, ds402: 0x7594, text: "External Bus module system failure" },
-    CommError { p700: 105, ds402: 0x7595, text: "System error; netX and controller not compatible" },
-    CommError { p700: 105, ds402: 0x7596, text: "Error when changing the field bus protocol" },
-    CommError { p700: 105, ds402: 0x7597, text: "System errors: Package to field bus interface too long" },
-    CommError { p700: 105, ds402: 0x7598, text: "Condition for change of field bus protocol not present" },
-    CommError { p700: 106, ds402: 0x7599, text: "Ethernet cable not connected" },
-    CommError { p700: 107, ds402: 0x759A, text: "Reserve" },
-    CommError { p700: 108, ds402: 0x759B, text: "Communication error to field bus interface" },
+    CommError {
+        p700: 100,
+        ds402: 0x7580,
+        text: "CAN /CANopen connection error",
+    },
+    CommError {
+        p700: 100,
+        ds402: 0x7581,
+        text: "CAN Broadcast telegram timeout",
+    },
+    CommError {
+        p700: 100,
+        ds402: 0x7582,
+        text: "CANopen NodeGuard telegram timeout",
+    },
+    CommError {
+        p700: 100,
+        ds402: 0x7583,
+        text: "CANopen HeartBeat monitoring telegram timeout",
+    },
+    CommError {
+        p700: 100,
+        ds402: 0x7584,
+        text: "USS telegram timeout",
+    },
+    CommError {
+        p700: 100,
+        ds402: 0x7585,
+        text: "CAN in Bus Off state",
+    },
+    CommError {
+        p700: 100,
+        ds402: 0x7586,
+        text: "USB telegram timeout",
+    },
+    CommError {
+        p700: 100,
+        ds402: 0x7587,
+        text: "Ini CAN Hardware Problem",
+    },
+    CommError {
+        p700: 101,
+        ds402: 0x7590,
+        text: "Reserve",
+    },
+    CommError {
+        p700: 102,
+        ds402: 0x7591,
+        text: "Telegram timeout for field bus interface (Time-out through PLC)",
+    },
+    CommError {
+        p700: 103,
+        ds402: 0x7592,
+        text: "Telegram timeout for field bus interface (Time-out through P513)",
+    },
+    CommError {
+        p700: 104,
+        ds402: 0x7593,
+        text: "External bus module initialisation failure",
+    },
+    CommError {
+        p700: 105,
+        ds402: 0x7594,
+        text: "External Bus module system failure",
+    },
+    CommError {
+        p700: 105,
+        ds402: 0x7595,
+        text: "System error; netX and controller not compatible",
+    },
+    CommError {
+        p700: 105,
+        ds402: 0x7596,
+        text: "Error when changing the field bus protocol",
+    },
+    CommError {
+        p700: 105,
+        ds402: 0x7597,
+        text: "System errors: Package to field bus interface too long",
+    },
+    CommError {
+        p700: 105,
+        ds402: 0x7598,
+        text: "Condition for change of field bus protocol not present",
+    },
+    CommError {
+        p700: 106,
+        ds402: 0x7599,
+        text: "Ethernet cable not connected",
+    },
+    CommError {
+        p700: 107,
+        ds402: 0x759A,
+        text: "Reserve",
+    },
+    CommError {
+        p700: 108,
+        ds402: 0x759B,
+        text: "Communication error to field bus interface",
+    },
 ];
 
 /// The PROFINET diagnostic alarm of an inverter error: 100h + P700 value (BU 0620 §5.4.2: E10.3
@@ -125,9 +205,15 @@ mod tests {
 
     #[test]
     fn the_two_abort_lists_differ() {
-        assert_eq!(SdoAbort(0x0503_0000).describe(Protocol::Ethercat), Some("Toggle bit unchanged"));
+        assert_eq!(
+            SdoAbort(0x0503_0000).describe(Protocol::Ethercat),
+            Some("Toggle bit unchanged")
+        );
         assert_eq!(SdoAbort(0x0503_0000).describe(Protocol::Powerlink), None);
-        assert_eq!(SdoAbort(0x0800_0021).describe(Protocol::Powerlink), Some("Bus interface does not respond"));
+        assert_eq!(
+            SdoAbort(0x0800_0021).describe(Protocol::Powerlink),
+            Some("Bus interface does not respond")
+        );
         assert_eq!(SdoAbort(0x0800_0021).describe(Protocol::Ethercat), None);
         assert_eq!((ETHERCAT_ABORTS.len(), POWERLINK_ABORTS.len()), (20, 23));
     }

@@ -72,7 +72,15 @@ pub struct ParamDef {
     pub source: &'static str,
 }
 
-const fn inv(number: u16, name: &'static str, min: i32, max: i32, default: i32, decimals: u8, source: &'static str) -> ParamDef {
+const fn inv(
+    number: u16,
+    name: &'static str,
+    min: i32,
+    max: i32,
+    default: i32,
+    decimals: u8,
+    source: &'static str,
+) -> ParamDef {
     ParamDef {
         number,
         name,
@@ -91,19 +99,32 @@ const fn inv(number: u16, name: &'static str, min: i32, max: i32, default: i32, 
 }
 
 const fn sets(p: ParamDef) -> ParamDef {
-    ParamDef { set_dependent: true, ..p }
+    ParamDef {
+        set_dependent: true,
+        ..p
+    }
 }
 
 const fn array(p: ParamDef, n: u8) -> ParamDef {
-    ParamDef { array: Some(n), ..p }
+    ParamDef {
+        array: Some(n),
+        ..p
+    }
 }
 
 const fn ro(p: ParamDef) -> ParamDef {
-    ParamDef { access: Access::ReadOnly, ..p }
+    ParamDef {
+        access: Access::ReadOnly,
+        ..p
+    }
 }
 
 const fn iface(p: ParamDef) -> ParamDef {
-    ParamDef { owner: Owner::Interface, family: Some(Family::Integrated), ..p }
+    ParamDef {
+        owner: Owner::Interface,
+        family: Some(Family::Integrated),
+        ..p
+    }
 }
 
 /// Every catalogued parameter.
@@ -156,13 +177,17 @@ pub fn element_default(def: &ParamDef, element: u8) -> i32 {
 /// The parameter `number` of a unit of `product`.
 pub fn lookup(product: Product, owner: Owner, number: ParamNumber) -> Option<&'static ParamDef> {
     CATALOGUE.iter().find(|d| {
-        d.number == number.get() && d.owner == owner && d.family.is_none_or(|f| f == product.family())
+        d.number == number.get()
+            && d.owner == owner
+            && d.family.is_none_or(|f| f == product.family())
     })
 }
 
 /// A product's catalogue for one owner.
 pub fn of(product: Product, owner: Owner) -> impl Iterator<Item = &'static ParamDef> {
-    CATALOGUE.iter().filter(move |d| d.owner == owner && d.family.is_none_or(|f| f == product.family()))
+    CATALOGUE
+        .iter()
+        .filter(move |d| d.owner == owner && d.family.is_none_or(|f| f == product.family()))
 }
 
 #[cfg(test)]
@@ -176,7 +201,10 @@ mod tests {
     #[test]
     fn p102_has_resolution_0_01_and_four_sets() {
         let d = lookup(Product::Sk550p, Owner::Inverter, p(102)).unwrap();
-        assert_eq!((d.decimals, d.set_dependent, d.width), (2, true, Width::Word));
+        assert_eq!(
+            (d.decimals, d.set_dependent, d.width),
+            (2, true, Width::Word)
+        );
         // BU 0620 §2.5.6.3: 99.99 s is transferred as 9999: inside the range.
         assert!((d.min..=d.max).contains(&9999));
     }
@@ -185,13 +213,23 @@ mod tests {
     fn interface_parameters_belong_to_the_sk550p() {
         assert!(lookup(Product::Sk550p, Owner::Interface, p(872)).is_some());
         assert!(lookup(Product::Tu3Pnt, Owner::Interface, p(872)).is_none());
-        assert_eq!(element_default(lookup(Product::Sk550p, Owner::Interface, p(850)).unwrap(), 4), 100);
+        assert_eq!(
+            element_default(
+                lookup(Product::Sk550p, Owner::Interface, p(850)).unwrap(),
+                4
+            ),
+            100
+        );
     }
 
     #[test]
     fn catalogue_is_consistent() {
         for d in CATALOGUE {
-            assert!(d.min <= d.default && d.default <= d.max, "P{} default outside range", d.number);
+            assert!(
+                d.min <= d.default && d.default <= d.max,
+                "P{} default outside range",
+                d.number
+            );
             assert!(d.number <= 999 && !d.source.is_empty());
         }
     }

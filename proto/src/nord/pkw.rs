@@ -119,7 +119,13 @@ impl PkwRepr {
     /// Parses the first 8 bytes.
     pub fn parse(bytes: &[u8]) -> Result<PkwRepr, PkwError> {
         let f = PkwFrame::new_checked(bytes)?;
-        Ok(PkwRepr { ak: f.ak(), spm: f.spm(), pnu: f.pnu(), ind: f.ind(), pwe: f.pwe() })
+        Ok(PkwRepr {
+            ak: f.ak(),
+            spm: f.spm(),
+            pnu: f.pnu(),
+            ind: f.ind(),
+            pwe: f.pwe(),
+        })
     }
 
     /// Always 8.
@@ -131,9 +137,13 @@ impl PkwRepr {
     /// reported).
     pub fn emit(&self, out: &mut [u8]) -> Result<(), PkwError> {
         if out.len() < PKW_LEN {
-            return Err(PkwError::Truncated { need: PKW_LEN, got: out.len() });
+            return Err(PkwError::Truncated {
+                need: PKW_LEN,
+                got: out.len(),
+            });
         }
-        let pke = (u16::from(self.ak & 0x0F) << 12) | (u16::from(self.spm) << 11) | (self.pnu & 0x07FF);
+        let pke =
+            (u16::from(self.ak & 0x0F) << 12) | (u16::from(self.spm) << 11) | (self.pnu & 0x07FF);
         out[field::PKE].copy_from_slice(&pke.to_be_bytes());
         out[field::IND].copy_from_slice(&self.ind.to_be_bytes());
         out[field::PWE].copy_from_slice(&self.pwe.to_be_bytes());
@@ -456,7 +466,9 @@ impl Ind {
         match (set, element) {
             (None, None) => Ind(0),
             (Some(s), None) => Ind(u16::from(s.get() - 1) << 8),
-            (Some(s), Some(e)) => Ind((u16::from(e.get() - 1) << 10) | (u16::from(s.get() - 1) << 8)),
+            (Some(s), Some(e)) => {
+                Ind((u16::from(e.get() - 1) << 10) | (u16::from(s.get() - 1) << 8))
+            }
             (None, Some(e)) => Ind(u16::from(e.get() - 1) << 8),
         }
     }
@@ -486,7 +498,12 @@ impl Ind {
         if self.0 == 0 {
             return "set 1 / element 1".into();
         }
-        format!("set {} element {} | sub-index {}", self.set(), self.element(), self.subindex())
+        format!(
+            "set {} element {} | sub-index {}",
+            self.set(),
+            self.element(),
+            self.subindex()
+        )
     }
 }
 
@@ -517,7 +534,10 @@ mod tests {
         // p. 59: "24h, 4Eh, 01h, 00h, 00h, 00h, 00h, FAh": AK 2, PNU 1102, IND 0100h, 250.
         let r = PkwRepr::parse(&[0x24, 0x4E, 0x01, 0x00, 0, 0, 0, 0xFA]).unwrap();
         assert_eq!((r.ak, r.pnu, r.ind, r.value()), (2, 1102, 0x0100, 250));
-        assert_eq!(OrderLabel(r.ak).positive_responses(), &[ResponseLabel::WORD]);
+        assert_eq!(
+            OrderLabel(r.ak).positive_responses(),
+            &[ResponseLabel::WORD]
+        );
         assert_eq!(Ind(r.ind).set(), 2);
     }
 
@@ -528,14 +548,21 @@ mod tests {
     #[case(2, 5, 0x1100)]
     #[case(4, 21, 0x5300)]
     fn ind_examples(#[case] set: i64, #[case] element: i64, #[case] raw: u16) {
-        let ind = Ind::for_address(Some(ParamSet::new(set).unwrap()), Some(ArrayElement::new(element).unwrap()));
+        let ind = Ind::for_address(
+            Some(ParamSet::new(set).unwrap()),
+            Some(ArrayElement::new(element).unwrap()),
+        );
         assert_eq!(ind.raw(), raw);
         assert_eq!((ind.set(), ind.element()), (set as u8, element as u8));
     }
 
     #[test]
     fn negative_values_are_sign_filled() {
-        let r = PkwRepr { ak: 2, pwe: (-5i32) as u32, ..Default::default() };
+        let r = PkwRepr {
+            ak: 2,
+            pwe: (-5i32) as u32,
+            ..Default::default()
+        };
         assert_eq!(&r.emit_bytes()[4..], &[0xFF, 0xFF, 0xFF, 0xFB]);
         assert_eq!(PkwRepr::parse(&r.emit_bytes()).unwrap().value(), -5);
     }
@@ -544,7 +571,10 @@ mod tests {
     fn truncation_at_every_length() {
         let full = [0x16, 0xB5, 0, 0, 0, 0, 0, 0];
         for n in 0..PKW_LEN {
-            assert_eq!(PkwRepr::parse(&full[..n]), Err(PkwError::Truncated { need: 8, got: n }));
+            assert_eq!(
+                PkwRepr::parse(&full[..n]),
+                Err(PkwError::Truncated { need: 8, got: n })
+            );
         }
         let mut short = [0u8; 4];
         assert!(PkwRepr::default().emit(&mut short).is_err());
@@ -553,7 +583,13 @@ mod tests {
     #[test]
     fn round_trip_every_label() {
         for ak in 0..16u8 {
-            let r = PkwRepr { ak, spm: ak % 2 == 0, pnu: 2047, ind: 0xABCD, pwe: 0xDEAD_BEEF };
+            let r = PkwRepr {
+                ak,
+                spm: ak % 2 == 0,
+                pnu: 2047,
+                ind: 0xABCD,
+                pwe: 0xDEAD_BEEF,
+            };
             assert_eq!(PkwRepr::parse(&r.emit_bytes()), Ok(r));
         }
     }
@@ -588,8 +624,20 @@ mod tests {
     fn describe_in_manual_terms() {
         let r = PkwRepr::parse(&[0x70, 0x66, 0x02, 0x00, 0x00, 0x00, 0x03, 0xE8]).unwrap();
         let s = r.describe_order();
-        assert!(s.contains("Change parameter value (array, word)") && s.contains("PWE 1000"), "{s}");
-        let e = PkwRepr { ak: 7, pnu: 1102, pwe: 2, ..Default::default() }.describe_response();
-        assert!(e.contains("error 2 \"Lower or upper value limit exceeded\""), "{e}");
+        assert!(
+            s.contains("Change parameter value (array, word)") && s.contains("PWE 1000"),
+            "{s}"
+        );
+        let e = PkwRepr {
+            ak: 7,
+            pnu: 1102,
+            pwe: 2,
+            ..Default::default()
+        }
+        .describe_response();
+        assert!(
+            e.contains("error 2 \"Lower or upper value limit exceeded\""),
+            "{e}"
+        );
     }
 }

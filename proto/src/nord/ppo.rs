@@ -55,11 +55,20 @@ impl PpoType {
     /// Control/status word + 5 setpoints/actual values.
     pub const TYPE_6: PpoType = PpoType(6);
     /// Every type NORD inverters process (BU 0620 §2.5.4).
-    pub const ALL: [PpoType; 5] = [Self::TYPE_1, Self::TYPE_2, Self::TYPE_3, Self::TYPE_4, Self::TYPE_6];
+    pub const ALL: [PpoType; 5] = [
+        Self::TYPE_1,
+        Self::TYPE_2,
+        Self::TYPE_3,
+        Self::TYPE_4,
+        Self::TYPE_6,
+    ];
 
     /// Checks the type number.
     pub fn new(n: u8) -> Result<PpoType, PpoError> {
-        Self::ALL.into_iter().find(|t| t.0 == n).ok_or(PpoError::UnknownType(n))
+        Self::ALL
+            .into_iter()
+            .find(|t| t.0 == n)
+            .ok_or(PpoError::UnknownType(n))
     }
 
     /// Whether the telegram starts with the 4-word parameter channel.
@@ -123,14 +132,21 @@ impl PpoRepr {
     pub fn parse(bytes: &[u8], ppo: PpoType) -> Result<PpoRepr, PpoError> {
         let ppo = PpoType::new(ppo.0)?;
         if bytes.len() != ppo.byte_len() {
-            return Err(PpoError::BadLength { ppo: ppo.0, need: ppo.byte_len(), got: bytes.len() });
+            return Err(PpoError::BadLength {
+                ppo: ppo.0,
+                need: ppo.byte_len(),
+                got: bytes.len(),
+            });
         }
         let (pkw, rest) = if ppo.has_pkw() {
             (Some(PkwRepr::parse(bytes)?), &bytes[PKW_LEN..])
         } else {
             (None, bytes)
         };
-        let pzd = rest.chunks_exact(2).map(|w| u16::from_be_bytes([w[0], w[1]])).collect();
+        let pzd = rest
+            .chunks_exact(2)
+            .map(|w| u16::from_be_bytes([w[0], w[1]]))
+            .collect();
         Ok(PpoRepr { pkw, pzd })
     }
 
@@ -148,7 +164,11 @@ impl PpoRepr {
     }
 
     fn words(&self) -> String {
-        self.pzd.iter().map(|w| format!("{w:04X}h")).collect::<Vec<_>>().join(" ")
+        self.pzd
+            .iter()
+            .map(|w| format!("{w:04X}h"))
+            .collect::<Vec<_>>()
+            .join(" ")
     }
 
     /// The telegram as the master sends it, in the manuals' terms.
@@ -184,7 +204,10 @@ mod tests {
     #[case(6, false, 6, 12)]
     fn layouts(#[case] n: u8, #[case] pkw: bool, #[case] words: usize, #[case] bytes: usize) {
         let t = PpoType::new(n).unwrap();
-        assert_eq!((t.has_pkw(), t.pzd_words(), t.byte_len()), (pkw, words, bytes));
+        assert_eq!(
+            (t.has_pkw(), t.pzd_words(), t.byte_len()),
+            (pkw, words, bytes)
+        );
     }
 
     #[test]
@@ -206,7 +229,10 @@ mod tests {
     #[test]
     fn ppo1_round_trip_with_the_p102_order() {
         // BU 0620 §2.5.6.4 order in the PKW area, control word 047Eh, setpoint 0.
-        let r = PpoRepr { pkw: PkwRepr::parse(&[0x24, 0x4E, 0x01, 0, 0, 0, 0, 0xFA]).ok(), pzd: vec![0x047E, 0] };
+        let r = PpoRepr {
+            pkw: PkwRepr::parse(&[0x24, 0x4E, 0x01, 0, 0, 0, 0, 0xFA]).ok(),
+            pzd: vec![0x047E, 0],
+        };
         let b = r.emit(PpoType::TYPE_1);
         assert_eq!(b, [0x24, 0x4E, 0x01, 0, 0, 0, 0, 0xFA, 0x04, 0x7E, 0, 0]);
         assert_eq!(PpoRepr::parse(&b, PpoType::TYPE_1), Ok(r));

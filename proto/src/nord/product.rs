@@ -144,7 +144,11 @@ impl Product {
     pub fn max_inverters(self) -> u8 {
         match self {
             Product::Sk550p | Product::Tu3Eip => 8,
-            Product::Tu4Eip | Product::Cu4Eip | Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => 4,
+            Product::Tu4Eip
+            | Product::Cu4Eip
+            | Product::Tu3Pol
+            | Product::Tu4Pol
+            | Product::Cu4Pol => 4,
             Product::Tu3Pnt => 1,
         }
     }

@@ -48,7 +48,10 @@ pub fn validate_device_name(name: &str) -> Result<(), NameError> {
     if count > DEVICE_NAME_MAX {
         return Err(NameError::TooLong(count));
     }
-    if let Some(c) = name.chars().find(|c| !(c.is_ascii_lowercase() || c.is_ascii_digit() || *c == '-' || *c == '.')) {
+    if let Some(c) = name
+        .chars()
+        .find(|c| !(c.is_ascii_lowercase() || c.is_ascii_digit() || *c == '-' || *c == '.'))
+    {
         return Err(NameError::BadCharacter(c));
     }
     if let Some(l) = name.split(['.', '-']).find(|l| l.len() > LABEL_MAX) {
@@ -62,7 +65,11 @@ pub fn validate_device_name(name: &str) -> Result<(), NameError> {
         return Err(NameError::DigitAtEnd);
     }
     let parts: Vec<&str> = name.split('.').collect();
-    if parts.len() == 4 && parts.iter().all(|p| !p.is_empty() && p.chars().all(|c| c.is_ascii_digit())) {
+    if parts.len() == 4
+        && parts
+            .iter()
+            .all(|p| !p.is_empty() && p.chars().all(|c| c.is_ascii_digit()))
+    {
         return Err(NameError::IpFormat);
     }
     if let Some(rest) = name.strip_prefix("port-") {
@@ -96,7 +103,10 @@ mod tests {
         let label = "a".repeat(63);
         let ok = [label.as_str(); 3].join(".");
         assert_eq!(validate_device_name(&ok), Ok(()));
-        assert!(matches!(validate_device_name(&"a".repeat(64)), Err(NameError::LabelTooLong(_))));
+        assert!(matches!(
+            validate_device_name(&"a".repeat(64)),
+            Err(NameError::LabelTooLong(_))
+        ));
         let sixty = "a".repeat(60);
         let long = [sixty.as_str(); 4].join(".");
         assert_eq!(long.len(), 243);

@@ -10,7 +10,9 @@ pub const FULL_SCALE: i32 = 0x4000;
 
 /// Raw process value of a percentage, saturated to the 16-bit range.
 pub fn percent_to_raw(percent: f64) -> i16 {
-    (percent * f64::from(FULL_SCALE) / 100.0).round().clamp(-32768.0, 32767.0) as i16
+    (percent * f64::from(FULL_SCALE) / 100.0)
+        .round()
+        .clamp(-32768.0, 32767.0) as i16
 }
 
 /// Percentage of a raw process value.

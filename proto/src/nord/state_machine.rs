@@ -156,7 +156,12 @@ pub struct Transition {
 }
 
 const fn ctl(command: &'static str, mask: u16, value: u16, priority: u8) -> Trigger {
-    Trigger::Control { command, mask, value, priority }
+    Trigger::Control {
+        command,
+        mask,
+        value,
+        priority,
+    }
 }
 
 use State::*;
@@ -170,42 +175,138 @@ const DISABLE_OPERATION: Trigger = ctl("Disable operation", 0b0000_1111, 0b0000_
 
 /// The transition table of §6.1.2.3, rows 7 and 10 split by command.
 pub const TRANSITIONS: &[Transition] = &[
-    Transition { number: 1, from: &[NotReadyForSwitchOn], to: SwitchOnBlock, trigger: Trigger::Automatic("charging relay engaged") },
-    Transition { number: 2, from: &[SwitchOnBlock], to: ReadyForSwitchOn, trigger: SHUT_DOWN },
-    Transition { number: 3, from: &[ReadyForSwitchOn], to: SwitchedOn, trigger: SWITCH_ON },
-    Transition { number: 4, from: &[SwitchedOn], to: OperationEnabled, trigger: ENABLE_OPERATION },
-    Transition { number: 5, from: &[OperationEnabled], to: SwitchedOn, trigger: DISABLE_OPERATION },
-    Transition { number: 6, from: &[SwitchedOn], to: ReadyForSwitchOn, trigger: SHUT_DOWN },
-    Transition { number: 7, from: &[ReadyForSwitchOn], to: SwitchOnBlock, trigger: DISABLE_VOLTAGE },
-    Transition { number: 7, from: &[ReadyForSwitchOn], to: SwitchOnBlock, trigger: QUICK_STOP },
-    Transition { number: 8, from: &[OperationEnabled], to: ReadyForSwitchOn, trigger: SHUT_DOWN },
-    Transition { number: 9, from: &[OperationEnabled], to: SwitchOnBlock, trigger: DISABLE_VOLTAGE },
-    Transition { number: 10, from: &[SwitchedOn], to: SwitchOnBlock, trigger: DISABLE_VOLTAGE },
-    Transition { number: 10, from: &[SwitchedOn], to: SwitchOnBlock, trigger: QUICK_STOP },
-    Transition { number: 11, from: &[OperationEnabled], to: EmergencyStopActive, trigger: QUICK_STOP },
-    Transition { number: 12, from: &[EmergencyStopActive], to: SwitchOnBlock, trigger: DISABLE_VOLTAGE },
+    Transition {
+        number: 1,
+        from: &[NotReadyForSwitchOn],
+        to: SwitchOnBlock,
+        trigger: Trigger::Automatic("charging relay engaged"),
+    },
+    Transition {
+        number: 2,
+        from: &[SwitchOnBlock],
+        to: ReadyForSwitchOn,
+        trigger: SHUT_DOWN,
+    },
+    Transition {
+        number: 3,
+        from: &[ReadyForSwitchOn],
+        to: SwitchedOn,
+        trigger: SWITCH_ON,
+    },
+    Transition {
+        number: 4,
+        from: &[SwitchedOn],
+        to: OperationEnabled,
+        trigger: ENABLE_OPERATION,
+    },
+    Transition {
+        number: 5,
+        from: &[OperationEnabled],
+        to: SwitchedOn,
+        trigger: DISABLE_OPERATION,
+    },
+    Transition {
+        number: 6,
+        from: &[SwitchedOn],
+        to: ReadyForSwitchOn,
+        trigger: SHUT_DOWN,
+    },
+    Transition {
+        number: 7,
+        from: &[ReadyForSwitchOn],
+        to: SwitchOnBlock,
+        trigger: DISABLE_VOLTAGE,
+    },
+    Transition {
+        number: 7,
+        from: &[ReadyForSwitchOn],
+        to: SwitchOnBlock,
+        trigger: QUICK_STOP,
+    },
+    Transition {
+        number: 8,
+        from: &[OperationEnabled],
+        to: ReadyForSwitchOn,
+        trigger: SHUT_DOWN,
+    },
+    Transition {
+        number: 9,
+        from: &[OperationEnabled],
+        to: SwitchOnBlock,
+        trigger: DISABLE_VOLTAGE,
+    },
+    Transition {
+        number: 10,
+        from: &[SwitchedOn],
+        to: SwitchOnBlock,
+        trigger: DISABLE_VOLTAGE,
+    },
+    Transition {
+        number: 10,
+        from: &[SwitchedOn],
+        to: SwitchOnBlock,
+        trigger: QUICK_STOP,
+    },
+    Transition {
+        number: 11,
+        from: &[OperationEnabled],
+        to: EmergencyStopActive,
+        trigger: QUICK_STOP,
+    },
+    Transition {
+        number: 12,
+        from: &[EmergencyStopActive],
+        to: SwitchOnBlock,
+        trigger: DISABLE_VOLTAGE,
+    },
     Transition {
         number: 13,
-        from: &[NotReadyForSwitchOn, SwitchOnBlock, ReadyForSwitchOn, SwitchedOn, OperationEnabled, EmergencyStopActive],
+        from: &[
+            NotReadyForSwitchOn,
+            SwitchOnBlock,
+            ReadyForSwitchOn,
+            SwitchedOn,
+            OperationEnabled,
+            EmergencyStopActive,
+        ],
         to: ErrorReactionActive,
         trigger: Trigger::Automatic("a fault occurs"),
     },
-    Transition { number: 14, from: &[ErrorReactionActive], to: Fault, trigger: Trigger::Automatic("fault reaction completed") },
-    Transition { number: 15, from: &[Fault], to: SwitchOnBlock, trigger: Trigger::AcknowledgeEdge },
+    Transition {
+        number: 14,
+        from: &[ErrorReactionActive],
+        to: Fault,
+        trigger: Trigger::Automatic("fault reaction completed"),
+    },
+    Transition {
+        number: 15,
+        from: &[Fault],
+        to: SwitchOnBlock,
+        trigger: Trigger::AcknowledgeEdge,
+    },
 ];
 
 /// The transition a control word triggers from `state`, by priority, or `None`.
 ///
 /// `previous` is the control word of the previous telegram (for the acknowledge edge). A word
 /// without bit 10 is not evaluated (§6.1.2.3 "Control bit 10").
-pub fn next(state: State, control: ControlWord, previous: ControlWord) -> Option<&'static Transition> {
+pub fn next(
+    state: State,
+    control: ControlWord,
+    previous: ControlWord,
+) -> Option<&'static Transition> {
     if !control.valid() {
         return None;
     }
     let mut best: Option<(&'static Transition, u8)> = None;
     for t in TRANSITIONS.iter().filter(|t| t.from.contains(&state)) {
         let priority = match t.trigger {
-            Trigger::Control { mask, value, priority, .. } if control.0 & mask == value => priority,
+            Trigger::Control {
+                mask,
+                value,
+                priority,
+                ..
+            } if control.0 & mask == value => priority,
             Trigger::AcknowledgeEdge if control.bit(7) && !previous.bit(7) => 7,
             _ => continue,
         };
@@ -218,7 +319,9 @@ pub fn next(state: State, control: ControlWord, previous: ControlWord) -> Option
 
 /// The automatic transition out of `state` (1, 13 or 14), for the drive model.
 pub fn automatic(number: u8) -> Option<&'static Transition> {
-    TRANSITIONS.iter().find(|t| t.number == number && matches!(t.trigger, Trigger::Automatic(_)))
+    TRANSITIONS
+        .iter()
+        .find(|t| t.number == number && matches!(t.trigger, Trigger::Automatic(_)))
 }
 
 #[cfg(test)]
@@ -255,7 +358,10 @@ mod tests {
 
     #[test]
     fn acknowledge_needs_a_rising_edge() {
-        assert_eq!(next(Fault, cw(0x04FE), cw(0x047E)).map(|t| t.number), Some(15));
+        assert_eq!(
+            next(Fault, cw(0x04FE), cw(0x047E)).map(|t| t.number),
+            Some(15)
+        );
         assert_eq!(next(Fault, cw(0x04FE), cw(0x04FE)), None);
     }
 

@@ -59,7 +59,10 @@ impl StatusWord {
         StatusFields {
             word: self.0,
             bits: (0..16).map(|n| u8::from(self.bit(n))).collect(),
-            set: (0..16).filter(|n| self.bit(*n)).map(|n| BIT_NAMES[usize::from(n)]).collect(),
+            set: (0..16)
+                .filter(|n| self.bit(*n))
+                .map(|n| BIT_NAMES[usize::from(n)])
+                .collect(),
             parameter_set: ((self.0 >> 14) & 3) as u8 + 1,
             state: state.map(State::name),
             letter: state.map(State::letter),

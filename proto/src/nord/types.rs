@@ -122,6 +122,9 @@ mod tests {
     #[test]
     fn range_error_names_the_quantity() {
         let e = ParamNumber::new(1000).unwrap_err();
-        assert_eq!(e.to_string(), "parameter number 1000 is out of range 0..=999");
+        assert_eq!(
+            e.to_string(),
+            "parameter number 1000 is out of range 0..=999"
+        );
     }
 }
