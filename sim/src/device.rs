@@ -13,13 +13,16 @@
 
 use proto::nord::pkw::PkwRepr;
 use proto::nord::ppo::{PpoRepr, PpoType};
-use proto::nord::{Inverter, ParamNumber, Product};
+use proto::nord::{led, Inverter, ParamNumber, Product};
 use std::time::Duration;
 
 use crate::drive::{Drive, DriveParams, FaultCode};
 use crate::link::{LinkFrameError, LinkRepr, Unit};
 use crate::pkw_server;
 use crate::store::{ParamStore, Target};
+
+/// How long after the last valid process data the "BUS" LED still shows communication.
+pub const PROCESS_DATA_WINDOW: Duration = Duration::from_millis(100);
 
 /// How to build a device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -111,6 +114,8 @@ fn unit_is_first(unit: Unit) -> bool {
 struct InverterUnit {
     params: ParamChannel,
     drive: Drive,
+    /// When the last valid process data (control bit 10) arrived.
+    last_process: Option<Duration>,
 }
 
 /// Parameters the drive reads, from the inverter's store (parameter set 1).
@@ -141,6 +146,7 @@ impl Device {
             .map(|i| InverterUnit {
                 params: ParamChannel::new(ParamStore::new(config.product, Target::Inverter(i))),
                 drive: Drive::new(),
+                last_process: None,
             })
             .collect();
         Device {
@@ -185,6 +191,9 @@ impl Device {
                     .pkw
                     .map(|o| unit.params.cycle(o, delay, product, link.unit));
                 let control = ppo.pzd.first().copied().unwrap_or(0);
+                if proto::nord::control::ControlWord(control).valid() {
+                    unit.last_process = Some(now);
+                }
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
                 let out = unit
                     .drive
@@ -237,6 +246,25 @@ impl Device {
             .drive
             .state()
             .to_string())
+    }
+
+    /// The "DEV" and "BUS" LEDs of an inverter at `now` (BU 0620 §5.5.1): process data counts as
+    /// active while valid control words arrived within [`PROCESS_DATA_WINDOW`].
+    pub fn leds(
+        &mut self,
+        inverter: Inverter,
+        now: Duration,
+    ) -> Result<(led::Row, led::Row), String> {
+        let unit = self.inverter_mut(inverter).map_err(|e| e.to_string())?;
+        let active = unit
+            .last_process
+            .is_some_and(|t| now.saturating_sub(t) <= PROCESS_DATA_WINDOW);
+        let fault = unit.drive.fault();
+        let timeout = fault.is_some_and(|f| f.group == 10 && matches!(f.sub, 2 | 3));
+        Ok((
+            led::dev(unit.drive.state(), fault.map(|f| f.group)),
+            led::bus(active, timeout),
+        ))
     }
 
     /// EEPROM writes of an inverter's parameter store (the bus interface's for `None`).

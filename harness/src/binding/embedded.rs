@@ -89,10 +89,14 @@ impl Dut for Embedded {
     fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, String> {
         match what {
             "state" => Ok(json!({ "state": self.device.state_name(inverter)? })),
+            "leds" => {
+                let (dev, bus) = self.device.leds(inverter, self.clock.now())?;
+                Ok(json!({ "dev": dev, "bus": bus }))
+            }
             "eeprom-writes" => Ok(json!({ "count": self.device.eeprom_writes(Some(inverter))? })),
             "interface-eeprom-writes" => Ok(json!({ "count": self.device.eeprom_writes(None)? })),
             other => Err(format!(
-                "cannot observe `{other}` (state, eeprom-writes, interface-eeprom-writes)"
+                "cannot observe `{other}` (state, leds, eeprom-writes, interface-eeprom-writes)"
             )),
         }
     }

@@ -1,7 +1,7 @@
 //! Compute functions of the `tables` theme: error tables, SDO aborts, device-name rules.
 
 use proto::nord::errors::{self, SdoAbort};
-use proto::nord::{rules, Protocol};
+use proto::nord::{led, rules, Protocol};
 use serde_json::{json, Value};
 
 use super::{Args, ComputeError, ComputeFn, Ctx};
@@ -33,6 +33,24 @@ fn comm_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     Ok(json!({ "p700": e.p700, "text": e.text, "profinet_alarm": errors::profinet_alarm(e.p700) }))
 }
 
+fn led_table(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    let rows = match a.str("led")? {
+        "dev" => led::DEV,
+        "bus" => led::BUS,
+        "ethercat-run" => led::ETHERCAT_RUN,
+        "ethercat-err" => led::ETHERCAT_ERR,
+        other => {
+            return Err(ComputeError::BadArg {
+                arg: "led".into(),
+                why: format!("no LED table `{other}` (dev, bus, ethercat-run, ethercat-err)"),
+            })
+        }
+    };
+    serde_json::to_value(rows)
+        .map(|rows| json!({ "rows": rows }))
+        .map_err(|e| ComputeError::Refused(e.to_string()))
+}
+
 /// The functions of this theme.
 pub(super) const FNS: &[ComputeFn] = &[
     ComputeFn {
@@ -51,6 +69,11 @@ pub(super) const FNS: &[ComputeFn] = &[
         run: |_: &Ctx, a: &Args| {
             Ok(json!({ "alarm": errors::profinet_alarm(a.int("p700")? as u16) }))
         },
+    },
+    ComputeFn {
+        name: "tables.led",
+        doc: "An LED table: pattern and meaning per row (BU 0620 §5.5)",
+        run: led_table,
     },
     ComputeFn {
         name: "tables.device_name",

@@ -12,6 +12,7 @@
 pub mod addr;
 pub mod control;
 pub mod errors;
+pub mod led;
 pub mod params;
 pub mod pkw;
 pub mod ppo;

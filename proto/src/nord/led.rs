@@ -1,0 +1,167 @@
+//! LED patterns per state: the SK 550P's "DEV" and "BUS" LEDs and the EtherCAT RUN/ERR LEDs.
+//!
+//! BU 0620 §5.5.1 (p. 100) and §5.5.2.1 (p. 101). The tables are data; [`dev`] and [`bus`]
+//! derive the pattern from the inverter's state, as the simulator shows it.
+
+use serde::Serialize;
+
+use super::state_machine::State;
+
+/// What an LED shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "pattern")]
+pub enum Pattern {
+    /// Dark.
+    Off,
+    /// Steady green.
+    Green,
+    /// Steady red.
+    Red,
+    /// Green flashing at `tenths_hz` / 10 Hz.
+    FlashingGreen {
+        /// Frequency in 0.1 Hz.
+        tenths_hz: u16,
+    },
+    /// Red flashing at `tenths_hz` / 10 Hz.
+    FlashingRed {
+        /// Frequency in 0.1 Hz.
+        tenths_hz: u16,
+    },
+    /// Red flashes giving an error number ("Error 3: flashes three times and then pauses").
+    ErrorCode {
+        /// The number flashed.
+        flashes: u16,
+    },
+    /// Single green flash.
+    SingleFlashGreen,
+    /// Single red flash.
+    SingleFlashRed,
+    /// Double red flash.
+    DoubleFlashRed,
+}
+
+/// One row of an LED table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Row {
+    /// The pattern.
+    #[serde(flatten)]
+    pub pattern: Pattern,
+    /// What it means, as the manual says.
+    pub meaning: &'static str,
+}
+
+const fn row(pattern: Pattern, meaning: &'static str) -> Row {
+    Row { pattern, meaning }
+}
+
+/// "DEV" LED (§5.5.1.1), the rows the simulator can show.
+pub const DEV: &[Row] = &[
+    row(
+        Pattern::Off,
+        "FI not ready for operation, no mains or control voltage",
+    ),
+    row(Pattern::Green, "FI is enabled"),
+    row(
+        Pattern::FlashingGreen { tenths_hz: 40 },
+        "FI is in switch-on block",
+    ),
+    row(
+        Pattern::FlashingGreen { tenths_hz: 5 },
+        "FI is in standby but not enabled",
+    ),
+];
+
+/// "BUS" LED (§5.5.1.2).
+pub const BUS: &[Row] = &[
+    row(Pattern::Off, "No process data communication"),
+    row(Pattern::Green, "Process data communication active"),
+    row(Pattern::FlashingGreen { tenths_hz: 40 }, "Bus warning"),
+    row(
+        Pattern::FlashingRed { tenths_hz: 40 },
+        "Monitoring error P120 or P513 (E10.0/E10.9)",
+    ),
+    row(
+        Pattern::FlashingRed { tenths_hz: 10 },
+        "Field bus interface telegram timeout (E10.2/E10.3)",
+    ),
+    row(Pattern::Red, "System bus in state \"Bus off\""),
+];
+
+/// EtherCAT LED A "RUN" per EtherCAT state (§5.5.2.1). The manual gives no flashing rate; 2.5 Hz
+/// is the EtherCAT indicator rate (ETG.1300) and is an assumption here.
+pub const ETHERCAT_RUN: &[Row] = &[
+    row(Pattern::Off, "Init"),
+    row(Pattern::FlashingGreen { tenths_hz: 25 }, "Pre-Operational"),
+    row(Pattern::SingleFlashGreen, "Safe Operational"),
+    row(Pattern::Green, "Operational"),
+];
+
+/// EtherCAT LED B "ERR" (§5.5.2.1).
+pub const ETHERCAT_ERR: &[Row] = &[
+    row(Pattern::Off, "No Error"),
+    row(
+        Pattern::FlashingRed { tenths_hz: 25 },
+        "Invalid Configuration",
+    ),
+    row(Pattern::SingleFlashRed, "Unsolicited State Change"),
+    row(Pattern::DoubleFlashRed, "Application Watchdog Timeout"),
+];
+
+/// The "DEV" LED of an inverter in `state`; a present error is flashed as its group number.
+pub fn dev(state: State, error_group: Option<u16>) -> Row {
+    match (state, error_group) {
+        (State::Fault | State::ErrorReactionActive, Some(n)) => row(
+            Pattern::ErrorCode { flashes: n },
+            "Output of the error number",
+        ),
+        (State::NotReadyForSwitchOn, _) => DEV[0],
+        (State::OperationEnabled, _) => DEV[1],
+        (State::SwitchOnBlock | State::EmergencyStopActive, _) => DEV[2],
+        _ => DEV[3],
+    }
+}
+
+/// The "BUS" LED: process data flowing or not, and a telegram timeout (E10.2/E10.3).
+pub fn bus(process_data: bool, telegram_timeout: bool) -> Row {
+    match (telegram_timeout, process_data) {
+        (true, _) => BUS[4],
+        (false, true) => BUS[1],
+        (false, false) => BUS[0],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dev_led_follows_the_status_machine() {
+        assert_eq!(dev(State::OperationEnabled, None).pattern, Pattern::Green);
+        assert_eq!(
+            dev(State::SwitchOnBlock, None).pattern,
+            Pattern::FlashingGreen { tenths_hz: 40 }
+        );
+        assert_eq!(
+            dev(State::ReadyForSwitchOn, None).pattern,
+            Pattern::FlashingGreen { tenths_hz: 5 }
+        );
+        assert_eq!(
+            dev(State::Fault, Some(10)).pattern,
+            Pattern::ErrorCode { flashes: 10 }
+        );
+        assert_eq!(dev(State::NotReadyForSwitchOn, None).pattern, Pattern::Off);
+    }
+
+    #[test]
+    fn bus_led() {
+        assert_eq!(
+            bus(true, false).meaning,
+            "Process data communication active"
+        );
+        assert_eq!(bus(false, false).pattern, Pattern::Off);
+        assert_eq!(
+            bus(true, true).pattern,
+            Pattern::FlashingRed { tenths_hz: 10 }
+        );
+    }
+}
