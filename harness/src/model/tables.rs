@@ -1,6 +1,7 @@
 //! Compute functions of the `tables` theme: error tables, SDO aborts, device-name rules.
 
 use proto::nord::errors::{self, SdoAbort};
+use proto::nord::nmt::{self, EcState, PlEvent, PlState};
 use proto::nord::{led, rules, Protocol};
 use serde_json::{json, Value};
 
@@ -51,6 +52,36 @@ fn led_table(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
         .map_err(|e| ComputeError::Refused(e.to_string()))
 }
 
+fn bad(arg: &str, why: String) -> ComputeError {
+    ComputeError::BadArg {
+        arg: arg.into(),
+        why,
+    }
+}
+
+fn powerlink_nmt(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    let s = a.str("state")?;
+    let state =
+        PlState::from_name(s).ok_or_else(|| bad("state", format!("no POWERLINK state `{s}`")))?;
+    let e = a.str("event")?;
+    let event = PlEvent::from_name(e).ok_or_else(|| bad("event", format!("no event `{e}`")))?;
+    let next =
+        nmt::powerlink_next(state, event).map_err(|e| ComputeError::Refused(e.to_string()))?;
+    Ok(
+        json!({ "to": next.name(), "parameters": next.parameters(), "process_data": next.process_data() }),
+    )
+}
+
+fn ethercat_nmt(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    let state = |arg: &str| -> Result<EcState, ComputeError> {
+        let s = a.str(arg)?;
+        EcState::from_name(s).ok_or_else(|| bad(arg, format!("no EtherCAT state `{s}`")))
+    };
+    let next = nmt::ethercat_next(state("state")?, state("request")?)
+        .map_err(|e| ComputeError::Refused(e.to_string()))?;
+    Ok(json!({ "to": next.name() }))
+}
+
 /// The functions of this theme.
 pub(super) const FNS: &[ComputeFn] = &[
     ComputeFn {
@@ -68,6 +99,25 @@ pub(super) const FNS: &[ComputeFn] = &[
         doc: "PROFINET alarm number of a P700 value: 100h + P700 (BU 0620 §5.4.2)",
         run: |_: &Ctx, a: &Args| {
             Ok(json!({ "alarm": errors::profinet_alarm(a.int("p700")? as u16) }))
+        },
+    },
+    ComputeFn {
+        name: "tables.powerlink_nmt",
+        doc: "POWERLINK NMT: next state on an event (BU 0620 §2.4.4)",
+        run: powerlink_nmt,
+    },
+    ComputeFn {
+        name: "tables.ethercat_nmt",
+        doc: "EtherCAT state machine: may the master request a state (BU 0620 §2.2.5)",
+        run: ethercat_nmt,
+    },
+    ComputeFn {
+        name: "tables.node_id",
+        doc: "POWERLINK node id class (BU 0620 §2.4.3.1)",
+        run: |_: &Ctx, a: &Args| {
+            let id = u8::try_from(a.int("id")?)
+                .map_err(|_| ComputeError::Refused("a node id is one byte (0..255)".into()))?;
+            serde_json::to_value(nmt::node_id(id)).map_err(|e| ComputeError::Refused(e.to_string()))
         },
     },
     ComputeFn {

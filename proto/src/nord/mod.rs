@@ -13,6 +13,7 @@ pub mod addr;
 pub mod control;
 pub mod errors;
 pub mod led;
+pub mod nmt;
 pub mod params;
 pub mod pkw;
 pub mod ppo;
