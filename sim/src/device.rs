@@ -24,6 +24,23 @@ use crate::store::{ParamStore, Target};
 /// How long after the last valid process data the "BUS" LED still shows communication.
 pub const PROCESS_DATA_WINDOW: Duration = Duration::from_millis(100);
 
+const P513: ParamNumber = match ParamNumber::new(513) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
+const P899: ParamNumber = match ParamNumber::new(899) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
+/// P513 [-04] is the Ethernet timeout (BU 0620 §4.5: "[-3] = CANopen, [-4] = Ethernet").
+const ELEMENT_ETHERNET: Option<proto::nord::ArrayElement> = match proto::nord::ArrayElement::new(4)
+{
+    Ok(e) => Some(e),
+    Err(_) => None,
+};
+const E10_3: FaultCode = FaultCode { group: 10, sub: 3 };
+const E10_5: FaultCode = FaultCode { group: 10, sub: 5 };
+
 /// How to build a device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DeviceConfig {
@@ -171,8 +188,68 @@ impl Device {
             .ok_or(DeviceError::NoSuchInverter(i.get(), count))
     }
 
+    /// Telegram monitoring and bus status, evaluated whenever a frame arrives.
+    ///
+    /// - P513 [-04] "Telegram timeout time" (Ethernet, 0.1 s; 0 = off): an inverter that had
+    ///   valid process data and gets none for longer raises E10.3 (BU 0620 §5.1, §5.3: 7592h).
+    /// - P872 "Bus status" (§4.3): bit 0 module ready, bit 1 cyclic PZD communication, bit 3
+    ///   timeout P513 (while an inverter shows E10.3), bits 8–15 FI 1..8 online.
+    fn monitor(&mut self, now: Duration) {
+        let mut status: i32 = 1;
+        for (n, unit) in self.inverters.iter_mut().enumerate() {
+            status |= 1 << (8 + n);
+            if unit.drive.fault() == Some(E10_3) {
+                status |= 1 << 3;
+            }
+            let Some(last) = unit.last_process else {
+                continue;
+            };
+            let silent = now.saturating_sub(last);
+            if silent <= PROCESS_DATA_WINDOW {
+                status |= 1 << 1;
+            }
+            let limit = unit
+                .params
+                .store
+                .read(P513, None, ELEMENT_ETHERNET)
+                .unwrap_or(0);
+            if limit > 0 && silent > Duration::from_millis(100 * limit as u64) {
+                if unit.drive.fault().is_none() {
+                    unit.drive.inject_fault(E10_3);
+                }
+                status |= 1 << 3;
+            }
+        }
+        self.interface.store.set_info(872, 1, status);
+        self.change_protocol(now);
+    }
+
+    /// P899 "Changing the bus protocol" (BU 0620 §4.1): a value 1..4 changes the protocol
+    /// (shown in P870) and P899 returns to 0 — unless process data (control via Ethernet) has
+    /// run, when the change is refused with E10.5 "Condition for change of field bus
+    /// protocol not present" (7598h).
+    fn change_protocol(&mut self, now: Duration) {
+        let wanted = self.interface.store.read(P899, None, None).unwrap_or(0);
+        if wanted == 0 {
+            return;
+        }
+        let busy = self.inverters.iter().any(|u| {
+            u.last_process
+                .is_some_and(|t| now.saturating_sub(t) <= PROCESS_DATA_WINDOW)
+        });
+        if busy {
+            if let Some(fi1) = self.inverters.first_mut() {
+                fi1.drive.inject_fault(E10_5);
+            }
+        } else {
+            self.interface.store.set_info(870, 1, wanted);
+        }
+        self.interface.store.set_info(899, 1, 0);
+    }
+
     /// Handles one link frame at time `now`, returning the answer frame.
     pub fn handle(&mut self, frame: &[u8], now: Duration) -> Result<Vec<u8>, DeviceError> {
+        self.monitor(now);
         let link = LinkRepr::parse(frame)?;
         let ppo_type = PpoType::new(link.ppo_type).map_err(|e| DeviceError::Ppo(e.to_string()))?;
         let ppo =

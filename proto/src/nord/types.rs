@@ -31,8 +31,8 @@ macro_rules! ranged {
             pub const MAX: $t = $max;
 
             /// Checks the range.
-            pub fn new(value: i64) -> Result<Self, RangeError> {
-                if (Self::MIN as i64..=Self::MAX as i64).contains(&value) {
+            pub const fn new(value: i64) -> Result<Self, RangeError> {
+                if value >= Self::MIN as i64 && value <= Self::MAX as i64 {
                     Ok(Self(value as $t))
                 } else {
                     Err(RangeError { what: $what, value, min: Self::MIN as i64, max: Self::MAX as i64 })
