@@ -288,3 +288,160 @@ pub(crate) fn cycles_for(d: Duration, cycle: Duration) -> u32 {
     let n = d.as_nanos().div_ceil(cycle.as_nanos().max(1));
     u32::try_from(n).unwrap_or(u32::MAX).max(1)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::binding::embedded::EmbeddedFactory;
+    use crate::profile::Capability;
+    use crate::suite::load_text_for_tests;
+    use proto::nord::{Inverter, Product};
+
+    /// How the wrapped simulator misbehaves.
+    #[derive(Clone, Copy)]
+    enum Fault {
+        /// Answers nothing (hung or unplugged).
+        Silent,
+        /// Answers bytes that are not a frame.
+        Garbage,
+        /// Answers with the order's PKW never processed (always "no response").
+        NeverAnswers,
+    }
+
+    /// Wraps the real embedded simulator and breaks its answers, as a fault injector on the link.
+    struct Faulty {
+        inner: Box<dyn Dut>,
+        fault: Fault,
+    }
+
+    impl Dut for Faulty {
+        fn describe(&self) -> String {
+            "faulty simulator".into()
+        }
+        fn capabilities(&self) -> &[Capability] {
+            self.inner.capabilities()
+        }
+        fn cycle_time(&self) -> Duration {
+            self.inner.cycle_time()
+        }
+        fn cycle(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+            let answer = self.inner.cycle(frame);
+            match self.fault {
+                Fault::Silent => None,
+                Fault::Garbage => Some(vec![0xDE, 0xAD]),
+                Fault::NeverAnswers => answer.map(|mut a| {
+                    // Zero the PKW area of the answer (bytes 2..10): "no response", forever.
+                    for b in a.iter_mut().skip(2).take(8) {
+                        *b = 0;
+                    }
+                    a
+                }),
+            }
+        }
+        fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
+            self.inner.inject(inverter, error)
+        }
+        fn observe(&mut self, what: &str, inverter: Inverter) -> Result<serde_json::Value, String> {
+            self.inner.observe(what, inverter)
+        }
+    }
+
+    struct FaultyFactory(Fault);
+
+    impl DutFactory for FaultyFactory {
+        fn describe(&self) -> String {
+            "faulty simulator".into()
+        }
+        fn open(&mut self, profile: &Profile) -> Result<Box<dyn Dut>, String> {
+            Ok(Box::new(Faulty {
+                inner: EmbeddedFactory.open(profile)?,
+                fault: self.0,
+            }))
+        }
+    }
+
+    const SUITE: &str = r#"
+doc: BU 0620
+edition: "2020-03 en"
+cases:
+  - id: read
+    title: read P102
+    ref: { section: "2.5.6", page: 51 }
+    steps:
+      - read: { param: 102 }
+  - id: process
+    title: process data
+    ref: { section: "6.1.3", page: 114 }
+    steps:
+      - process: { control: "047Eh", for: 40ms }
+        expect: { status: "xx31h" }
+  - id: setup-fails
+    title: a failing setup step makes the case inconclusive
+    ref: { section: "6.1.3", page: 114 }
+    steps:
+      - process: { control: "047Eh", for: 40ms }
+        expect: { status: "xx37h" }
+        setup: true
+"#;
+
+    fn run_with(fault: Option<Fault>) -> RunResult {
+        let loaded = load_text_for_tests(SUITE);
+        let opts = RunOptions {
+            profiles: vec![Profile::builtin(Product::Sk550p)],
+            filter: None,
+            retries: 25,
+        };
+        match fault {
+            None => run(&loaded, &opts, &mut EmbeddedFactory),
+            Some(f) => run(&loaded, &opts, &mut FaultyFactory(f)),
+        }
+    }
+
+    fn verdicts(r: &RunResult) -> Vec<(Verdict, &str)> {
+        r.cases
+            .iter()
+            .map(|c| (c.verdict, c.message.as_str()))
+            .collect()
+    }
+
+    #[test]
+    fn a_healthy_dut_passes_and_a_failed_setup_is_inconclusive() {
+        let r = run_with(None);
+        let v = verdicts(&r);
+        assert_eq!(v[0].0, Verdict::Pass, "{v:?}");
+        assert_eq!(v[1].0, Verdict::Pass, "{v:?}");
+        assert_eq!(v[2].0, Verdict::Inconclusive, "{v:?}");
+        assert!(v[2].1.starts_with("setup step failed"), "{v:?}");
+    }
+
+    #[test]
+    fn a_silent_dut_is_an_error_verdict_not_a_hang() {
+        let r = run_with(Some(Fault::Silent));
+        for (v, m) in verdicts(&r) {
+            assert_eq!(v, Verdict::Error, "{m}");
+            assert!(m.contains("no answer from the DUT within"), "{m}");
+        }
+    }
+
+    #[test]
+    fn a_garbage_answer_fails_naming_the_problem() {
+        let r = run_with(Some(Fault::Garbage));
+        let (v, m) = verdicts(&r)[0];
+        assert_eq!(v, Verdict::Fail);
+        assert!(
+            m.contains("malformed answer from the DUT: data record 222 addresses neither"),
+            "{m}"
+        );
+    }
+
+    #[test]
+    fn an_order_never_answered_fails_after_the_bounded_retries() {
+        let r = run_with(Some(Fault::NeverAnswers));
+        let (v, m) = verdicts(&r)[0];
+        assert_eq!(v, Verdict::Fail);
+        assert!(
+            m.contains("did not answer the order within 25 bus cycles"),
+            "{m}"
+        );
+    }
+}

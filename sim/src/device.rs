@@ -357,3 +357,104 @@ impl Device {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proto::nord::pkw::PkwRepr;
+
+    fn ms(n: u64) -> Duration {
+        Duration::from_millis(n)
+    }
+
+    fn frame(record: u8, ppo: u8, payload: &[u8]) -> Vec<u8> {
+        let mut f = vec![record, ppo];
+        f.extend_from_slice(payload);
+        f
+    }
+
+    fn pkw_frame(record: u8, order: PkwRepr) -> Vec<u8> {
+        let ppo = PpoRepr {
+            pkw: Some(order),
+            pzd: vec![0x047E, 0],
+        };
+        frame(record, 1, &ppo.emit(PpoType::TYPE_1))
+    }
+
+    #[test]
+    fn malformed_frames_are_typed_errors() {
+        let mut d = Device::new(DeviceConfig::new(Product::Sk550p));
+        assert!(matches!(d.handle(&[101], ms(0)), Err(DeviceError::Link(_))));
+        assert!(matches!(
+            d.handle(&frame(99, 1, &[0; 12]), ms(0)),
+            Err(DeviceError::Link(_))
+        ));
+        assert!(matches!(
+            d.handle(&frame(101, 5, &[0; 12]), ms(0)),
+            Err(DeviceError::Ppo(_))
+        ));
+        assert!(matches!(
+            d.handle(&frame(101, 1, &[0; 11]), ms(0)),
+            Err(DeviceError::Ppo(_))
+        ));
+        let mut small = Device::new(DeviceConfig {
+            inverters: 2,
+            ..DeviceConfig::new(Product::Sk550p)
+        });
+        assert_eq!(
+            small.handle(&frame(103, 3, &[0; 4]), ms(0)),
+            Err(DeviceError::NoSuchInverter(3, 2))
+        );
+        // Every byte sequence up to 20 bytes is answered or refused, never a panic.
+        for len in 0..20 {
+            for b in [0u8, 1, 2, 6, 100, 101, 108, 255] {
+                let _ = d.handle(&vec![b; len], ms(0));
+            }
+        }
+    }
+
+    #[test]
+    fn an_order_is_answered_one_cycle_later_and_only_once() {
+        let mut d = Device::new(DeviceConfig::new(Product::Sk550p));
+        let write = PkwRepr {
+            ak: 2,
+            pnu: 1102,
+            pwe: 300,
+            ..Default::default()
+        };
+        let first = PpoRepr::parse(
+            &d.handle(&pkw_frame(101, write), ms(0)).unwrap()[2..],
+            PpoType::TYPE_1,
+        )
+        .unwrap();
+        assert_eq!(first.pkw.map(|p| p.ak), Some(0), "no response yet");
+        let second = PpoRepr::parse(
+            &d.handle(&pkw_frame(101, write), ms(4)).unwrap()[2..],
+            PpoType::TYPE_1,
+        )
+        .unwrap();
+        assert_eq!(second.pkw.map(|p| (p.ak, p.value())), Some((1, 300)));
+        d.handle(&pkw_frame(101, write), ms(8)).unwrap();
+        assert_eq!(
+            d.eeprom_writes(Some(Inverter::new(1).unwrap())),
+            Ok(1),
+            "a repeated order is not executed twice"
+        );
+    }
+
+    #[test]
+    fn the_interface_answers_on_record_100() {
+        let mut d = Device::new(DeviceConfig::new(Product::Sk550p));
+        let read = PkwRepr {
+            ak: 6,
+            pnu: 1850,
+            ind: 0x0300,
+            ..Default::default()
+        };
+        d.handle(&pkw_frame(100, read), ms(0)).unwrap();
+        let answer = d.handle(&pkw_frame(100, read), ms(4)).unwrap();
+        assert_eq!(answer[0], 100);
+        let ppo = PpoRepr::parse(&answer[2..], PpoType::TYPE_1).unwrap();
+        assert_eq!(ppo.pkw.map(|p| (p.ak, p.value())), Some((4, 100)));
+    }
+}

@@ -6,3 +6,18 @@ mod schema;
 
 pub(crate) use case::{Action, Case, OrderSpec, Run, Step, Target};
 pub(crate) use load::{load_dir, Loaded};
+
+/// Loads suite text for tests in other modules.
+#[cfg(test)]
+pub(crate) fn load_text_for_tests(text: &str) -> Loaded {
+    let mut loaded = Loaded::default();
+    load::load_text(
+        std::path::Path::new("test.yaml"),
+        "test",
+        text,
+        &mut std::collections::HashSet::new(),
+        &mut loaded,
+    );
+    assert!(loaded.errors.is_empty(), "{:?}", loaded.errors);
+    loaded
+}
