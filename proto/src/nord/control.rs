@@ -28,6 +28,16 @@ pub const BIT_NAMES: [&str; 16] = [
     "Parameter set Bit 1 On",
 ];
 
+/// Bits 0..15 of a word as 0/1, for the control and status word tables.
+pub(crate) fn bits(word: u16) -> Vec<u8> {
+    (0..16).map(|n| u8::from(word & (1 << n) != 0)).collect()
+}
+
+/// The names of the set bits of a word.
+pub(crate) fn set_names(word: u16, names: &[&'static str; 16]) -> Vec<&'static str> {
+    (0..16).filter(|n| word & (1 << n) != 0).map(|n| names[n]).collect()
+}
+
 /// The bits of a control word by name, for `harness decode control` and compute steps.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct ControlFields {
@@ -73,11 +83,8 @@ impl ControlWord {
     pub fn fields(self) -> ControlFields {
         ControlFields {
             word: self.0,
-            bits: (0..16).map(|n| u8::from(self.bit(n))).collect(),
-            set: (0..16)
-                .filter(|n| self.bit(*n))
-                .map(|n| BIT_NAMES[usize::from(n)])
-                .collect(),
+            bits: bits(self.0),
+            set: set_names(self.0, &BIT_NAMES),
             parameter_set: self.parameter_set(),
             valid: self.valid(),
         }

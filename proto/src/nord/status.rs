@@ -4,6 +4,7 @@
 
 use serde::Serialize;
 
+use super::control::{bits, set_names};
 use super::state_machine::State;
 
 /// A status word.
@@ -58,11 +59,8 @@ impl StatusWord {
         let state = State::from_status(self);
         StatusFields {
             word: self.0,
-            bits: (0..16).map(|n| u8::from(self.bit(n))).collect(),
-            set: (0..16)
-                .filter(|n| self.bit(*n))
-                .map(|n| BIT_NAMES[usize::from(n)])
-                .collect(),
+            bits: bits(self.0),
+            set: set_names(self.0, &BIT_NAMES),
             parameter_set: ((self.0 >> 14) & 3) as u8 + 1,
             state: state.map(State::name),
             letter: state.map(State::letter),
