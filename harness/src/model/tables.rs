@@ -82,6 +82,18 @@ fn ethercat_nmt(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     Ok(json!({ "to": next.name() }))
 }
 
+fn powerlink_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    let p700 = a.int("p700")? as u16;
+    let e = errors::powerlink_error(p700).ok_or_else(|| {
+        ComputeError::Refused(format!(
+            "P700 {p700} has no POWERLINK error code in BU 0620 §5.4.1.2"
+        ))
+    })?;
+    Ok(
+        json!({ "code": e.code, "register": e.register, "text": e.text, "group": errors::error_group(e.code) }),
+    )
+}
+
 /// The functions of this theme.
 pub(super) const FNS: &[ComputeFn] = &[
     ComputeFn {
@@ -100,6 +112,11 @@ pub(super) const FNS: &[ComputeFn] = &[
         run: |_: &Ctx, a: &Args| {
             Ok(json!({ "alarm": errors::profinet_alarm(a.int("p700")? as u16) }))
         },
+    },
+    ComputeFn {
+        name: "tables.powerlink_error",
+        doc: "POWERLINK error code and register of a P700 error (BU 0620 §5.4.1.2)",
+        run: powerlink_error,
     },
     ComputeFn {
         name: "tables.powerlink_nmt",

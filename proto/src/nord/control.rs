@@ -35,7 +35,10 @@ pub(crate) fn bits(word: u16) -> Vec<u8> {
 
 /// The names of the set bits of a word.
 pub(crate) fn set_names(word: u16, names: &[&'static str; 16]) -> Vec<&'static str> {
-    (0..16).filter(|n| word & (1 << n) != 0).map(|n| names[n]).collect()
+    (0..16)
+        .filter(|n| word & (1 << n) != 0)
+        .map(|n| names[n])
+        .collect()
 }
 
 /// The bits of a control word by name, for `harness decode control` and compute steps.

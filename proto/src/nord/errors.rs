@@ -1,5 +1,6 @@
 //! Error tables: inverter communication errors (P700) with their DS402 codes, PROFINET alarm
-//! numbers, and the SDO abort codes of EtherCAT and POWERLINK (which differ).
+//! numbers, POWERLINK error codes, and the SDO abort codes of EtherCAT and POWERLINK (which
+//! differ).
 
 use std::fmt;
 
@@ -199,6 +200,135 @@ impl fmt::Debug for SdoAbort {
     }
 }
 
+/// One row of "Allocation of frequency inverter error codes" (BU 0620 §5.4.1.2, p. 96–97):
+/// the DS-301 error code and error register ("error index") POWERLINK reports for P700 errors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PlError {
+    /// DS-301 error code.
+    pub code: u16,
+    /// Error register value (1 generic, 3 current, 5 voltage, 9 temperature, 17 communication,
+    /// 129 manufacturer specific).
+    pub register: u8,
+    /// P700 errors (tenths: 10.3 → 103) as inclusive ranges.
+    pub p700: &'static [(u16, u16)],
+    /// Meaning.
+    pub text: &'static str,
+}
+
+const fn pl(code: u16, register: u8, p700: &'static [(u16, u16)], text: &'static str) -> PlError {
+    PlError {
+        code,
+        register,
+        p700,
+        text,
+    }
+}
+
+/// §5.4.1.2 table (rows without a P700 number are left out).
+pub const POWERLINK_ERRORS: &[PlError] = &[
+    pl(0x1000, 0, &[(0, 0)], "No error"),
+    pl(
+        0x2200,
+        3,
+        &[(40, 41)],
+        "Overcurrent frequency inverter/current measurement",
+    ),
+    pl(0x2310, 3, &[(30, 30)], "Overcurrent I2t-limit"),
+    pl(0x2311, 3, &[(32, 32)], "IGBT overcurrent 125 %"),
+    pl(0x2312, 3, &[(33, 33)], "IGBT overcurrent 150 %"),
+    pl(0x3110, 5, &[(51, 51)], "Mains voltage too high"),
+    pl(0x3120, 5, &[(61, 61)], "Mains voltage too low"),
+    pl(0x3130, 5, &[(70, 70)], "Mains connection failure"),
+    pl(0x3210, 5, &[(50, 50)], "Link circuit voltage too high"),
+    pl(0x3230, 5, &[(60, 60)], "Link circuit voltage too low"),
+    pl(
+        0x4210,
+        9,
+        &[(11, 11)],
+        "Overtemperature in frequency inverter",
+    ),
+    pl(0x4310, 9, &[(20, 22)], "Motor overtemperature"),
+    pl(
+        0x5000,
+        1,
+        &[(108, 108)],
+        "Bus interface communication error",
+    ),
+    pl(0x5110, 1, &[(110, 110)], "External bus error"),
+    pl(0x5300, 1, &[(170, 170)], "EMC fault"),
+    pl(0x5510, 1, &[(200, 200)], "Reserved"),
+    pl(0x5520, 1, &[(208, 208)], "EEPROM error"),
+    pl(0x5530, 1, &[(82, 82)], "External copy error"),
+    pl(
+        0x6000,
+        1,
+        &[(150, 158), (201, 207), (213, 213)],
+        "System error",
+    ),
+    pl(
+        0x6310,
+        1,
+        &[(80, 80)],
+        "Parameter loss (maximum EEPROM value exceeded)",
+    ),
+    pl(0x7112, 3, &[(31, 31)], "Brake chopper overcurrent"),
+    pl(0x7120, 1, &[(160, 161)], "Motor error"),
+    pl(0x7300, 1, &[(143, 143)], "Absolute encoder error"),
+    pl(0x7305, 1, &[(130, 130)], "Encoder error"),
+    pl(0x7306, 1, &[(144, 144)], "Absolute encoder error"),
+    pl(0x7310, 1, &[(145, 145)], "Position difference"),
+    pl(0x7320, 1, &[(146, 148)], "Position error"),
+    pl(0x7330, 1, &[(250, 250)], "Position deviation"),
+    pl(
+        0x7331,
+        1,
+        &[(251, 251)],
+        "Universal encoder communication error",
+    ),
+    pl(0x7333, 1, &[(253, 253)], "Universal encoder error"),
+    pl(0x8100, 17, &[(100, 102)], "Bus timeout"),
+    pl(
+        0x8111,
+        17,
+        &[(103, 107), (109, 109)],
+        "Bus interface communication error",
+    ),
+    pl(0x8300, 1, &[(132, 132)], "Slip error switch-off monitoring"),
+    pl(0x8400, 1, &[(131, 131)], "Speed slip error"),
+    pl(0x8600, 1, &[(140, 141)], "Reference point error"),
+    pl(0x8710, 1, &[(135, 135)], "Acceleration path error"),
+    pl(0x9000, 1, &[(120, 122)], "External watchdog"),
+    pl(0xFF10, 129, &[(180, 180)], "Reserved"),
+    pl(0xFF11, 129, &[(190, 190)], "Connected motor not identified"),
+];
+
+/// The POWERLINK error row of a P700 error (tenths).
+pub fn powerlink_error(p700: u16) -> Option<&'static PlError> {
+    POWERLINK_ERRORS
+        .iter()
+        .find(|e| e.p700.iter().any(|(lo, hi)| (*lo..=*hi).contains(&p700)))
+}
+
+/// DS-301 error group of a code (§5.4.1.2 "Error Groups").
+pub fn error_group(code: u16) -> &'static str {
+    if code == 0xFF00 || code >= 0xFF00 {
+        return "Specific to device";
+    }
+    match code >> 12 {
+        0 => "No error",
+        1 => "Undefined error type",
+        2 => "Current error",
+        3 => "Voltage error",
+        4 => "Temperature error",
+        5 => "Hardware error",
+        6 => "Software error",
+        7 => "Additional module",
+        8 => "Communication",
+        9 => "External error",
+        _ => "Not a DS-301 group",
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -216,6 +346,19 @@ mod tests {
         );
         assert_eq!(SdoAbort(0x0800_0021).describe(Protocol::Ethercat), None);
         assert_eq!((ETHERCAT_ABORTS.len(), POWERLINK_ABORTS.len()), (20, 23));
+    }
+
+    #[test]
+    fn powerlink_codes_of_p700_errors() {
+        assert_eq!(
+            powerlink_error(103).map(|e| (e.code, e.register)),
+            Some((0x8111, 17))
+        );
+        assert_eq!(powerlink_error(108).map(|e| e.code), Some(0x5000));
+        assert_eq!(powerlink_error(205).map(|e| e.code), Some(0x6000));
+        assert_eq!(powerlink_error(999), None);
+        assert_eq!(error_group(0x8111), "Communication");
+        assert_eq!(error_group(0xFF11), "Specific to device");
     }
 
     #[test]
