@@ -50,8 +50,12 @@ pub struct ParamDef {
     pub name: &'static str,
     /// Who owns it.
     pub owner: Owner,
-    /// Products that have it (`None`: the family of [`ParamDef::family`]).
+    /// Product family that has it (`None`: every product).
     pub family: Option<Family>,
+    /// Products that have it, where the manual narrows it down ("Bus interface: SK TU4-EIP");
+    /// empty: every product of the family.
+    #[serde(skip)]
+    pub products: &'static [Product],
     /// Transfer width.
     pub width: Width,
     /// Smallest value (raw, after resolution).
@@ -86,6 +90,7 @@ const fn inv(
         name,
         owner: Owner::Inverter,
         family: None,
+        products: &[],
         width: Width::Word,
         min,
         max,
@@ -127,6 +132,19 @@ const fn iface(p: ParamDef) -> ParamDef {
     }
 }
 
+/// A bus-module parameter of the listed products (BU 2100 §7.1 "Bus interface" rows).
+const fn module(p: ParamDef, products: &'static [Product]) -> ParamDef {
+    ParamDef {
+        owner: Owner::Interface,
+        family: Some(Family::Module),
+        products,
+        ..p
+    }
+}
+
+const EIP_ALL: &[Product] = &[Product::Tu3Eip, Product::Tu4Eip, Product::Cu4Eip];
+const EIP_TU4_CU4: &[Product] = &[Product::Tu4Eip, Product::Cu4Eip];
+
 /// Every catalogued parameter.
 pub const CATALOGUE: &[ParamDef] = &[
     sets(inv(102, "Acceleration time", 0, 32000, 200, 2, "BU 0620 §2.5.6.4 (P102 set 2 = 2.5 s = 250); range 0–320.00 s and default 2.00 s assumed from BU 0600")),
@@ -157,37 +175,46 @@ pub const CATALOGUE: &[ParamDef] = &[
     iface(ro(array(inv(874, "Process data bus Out", 0, 0xFFFF, 0, 0, "BU 0620 §4.3: [-01] status word, [-02]..[-06] actual values of FI 1"), 6))),
     iface(ro(array(inv(879, "PPO Type", 0, 255, 3, 0, "BU 0620 §4.4.3: [-01]..[-08] FI 1..8; 3 = empty slot, 6 PPO3, 7 PPO4, 8 PPO6, 9 PPO1, 10 PPO2"), 8))),
     iface(inv(899, "Changing the bus protocol", 0, 4, 0, 0, "BU 0620 §4.2: 0…4, factory 0")),
+    module(inv(150, "Set relay", 0, 4, 0, 0, "BU 2100 §7.1.1: 0…4, factory 0, SK TU4-EIP only"), &[Product::Tu4Eip]),
+    module(inv(151, "Timeout for external bus", -1, 32767, 0, 0, "BU 2100 §7.1.1: ms, factory 0; -1 = monitoring off (the printed range 0…32767 omits it)"), EIP_TU4_CU4),
+    module(inv(152, "Factory setting", 0, 3, 0, 0, "BU 2100 §7.1.1: 0…3, returns to 0 after loading"), EIP_ALL),
+    module(array(inv(153, "Min. system bus cycle", 0, 250, 10, 0, "BU 2100 §7.1.1: ms, [-01] TxSDO {10}, [-02] TxPDO {5}"), 2), EIP_TU4_CU4),
+    module(array(inv(154, "TB-IO access", 0, 5, 0, 0, "BU 2100 §7.1.1: [-01] inputs, [-02] outputs, {0}"), 2), EIP_TU4_CU4),
+    module(array(inv(160, "IP address", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 192.168.1.100"), 4), EIP_ALL),
+    module(array(inv(161, "IP subnet mask", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 255.255.255.0"), 4), EIP_ALL),
+    module(array(inv(164, "IP Gateway", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 0.0.0.0"), 4), EIP_ALL),
+    module(inv(165, "Addressing mode", 0, 2, 1, 0, "BU 2100 §7.1.2: 0…2, factory 1"), EIP_ALL),
 ];
 
 /// Factory setting of one array element (BU 0620 §4.2.2 IP factory settings; §6.1.3 bus
 /// setpoint/actual value functions), `default` where the manuals give no per-element value.
 pub fn element_default(def: &ParamDef, element: u8) -> i32 {
     match (def.number, element) {
-        (850, 1) => 192,
-        (850, 2) => 168,
-        (850, 3) => 1,
-        (850, 4) => 100,
-        (851, 1..=3) => 255,
+        (850 | 160, 1) => 192,
+        (850 | 160, 2) => 168,
+        (850 | 160, 3) => 1,
+        (850 | 160, 4) => 100,
+        (851 | 161, 1..=3) => 255,
+        (153, 2) => 5,
         // Only the first setpoint and actual value carry a function from the factory (§6.1.3).
         (543 | 546, 2..) => 0,
         _ => def.default,
     }
 }
 
-/// The parameter `number` of a unit of `product`.
-pub fn lookup(product: Product, owner: Owner, number: ParamNumber) -> Option<&'static ParamDef> {
-    CATALOGUE.iter().find(|d| {
-        d.number == number.get()
-            && d.owner == owner
-            && d.family.is_none_or(|f| f == product.family())
-    })
+impl ParamDef {
+    /// Whether `product` has the parameter.
+    pub fn applies_to(&self, product: Product) -> bool {
+        self.family.is_none_or(|f| f == product.family())
+            && (self.products.is_empty() || self.products.contains(&product))
+    }
 }
 
-/// A product's catalogue for one owner.
-pub fn of(product: Product, owner: Owner) -> impl Iterator<Item = &'static ParamDef> {
+/// The parameter `number` of a unit of `product`.
+pub fn lookup(product: Product, owner: Owner, number: ParamNumber) -> Option<&'static ParamDef> {
     CATALOGUE
         .iter()
-        .filter(move |d| d.owner == owner && d.family.is_none_or(|f| f == product.family()))
+        .find(|d| d.number == number.get() && d.owner == owner && d.applies_to(product))
 }
 
 #[cfg(test)]
@@ -220,6 +247,14 @@ mod tests {
             ),
             100
         );
+    }
+
+    #[test]
+    fn module_parameters_per_product() {
+        assert!(lookup(Product::Tu4Eip, Owner::Interface, p(150)).is_some());
+        assert!(lookup(Product::Tu3Eip, Owner::Interface, p(150)).is_none());
+        assert!(lookup(Product::Tu3Eip, Owner::Interface, p(160)).is_some());
+        assert!(lookup(Product::Sk550p, Owner::Interface, p(160)).is_none());
     }
 
     #[test]
