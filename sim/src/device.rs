@@ -135,14 +135,15 @@ struct InverterUnit {
     last_process: Option<Duration>,
 }
 
-/// Parameters the drive reads, from the inverter's store (parameter set 1).
-struct StoreView<'a>(&'a ParamStore);
+/// Parameters the drive reads, from the inverter's store, in the parameter set the control
+/// word selects (bits 14–15, BU 0620 §6.1.2.1).
+struct StoreView<'a>(&'a ParamStore, Option<proto::nord::ParamSet>);
 
 impl DriveParams for StoreView<'_> {
     fn get(&self, number: u16, element: Option<u8>) -> Option<i32> {
         let number = ParamNumber::new(i64::from(number)).ok()?;
         let element = element.and_then(|e| proto::nord::ArrayElement::new(i64::from(e)).ok());
-        self.0.read(number, None, element).ok()
+        self.0.read(number, self.1, element).ok()
     }
 }
 
@@ -268,13 +269,15 @@ impl Device {
                     .pkw
                     .map(|o| unit.params.cycle(o, delay, product, link.unit));
                 let control = ppo.pzd.first().copied().unwrap_or(0);
-                if proto::nord::control::ControlWord(control).valid() {
+                let word = proto::nord::control::ControlWord(control);
+                let set = proto::nord::ParamSet::new(i64::from(word.parameter_set())).ok();
+                if word.valid() {
                     unit.last_process = Some(now);
                 }
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
-                let out = unit
-                    .drive
-                    .cycle(control, setpoints, &StoreView(&unit.params.store), now);
+                let out =
+                    unit.drive
+                        .cycle(control, setpoints, &StoreView(&unit.params.store, set), now);
                 // Information parameters mirror the process data and the present error
                 // (BU 0620 §4.5: P740 PZD bus in, P741 PZD bus out, P700 [-01] present error).
                 let store = &mut unit.params.store;
