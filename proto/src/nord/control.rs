@@ -8,11 +8,12 @@ use serde::Serialize;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct ControlWord(pub u16);
 
-/// Names of the 16 bits as BU 0620 §6.1.2.1 prints them.
+/// Names of the 16 bits when set, after BU 0620 §6.1.2.1. Bits 1 and 2 act when 0 ("Disable
+/// voltage", "Emergency stop"); set, they mean the value-1 column: the command is cancelled.
 pub const BIT_NAMES: [&str; 16] = [
     "Ready for operation",
-    "Disable voltage",
-    "Emergency stop",
+    "Disable voltage cancelled",
+    "Emergency stop cancelled",
     "Enable operation",
     "Enable pulses",
     "Enable ramp",

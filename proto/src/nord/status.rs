@@ -11,14 +11,15 @@ use super::state_machine::State;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct StatusWord(pub u16);
 
-/// Names of the 16 bits as BU 0620 §6.1.2.2 prints them.
+/// Names of the 16 bits when set, after BU 0620 §6.1.2.2. Bit 5 "Emergency stop" is 0 while
+/// the command is present, so set it reads "no emergency stop".
 pub const BIT_NAMES: [&str; 16] = [
     "Ready to start",
     "Ready for operation",
     "Operation enabled",
     "Fault",
     "Voltage enabled",
-    "Emergency stop",
+    "No emergency stop",
     "Starting disabled",
     "Warning active",
     "Setpoint reached",
