@@ -110,7 +110,17 @@ pub(super) const FNS: &[ComputeFn] = &[
         name: "tables.profinet_alarm",
         doc: "PROFINET alarm number of a P700 value: 100h + P700 (BU 0620 §5.4.2)",
         run: |_: &Ctx, a: &Args| {
-            Ok(json!({ "alarm": errors::profinet_alarm(a.int("p700")? as u16) }))
+            let p700 = match a.opt_str("event")? {
+                Some("lost-inverter") => errors::LOST_INVERTER,
+                Some(e) => {
+                    return Err(bad(
+                        "event",
+                        format!("`{e}` is not an event (lost-inverter)"),
+                    ))
+                }
+                None => a.int("p700")? as u16,
+            };
+            Ok(json!({ "alarm": errors::profinet_alarm(p700) }))
         },
     },
     ComputeFn {

@@ -127,6 +127,10 @@ pub fn profinet_alarm(p700: u16) -> u16 {
     0x100 + p700
 }
 
+/// The error number reported when an inverter on the system bus is lost (BU 0620 §5.4.2
+/// "Information": alarm 256 + 1000 = 1256).
+pub const LOST_INVERTER: u16 = 1000;
+
 /// An SDO abort code (open: unknown codes are kept).
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 pub struct SdoAbort(pub u32);
@@ -366,5 +370,6 @@ mod tests {
         let e = COMM_ERRORS.iter().find(|e| e.ds402 == 0x7592).unwrap();
         assert_eq!(e.p700, 103);
         assert_eq!(profinet_alarm(e.p700), 359);
+        assert_eq!(profinet_alarm(LOST_INVERTER), 1256);
     }
 }
