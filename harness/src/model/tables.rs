@@ -40,10 +40,16 @@ fn led_table(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
         "bus" => led::BUS,
         "ethercat-run" => led::ETHERCAT_RUN,
         "ethercat-err" => led::ETHERCAT_ERR,
+        "ethernetip-ms" => led::ETHERNETIP_MS,
+        "ethernetip-ns" => led::ETHERNETIP_NS,
+        "powerlink-bs" => led::POWERLINK_BS,
+        "powerlink-be" => led::POWERLINK_BE,
+        "profinet-run" => led::PROFINET_RUN,
+        "profinet-bf" => led::PROFINET_BF,
         other => {
             return Err(ComputeError::BadArg {
                 arg: "led".into(),
-                why: format!("no LED table `{other}` (dev, bus, ethercat-run, ethercat-err)"),
+                why: format!("no LED table `{other}` (dev, bus, ethercat-run, ethercat-err, ethernetip-ms, ethernetip-ns, powerlink-bs, powerlink-be, profinet-run, profinet-bf)"),
             })
         }
     };

@@ -38,6 +38,13 @@ pub enum Pattern {
     SingleFlashRed,
     /// Double red flash.
     DoubleFlashRed,
+    /// Green `count` flashes, then a pause (POWERLINK BS, §5.5.2.3).
+    FlashesGreen {
+        /// Flashes per group.
+        count: u8,
+    },
+    /// Green and red alternately (power up, self test).
+    FlashingGreenRed,
 }
 
 /// One row of an LED table.
@@ -106,6 +113,72 @@ pub const ETHERCAT_ERR: &[Row] = &[
     row(Pattern::SingleFlashRed, "Unsolicited State Change"),
     row(Pattern::DoubleFlashRed, "Application Watchdog Timeout"),
 ];
+
+/// EtherNet/IP LED A "MS" (module state, §5.5.2.2). The manual gives no flashing rate; 1 Hz is
+/// the CIP indicator rate (Vol. 1 §9-4) and is an assumption here, as for "NS".
+pub const ETHERNETIP_MS: &[Row] = &[
+    row(Pattern::Off, "No operating voltage"),
+    row(
+        Pattern::FlashingGreen { tenths_hz: 10 },
+        "Bus interface not configured in FI",
+    ),
+    row(Pattern::Green, "Bus interface in FI working correctly"),
+    row(
+        Pattern::FlashingRed { tenths_hz: 10 },
+        "Insignificant error Incorrect configuration",
+    ),
+    row(Pattern::Red, "Error cannot be corrected"),
+    row(Pattern::FlashingGreenRed, "Power up, self test"),
+];
+
+/// EtherNet/IP LED B "NS" (network state, §5.5.2.2).
+pub const ETHERNETIP_NS: &[Row] = &[
+    row(Pattern::Off, "No operating voltage"),
+    row(
+        Pattern::FlashingGreen { tenths_hz: 10 },
+        "IP address configured but no CIP connection available",
+    ),
+    row(Pattern::Green, "CIP connection(s) available"),
+    row(
+        Pattern::FlashingRed { tenths_hz: 10 },
+        "Time-out, an \"exclusive owner connection\" has a time-out error",
+    ),
+    row(
+        Pattern::Red,
+        "Dual IP. The IP address is already being used",
+    ),
+    row(Pattern::FlashingGreenRed, "Power up, self test"),
+];
+
+/// POWERLINK LED A "BS" per NMT state (§5.5.2.3).
+pub const POWERLINK_BS: &[Row] = &[
+    row(Pattern::Off, "No communication"),
+    row(Pattern::FlashesGreen { count: 1 }, "Pre-Operational 1"),
+    row(Pattern::FlashesGreen { count: 2 }, "Pre-Operational 2"),
+    row(Pattern::FlashesGreen { count: 3 }, "Ready To Operate"),
+    row(Pattern::Green, "Operational"),
+    row(Pattern::FlashingGreen { tenths_hz: 100 }, "Basic Ethernet"),
+    row(Pattern::FlashingGreen { tenths_hz: 25 }, "Stopped"),
+];
+
+/// POWERLINK LED B "BE" (§5.5.2.3).
+pub const POWERLINK_BE: &[Row] = &[
+    row(Pattern::Off, "No POWERLINK error"),
+    row(Pattern::Red, "General POWERLINK error"),
+];
+
+/// PROFINET LED B "RUN" (Ethernet state). BU 0620 §5.5.2.4 prints "Lights up green: No Ethernet
+/// connection", against PROFINET practice and BU 0590 table 4 (off: initialisation, flashing:
+/// waiting for AR, on: AR established), which this table follows; the erratum is recorded in
+/// suites/bu0620/leds.yaml. Neither manual gives the flashing rate (2 Hz assumed).
+pub const PROFINET_RUN: &[Row] = &[
+    row(Pattern::Off, "Device switched off or initialisation"),
+    row(Pattern::FlashingGreen { tenths_hz: 20 }, "Waiting for AR"),
+    row(Pattern::Green, "AR established"),
+];
+
+/// PROFINET LED A "BF" (Ethernet error, §5.5.2.4).
+pub const PROFINET_BF: &[Row] = &[row(Pattern::Off, "No error"), row(Pattern::Red, "Alarm")];
 
 /// The "DEV" LED of an inverter in `state`; a present error is flashed as its group number.
 pub fn dev(state: State, error_group: Option<u16>) -> Row {
