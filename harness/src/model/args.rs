@@ -61,6 +61,11 @@ impl Args {
         }
     }
 
+    /// Whether the argument was given.
+    pub(crate) fn raw_present(&self, name: &str) -> bool {
+        self.0.get(name).is_some_and(|v| !v.is_null())
+    }
+
     /// A required string.
     pub(crate) fn str(&self, name: &str) -> Result<&str, ComputeError> {
         self.opt_str(name)?

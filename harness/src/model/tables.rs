@@ -100,6 +100,28 @@ fn powerlink_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     )
 }
 
+fn ip_of(a: &Args, name: &str) -> Result<[u8; 4], ComputeError> {
+    let text = a.str(name)?;
+    let parts: Vec<u8> = text.split('.').filter_map(|p| p.parse().ok()).collect();
+    parts
+        .try_into()
+        .map_err(|_| bad(name, format!("`{text}` is not a dotted IPv4 address")))
+}
+
+fn powerlink_ip(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    let show = |ip: [u8; 4]| format!("{}.{}.{}.{}", ip[0], ip[1], ip[2], ip[3]);
+    if a.raw_present("gateway") {
+        return Ok(match rules::powerlink_gateway(ip_of(a, "gateway")?) {
+            Ok(()) => json!({ "valid": true }),
+            Err(e) => json!({ "valid": false, "rule": e.to_string() }),
+        });
+    }
+    let id = u8::try_from(a.int("node_id")?)
+        .map_err(|_| ComputeError::Refused("a node id is one byte".into()))?;
+    let (ip, mask) = rules::powerlink_ip(id).map_err(|e| ComputeError::Refused(e.to_string()))?;
+    Ok(json!({ "ip": show(ip), "mask": show(mask) }))
+}
+
 /// The functions of this theme.
 pub(super) const FNS: &[ComputeFn] = &[
     ComputeFn {
@@ -133,6 +155,22 @@ pub(super) const FNS: &[ComputeFn] = &[
         name: "tables.powerlink_error",
         doc: "POWERLINK error code and register of a P700 error (BU 0620 §5.4.1.2)",
         run: powerlink_error,
+    },
+    ComputeFn {
+        name: "tables.powerlink_ip",
+        doc: "POWERLINK IP address of a node id, or whether a gateway is allowed (BU 0620 §3.7.3)",
+        run: powerlink_ip,
+    },
+    ComputeFn {
+        name: "tables.addressing_mode",
+        doc: "EtherNet/IP addressing mode of a P856/P165 value (BU 0620 §4.2.2, BU 2100 §7.1.2)",
+        run: |_: &Ctx, a: &Args| {
+            let v = a.int("value")?;
+            let m = rules::AddressingMode::from_value(v).ok_or_else(|| {
+                ComputeError::Refused(format!("{v} is not an addressing mode (0…2)"))
+            })?;
+            Ok(json!({ "mode": m }))
+        },
     },
     ComputeFn {
         name: "tables.powerlink_nmt",

@@ -1,4 +1,5 @@
-//! Configuration rules the manuals state: PROFINET device names.
+//! Configuration rules the manuals state: PROFINET device names, POWERLINK IP addresses and
+//! gateways, EtherNet/IP addressing modes.
 //!
 //! BU 0620 §3.8.1 (p. 71) and P854 (§4.2.4, p. 83) give the same conventions with different
 //! maximum lengths: 127 characters in §3.8.1, 240 in P854. PROFINET (IEC 61158-6-10, DNS rules)
@@ -80,6 +81,62 @@ pub fn validate_device_name(name: &str) -> Result<(), NameError> {
     Ok(())
 }
 
+/// A POWERLINK address setting the manuals forbid.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PlAddressError {
+    /// Node id outside 1..239 (BU 0620 §2.4.3.1: controlled nodes).
+    #[error("node id {0} is not a controlled-node address (1…239)")]
+    NodeId(u8),
+    /// Gateway outside 192.168.100.1…240 (BU 0620 §3.7.3, P852): the inverter reports
+    /// "5605 set config.".
+    #[error(
+        "gateway {0}.{1}.{2}.{3} is outside 192.168.100.1…192.168.100.240: error 5605 set config."
+    )]
+    Gateway(u8, u8, u8, u8),
+}
+
+/// The IP address and sub-net mask POWERLINK prescribes for a node id (BU 0620 §3.7.3):
+/// 192.168.100.<node id>, 255.255.255.0.
+pub fn powerlink_ip(node_id: u8) -> Result<([u8; 4], [u8; 4]), PlAddressError> {
+    if !(1..=239).contains(&node_id) {
+        return Err(PlAddressError::NodeId(node_id));
+    }
+    Ok(([192, 168, 100, node_id], [255, 255, 255, 0]))
+}
+
+/// Checks a POWERLINK gateway address (BU 0620 §3.7.3 and P852, §4.2.3).
+pub fn powerlink_gateway(ip: [u8; 4]) -> Result<(), PlAddressError> {
+    match ip {
+        [192, 168, 100, 1..=240] => Ok(()),
+        [a, b, c, d] => Err(PlAddressError::Gateway(a, b, c, d)),
+    }
+}
+
+/// Where an EtherNet/IP interface takes its IP configuration from (P856 on the SK 550P, P165 on
+/// the modules; BU 0620 §4.2.2, BU 2100 §7.1.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AddressingMode {
+    /// 0: from the IP parameters (P850–P852 / P160, P161, P164).
+    Fixed,
+    /// 1 (factory setting): BOOTP.
+    Bootp,
+    /// 2: DHCP.
+    Dhcp,
+}
+
+impl AddressingMode {
+    /// The mode of a parameter value, `None` outside 0…2.
+    pub fn from_value(v: i64) -> Option<AddressingMode> {
+        match v {
+            0 => Some(AddressingMode::Fixed),
+            1 => Some(AddressingMode::Bootp),
+            2 => Some(AddressingMode::Dhcp),
+            _ => None,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -96,6 +153,22 @@ mod tests {
     #[case("port-123x", Err(NameError::PortPrefix))]
     fn names(#[case] name: &str, #[case] want: Result<(), NameError>) {
         assert_eq!(validate_device_name(name), want);
+    }
+
+    #[test]
+    fn powerlink_addresses() {
+        assert_eq!(
+            powerlink_ip(5),
+            Ok(([192, 168, 100, 5], [255, 255, 255, 0]))
+        );
+        assert_eq!(powerlink_ip(240), Err(PlAddressError::NodeId(240)));
+        assert_eq!(powerlink_gateway([192, 168, 100, 240]), Ok(()));
+        assert!(powerlink_gateway([192, 168, 100, 241])
+            .unwrap_err()
+            .to_string()
+            .contains("5605"));
+        assert_eq!(AddressingMode::from_value(1), Some(AddressingMode::Bootp));
+        assert_eq!(AddressingMode::from_value(3), None);
     }
 
     #[test]
