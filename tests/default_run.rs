@@ -157,3 +157,30 @@ fn decode_and_addr_speak_the_manuals_terms() {
     // BU 0620 §2.2.7: P102 on FI 3 is CoE index 2000h + 1000h + 66h = 3066h (12390).
     assert!(text.contains("12390"), "{text}");
 }
+
+#[test]
+fn transcript_of_the_p102_write_example_is_stable() {
+    // BU 0620 §2.5.6.4: the P102 write order over the link, byte for byte; the snapshot pins the
+    // exchange (order repeated until answered, response label 1, PWE 250).
+    let out = std::env::temp_dir().join(format!("harness-transcript-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let o = harness(&[
+        "run",
+        "--profile",
+        "sk550p",
+        "--filter",
+        "pkw-telegrams/p102-write-on-the-dut",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let path = out.join("transcripts/sk550p/bu0620__pkw-telegrams__p102-write-on-the-dut.txt");
+    let transcript = std::fs::read_to_string(&path).expect("transcript written");
+    insta::assert_snapshot!("p102_write_transcript", transcript);
+    let _ = std::fs::remove_dir_all(&out);
+}
