@@ -68,6 +68,9 @@ pub struct ParamDef {
     pub decimals: u8,
     /// Array elements, if an array.
     pub array: Option<u8>,
+    /// Factory settings per array element where the manual gives them (else `default`).
+    #[serde(skip)]
+    pub element_defaults: &'static [i32],
     /// Depends on the parameter set (P1…P4).
     pub set_dependent: bool,
     /// Writability.
@@ -97,6 +100,7 @@ const fn inv(
         default,
         decimals,
         array: None,
+        element_defaults: &[],
         set_dependent: false,
         access: Access::ReadWrite,
         source,
@@ -106,6 +110,15 @@ const fn inv(
 const fn sets(p: ParamDef) -> ParamDef {
     ParamDef {
         set_dependent: true,
+        ..p
+    }
+}
+
+/// An array whose elements have their own factory settings.
+const fn elements(p: ParamDef, defaults: &'static [i32]) -> ParamDef {
+    ParamDef {
+        array: Some(defaults.len() as u8),
+        element_defaults: defaults,
         ..p
     }
 }
@@ -144,6 +157,21 @@ const fn module(p: ParamDef, products: &'static [Product]) -> ParamDef {
 
 const EIP_ALL: &[Product] = &[Product::Tu3Eip, Product::Tu4Eip, Product::Cu4Eip];
 const EIP_TU4_CU4: &[Product] = &[Product::Tu4Eip, Product::Cu4Eip];
+const POL_ALL: &[Product] = &[Product::Tu3Pol, Product::Tu4Pol, Product::Cu4Pol];
+const TU4_CU4: &[Product] = &[
+    Product::Tu4Eip,
+    Product::Cu4Eip,
+    Product::Tu4Pol,
+    Product::Cu4Pol,
+];
+const EIP_POL_ALL: &[Product] = &[
+    Product::Tu3Eip,
+    Product::Tu4Eip,
+    Product::Cu4Eip,
+    Product::Tu3Pol,
+    Product::Tu4Pol,
+    Product::Cu4Pol,
+];
 
 /// Every catalogued parameter.
 pub const CATALOGUE: &[ParamDef] = &[
@@ -158,15 +186,15 @@ pub const CATALOGUE: &[ParamDef] = &[
     array(inv(513, "Telegram timeout time", -1, 3200, 0, 1, "BU 0620 §4.5: [-03] CANopen, [-04] Ethernet, factory Off (0)"), 4),
     inv(514, "CAN baud rate", 0, 7, 5, 0, "BU 0620 §4.5: 5 = 250 kBaud"),
     array(inv(515, "CAN address", 0, 255, 32, 0, "BU 0620 §4.5: [-01] system bus address 32 (further FIs 34, 36, …)"), 3),
-    array(inv(543, "Actual bus value", 0, 60, 1, 0, "BU 0620 §6.1.2.4/§6.1.3: [-01]..[-05], 1 = actual frequency"), 5),
-    array(inv(546, "Function bus setpoint", 0, 60, 1, 0, "BU 0620 §6.1.2.4/§6.1.3: [-01]..[-05], 1 = setpoint frequency"), 5),
+    elements(inv(543, "Actual bus value", 0, 60, 0, 0, "BU 0620 §6.1.2.4/§6.1.3: [-01]..[-05], [-01] = 1 actual frequency"), &[1, 0, 0, 0, 0]),
+    elements(inv(546, "Function bus setpoint", 0, 60, 0, 0, "BU 0620 §6.1.2.4/§6.1.3: [-01]..[-05], [-01] = 1 setpoint frequency"), &[1, 0, 0, 0, 0]),
     inv(560, "Save in EEPROM", 0, 1, 1, 0, "BU 0620 §2.5.6 (RAM-only saving via P560); 1 = save assumed default"),
     ro(array(inv(700, "Present operating status", 0, 0xFFFF, 0, 0, "BU 0620 §5.3: [-01] present error (10.3 shown as 103)"), 4)),
     ro(inv(717, "Current speed", -32768, 32767, 0, 0, "BU 0620 §2.5.6.4: read example, 1020 (03FCh)")),
     ro(array(inv(740, "PZD bus in", 0, 0xFFFF, 0, 0, "BU 0620 §4.5: control word and setpoints as received"), 6)),
     ro(array(inv(741, "PZD bus out", 0, 0xFFFF, 0, 0, "BU 0620 §4.5: status word and actual values as sent"), 6)),
-    iface(array(inv(850, "IP address", 0, 255, 0, 0, "BU 0620 §4.2.2: [-01]..[-04], factory 192.168.1.100"), 4)),
-    iface(array(inv(851, "IP sub-net mask", 0, 255, 0, 0, "BU 0620 §4.2.2: factory 255.255.255.0"), 4)),
+    iface(elements(inv(850, "IP address", 0, 255, 0, 0, "BU 0620 §4.2.2: [-01]..[-04], factory 192.168.1.100"), IP_DEFAULT)),
+    iface(elements(inv(851, "IP sub-net mask", 0, 255, 0, 0, "BU 0620 §4.2.2: factory 255.255.255.0"), MASK_DEFAULT)),
     iface(array(inv(852, "IP Gateway", 0, 255, 0, 0, "BU 0620 §4.2.2: factory 0.0.0.0"), 4)),
     iface(inv(853, "Right TCP Ethernet", 0, 3, 0, 0, "BU 0620 §4.2.2: 0…3, factory 0")),
     iface(ro(inv(870, "Present bus protocol", 0, 4, 0, 0, "BU 0620 §4.3: display 0…4"))),
@@ -176,30 +204,33 @@ pub const CATALOGUE: &[ParamDef] = &[
     iface(ro(array(inv(879, "PPO Type", 0, 255, 3, 0, "BU 0620 §4.4.3: [-01]..[-08] FI 1..8; 3 = empty slot, 6 PPO3, 7 PPO4, 8 PPO6, 9 PPO1, 10 PPO2"), 8))),
     iface(inv(899, "Changing the bus protocol", 0, 4, 0, 0, "BU 0620 §4.2: 0…4, factory 0")),
     module(inv(150, "Set relay", 0, 4, 0, 0, "BU 2100 §7.1.1: 0…4, factory 0, SK TU4-EIP only"), &[Product::Tu4Eip]),
-    module(inv(151, "Timeout for external bus", -1, 32767, 0, 0, "BU 2100 §7.1.1: ms, factory 0; -1 = monitoring off (the printed range 0…32767 omits it)"), EIP_TU4_CU4),
-    module(inv(152, "Factory setting", 0, 3, 0, 0, "BU 2100 §7.1.1: 0…3, returns to 0 after loading"), EIP_ALL),
-    module(array(inv(153, "Min. system bus cycle", 0, 250, 10, 0, "BU 2100 §7.1.1: ms, [-01] TxSDO {10}, [-02] TxPDO {5}"), 2), EIP_TU4_CU4),
+    module(inv(151, "Timeout for external bus", -1, 32767, 0, 0, "BU 2100 §7.1.1, BU 2200 §7: ms, factory 0; -1 = monitoring off (the printed range 0…32767 omits it)"), TU4_CU4),
+    module(inv(152, "Factory setting", 0, 3, 0, 0, "BU 2100 §7.1.1, BU 2200 §7: 0…3, returns to 0 after loading"), EIP_POL_ALL),
+    module(elements(inv(153, "Min. system bus cycle", 0, 250, 0, 0, "BU 2100 §7.1.1, BU 2200 §7: ms, [-01] TxSDO {10}, [-02] TxPDO {5}"), &[10, 5]), TU4_CU4),
     module(array(inv(154, "TB-IO access", 0, 5, 0, 0, "BU 2100 §7.1.1: [-01] inputs, [-02] outputs, {0}"), 2), EIP_TU4_CU4),
-    module(array(inv(160, "IP address", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 192.168.1.100"), 4), EIP_ALL),
-    module(array(inv(161, "IP subnet mask", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 255.255.255.0"), 4), EIP_ALL),
+    module(elements(inv(160, "IP address", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 192.168.1.100"), IP_DEFAULT), EIP_ALL),
+    module(elements(inv(161, "IP subnet mask", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 255.255.255.0"), MASK_DEFAULT), EIP_ALL),
     module(array(inv(164, "IP Gateway", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 0.0.0.0"), 4), EIP_ALL),
     module(inv(165, "Addressing mode", 0, 2, 1, 0, "BU 2100 §7.1.2: 0…2, factory 1"), EIP_ALL),
+    module(inv(160, "Node Id/IP Adresse 4", 0, 239, 0, 0, "BU 2200 §7: 0…239 (no factory setting printed; 0 assumed, DIP switches take precedence)"), POL_ALL),
+    module(inv(163, "FU setzt Busfehler", 0, 1, 1, 0, "BU 2200 §7: 0…1, factory 1"), POL_ALL),
+    module(elements(inv(164, "IP Gateway", 0, 255, 0, 0, "BU 2200 §7: factory 192.168.100.254"), &[192, 168, 100, 254]), POL_ALL),
+    module(inv(165, "POWERLINK Zyklus", 400, 4000, 1000, 0, "BU 2200 §7: 400…4000 µs, factory 1000"), POL_ALL),
 ];
 
-/// Factory setting of one array element (BU 0620 §4.2.2 IP factory settings; §6.1.3 bus
-/// setpoint/actual value functions), `default` where the manuals give no per-element value.
+/// IP address factory setting 192.168.1.100 (BU 0620 §4.2.2, BU 2100 §7.1.2).
+const IP_DEFAULT: &[i32] = &[192, 168, 1, 100];
+/// Sub-net mask factory setting 255.255.255.0.
+const MASK_DEFAULT: &[i32] = &[255, 255, 255, 0];
+
+/// Factory setting of one array element (1-based): the element's own where the manual gives
+/// one, else the parameter's.
 pub fn element_default(def: &ParamDef, element: u8) -> i32 {
-    match (def.number, element) {
-        (850 | 160, 1) => 192,
-        (850 | 160, 2) => 168,
-        (850 | 160, 3) => 1,
-        (850 | 160, 4) => 100,
-        (851 | 161, 1..=3) => 255,
-        (153, 2) => 5,
-        // Only the first setpoint and actual value carry a function from the factory (§6.1.3).
-        (543 | 546, 2..) => 0,
-        _ => def.default,
-    }
+    usize::from(element)
+        .checked_sub(1)
+        .and_then(|i| def.element_defaults.get(i))
+        .copied()
+        .unwrap_or(def.default)
 }
 
 impl ParamDef {
