@@ -158,6 +158,7 @@ const fn module(p: ParamDef, products: &'static [Product]) -> ParamDef {
 const EIP_ALL: &[Product] = &[Product::Tu3Eip, Product::Tu4Eip, Product::Cu4Eip];
 const EIP_TU4_CU4: &[Product] = &[Product::Tu4Eip, Product::Cu4Eip];
 const POL_ALL: &[Product] = &[Product::Tu3Pol, Product::Tu4Pol, Product::Cu4Pol];
+const PNT: &[Product] = &[Product::Tu3Pnt];
 const TU4_CU4: &[Product] = &[
     Product::Tu4Eip,
     Product::Cu4Eip,
@@ -216,6 +217,10 @@ pub const CATALOGUE: &[ParamDef] = &[
     module(inv(163, "FU setzt Busfehler", 0, 1, 1, 0, "BU 2200 §7: 0…1, factory 1"), POL_ALL),
     module(elements(inv(164, "IP Gateway", 0, 255, 0, 0, "BU 2200 §7: factory 192.168.100.254"), &[192, 168, 100, 254]), POL_ALL),
     module(inv(165, "POWERLINK Zyklus", 400, 4000, 1000, 0, "BU 2200 §7: 400…4000 µs, factory 1000"), POL_ALL),
+    module(inv(152, "Factory setting", 0, 1, 0, 0, "BU 0590 §5.1.1: 0…1, factory 0"), PNT),
+    module(elements(inv(160, "IP address", 0, 255, 0, 0, "BU 0590 §5.1.2: factory 192.168.20.200"), &[192, 168, 20, 200]), PNT),
+    module(elements(inv(161, "IP sub-net mask", 0, 255, 0, 0, "BU 0590 §5.1.2: factory 255.255.255.0"), MASK_DEFAULT), PNT),
+    module(array(inv(163, "Test alarm", 0, 255, 0, 0, "BU 0590 §5.1.2: [-01]..[-07] slots, all {0}"), 7), PNT),
 ];
 
 /// IP address factory setting 192.168.1.100 (BU 0620 §4.2.2, BU 2100 §7.1.2).
