@@ -3,6 +3,9 @@
 //! Sans-IO and deterministic: time only comes in as `now`. The status machine is
 //! `proto::nord::state_machine` (BU 0620 §6.1.2.3); setpoints and actual values follow
 //! §6.1.2.4 (4000h = 100 % of P105); the ramp follows P102/P103 (time from 0 to P105).
+//! Actual-value functions (P543): 1 frequency, 10/15 position low/high word. Setpoint functions
+//! (P546): 1 frequency; the position setpoints 23/24 need positioning (POSICON), which the model
+//! does not have, so they are read as "no function".
 
 use std::fmt;
 use std::str::FromStr;
@@ -79,6 +82,9 @@ pub struct Drive {
     previous: ControlWord,
     frequency: f64,
     target: f64,
+    /// Motor position in rotations (one rotation per hertz-second: the model has no pole
+    /// pairs or gear), for the actual-position functions of P543.
+    position: f64,
     fault: Option<FaultCode>,
     pending_fault: Option<FaultCode>,
 }
@@ -99,6 +105,7 @@ impl Drive {
             previous: ControlWord(0),
             frequency: 0.0,
             target: 0.0,
+            position: 0.0,
             fault: None,
             pending_fault: None,
         }
@@ -201,11 +208,13 @@ impl Drive {
             max_hz * dt / ramp_s
         };
         let diff = goal - self.frequency;
+        let before = self.frequency;
         self.frequency = if diff.abs() <= step {
             goal
         } else {
             self.frequency + step * diff.signum()
         };
+        self.position += (before + self.frequency) / 2.0 * dt;
         if self.state == State::EmergencyStopActive && self.frequency == 0.0 {
             // F: "the drive is stopped, the frequency inverter changes to Switch-on block".
             self.enter(State::SwitchOnBlock, now);
@@ -238,6 +247,12 @@ impl Drive {
         s
     }
 
+    /// The position in increments (1000 per rotation), limited to ±50000.00 rotations.
+    fn position_increments(&self) -> i32 {
+        let limit = f64::from(proto::nord::scaling::POSITION_LIMIT);
+        (self.position * 1000.0).round().clamp(-limit, limit) as i32
+    }
+
     fn actuals(&self, params: &dyn DriveParams, max_hz: f64) -> Vec<u16> {
         (1..=5u8)
             .map(|i| match params.get(543, Some(i)).unwrap_or(0) {
@@ -245,6 +260,10 @@ impl Drive {
                 1 => (self.frequency * FULL_SCALE / max_hz)
                     .round()
                     .clamp(-32768.0, 32767.0) as i16 as u16,
+                // 10 / 15 = actual position low / high word (BU 0620 §3.9 step 5, §6.1.2.4:
+                // 1000 increments per rotation, 32 bits over two words).
+                10 => proto::nord::scaling::position_words(self.position_increments()).0,
+                15 => proto::nord::scaling::position_words(self.position_increments()).1,
                 _ => 0,
             })
             .collect()
