@@ -46,10 +46,11 @@ fn led_table(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
         "powerlink-be" => led::POWERLINK_BE,
         "profinet-run" => led::PROFINET_RUN,
         "profinet-bf" => led::PROFINET_BF,
+        "tu3-pnt-err" => led::TU3_PNT_ERR,
         other => {
             return Err(ComputeError::BadArg {
                 arg: "led".into(),
-                why: format!("no LED table `{other}` (dev, bus, ethercat-run, ethercat-err, ethernetip-ms, ethernetip-ns, powerlink-bs, powerlink-be, profinet-run, profinet-bf)"),
+                why: format!("no LED table `{other}` (dev, bus, ethercat-run, ethercat-err, ethernetip-ms, ethernetip-ns, powerlink-bs, powerlink-be, profinet-run, profinet-bf, tu3-pnt-err)"),
             })
         }
     };

@@ -177,6 +177,20 @@ pub const PROFINET_RUN: &[Row] = &[
     row(Pattern::Green, "AR established"),
 ];
 
+/// SK TU3-PNT red "ERR" LED (BU 0590 §2.2.4 table 5): off, double flash (2 × 0.25 s, pause
+/// 1 s) on an IO-controller timeout (P151 or P513), on for an Ethernet error.
+pub const TU3_PNT_ERR: &[Row] = &[
+    row(Pattern::Off, "No error PROFINET IO functioning normally"),
+    row(
+        Pattern::DoubleFlashRed,
+        "Timeout: the IO controller monitoring has detected an error (see parameter P151 or P513)",
+    ),
+    row(
+        Pattern::Red,
+        "Ethernet error, no mains: TU3-PNT not connected to any Ethernet participant",
+    ),
+];
+
 /// PROFINET LED A "BF" (Ethernet error, §5.5.2.4).
 pub const PROFINET_BF: &[Row] = &[row(Pattern::Off, "No error"), row(Pattern::Red, "Alarm")];
 
