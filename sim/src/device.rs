@@ -167,12 +167,23 @@ impl Device {
                 last_process: None,
             })
             .collect();
+        let mut interface = ParamChannel::new(ParamStore::new(config.product, Target::Interface));
+        // P172 "Configuration level" (BU 2100 §7.1.3): 0 CU4, 1 TU4, 2 TU3.
+        let level = match config.product {
+            Product::Cu4Eip => Some(0),
+            Product::Tu4Eip => Some(1),
+            Product::Tu3Eip => Some(2),
+            _ => None,
+        };
+        if let Some(l) = level {
+            interface.store.set_info(172, 1, l);
+        }
         Device {
             config: DeviceConfig {
                 inverters: count,
                 ..config
             },
-            interface: ParamChannel::new(ParamStore::new(config.product, Target::Interface)),
+            interface,
             inverters,
         }
     }
@@ -221,7 +232,12 @@ impl Device {
                 status |= 1 << 3;
             }
         }
-        self.interface.store.set_info(872, 1, status);
+        // The SK 550P shows the bus status in P872; the EtherNet/IP modules in P173 [-01] with
+        // the same low bits (BU 2100 §7.1.3: ready, cyclic communication, timeout P151/P513).
+        match self.config.product.family() {
+            proto::nord::Family::Integrated => self.interface.store.set_info(872, 1, status),
+            proto::nord::Family::Module => self.interface.store.set_info(173, 1, status & 0x0B),
+        }
         self.change_protocol(now);
     }
 
