@@ -133,6 +133,9 @@ pub(crate) fn decode(a: DecodeArgs) -> Result<i32, String> {
                         .map_err(|_| format!("pkw: `{t}` is not a hex byte"))
                 })
                 .collect::<Result<_, _>>()?;
+            if raw.len() > proto::nord::pkw::PKW_LEN {
+                return Err(format!("pkw: a telegram is 8 bytes, got {}", raw.len()));
+            }
             let r = PkwRepr::parse(&raw).map_err(|e| format!("pkw: {e}"))?;
             let text = if response {
                 r.describe_response()

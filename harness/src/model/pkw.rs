@@ -27,6 +27,12 @@ fn decode(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
             arg: "bytes".into(),
             why: format!("`{text}` is not hex bytes"),
         })?;
+    if bytes.len() > proto::nord::pkw::PKW_LEN {
+        return Err(ComputeError::Refused(format!(
+            "a PKW telegram is 8 bytes, got {}",
+            bytes.len()
+        )));
+    }
     let r = PkwRepr::parse(&bytes).map_err(|e| ComputeError::Refused(e.to_string()))?;
     Ok(fields(&r))
 }
