@@ -164,12 +164,12 @@ fn run(a: RunArgs) -> Result<i32, String> {
         SnapshotMode::Off
     };
     let snaps = report::apply_snapshots(&mut run, &mode).map_err(|e| e.to_string())?;
-    report::write_all(&run, &a.out).map_err(|e| e.to_string())?;
+    let written = report::write_all(&run, &a.out).map_err(|e| e.to_string())?;
     print!("{}", report::terminal(&run));
     if !matches!(mode, SnapshotMode::Off) {
         println!("{snaps}");
     }
-    println!("reports written to {}", a.out.display());
+    println!("{written}");
     Ok(if !run.load_errors.is_empty() {
         EXIT_USAGE
     } else if run.count(Verdict::Fail) + run.count(Verdict::Error) > 0 {

@@ -1,11 +1,15 @@
 //! Transcript snapshots: `--accept` stores every case's transcript, `--snapshots` compares a run
-//! with the stored ones and fails each passing case whose transcript changed — how one firmware
-//! release is compared with the previous.
+//! with the stored ones and fails each passing case whose transcript changed. This is how one
+//! firmware release is compared with the previous one (DESIGN.md "Verdicts and reports").
+//!
+//! Files: `<dir>/<profile>/<case id with / as __>.snap`, the same naming as the transcripts.
+//! Both sides pass through [`redact`] before they are stored or compared.
 
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use super::{case_file, io, transcript, write, ReportError};
+use super::transcript;
+use super::write::{case_file, io, write_file, ReportError};
 use crate::outcome::{RunResult, Verdict};
 
 /// What to do with snapshots.
@@ -13,18 +17,22 @@ use crate::outcome::{RunResult, Verdict};
 pub(crate) enum SnapshotMode {
     /// Nothing.
     Off,
-    /// Compare with the snapshots in the folder.
+    /// Compare the run's transcripts with the snapshots in the folder.
     Compare(PathBuf),
-    /// Store the run's transcripts in the folder.
+    /// Store the run's transcripts in the folder as the new snapshots.
     Accept(PathBuf),
 }
 
-/// What a snapshot pass did.
+/// What a snapshot pass did. Cases are named `<profile> <id>`.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]
 pub(crate) struct SnapshotReport {
+    /// Snapshots written (accept).
     pub(crate) stored: usize,
+    /// Transcripts equal to their snapshot (compare).
     pub(crate) same: usize,
+    /// Transcripts that differ from their snapshot (compare); passing ones now fail.
     pub(crate) changed: Vec<String>,
+    /// Cases without a snapshot (compare): reported, not failed.
     pub(crate) new: Vec<String>,
 }
 
@@ -32,23 +40,83 @@ impl fmt::Display for SnapshotReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "snapshots: {} stored, {} unchanged, {} changed, {} without a snapshot",
+            "snapshots: {} stored, {} unchanged, {} changed, {} new (no snapshot yet)",
             self.stored,
             self.same,
             self.changed.len(),
             self.new.len()
-        )
+        )?;
+        for c in &self.changed {
+            write!(f, "\n  changed: {c}")?;
+        }
+        Ok(())
     }
 }
 
-/// Run-to-run variable data (session handles, connection ids, timestamps) is masked here before
-/// comparing. The PPO link has none yet, so this is the identity; protocol bindings that carry
-/// such fields extend it.
+/// Masks run-to-run variable data before transcripts are stored or compared.
+///
+/// Today nothing in a transcript varies between runs (the PPO link carries no session state and
+/// transcripts hold no times), so this is the identity. Bindings that put session handles,
+/// connection ids, sequence counters or timestamps into their decoded text (EtherNet/IP session
+/// handle, CIP connection ids, POWERLINK/PROFINET counters) must mask them here, e.g. replace
+/// `session 1A2B3C4Dh` with `session <handle>`, so a new run compares equal.
 pub(crate) fn redact(text: &str) -> String {
     text.to_string()
 }
 
-/// Applies the mode to the run.
+/// The first line where `want` and `got` differ: (1-based line, expected, got); `(end)` stands
+/// for a missing line.
+fn first_difference(want: &str, got: &str) -> Option<(usize, String, String)> {
+    let (mut w, mut g) = (want.lines(), got.lines());
+    let mut n = 0;
+    loop {
+        n += 1;
+        match (w.next(), g.next()) {
+            (None, None) => return None,
+            (a, b) if a != b => {
+                let show = |l: Option<&str>| l.unwrap_or("(end)").to_string();
+                return Some((n, show(a), show(b)));
+            }
+            _ => {}
+        }
+    }
+}
+
+fn compare(
+    run: &mut RunResult,
+    dir: &Path,
+    report: &mut SnapshotReport,
+) -> Result<(), ReportError> {
+    for c in &mut run.cases {
+        let path = dir.join(case_file(c, "snap"));
+        let name = format!("{} {}", c.profile, c.id);
+        let stored = match std::fs::read_to_string(&path) {
+            Ok(s) => redact(&s),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                report.new.push(name);
+                continue;
+            }
+            Err(e) => return Err(io(&path)(e)),
+        };
+        let Some((line, want, got)) = first_difference(&stored, &redact(&transcript::render(c)))
+        else {
+            report.same += 1;
+            continue;
+        };
+        report.changed.push(name);
+        if c.verdict == Verdict::Pass {
+            c.verdict = Verdict::Fail;
+            c.message = format!(
+                "transcript differs from snapshot {}: first difference at line {line}: expected `{want}`, got `{got}`",
+                path.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Applies `mode` to the run: stores every transcript (accept), or compares every transcript with
+/// its snapshot and turns each passing case whose transcript changed into a failure (compare).
 pub(crate) fn apply_snapshots(
     run: &mut RunResult,
     mode: &SnapshotMode,
@@ -58,83 +126,97 @@ pub(crate) fn apply_snapshots(
         SnapshotMode::Off => {}
         SnapshotMode::Accept(dir) => {
             for c in &run.cases {
-                let path = dir
-                    .join(&c.profile)
-                    .join(format!("{}.snap", case_file(&c.id)));
-                write(&path, redact(&transcript::render(c)).as_bytes())?;
+                let text = redact(&transcript::render(c));
+                write_file(&dir.join(case_file(c, "snap")), text.as_bytes())?;
                 report.stored += 1;
             }
         }
-        SnapshotMode::Compare(dir) => {
-            for c in &mut run.cases {
-                let path = dir
-                    .join(&c.profile)
-                    .join(format!("{}.snap", case_file(&c.id)));
-                let stored = match std::fs::read_to_string(&path) {
-                    Ok(s) => s,
-                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                        report.new.push(c.id.clone());
-                        continue;
-                    }
-                    Err(e) => return Err(io(&path)(e)),
-                };
-                let now = redact(&transcript::render(c));
-                match first_difference(&stored, &now) {
-                    None => report.same += 1,
-                    Some((line, want, got)) => {
-                        report.changed.push(c.id.clone());
-                        if c.verdict == Verdict::Pass {
-                            c.verdict = Verdict::Fail;
-                            c.message = format!(
-                                "transcript differs from snapshot {}: first difference at line {line}: expected `{want}`, got `{got}`",
-                                path.display()
-                            );
-                        }
-                    }
-                }
-            }
-        }
+        SnapshotMode::Compare(dir) => compare(run, dir, &mut report)?,
     }
     Ok(report)
-}
-
-fn first_difference(a: &str, b: &str) -> Option<(usize, String, String)> {
-    let (mut x, mut y) = (a.lines(), b.lines());
-    for n in 1.. {
-        match (x.next(), y.next()) {
-            (None, None) => return None,
-            (l, r) if l != r => {
-                return Some((n, l.unwrap_or("(end)").into(), r.unwrap_or("(end)").into()))
-            }
-            _ => {}
-        }
-    }
-    None
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::tests::sample_run;
+    use crate::report::fixtures::{sample_run, temp_dir};
+    use rstest::rstest;
+
+    #[rstest]
+    #[case("a\nb\n", "a\nb\n", None)]
+    #[case("a\nb\n", "a\nc\n", Some((2, "b", "c")))]
+    #[case("a\n", "a\nb\n", Some((2, "(end)", "b")))]
+    #[case("a\nb\n", "a\n", Some((2, "b", "(end)")))]
+    fn first_difference_names_the_line(
+        #[case] want: &str,
+        #[case] got: &str,
+        #[case] diff: Option<(usize, &str, &str)>,
+    ) {
+        let diff = diff.map(|(n, a, b)| (n, a.to_string(), b.to_string()));
+        assert_eq!(first_difference(want, got), diff);
+    }
 
     #[test]
     fn accept_then_compare_then_detect_a_change() {
-        let dir = std::env::temp_dir().join(format!("harness-snap-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
+        let dir = temp_dir("snap");
         let mut run = sample_run();
         let r = apply_snapshots(&mut run, &SnapshotMode::Accept(dir.clone())).unwrap();
         assert_eq!(r.stored, run.cases.len());
+        assert!(dir
+            .join("sk550p/bu0620__pkw-telegrams__p102-write.snap")
+            .is_file());
         let r = apply_snapshots(&mut run, &SnapshotMode::Compare(dir.clone())).unwrap();
-        assert_eq!((r.same, r.changed.len()), (run.cases.len(), 0));
-        run.cases[0].steps[0].message = "different".into();
-        let r = apply_snapshots(&mut run, &SnapshotMode::Compare(dir.clone())).unwrap();
-        assert_eq!(r.changed, vec![run.cases[0].id.clone()]);
-        assert_eq!(run.cases[0].verdict, Verdict::Fail);
-        assert!(
-            run.cases[0].message.contains("first difference at line"),
-            "{}",
-            run.cases[0].message
+        assert_eq!(
+            (r.same, r.changed.len(), r.new.len()),
+            (run.cases.len(), 0, 0)
         );
+
+        // A new firmware answers PWE 251; the passing case fails, the failing one stays failing.
+        for c in &mut run.cases[..2] {
+            c.steps[0].exchanges[0].received_hex = "65 02 14 4E 01 00 00 00 00 FB".into();
+        }
+        let r = apply_snapshots(&mut run, &SnapshotMode::Compare(dir.clone())).unwrap();
+        assert_eq!(
+            r.changed,
+            vec![
+                "sk550p bu0620/pkw-telegrams/p102-write".to_string(),
+                "sk550p bu0620/addressing/coe-p102".to_string()
+            ]
+        );
+        assert_eq!(run.cases[0].verdict, Verdict::Fail);
+        let want = format!(
+            "transcript differs from snapshot {}: first difference at line 12: expected `  <- 65 02 14 4E 01 00 00 00 00 FA`, got `  <- 65 02 14 4E 01 00 00 00 00 FB`",
+            dir.join("sk550p/bu0620__pkw-telegrams__p102-write.snap").display()
+        );
+        assert_eq!(run.cases[0].message, want);
+        assert_eq!(run.cases[1].verdict, Verdict::Fail);
+        assert!(
+            run.cases[1].message.starts_with("status: expected"),
+            "message kept"
+        );
+        assert!(r.to_string().contains("2 changed"), "{r}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_missing_snapshot_is_new_not_a_failure() {
+        let dir = temp_dir("snap-new");
+        let mut run = sample_run();
+        let r = apply_snapshots(&mut run, &SnapshotMode::Compare(dir.clone())).unwrap();
+        assert_eq!(r.new.len(), run.cases.len());
+        assert_eq!(run, sample_run(), "verdicts untouched");
+    }
+
+    #[test]
+    fn off_does_nothing() {
+        let mut run = sample_run();
+        let r = apply_snapshots(&mut run, &SnapshotMode::Off).unwrap();
+        assert_eq!((r, run), (SnapshotReport::default(), sample_run()));
+    }
+
+    #[test]
+    fn redaction_keeps_todays_deterministic_transcripts() {
+        let t = transcript::render(&sample_run().cases[0]);
+        assert_eq!(redact(&t), t);
     }
 }

@@ -1,109 +1,207 @@
-//! The human summary: verdicts per profile, coverage by manual section, errata, failures.
+//! The human summary (`summary.md` and the console lines): load errors first, verdict counts per
+//! profile, coverage by manual section, the manuals' errata, and the cases that did not pass.
 
+use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-use crate::outcome::{RunResult, Verdict};
+use crate::outcome::{CaseResult, RunResult, Verdict};
 
-/// Sort key for sections: "2.10" after "2.2.7".
-fn section_key(s: &str) -> Vec<u32> {
+/// Cases per verdict, every verdict present (zero included); serializes as `{"pass": n, …}`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(transparent)]
+pub(super) struct Counts(BTreeMap<Verdict, usize>);
+
+impl Counts {
+    /// Counts the verdicts of `cases`.
+    pub(super) fn of<'a>(cases: impl IntoIterator<Item = &'a CaseResult>) -> Self {
+        let mut m: BTreeMap<Verdict, usize> = Verdict::ALL.iter().map(|v| (*v, 0)).collect();
+        for c in cases {
+            *m.entry(c.verdict).or_default() += 1;
+        }
+        Counts(m)
+    }
+
+    /// How many cases ended with `v`.
+    pub(super) fn get(&self, v: Verdict) -> usize {
+        self.0.get(&v).copied().unwrap_or(0)
+    }
+
+    fn total(&self) -> usize {
+        self.0.values().sum()
+    }
+
+    /// Table cells in [`Verdict::ALL`] order: `1 | 0 | …`.
+    fn cells(&self) -> String {
+        Verdict::ALL
+            .iter()
+            .map(|v| self.get(*v).to_string())
+            .collect::<Vec<_>>()
+            .join(" | ")
+    }
+}
+
+/// The run's profiles in order, followed by any profile a case ran under that the run does not
+/// list (so no case is left out of a per-profile report).
+pub(super) fn profiles(run: &RunResult) -> Vec<&str> {
+    let mut out: Vec<&str> = run.profiles.iter().map(String::as_str).collect();
+    for c in &run.cases {
+        if !out.contains(&c.profile.as_str()) {
+            out.push(&c.profile);
+        }
+    }
+    out
+}
+
+/// Sort key for section numbers: numerically per level, so `2.2.7` sorts before `2.10`; a
+/// non-numeric level (`A`) sorts after the numbers, by text.
+fn section_key(s: &str) -> Vec<(u64, &str)> {
     s.split('.')
-        .map(|p| p.parse().unwrap_or(u32::MAX))
+        .map(|p| p.parse().map_or((u64::MAX, p), |n| (n, "")))
         .collect()
 }
 
-fn counts_row(counts: &[usize; 5]) -> String {
-    counts
-        .iter()
-        .map(|n| n.to_string())
-        .collect::<Vec<_>>()
-        .join(" | ")
+/// A Markdown table cell: no `|` or line break may end the cell early.
+fn cell(s: &str) -> String {
+    s.replace('|', "\\|").replace(['\n', '\r'], " ")
 }
 
-fn index(v: Verdict) -> usize {
-    Verdict::ALL.iter().position(|x| *x == v).unwrap_or(0)
+/// `## Verdicts per profile`, `## Coverage by manual section` and the header row they share.
+const VERDICT_HEADER: &str = "pass | fail | inconclusive | error | not applicable |";
+
+fn coverage(s: &mut String, run: &RunResult) {
+    type Key<'a> = (&'a str, &'a str, Vec<(u64, &'a str)>, &'a str);
+    let mut by: BTreeMap<Key<'_>, Vec<&CaseResult>> = BTreeMap::new();
+    for c in &run.cases {
+        let m = &c.manual;
+        let key = (
+            m.doc.as_str(),
+            m.edition.as_str(),
+            section_key(&m.section),
+            m.section.as_str(),
+        );
+        by.entry(key).or_default().push(c);
+    }
+    let _ = writeln!(
+        s,
+        "\n## Coverage by manual section\n\n| doc | edition | section | cases | {VERDICT_HEADER}\n|---|---|---|---:|---:|---:|---:|---:|---:|"
+    );
+    for ((doc, edition, _, section), cases) in by {
+        let n = Counts::of(cases);
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} |",
+            cell(doc),
+            cell(edition),
+            cell(section),
+            n.total(),
+            n.cells()
+        );
+    }
+}
+
+fn errata(s: &mut String, run: &RunResult) {
+    let _ = writeln!(
+        s,
+        "\n## Errata: what the manuals print, and what the cases test\n"
+    );
+    if run.errata.is_empty() {
+        let _ = writeln!(s, "None recorded.");
+        return;
+    }
+    let mut list: Vec<_> = run.errata.iter().collect();
+    list.sort_by(|a, b| {
+        (&a.doc, &a.edition, section_key(&a.section), a.page).cmp(&(
+            &b.doc,
+            &b.edition,
+            section_key(&b.section),
+            b.page,
+        ))
+    });
+    let _ = writeln!(
+        s,
+        "| doc | edition | section | page | printed → correct | why | case |\n|---|---|---|---:|---|---|---|"
+    );
+    for e in list {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | `{}` → `{}` | {} | {} |",
+            cell(&e.doc),
+            cell(&e.edition),
+            cell(&e.section),
+            e.page,
+            cell(&e.printed),
+            cell(&e.correct),
+            cell(&e.why),
+            cell(&e.case)
+        );
+    }
+}
+
+/// Cases that did not pass and apply: fail, error, inconclusive.
+fn not_passed(run: &RunResult) -> impl Iterator<Item = &CaseResult> {
+    run.cases.iter().filter(|c| {
+        matches!(
+            c.verdict,
+            Verdict::Fail | Verdict::Error | Verdict::Inconclusive
+        )
+    })
 }
 
 /// `summary.md`.
 pub(super) fn markdown(run: &RunResult) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# Run summary\n\nDUT: {}; profiles: {}; {:.3} s\n",
-        run.dut,
-        run.profiles.join(", "),
-        run.duration.as_secs_f64()
-    );
+    let mut s = String::from("# Run summary\n\n");
     if !run.load_errors.is_empty() {
-        let _ = writeln!(s, "## Suite files that did not load\n");
+        let _ = writeln!(
+            s,
+            "## ⚠ {} suite file(s) did not load: their cases did not run\n",
+            run.load_errors.len()
+        );
         for e in &run.load_errors {
-            let _ = writeln!(s, "- {e}");
+            let _ = writeln!(s, "- `{}`", e.replace('`', "'"));
         }
         s.push('\n');
     }
-    let header = "| pass | fail | inconclusive | error | not applicable |";
     let _ = writeln!(
         s,
-        "## Verdicts per profile\n\n| profile {header}\n|---|---|---|---|---|---|"
+        "DUT: {}; profiles: {}; {} cases; {:.3} s\n",
+        run.dut,
+        run.profiles.join(", "),
+        run.cases.len(),
+        run.duration.as_secs_f64()
     );
-    for p in &run.profiles {
-        let mut c = [0usize; 5];
-        for case in run.cases.iter().filter(|c| &c.profile == p) {
-            c[index(case.verdict)] += 1;
-        }
-        let _ = writeln!(s, "| {p} | {} |", counts_row(&c));
-    }
-    let mut by_section: BTreeMap<(String, Vec<u32>, String), [usize; 5]> = BTreeMap::new();
-    for c in &run.cases {
-        let key = (
-            c.manual.doc.clone(),
-            section_key(&c.manual.section),
-            c.manual.section.clone(),
-        );
-        by_section.entry(key).or_default()[index(c.verdict)] += 1;
-    }
-    let _ = writeln!(s, "\n## Coverage by manual section\n\n| manual | section {header}\n|---|---|---|---|---|---|---|");
-    for ((doc, _, section), c) in &by_section {
-        let _ = writeln!(s, "| {doc} | {section} | {} |", counts_row(c));
-    }
     let _ = writeln!(
         s,
-        "\n## Errata (what the manuals print, and what the cases test)\n"
+        "## Verdicts per profile\n\n| profile | {VERDICT_HEADER}\n|---|---:|---:|---:|---:|---:|"
     );
-    for e in &run.errata {
-        let _ = writeln!(
-            s,
-            "- {} ({}) §{} p. {}: printed `{}` → correct `{}` — {}",
-            e.doc, e.edition, e.section, e.page, e.printed, e.correct, e.why
-        );
+    for p in profiles(run) {
+        let n = Counts::of(run.cases.iter().filter(|c| c.profile == p));
+        let _ = writeln!(s, "| {} | {} |", cell(p), n.cells());
     }
-    let bad: Vec<_> = run
-        .cases
-        .iter()
-        .filter(|c| {
-            matches!(
-                c.verdict,
-                Verdict::Fail | Verdict::Error | Verdict::Inconclusive
-            )
-        })
-        .collect();
-    if !bad.is_empty() {
+    let _ = writeln!(s, "| **all** | {} |", Counts::of(&run.cases).cells());
+    let mut bad = not_passed(run).peekable();
+    if bad.peek().is_some() {
         let _ = writeln!(s, "\n## Failed, errored and inconclusive cases\n");
         for c in bad {
             let _ = writeln!(
                 s,
-                "- **{}** [{}] {}: {}",
+                "- **{}** [{}] `{}` ({} §{} p. {}): {}",
                 c.verdict.name(),
                 c.profile,
                 c.id,
+                c.manual.doc,
+                c.manual.section,
+                c.manual.page,
                 c.message
             );
         }
     }
+    coverage(&mut s, run);
+    errata(&mut s, run);
     s
 }
 
-/// A few lines for the terminal.
+/// The console lines: load errors, failing and erroring cases, counts per profile, totals.
 pub(crate) fn terminal(run: &RunResult) -> String {
     let mut s = String::new();
     for e in &run.load_errors {
@@ -114,26 +212,28 @@ pub(crate) fn terminal(run: &RunResult) -> String {
         .iter()
         .filter(|c| matches!(c.verdict, Verdict::Fail | Verdict::Error))
     {
-        let _ = writeln!(
-            s,
-            "{:<5} [{}] {}: {}",
-            c.verdict.name().to_uppercase(),
-            c.profile,
-            c.id,
-            c.message
-        );
+        let name = c.verdict.name().to_uppercase();
+        let _ = writeln!(s, "{name:<5} [{}] {}: {}", c.profile, c.id, c.message);
+    }
+    let line = |n: &Counts| {
+        Verdict::ALL
+            .iter()
+            .map(|v| format!("{} {}", n.get(*v), v.name().replace('_', " ")))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    for p in profiles(run) {
+        let n = Counts::of(run.cases.iter().filter(|c| c.profile == p));
+        let _ = writeln!(s, "  {p:<8} {}", line(&n));
     }
     let _ = writeln!(
         s,
-        "{} cases under {} profiles: {} pass, {} fail, {} inconclusive, {} error, {} not applicable; {} errata recorded",
+        "{} cases under {} profiles: {}; {} errata recorded; {} suite files did not load",
         run.cases.len(),
         run.profiles.len(),
-        run.count(Verdict::Pass),
-        run.count(Verdict::Fail),
-        run.count(Verdict::Inconclusive),
-        run.count(Verdict::Error),
-        run.count(Verdict::NotApplicable),
-        run.errata.len()
+        line(&Counts::of(&run.cases)),
+        run.errata.len(),
+        run.load_errors.len()
     );
     s
 }
@@ -141,38 +241,95 @@ pub(crate) fn terminal(run: &RunResult) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::tests::sample_run;
+    use crate::report::fixtures::sample_run;
+    use rstest::rstest;
 
-    #[test]
-    fn sections_sort_numerically() {
-        let mut v = vec![
-            section_key("2.10"),
-            section_key("2.2.7"),
-            section_key("2.2"),
-        ];
-        v.sort();
-        assert_eq!(
-            v,
-            vec![
-                section_key("2.2"),
-                section_key("2.2.7"),
-                section_key("2.10")
-            ]
+    #[rstest]
+    #[case("2.2.7", "2.10")]
+    #[case("2.2", "2.2.7")]
+    #[case("2.9", "2.10")]
+    #[case("9", "10")]
+    #[case("7.1.3", "A.1")]
+    fn sections_sort_numerically(#[case] before: &str, #[case] after: &str) {
+        assert!(
+            section_key(before) < section_key(after),
+            "{before} < {after}"
         );
     }
 
     #[test]
-    fn summary_has_coverage_errata_and_failures() {
+    fn counts_include_every_verdict() {
+        let n = Counts::of(&sample_run().cases);
+        assert_eq!(Verdict::ALL.map(|v| n.get(v)), [1, 1, 1, 1, 1]);
+        assert_eq!(n.cells(), "1 | 1 | 1 | 1 | 1");
+    }
+
+    #[test]
+    fn coverage_table_is_sorted_by_doc_then_section() {
+        let mut run = sample_run();
+        run.cases[0].manual.section = "2.10".into();
+        let md = markdown(&run);
+        let row = |needle: &str| md.find(needle).unwrap_or_else(|| panic!("{needle}\n{md}"));
+        // BU 0620 §2.2.7: one fail (sk550p) and one not applicable (tu3-eip).
+        let r227 = row("| BU 0620 | 2020-03 en | 2.2.7 | 2 | 0 | 1 | 0 | 0 | 1 |");
+        let r2564 = row("| BU 0620 | 2020-03 en | 2.5.6.4 | 1 | 0 | 0 | 0 | 1 | 0 |");
+        let r210 = row("| BU 0620 | 2020-03 en | 2.10 | 1 | 1 | 0 | 0 | 0 | 0 |");
+        let bu2100 = row("| BU 2100 | en | 5.1 | 1 | 0 | 0 | 1 | 0 | 0 |");
+        assert!(r227 < r2564 && r2564 < r210 && r210 < bu2100, "{md}");
+    }
+
+    #[test]
+    fn summary_lists_profiles_failures_and_errata() {
         let md = markdown(&sample_run());
+        assert!(md.contains("| sk550p | 1 | 1 | 0 | 0 | 0 |"), "{md}");
+        assert!(md.contains("| tu3-eip | 0 | 0 | 1 | 1 | 1 |"), "{md}");
         assert!(
-            md.contains("| BU 0620 | 2.2.7 | 1 | 1 | 0 | 1 | 1 |"),
+            md.contains("| BU 0620 | 2020-03 en | 2.3.5 | 27 | `class 103` → `class 102` | FI 2 is class 102 |"),
             "{md}"
         );
         assert!(
-            md.contains("printed `class 103` → correct `class 102`"),
+            md.contains("- **fail** [sk550p] `bu0620/addressing/coe-p102` (BU 0620 §2.2.7 p. 20): status: expected 2865"),
             "{md}"
         );
-        assert!(md.contains("**fail** [sk550p]"), "{md}");
-        assert!(terminal(&sample_run()).contains("1 pass, 1 fail"));
+        assert!(!md.contains("did not load"), "{md}");
+    }
+
+    #[test]
+    fn load_errors_come_first() {
+        let mut run = sample_run();
+        run.load_errors = vec!["suites/bu0620/x.yaml:8: unknown step `wait`".into()];
+        let md = markdown(&run);
+        let err = md.find("x.yaml:8").unwrap();
+        assert!(err < md.find("## Verdicts").unwrap(), "{md}");
+        assert!(md.contains("1 suite file(s) did not load"), "{md}");
+        let t = terminal(&run);
+        assert!(t.starts_with("LOAD ERROR suites/bu0620/x.yaml:8"), "{t}");
+    }
+
+    #[test]
+    fn terminal_is_short_and_counts_per_profile() {
+        let t = terminal(&sample_run());
+        assert!(
+            t.contains("FAIL  [sk550p] bu0620/addressing/coe-p102: status"),
+            "{t}"
+        );
+        assert!(
+            t.contains("ERROR [tu3-eip] bu0620/pkw-telegrams/silent"),
+            "{t}"
+        );
+        assert!(
+            t.contains("  sk550p   1 pass, 1 fail, 0 inconclusive, 0 error, 0 not applicable"),
+            "{t}"
+        );
+        assert!(
+            t.contains("5 cases under 2 profiles: 1 pass, 1 fail"),
+            "{t}"
+        );
+        assert!(t.lines().count() <= 6, "{t}");
+    }
+
+    #[test]
+    fn cells_cannot_break_the_table() {
+        assert_eq!(cell("a|b\nc"), "a\\|b c");
     }
 }

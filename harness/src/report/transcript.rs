@@ -1,18 +1,49 @@
-//! A case's transcript: steps, observations and every link exchange in hex and decoded.
-//! Deterministic (no times), so transcripts can be stored as snapshots and diffed.
+//! A case's transcript: header (id, title, manual reference, verdict), then every step with its
+//! verdict, observation, message and link exchanges in hex and decoded.
+//!
+//! Deterministic: no timestamps and no durations, so transcripts can be stored as snapshots and
+//! diffed across firmware releases (see `snapshot.rs`). Layout:
+//!
+//! ```text
+//! case: <id>
+//! title: <title>
+//! manual: <doc> (<edition>) §<section> p. <page>
+//! profile: <profile>
+//! verdict: <verdict>
+//! message: <message>            (only when not empty)
+//!
+//! step <n>: <step line>
+//!   verdict: <verdict>
+//!   observed: <compact JSON>    (only when not null)
+//!   message: <message>          (only when not empty)
+//!   -> <sent hex>
+//!      <sent decoded>
+//!   <- <received hex>           (`(nothing received)` when the DUT stayed silent)
+//!      <received decoded>
+//! ```
 
 use std::fmt::Write;
 
-use crate::outcome::CaseResult;
+use crate::outcome::{CaseResult, Exchange};
 
-/// The transcript text.
+fn exchange(s: &mut String, x: &Exchange) {
+    let _ = writeln!(s, "  -> {}\n     {}", x.sent_hex, x.sent);
+    if x.received_hex.is_empty() {
+        let _ = writeln!(s, "  <- (nothing received)");
+    } else {
+        let _ = writeln!(s, "  <- {}\n     {}", x.received_hex, x.received);
+    }
+}
+
+/// The transcript text of one case.
 pub(crate) fn render(c: &CaseResult) -> String {
     let mut s = String::new();
+    let m = &c.manual;
     let _ = writeln!(s, "case: {}\ntitle: {}", c.id, c.title);
     let _ = writeln!(
         s,
         "manual: {} ({}) §{} p. {}",
-        c.manual.doc, c.manual.edition, c.manual.section, c.manual.page
+        m.doc, m.edition, m.section, m.page
     );
     let _ = writeln!(s, "profile: {}\nverdict: {}", c.profile, c.verdict.name());
     if !c.message.is_empty() {
@@ -33,11 +64,7 @@ pub(crate) fn render(c: &CaseResult) -> String {
             let _ = writeln!(s, "  message: {}", st.message);
         }
         for x in &st.exchanges {
-            let _ = writeln!(
-                s,
-                "  -> {}\n     {}\n  <- {}\n     {}",
-                x.sent_hex, x.sent, x.received_hex, x.received
-            );
+            exchange(&mut s, x);
         }
     }
     s
@@ -46,15 +73,53 @@ pub(crate) fn render(c: &CaseResult) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::tests::sample_run;
+    use crate::report::fixtures::sample_run;
 
     #[test]
-    fn transcript_shows_exchanges_in_hex_and_decoded() {
+    fn failing_case_shows_header_step_and_exchange() {
         let run = sample_run();
-        let t = render(&run.cases[1]);
-        assert!(t.contains("-> 65 01 24 4E"), "{t}");
-        assert!(t.contains("<- 65 01 14 4E"), "{t}");
-        assert!(t.contains("verdict: fail"), "{t}");
-        assert_eq!(t, render(&run.cases[1]), "deterministic");
+        insta::assert_snapshot!(render(&run.cases[1]), @r#"
+        case: bu0620/addressing/coe-p102
+        title: title of bu0620/addressing/coe-p102
+        manual: BU 0620 (2020-03 en) §2.2.7 p. 20
+        profile: sk550p
+        verdict: fail
+        message: status: expected 2865 (0B31h), got 2871 (0B37h)
+
+        step 1: read P102 set 3 FI 5
+          verdict: fail
+          observed: {"ak":1,"pwe":250}
+          message: status: expected 2865 (0B31h), got 2871 (0B37h)
+          -> 65 02 24 4E 01 00 00 00 00 FA
+             AK 2, PNU 1102 = P102, IND 0100h, PWE 250
+          <- 65 02 14 4E 01 00 00 00 00 FA
+             AK 1, PNU 1102 = P102, IND 0100h, PWE 250
+        "#);
+    }
+
+    #[test]
+    fn silence_and_passing_steps_are_explicit() {
+        let run = sample_run();
+        let silent = render(&run.cases[3]);
+        assert!(
+            silent.ends_with("  -> 65 02 24 4E 01 00 00 00 00 FA\n     AK 2, PNU 1102 = P102, IND 0100h, PWE 250\n  <- (nothing received)\n"),
+            "{silent}"
+        );
+        let pass = render(&run.cases[0]);
+        assert!(!pass.contains("message:"), "{pass}");
+        let na = render(&run.cases[2]);
+        assert!(!na.contains("step 1"), "{na}");
+        assert!(
+            na.contains("verdict: not_applicable\nmessage: the statement is about sk550p"),
+            "{na}"
+        );
+    }
+
+    #[test]
+    fn deterministic_without_times() {
+        let run = sample_run();
+        let mut slower = run.cases[1].clone();
+        slower.duration *= 1000;
+        assert_eq!(render(&run.cases[1]), render(&slower));
     }
 }
