@@ -2,30 +2,61 @@
 //!
 //! Sans-IO and deterministic: time only comes in as `now`. The status machine is
 //! `proto::nord::state_machine` (BU 0620 §6.1.2.3); setpoints and actual values follow
-//! §6.1.2.4 (4000h = 100 % of P105); the ramp follows P102/P103 (time from 0 to P105).
-//! Actual-value functions (P543): 1 frequency, 10/15 position low/high word. Setpoint functions
-//! (P546): 1 frequency; the position setpoints 23/24 need positioning (POSICON), which the model
-//! does not have, so they are read as "no function".
+//! §6.1.2.4 (4000h = 100 % of P105) and the function codes of P546/P543
+//! (`proto::nord::scaling`); the ramp follows P102/P103 (time from 0 to P105).
+//!
+//! What the model does with the control bits (§6.1.2.1, p. 106):
+//! - transitions chain within one telegram (047Fh from "Ready for switch-on" takes 3 then 4:
+//!   §6.1.3 answers it with xx37h at once);
+//! - in "Operation enabled" bit 4 = 0 sets the ramp generator to zero, bit 5 = 0 holds the
+//!   frequency, bit 6 = 0 ramps to setpoint 0; bit 12 (priority over 11) turns left;
+//! - "Shut down" (bit 0 = 0) brakes with P103 ("Reverse with brake ramp"); bit 3 = 0 or
+//!   "Disable voltage" switches the output off at once; "Quick stop" brakes with P426
+//!   (P103 when absent) and ends in "Switch-on block" at f = 0;
+//! - a fault blocks all functions (state G, then H after [`FAULT_REACTION`]).
+//!
+//! Setpoint functions (P546): 1 setpoint frequency, 4 frequency addition, 5 frequency
+//! subtraction; others (positions 23/24 need POSICON) have no effect. Actual-value functions
+//! (P543): 1, 21, 23, 24 actual frequency (no slip in the model), 8, 19 setpoint frequency,
+//! 20 setpoint after the ramp, 9 error number (as P700 [-01] shows it), 10/15 position
+//! low/high word; others send 0.
 
 use std::fmt;
 use std::str::FromStr;
 use std::time::Duration;
 
 use proto::nord::control::ControlWord;
-use proto::nord::state_machine::{self, State};
+use proto::nord::scaling::{self, Transmission, INCREMENTS_PER_ROTATION, POSITION_LIMIT};
+use proto::nord::state_machine::{self, State, Transition, EMERGENCY_STOP_COMPLETE};
 
 /// Parameters the drive reads (the device implements it over the inverter's store).
 pub trait DriveParams {
-    /// Value of `number` (element 1-based for arrays), parameter set 1.
+    /// Value of `number` (element 1-based for arrays) in the parameter set the control word
+    /// selects, or `None` when the inverter has no such parameter.
     fn get(&self, number: u16, element: Option<u8>) -> Option<i32>;
 }
 
-/// How long the error reaction (state G) lasts before "Fault" (H).
-const FAULT_REACTION: Duration = Duration::from_millis(20);
+/// How long the error reaction (state G) lasts before "Fault" (H, transition 14).
+pub const FAULT_REACTION: Duration = Duration::from_millis(20);
 /// How long after power-on the charging relay engages (transition 1).
-const CHARGING: Duration = Duration::from_millis(20);
-/// 100 % in process data (§6.1.2.4).
-const FULL_SCALE: f64 = 16384.0;
+pub const CHARGING: Duration = Duration::from_millis(20);
+
+/// Defaults when a parameter is absent: P102/P103 2.00 s, P105 50.0 Hz (BU 0620 §6.1.3),
+/// P543 [-01..-05] = 1, 4, 9, 0, 0 and P546 [-01] = 1 (BU 0590 §5, p. 39–40).
+const DEFAULT_RAMP: i32 = 200;
+const DEFAULT_MAX_FREQUENCY: i32 = 500;
+const DEFAULT_P543: [i32; 5] = [1, 4, 9, 0, 0];
+
+/// A malformed error number.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("`{0}` is not an error number like 10.3 (group 1..999, sub-number 0..9)")]
+pub struct FaultCodeError(pub String);
+
+impl From<FaultCodeError> for String {
+    fn from(e: FaultCodeError) -> String {
+        e.to_string()
+    }
+}
 
 /// An inverter error as P700 shows it, e.g. `10.0` (group 10, sub-number 0).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -44,9 +75,9 @@ impl FaultCode {
 }
 
 impl FromStr for FaultCode {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        let bad = || format!("`{s}` is not an error number like 10.3");
+    type Err = FaultCodeError;
+    fn from_str(s: &str) -> Result<Self, FaultCodeError> {
+        let bad = || FaultCodeError(s.to_string());
         let t = s.trim().trim_start_matches(['E', 'e']);
         let (g, sub) = t.split_once('.').ok_or_else(bad)?;
         let group: u16 = g.parse().map_err(|_| bad())?;
@@ -79,14 +110,20 @@ pub struct Drive {
     state: State,
     entered: Duration,
     last: Option<Duration>,
+    /// The last control word the inverter evaluated (bit 10 set).
     previous: ControlWord,
+    /// Output frequency in Hz, negative = left.
     frequency: f64,
-    target: f64,
+    /// Setpoint frequency in Hz from the bus setpoints, signed.
+    setpoint: f64,
+    /// Frequency the ramp heads for this cycle.
+    goal: f64,
     /// Motor position in rotations (one rotation per hertz-second: the model has no pole
     /// pairs or gear), for the actual-position functions of P543.
     position: f64,
     fault: Option<FaultCode>,
     pending_fault: Option<FaultCode>,
+    last_transition: Option<u8>,
 }
 
 impl Default for Drive {
@@ -104,10 +141,12 @@ impl Drive {
             last: None,
             previous: ControlWord(0),
             frequency: 0.0,
-            target: 0.0,
+            setpoint: 0.0,
+            goal: 0.0,
             position: 0.0,
             fault: None,
             pending_fault: None,
+            last_transition: None,
         }
     }
 
@@ -116,9 +155,22 @@ impl Drive {
         self.state
     }
 
-    /// Output frequency in Hz.
+    /// Output frequency in Hz (negative: rotation left).
     pub fn frequency_hz(&self) -> f64 {
         self.frequency
+    }
+
+    /// Setpoint frequency in Hz from the bus setpoints.
+    pub fn setpoint_hz(&self) -> f64 {
+        self.setpoint
+    }
+
+    /// Position in increments (1000 per rotation), limited to ±50000.00 rotations.
+    pub fn position_increments(&self) -> i32 {
+        let limit = f64::from(POSITION_LIMIT);
+        (self.position * f64::from(INCREMENTS_PER_ROTATION))
+            .round()
+            .clamp(-limit, limit) as i32
     }
 
     /// The present error, if any.
@@ -126,14 +178,28 @@ impl Drive {
         self.fault
     }
 
+    /// Number of the last transition taken (0 = emergency stop complete), if any.
+    pub fn last_transition(&self) -> Option<u8> {
+        self.last_transition
+    }
+
     /// Raises an error; the next cycle takes transition 13.
     pub fn inject_fault(&mut self, code: FaultCode) {
         self.pending_fault = Some(code);
     }
 
-    fn enter(&mut self, state: State, now: Duration) {
-        self.state = state;
+    fn take(&mut self, t: &Transition, now: Duration) {
+        self.state = t.to;
         self.entered = now;
+        self.last_transition = Some(t.number);
+    }
+
+    fn take_automatic(&mut self, number: u8, now: Duration) {
+        if let Some(t) = state_machine::automatic(number) {
+            if t.from.contains(&self.state) {
+                self.take(t, now);
+            }
+        }
     }
 
     /// One bus cycle: control word and setpoints in, status word and actual values out.
@@ -150,83 +216,101 @@ impl Drive {
             .map_or(Duration::ZERO, |l| now.saturating_sub(l))
             .as_secs_f64();
         self.last = Some(now);
-        let max_hz = f64::from(params.get(105, None).unwrap_or(500)) / 10.0;
+        let max_hz = f64::from(params.get(105, None).unwrap_or(DEFAULT_MAX_FREQUENCY)) / 10.0;
 
-        // Automatic transitions: 1 (charging relay), 13 (fault), 14 (end of fault reaction).
+        self.automatic_transitions(now);
+        if control.valid() {
+            self.evaluate(control, now);
+            self.setpoint = setpoint_hz(control, setpoints, params, max_hz);
+        }
+        self.run(params, max_hz, dt);
+        if self.state == State::EmergencyStopActive && self.frequency == 0.0 {
+            self.take(&EMERGENCY_STOP_COMPLETE, now);
+        }
+        DriveOutput {
+            status: self.status_word(control),
+            actuals: self.actuals(params, max_hz),
+        }
+    }
+
+    /// Transitions 13 (a fault), 1 (charging relay) and 14 (end of the fault reaction).
+    fn automatic_transitions(&mut self, now: Duration) {
         if let Some(code) = self.pending_fault.take() {
-            self.fault = Some(code);
-            self.enter(State::ErrorReactionActive, now);
-        }
-        match self.state {
-            State::NotReadyForSwitchOn if now >= CHARGING => self.enter(State::SwitchOnBlock, now),
-            State::ErrorReactionActive if now.saturating_sub(self.entered) >= FAULT_REACTION => {
-                self.enter(State::Fault, now)
+            if self.fault.is_none() {
+                self.fault = Some(code);
             }
-            _ => {}
+            self.take_automatic(13, now);
         }
-        // Commands chain within one telegram (047Fh from "Ready for switch-on" takes 3 then 4:
-        // §6.1.3 answers it with xx37h); at most one pass per state.
+        if now >= CHARGING {
+            self.take_automatic(1, now);
+        }
+        if now.saturating_sub(self.entered) >= FAULT_REACTION {
+            self.take_automatic(14, now);
+        }
+    }
+
+    /// Applies a valid control word: transitions by priority, chained within the telegram.
+    fn evaluate(&mut self, control: ControlWord, now: Duration) {
         let mut previous = self.previous;
         for _ in 0..State::ALL.len() {
             let Some(t) = state_machine::next(self.state, control, previous) else {
                 break;
             };
-            if t.number == 15 {
+            if t.to == State::SwitchOnBlock && self.state == State::Fault {
                 self.fault = None;
             }
-            self.enter(t.to, now);
+            self.take(t, now);
             previous = control;
         }
-        if control.valid() {
-            self.previous = control;
-        }
+        self.previous = control;
+    }
 
-        // Setpoint 1 per P546[-01] = 1 (setpoint frequency, §6.1.3), only with bit 10 and bit 6.
-        if control.valid() {
-            let raw = setpoints.first().copied().unwrap_or(0) as i16;
-            let function = params.get(546, Some(1)).unwrap_or(1);
-            self.target = if function == 1 && control.bit(6) {
-                f64::from(raw) * max_hz / FULL_SCALE
-            } else {
-                0.0
-            };
-        }
-        let goal = if self.state == State::OperationEnabled {
-            self.target
-        } else {
-            0.0
+    /// Moves the output frequency one cycle towards its goal.
+    fn run(&mut self, params: &dyn DriveParams, max_hz: f64, dt: f64) {
+        let c = self.previous;
+        let before = self.frequency;
+        let ramp =
+            |number: u16| f64::from(params.get(number, None).unwrap_or(DEFAULT_RAMP)) / 100.0;
+        let (goal, ramp_s) = match self.state {
+            State::OperationEnabled if !c.bit(ControlWord::ENABLE_PULSES) => (0.0, 0.0),
+            State::OperationEnabled if !c.bit(ControlWord::ENABLE_RAMP) => (self.frequency, 0.0),
+            State::OperationEnabled if !c.bit(ControlWord::ENABLE_SETPOINT) => (0.0, ramp(103)),
+            State::OperationEnabled => {
+                let up = self.setpoint.abs() > self.frequency.abs()
+                    && self.setpoint * self.frequency >= 0.0;
+                (self.setpoint, ramp(if up { 102 } else { 103 }))
+            }
+            State::EmergencyStopActive => (
+                0.0,
+                params
+                    .get(426, None)
+                    .map_or_else(|| ramp(103), |v| f64::from(v) / 100.0),
+            ),
+            State::ReadyForSwitchOn | State::SwitchedOn
+                if c.bit(ControlWord::ENABLE_OPERATION_BIT) =>
+            {
+                (0.0, ramp(103))
+            }
+            _ => (0.0, 0.0),
         };
-        let ramp_param = if goal.abs() > self.frequency.abs() {
-            102
-        } else {
-            103
-        };
-        let ramp_s = f64::from(params.get(ramp_param, None).unwrap_or(200)) / 100.0;
         let step = if ramp_s <= 0.0 {
             f64::INFINITY
         } else {
             max_hz * dt / ramp_s
         };
         let diff = goal - self.frequency;
-        let before = self.frequency;
         self.frequency = if diff.abs() <= step {
             goal
         } else {
             self.frequency + step * diff.signum()
         };
+        self.goal = goal;
         self.position += (before + self.frequency) / 2.0 * dt;
-        if self.state == State::EmergencyStopActive && self.frequency == 0.0 {
-            // F: "the drive is stopped, the frequency inverter changes to Switch-on block".
-            self.enter(State::SwitchOnBlock, now);
-        }
-        DriveOutput {
-            status: self.status_word(control, goal),
-            actuals: self.actuals(params, max_hz),
-        }
     }
 
-    fn status_word(&self, control: ControlWord, goal: f64) -> u16 {
-        let (_, base) = self.state.status_pattern();
+    fn status_word(&self, control: ControlWord) -> u16 {
+        let (_, base) = self.state.status_bits();
+        let c = self.previous;
         let mut s = base;
         if !matches!(
             self.state,
@@ -236,37 +320,67 @@ impl Drive {
                 | State::EmergencyStopActive
         ) {
             // Bits 4 and 5 are X in these states: they show the commands present (§6.1.2.2) in
-            // the last control word the inverter evaluated (bit 10 set).
-            s |= u16::from(self.previous.bit(1)) << 4 | u16::from(self.previous.bit(2)) << 5;
+            // the last control word the inverter evaluated.
+            s |= u16::from(c.bit(ControlWord::DISABLE_VOLTAGE)) << 4
+                | u16::from(c.bit(ControlWord::EMERGENCY_STOP)) << 5;
         }
-        let reached = (self.frequency - goal).abs() < 1e-6;
+        let reached = (self.frequency - self.goal).abs() < 1e-6;
         s |= u16::from(reached) << 8;
         s |= u16::from(control.valid()) << 9;
-        s |= if control.left() { 1 << 12 } else { 1 << 11 };
-        s |= u16::from(control.parameter_set() - 1) << 14;
+        s |= if c.left() { 1 << 12 } else { 1 << 11 };
+        s |= u16::from(c.parameter_set() - 1) << 14;
         s
     }
 
-    /// The position in increments (1000 per rotation), limited to ±50000.00 rotations.
-    fn position_increments(&self) -> i32 {
-        let limit = f64::from(proto::nord::scaling::POSITION_LIMIT);
-        (self.position * 1000.0).round().clamp(-limit, limit) as i32
-    }
-
     fn actuals(&self, params: &dyn DriveParams, max_hz: f64) -> Vec<u16> {
-        (1..=5u8)
-            .map(|i| match params.get(543, Some(i)).unwrap_or(0) {
-                // 1 = actual frequency, as a percentage of P105 (§6.1.3).
-                1 => (self.frequency * FULL_SCALE / max_hz)
-                    .round()
-                    .clamp(-32768.0, 32767.0) as i16 as u16,
-                // 10 / 15 = actual position low / high word (BU 0620 §3.9 step 5, §6.1.2.4:
-                // 1000 increments per rotation, 32 bits over two words).
-                10 => proto::nord::scaling::position_words(self.position_increments()).0,
-                15 => proto::nord::scaling::position_words(self.position_increments()).1,
-                _ => 0,
+        let hz = |f: f64| scaling::value_to_raw_saturating(f, max_hz) as u16;
+        let (low, high) =
+            scaling::position_words(i64::from(self.position_increments())).unwrap_or_default();
+        DEFAULT_P543
+            .iter()
+            .zip(1u8..)
+            .map(|(default, i)| {
+                let code = params.get(543, Some(i)).unwrap_or(*default);
+                let transmission = scaling::actual_function(code).map(|f| f.transmission);
+                match (code, transmission) {
+                    (_, Some(Transmission::PositionLow)) => low,
+                    (_, Some(Transmission::PositionHigh)) => high,
+                    (1 | 21 | 23 | 24, _) => hz(self.frequency),
+                    (8 | 19, _) => hz(self.setpoint),
+                    (20, _) => hz(self.goal),
+                    (9, _) => self.fault.map_or(0, FaultCode::p700),
+                    _ => 0,
+                }
             })
             .collect()
+    }
+}
+
+/// The setpoint frequency the bus setpoints give per P546 (§6.1.2.4; BU 0590 §5 p. 40):
+/// 1 setpoint frequency, 4 addition, 5 subtraction, as percentages of P105; bit 12 turns left.
+fn setpoint_hz(
+    control: ControlWord,
+    setpoints: &[u16],
+    params: &dyn DriveParams,
+    max_hz: f64,
+) -> f64 {
+    let sum: f64 = setpoints
+        .iter()
+        .zip(1u8..=5)
+        .map(|(raw, i)| {
+            let default = i32::from(i == 1);
+            let hz = scaling::raw_to_value(*raw as i16, max_hz);
+            match params.get(546, Some(i)).unwrap_or(default) {
+                1 | 4 => hz,
+                5 => -hz,
+                _ => 0.0,
+            }
+        })
+        .sum();
+    if control.left() {
+        -sum
+    } else {
+        sum
     }
 }
 
@@ -274,13 +388,18 @@ impl Drive {
 mod tests {
     use super::*;
 
-    struct Defaults;
-    impl DriveParams for Defaults {
+    /// The settings of BU 0620 §6.1.3 (p. 114): P105 = 50 Hz, P543 [-01] = 1, P546 [-01] = 1;
+    /// P102/P103 = 2.00 s; P543 [-02] = 9 (error number), [-03] = 10 (position low word).
+    struct Example;
+    impl DriveParams for Example {
         fn get(&self, number: u16, element: Option<u8>) -> Option<i32> {
             match (number, element) {
                 (105, _) => Some(500),
                 (102 | 103, _) => Some(200),
-                (543 | 546, Some(1)) => Some(1),
+                (543, Some(1)) | (546, Some(1)) => Some(1),
+                (543, Some(2)) => Some(9),
+                (543, Some(3)) => Some(10),
+                (543 | 546, Some(_)) => Some(0),
                 _ => None,
             }
         }
@@ -290,32 +409,54 @@ mod tests {
         Duration::from_millis(n)
     }
 
+    /// Runs `word` with `setpoint` every 4 ms from `from` to `to` (ms), returning the last output.
+    fn run(d: &mut Drive, word: u16, setpoint: u16, from: u64, to: u64) -> DriveOutput {
+        let mut out = d.cycle(word, &[setpoint], &Example, ms(from));
+        for t in (from + 4..=to).step_by(4) {
+            out = d.cycle(word, &[setpoint], &Example, ms(t));
+        }
+        out
+    }
+
     #[test]
     fn switching_example_of_bu0620_6_1_3() {
+        // p. 114: 0000h, xx40h at power-on; 047Eh → xx31h; 047Fh + 2000h → xx37h, 2000h.
         let mut d = Drive::new();
-        assert_eq!(d.cycle(0, &[], &Defaults, ms(0)).status & 0x7F, 0x00);
-        assert_eq!(d.cycle(0, &[], &Defaults, ms(40)).status & 0xFF, 0x40);
-        assert_eq!(d.cycle(0x047E, &[0], &Defaults, ms(44)).status & 0xFF, 0x31);
-        // 047Fh with 2000h: operation enabled; after the 2 s ramp to 50 % the actual value is 2000h.
-        let mut out = d.cycle(0x047F, &[0x2000], &Defaults, ms(48));
+        assert_eq!(d.cycle(0, &[], &Example, ms(0)).status & 0x7F, 0x00);
+        assert_eq!(d.cycle(0, &[], &Example, ms(40)).status & 0xFF, 0x40);
+        assert_eq!(d.last_transition(), Some(1));
+        assert_eq!(d.cycle(0x047E, &[0], &Example, ms(44)).status, 0x0B31);
+        let out = d.cycle(0x047F, &[0x2000], &Example, ms(48));
         assert_eq!(out.status & 0xFF, 0x37);
-        for t in (52..=1200).step_by(4) {
-            out = d.cycle(0x047F, &[0x2000], &Defaults, ms(t));
-        }
+        assert_eq!(d.last_transition(), Some(4));
+        let out = run(&mut d, 0x047F, 0x2000, 52, 1200);
         assert_eq!(out.actuals[0], 0x2000);
         assert_eq!(out.status & 0x100, 0x100, "setpoint reached");
         assert!((d.frequency_hz() - 25.0).abs() < 1e-9);
+        // 047Eh: "Ready for switch-on" at once, braking along P103 to 0.
+        let out = d.cycle(0x047E, &[0x2000], &Example, ms(1204));
+        assert_eq!(out.status & 0xFF, 0x31);
+        assert!(d.frequency_hz() > 24.0);
+        let out = run(&mut d, 0x047E, 0x2000, 1208, 2300);
+        assert_eq!(out.actuals[0], 0);
+        // 047Fh + 1000h: 12.5 Hz.
+        let out = run(&mut d, 0x047F, 0x1000, 2304, 3500);
+        assert_eq!((out.status & 0xFF, out.actuals[0]), (0x37, 0x1000));
     }
 
     #[test]
     fn fault_and_acknowledge() {
         let mut d = Drive::new();
-        d.cycle(0x047E, &[], &Defaults, ms(40));
+        d.cycle(0x047E, &[], &Example, ms(40));
         d.inject_fault("10.3".parse().unwrap());
-        assert_eq!(d.cycle(0x047E, &[], &Defaults, ms(44)).status & 0x4F, 0x0F);
-        assert_eq!(d.cycle(0x047E, &[], &Defaults, ms(80)).status & 0x4F, 0x08);
+        let out = d.cycle(0x047E, &[], &Example, ms(44));
+        assert_eq!(out.status & 0x4F, 0x0F, "G: error reaction active");
+        assert_eq!(out.actuals[1], 103, "P543 = 9: error number");
+        assert_eq!(d.cycle(0x047E, &[], &Example, ms(80)).status & 0x4F, 0x08);
+        assert_eq!(d.last_transition(), Some(14));
         assert_eq!(d.fault().map(FaultCode::p700), Some(103));
-        d.cycle(0x0480, &[], &Defaults, ms(84));
+        // Acknowledge: bit 7 0 → 1 (transition 15); 0480h also disables voltage: stays in B.
+        d.cycle(0x0480, &[], &Example, ms(84));
         assert_eq!(d.state(), State::SwitchOnBlock);
         assert_eq!(d.fault(), None);
     }
@@ -323,8 +464,47 @@ mod tests {
     #[test]
     fn invalid_control_data_is_ignored() {
         let mut d = Drive::new();
-        d.cycle(0x007E, &[], &Defaults, ms(40));
+        let out = d.cycle(0x007E, &[0x2000], &Example, ms(40));
         assert_eq!(d.state(), State::SwitchOnBlock);
+        assert_eq!(out.status & 0x0200, 0, "bus control not active");
+    }
+
+    #[test]
+    fn quick_stop_ends_in_switch_on_block() {
+        let mut d = Drive::new();
+        d.cycle(0x047E, &[], &Example, ms(40));
+        run(&mut d, 0x047F, 0x4000, 44, 2100);
+        let out = d.cycle(0x047B, &[0x4000], &Example, ms(2104));
+        assert_eq!(out.status & 0x7F, 0x17, "F: emergency stop active");
+        run(&mut d, 0x047B, 0x4000, 2108, 4200);
+        assert_eq!(d.state(), State::SwitchOnBlock);
+        assert_eq!(d.last_transition(), Some(0));
+    }
+
+    #[test]
+    fn left_rotation_and_control_bits_4_to_6() {
+        let mut d = Drive::new();
+        d.cycle(0x047E, &[], &Example, ms(40));
+        // Bit 12: left, negative frequency, status bit 12.
+        let out = run(&mut d, 0x147F, 0x2000, 44, 1200);
+        assert_eq!(out.actuals[0], 0xE000);
+        assert_eq!(out.status & 0x1800, 0x1000);
+        // Bit 5 = 0 holds the frequency although the setpoint changes.
+        let out = run(&mut d, 0x145F, 0x4000, 1204, 1500);
+        assert_eq!(out.actuals[0], 0xE000);
+        // Bit 4 = 0: ramp generator to zero at once; still "Operation enabled".
+        let out = d.cycle(0x146F, &[0x4000], &Example, ms(1504));
+        assert_eq!((out.actuals[0], out.status & 0x7F), (0, 0x37));
+    }
+
+    #[test]
+    fn disable_voltage_switches_off_at_once() {
+        let mut d = Drive::new();
+        d.cycle(0x047E, &[], &Example, ms(40));
+        run(&mut d, 0x047F, 0x2000, 44, 1200);
+        let out = d.cycle(0x047D, &[0x2000], &Example, ms(1204));
+        assert_eq!((out.status & 0x4F, out.actuals[0]), (0x40, 0));
+        assert_eq!(d.last_transition(), Some(9));
     }
 
     #[test]
@@ -332,5 +512,7 @@ mod tests {
         assert_eq!("E10.3".parse::<FaultCode>().map(|c| c.p700()), Ok(103));
         assert!("10".parse::<FaultCode>().is_err());
         assert!("x.1".parse::<FaultCode>().is_err());
+        assert!("10.10".parse::<FaultCode>().is_err());
+        assert_eq!(FaultCode { group: 10, sub: 0 }.to_string(), "E010.0");
     }
 }
