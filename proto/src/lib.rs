@@ -6,4 +6,5 @@
 //! Every parser in this crate returns `Err` on malformed input; none panics on any byte
 //! sequence.
 
+pub mod enip;
 pub mod nord;

@@ -1,0 +1,158 @@
+//! Length-checked little-endian reading shared by the EtherNet/IP codecs.
+//!
+//! CIP and the encapsulation layer are little-endian; only the socket-address item is
+//! big-endian (network order). Every read names what it was reading, so an error says which
+//! field of which structure ran short.
+
+/// A malformed EtherNet/IP or CIP structure.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum WireError {
+    /// The bytes end before the field.
+    #[error("{what}: truncated, need {need} bytes, got {got}")]
+    Truncated {
+        /// The field or structure.
+        what: &'static str,
+        /// Bytes needed.
+        need: usize,
+        /// Bytes present.
+        got: usize,
+    },
+    /// A length field disagrees with the bytes present.
+    #[error("{what}: length field says {declared} bytes, {actual} present")]
+    Length {
+        /// The length field.
+        what: &'static str,
+        /// What the field says.
+        declared: usize,
+        /// What is there.
+        actual: usize,
+    },
+    /// Bytes left over after a structure that must fill its buffer.
+    #[error("{what}: {extra} unexpected trailing bytes")]
+    Trailing {
+        /// The structure.
+        what: &'static str,
+        /// How many bytes are left.
+        extra: usize,
+    },
+    /// A field holds a value the format does not allow.
+    #[error("{what}: {detail}")]
+    Invalid {
+        /// The field.
+        what: &'static str,
+        /// What is wrong.
+        detail: String,
+    },
+}
+
+/// Reads fields front to back, checking every length.
+#[derive(Debug, Clone)]
+pub(crate) struct Reader<'a> {
+    buf: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Reader<'a> {
+    pub(crate) fn new(buf: &'a [u8]) -> Self {
+        Reader { buf, pos: 0 }
+    }
+
+    /// Bytes not yet read.
+    pub(crate) fn remaining(&self) -> usize {
+        self.buf.len() - self.pos
+    }
+
+    pub(crate) fn bytes(&mut self, n: usize, what: &'static str) -> Result<&'a [u8], WireError> {
+        if self.remaining() < n {
+            return Err(WireError::Truncated {
+                what,
+                need: n,
+                got: self.remaining(),
+            });
+        }
+        let s = &self.buf[self.pos..self.pos + n];
+        self.pos += n;
+        Ok(s)
+    }
+
+    pub(crate) fn rest(&mut self) -> &'a [u8] {
+        let s = &self.buf[self.pos..];
+        self.pos = self.buf.len();
+        s
+    }
+
+    pub(crate) fn u8(&mut self, what: &'static str) -> Result<u8, WireError> {
+        Ok(self.bytes(1, what)?[0])
+    }
+
+    pub(crate) fn u16(&mut self, what: &'static str) -> Result<u16, WireError> {
+        let b = self.bytes(2, what)?;
+        Ok(u16::from_le_bytes([b[0], b[1]]))
+    }
+
+    pub(crate) fn u32(&mut self, what: &'static str) -> Result<u32, WireError> {
+        let b = self.bytes(4, what)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// Fails if bytes are left.
+    pub(crate) fn finish(&self, what: &'static str) -> Result<(), WireError> {
+        match self.remaining() {
+            0 => Ok(()),
+            extra => Err(WireError::Trailing { what, extra }),
+        }
+    }
+}
+
+/// Writes little-endian fields.
+pub(crate) trait Put {
+    fn put_u8(&mut self, v: u8);
+    fn put_u16(&mut self, v: u16);
+    fn put_u32(&mut self, v: u32);
+}
+
+impl Put for Vec<u8> {
+    fn put_u8(&mut self, v: u8) {
+        self.push(v);
+    }
+    fn put_u16(&mut self, v: u16) {
+        self.extend_from_slice(&v.to_le_bytes());
+    }
+    fn put_u32(&mut self, v: u32) {
+        self.extend_from_slice(&v.to_le_bytes());
+    }
+}
+
+/// A length that must fit a 16-bit field.
+pub(crate) fn len16(what: &'static str, n: usize) -> Result<u16, WireError> {
+    u16::try_from(n).map_err(|_| WireError::Invalid {
+        what,
+        detail: format!("{n} bytes do not fit a 16-bit length"),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn short_reads_name_the_field() {
+        let mut r = Reader::new(&[1, 2, 3]);
+        assert_eq!(r.u16("a").unwrap(), 0x0201);
+        assert_eq!(
+            r.u32("session handle"),
+            Err(WireError::Truncated {
+                what: "session handle",
+                need: 4,
+                got: 1
+            })
+        );
+        assert_eq!(
+            r.finish("x"),
+            Err(WireError::Trailing {
+                what: "x",
+                extra: 1
+            })
+        );
+    }
+}
