@@ -135,6 +135,40 @@ struct InverterUnit {
     last_process: Option<Duration>,
 }
 
+impl InverterUnit {
+    /// One process-data cycle: the control word and setpoints drive the inverter, whose status
+    /// word and actual values come back (as many words as the drive produces).
+    fn process(&mut self, control: u16, setpoints: &[u16], now: Duration) -> Vec<u16> {
+        let word = proto::nord::control::ControlWord(control);
+        let set = proto::nord::ParamSet::new(i64::from(word.parameter_set())).ok();
+        if word.valid() {
+            self.last_process = Some(now);
+        }
+        let out = self
+            .drive
+            .cycle(control, setpoints, &StoreView(&self.params.store, set), now);
+        // Information parameters mirror the process data and the present error
+        // (BU 0620 §4.5: P740 PZD bus in, P741 PZD bus out, P700 [-01] present error).
+        let store = &mut self.params.store;
+        store.set_info(740, 1, i32::from(control));
+        for (i, w) in setpoints.iter().enumerate() {
+            store.set_info(740, i as u8 + 2, i32::from(*w));
+        }
+        store.set_info(741, 1, i32::from(out.status));
+        for (i, w) in out.actuals.iter().enumerate() {
+            store.set_info(741, i as u8 + 2, i32::from(*w));
+        }
+        store.set_info(
+            700,
+            1,
+            self.drive.fault().map_or(0, |f| i32::from(f.p700())),
+        );
+        let mut pzd = vec![out.status];
+        pzd.extend(out.actuals);
+        pzd
+    }
+}
+
 /// Parameters the drive reads, from the inverter's store, in the parameter set the control
 /// word selects (bits 14–15, BU 0620 §6.1.2.1).
 struct StoreView<'a>(&'a ParamStore, Option<proto::nord::ParamSet>);
@@ -153,6 +187,7 @@ pub struct Device {
     config: DeviceConfig,
     interface: ParamChannel,
     inverters: Vec<InverterUnit>,
+    fieldbus_timeout: bool,
 }
 
 impl Device {
@@ -185,6 +220,7 @@ impl Device {
             },
             interface,
             inverters,
+            fieldbus_timeout: false,
         }
     }
 
@@ -207,7 +243,7 @@ impl Device {
     /// - P872 "Bus status" (§4.3): bit 0 module ready, bit 1 cyclic PZD communication, bit 3
     ///   timeout P513 (while an inverter shows E10.3), bits 8–15 FI 1..8 online.
     fn monitor(&mut self, now: Duration) {
-        let mut status: i32 = 1;
+        let mut status: i32 = 1 | if self.fieldbus_timeout { 1 << 2 } else { 0 };
         for (n, unit) in self.inverters.iter_mut().enumerate() {
             status |= 1 << (8 + n);
             if unit.drive.fault() == Some(E10_3) {
@@ -236,7 +272,7 @@ impl Device {
         // the same low bits (BU 2100 §7.1.3: ready, cyclic communication, timeout P151/P513).
         match self.config.product.family() {
             proto::nord::Family::Integrated => self.interface.store.set_info(872, 1, status),
-            proto::nord::Family::Module => self.interface.store.set_info(173, 1, status & 0x0B),
+            proto::nord::Family::Module => self.interface.store.set_info(173, 1, status & 0x0F),
         }
         self.change_protocol(now);
     }
@@ -285,32 +321,8 @@ impl Device {
                     .pkw
                     .map(|o| unit.params.cycle(o, delay, product, link.unit));
                 let control = ppo.pzd.first().copied().unwrap_or(0);
-                let word = proto::nord::control::ControlWord(control);
-                let set = proto::nord::ParamSet::new(i64::from(word.parameter_set())).ok();
-                if word.valid() {
-                    unit.last_process = Some(now);
-                }
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
-                let out =
-                    unit.drive
-                        .cycle(control, setpoints, &StoreView(&unit.params.store, set), now);
-                // Information parameters mirror the process data and the present error
-                // (BU 0620 §4.5: P740 PZD bus in, P741 PZD bus out, P700 [-01] present error).
-                let store = &mut unit.params.store;
-                for (i, w) in ppo.pzd.iter().enumerate() {
-                    store.set_info(740, i as u8 + 1, i32::from(*w));
-                }
-                store.set_info(741, 1, i32::from(out.status));
-                for (i, w) in out.actuals.iter().enumerate() {
-                    store.set_info(741, i as u8 + 2, i32::from(*w));
-                }
-                store.set_info(
-                    700,
-                    1,
-                    unit.drive.fault().map_or(0, |f| i32::from(f.p700())),
-                );
-                let mut pzd = vec![out.status];
-                pzd.extend(out.actuals);
+                let mut pzd = unit.process(control, setpoints, now);
                 pzd.resize(ppo.pzd.len(), 0);
                 (pkw, pzd)
             }
@@ -322,6 +334,49 @@ impl Device {
             payload: answer.emit(ppo_type),
         }
         .emit())
+    }
+
+    /// One process-data cycle of an inverter outside a PPO frame (an EtherNet/IP assembly):
+    /// returns the status word and actual values.
+    pub fn process(
+        &mut self,
+        inverter: Inverter,
+        control: u16,
+        setpoints: &[u16],
+        now: Duration,
+    ) -> Result<Vec<u16>, DeviceError> {
+        self.monitor(now);
+        Ok(self
+            .inverter_mut(inverter)?
+            .process(control, setpoints, now))
+    }
+
+    /// Time passes without a frame: telegram monitoring runs.
+    pub fn tick(&mut self, now: Duration) {
+        self.monitor(now);
+    }
+
+    /// A unit's parameter store, for protocol endpoints that address parameters themselves
+    /// (CIP classes 100–108).
+    pub fn store(&mut self, unit: Unit) -> Result<&mut ParamStore, DeviceError> {
+        match unit {
+            Unit::Interface => Ok(&mut self.interface.store),
+            Unit::Inverter(i) => Ok(&mut self.inverter_mut(i)?.params.store),
+        }
+    }
+
+    /// Raises an inverter error unless one is present (a bus watchdog, E10.x).
+    pub fn raise(&mut self, inverter: Inverter, code: FaultCode) -> Result<(), DeviceError> {
+        let drive = &mut self.inverter_mut(inverter)?.drive;
+        if drive.fault().is_none() {
+            drive.inject_fault(code);
+        }
+        Ok(())
+    }
+
+    /// Marks the field-bus watchdog (P872/P173 bit 2) as tripped or clear.
+    pub fn set_fieldbus_timeout(&mut self, tripped: bool) {
+        self.fieldbus_timeout = tripped;
     }
 
     /// Raises an inverter error, as P700 shows it (`"10.0"`).

@@ -81,6 +81,34 @@ pub fn cip_instance(set: Option<ParamSet>, element: Option<ArrayElement>) -> u16
     }
 }
 
+/// The set and element a CIP instance addresses, given the parameter's structure — the inverse
+/// of [`cip_instance`]. `None` when the instance names no set/element of that parameter.
+pub fn cip_decode_instance(
+    instance: u32,
+    set_dependent: bool,
+    array: Option<u8>,
+) -> Option<(Option<ParamSet>, Option<ArrayElement>)> {
+    let (set, element) = match (set_dependent, array) {
+        (false, None) => (None, None),
+        (true, None) => (Some(instance), None),
+        (false, Some(_)) => (None, Some(instance)),
+        (true, Some(_)) => (Some(instance % 4), Some(instance / 4)),
+    };
+    if !set_dependent && array.is_none() && instance != 0 {
+        return None;
+    }
+    let set = match set {
+        Some(s) => Some(ParamSet::new(i64::from(s) + 1).ok()?),
+        None => None,
+    };
+    let element = match (element, array) {
+        (Some(e), Some(n)) if e < u32::from(n) => Some(ArrayElement::new(i64::from(e) + 1).ok()?),
+        (Some(_), _) => return None,
+        (None, _) => None,
+    };
+    Some((set, element))
+}
+
 /// A CoE or POWERLINK object address.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct SdoAddress {
@@ -310,6 +338,39 @@ mod tests {
                 .index,
             0x2866
         );
+    }
+
+    #[test]
+    fn cip_instances_decode_back() {
+        for set_dependent in [false, true] {
+            for array in [None, Some(9)] {
+                let sets: Vec<Option<ParamSet>> = if set_dependent {
+                    (1..=4).map(|s| ParamSet::new(s).ok()).collect()
+                } else {
+                    vec![None]
+                };
+                let elements: Vec<Option<ArrayElement>> = match array {
+                    Some(n) => (1..=i64::from(n))
+                        .map(|e| ArrayElement::new(e).ok())
+                        .collect(),
+                    None => vec![None],
+                };
+                for &s in &sets {
+                    for &e in &elements {
+                        let i = cip_instance(s, e);
+                        assert_eq!(
+                            cip_decode_instance(u32::from(i), set_dependent, array),
+                            Some((s, e))
+                        );
+                    }
+                }
+            }
+        }
+        // P103 has four sets: instance 4 is none of them; P102-like plain parameters only 0.
+        assert_eq!(cip_decode_instance(4, true, None), None);
+        assert_eq!(cip_decode_instance(1, false, None), None);
+        assert_eq!(cip_decode_instance(36, true, Some(9)), None);
+        assert_eq!(cip_decode_instance(9, false, Some(9)), None);
     }
 
     #[rstest]

@@ -1,0 +1,313 @@
+//! What the manuals state about the EtherNet/IP side of each product: assembly instances and
+//! their layout, the parameter classes, the run/idle header rule (P166) and the identity.
+//!
+//! BU 0620 §2.3.4.1 (SK 550P: 100/101, 96 bytes, variable) and BU 2100 §6.2.1 (TU3-EIP:
+//! 100/101 12 bytes fixed, 102/103 96 bytes variable; TU4/CU4-EIP: 100/101 and 110/111, 50
+//! bytes variable with the interface I/O word first, "truncated … from the end").
+
+use super::product::Product;
+use super::types::Inverter;
+
+/// Which way an assembly's data flows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Direction {
+    /// Consumed by the device: control words and setpoints (O→T).
+    Output,
+    /// Produced by the device: status words and actual values (T→O).
+    Input,
+}
+
+/// One assembly instance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct Assembly {
+    /// Instance number.
+    pub instance: u16,
+    /// Data direction.
+    pub direction: Direction,
+    /// Full length in bytes.
+    pub len: u16,
+    /// "Variable" (may be truncated from the end, in whole words) or "Fixed".
+    pub variable: bool,
+    /// A leading word for the bus interface's own digital I/O (instances 110/111).
+    pub io_word: bool,
+    /// Inverters carried, 6 words each (control/status word + 5 setpoints/actual values).
+    pub inverters: u8,
+    /// The manual's description.
+    pub description: &'static str,
+}
+
+/// Words per inverter in an assembly: STW + SW1..SW5, or ZSW + IW1..IW5.
+pub const WORDS_PER_INVERTER: usize = 6;
+
+const fn asm(
+    instance: u16,
+    direction: Direction,
+    len: u16,
+    variable: bool,
+    io_word: bool,
+    inverters: u8,
+    description: &'static str,
+) -> Assembly {
+    Assembly {
+        instance,
+        direction,
+        len,
+        variable,
+        io_word,
+        inverters,
+        description,
+    }
+}
+
+const SK550P: &[Assembly] = &[
+    asm(
+        100,
+        Direction::Output,
+        96,
+        true,
+        false,
+        8,
+        "8 frequency inverters (for each: CTW + SW1 … SW5)",
+    ),
+    asm(
+        101,
+        Direction::Input,
+        96,
+        true,
+        false,
+        8,
+        "8 frequency inverters (for each: STW + IW1 … IW5)",
+    ),
+];
+const TU3: &[Assembly] = &[
+    asm(
+        100,
+        Direction::Output,
+        12,
+        false,
+        false,
+        1,
+        "STW + SW1 + SW2 + SW3 + SW4 + SW5",
+    ),
+    asm(
+        101,
+        Direction::Input,
+        12,
+        false,
+        false,
+        1,
+        "ZSW + IW1 + IW2 + IW3 + IW4 + IW5",
+    ),
+    asm(
+        102,
+        Direction::Output,
+        96,
+        true,
+        false,
+        8,
+        "8 frequency inverters (for each: STW + SW1 … SW5)",
+    ),
+    asm(
+        103,
+        Direction::Input,
+        96,
+        true,
+        false,
+        8,
+        "8 frequency inverters (for each: ZSW + IW1 … IW5)",
+    ),
+];
+const XU4: &[Assembly] = &[
+    asm(
+        100,
+        Direction::Output,
+        12,
+        false,
+        false,
+        1,
+        "STW + SW1 + SW2 + SW3 + SW4 + SW5",
+    ),
+    asm(
+        101,
+        Direction::Input,
+        12,
+        false,
+        false,
+        1,
+        "ZSW + IW1 + IW2 + IW3 + IW4 + IW5",
+    ),
+    asm(
+        110,
+        Direction::Output,
+        50,
+        true,
+        true,
+        4,
+        "Bus interface outputs + 4 frequency inverters (for each: STW + SW1 … SW5)",
+    ),
+    asm(
+        111,
+        Direction::Input,
+        50,
+        true,
+        true,
+        4,
+        "Bus interface inputs + 4 frequency inverters (for each: ZSW + IW1 … IW5)",
+    ),
+];
+
+/// The assembly instances of a product (empty for products without EtherNet/IP).
+pub fn assemblies(product: Product) -> &'static [Assembly] {
+    match product {
+        Product::Sk550p => SK550P,
+        Product::Tu3Eip => TU3,
+        Product::Tu4Eip | Product::Cu4Eip => XU4,
+        _ => &[],
+    }
+}
+
+/// An assembly instance of a product.
+pub fn assembly(product: Product, instance: u16) -> Option<&'static Assembly> {
+    assemblies(product).iter().find(|a| a.instance == instance)
+}
+
+impl Assembly {
+    /// Whether a connection may carry `len` data bytes of this assembly: the full length, or
+    /// for a variable assembly any whole number of words down to one (truncated from the end,
+    /// BU 2100 §6.2.1 "Truncation of data length": 10, 14 and 26 of 50 bytes).
+    pub fn accepts(&self, len: usize) -> bool {
+        let full = usize::from(self.len);
+        if self.variable {
+            len >= 2 && len <= full && len % 2 == 0
+        } else {
+            len == full
+        }
+    }
+
+    /// Where an inverter's six words start in the data, in bytes.
+    pub fn offset(&self, inverter: Inverter) -> Option<usize> {
+        let n = usize::from(inverter.get());
+        (n <= usize::from(self.inverters))
+            .then(|| usize::from(self.io_word) * 2 + (n - 1) * WORDS_PER_INVERTER * 2)
+    }
+}
+
+/// Whether O→T data of `instance` carries the 32-bit run/idle header.
+///
+/// BU 2100 §7.1.2 P166 "PZD transmission format": 0 = "32 Bit header + status", 1 = "Modeless
+/// Format", which "can only be used for the assembly instances 110 and 111 … For instances 100
+/// and 101 the data length is fixed and contains the 32 bit header." The TU3-EIP's variable
+/// instance 102 follows P166 like 110. The SK 550P has no such parameter: its O→T data carries
+/// the header, as CIP's default for class-1 O→T data.
+pub fn o_t_run_idle(product: Product, instance: u16, p166: i32) -> bool {
+    match assembly(product, instance) {
+        Some(a) if a.variable && product != Product::Sk550p => p166 == 0,
+        _ => true,
+    }
+}
+
+/// The CIP class of a unit's parameters: 100 for a module's own parameters, 100 + n for FI n
+/// (BU 0620 §2.3.5, BU 2100 §6.3).
+pub fn param_class(inverter: Option<Inverter>) -> u16 {
+    100 + inverter.map_or(0, |i| u16::from(i.get()))
+}
+
+/// How the product identifies itself on EtherNet/IP (Identity object, ListIdentity, EDS).
+///
+/// The manuals print none of these values; they name the EDS files (BU 2100 §5.2.1: TU3_EIP.eds,
+/// TU4_EIP.eds) and the MAC prefix F0:5F:5A. The simulator's values are its own, kept in one
+/// place so the adapter and its EDS agree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct IdentityInfo {
+    /// Vendor id.
+    pub vendor: u16,
+    /// Vendor name.
+    pub vendor_name: &'static str,
+    /// Device type: 0Ch communications adapter.
+    pub device_type: u16,
+    /// Product code.
+    pub product_code: u16,
+    /// Revision major.minor (BU 2100 §4.3: gateway function "with software version V1.3 R0").
+    pub revision: (u8, u8),
+    /// Product name.
+    pub name: &'static str,
+    /// The EDS file name the manual gives.
+    pub eds_file: &'static str,
+}
+
+/// The identity of an EtherNet/IP product.
+pub fn identity(product: Product) -> Option<IdentityInfo> {
+    let (product_code, name, eds_file) = match product {
+        Product::Sk550p => (550, "NORDAC PRO SK 550P", "SK550P_EIP.eds"),
+        Product::Tu3Eip => (1003, "SK TU3-EIP", "TU3_EIP.eds"),
+        Product::Tu4Eip => (1004, "SK TU4-EIP", "TU4_EIP.eds"),
+        Product::Cu4Eip => (1005, "SK CU4-EIP", "TU4_EIP.eds"),
+        _ => return None,
+    };
+    Some(IdentityInfo {
+        vendor: VENDOR_ID,
+        vendor_name: "Getriebebau NORD GmbH & Co. KG",
+        device_type: 0x0C,
+        product_code,
+        revision: (1, 3),
+        name,
+        eds_file,
+    })
+}
+
+/// The vendor id the simulator reports (not printed in the manuals).
+pub const VENDOR_ID: u16 = 0x0163;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rstest::rstest;
+
+    #[rstest]
+    #[case(Product::Sk550p, 100, 96, 96, true)]
+    #[case(Product::Tu3Eip, 100, 12, 12, true)]
+    #[case(Product::Tu3Eip, 100, 10, 12, false)]
+    #[case(Product::Tu4Eip, 110, 10, 50, true)]
+    #[case(Product::Tu4Eip, 110, 14, 50, true)]
+    #[case(Product::Tu4Eip, 110, 26, 50, true)]
+    #[case(Product::Tu4Eip, 110, 52, 50, false)]
+    #[case(Product::Cu4Eip, 111, 11, 50, false)]
+    fn assembly_lengths(
+        #[case] p: Product,
+        #[case] instance: u16,
+        #[case] len: usize,
+        #[case] full: u16,
+        #[case] ok: bool,
+    ) {
+        let a = assembly(p, instance).unwrap();
+        assert_eq!(a.len, full);
+        assert_eq!(a.accepts(len), ok);
+    }
+
+    #[test]
+    fn every_assembly_length_is_its_words() {
+        for p in Product::ALL {
+            for a in assemblies(p) {
+                let words = usize::from(a.io_word) + usize::from(a.inverters) * WORDS_PER_INVERTER;
+                assert_eq!(usize::from(a.len), words * 2, "{p:?} {}", a.instance);
+            }
+        }
+        assert!(assemblies(Product::Tu3Pnt).is_empty());
+    }
+
+    #[test]
+    fn inverter_offsets_and_run_idle() {
+        let fi = |n| Inverter::new(n).unwrap();
+        let a110 = assembly(Product::Tu4Eip, 110).unwrap();
+        assert_eq!(a110.offset(fi(1)), Some(2));
+        assert_eq!(a110.offset(fi(4)), Some(38));
+        assert_eq!(a110.offset(fi(5)), None);
+        assert!(o_t_run_idle(Product::Tu4Eip, 100, 1));
+        assert!(!o_t_run_idle(Product::Tu4Eip, 110, 1));
+        assert!(o_t_run_idle(Product::Tu4Eip, 110, 0));
+        assert!(o_t_run_idle(Product::Sk550p, 100, 1));
+        assert_eq!(param_class(None), 100);
+        assert_eq!(param_class(Some(fi(8))), 108);
+    }
+}
