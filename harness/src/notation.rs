@@ -149,6 +149,13 @@ pub(crate) enum Matcher {
     List(Vec<Matcher>),
 }
 
+impl Matcher {
+    /// Whether an object matcher names `field` at its top level.
+    pub(crate) fn mentions(&self, field: &str) -> bool {
+        matches!(self, Matcher::Object(fields) if fields.iter().any(|(k, _)| k == field))
+    }
+}
+
 /// Why an actual value does not match.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Mismatch {

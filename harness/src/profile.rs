@@ -9,7 +9,9 @@ use std::fmt;
 /// Something a case may need from the DUT.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub(crate) enum Capability {
-    /// Parameter orders (PKW) are answered.
+    /// Parameters can be read and written (over any protocol).
+    ParameterAccess,
+    /// The NORD parameter channel (PKW telegrams, order labels, error numbers) is answered.
     ParameterChannel,
     /// Control/status words and setpoints/actual values are exchanged.
     ProcessData,
@@ -17,24 +19,30 @@ pub(crate) enum Capability {
     FaultInjection,
     /// The harness can see internal state: LEDs, status-machine state, EEPROM writes.
     Observe,
+    /// EtherNet/IP encapsulation and CIP requests can be sent as such.
+    Ethernetip,
 }
 
 impl Capability {
     /// All capabilities.
-    pub(crate) const ALL: [Capability; 4] = [
+    pub(crate) const ALL: [Capability; 6] = [
+        Capability::ParameterAccess,
         Capability::ParameterChannel,
         Capability::ProcessData,
         Capability::FaultInjection,
         Capability::Observe,
+        Capability::Ethernetip,
     ];
 
     /// Name as suites write it.
     pub(crate) fn name(self) -> &'static str {
         match self {
+            Capability::ParameterAccess => "parameter-access",
             Capability::ParameterChannel => "parameter-channel",
             Capability::ProcessData => "process-data",
             Capability::FaultInjection => "fault-injection",
             Capability::Observe => "observe",
+            Capability::Ethernetip => "ethernetip",
         }
     }
 
@@ -50,40 +58,71 @@ impl fmt::Display for Capability {
     }
 }
 
-/// A device profile: the product and how many inverters sit behind it.
+/// How the harness talks to the DUT.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum BindingKind {
+    /// PPO telegrams: the NORD parameter channel and process data (data records 100..108).
+    Ppo,
+    /// EtherNet/IP: explicit messages to the parameter classes and a class-1 I/O connection.
+    Enip,
+}
+
+/// A device profile: the product, how many inverters sit behind it, and the binding.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Profile {
     /// The product.
     pub(crate) product: Product,
     /// Inverters behind the interface (FI 1..=n).
     pub(crate) inverters: u8,
+    /// The binding the cases run over.
+    pub(crate) binding: BindingKind,
 }
 
 impl Profile {
-    /// The built-in profile of a product, with the product's maximum inverter count.
+    /// The built-in PPO profile of a product, with the product's maximum inverter count.
     pub(crate) fn builtin(product: Product) -> Profile {
         Profile {
             product,
             inverters: product.max_inverters(),
+            binding: BindingKind::Ppo,
         }
     }
 
-    /// Every built-in profile.
-    pub(crate) fn all() -> Vec<Profile> {
-        Product::ALL.into_iter().map(Profile::builtin).collect()
+    /// The EtherNet/IP profile of a product that speaks EtherNet/IP.
+    pub(crate) fn enip(product: Product) -> Option<Profile> {
+        proto::nord::eip::identity(product).map(|_| Profile {
+            binding: BindingKind::Enip,
+            ..Profile::builtin(product)
+        })
     }
 
-    /// Profile name (`sk550p`, `tu3-eip`, …).
+    /// Every built-in profile: each product over PPO, and each EtherNet/IP product over
+    /// EtherNet/IP (`<product>@enip`), so every case runs over every binding it can.
+    pub(crate) fn all() -> Vec<Profile> {
+        let ppo = Product::ALL.into_iter().map(Profile::builtin);
+        let enip = Product::ALL.into_iter().filter_map(Profile::enip);
+        ppo.chain(enip).collect()
+    }
+
+    /// Profile name (`sk550p`, `tu3-eip`, …, `tu3-eip@enip`).
     pub(crate) fn name(&self) -> &'static str {
-        self.product.name()
+        match (self.binding, self.product) {
+            (BindingKind::Ppo, p) => p.name(),
+            (BindingKind::Enip, Product::Sk550p) => "sk550p@enip",
+            (BindingKind::Enip, Product::Tu3Eip) => "tu3-eip@enip",
+            (BindingKind::Enip, Product::Tu4Eip) => "tu4-eip@enip",
+            (BindingKind::Enip, Product::Cu4Eip) => "cu4-eip@enip",
+            (BindingKind::Enip, p) => p.name(),
+        }
     }
 
     /// Looks a built-in profile up by name; the error lists the valid names.
     pub(crate) fn by_name(name: &str) -> Result<Profile, String> {
-        Product::from_name(name)
-            .map(Profile::builtin)
+        Profile::all()
+            .into_iter()
+            .find(|p| p.name() == name)
             .ok_or_else(|| {
-                let names: Vec<&str> = Product::ALL.iter().map(|p| p.name()).collect();
+                let names: Vec<&str> = Profile::all().iter().map(Profile::name).collect();
                 format!(
                     "unknown profile `{name}` (built-in profiles: {})",
                     names.join(", ")

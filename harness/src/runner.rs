@@ -8,8 +8,7 @@
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
 
-use crate::binding::channel::{Channel, StepError};
-use crate::binding::Dut;
+use crate::binding::{Binding, StepError};
 use crate::model::{Args, ComputeError, Ctx};
 use crate::outcome::{CaseResult, RunResult, StepResult, Verdict};
 use crate::profile::Profile;
@@ -29,8 +28,8 @@ pub(crate) struct RunOptions {
 pub(crate) trait DutFactory {
     /// What is tested, for reports.
     fn describe(&self) -> String;
-    /// A DUT in its power-on state for the profile.
-    fn open(&mut self, profile: &Profile) -> Result<Box<dyn Dut>, String>;
+    /// A DUT in its power-on state for the profile, behind the profile's binding.
+    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, String>;
 }
 
 /// Runs the loaded suites.
@@ -76,7 +75,7 @@ fn result(
 }
 
 /// Why a case does not apply to a profile, if it does not.
-fn not_applicable(case: &Case, profile: &Profile, dut: Option<&dyn Dut>) -> Option<String> {
+fn not_applicable(case: &Case, profile: &Profile, dut: Option<&dyn Binding>) -> Option<String> {
     if let Some(products) = &case.products {
         if !products.contains(&profile.product) {
             let names: Vec<&str> = products.iter().map(|p| p.name()).collect();
@@ -92,7 +91,7 @@ fn not_applicable(case: &Case, profile: &Profile, dut: Option<&dyn Dut>) -> Opti
         .requires
         .iter()
         .copied()
-        .chain(case.steps.iter().filter_map(|s| s.action.needs()));
+        .chain(case.steps.iter().flat_map(|s| s.needs()));
     for cap in needed {
         if !dut.capabilities().contains(&cap) {
             return Some(format!(
@@ -105,7 +104,7 @@ fn not_applicable(case: &Case, profile: &Profile, dut: Option<&dyn Dut>) -> Opti
 }
 
 fn needs_dut(case: &Case) -> bool {
-    !case.requires.is_empty() || case.steps.iter().any(|s| s.action.needs().is_some())
+    !case.requires.is_empty() || case.steps.iter().any(|s| !s.needs().is_empty())
 }
 
 fn run_case(
@@ -126,7 +125,7 @@ fn run_case(
         );
     }
     let mut channel = if needs_dut(case) {
-        match factory.open(profile) {
+        match factory.open(profile, opts.retries) {
             Ok(dut) => {
                 if let Some(why) = not_applicable(case, profile, Some(dut.as_ref())) {
                     return result(
@@ -138,7 +137,7 @@ fn run_case(
                         start,
                     );
                 }
-                Some(Channel::new(dut, profile.product, opts.retries))
+                Some(dut)
             }
             Err(e) => {
                 return result(
@@ -198,6 +197,7 @@ fn describe(action: &Action) -> String {
         Action::Wait(d) => format!("wait {d:?}"),
         Action::Inject { inverter, error } => format!("inject {inverter}: error {error}"),
         Action::Observe { what, inverter } => format!("observe {inverter}: {what}"),
+        Action::Enip(e) => format!("enip {e:?}"),
     }
 }
 
@@ -210,7 +210,7 @@ pub(crate) fn hex(bytes: &[u8]) -> String {
         .join(" ")
 }
 
-fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Channel>) -> StepResult {
+fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding>>) -> StepResult {
     let line = describe(&step.action);
     let (outcome, exchanges) = match (&step.action, channel) {
         (
@@ -279,6 +279,18 @@ fn implicit_expectation(action: &Action, observed: &Value) -> Result<(), String>
                 observed.get("error").cloned().unwrap_or(Value::Null)
             ))
         }
+        Action::Read(_) | Action::Write(_)
+            if observed
+                .get("cip_status")
+                .and_then(Value::as_i64)
+                .unwrap_or(0)
+                != 0 =>
+        {
+            Err(format!(
+                "the DUT refused the request: {}",
+                observed.get("refused").cloned().unwrap_or(Value::Null)
+            ))
+        }
         _ => Ok(()),
     }
 }
@@ -292,7 +304,9 @@ pub(crate) fn cycles_for(d: Duration, cycle: Duration) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::binding::embedded::EmbeddedFactory;
+    use crate::binding::channel::Channel;
+    use crate::binding::embedded::{ppo_dut, EmbeddedFactory};
+    use crate::binding::Dut;
     use crate::profile::Capability;
     use crate::suite::load_text_for_tests;
     use proto::nord::{Inverter, Product};
@@ -352,11 +366,12 @@ mod tests {
         fn describe(&self) -> String {
             "faulty simulator".into()
         }
-        fn open(&mut self, profile: &Profile) -> Result<Box<dyn Dut>, String> {
-            Ok(Box::new(Faulty {
-                inner: EmbeddedFactory.open(profile)?,
+        fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, String> {
+            let dut = Box::new(Faulty {
+                inner: ppo_dut(profile),
                 fault: self.0,
-            }))
+            });
+            Ok(Box::new(Channel::new(dut, profile.product, retries)))
         }
     }
 

@@ -8,6 +8,7 @@
 pub mod clock;
 pub mod device;
 pub mod drive;
+pub mod enip;
 pub mod link;
 pub mod pkw_server;
 pub mod store;

@@ -43,6 +43,9 @@ pub(crate) enum StepError {
     /// The suite asked for something impossible.
     #[error("suite error: {0}")]
     Suite(String),
+    /// The link to the DUT broke or a request went unanswered (a hung, closing or silent DUT).
+    #[error("link error: {0}")]
+    Link(String),
 }
 
 impl StepError {
@@ -50,9 +53,10 @@ impl StepError {
     pub(crate) fn verdict(&self) -> Verdict {
         match self {
             StepError::Unanswered { .. } | StepError::Protocol(_) => Verdict::Fail,
-            StepError::Silent { .. } | StepError::Refused(_) | StepError::Suite(_) => {
-                Verdict::Error
-            }
+            StepError::Silent { .. }
+            | StepError::Refused(_)
+            | StepError::Suite(_)
+            | StepError::Link(_) => Verdict::Error,
         }
     }
 }
@@ -72,6 +76,24 @@ pub(crate) struct Channel {
     ppo: PpoType,
     process: [Process; 9],
     exchanges: Vec<Exchange>,
+}
+
+impl super::Binding for Channel {
+    fn describe(&self) -> String {
+        self.dut.describe()
+    }
+
+    fn capabilities(&self) -> &[crate::profile::Capability] {
+        self.dut.capabilities()
+    }
+
+    fn perform(&mut self, action: &Action) -> Result<Value, StepError> {
+        Channel::perform(self, action)
+    }
+
+    fn take_exchanges(&mut self) -> Vec<Exchange> {
+        Channel::take_exchanges(self)
+    }
 }
 
 impl Channel {
@@ -140,6 +162,9 @@ impl Channel {
                 .dut
                 .observe(what, *inverter)
                 .map_err(StepError::Refused),
+            Action::Enip(_) => Err(StepError::Suite(
+                "the PPO link carries no EtherNet/IP messages".into(),
+            )),
         }
     }
 
@@ -253,25 +278,29 @@ impl Channel {
 }
 
 impl Channel {
-    /// Keeps the first two and the last exchange of a long process-data run, so transcripts
-    /// stay readable; the note says how many cycles were left out.
     fn compact(&mut self, from: usize) {
-        const KEEP_HEAD: usize = 2;
-        let n = self.exchanges.len().saturating_sub(from);
-        if n <= KEEP_HEAD + 2 {
-            return;
-        }
-        let skipped = n - KEEP_HEAD - 1;
-        let last = self.exchanges.pop();
-        self.exchanges.truncate(from + KEEP_HEAD);
-        self.exchanges.push(Exchange {
-            sent_hex: String::new(),
-            sent: format!("… {skipped} more cycles with the same process data …"),
-            received_hex: String::new(),
-            received: String::new(),
-        });
-        self.exchanges.extend(last);
+        compact(&mut self.exchanges, from);
     }
+}
+
+/// Keeps the first two and the last exchange of a long process-data run, so transcripts stay
+/// readable; the note says how many cycles were left out.
+pub(crate) fn compact(exchanges: &mut Vec<Exchange>, from: usize) {
+    const KEEP_HEAD: usize = 2;
+    let n = exchanges.len().saturating_sub(from);
+    if n <= KEEP_HEAD + 2 {
+        return;
+    }
+    let skipped = n - KEEP_HEAD - 1;
+    let last = exchanges.pop();
+    exchanges.truncate(from + KEEP_HEAD);
+    exchanges.push(Exchange {
+        sent_hex: String::new(),
+        sent: format!("… {skipped} more cycles with the same process data …"),
+        received_hex: String::new(),
+        received: String::new(),
+    });
+    exchanges.extend(last);
 }
 
 fn unit(target: Target) -> Unit {

@@ -7,13 +7,23 @@ use sim::device::{Device, DeviceConfig};
 use sim::link::{mem_pair, MemEnd};
 use std::time::Duration;
 
-use super::Dut;
-use crate::profile::{Capability, Profile};
+use super::channel::Channel;
+use super::{Binding, Dut};
+use crate::profile::{BindingKind, Capability, Profile};
 use crate::runner::DutFactory;
 use proto::nord::Inverter;
 
 /// Bus cycle of the embedded link: 4 ms, a common PROFINET send clock multiple.
 const CYCLE: Duration = Duration::from_millis(4);
+
+/// What the embedded PPO link offers: everything but EtherNet/IP messages.
+const PPO_CAPABILITIES: [Capability; 5] = [
+    Capability::ParameterAccess,
+    Capability::ParameterChannel,
+    Capability::ProcessData,
+    Capability::FaultInjection,
+    Capability::Observe,
+];
 
 /// Opens a fresh simulator per case.
 pub(crate) struct EmbeddedFactory;
@@ -23,13 +33,25 @@ impl DutFactory for EmbeddedFactory {
         "embedded simulator".into()
     }
 
-    fn open(&mut self, profile: &Profile) -> Result<Box<dyn Dut>, String> {
+    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, String> {
         let config = DeviceConfig {
             inverters: profile.inverters,
             ..DeviceConfig::new(profile.product)
         };
-        Ok(Box::new(Embedded::new(Device::new(config))))
+        Ok(match profile.binding {
+            BindingKind::Ppo => Box::new(Channel::new(ppo_dut(profile), profile.product, retries)),
+            BindingKind::Enip => Box::new(super::enip::Scanner::embedded(Device::new(config))),
+        })
     }
+}
+
+/// The simulator for a profile behind the in-memory PPO link.
+pub(crate) fn ppo_dut(profile: &Profile) -> Box<dyn Dut> {
+    let config = DeviceConfig {
+        inverters: profile.inverters,
+        ..DeviceConfig::new(profile.product)
+    };
+    Box::new(Embedded::new(Device::new(config)))
 }
 
 /// The simulator and both ends of its link.
@@ -62,7 +84,7 @@ impl Dut for Embedded {
     }
 
     fn capabilities(&self) -> &[Capability] {
-        &Capability::ALL
+        &PPO_CAPABILITIES
     }
 
     fn cycle_time(&self) -> Duration {

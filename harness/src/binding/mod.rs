@@ -6,12 +6,29 @@
 
 pub(crate) mod channel;
 pub(crate) mod embedded;
+pub(crate) mod enip;
 
 use serde_json::Value;
 use std::time::Duration;
 
+pub(crate) use channel::StepError;
+
+use crate::outcome::Exchange;
 use crate::profile::Capability;
+use crate::suite::Action;
 use proto::nord::Inverter;
+
+/// The harness's end of a binding: performs the manual-level steps over one protocol.
+pub(crate) trait Binding {
+    /// What is being tested, for reports.
+    fn describe(&self) -> String;
+    /// What this binding lets the harness do.
+    fn capabilities(&self) -> &[Capability];
+    /// Runs one DUT step, returning what was observed.
+    fn perform(&mut self, action: &Action) -> Result<Value, StepError>;
+    /// The exchanges since the last call, for the transcript.
+    fn take_exchanges(&mut self) -> Vec<Exchange>;
+}
 
 /// A device under test, one bus cycle at a time.
 pub(crate) trait Dut {

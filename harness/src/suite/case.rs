@@ -33,6 +33,25 @@ pub(crate) struct Step {
     pub(crate) setup: bool,
 }
 
+impl Step {
+    /// What the step needs from the DUT: its action's capability, and the parameter channel
+    /// itself when a read/write forces an order label, writes RAM only (labels 11–14), or
+    /// expects fields only a PKW response has (response label, error number, PNU, IND).
+    pub(crate) fn needs(&self) -> Vec<Capability> {
+        let mut v: Vec<Capability> = self.action.needs().into_iter().collect();
+        if let Action::Read(o) | Action::Write(o) = &self.action {
+            let pkw_fields = self
+                .expect
+                .as_ref()
+                .is_some_and(|m| ["ak", "error", "pnu", "ind"].iter().any(|k| m.mentions(k)));
+            if o.ak.is_some() || !o.eeprom || o.dword.is_some() || pkw_fields {
+                v.push(Capability::ParameterChannel);
+            }
+        }
+        v
+    }
+}
+
 /// Where a parameter order goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Target {
@@ -104,6 +123,25 @@ pub(crate) enum Action {
     Inject { inverter: Inverter, error: String },
     /// Look at internal state.
     Observe { what: String, inverter: Inverter },
+    /// An EtherNet/IP message of the protocol suites.
+    Enip(EnipStep),
+}
+
+/// An `enip:` step.
+#[derive(Debug, Clone)]
+pub(crate) enum EnipStep {
+    /// Encapsulation bytes as written; `session` puts the open session's handle in bytes 4..8.
+    Raw { bytes: Vec<u8>, session: bool },
+    /// An unconnected CIP request.
+    Request {
+        service: u8,
+        path: Vec<u8>,
+        data: Vec<u8>,
+    },
+    /// A Forward_Open with the given parameters.
+    ForwardOpen(crate::binding::enip::ForwardOpenSpec),
+    /// The scanner stops sending O→T data for this long.
+    StopIo { time: Duration },
 }
 
 /// How long a `process:` step runs.
@@ -118,12 +156,12 @@ impl Action {
     pub(crate) fn needs(&self) -> Option<Capability> {
         match self {
             Action::Compute { .. } => None,
-            Action::Read(_) | Action::Write(_) | Action::Pkw { .. } => {
-                Some(Capability::ParameterChannel)
-            }
+            Action::Read(_) | Action::Write(_) => Some(Capability::ParameterAccess),
+            Action::Pkw { .. } => Some(Capability::ParameterChannel),
             Action::Process { .. } | Action::Wait(_) => Some(Capability::ProcessData),
             Action::Inject { .. } => Some(Capability::FaultInjection),
             Action::Observe { .. } => Some(Capability::Observe),
+            Action::Enip(_) => Some(Capability::Ethernetip),
         }
     }
 }
@@ -302,6 +340,7 @@ fn action(step: StepDoc) -> Result<Action, String> {
         ("wait", step.wait.is_some()),
         ("inject", step.inject.is_some()),
         ("observe", step.observe.is_some()),
+        ("enip", step.enip.is_some()),
     ] {
         if present {
             found.push(name);
@@ -309,7 +348,7 @@ fn action(step: StepDoc) -> Result<Action, String> {
     }
     if found.len() != 1 {
         return Err(format!(
-            "a step needs exactly one action (compute, read, write, pkw, process, wait, inject, observe); found {}",
+            "a step needs exactly one action (compute, read, write, pkw, process, wait, inject, observe, enip); found {}",
             if found.is_empty() { "none".to_string() } else { found.join(", ") }
         ));
     }
@@ -403,12 +442,108 @@ fn action(step: StepDoc) -> Result<Action, String> {
             error: f.text("error")?.ok_or("`inject` needs `error`")?,
         });
     }
+    if let Some(m) = step.enip {
+        return Ok(Action::Enip(enip_step(&m)?));
+    }
     let m = step.observe.unwrap_or_default();
     let f = Fields::new("observe", &m, &["what", "inverter"])?;
     Ok(Action::Observe {
         what: f.text("what")?.ok_or("`observe` needs `what`")?,
         inverter: f.inverter()?,
     })
+}
+
+/// Hex bytes separated by spaces (`"65 00 04 00"`); empty text is no bytes.
+fn hex_bytes(action: &str, text: &str) -> Result<Vec<u8>, String> {
+    text.split_whitespace()
+        .map(|t| u8::from_str_radix(t, 16))
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("`{action}`: `{text}` is not hex bytes like \"65 00 04 00\""))
+}
+
+fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
+    if m.contains_key("raw") {
+        let f = Fields::new("enip", m, &["raw", "session"])?;
+        return Ok(EnipStep::Raw {
+            bytes: hex_bytes("enip.raw", &f.text("raw")?.unwrap_or_default())?,
+            session: f.bool("session")?.unwrap_or(false),
+        });
+    }
+    if m.contains_key("service") {
+        let f = Fields::new("enip", m, &["service", "path", "data"])?;
+        let service = u8::try_from(f.req_int("service")?)
+            .map_err(|_| "`enip.service` is not a byte".to_string())?;
+        return Ok(EnipStep::Request {
+            service,
+            path: hex_bytes("enip.path", &f.text("path")?.unwrap_or_default())?,
+            data: hex_bytes("enip.data", &f.text("data")?.unwrap_or_default())?,
+        });
+    }
+    if m.contains_key("forward_open") {
+        let f = Fields::new(
+            "enip",
+            m,
+            &[
+                "forward_open",
+                "o_t",
+                "t_o",
+                "o_t_size",
+                "t_o_size",
+                "rpi_us",
+                "transport",
+                "multiplier",
+                "large",
+            ],
+        )?;
+        let d = crate::binding::enip::ForwardOpenSpec::default();
+        let small = |k: &str, v: i64| -> Result<u16, String> {
+            u16::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not 0..=65535"))
+        };
+        let byte = |k: &str, v: i64| -> Result<u8, String> {
+            u8::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not a byte"))
+        };
+        return Ok(EnipStep::ForwardOpen(
+            crate::binding::enip::ForwardOpenSpec {
+                o_t_point: f
+                    .int("o_t")?
+                    .map(|v| small("o_t", v))
+                    .transpose()?
+                    .unwrap_or(d.o_t_point),
+                t_o_point: f
+                    .int("t_o")?
+                    .map(|v| small("t_o", v))
+                    .transpose()?
+                    .unwrap_or(d.t_o_point),
+                o_t_size: small("o_t_size", f.req_int("o_t_size")?)?,
+                t_o_size: small("t_o_size", f.req_int("t_o_size")?)?,
+                rpi_us: f
+                    .int("rpi_us")?
+                    .map(|v| {
+                        u32::try_from(v).map_err(|_| format!("`enip.rpi_us`: {v} is not 32-bit"))
+                    })
+                    .transpose()?
+                    .unwrap_or(d.rpi_us),
+                transport: f
+                    .int("transport")?
+                    .map(|v| byte("transport", v))
+                    .transpose()?
+                    .unwrap_or(d.transport),
+                multiplier: f
+                    .int("multiplier")?
+                    .map(|v| byte("multiplier", v))
+                    .transpose()?
+                    .unwrap_or(d.multiplier),
+                large: f.bool("large")?.unwrap_or(false),
+            },
+        ));
+    }
+    if m.contains_key("stop_io") {
+        let f = Fields::new("enip", m, &["stop_io"])?;
+        return Ok(EnipStep::StopIo {
+            time: parse_duration(&f.text("stop_io")?.unwrap_or_default())?,
+        });
+    }
+    Err("`enip` needs one of `raw`, `service`, `forward_open`, `stop_io`".into())
 }
 
 /// Converts one step; the error text is placed by the loader.

@@ -4,7 +4,7 @@ mod case;
 mod load;
 mod schema;
 
-pub(crate) use case::{Action, Case, OrderSpec, Run, Step, Target};
+pub(crate) use case::{Action, Case, EnipStep, OrderSpec, Run, Step, Target};
 pub(crate) use load::{load_dir, Loaded};
 
 /// Loads suite text for tests in other modules.

@@ -100,6 +100,8 @@ pub(super) struct StepDoc {
     #[serde(default)]
     pub(super) observe: Option<Map<String, Value>>,
     #[serde(default)]
+    pub(super) enip: Option<Map<String, Value>>,
+    #[serde(default)]
     pub(super) expect: Option<Value>,
     #[serde(default)]
     pub(super) setup: bool,

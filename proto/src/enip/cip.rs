@@ -9,6 +9,22 @@ use std::fmt;
 use super::epath::EPath;
 use super::wire::{Put, Reader, WireError};
 
+/// CIP object class ids.
+pub mod class {
+    /// Identity.
+    pub const IDENTITY: u16 = 0x01;
+    /// Message Router.
+    pub const MESSAGE_ROUTER: u16 = 0x02;
+    /// Assembly.
+    pub const ASSEMBLY: u16 = 0x04;
+    /// Connection Manager.
+    pub const CONNECTION_MANAGER: u16 = 0x06;
+    /// TCP/IP Interface.
+    pub const TCP_IP: u16 = 0xF5;
+    /// Ethernet Link.
+    pub const ETHERNET_LINK: u16 = 0xF6;
+}
+
 /// A CIP service code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Service(pub u8);

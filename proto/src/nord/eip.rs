@@ -37,6 +37,14 @@ pub struct Assembly {
     pub description: &'static str,
 }
 
+/// The O→T connection point of a listen-only connection (heartbeat, no data).
+pub const LISTEN_ONLY_POINT: u16 = 255;
+/// The RPIs the simulator accepts, µs (the manuals state none; 1 ms … 10 s).
+pub const RPI_RANGE: std::ops::RangeInclusive<u32> = 1_000..=10_000_000;
+/// Exclusive-owner and listen-only connections (BU 0620 §2.3.1, BU 2100 §3.1: "1 Exclusive
+/// Owner, 2 Listen Only").
+pub const LISTEN_ONLY_MAX: usize = 2;
+
 /// Words per inverter in an assembly: STW + SW1..SW5, or ZSW + IW1..IW5.
 pub const WORDS_PER_INVERTER: usize = 6;
 

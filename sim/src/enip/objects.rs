@@ -1,0 +1,472 @@
+//! Explicit messages: the CIP objects of the adapter and the NORD parameter classes.
+
+use std::net::{Ipv4Addr, SocketAddr};
+use std::time::Duration;
+
+use proto::enip::cip::{class, GeneralStatus as GS, MrRequest, MrResponse, Service};
+use proto::enip::cm::UnconnectedSend;
+use proto::enip::epath::Segment;
+use proto::enip::WireError;
+use proto::nord::addr::cip_decode_instance;
+use proto::nord::params::{Access, Width};
+use proto::nord::{Family, Inverter, ParamNumber, Product};
+
+use super::{connections, malformed, Adapter, ClientId};
+use crate::link::Unit;
+use crate::store::{AccessError, ParamStore, Persist};
+
+/// The MAC address the simulator shows: NORD's prefix F0:5F:5A (BU 0620 §4.4.1, BU 2100
+/// §7.1.4) and a suffix from the product code.
+pub(super) fn mac(a: &Adapter) -> [u8; 6] {
+    let code = a.identity.product_code.to_be_bytes();
+    [0xF0, 0x5F, 0x5A, 0x00, code[0], code[1]]
+}
+
+/// Parameter numbers that differ between the SK 550P (P85x/P87x) and the modules (P16x/P18x).
+struct IpParams {
+    address: u16,
+    mask: u16,
+    gateway: u16,
+    mode: u16,
+    present_address: u16,
+    present_mask: u16,
+    mac: u16,
+    active_assembly: u16,
+}
+
+fn ip_params(product: Product) -> IpParams {
+    match product.family() {
+        Family::Integrated => IpParams {
+            address: 850,
+            mask: 851,
+            gateway: 852,
+            mode: 856,
+            present_address: 875,
+            present_mask: 876,
+            mac: 878,
+            active_assembly: 879,
+        },
+        Family::Module => IpParams {
+            address: 160,
+            mask: 161,
+            gateway: 164,
+            mode: 165,
+            present_address: 185,
+            present_mask: 186,
+            mac: 181,
+            active_assembly: 180,
+        },
+    }
+}
+
+fn read4(store: &ParamStore, number: u16) -> [u8; 4] {
+    let mut out = [0; 4];
+    if let Ok(n) = ParamNumber::new(i64::from(number)) {
+        for (i, b) in out.iter_mut().enumerate() {
+            let e = proto::nord::ArrayElement::new(i as i64 + 1).ok();
+            *b = store.read(n, None, e).unwrap_or(0) as u8;
+        }
+    }
+    out
+}
+
+fn read1(store: &ParamStore, number: u16) -> i32 {
+    ParamNumber::new(i64::from(number))
+        .ok()
+        .and_then(|n| store.read(n, None, None).ok())
+        .unwrap_or(0)
+}
+
+/// Power-on (and Identity Reset): the addressing parameters are read in (BU 0620 §4.2.2,
+/// BU 2100 §7.1.2: "After setting, restart … so that the parameter setting is read in").
+/// In fixed mode (0) the present address is P850/P160 with its mask; with BOOTP or DHCP it is
+/// the address the adapter is reached at.
+pub(super) fn power_on(a: &mut Adapter) {
+    let p = ip_params(a.product());
+    let mac = mac(a);
+    let served = *a.address.ip();
+    let Ok(store) = a.device.store(Unit::Interface) else {
+        return;
+    };
+    let (ip, mask) = if read1(store, p.mode) == 0 {
+        (read4(store, p.address), read4(store, p.mask))
+    } else {
+        (served.octets(), [255, 255, 255, 0])
+    };
+    for i in 0..4u8 {
+        store.set_info(p.present_address, i + 1, i32::from(ip[usize::from(i)]));
+        store.set_info(p.present_mask, i + 1, i32::from(mask[usize::from(i)]));
+    }
+    for (i, b) in mac.iter().enumerate() {
+        store.set_info(p.mac, i as u8 + 1, i32::from(*b));
+    }
+    for e in 1..=2 {
+        store.set_info(p.active_assembly, e, 0);
+    }
+}
+
+/// Shows the active assemblies (P879 / P180: [-01] consumed, [-02] produced).
+pub(super) fn show_active_assembly(a: &mut Adapter, consumed: u16, produced: u16) {
+    let p = ip_params(a.product());
+    if let Ok(store) = a.device.store(Unit::Interface) {
+        store.set_info(p.active_assembly, 1, i32::from(consumed));
+        store.set_info(p.active_assembly, 2, i32::from(produced));
+    }
+}
+
+/// Answers one message-router request.
+pub(super) fn request(
+    a: &mut Adapter,
+    client: ClientId,
+    peer: SocketAddr,
+    bytes: &[u8],
+    now: Duration,
+) -> MrResponse {
+    let req = match MrRequest::parse(bytes) {
+        Ok(r) => r,
+        Err(e) => {
+            let service = bytes.first().copied().unwrap_or(0) & 0x7F;
+            let status = match e {
+                _ if bytes.len() < 2 => GS::NOT_ENOUGH_DATA,
+                WireError::Length { .. } | WireError::Truncated { .. } => GS::PATH_SIZE_INVALID,
+                _ => GS::PATH_SEGMENT_ERROR,
+            };
+            return malformed(service, status);
+        }
+    };
+    let s = req.service;
+    match req.path.class_id() {
+        Some(class::IDENTITY) => identity(a, &req),
+        Some(class::MESSAGE_ROUTER) => message_router(&req),
+        Some(class::ASSEMBLY) => connections::assembly_service(a, &req, now),
+        Some(class::CONNECTION_MANAGER) => match Service(s) {
+            Service::FORWARD_OPEN | Service::LARGE_FORWARD_OPEN => {
+                connections::forward_open(a, client, peer, &req, now)
+            }
+            Service::FORWARD_CLOSE => connections::forward_close(a, &req),
+            Service::UNCONNECTED_SEND => unconnected_send(a, client, peer, &req, now),
+            _ => MrResponse::error(s, GS::SERVICE_NOT_SUPPORTED),
+        },
+        Some(class::TCP_IP) => tcp_ip(a, &req),
+        Some(class::ETHERNET_LINK) => ethernet_link(a, &req),
+        Some(c @ 100..=108) => parameter(a, c, &req),
+        _ => MrResponse::error(s, GS::PATH_DESTINATION_UNKNOWN),
+    }
+}
+
+/// Unconnected_Send addressed to this device: the embedded request is answered directly.
+fn unconnected_send(
+    a: &mut Adapter,
+    client: ClientId,
+    peer: SocketAddr,
+    req: &MrRequest,
+    now: Duration,
+) -> MrResponse {
+    let us = match UnconnectedSend::parse(&req.data) {
+        Ok(u) => u,
+        Err(WireError::Truncated { .. }) => {
+            return MrResponse::error(req.service, GS::NOT_ENOUGH_DATA)
+        }
+        Err(_) => {
+            return MrResponse {
+                service: req.service,
+                general: GS::CONNECTION_FAILURE.0,
+                extended: vec![proto::enip::cm::ext::UNCONNECTED_SEND_PARAMETER],
+                data: Vec::new(),
+            }
+        }
+    };
+    // The route ends here: a single port segment (backplane, slot 0) or none.
+    let local = us.route.segments.is_empty()
+        || matches!(us.route.segments.as_slice(), [Segment::Port { port: 1, link }] if link == &[0]);
+    if !local {
+        return MrResponse {
+            service: req.service,
+            general: GS::CONNECTION_FAILURE.0,
+            extended: vec![proto::enip::cm::ext::PORT_NOT_AVAILABLE],
+            data: Vec::new(),
+        };
+    }
+    request(a, client, peer, &us.request, now)
+}
+
+fn instance_one(req: &MrRequest) -> bool {
+    req.path.instance_id() == Some(1)
+}
+
+fn get_single(req: &MrRequest, value: impl Fn(u16) -> Option<Vec<u8>>) -> MrResponse {
+    match req.path.attribute_id() {
+        Some(attr) => match value(attr) {
+            Some(v) => MrResponse::ok(req.service, v),
+            None => MrResponse::error(req.service, GS::ATTRIBUTE_NOT_SUPPORTED),
+        },
+        None => MrResponse::error(req.service, GS::PATH_SEGMENT_ERROR),
+    }
+}
+
+/// Class-level attribute 1 (revision) of every object, instance 0.
+fn class_attribute(req: &MrRequest, revision: u16) -> Option<MrResponse> {
+    (req.path.instance_id() == Some(0) && Service(req.service) == Service::GET_ATTRIBUTE_SINGLE)
+        .then(|| {
+            get_single(req, |attr| {
+                (attr == 1).then(|| revision.to_le_bytes().to_vec())
+            })
+        })
+}
+
+fn identity(a: &mut Adapter, req: &MrRequest) -> MrResponse {
+    if let Some(r) = class_attribute(req, 1) {
+        return r;
+    }
+    if !instance_one(req) {
+        return MrResponse::error(req.service, GS::PATH_DESTINATION_UNKNOWN);
+    }
+    match Service(req.service) {
+        Service::GET_ATTRIBUTES_ALL => MrResponse::ok(req.service, a.identity.all()),
+        Service::GET_ATTRIBUTE_SINGLE => {
+            let id = a.identity.clone();
+            get_single(req, |attr| id.attribute(attr))
+        }
+        Service::SET_ATTRIBUTE_SINGLE => match req.path.attribute_id() {
+            Some(attr) if a.identity.attribute(attr).is_some() => {
+                MrResponse::error(req.service, GS::ATTRIBUTE_NOT_SETTABLE)
+            }
+            _ => MrResponse::error(req.service, GS::ATTRIBUTE_NOT_SUPPORTED),
+        },
+        Service::RESET => match req.data.as_slice() {
+            [] | [0] => {
+                // Type 0: emulate a power cycle of the interface — connections end and the
+                // addressing parameters are read in.
+                connections::close_all(a);
+                power_on(a);
+                MrResponse::ok(req.service, Vec::new())
+            }
+            [_] => MrResponse::error(req.service, GS::INVALID_PARAMETER),
+            _ => MrResponse::error(req.service, GS::TOO_MUCH_DATA),
+        },
+        _ => MrResponse::error(req.service, GS::SERVICE_NOT_SUPPORTED),
+    }
+}
+
+/// The object classes the message router knows (attribute 1 of instance 1).
+const OBJECTS: [u16; 6] = [
+    class::IDENTITY,
+    class::MESSAGE_ROUTER,
+    class::ASSEMBLY,
+    class::CONNECTION_MANAGER,
+    class::TCP_IP,
+    class::ETHERNET_LINK,
+];
+
+fn message_router(req: &MrRequest) -> MrResponse {
+    if let Some(r) = class_attribute(req, 1) {
+        return r;
+    }
+    if !instance_one(req) {
+        return MrResponse::error(req.service, GS::PATH_DESTINATION_UNKNOWN);
+    }
+    match Service(req.service) {
+        Service::GET_ATTRIBUTE_SINGLE => get_single(req, |attr| {
+            (attr == 1).then(|| {
+                let mut v = (OBJECTS.len() as u16).to_le_bytes().to_vec();
+                for c in OBJECTS {
+                    v.extend(c.to_le_bytes());
+                }
+                v
+            })
+        }),
+        _ => MrResponse::error(req.service, GS::SERVICE_NOT_SUPPORTED),
+    }
+}
+
+fn ipv4(b: [u8; 4]) -> Vec<u8> {
+    // CIP UDINT of an address: little-endian of the address as a number.
+    u32::from(Ipv4Addr::from(b)).to_le_bytes().to_vec()
+}
+
+/// TCP/IP Interface object (F5h), instance 1, backed by the addressing parameters.
+fn tcp_ip(a: &mut Adapter, req: &MrRequest) -> MrResponse {
+    if let Some(r) = class_attribute(req, 4) {
+        return r;
+    }
+    if !instance_one(req) {
+        return MrResponse::error(req.service, GS::PATH_DESTINATION_UNKNOWN);
+    }
+    let p = ip_params(a.product());
+    let Ok(store) = a.device.store(Unit::Interface) else {
+        return MrResponse::error(req.service, GS::DEVICE_STATE_CONFLICT);
+    };
+    match Service(req.service) {
+        Service::GET_ATTRIBUTE_SINGLE => get_single(req, |attr| {
+            Some(match attr {
+                // Status: interface configuration valid.
+                1 => 1u32.to_le_bytes().to_vec(),
+                // Capability: BOOTP client, DHCP client, configuration settable.
+                2 => 0x15u32.to_le_bytes().to_vec(),
+                // Configuration control: 0 static, 1 BOOTP, 2 DHCP (= P856 / P165).
+                3 => (read1(store, p.mode) as u32).to_le_bytes().to_vec(),
+                // Physical link object: path to Ethernet Link instance 1.
+                4 => vec![2, 0, 0x20, 0xF6, 0x24, 0x01],
+                5 => {
+                    let mut v = ipv4(read4(store, p.present_address));
+                    v.extend(ipv4(read4(store, p.present_mask)));
+                    v.extend(ipv4(read4(store, p.gateway)));
+                    v.extend([0; 8]);
+                    v.extend([0, 0]);
+                    v
+                }
+                6 => vec![0, 0],
+                _ => return None,
+            })
+        }),
+        Service::SET_ATTRIBUTE_SINGLE => match req.path.attribute_id() {
+            Some(3) => {
+                let [mode, 0, 0, 0] = req.data.as_slice() else {
+                    return MrResponse::error(
+                        req.service,
+                        if req.data.len() < 4 {
+                            GS::NOT_ENOUGH_DATA
+                        } else if req.data.len() > 4 {
+                            GS::TOO_MUCH_DATA
+                        } else {
+                            GS::INVALID_ATTRIBUTE_VALUE
+                        },
+                    );
+                };
+                let Ok(n) = ParamNumber::new(i64::from(p.mode)) else {
+                    return MrResponse::error(req.service, GS::DEVICE_STATE_CONFLICT);
+                };
+                match store.write(n, None, None, i32::from(*mode), Persist::Eeprom) {
+                    Ok(()) => MrResponse::ok(req.service, Vec::new()),
+                    Err(_) => MrResponse::error(req.service, GS::INVALID_ATTRIBUTE_VALUE),
+                }
+            }
+            Some(1 | 2 | 4 | 5 | 6) => MrResponse::error(req.service, GS::ATTRIBUTE_NOT_SETTABLE),
+            _ => MrResponse::error(req.service, GS::ATTRIBUTE_NOT_SUPPORTED),
+        },
+        _ => MrResponse::error(req.service, GS::SERVICE_NOT_SUPPORTED),
+    }
+}
+
+/// Ethernet Link object (F6h), instance 1.
+fn ethernet_link(a: &mut Adapter, req: &MrRequest) -> MrResponse {
+    if let Some(r) = class_attribute(req, 4) {
+        return r;
+    }
+    if !instance_one(req) {
+        return MrResponse::error(req.service, GS::PATH_DESTINATION_UNKNOWN);
+    }
+    let mac = mac(a);
+    match Service(req.service) {
+        Service::GET_ATTRIBUTE_SINGLE => get_single(req, |attr| {
+            Some(match attr {
+                // 100 Mbit/s (BU 0620 §2.3.1 "Transfer rate 100 MBit").
+                1 => 100u32.to_le_bytes().to_vec(),
+                // Link active, full duplex, negotiation succeeded.
+                2 => 0x0Du32.to_le_bytes().to_vec(),
+                3 => mac.to_vec(),
+                _ => return None,
+            })
+        }),
+        Service::SET_ATTRIBUTE_SINGLE => MrResponse::error(req.service, GS::ATTRIBUTE_NOT_SETTABLE),
+        _ => MrResponse::error(req.service, GS::SERVICE_NOT_SUPPORTED),
+    }
+}
+
+/// The unit behind a parameter class: 100 the module itself, 101..108 FI 1..8. The SK 550P's
+/// interface is built into FI 1, so its P85x–P89x answer in class 101 (BU 0620 §2.3.5 lists
+/// classes 101–108 only).
+fn unit_of(a: &mut Adapter, class: u16, number: ParamNumber) -> Option<Unit> {
+    let product = a.product();
+    match (product.family(), class) {
+        (Family::Module, 100) => Some(Unit::Interface),
+        (Family::Integrated, 100) => None,
+        (_, c) => {
+            let fi = Inverter::new(i64::from(c - 100)).ok()?;
+            if product.family() == Family::Integrated && fi.get() == 1 {
+                let iface = a.device.store(Unit::Interface).ok()?;
+                if iface.def(number).is_some() {
+                    return Some(Unit::Interface);
+                }
+            }
+            a.device.store(Unit::Inverter(fi)).ok()?;
+            Some(Unit::Inverter(fi))
+        }
+    }
+}
+
+/// Get/Set_Attribute_Single on a parameter: class 100 + FI, instance from set and element,
+/// attribute = parameter number; values are INT (16 bit) or DINT (positions), little-endian.
+fn parameter(a: &mut Adapter, class: u16, req: &MrRequest) -> MrResponse {
+    let s = req.service;
+    let (Some(instance), Some(attr)) = (req.path.instance_id(), req.path.attribute_id()) else {
+        return MrResponse::error(s, GS::PATH_DESTINATION_UNKNOWN);
+    };
+    let get = Service(s) == Service::GET_ATTRIBUTE_SINGLE;
+    if !get && Service(s) != Service::SET_ATTRIBUTE_SINGLE {
+        return MrResponse::error(s, GS::SERVICE_NOT_SUPPORTED);
+    }
+    let Ok(number) = ParamNumber::new(i64::from(attr)) else {
+        return MrResponse::error(s, GS::ATTRIBUTE_NOT_SUPPORTED);
+    };
+    let Some(unit) = unit_of(a, class, number) else {
+        return MrResponse::error(s, GS::PATH_DESTINATION_UNKNOWN);
+    };
+    let product = a.product();
+    let Ok(store) = a.device.store(unit) else {
+        return MrResponse::error(s, GS::PATH_DESTINATION_UNKNOWN);
+    };
+    let Some(def) = store.def(number) else {
+        return MrResponse::error(s, GS::ATTRIBUTE_NOT_SUPPORTED);
+    };
+    let Some((set, element)) = cip_decode_instance(instance, def.set_dependent, def.array) else {
+        return MrResponse::error(s, GS::PATH_DESTINATION_UNKNOWN);
+    };
+    let width = match def.width {
+        Width::Word => 2,
+        Width::Dword => 4,
+    };
+    if get {
+        if !req.data.is_empty() {
+            return MrResponse::error(s, GS::TOO_MUCH_DATA);
+        }
+        return match store.read(number, set, element) {
+            Ok(v) => MrResponse::ok(s, v.to_le_bytes()[..width].to_vec()),
+            Err(e) => MrResponse::error(s, access_status(e)),
+        };
+    }
+    // BU 0620 §4.2.2 P853: "Writing only possible via USS or USB".
+    if product == Product::Sk550p && attr == 853 {
+        return MrResponse::error(s, GS::ATTRIBUTE_NOT_SETTABLE);
+    }
+    if def.access == Access::ReadOnly {
+        return MrResponse::error(s, GS::ATTRIBUTE_NOT_SETTABLE);
+    }
+    let value = match req.data.len() {
+        n if n < width => return MrResponse::error(s, GS::NOT_ENOUGH_DATA),
+        n if n > width => return MrResponse::error(s, GS::TOO_MUCH_DATA),
+        2 => {
+            let raw = u16::from_le_bytes([req.data[0], req.data[1]]);
+            if def.min < 0 {
+                i32::from(raw as i16)
+            } else {
+                i32::from(raw)
+            }
+        }
+        _ => i32::from_le_bytes([req.data[0], req.data[1], req.data[2], req.data[3]]),
+    };
+    match store.write(number, set, element, value, Persist::Eeprom) {
+        Ok(()) => MrResponse::ok(s, Vec::new()),
+        Err(e) => MrResponse::error(s, access_status(e)),
+    }
+}
+
+/// The CIP general status of a refused parameter access.
+pub(crate) fn access_status(e: AccessError) -> GS {
+    match e {
+        AccessError::NoSuchParameter => GS::ATTRIBUTE_NOT_SUPPORTED,
+        AccessError::ReadOnly => GS::ATTRIBUTE_NOT_SETTABLE,
+        AccessError::OutOfRange | AccessError::OnlyResettable => GS::INVALID_ATTRIBUTE_VALUE,
+        AccessError::BadSubIndex | AccessError::NotAnArray => GS::PATH_DESTINATION_UNKNOWN,
+    }
+}
