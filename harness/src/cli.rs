@@ -42,6 +42,40 @@ enum Command {
     Addr(crate::cli_tools::AddrArgs),
     /// Decode a telegram or word in the manuals' terms, e.g. `harness decode status 0B31h`.
     Decode(crate::cli_tools::DecodeArgs),
+    /// Serve the simulator on the network as a real device, e.g. `harness serve enip`.
+    Serve(ServeArgs),
+    /// Print a device description file, e.g. `harness describe eds --profile tu3-eip`.
+    Describe(DescribeArgs),
+}
+
+#[derive(ClapArgs, Debug)]
+struct DescribeArgs {
+    /// What to describe: `eds` (EtherNet/IP electronic data sheet).
+    what: String,
+    /// Product profile: sk550p, tu3-eip, tu4-eip, cu4-eip.
+    #[arg(long)]
+    profile: String,
+    /// Inverters behind the interface (default: the product's maximum).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
+    inverters: Option<u8>,
+}
+
+#[derive(ClapArgs, Debug)]
+struct ServeArgs {
+    /// Protocol to serve: `enip` (EtherNet/IP adapter).
+    protocol: String,
+    /// Listen address, HOST[:PORT] (UDP 2222 on the same host carries I/O).
+    #[arg(long, default_value = "127.0.0.2:44818")]
+    listen: String,
+    /// Product profile: sk550p, tu3-eip, tu4-eip, cu4-eip.
+    #[arg(long, default_value = "tu3-eip")]
+    profile: String,
+    /// Inverters behind the interface (default: the product's maximum).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
+    inverters: Option<u8>,
+    /// Stop after this many seconds (default: serve until killed).
+    #[arg(long)]
+    seconds: Option<u64>,
 }
 
 #[derive(ClapArgs, Debug, Default)]
@@ -74,6 +108,16 @@ struct RunArgs {
     /// Snapshot folder.
     #[arg(long, default_value = "vectors/snapshots")]
     snapshot_dir: PathBuf,
+    /// The DUT: the embedded simulator (default) or `enip://HOST[:PORT]`, an EtherNet/IP
+    /// device or another implementation on the network.
+    #[arg(long)]
+    dut: Option<String>,
+    /// Seconds a network DUT may take to answer one request.
+    #[arg(long, default_value_t = 2.0)]
+    timeout: f64,
+    /// Write the run's EtherNet/IP traffic to this pcap file (embedded runs).
+    #[arg(long)]
+    pcap: Option<PathBuf>,
 }
 
 #[derive(ClapArgs, Debug)]
@@ -122,6 +166,8 @@ pub fn main() -> i32 {
         Command::List(a) => list(a),
         Command::Addr(a) => crate::cli_tools::addr(a),
         Command::Decode(a) => crate::cli_tools::decode(a),
+        Command::Serve(a) => serve(a),
+        Command::Describe(a) => describe(a),
     };
     match outcome {
         Ok(code) => code,
@@ -130,6 +176,42 @@ pub fn main() -> i32 {
             EXIT_USAGE
         }
     }
+}
+
+fn describe(a: DescribeArgs) -> Result<i32, String> {
+    if a.what != "eds" {
+        return Err(format!("cannot describe `{}` (known: eds)", a.what));
+    }
+    let product = Profile::by_name(&a.profile)?.product;
+    print!(
+        "{}",
+        crate::eds::eds(product, a.inverters.unwrap_or(product.max_inverters()))?
+    );
+    Ok(EXIT_PASS)
+}
+
+fn serve(a: ServeArgs) -> Result<i32, String> {
+    if a.protocol != "enip" {
+        return Err(format!("cannot serve `{}` (protocols: enip)", a.protocol));
+    }
+    let product = Profile::by_name(&a.profile)?.product;
+    if proto::nord::eip::identity(product).is_none() {
+        return Err(format!("{} has no EtherNet/IP interface", product.name()));
+    }
+    let config = sim::device::DeviceConfig {
+        inverters: a
+            .inverters
+            .unwrap_or(product.max_inverters())
+            .min(product.max_inverters()),
+        ..sim::device::DeviceConfig::new(product)
+    };
+    let listen = crate::serve::parse_addr(&a.listen)?;
+    crate::serve::serve_enip(
+        listen,
+        config,
+        a.seconds.map(std::time::Duration::from_secs),
+    )?;
+    Ok(EXIT_PASS)
 }
 
 fn run(a: RunArgs) -> Result<i32, String> {
@@ -155,7 +237,49 @@ fn run(a: RunArgs) -> Result<i32, String> {
         filter: a.filter,
         retries: a.retries,
     };
-    let mut run = runner::run(&loaded, &opts, &mut EmbeddedFactory);
+    let mut run = match &a.dut {
+        None => {
+            let tap = a.pcap.as_ref().map(|_| crate::pcap::SharedTap::default());
+            let mut factory = EmbeddedFactory { tap: tap.clone() };
+            let run = runner::run(&loaded, &opts, &mut factory);
+            if let (Some(path), Some(tap)) = (&a.pcap, tap) {
+                let tap = tap.borrow();
+                tap.capture
+                    .write(path)
+                    .map_err(|e| format!("{}: cannot write pcap: {e}", path.display()))?;
+                println!("pcap: {} packets in {}", tap.capture.len(), path.display());
+            }
+            run
+        }
+        Some(url) => {
+            let target = url
+                .strip_prefix("enip://")
+                .ok_or_else(|| format!("`--dut {url}`: only enip://HOST[:PORT] is supported"))
+                .and_then(crate::serve::parse_addr)?;
+            if !(0.01..=60.0).contains(&a.timeout) {
+                return Err(format!(
+                    "`--timeout {}`: give 0.01 to 60 seconds",
+                    a.timeout
+                ));
+            }
+            let opts = RunOptions {
+                profiles: opts
+                    .profiles
+                    .iter()
+                    .filter_map(|p| Profile::enip(p.product))
+                    .collect(),
+                ..opts
+            };
+            if opts.profiles.is_empty() {
+                return Err("none of the profiles speaks EtherNet/IP".into());
+            }
+            let mut factory = crate::binding::enip::NetworkFactory {
+                target,
+                timeout: std::time::Duration::from_secs_f64(a.timeout),
+            };
+            runner::run(&loaded, &opts, &mut factory)
+        }
+    };
     let mode = if a.accept {
         SnapshotMode::Accept(a.snapshot_dir)
     } else if a.snapshots {

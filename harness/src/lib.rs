@@ -3,12 +3,15 @@
 mod binding;
 pub mod cli;
 mod cli_tools;
+mod eds;
 mod model;
 mod notation;
 pub mod outcome;
+mod pcap;
 mod profile;
 mod report;
 mod runner;
+mod serve;
 mod suite;
 
 /// Runs every suite below `suites` against the embedded simulator under every built-in profile
@@ -23,6 +26,6 @@ pub fn run_embedded(suites: &std::path::Path) -> Result<outcome::RunResult, Stri
     Ok(runner::run(
         &loaded,
         &opts,
-        &mut binding::embedded::EmbeddedFactory,
+        &mut binding::embedded::EmbeddedFactory::default(),
     ))
 }

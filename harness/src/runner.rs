@@ -407,7 +407,7 @@ cases:
             retries: 25,
         };
         match fault {
-            None => run(&loaded, &opts, &mut EmbeddedFactory),
+            None => run(&loaded, &opts, &mut EmbeddedFactory::default()),
             Some(f) => run(&loaded, &opts, &mut FaultyFactory(f)),
         }
     }

@@ -25,8 +25,12 @@ const PPO_CAPABILITIES: [Capability; 5] = [
     Capability::Observe,
 ];
 
-/// Opens a fresh simulator per case.
-pub(crate) struct EmbeddedFactory;
+/// Opens a fresh simulator per case; EtherNet/IP traffic goes to the tap when there is one.
+#[derive(Default)]
+pub(crate) struct EmbeddedFactory {
+    /// Where `--pcap` collects the run's EtherNet/IP traffic.
+    pub(crate) tap: Option<crate::pcap::SharedTap>,
+}
 
 impl DutFactory for EmbeddedFactory {
     fn describe(&self) -> String {
@@ -40,7 +44,10 @@ impl DutFactory for EmbeddedFactory {
         };
         Ok(match profile.binding {
             BindingKind::Ppo => Box::new(Channel::new(ppo_dut(profile), profile.product, retries)),
-            BindingKind::Enip => Box::new(super::enip::Scanner::embedded(Device::new(config))),
+            BindingKind::Enip => Box::new(super::enip::Scanner::embedded(
+                Device::new(config),
+                self.tap.clone(),
+            )),
         })
     }
 }

@@ -255,7 +255,7 @@ pub fn identity(product: Product) -> Option<IdentityInfo> {
     };
     Some(IdentityInfo {
         vendor: VENDOR_ID,
-        vendor_name: "Getriebebau NORD GmbH & Co. KG",
+        vendor_name: "NORD Electronic DRIVESYSTEMS GmbH",
         device_type: 0x0C,
         product_code,
         revision: (1, 3),
@@ -264,8 +264,9 @@ pub fn identity(product: Product) -> Option<IdentityInfo> {
     })
 }
 
-/// The vendor id the simulator reports (not printed in the manuals).
-pub const VENDOR_ID: u16 = 0x0163;
+/// The vendor id the simulator reports. The manuals print none; 834 is "NORD Electronic
+/// DRIVESYSTEMS GmbH" in the CIP vendor table that EtherNet/IP tools ship (pycomm3's, for one).
+pub const VENDOR_ID: u16 = 834;
 
 #[cfg(test)]
 mod tests {

@@ -2,7 +2,9 @@
 //! (same bytes, virtual clock) or a device on the network (TCP 44818, UDP 2222).
 
 use std::io::{Read, Write};
-use std::net::{SocketAddr, TcpStream, UdpSocket};
+use std::net::{SocketAddr, SocketAddrV4, TcpStream, UdpSocket};
+
+use crate::pcap::SharedTap;
 use std::time::{Duration, Instant};
 
 use proto::enip::encap::{frame_len, HEADER_LEN};
@@ -24,24 +26,95 @@ pub(crate) trait EnipLink {
 }
 
 /// The peer address the embedded adapter sees (the scanner's).
-const SCANNER: SocketAddr = SocketAddr::V4(std::net::SocketAddrV4::new(
-    std::net::Ipv4Addr::new(192, 168, 1, 10),
-    50_000,
-));
+const SCANNER_V4: SocketAddrV4 =
+    SocketAddrV4::new(std::net::Ipv4Addr::new(192, 168, 1, 10), 50_000);
+const SCANNER: SocketAddr = SocketAddr::V4(SCANNER_V4);
+
+/// Where captured packets of the embedded link go: the tap, this case's time base and its
+/// client address.
+struct Recorder {
+    tap: SharedTap,
+    base: Duration,
+    client: SocketAddrV4,
+    server: SocketAddrV4,
+}
+
+impl Recorder {
+    fn new(tap: SharedTap, server: SocketAddrV4, now: Duration) -> Recorder {
+        let (base, client) = {
+            let mut t = tap.borrow_mut();
+            t.connections = t.connections.wrapping_add(1);
+            let port = 50_000u16.wrapping_add(t.connections % 10_000);
+            (
+                t.last + Duration::from_millis(1),
+                SocketAddrV4::new(*SCANNER_V4.ip(), port),
+            )
+        };
+        let r = Recorder {
+            tap,
+            base,
+            client,
+            server,
+        };
+        r.tap
+            .borrow_mut()
+            .capture
+            .tcp_open(client, server, base + now);
+        r
+    }
+
+    fn at(&self, now: Duration) -> Duration {
+        let t = self.base + now;
+        let mut tap = self.tap.borrow_mut();
+        tap.last = tap.last.max(t);
+        t
+    }
+
+    fn tcp(&self, to_server: bool, bytes: &[u8], now: Duration) {
+        let t = self.at(now);
+        let (from, to) = if to_server {
+            (self.client, self.server)
+        } else {
+            (self.server, self.client)
+        };
+        self.tap.borrow_mut().capture.tcp_data(from, to, bytes, t);
+    }
+
+    fn udp(&self, to_server: bool, bytes: &[u8], now: Duration) {
+        let t = self.at(now);
+        let c = SocketAddrV4::new(*self.client.ip(), IO_PORT);
+        let s = SocketAddrV4::new(*self.server.ip(), IO_PORT);
+        let (from, to) = if to_server { (c, s) } else { (s, c) };
+        self.tap.borrow_mut().capture.udp(from, to, bytes, t);
+    }
+}
 
 /// The embedded adapter behind an in-memory link.
 pub(crate) struct Embedded {
     adapter: Adapter,
     clock: VirtualClock,
     framer: Framer,
+    recorder: Option<Recorder>,
 }
 
 impl Embedded {
-    pub(crate) fn new(adapter: Adapter) -> Embedded {
+    pub(crate) fn new(adapter: Adapter, server: SocketAddrV4, tap: Option<SharedTap>) -> Embedded {
+        let clock = VirtualClock::new();
+        let recorder = tap.map(|t| Recorder::new(t, server, clock.now()));
         Embedded {
             adapter,
-            clock: VirtualClock::new(),
+            clock,
             framer: Framer::new(),
+            recorder,
+        }
+    }
+}
+
+impl Drop for Embedded {
+    fn drop(&mut self) {
+        if let Some(r) = &self.recorder {
+            let t = r.at(self.clock.now());
+            r.tap.borrow_mut().capture.tcp_close(r.client, r.server, t);
         }
     }
 }
@@ -55,28 +128,44 @@ impl EnipLink for Embedded {
     }
 
     fn request(&mut self, msg: &[u8]) -> Result<Option<Vec<u8>>, String> {
+        let now = self.clock.now();
+        if let Some(r) = &self.recorder {
+            r.tcp(true, msg, now);
+        }
         let mut reply = None;
         for m in self.framer.push(msg).map_err(|e| e.to_string())? {
-            let r = self.adapter.handle_tcp(1, SCANNER, &m, self.clock.now());
+            let r = self.adapter.handle_tcp(1, SCANNER, &m, now);
             if r.reply.is_some() {
                 reply = r.reply;
             }
+        }
+        if let (Some(r), Some(b)) = (&self.recorder, &reply) {
+            r.tcp(false, b, now);
         }
         Ok(reply)
     }
 
     fn io_cycle(&mut self, datagram: Option<&[u8]>, rpi: Duration) -> Result<Vec<Vec<u8>>, String> {
         if let Some(d) = datagram {
+            if let Some(r) = &self.recorder {
+                r.udp(true, d, self.clock.now());
+            }
             // A datagram the adapter drops is what a real device would do too.
             let _ = self.adapter.handle_io(SCANNER, d, self.clock.now());
         }
         self.clock.advance(rpi);
-        Ok(self
+        let out: Vec<Vec<u8>> = self
             .adapter
             .poll(self.clock.now())
             .into_iter()
             .map(|(_, b)| b)
-            .collect())
+            .collect();
+        if let Some(r) = &self.recorder {
+            for b in &out {
+                r.udp(false, b, self.clock.now());
+            }
+        }
+        Ok(out)
     }
 
     fn adapter(&mut self) -> Option<(&mut Adapter, Duration)> {

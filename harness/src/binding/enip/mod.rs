@@ -15,7 +15,7 @@ use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4};
 use std::time::Duration;
 
 use proto::enip::cip::{class, GeneralStatus, MrRequest, MrResponse, Service};
-use proto::enip::cm::{kind, ForwardOpen, ForwardOpenReply, NetParams, Transport};
+use proto::enip::cm::{kind, ForwardClose, ForwardOpen, ForwardOpenReply, NetParams, Transport};
 use proto::enip::cpf::{Cpf, Item};
 use proto::enip::encap::{Command, EncapRepr, EncapStatus, RegisterSession, SendData};
 use proto::enip::epath::{EPath, Segment};
@@ -39,8 +39,13 @@ use crate::suite::{Action, EnipStep, OrderSpec, Target};
 
 /// RPI of the harness's I/O connection.
 pub(crate) const RPI: Duration = Duration::from_millis(4);
+/// The harness's originator vendor id and serial number in Forward_Open.
+const VENDOR: u16 = 0x4E48;
+const ORIGINATOR_SERIAL: u32 = 0x4E48_5331;
 /// The embedded adapter's address.
 const EMBEDDED_ADDR: SocketAddrV4 = SocketAddrV4::new(Ipv4Addr::new(192, 168, 1, 100), 44818);
+
+static SERIAL: std::sync::atomic::AtomicU16 = std::sync::atomic::AtomicU16::new(1);
 
 /// An open I/O connection.
 struct IoConn {
@@ -68,11 +73,11 @@ pub(crate) struct Scanner {
 
 impl Scanner {
     /// The embedded adapter around `device`.
-    pub(crate) fn embedded(device: Device) -> Scanner {
+    pub(crate) fn embedded(device: Device, tap: Option<crate::pcap::SharedTap>) -> Scanner {
         let product = device.config().product;
         let adapter = Adapter::new(device, EMBEDDED_ADDR);
         Scanner::new(
-            Box::new(link::Embedded::new(adapter)),
+            Box::new(link::Embedded::new(adapter, EMBEDDED_ADDR, tap)),
             product,
             Capability::ALL
                 .into_iter()
@@ -342,7 +347,9 @@ impl Scanner {
         &mut self,
         s: &ForwardOpenSpec,
     ) -> Result<(MrResponse, Option<ForwardOpenReply>), StepError> {
-        self.serial = self.serial.wrapping_add(1);
+        self.serial = SERIAL
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+            .max(1);
         let np = |size: u16, k: u8| NetParams {
             size,
             variable: false,
@@ -360,8 +367,8 @@ impl Scanner {
             o_t_id: 0,
             t_o_id: 0x5343_0000 | u32::from(self.serial),
             serial: self.serial,
-            vendor: 0x4E48,
-            originator_serial: 0x4E48_5331,
+            vendor: VENDOR,
+            originator_serial: ORIGINATOR_SERIAL,
             timeout_multiplier: s.multiplier,
             o_t_rpi: s.rpi_us,
             o_t: np(s.o_t_size, kind::POINT_TO_POINT),
@@ -537,6 +544,32 @@ impl Scanner {
     }
 }
 
+/// Opens a new connection to a network target per case.
+pub(crate) struct NetworkFactory {
+    /// Encapsulation address of the target.
+    pub(crate) target: SocketAddr,
+    /// How long one request may take.
+    pub(crate) timeout: Duration,
+}
+
+impl crate::runner::DutFactory for NetworkFactory {
+    fn describe(&self) -> String {
+        format!("EtherNet/IP target at {}", self.target)
+    }
+
+    fn open(
+        &mut self,
+        profile: &crate::profile::Profile,
+        _retries: u32,
+    ) -> Result<Box<dyn Binding>, String> {
+        Ok(Box::new(Scanner::network(
+            self.target,
+            profile.product,
+            self.timeout,
+        )?))
+    }
+}
+
 /// Parameters of a Forward_Open step.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct ForwardOpenSpec {
@@ -630,6 +663,36 @@ fn describe_reply(r: &EncapRepr) -> String {
         }
     }
     s
+}
+
+impl Drop for Scanner {
+    /// Leaves the target as found: the I/O connection closed, the session unregistered.
+    fn drop(&mut self) {
+        let Some(session) = self.session else { return };
+        if self.io.take().is_some() {
+            let fc = ForwardClose {
+                priority_tick: 0x0A,
+                timeout_ticks: 0x0E,
+                serial: self.serial,
+                vendor: VENDOR,
+                originator_serial: ORIGINATOR_SERIAL,
+                path: EPath::object(class::ASSEMBLY, 1),
+            };
+            let _ = self.explicit(&MrRequest {
+                service: Service::FORWARD_CLOSE.0,
+                path: EPath::object(class::CONNECTION_MANAGER, 1),
+                data: fc.emit(),
+            });
+        }
+        let bye = EncapRepr {
+            command: Command::UNREGISTER_SESSION.0,
+            session,
+            ..EncapRepr::default()
+        };
+        if let Ok(b) = bye.emit() {
+            let _ = self.link.request(&b);
+        }
+    }
 }
 
 impl Binding for Scanner {

@@ -1,0 +1,670 @@
+//! Packet capture of a run's EtherNet/IP traffic, written as a pcap file.
+//!
+//! The harness's links carry application payloads only (TCP stream bytes of encapsulation
+//! messages, UDP datagrams on 44818 and 2222), sometimes over an in-memory link, so this module
+//! synthesizes the framing around them: Ethernet II, IPv4 and TCP or UDP, with correct checksums
+//! and, for TCP, a handshake, sequence and acknowledgement numbers per direction and a closing
+//! FIN exchange. The result dissects cleanly in Wireshark/tshark as `enip`/`cip`/`cipio`.
+//!
+//! MAC addresses are derived from the IPv4 address (`02:00:a:b:c:d`, locally administered),
+//! initial sequence numbers from the connection's 4-tuple, so a capture of the same run is
+//! byte-for-byte the same.
+
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::net::SocketAddrV4;
+use std::path::Path;
+use std::time::Duration;
+
+use pcap_file::pcap::{PcapHeader, PcapPacket, PcapWriter};
+use pcap_file::{DataLink, Endianness, PcapError, TsResolution};
+
+/// The capture's epoch: 2026-11-23T00:00:00Z, in seconds since the Unix epoch. Every `at` is
+/// an offset from it.
+const EPOCH_SECS: u64 = 1_795_392_000;
+/// Largest TCP payload per segment (Ethernet MTU 1500 less 20 bytes of IPv4 and 20 of TCP).
+const MSS: usize = 1460;
+/// Largest UDP payload that fits an IPv4 datagram.
+const MAX_UDP_PAYLOAD: usize = 65_535 - IPV4_LEN - UDP_LEN;
+/// The pcap file's snapshot length: larger than any frame this module builds.
+const SNAPLEN: u32 = 262_144;
+
+const ETH_LEN: usize = 14;
+const IPV4_LEN: usize = 20;
+const UDP_LEN: usize = 8;
+const TCP_LEN: usize = 20;
+const ETHERTYPE_IPV4: u16 = 0x0800;
+const PROTO_TCP: u8 = 6;
+const PROTO_UDP: u8 = 17;
+const TTL: u8 = 64;
+const WINDOW: u16 = 65_535;
+
+const FIN: u8 = 0x01;
+const SYN: u8 = 0x02;
+const PSH: u8 = 0x08;
+const ACK: u8 = 0x10;
+
+/// One TCP connection's sequence state.
+#[derive(Debug, Clone, Copy)]
+struct TcpState {
+    /// Next sequence number the client sends.
+    client_next: u32,
+    /// Next sequence number the server sends.
+    server_next: u32,
+}
+
+/// A capture: packets collected in memory, written out with [`Capture::write`].
+#[derive(Debug, Default)]
+pub(crate) struct Capture {
+    /// Frames (Ethernet II onwards) with their time since [`EPOCH_SECS`].
+    packets: Vec<(Duration, Vec<u8>)>,
+    /// Open TCP connections, keyed by (client, server).
+    tcp: HashMap<(SocketAddrV4, SocketAddrV4), TcpState>,
+    /// Connections opened so far: mixed into each initial sequence number so that a reopened
+    /// 4-tuple starts elsewhere.
+    opened: u64,
+    /// Next IPv4 identification.
+    ip_id: u16,
+}
+
+impl Capture {
+    /// A TCP connection between `client` and `server` opened: emits SYN, SYN-ACK and ACK.
+    /// Opening a connection that is already open starts it anew.
+    pub(crate) fn tcp_open(&mut self, client: SocketAddrV4, server: SocketAddrV4, at: Duration) {
+        let isn = splitmix64(
+            u64::from(u32::from(*client.ip())) << 32
+                ^ u64::from(u32::from(*server.ip()))
+                ^ u64::from(client.port()) << 48
+                ^ u64::from(server.port()) << 16
+                ^ self.opened.wrapping_mul(0x9E37_79B9_7F4A_7C15),
+        );
+        self.opened += 1;
+        let (client_isn, server_isn) = (isn as u32, (isn >> 32) as u32);
+        self.tcp_segment(client, server, client_isn, 0, SYN, &[], at);
+        let client_next = client_isn.wrapping_add(1);
+        self.tcp_segment(server, client, server_isn, client_next, SYN | ACK, &[], at);
+        let server_next = server_isn.wrapping_add(1);
+        self.tcp_segment(client, server, client_next, server_next, ACK, &[], at);
+        self.tcp.insert(
+            (client, server),
+            TcpState {
+                client_next,
+                server_next,
+            },
+        );
+    }
+
+    /// Stream bytes from `from` to `to` on an open TCP connection, flags PSH|ACK: one segment
+    /// per call, or several of at most 1460 bytes each for a longer payload. An empty payload
+    /// emits nothing. On a connection not open yet, `from` is taken as the client and the
+    /// handshake is emitted first.
+    pub(crate) fn tcp_data(
+        &mut self,
+        from: SocketAddrV4,
+        to: SocketAddrV4,
+        payload: &[u8],
+        at: Duration,
+    ) {
+        if payload.is_empty() {
+            return;
+        }
+        let (key, from_client) = self.connection(from, to, at);
+        for chunk in payload.chunks(MSS) {
+            let state = self.tcp[&key];
+            let (seq, ack) = if from_client {
+                (state.client_next, state.server_next)
+            } else {
+                (state.server_next, state.client_next)
+            };
+            self.tcp_segment(from, to, seq, ack, PSH | ACK, chunk, at);
+            let next = seq.wrapping_add(chunk.len() as u32);
+            let state = self.tcp.get_mut(&key).expect("connection is open");
+            if from_client {
+                state.client_next = next;
+            } else {
+                state.server_next = next;
+            }
+        }
+    }
+
+    /// The connection closed by `from`: emits FIN|ACK from `from`, FIN|ACK from `to` and the
+    /// final ACK from `from`. On a connection not open, `from` is taken as the client and the
+    /// handshake is emitted first, so the capture stays consistent.
+    pub(crate) fn tcp_close(&mut self, from: SocketAddrV4, to: SocketAddrV4, at: Duration) {
+        let (key, from_client) = self.connection(from, to, at);
+        let state = self.tcp.remove(&key).expect("connection is open");
+        let (from_seq, to_seq) = if from_client {
+            (state.client_next, state.server_next)
+        } else {
+            (state.server_next, state.client_next)
+        };
+        let from_next = from_seq.wrapping_add(1);
+        let to_next = to_seq.wrapping_add(1);
+        self.tcp_segment(from, to, from_seq, to_seq, FIN | ACK, &[], at);
+        self.tcp_segment(to, from, to_seq, from_next, FIN | ACK, &[], at);
+        self.tcp_segment(from, to, from_next, to_next, ACK, &[], at);
+    }
+
+    /// A UDP datagram. A payload longer than an IPv4 datagram can carry (65507 bytes) is
+    /// truncated to that length.
+    pub(crate) fn udp(
+        &mut self,
+        from: SocketAddrV4,
+        to: SocketAddrV4,
+        payload: &[u8],
+        at: Duration,
+    ) {
+        let payload = &payload[..payload.len().min(MAX_UDP_PAYLOAD)];
+        let udp_len = (UDP_LEN + payload.len()) as u16;
+        let mut segment = Vec::with_capacity(UDP_LEN + payload.len());
+        segment.extend_from_slice(&from.port().to_be_bytes());
+        segment.extend_from_slice(&to.port().to_be_bytes());
+        segment.extend_from_slice(&udp_len.to_be_bytes());
+        segment.extend_from_slice(&[0, 0]);
+        segment.extend_from_slice(payload);
+        let mut checksum = transport_checksum(from, to, PROTO_UDP, &segment);
+        if checksum == 0 {
+            // Zero means "no checksum" in UDP over IPv4; its ones-complement twin stands in.
+            checksum = 0xFFFF;
+        }
+        segment[6..8].copy_from_slice(&checksum.to_be_bytes());
+        self.push_ipv4(from, to, PROTO_UDP, false, &segment, at);
+    }
+
+    /// Number of packets captured so far.
+    pub(crate) fn len(&self) -> usize {
+        self.packets.len()
+    }
+
+    /// Whether no packet has been captured.
+    #[allow(dead_code)]
+    pub(crate) fn is_empty(&self) -> bool {
+        self.packets.is_empty()
+    }
+
+    /// Writes the capture as a pcap file (LINKTYPE_ETHERNET, microsecond timestamps, little
+    /// endian), each packet stamped 2026-11-23T00:00:00Z plus its `at`.
+    pub(crate) fn write(&self, path: &Path) -> std::io::Result<()> {
+        let header = PcapHeader {
+            version_major: 2,
+            version_minor: 4,
+            ts_correction: 0,
+            ts_accuracy: 0,
+            snaplen: SNAPLEN,
+            datalink: DataLink::ETHERNET,
+            ts_resolution: TsResolution::MicroSecond,
+            endianness: Endianness::Little,
+        };
+        let file = BufWriter::new(File::create(path)?);
+        let mut writer = PcapWriter::with_header(file, header).map_err(io_error)?;
+        for (at, frame) in &self.packets {
+            let timestamp = Duration::from_secs(EPOCH_SECS) + *at;
+            let packet = PcapPacket::new(timestamp, frame.len() as u32, frame);
+            writer.write_packet(&packet).map_err(io_error)?;
+        }
+        writer.into_writer().flush()
+    }
+
+    /// The open connection between `a` and `b` in either direction, opened with `a` as client
+    /// if there is none; returns its key and whether `a` is the client.
+    fn connection(
+        &mut self,
+        a: SocketAddrV4,
+        b: SocketAddrV4,
+        at: Duration,
+    ) -> ((SocketAddrV4, SocketAddrV4), bool) {
+        if self.tcp.contains_key(&(a, b)) {
+            ((a, b), true)
+        } else if self.tcp.contains_key(&(b, a)) {
+            ((b, a), false)
+        } else {
+            self.tcp_open(a, b, at);
+            ((a, b), true)
+        }
+    }
+
+    /// Emits one TCP segment. SYN segments carry an MSS option.
+    #[allow(clippy::too_many_arguments)]
+    fn tcp_segment(
+        &mut self,
+        from: SocketAddrV4,
+        to: SocketAddrV4,
+        seq: u32,
+        ack: u32,
+        flags: u8,
+        payload: &[u8],
+        at: Duration,
+    ) {
+        let options: &[u8] = if flags & SYN != 0 {
+            &[2, 4, (MSS >> 8) as u8, MSS as u8]
+        } else {
+            &[]
+        };
+        let header_len = TCP_LEN + options.len();
+        let mut segment = Vec::with_capacity(header_len + payload.len());
+        segment.extend_from_slice(&from.port().to_be_bytes());
+        segment.extend_from_slice(&to.port().to_be_bytes());
+        segment.extend_from_slice(&seq.to_be_bytes());
+        segment.extend_from_slice(&(if flags & ACK != 0 { ack } else { 0 }).to_be_bytes());
+        segment.push(((header_len / 4) as u8) << 4);
+        segment.push(flags);
+        segment.extend_from_slice(&WINDOW.to_be_bytes());
+        segment.extend_from_slice(&[0, 0]); // checksum
+        segment.extend_from_slice(&[0, 0]); // urgent pointer
+        segment.extend_from_slice(options);
+        segment.extend_from_slice(payload);
+        let checksum = transport_checksum(from, to, PROTO_TCP, &segment);
+        segment[16..18].copy_from_slice(&checksum.to_be_bytes());
+        self.push_ipv4(from, to, PROTO_TCP, true, &segment, at);
+    }
+
+    /// Wraps a transport segment in IPv4 and Ethernet II and stores the frame.
+    fn push_ipv4(
+        &mut self,
+        from: SocketAddrV4,
+        to: SocketAddrV4,
+        protocol: u8,
+        dont_fragment: bool,
+        segment: &[u8],
+        at: Duration,
+    ) {
+        let mut frame = Vec::with_capacity(ETH_LEN + IPV4_LEN + segment.len());
+        frame.extend_from_slice(&mac(to));
+        frame.extend_from_slice(&mac(from));
+        frame.extend_from_slice(&ETHERTYPE_IPV4.to_be_bytes());
+
+        let id = self.ip_id;
+        self.ip_id = self.ip_id.wrapping_add(1);
+        let total_len = (IPV4_LEN + segment.len()) as u16;
+        let flags_fragment: u16 = if dont_fragment { 0x4000 } else { 0 };
+        let mut ip = [0u8; IPV4_LEN];
+        ip[0] = 0x45; // version 4, header length 5 words
+        ip[2..4].copy_from_slice(&total_len.to_be_bytes());
+        ip[4..6].copy_from_slice(&id.to_be_bytes());
+        ip[6..8].copy_from_slice(&flags_fragment.to_be_bytes());
+        ip[8] = TTL;
+        ip[9] = protocol;
+        ip[12..16].copy_from_slice(&from.ip().octets());
+        ip[16..20].copy_from_slice(&to.ip().octets());
+        let checksum = !ones_complement_sum(0, &ip);
+        ip[10..12].copy_from_slice(&checksum.to_be_bytes());
+
+        frame.extend_from_slice(&ip);
+        frame.extend_from_slice(segment);
+        self.packets.push((at, frame));
+    }
+}
+
+/// The locally administered MAC address standing for an IPv4 host: `02:00:a:b:c:d`.
+fn mac(addr: SocketAddrV4) -> [u8; 6] {
+    let [a, b, c, d] = addr.ip().octets();
+    [0x02, 0x00, a, b, c, d]
+}
+
+/// The TCP or UDP checksum of `segment` (its checksum field zero) with the IPv4 pseudo-header.
+fn transport_checksum(from: SocketAddrV4, to: SocketAddrV4, protocol: u8, segment: &[u8]) -> u16 {
+    let mut pseudo = [0u8; 12];
+    pseudo[0..4].copy_from_slice(&from.ip().octets());
+    pseudo[4..8].copy_from_slice(&to.ip().octets());
+    pseudo[9] = protocol;
+    pseudo[10..12].copy_from_slice(&(segment.len() as u16).to_be_bytes());
+    let sum = ones_complement_sum(ones_complement_sum(0, &pseudo), segment);
+    !sum
+}
+
+/// Adds `bytes`, as big-endian 16-bit words (an odd last byte padded with zero), to `sum` in
+/// ones-complement arithmetic.
+fn ones_complement_sum(sum: u16, bytes: &[u8]) -> u16 {
+    let mut acc = u32::from(sum);
+    let mut words = bytes.chunks_exact(2);
+    for word in &mut words {
+        acc += u32::from(u16::from_be_bytes([word[0], word[1]]));
+    }
+    if let [last] = words.remainder() {
+        acc += u32::from(*last) << 8;
+    }
+    while acc > 0xFFFF {
+        acc = (acc & 0xFFFF) + (acc >> 16);
+    }
+    acc as u16
+}
+
+/// A 64-bit mixing function (SplitMix64's finalizer), for deterministic initial sequence
+/// numbers.
+fn splitmix64(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// A pcap-file error as an I/O error.
+fn io_error(e: PcapError) -> std::io::Error {
+    match e {
+        PcapError::IoError(e) => e,
+        other => std::io::Error::new(std::io::ErrorKind::InvalidData, other),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::net::Ipv4Addr;
+    use std::process::Command;
+
+    fn client() -> SocketAddrV4 {
+        SocketAddrV4::new(Ipv4Addr::new(192, 168, 1, 10), 50_123)
+    }
+
+    fn server() -> SocketAddrV4 {
+        SocketAddrV4::new(Ipv4Addr::new(192, 168, 1, 20), 44_818)
+    }
+
+    fn ms(n: u64) -> Duration {
+        Duration::from_millis(n)
+    }
+
+    /// The IPv4 header and the transport segment of an emitted frame.
+    fn split(frame: &[u8]) -> (&[u8], &[u8]) {
+        assert_eq!(&frame[12..14], &[0x08, 0x00], "EtherType IPv4");
+        let ip = &frame[ETH_LEN..];
+        let ihl = usize::from(ip[0] & 0x0F) * 4;
+        let total = usize::from(u16::from_be_bytes([ip[2], ip[3]]));
+        assert_eq!(total, ip.len(), "IPv4 total length");
+        (&ip[..ihl], &ip[ihl..total])
+    }
+
+    /// The sum over the pseudo-header and the segment, checksum included: 0xFFFF when right.
+    fn verify_transport(ip: &[u8], segment: &[u8]) -> u16 {
+        let mut pseudo = [0u8; 12];
+        pseudo[0..8].copy_from_slice(&ip[12..20]);
+        pseudo[9] = ip[9];
+        pseudo[10..12].copy_from_slice(&(segment.len() as u16).to_be_bytes());
+        ones_complement_sum(ones_complement_sum(0, &pseudo), segment)
+    }
+
+    /// (seq, ack, flags, payload length) of a TCP frame.
+    fn tcp_fields(frame: &[u8]) -> (u32, u32, u8, usize) {
+        let (_, tcp) = split(frame);
+        let seq = u32::from_be_bytes(tcp[4..8].try_into().unwrap());
+        let ack = u32::from_be_bytes(tcp[8..12].try_into().unwrap());
+        let data_offset = usize::from(tcp[12] >> 4) * 4;
+        (seq, ack, tcp[13], tcp.len() - data_offset)
+    }
+
+    #[test]
+    fn checksums_verify_over_emitted_bytes() {
+        let mut cap = Capture::default();
+        // Odd payload lengths exercise the padding of the last byte.
+        cap.udp(client(), server(), &[0x63, 0, 0, 0, 0, 1, 2], ms(0));
+        cap.tcp_open(client(), server(), ms(1));
+        cap.tcp_data(client(), server(), &[0x65, 0, 4, 0, 9], ms(2));
+        assert_eq!(cap.len(), 5);
+        for (_, frame) in &cap.packets {
+            let (ip, segment) = split(frame);
+            assert_eq!(ones_complement_sum(0, ip), 0xFFFF, "IPv4 header checksum");
+            assert_eq!(ip[8], TTL);
+            assert_eq!(verify_transport(ip, segment), 0xFFFF, "transport checksum");
+            assert_eq!(&frame[0..2], &[0x02, 0x00], "destination MAC");
+            assert_eq!(&frame[2..6], &ip[16..20], "destination MAC from IPv4");
+            assert_eq!(&frame[6..8], &[0x02, 0x00], "source MAC");
+            assert_eq!(&frame[8..12], &ip[12..16], "source MAC from IPv4");
+        }
+        let (ip, udp) = split(&cap.packets[0].1);
+        assert_eq!(ip[9], PROTO_UDP);
+        assert_eq!(&ip[6..8], &[0, 0], "no DF on UDP");
+        assert_eq!(u16::from_be_bytes([udp[4], udp[5]]), 15, "UDP length");
+        assert_ne!(&udp[6..8], &[0, 0], "UDP checksum present");
+        let (ip, tcp) = split(&cap.packets[4].1);
+        assert_eq!(ip[9], PROTO_TCP);
+        assert_eq!(&ip[6..8], &[0x40, 0], "DF on TCP");
+        assert_eq!(tcp[12] >> 4, 5, "no options on data segments");
+        assert_eq!(u16::from_be_bytes([tcp[14], tcp[15]]), WINDOW);
+        // IPv4 identification counts up per packet.
+        let ids: Vec<u16> = cap
+            .packets
+            .iter()
+            .map(|(_, f)| u16::from_be_bytes([f[18], f[19]]))
+            .collect();
+        assert_eq!(ids, vec![0, 1, 2, 3, 4]);
+    }
+
+    #[test]
+    fn tcp_sequence_numbers_continue() {
+        let mut cap = Capture::default();
+        cap.tcp_open(client(), server(), ms(0));
+        cap.tcp_data(client(), server(), &[1; 28], ms(1));
+        cap.tcp_data(server(), client(), &[2; 28], ms(2));
+        cap.tcp_data(client(), server(), &[3; 3000], ms(3)); // 1460 + 1460 + 80
+        cap.tcp_data(server(), client(), &[4; 10], ms(4));
+        cap.tcp_data(server(), client(), &[], ms(5)); // nothing
+        cap.tcp_close(client(), server(), ms(6));
+        assert_eq!(cap.len(), 3 + 1 + 1 + 3 + 1 + 3);
+
+        let from_client = |frame: &[u8]| frame[6..12] == mac(client());
+        let lens: Vec<usize> = cap.packets.iter().map(|(_, f)| tcp_fields(f).3).collect();
+        assert_eq!(lens, vec![0, 0, 0, 28, 28, 1460, 1460, 80, 10, 0, 0, 0]);
+
+        // next[0]: client's next sequence number, next[1]: server's.
+        let mut next: [Option<u32>; 2] = [None, None];
+        for (i, (_, frame)) in cap.packets.iter().enumerate() {
+            let (seq, ack, flags, len) = tcp_fields(frame);
+            let (me, peer) = if from_client(frame) { (0, 1) } else { (1, 0) };
+            if let Some(expected) = next[me] {
+                assert_eq!(seq, expected, "seq of packet {i}");
+            } else {
+                assert_ne!(flags & SYN, 0, "first packet of a side is a SYN");
+            }
+            if flags & ACK != 0 {
+                assert_eq!(Some(ack), next[peer], "ack of packet {i}");
+            } else {
+                assert_eq!(i, 0, "only the SYN lacks ACK");
+            }
+            if len > 0 {
+                assert_eq!(flags, PSH | ACK, "data flags of packet {i}");
+            }
+            let consumed = len as u32 + u32::from(flags & SYN != 0) + u32::from(flags & FIN != 0);
+            next[me] = Some(seq.wrapping_add(consumed));
+        }
+        let flags: Vec<u8> = cap.packets.iter().map(|(_, f)| tcp_fields(f).2).collect();
+        assert_eq!(&flags[..3], &[SYN, SYN | ACK, ACK]);
+        assert_eq!(&flags[9..], &[FIN | ACK, FIN | ACK, ACK]);
+        assert!(from_client(&cap.packets[9].1) && !from_client(&cap.packets[10].1));
+
+        // The same run gives the same bytes; a reopened connection starts elsewhere.
+        let mut again = Capture::default();
+        again.tcp_open(client(), server(), ms(0));
+        assert_eq!(again.packets[0].1, cap.packets[0].1);
+        again.tcp_close(server(), client(), ms(1));
+        again.tcp_open(client(), server(), ms(2));
+        assert_ne!(
+            tcp_fields(&again.packets[6].1).0,
+            tcp_fields(&again.packets[0].1).0
+        );
+    }
+
+    #[test]
+    fn data_on_unopened_connection_opens_it() {
+        let mut cap = Capture::default();
+        cap.tcp_data(client(), server(), &[7; 4], ms(0));
+        assert_eq!(cap.len(), 4);
+        assert_eq!(tcp_fields(&cap.packets[0].1).2, SYN);
+    }
+
+    #[test]
+    fn write_reads_back() {
+        let mut cap = Capture::default();
+        cap.tcp_open(client(), server(), ms(0));
+        cap.tcp_data(client(), server(), &[1; 2000], ms(1));
+        cap.udp(
+            client(),
+            server(),
+            &[0x63, 0],
+            Duration::from_micros(1_500_250),
+        );
+        cap.tcp_close(server(), client(), ms(2000));
+        let dir = tempdir("write_reads_back");
+        let path = dir.join("run.pcap");
+        cap.write(&path).unwrap();
+
+        let file = File::open(&path).unwrap();
+        let mut reader = pcap_file::pcap::PcapReader::new(file).unwrap();
+        assert_eq!(reader.header().datalink, DataLink::ETHERNET);
+        assert_eq!(reader.header().ts_resolution, TsResolution::MicroSecond);
+        let mut read = Vec::new();
+        while let Some(packet) = reader.next_packet() {
+            let packet = packet.unwrap();
+            read.push((packet.timestamp, packet.data.into_owned()));
+        }
+        assert_eq!(read.len(), cap.len());
+        for ((ts, data), (at, frame)) in read.iter().zip(&cap.packets) {
+            assert_eq!(*ts, Duration::from_secs(EPOCH_SECS) + *at);
+            assert_eq!(data, frame);
+        }
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn tshark_dissects_enip_cleanly() {
+        if Command::new("tshark").arg("--version").output().is_err() {
+            eprintln!("SKIPPED tshark_dissects_enip_cleanly: tshark is not on PATH");
+            return;
+        }
+        let mut register = vec![0x65, 0x00, 0x04, 0x00];
+        register.extend_from_slice(&[0; 20]);
+        register.extend_from_slice(&[0x01, 0x00, 0x00, 0x00]);
+        let mut registered = register.clone();
+        registered[4..8].copy_from_slice(&[0x01, 0x00, 0x00, 0x00]);
+        let mut list_identity = vec![0x63, 0x00];
+        list_identity.extend_from_slice(&[0; 22]);
+        let udp_server = SocketAddrV4::new(*server().ip(), 44_818);
+        let udp_client = SocketAddrV4::new(*client().ip(), 50_124);
+
+        let mut cap = Capture::default();
+        cap.tcp_open(client(), server(), ms(0));
+        cap.tcp_data(client(), server(), &register, ms(1));
+        cap.tcp_data(server(), client(), &registered, ms(2));
+        cap.udp(udp_client, udp_server, &list_identity, ms(3));
+        // Class 1 I/O on 2222: CPF with a sequenced address item and a connected data item.
+        let io = [
+            0x02, 0x00, 0x02, 0x80, 0x08, 0x00, 0x01, 0x00, 0x00, 0x00, 0x05, 0x00, 0x00, 0x00,
+            0xB1, 0x00, 0x04, 0x00, 0x05, 0x00, 0xAA, 0xBB,
+        ];
+        let io_from = SocketAddrV4::new(*client().ip(), 2222);
+        let io_to = SocketAddrV4::new(*server().ip(), 2222);
+        cap.udp(io_from, io_to, &io, ms(4));
+        cap.tcp_close(client(), server(), ms(5));
+        let data_frames = [4, 5, 6]; // 1-based frame numbers carrying encapsulation messages
+        let io_frame = 7;
+        let dir = tempdir("tshark");
+        let path = dir.join("enip.pcap");
+        cap.write(&path).unwrap();
+
+        let checks = [
+            "-o",
+            "tcp.check_checksum:TRUE",
+            "-o",
+            "udp.check_checksum:TRUE",
+            "-o",
+            "ip.check_checksum:TRUE",
+        ];
+        let tshark = |args: &[&str]| {
+            let out = Command::new("tshark")
+                .arg("-n")
+                .arg("-r")
+                .arg(&path)
+                .args(checks)
+                .args(args)
+                .output()
+                .expect("run tshark");
+            let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+            eprintln!(
+                "tshark {args:?}:\n{stdout}{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            assert!(out.status.success(), "tshark failed");
+            stdout
+        };
+
+        let fields = tshark(&[
+            "-T",
+            "fields",
+            "-E",
+            "separator=;",
+            "-e",
+            "frame.number",
+            "-e",
+            "frame.protocols",
+            "-e",
+            "ip.checksum.status",
+            "-e",
+            "tcp.checksum.status",
+            "-e",
+            "udp.checksum.status",
+        ]);
+        let rows: Vec<Vec<&str>> = fields.lines().map(|l| l.split(';').collect()).collect();
+        assert_eq!(rows.len(), cap.len());
+        for row in &rows {
+            let number: usize = row[0].parse().unwrap();
+            let protocols = row[1];
+            assert!(protocols.starts_with("eth:ethertype:ip:"), "{row:?}");
+            if data_frames.contains(&number) {
+                assert!(protocols.contains("enip"), "frame {number}: {protocols}");
+            }
+            if number == io_frame {
+                assert!(protocols.contains("cipio"), "frame {number}: {protocols}");
+            }
+            // 1 is "Good": verified, not just unverified (2) or bad (0).
+            assert_eq!(row[2], "1", "IPv4 checksum of frame {number}");
+            assert!(
+                row[3] == "1" || row[4] == "1",
+                "transport checksum of frame {number}: {row:?}"
+            );
+        }
+
+        let expert = tshark(&["-q", "-z", "expert"]);
+        let mut counted = false;
+        for line in expert.lines() {
+            let line = line.trim();
+            for severity in ["Errors", "Warnings", "Warns"] {
+                if let Some(rest) = line.strip_prefix(severity) {
+                    let count: u32 = rest
+                        .trim()
+                        .trim_start_matches('(')
+                        .trim_end_matches(')')
+                        .parse()
+                        .unwrap_or(u32::MAX);
+                    assert_eq!(count, 0, "expert {severity}: {expert}");
+                }
+            }
+            counted |= line.starts_with("Chats") || line.starts_with("Notes");
+        }
+        assert!(counted, "tshark's expert summary was not parsed:\n{expert}");
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    /// A fresh directory under the target's temporary directory.
+    fn tempdir(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("harness-pcap-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+}
+
+/// A capture shared by every connection of a run, with the run's own time line: each
+/// embedded case starts on a fresh virtual clock, so its times are placed after the last
+/// packet so far.
+#[derive(Debug, Default)]
+pub(crate) struct Tap {
+    /// The packets.
+    pub(crate) capture: Capture,
+    /// The latest time used.
+    pub(crate) last: Duration,
+    /// Connections opened so far (gives each its own client port).
+    pub(crate) connections: u16,
+}
+
+/// The run's tap, shared by the links.
+pub(crate) type SharedTap = std::rc::Rc<std::cell::RefCell<Tap>>;
