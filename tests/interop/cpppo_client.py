@@ -21,6 +21,7 @@ cpppo notes (cpppo 5.2.5):
 import os
 import sys
 
+sys.dont_write_bytecode = True  # keep tests/interop free of __pycache__
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import interop_common as ic  # noqa: E402
 

@@ -20,6 +20,7 @@ pycomm3 notes (checked against pycomm3 1.2.16's source and on the wire with tsha
 import os
 import sys
 
+sys.dont_write_bytecode = True  # keep tests/interop free of __pycache__
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import interop_common as ic  # noqa: E402
 
