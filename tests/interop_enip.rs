@@ -29,13 +29,25 @@ fn python() -> Option<PathBuf> {
 
 fn serve(listen: &str, profile: &str) -> Server {
     let child = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(["serve", "enip", "--listen", listen, "--profile", profile, "--seconds", "60"])
+        .args([
+            "serve",
+            "enip",
+            "--listen",
+            listen,
+            "--profile",
+            profile,
+            "--seconds",
+            "60",
+        ])
         .spawn()
         .expect("harness serve starts");
     let addr: SocketAddr = listen.parse().unwrap();
     let deadline = Instant::now() + Duration::from_secs(10);
     while TcpStream::connect_timeout(&addr, Duration::from_millis(200)).is_err() {
-        assert!(Instant::now() < deadline, "harness serve did not listen on {listen}");
+        assert!(
+            Instant::now() < deadline,
+            "harness serve did not listen on {listen}"
+        );
         std::thread::sleep(Duration::from_millis(50));
     }
     Server(child)
@@ -51,7 +63,11 @@ fn client(py: &PathBuf, script: &str, target: &[&str], ops: &[&str]) -> Vec<Valu
         .args(ops)
         .output()
         .expect("client runs");
-    assert!(out.status.success(), "{script}: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{script}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8_lossy(&out.stdout)
         .lines()
         .filter(|l| l.starts_with('{'))
@@ -95,7 +111,10 @@ fn pycomm3_and_cpppo_read_and_write_parameters_of_the_served_simulator() {
         &py,
         "cpppo_client.py",
         &["127.0.0.3:44818"],
-        &["get", "101", "0", "102", "set", "101", "0", "102", "250", "get", "101", "0", "102", "set", "101", "0", "172", "1"],
+        &[
+            "get", "101", "0", "102", "set", "101", "0", "102", "250", "get", "101", "0", "102",
+            "set", "101", "0", "172", "1",
+        ],
     );
     assert_eq!(r.len(), 4, "{r:?}");
     assert_eq!(r[0]["value"], 1000, "{}", r[0]);

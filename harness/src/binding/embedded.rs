@@ -116,17 +116,30 @@ impl Dut for Embedded {
     }
 
     fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, String> {
-        match what {
-            "state" => Ok(json!({ "state": self.device.state_name(inverter)? })),
-            "leds" => {
-                let (dev, bus) = self.device.leds(inverter, self.clock.now())?;
-                Ok(json!({ "dev": dev, "bus": bus }))
-            }
-            "eeprom-writes" => Ok(json!({ "count": self.device.eeprom_writes(Some(inverter))? })),
-            "interface-eeprom-writes" => Ok(json!({ "count": self.device.eeprom_writes(None)? })),
-            other => Err(format!(
-                "cannot observe `{other}` (state, leds, eeprom-writes, interface-eeprom-writes)"
-            )),
-        }
+        observe_device(&mut self.device, what, inverter, self.clock.now())?
+            .ok_or_else(|| format!("cannot observe `{what}` ({OBSERVABLE})"))
     }
+}
+
+/// What every embedded DUT can show.
+pub(crate) const OBSERVABLE: &str = "state, leds, eeprom-writes, interface-eeprom-writes";
+
+/// Internal state of the simulated device at `now`; `None` for a `what` it does not know, so a
+/// binding can add its own.
+pub(crate) fn observe_device(
+    device: &mut Device,
+    what: &str,
+    inverter: Inverter,
+    now: Duration,
+) -> Result<Option<Value>, String> {
+    Ok(Some(match what {
+        "state" => json!({ "state": device.state_name(inverter)? }),
+        "leds" => {
+            let (dev, bus) = device.leds(inverter, now)?;
+            json!({ "dev": dev, "bus": bus })
+        }
+        "eeprom-writes" => json!({ "count": device.eeprom_writes(Some(inverter))? }),
+        "interface-eeprom-writes" => json!({ "count": device.eeprom_writes(None)? }),
+        _ => return Ok(None),
+    }))
 }

@@ -188,14 +188,7 @@ impl MrRequest {
             });
         }
         let words = usize::from(r.u8("request path size")?);
-        let got = r.remaining();
-        let path = r
-            .bytes(words * 2, "request path")
-            .map_err(|_| WireError::Length {
-                what: "request path size",
-                declared: words * 2,
-                actual: got,
-            })?;
+        let path = r.sized(words * 2, "request path size")?;
         let path = EPath::parse(path)?;
         Ok(MrRequest {
             service,

@@ -218,14 +218,7 @@ impl ForwardOpen {
         };
         let transport = Transport(r.u8("transport type/trigger")?);
         let words = usize::from(r.u8("connection path size")?);
-        let got = r.remaining();
-        let path = r
-            .bytes(words * 2, "connection path")
-            .map_err(|_| WireError::Length {
-                what: "connection path size",
-                declared: words * 2,
-                actual: got,
-            })?;
+        let path = r.sized(words * 2, "connection path size")?;
         let path = EPath::parse(path)?;
         r.finish("Forward_Open request")?;
         Ok(ForwardOpen {
@@ -384,14 +377,7 @@ impl ForwardClose {
         let originator_serial = r.u32("originator serial number")?;
         let words = usize::from(r.u8("connection path size")?);
         r.u8("reserved")?;
-        let got = r.remaining();
-        let path = r
-            .bytes(words * 2, "connection path")
-            .map_err(|_| WireError::Length {
-                what: "connection path size",
-                declared: words * 2,
-                actual: got,
-            })?;
+        let path = r.sized(words * 2, "connection path size")?;
         let path = EPath::parse(path)?;
         r.finish("Forward_Close request")?;
         Ok(ForwardClose {
@@ -445,15 +431,7 @@ impl UnconnectedSend {
         let priority_tick = r.u8("priority/time tick")?;
         let timeout_ticks = r.u8("timeout ticks")?;
         let size = usize::from(r.u16("embedded message size")?);
-        let got = r.remaining();
-        let request = r
-            .bytes(size, "embedded message")
-            .map_err(|_| WireError::Length {
-                what: "embedded message size",
-                declared: size,
-                actual: got,
-            })?
-            .to_vec();
+        let request = r.sized(size, "embedded message size")?.to_vec();
         if size % 2 == 1 {
             r.u8("embedded message pad")?;
         }

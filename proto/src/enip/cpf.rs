@@ -189,14 +189,7 @@ impl Cpf {
         for _ in 0..count {
             let type_id = r.u16("CPF item type")?;
             let len = usize::from(r.u16("CPF item length")?);
-            let got = r.remaining();
-            let data = r
-                .bytes(len, "CPF item data")
-                .map_err(|_| WireError::Length {
-                    what: "CPF item length",
-                    declared: len,
-                    actual: got,
-                })?;
+            let data = r.sized(len, "CPF item length")?;
             items.push(Item::parse(type_id, data)?);
         }
         r.finish("CPF item list")?;

@@ -75,6 +75,17 @@ impl<'a> Reader<'a> {
         Ok(s)
     }
 
+    /// `n` bytes announced by the length field `what`; too few is a [`WireError::Length`]
+    /// naming that field, since the field, not the data, is what lies.
+    pub(crate) fn sized(&mut self, n: usize, what: &'static str) -> Result<&'a [u8], WireError> {
+        let actual = self.remaining();
+        self.bytes(n, what).map_err(|_| WireError::Length {
+            what,
+            declared: n,
+            actual,
+        })
+    }
+
     pub(crate) fn rest(&mut self) -> &'a [u8] {
         let s = &self.buf[self.pos..];
         self.pos = self.buf.len();

@@ -187,7 +187,7 @@ impl Assembly {
     pub fn accepts(&self, len: usize) -> bool {
         let full = usize::from(self.len);
         if self.variable {
-            len >= 2 && len <= full && len % 2 == 0
+            len >= 2 && len <= full && len.is_multiple_of(2)
         } else {
             len == full
         }

@@ -31,6 +31,7 @@ use sim::enip::Adapter;
 pub(crate) use link::{EnipLink, Network};
 
 use super::channel::compact;
+use super::embedded::{observe_device, OBSERVABLE};
 use super::{Binding, StepError};
 use crate::outcome::Exchange;
 use crate::profile::Capability;
@@ -760,21 +761,21 @@ fn observe(
     inverter: Inverter,
     now: Duration,
 ) -> Result<Value, String> {
-    let d = a.device_mut();
-    match what {
-        "state" => Ok(json!({ "state": d.state_name(inverter)? })),
-        "leds" => {
-            let (dev, bus) = d.leds(inverter, now)?;
-            Ok(json!({ "dev": dev, "bus": bus, "ms": a.ms_led(), "ns": a.ns_led() }))
-        }
-        "eeprom-writes" => Ok(json!({ "count": d.eeprom_writes(Some(inverter))? })),
-        "interface-eeprom-writes" => Ok(json!({ "count": d.eeprom_writes(None)? })),
-        "connections" => {
-            let (owner, listen, explicit) = a.connection_counts();
-            Ok(json!({ "exclusive_owner": owner, "listen_only": listen, "explicit": explicit, "sessions": a.session_count() }))
-        }
-        other => Err(format!(
-            "cannot observe `{other}` (state, leds, eeprom-writes, interface-eeprom-writes, connections)"
-        )),
+    if what == "connections" {
+        let (owner, listen, explicit) = a.connection_counts();
+        return Ok(json!({
+            "exclusive_owner": owner,
+            "listen_only": listen,
+            "explicit": explicit,
+            "sessions": a.session_count(),
+        }));
     }
+    let (ms, ns) = (a.ms_led(), a.ns_led());
+    let mut v = observe_device(a.device_mut(), what, inverter, now)?
+        .ok_or_else(|| format!("cannot observe `{what}` ({OBSERVABLE}, connections)"))?;
+    if what == "leds" {
+        v["ms"] = json!(ms);
+        v["ns"] = json!(ns);
+    }
+    Ok(v)
 }
