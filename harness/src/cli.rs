@@ -183,10 +183,9 @@ fn describe(a: DescribeArgs) -> Result<i32, String> {
         return Err(format!("cannot describe `{}` (known: eds)", a.what));
     }
     let product = Profile::by_name(&a.profile)?.product;
-    print!(
-        "{}",
-        crate::eds::eds(product, a.inverters.unwrap_or(product.max_inverters()))?
-    );
+    let text = crate::eds::eds(product, a.inverters.unwrap_or(product.max_inverters()))?;
+    // A closed pipe (`| head`) ends the output, not the program with a panic.
+    let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes());
     Ok(EXIT_PASS)
 }
 
