@@ -317,12 +317,11 @@ fn list(a: ListArgs) -> Result<i32, String> {
             .map(|ps| ps.iter().map(|p| p.name()).collect::<Vec<_>>().join(","))
             .unwrap_or_else(|| "all".into());
         println!(
-            "{:<64} {} {} §{} p.{} [{}]  {}",
+            "{:<64} {} {} {} [{}]  {}",
             c.id,
             c.manual.doc,
             c.manual.edition,
-            c.manual.section,
-            c.manual.page,
+            c.manual.place(),
             profiles,
             c.title
         );

@@ -51,8 +51,18 @@ pub struct ManualRef {
     pub edition: String,
     /// Section, e.g. `2.2.7`.
     pub section: String,
-    /// Page as printed.
-    pub page: u32,
+    /// Page as printed; a specification cited by section and table alone has none.
+    pub page: Option<u32>,
+}
+
+impl ManualRef {
+    /// `§2.2.7 p. 20`, or `§2-3.3` without a page.
+    pub fn place(&self) -> String {
+        match self.page {
+            Some(p) => format!("§{} p. {p}", self.section),
+            None => format!("§{}", self.section),
+        }
+    }
 }
 
 /// A wrong value a manual prints, recorded by a case.
@@ -65,7 +75,7 @@ pub struct Erratum {
     /// Section.
     pub section: String,
     /// Page.
-    pub page: u32,
+    pub page: Option<u32>,
     /// Id of the case that records it.
     pub case: String,
     /// What the manual prints.

@@ -12,7 +12,7 @@ fn manual(doc: &str, edition: &str, section: &str, page: u32) -> ManualRef {
         doc: doc.into(),
         edition: edition.into(),
         section: section.into(),
-        page,
+        page: Some(page),
     }
 }
 
@@ -135,7 +135,7 @@ pub(super) fn sample_run() -> RunResult {
             doc: "BU 0620".into(),
             edition: "2020-03 en".into(),
             section: "2.3.5".into(),
-            page: 27,
+            page: Some(27),
             case: "bu0620/addressing-cip/x".into(),
             printed: "class 103".into(),
             correct: "class 102".into(),

@@ -86,7 +86,7 @@ fn testcase(c: &CaseResult, dut: &str) -> TestCase {
         m.doc,
         m.edition,
         m.section,
-        m.page,
+        m.page.map_or("-".to_string(), |p| p.to_string()),
         c.profile,
         dut,
         c.title,

@@ -129,7 +129,7 @@ fn errata(s: &mut String, run: &RunResult) {
             cell(&e.doc),
             cell(&e.edition),
             cell(&e.section),
-            e.page,
+            e.page.map_or(String::new(), |p| p.to_string()),
             cell(&e.printed),
             cell(&e.correct),
             cell(&e.why),
@@ -185,13 +185,12 @@ pub(super) fn markdown(run: &RunResult) -> String {
         for c in bad {
             let _ = writeln!(
                 s,
-                "- **{}** [{}] `{}` ({} §{} p. {}): {}",
+                "- **{}** [{}] `{}` ({} {}): {}",
                 c.verdict.name(),
                 c.profile,
                 c.id,
                 c.manual.doc,
-                c.manual.section,
-                c.manual.page,
+                c.manual.place(),
                 c.message
             );
         }

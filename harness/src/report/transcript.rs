@@ -40,11 +40,7 @@ pub(crate) fn render(c: &CaseResult) -> String {
     let mut s = String::new();
     let m = &c.manual;
     let _ = writeln!(s, "case: {}\ntitle: {}", c.id, c.title);
-    let _ = writeln!(
-        s,
-        "manual: {} ({}) §{} p. {}",
-        m.doc, m.edition, m.section, m.page
-    );
+    let _ = writeln!(s, "manual: {} ({}) {}", m.doc, m.edition, m.place());
     let _ = writeln!(s, "profile: {}\nverdict: {}", c.profile, c.verdict.name());
     if !c.message.is_empty() {
         let _ = writeln!(s, "message: {}", c.message);

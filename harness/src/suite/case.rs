@@ -127,21 +127,35 @@ pub(crate) enum Action {
     Enip(EnipStep),
 }
 
-/// An `enip:` step.
+/// An `enip:` step. `client` picks the TCP connection: 1 is the scanner's own, 2.. are other
+/// clients of the same target (each with its own session), to show a target keeps serving
+/// others after one client misbehaved.
 #[derive(Debug, Clone)]
 pub(crate) enum EnipStep {
-    /// Encapsulation bytes as written; `session` puts the open session's handle in bytes 4..8.
-    Raw { bytes: Vec<u8>, session: bool },
+    /// Encapsulation bytes as written; `session` puts the client's session handle in bytes
+    /// 4..8 (registering one first).
+    Raw {
+        bytes: Vec<u8>,
+        session: bool,
+        client: u8,
+    },
+    /// A message-router request as written (service, path size, path, data; may be malformed)
+    /// in a SendRRData of the client's session.
+    Mr { bytes: Vec<u8>, client: u8 },
     /// An unconnected CIP request.
     Request {
         service: u8,
         path: Vec<u8>,
         data: Vec<u8>,
+        client: u8,
     },
-    /// A Forward_Open with the given parameters.
+    /// A Forward_Open with the given parameters; an accepted owner connection carries the
+    /// following process-data steps.
     ForwardOpen(crate::binding::enip::ForwardOpenSpec),
     /// The scanner stops sending O→T data for this long.
     StopIo { time: Duration },
+    /// The run/idle header of the following O→T frames: run (`true`) or idle.
+    Run(bool),
 }
 
 /// How long a `process:` step runs.
@@ -454,29 +468,54 @@ fn action(step: StepDoc) -> Result<Action, String> {
 }
 
 /// Hex bytes separated by spaces (`"65 00 04 00"`); empty text is no bytes.
+/// Hex bytes in wire order: `"65 00 04 00"`, or grouped as `"6500 0400"`.
 fn hex_bytes(action: &str, text: &str) -> Result<Vec<u8>, String> {
-    text.split_whitespace()
-        .map(|t| u8::from_str_radix(t, 16))
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("`{action}`: `{text}` is not hex bytes like \"65 00 04 00\""))
+    let bad = || format!("`{action}`: `{text}` is not hex bytes like \"65 00 04 00\"");
+    let mut out = Vec::new();
+    for t in text.split_whitespace() {
+        if t.len() % 2 != 0 {
+            return Err(bad());
+        }
+        for i in (0..t.len()).step_by(2) {
+            let b = t.get(i..i + 2).ok_or_else(bad)?;
+            out.push(u8::from_str_radix(b, 16).map_err(|_| bad())?);
+        }
+    }
+    Ok(out)
 }
 
 fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
+    let client = |f: &Fields| -> Result<u8, String> {
+        match f.int("client")? {
+            None => Ok(1),
+            Some(v @ 1..=99) => Ok(v as u8),
+            Some(v) => Err(format!("`enip.client`: {v} is not 1..=99")),
+        }
+    };
     if m.contains_key("raw") {
-        let f = Fields::new("enip", m, &["raw", "session"])?;
+        let f = Fields::new("enip", m, &["raw", "session", "client"])?;
         return Ok(EnipStep::Raw {
             bytes: hex_bytes("enip.raw", &f.text("raw")?.unwrap_or_default())?,
             session: f.bool("session")?.unwrap_or(false),
+            client: client(&f)?,
+        });
+    }
+    if m.contains_key("mr") {
+        let f = Fields::new("enip", m, &["mr", "client"])?;
+        return Ok(EnipStep::Mr {
+            bytes: hex_bytes("enip.mr", &f.text("mr")?.unwrap_or_default())?,
+            client: client(&f)?,
         });
     }
     if m.contains_key("service") {
-        let f = Fields::new("enip", m, &["service", "path", "data"])?;
+        let f = Fields::new("enip", m, &["service", "path", "data", "client"])?;
         let service = u8::try_from(f.req_int("service")?)
             .map_err(|_| "`enip.service` is not a byte".to_string())?;
         return Ok(EnipStep::Request {
             service,
             path: hex_bytes("enip.path", &f.text("path")?.unwrap_or_default())?,
             data: hex_bytes("enip.data", &f.text("data")?.unwrap_or_default())?,
+            client: client(&f)?,
         });
     }
     if m.contains_key("forward_open") {
@@ -493,47 +532,35 @@ fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
                 "transport",
                 "multiplier",
                 "large",
+                "run_idle",
             ],
         )?;
         let d = crate::binding::enip::ForwardOpenSpec::default();
-        let small = |k: &str, v: i64| -> Result<u16, String> {
-            u16::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not 0..=65535"))
+        let small = |k: &str| -> Result<Option<u16>, String> {
+            f.int(k)?
+                .map(|v| u16::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not 0..=65535")))
+                .transpose()
         };
-        let byte = |k: &str, v: i64| -> Result<u8, String> {
-            u8::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not a byte"))
+        let byte = |k: &str| -> Result<Option<u8>, String> {
+            f.int(k)?
+                .map(|v| u8::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not a byte")))
+                .transpose()
         };
+        let rpi = f
+            .int("rpi_us")?
+            .map(|v| u32::try_from(v).map_err(|_| format!("`enip.rpi_us`: {v} is not 32-bit")))
+            .transpose()?;
         return Ok(EnipStep::ForwardOpen(
             crate::binding::enip::ForwardOpenSpec {
-                o_t_point: f
-                    .int("o_t")?
-                    .map(|v| small("o_t", v))
-                    .transpose()?
-                    .unwrap_or(d.o_t_point),
-                t_o_point: f
-                    .int("t_o")?
-                    .map(|v| small("t_o", v))
-                    .transpose()?
-                    .unwrap_or(d.t_o_point),
-                o_t_size: small("o_t_size", f.req_int("o_t_size")?)?,
-                t_o_size: small("t_o_size", f.req_int("t_o_size")?)?,
-                rpi_us: f
-                    .int("rpi_us")?
-                    .map(|v| {
-                        u32::try_from(v).map_err(|_| format!("`enip.rpi_us`: {v} is not 32-bit"))
-                    })
-                    .transpose()?
-                    .unwrap_or(d.rpi_us),
-                transport: f
-                    .int("transport")?
-                    .map(|v| byte("transport", v))
-                    .transpose()?
-                    .unwrap_or(d.transport),
-                multiplier: f
-                    .int("multiplier")?
-                    .map(|v| byte("multiplier", v))
-                    .transpose()?
-                    .unwrap_or(d.multiplier),
+                o_t_point: small("o_t")?.unwrap_or(d.o_t_point),
+                t_o_point: small("t_o")?.unwrap_or(d.t_o_point),
+                o_t_size: small("o_t_size")?.ok_or("`enip` needs `o_t_size`")?,
+                t_o_size: small("t_o_size")?.ok_or("`enip` needs `t_o_size`")?,
+                rpi_us: rpi.unwrap_or(d.rpi_us),
+                transport: byte("transport")?.unwrap_or(d.transport),
+                multiplier: byte("multiplier")?.unwrap_or(d.multiplier),
                 large: f.bool("large")?.unwrap_or(false),
+                run_idle: f.bool("run_idle")?.unwrap_or(d.run_idle),
             },
         ));
     }
@@ -543,7 +570,11 @@ fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
             time: parse_duration(&f.text("stop_io")?.unwrap_or_default())?,
         });
     }
-    Err("`enip` needs one of `raw`, `service`, `forward_open`, `stop_io`".into())
+    if m.contains_key("run") {
+        let f = Fields::new("enip", m, &["run"])?;
+        return Ok(EnipStep::Run(f.bool("run")?.unwrap_or(true)));
+    }
+    Err("`enip` needs one of `raw`, `mr`, `service`, `forward_open`, `stop_io`, `run`".into())
 }
 
 /// Converts one step; the error text is placed by the loader.
@@ -591,6 +622,11 @@ pub(super) fn case_head(
         section: doc.reference.section.clone(),
         page: doc.reference.page,
     };
+    // A NORD manual is cited by page as printed; a specification (the ODVA CIP volumes) by
+    // section and table.
+    if manual.page.is_none() && manual.doc.starts_with("BU ") {
+        return Err(format!("`ref` of a case from {} needs `page`", manual.doc));
+    }
     let products = doc
         .profiles
         .as_ref()

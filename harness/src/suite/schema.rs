@@ -45,7 +45,8 @@ pub(super) struct RefDoc {
     #[serde(default)]
     pub(super) edition: Option<String>,
     pub(super) section: String,
-    pub(super) page: u32,
+    #[serde(default)]
+    pub(super) page: Option<u32>,
 }
 
 /// `manual_says:` may be one erratum or a list.

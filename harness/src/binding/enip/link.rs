@@ -1,6 +1,7 @@
 //! How the scanner reaches an EtherNet/IP target: the embedded adapter over an in-memory link
 //! (same bytes, virtual clock) or a device on the network (TCP 44818, UDP 2222).
 
+use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::net::{SocketAddr, SocketAddrV4, TcpStream, UdpSocket};
 
@@ -16,8 +17,10 @@ use sim::enip::{Adapter, Framer};
 pub(crate) trait EnipLink {
     /// What is reached.
     fn describe(&self) -> String;
-    /// Sends one encapsulation message; returns the reply, or `None` if none came in time.
-    fn request(&mut self, msg: &[u8]) -> Result<Option<Vec<u8>>, String>;
+    /// Sends one encapsulation message on the TCP connection of `client` (1 = the scanner's
+    /// own; others are opened on first use); returns the reply, or `None` if none came in
+    /// time. A connection the target closed stays closed: every later request is an error.
+    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, String>;
     /// Sends one O→T datagram (if any), lets `rpi` pass, and returns the T→O datagrams that
     /// arrived meanwhile.
     fn io_cycle(&mut self, datagram: Option<&[u8]>, rpi: Duration) -> Result<Vec<Vec<u8>>, String>;
@@ -93,7 +96,8 @@ impl Recorder {
 pub(crate) struct Embedded {
     adapter: Adapter,
     clock: VirtualClock,
-    framer: Framer,
+    /// Per client, its framer; `None` once the adapter closed the connection.
+    clients: BTreeMap<u8, Option<Framer>>,
     recorder: Option<Recorder>,
 }
 
@@ -104,7 +108,7 @@ impl Embedded {
         Embedded {
             adapter,
             clock,
-            framer: Framer::new(),
+            clients: BTreeMap::new(),
             recorder,
         }
     }
@@ -127,20 +131,50 @@ impl EnipLink for Embedded {
         )
     }
 
-    fn request(&mut self, msg: &[u8]) -> Result<Option<Vec<u8>>, String> {
+    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, String> {
         let now = self.clock.now();
-        if let Some(r) = &self.recorder {
+        // Only the scanner's own connection is captured.
+        let recorder = self.recorder.as_ref().filter(|_| client == 1);
+        if let Some(r) = recorder {
             r.tcp(true, msg, now);
         }
+        let slot = self
+            .clients
+            .entry(client)
+            .or_insert_with(|| Some(Framer::new()));
+        let Some(framer) = slot else {
+            return Err("the target closed the TCP connection".into());
+        };
+        // The served adapter drops a client whose message exceeds the framer's limit.
+        let (messages, mut close) = match framer.push(msg) {
+            Ok(m) => (m, false),
+            Err(_) => (Vec::new(), true),
+        };
+        let id = u64::from(client);
+        let peer = SocketAddr::V4(SocketAddrV4::new(
+            *SCANNER_V4.ip(),
+            SCANNER_V4.port() + u16::from(client),
+        ));
         let mut reply = None;
-        for m in self.framer.push(msg).map_err(|e| e.to_string())? {
-            let r = self.adapter.handle_tcp(1, SCANNER, &m, now);
+        for m in messages {
+            let r = self.adapter.handle_tcp(id, peer, &m, now);
             if r.reply.is_some() {
                 reply = r.reply;
             }
+            if r.close {
+                close = true;
+                break;
+            }
         }
-        if let (Some(r), Some(b)) = (&self.recorder, &reply) {
+        if let (Some(r), Some(b)) = (recorder, &reply) {
             r.tcp(false, b, now);
+        }
+        if close {
+            *slot = None;
+            self.adapter.client_closed(id);
+            if reply.is_none() {
+                return Err("the target closed the TCP connection".into());
+            }
         }
         Ok(reply)
     }
@@ -177,42 +211,39 @@ impl EnipLink for Embedded {
 /// A target on the network.
 pub(crate) struct Network {
     target: SocketAddr,
-    tcp: TcpStream,
+    tcp: Stream,
+    /// Connections of other clients, opened on first use.
+    others: BTreeMap<u8, Stream>,
     udp: UdpSocket,
     timeout: Duration,
+}
+
+/// One TCP connection and the bytes received beyond the last reply.
+struct Stream {
+    tcp: Option<TcpStream>,
     buf: Vec<u8>,
 }
 
-impl Network {
-    /// Connects to `target` (TCP) and binds UDP 2222 on the local address used for it, where
-    /// the target sends T→O data.
-    pub(crate) fn connect(target: SocketAddr, timeout: Duration) -> Result<Network, String> {
+impl Stream {
+    fn connect(target: SocketAddr, timeout: Duration) -> Result<Stream, String> {
         let tcp = TcpStream::connect_timeout(&target, timeout)
             .map_err(|e| format!("cannot connect to {target}: {e}"))?;
         tcp.set_nodelay(true).map_err(|e| e.to_string())?;
-        let local = tcp.local_addr().map_err(|e| e.to_string())?;
-        let udp = UdpSocket::bind(SocketAddr::new(local.ip(), IO_PORT))
-            .map_err(|e| format!("cannot bind UDP {}:{IO_PORT} for T→O data: {e}", local.ip()))?;
-        Ok(Network {
-            target,
-            tcp,
-            udp,
-            timeout,
+        Ok(Stream {
+            tcp: Some(tcp),
             buf: Vec::new(),
         })
     }
-}
 
-impl EnipLink for Network {
-    fn describe(&self) -> String {
-        format!("EtherNet/IP target at {}", self.target)
-    }
-
-    fn request(&mut self, msg: &[u8]) -> Result<Option<Vec<u8>>, String> {
-        self.tcp
-            .write_all(msg)
+    /// Sends `msg`, waits up to `timeout` for one whole reply.
+    fn request(&mut self, msg: &[u8], timeout: Duration) -> Result<Option<Vec<u8>>, String> {
+        let tcp = self
+            .tcp
+            .as_mut()
+            .ok_or("the target closed the TCP connection")?;
+        tcp.write_all(msg)
             .map_err(|e| format!("TCP send failed: {e}"))?;
-        let deadline = Instant::now() + self.timeout;
+        let deadline = Instant::now() + timeout;
         let mut chunk = [0u8; 4096];
         loop {
             if let Some(n) = frame_len(&self.buf) {
@@ -224,15 +255,15 @@ impl EnipLink for Network {
             if left.is_zero() {
                 return Ok(None);
             }
-            self.tcp
-                .set_read_timeout(Some(left))
+            tcp.set_read_timeout(Some(left))
                 .map_err(|e| e.to_string())?;
-            match self.tcp.read(&mut chunk) {
+            match tcp.read(&mut chunk) {
                 Ok(0) => {
+                    self.tcp = None;
                     return Err(format!(
                         "the target closed the TCP connection ({} bytes of a reply pending)",
                         self.buf.len()
-                    ))
+                    ));
                 }
                 Ok(n) => self.buf.extend_from_slice(&chunk[..n]),
                 Err(e)
@@ -250,9 +281,54 @@ impl EnipLink for Network {
                     }
                     return Ok(None);
                 }
-                Err(e) => return Err(format!("TCP receive failed: {e}")),
+                Err(e) => {
+                    self.tcp = None;
+                    return Err(format!("TCP receive failed: {e}"));
+                }
             }
         }
+    }
+}
+
+impl Network {
+    /// Connects to `target` (TCP) and binds UDP 2222 on the local address used for it, where
+    /// the target sends T→O data.
+    pub(crate) fn connect(target: SocketAddr, timeout: Duration) -> Result<Network, String> {
+        let tcp = Stream::connect(target, timeout)?;
+        let local = tcp
+            .tcp
+            .as_ref()
+            .and_then(|t| t.local_addr().ok())
+            .ok_or("no local address for the TCP connection")?;
+        let udp = UdpSocket::bind(SocketAddr::new(local.ip(), IO_PORT))
+            .map_err(|e| format!("cannot bind UDP {}:{IO_PORT} for T→O data: {e}", local.ip()))?;
+        Ok(Network {
+            target,
+            tcp,
+            others: BTreeMap::new(),
+            udp,
+            timeout,
+        })
+    }
+}
+
+impl EnipLink for Network {
+    fn describe(&self) -> String {
+        format!("EtherNet/IP target at {}", self.target)
+    }
+
+    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, String> {
+        let stream = if client == 1 {
+            &mut self.tcp
+        } else {
+            match self.others.entry(client) {
+                std::collections::btree_map::Entry::Occupied(e) => e.into_mut(),
+                std::collections::btree_map::Entry::Vacant(e) => {
+                    e.insert(Stream::connect(self.target, self.timeout)?)
+                }
+            }
+        };
+        stream.request(msg, self.timeout)
     }
 
     fn io_cycle(&mut self, datagram: Option<&[u8]>, rpi: Duration) -> Result<Vec<Vec<u8>>, String> {

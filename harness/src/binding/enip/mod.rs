@@ -52,8 +52,11 @@ static SERIAL: std::sync::atomic::AtomicU16 = std::sync::atomic::AtomicU16::new(
 struct IoConn {
     o_t_id: u32,
     t_o_id: u32,
-    o_t: &'static Assembly,
-    t_o: &'static Assembly,
+    /// The assemblies behind the connection points, if the product has them.
+    o_t: Option<&'static Assembly>,
+    t_o: Option<&'static Assembly>,
+    /// O→T application data bytes (a connection may be shorter than its assembly).
+    o_t_len: usize,
     run_idle: bool,
     sequence: u32,
     count: u16,
@@ -64,10 +67,13 @@ pub(crate) struct Scanner {
     link: Box<dyn EnipLink>,
     product: Product,
     caps: Vec<Capability>,
-    session: Option<u32>,
+    /// Registered sessions by client (1 = the scanner's own connection).
+    sessions: std::collections::BTreeMap<u8, u32>,
     context: u64,
     serial: u16,
     io: Option<IoConn>,
+    /// Run (`true`) or idle in the run/idle header of O→T frames.
+    run: bool,
     process: [(u16, Vec<u16>); 9],
     exchanges: Vec<Exchange>,
 }
@@ -106,23 +112,39 @@ impl Scanner {
             link,
             product,
             caps,
-            session: None,
+            sessions: Default::default(),
             context: 0,
             serial: 0,
             io: None,
+            run: true,
             process: Default::default(),
             exchanges: Vec::new(),
         }
     }
 
-    /// One encapsulation message and its reply, recorded.
-    fn send(&mut self, msg: EncapRepr, what: String) -> Result<Option<EncapRepr>, StepError> {
+    /// One encapsulation message of `client` and its reply, recorded.
+    fn send(
+        &mut self,
+        client: u8,
+        msg: EncapRepr,
+        what: String,
+    ) -> Result<Option<EncapRepr>, StepError> {
         let bytes = msg.emit().map_err(|e| StepError::Suite(e.to_string()))?;
-        self.send_bytes(&bytes, what)
+        self.send_bytes(client, &bytes, what)
     }
 
-    fn send_bytes(&mut self, bytes: &[u8], what: String) -> Result<Option<EncapRepr>, StepError> {
-        let reply = self.link.request(bytes);
+    fn send_bytes(
+        &mut self,
+        client: u8,
+        bytes: &[u8],
+        what: String,
+    ) -> Result<Option<EncapRepr>, StepError> {
+        let reply = self.link.request(client, bytes);
+        let what = if client == 1 {
+            what
+        } else {
+            format!("[client {client}] {what}")
+        };
         let (received_hex, received, result) = match reply {
             Err(e) => (
                 String::new(),
@@ -155,9 +177,10 @@ impl Scanner {
         self.context.to_le_bytes()
     }
 
-    fn session(&mut self) -> Result<u32, StepError> {
-        if let Some(s) = self.session {
-            return Ok(s);
+    /// The session of `client`, registered on first use.
+    fn session(&mut self, client: u8) -> Result<u32, StepError> {
+        if let Some(s) = self.sessions.get(&client) {
+            return Ok(*s);
         }
         let msg = EncapRepr {
             command: Command::REGISTER_SESSION.0,
@@ -166,7 +189,7 @@ impl Scanner {
             ..EncapRepr::default()
         };
         let reply = self
-            .send(msg, "RegisterSession".into())?
+            .send(client, msg, "RegisterSession".into())?
             .ok_or_else(|| StepError::Link("no reply to RegisterSession".into()))?;
         if reply.status != 0 || reply.session == 0 {
             return Err(StepError::Protocol(format!(
@@ -174,17 +197,37 @@ impl Scanner {
                 EncapStatus(reply.status)
             )));
         }
-        self.session = Some(reply.session);
+        self.sessions.insert(client, reply.session);
         Ok(reply.session)
     }
 
-    /// An unconnected explicit request (SendRRData) and its message-router reply.
+    /// An unconnected explicit request (SendRRData) of the scanner and its message-router
+    /// reply.
     fn explicit(&mut self, req: &MrRequest) -> Result<MrResponse, StepError> {
-        let session = self.session()?;
+        let what = format!("{} {}", Service(req.service), req.path);
+        let resp = self.unconnected(1, req.emit(), what)?;
+        if resp.service != req.service {
+            return Err(StepError::Protocol(format!(
+                "reply to service {:02X}h answers service {:02X}h",
+                req.service, resp.service
+            )));
+        }
+        Ok(resp)
+    }
+
+    /// A message-router request as bytes, in a SendRRData of `client`'s session.
+    fn unconnected(
+        &mut self,
+        client: u8,
+        request: Vec<u8>,
+        what: String,
+    ) -> Result<MrResponse, StepError> {
+        let service = request.first().copied().unwrap_or(0);
+        let session = self.session(client)?;
         let data = SendData {
             interface: 0,
             timeout: 0,
-            cpf: Cpf::new(vec![Item::Null, Item::UnconnectedData(req.emit())]),
+            cpf: Cpf::new(vec![Item::Null, Item::UnconnectedData(request)]),
         }
         .emit()
         .map_err(|e| StepError::Suite(e.to_string()))?;
@@ -195,10 +238,9 @@ impl Scanner {
             data,
             ..EncapRepr::default()
         };
-        let what = format!("{} {}", Service(req.service), req.path);
         let reply = self
-            .send(msg, what)?
-            .ok_or_else(|| StepError::Link(format!("no reply to {}", Service(req.service))))?;
+            .send(client, msg, what)?
+            .ok_or_else(|| StepError::Link(format!("no reply to {}", Service(service))))?;
         if reply.status != 0 {
             return Err(StepError::Protocol(format!(
                 "SendRRData answered with encapsulation status {}",
@@ -212,15 +254,8 @@ impl Scanner {
                 "SendRRData reply without unconnected data item".into(),
             ));
         };
-        let resp = MrResponse::parse(payload)
-            .map_err(|e| StepError::Protocol(format!("message-router reply: {e}")))?;
-        if resp.service != req.service {
-            return Err(StepError::Protocol(format!(
-                "reply to service {:02X}h answers service {:02X}h",
-                req.service, resp.service
-            )));
-        }
-        Ok(resp)
+        MrResponse::parse(payload)
+            .map_err(|e| StepError::Protocol(format!("message-router reply: {e}")))
     }
 
     /// Class, instance and attribute of a parameter, and its catalogue entry.
@@ -322,26 +357,17 @@ impl Scanner {
             t_o_point: inp.instance,
             o_t_size: 2 + if run_idle { 4 } else { 0 } + out.len,
             t_o_size: 2 + inp.len,
+            run_idle,
             ..ForwardOpenSpec::default()
         };
-        let (resp, reply) = self.forward_open(&spec)?;
-        let reply = reply.ok_or_else(|| {
-            StepError::Protocol(format!(
+        match self.forward_open(&spec)? {
+            (_, Some(_)) => Ok(()),
+            (resp, None) => Err(StepError::Protocol(format!(
                 "Forward_Open refused: {} extended {:04X?}",
                 GeneralStatus(resp.general),
                 resp.extended
-            ))
-        })?;
-        self.io = Some(IoConn {
-            o_t_id: reply.o_t_id,
-            t_o_id: reply.t_o_id,
-            o_t: out,
-            t_o: inp,
-            run_idle,
-            sequence: 0,
-            count: 0,
-        });
-        Ok(())
+            ))),
+        }
     }
 
     fn forward_open(
@@ -393,6 +419,20 @@ impl Scanner {
         }
         let reply = ForwardOpenReply::parse(&resp.data)
             .map_err(|e| StepError::Protocol(format!("Forward_Open reply: {e}")))?;
+        if s.o_t_point != eip::LISTEN_ONLY_POINT {
+            // An owner connection: the following process-data steps run over it.
+            let header = 2 + if s.run_idle { 4 } else { 0 };
+            self.io = Some(IoConn {
+                o_t_id: reply.o_t_id,
+                t_o_id: reply.t_o_id,
+                o_t: eip::assembly(self.product, s.o_t_point),
+                t_o: eip::assembly(self.product, s.t_o_point),
+                o_t_len: usize::from(s.o_t_size.saturating_sub(header)),
+                run_idle: s.run_idle,
+                sequence: 0,
+                count: 0,
+            });
+        }
         Ok((resp, Some(reply)))
     }
 
@@ -404,20 +444,22 @@ impl Scanner {
         let Some(io) = self.io.as_mut() else {
             return Err(StepError::Suite("no I/O connection".into()));
         };
-        let mut data = vec![0u8; usize::from(io.o_t.len)];
-        for n in 1..=io.o_t.inverters {
-            let Ok(fi) = Inverter::new(i64::from(n)) else {
+        let mut data = vec![0u8; io.o_t_len];
+        let asm = io.o_t;
+        for fi in (1..=asm.map_or(0, |a| a.inverters)).filter_map(|n| Inverter::new(n.into()).ok())
+        {
+            let Some(off) = asm.and_then(|a| a.offset(fi)) else {
                 continue;
             };
-            let Some(off) = io.o_t.offset(fi) else {
-                continue;
-            };
-            let (control, setpoints) = &self.process[usize::from(n)];
+            let (control, setpoints) = &self.process[usize::from(fi.get())];
             let mut words = vec![*control];
             words.extend(setpoints.iter().copied());
             words.resize(WORDS_PER_INVERTER, 0);
+            // A truncated connection carries the words that fit (BU 2100 §6.2.1).
             for (k, w) in words.iter().enumerate() {
-                data[off + 2 * k..off + 2 * k + 2].copy_from_slice(&w.to_le_bytes());
+                if let Some(d) = data.get_mut(off + 2 * k..off + 2 * k + 2) {
+                    d.copy_from_slice(&w.to_le_bytes());
+                }
             }
         }
         io.sequence = io.sequence.wrapping_add(1);
@@ -426,7 +468,7 @@ impl Scanner {
             connection: io.o_t_id,
             sequence: io.sequence,
             count: io.count,
-            run_idle: io.run_idle.then_some(1),
+            run_idle: io.run_idle.then_some(u32::from(self.run)),
             data,
         };
         let bytes = frame.emit().map_err(|e| StepError::Suite(e.to_string()))?;
@@ -467,10 +509,9 @@ impl Scanner {
             .io
             .as_ref()
             .ok_or_else(|| StepError::Suite("no I/O connection".into()))?;
-        let off = io.t_o.offset(inverter).ok_or_else(|| {
+        let off = io.t_o.and_then(|a| a.offset(inverter)).ok_or_else(|| {
             StepError::Suite(format!(
-                "{inverter} is not in input assembly {}",
-                io.t_o.instance
+                "{inverter} is not in the input assembly of the connection"
             ))
         })?;
         let words: Vec<u16> = data
@@ -492,31 +533,50 @@ impl Scanner {
     /// A raw or structured EtherNet/IP step of the protocol suites.
     fn enip_step(&mut self, step: &EnipStep) -> Result<Value, StepError> {
         match step {
-            EnipStep::Raw { bytes, session } => {
+            EnipStep::Raw {
+                bytes,
+                session,
+                client,
+            } => {
                 let mut b = bytes.clone();
                 if *session && b.len() >= 8 {
-                    let s = self.session()?;
+                    let s = self.session(*client)?;
                     b[4..8].copy_from_slice(&s.to_le_bytes());
                 }
-                let reply = self.send_bytes(&b, format!("raw {} bytes", b.len()));
+                let reply = self.send_bytes(*client, &b, format!("raw {} bytes", b.len()));
                 Ok(match reply {
-                    Ok(None) => json!({ "reply": false }),
+                    Ok(None) => json!({ "reply": false, "closed": false }),
                     Ok(Some(r)) => reply_fields(&r),
                     Err(StepError::Link(e)) => json!({ "reply": false, "closed": true, "link": e }),
+                    Err(StepError::Protocol(e)) => json!({ "reply": true, "malformed": e }),
                     Err(e) => return Err(e),
                 })
+            }
+            EnipStep::Mr { bytes, client } => {
+                let what = format!("message-router request {}", hex(bytes));
+                let resp = self.unconnected(*client, bytes.clone(), what)?;
+                Ok(mr_fields(&resp))
             }
             EnipStep::Request {
                 service,
                 path,
                 data,
+                client,
             } => {
-                let resp = self.explicit(&MrRequest {
+                let path =
+                    EPath::parse(path).map_err(|e| StepError::Suite(format!("path: {e}")))?;
+                let what = format!("{} {path}", Service(*service));
+                let req = MrRequest {
                     service: *service,
-                    path: EPath::parse(path).map_err(|e| StepError::Suite(format!("path: {e}")))?,
+                    path,
                     data: data.clone(),
-                })?;
+                };
+                let resp = self.unconnected(*client, req.emit(), what)?;
                 Ok(mr_fields(&resp))
+            }
+            EnipStep::Run(run) => {
+                self.run = *run;
+                Ok(json!({ "run": run }))
             }
             EnipStep::ForwardOpen(spec) => {
                 let (resp, reply) = self.forward_open(spec)?;
@@ -590,6 +650,8 @@ pub(crate) struct ForwardOpenSpec {
     pub(crate) multiplier: u8,
     /// Large_Forward_Open.
     pub(crate) large: bool,
+    /// O→T frames carry the 32-bit run/idle header (CIP's default for class-1 O→T).
+    pub(crate) run_idle: bool,
 }
 
 impl Default for ForwardOpenSpec {
@@ -603,6 +665,7 @@ impl Default for ForwardOpenSpec {
             transport: Transport::CLASS1_CYCLIC.0,
             multiplier: 2,
             large: false,
+            run_idle: true,
         }
     }
 }
@@ -618,6 +681,7 @@ fn refused(resp: &MrResponse) -> Value {
 
 fn mr_fields(resp: &MrResponse) -> Value {
     json!({
+        "service": resp.service,
         "cip_status": resp.general,
         "extended": resp.extended,
         "status_name": GeneralStatus(resp.general).name(),
@@ -632,7 +696,9 @@ fn reply_fields(r: &EncapRepr) -> Value {
         "command": r.command,
         "encap_status": r.status,
         "session": r.session,
+        "context": hex(&r.context),
         "length": r.data.len(),
+        "data": hex(&r.data),
     });
     if let Ok(sd) = SendData::parse(&r.data) {
         if let Some(Item::UnconnectedData(p)) = sd.cpf.items.get(1) {
@@ -669,8 +735,7 @@ fn describe_reply(r: &EncapRepr) -> String {
 impl Drop for Scanner {
     /// Leaves the target as found: the I/O connection closed, the session unregistered.
     fn drop(&mut self) {
-        let Some(session) = self.session else { return };
-        if self.io.take().is_some() {
+        if self.io.take().is_some() && self.sessions.contains_key(&1) {
             let fc = ForwardClose {
                 priority_tick: 0x0A,
                 timeout_ticks: 0x0E,
@@ -685,13 +750,15 @@ impl Drop for Scanner {
                 data: fc.emit(),
             });
         }
-        let bye = EncapRepr {
-            command: Command::UNREGISTER_SESSION.0,
-            session,
-            ..EncapRepr::default()
-        };
-        if let Ok(b) = bye.emit() {
-            let _ = self.link.request(&b);
+        for (client, session) in std::mem::take(&mut self.sessions) {
+            let bye = EncapRepr {
+                command: Command::UNREGISTER_SESSION.0,
+                session,
+                ..EncapRepr::default()
+            };
+            if let Ok(b) = bye.emit() {
+                let _ = self.link.request(client, &b);
+            }
         }
     }
 }
