@@ -28,6 +28,10 @@ const P513: ParamNumber = match ParamNumber::new(513) {
     Ok(p) => p,
     Err(_) => panic!("in range"),
 };
+const P151: ParamNumber = match ParamNumber::new(151) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
 const P899: ParamNumber = match ParamNumber::new(899) {
     Ok(p) => p,
     Err(_) => panic!("in range"),
@@ -158,14 +162,19 @@ impl InverterUnit {
         for (i, w) in out.actuals.iter().enumerate() {
             store.set_info(741, i as u8 + 2, i32::from(*w));
         }
-        store.set_info(
-            700,
-            1,
-            self.drive.fault().map_or(0, |f| i32::from(f.p700())),
-        );
+        self.show_fault();
         let mut pzd = vec![out.status];
         pzd.extend(out.actuals);
         pzd
+    }
+
+    /// P700 [-01] shows the present error as soon as it is raised, not only with the next
+    /// process data.
+    fn show_fault(&mut self) {
+        let code = self.drive.fault().or(self.drive.pending_fault());
+        self.params
+            .store
+            .set_info(700, 1, code.map_or(0, |f| i32::from(f.p700())));
     }
 }
 
@@ -240,10 +249,19 @@ impl Device {
     ///
     /// - P513 [-04] "Telegram timeout time" (Ethernet, 0.1 s; 0 = off): an inverter that had
     ///   valid process data and gets none for longer raises E10.3 (BU 0620 §5.1, §5.3: 7592h).
+    /// - P151 "Timeout for external bus" of a module (ms; 0 = control-word monitoring off, -1 =
+    ///   all monitoring off): the same for the module's telegrams, E10.3 "Timeout by P151/P513"
+    ///   (BU 2100 §7.1.1: "Invalid control word set (e.g. PLC to Stop)", 1 s → E10.3).
     /// - P872 "Bus status" (§4.3): bit 0 module ready, bit 1 cyclic PZD communication, bit 3
     ///   timeout P513 (while an inverter shows E10.3), bits 8–15 FI 1..8 online.
     fn monitor(&mut self, now: Duration) {
         let mut status: i32 = 1 | if self.fieldbus_timeout { 1 << 2 } else { 0 };
+        let p151 = match self.config.product.family() {
+            proto::nord::Family::Module => self.interface.store.read(P151, None, None).ok(),
+            proto::nord::Family::Integrated => None,
+        }
+        .filter(|ms| *ms > 0)
+        .map(|ms| Duration::from_millis(ms as u64));
         for (n, unit) in self.inverters.iter_mut().enumerate() {
             status |= 1 << (8 + n);
             if unit.drive.fault() == Some(E10_3) {
@@ -256,14 +274,17 @@ impl Device {
             if silent <= PROCESS_DATA_WINDOW {
                 status |= 1 << 1;
             }
-            let limit = unit
+            let p513 = unit
                 .params
                 .store
                 .read(P513, None, ELEMENT_ETHERNET)
-                .unwrap_or(0);
-            if limit > 0 && silent > Duration::from_millis(100 * limit as u64) {
+                .ok()
+                .filter(|t| *t > 0)
+                .map(|t| Duration::from_millis(100 * t as u64));
+            if p513.into_iter().chain(p151).any(|limit| silent > limit) {
                 if unit.drive.fault().is_none() {
                     unit.drive.inject_fault(E10_3);
+                    unit.show_fault();
                 }
                 status |= 1 << 3;
             }
@@ -367,9 +388,10 @@ impl Device {
 
     /// Raises an inverter error unless one is present (a bus watchdog, E10.x).
     pub fn raise(&mut self, inverter: Inverter, code: FaultCode) -> Result<(), DeviceError> {
-        let drive = &mut self.inverter_mut(inverter)?.drive;
-        if drive.fault().is_none() {
-            drive.inject_fault(code);
+        let unit = self.inverter_mut(inverter)?;
+        if unit.drive.fault().is_none() {
+            unit.drive.inject_fault(code);
+            unit.show_fault();
         }
         Ok(())
     }
@@ -382,10 +404,9 @@ impl Device {
     /// Raises an inverter error, as P700 shows it (`"10.0"`).
     pub fn inject_fault(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
         let code: FaultCode = error.parse()?;
-        self.inverter_mut(inverter)
-            .map_err(|e| e.to_string())?
-            .drive
-            .inject_fault(code);
+        let unit = self.inverter_mut(inverter).map_err(|e| e.to_string())?;
+        unit.drive.inject_fault(code);
+        unit.show_fault();
         Ok(())
     }
 

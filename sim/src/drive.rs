@@ -178,6 +178,11 @@ impl Drive {
         self.fault
     }
 
+    /// An error raised but not yet taken into the status machine (it is, with the next cycle).
+    pub fn pending_fault(&self) -> Option<FaultCode> {
+        self.pending_fault
+    }
+
     /// Number of the last transition taken (0 = emergency stop complete), if any.
     pub fn last_transition(&self) -> Option<u8> {
         self.last_transition
