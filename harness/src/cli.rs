@@ -115,7 +115,9 @@ struct RunArgs {
     /// Seconds a network DUT may take to answer one request.
     #[arg(long, default_value_t = 2.0)]
     timeout: f64,
-    /// Write the run's EtherNet/IP traffic to this pcap file (embedded runs).
+    /// Write the run's EtherNet/IP traffic to this pcap file: the embedded simulator's on its
+    /// virtual clock, or what was sent to and received from a `--dut enip://` target, with the
+    /// real addresses and times (IPv4 only).
     #[arg(long)]
     pcap: Option<PathBuf>,
 }
@@ -182,7 +184,7 @@ fn describe(a: DescribeArgs) -> Result<i32, String> {
     if a.what != "eds" {
         return Err(format!("cannot describe `{}` (known: eds)", a.what));
     }
-    let product = Profile::by_name(&a.profile)?.product;
+    let product = Profile::by_name(&a.profile)?.nord()?;
     let text = crate::eds::eds(product, a.inverters.unwrap_or(product.max_inverters()))?;
     // A closed pipe (`| head`) ends the output, not the program with a panic.
     let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes());
@@ -193,7 +195,7 @@ fn serve(a: ServeArgs) -> Result<i32, String> {
     if a.protocol != "enip" {
         return Err(format!("cannot serve `{}` (protocols: enip)", a.protocol));
     }
-    let product = Profile::by_name(&a.profile)?.product;
+    let product = Profile::by_name(&a.profile)?.nord()?;
     if proto::nord::eip::identity(product).is_none() {
         return Err(format!("{} has no EtherNet/IP interface", product.name()));
     }
@@ -236,25 +238,22 @@ fn run(a: RunArgs) -> Result<i32, String> {
         filter: a.filter,
         retries: a.retries,
     };
+    let tap = a.pcap.as_ref().map(|_| crate::pcap::SharedTap::default());
     let mut run = match &a.dut {
         None => {
-            let tap = a.pcap.as_ref().map(|_| crate::pcap::SharedTap::default());
             let mut factory = EmbeddedFactory { tap: tap.clone() };
-            let run = runner::run(&loaded, &opts, &mut factory);
-            if let (Some(path), Some(tap)) = (&a.pcap, tap) {
-                let tap = tap.borrow();
-                tap.capture
-                    .write(path)
-                    .map_err(|e| format!("{}: cannot write pcap: {e}", path.display()))?;
-                println!("pcap: {} packets in {}", tap.capture.len(), path.display());
-            }
-            run
+            runner::run(&loaded, &opts, &mut factory)
         }
         Some(url) => {
             let target = url
                 .strip_prefix("enip://")
                 .ok_or_else(|| format!("`--dut {url}`: only enip://HOST[:PORT] is supported"))
                 .and_then(crate::serve::parse_addr)?;
+            if tap.is_some() && !target.is_ipv4() {
+                return Err(format!(
+                    "`--pcap` with `--dut {url}`: a pcap records IPv4 only"
+                ));
+            }
             if !(0.01..=60.0).contains(&a.timeout) {
                 return Err(format!(
                     "`--timeout {}`: give 0.01 to 60 seconds",
@@ -265,7 +264,10 @@ fn run(a: RunArgs) -> Result<i32, String> {
                 profiles: opts
                     .profiles
                     .iter()
-                    .filter_map(|p| Profile::enip(p.product))
+                    .filter_map(|p| match p.product {
+                        Some(product) => Profile::enip(product),
+                        None => Some(p.clone()),
+                    })
                     .collect(),
                 ..opts
             };
@@ -275,10 +277,20 @@ fn run(a: RunArgs) -> Result<i32, String> {
             let mut factory = crate::binding::enip::NetworkFactory {
                 target,
                 timeout: std::time::Duration::from_secs_f64(a.timeout),
+                tap: tap.clone(),
+                clock: std::rc::Rc::new(sim::clock::RealClock::new()),
             };
             runner::run(&loaded, &opts, &mut factory)
         }
     };
+    // Every link is closed by now, its FIN exchange recorded.
+    if let (Some(path), Some(tap)) = (&a.pcap, &tap) {
+        let tap = tap.borrow();
+        tap.capture
+            .write(path)
+            .map_err(|e| format!("{}: cannot write pcap: {e}", path.display()))?;
+        println!("pcap: {} packets in {}", tap.capture.len(), path.display());
+    }
     let mode = if a.accept {
         SnapshotMode::Accept(a.snapshot_dir)
     } else if a.snapshots {

@@ -1,5 +1,7 @@
 //! The tester side: suites, bindings, runner, reports and the `harness` CLI.
 
+/// EtherNet/IP speed figures over loopback (`cargo bench -p harness --bench enip`).
+pub mod bench;
 mod binding;
 pub mod cli;
 mod cli_tools;

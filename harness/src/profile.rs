@@ -70,8 +70,9 @@ pub(crate) enum BindingKind {
 /// A device profile: the product, how many inverters sit behind it, and the binding.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Profile {
-    /// The product.
-    pub(crate) product: Product,
+    /// The NORD product; `None` for the generic `cip` profile, any maker's EtherNet/IP
+    /// adapter, against which only the protocol's own cases run.
+    pub(crate) product: Option<Product>,
     /// Inverters behind the interface (FI 1..=n).
     pub(crate) inverters: u8,
     /// The binding the cases run over.
@@ -82,7 +83,7 @@ impl Profile {
     /// The built-in PPO profile of a product, with the product's maximum inverter count.
     pub(crate) fn builtin(product: Product) -> Profile {
         Profile {
-            product,
+            product: Some(product),
             inverters: product.max_inverters(),
             binding: BindingKind::Ppo,
         }
@@ -96,37 +97,52 @@ impl Profile {
         })
     }
 
-    /// Every built-in profile: each product over PPO, and each EtherNet/IP product over
-    /// EtherNet/IP (`<product>@enip`), so every case runs over every binding it can.
+    /// The generic profile `cip`: an EtherNet/IP adapter of any maker (`run --dut` only).
+    pub(crate) fn cip() -> Profile {
+        Profile {
+            product: None,
+            inverters: 0,
+            binding: BindingKind::Enip,
+        }
+    }
+
+    /// Every built-in product profile: each product over PPO, and each EtherNet/IP product
+    /// over EtherNet/IP (`<product>@enip`), so every case runs over every binding it can.
     pub(crate) fn all() -> Vec<Profile> {
         let ppo = Product::ALL.into_iter().map(Profile::builtin);
         let enip = Product::ALL.into_iter().filter_map(Profile::enip);
         ppo.chain(enip).collect()
     }
 
-    /// Profile name (`sk550p`, `tu3-eip`, …, `tu3-eip@enip`).
+    /// The NORD product, or why the generic profile has none.
+    pub(crate) fn nord(&self) -> Result<Product, String> {
+        self.product.ok_or_else(|| {
+            "profile `cip` stands for any maker's EtherNet/IP adapter, not a NORD product".into()
+        })
+    }
+
+    /// Profile name (`sk550p`, `tu3-eip`, …, `tu3-eip@enip`, `cip`).
     pub(crate) fn name(&self) -> &'static str {
         match (self.binding, self.product) {
-            (BindingKind::Ppo, p) => p.name(),
-            (BindingKind::Enip, Product::Sk550p) => "sk550p@enip",
-            (BindingKind::Enip, Product::Tu3Eip) => "tu3-eip@enip",
-            (BindingKind::Enip, Product::Tu4Eip) => "tu4-eip@enip",
-            (BindingKind::Enip, Product::Cu4Eip) => "cu4-eip@enip",
-            (BindingKind::Enip, p) => p.name(),
+            (_, None) => "cip",
+            (BindingKind::Ppo, Some(p)) => p.name(),
+            (BindingKind::Enip, Some(Product::Sk550p)) => "sk550p@enip",
+            (BindingKind::Enip, Some(Product::Tu3Eip)) => "tu3-eip@enip",
+            (BindingKind::Enip, Some(Product::Tu4Eip)) => "tu4-eip@enip",
+            (BindingKind::Enip, Some(Product::Cu4Eip)) => "cu4-eip@enip",
+            (BindingKind::Enip, Some(p)) => p.name(),
         }
     }
 
     /// Looks a built-in profile up by name; the error lists the valid names.
     pub(crate) fn by_name(name: &str) -> Result<Profile, String> {
-        Profile::all()
-            .into_iter()
-            .find(|p| p.name() == name)
-            .ok_or_else(|| {
-                let names: Vec<&str> = Profile::all().iter().map(Profile::name).collect();
-                format!(
-                    "unknown profile `{name}` (built-in profiles: {})",
-                    names.join(", ")
-                )
-            })
+        let known = || Profile::all().into_iter().chain([Profile::cip()]);
+        known().find(|p| p.name() == name).ok_or_else(|| {
+            let names: Vec<&str> = known().map(|p| p.name()).collect();
+            format!(
+                "unknown profile `{name}` (built-in profiles: {})",
+                names.join(", ")
+            )
+        })
     }
 }

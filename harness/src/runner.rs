@@ -12,7 +12,7 @@ use crate::binding::{Binding, StepError};
 use crate::model::{Args, ComputeError, Ctx};
 use crate::outcome::{CaseResult, RunResult, StepResult, Verdict};
 use crate::profile::Profile;
-use crate::suite::{Action, Case, Loaded, Step};
+use crate::suite::{Action, Case, EnipStep, Loaded, Step};
 
 /// How to run.
 pub(crate) struct RunOptions {
@@ -76,8 +76,20 @@ fn result(
 
 /// Why a case does not apply to a profile, if it does not.
 fn not_applicable(case: &Case, profile: &Profile, dut: Option<&dyn Binding>) -> Option<String> {
+    if profile.product.is_none() {
+        if let Some(s) = case
+            .steps
+            .iter()
+            .find(|s| !matches!(s.action, Action::Enip(_)))
+        {
+            return Some(format!(
+                "profile `cip` (any maker's adapter) runs EtherNet/IP steps only; this case has `{}`",
+                describe(&s.action)
+            ));
+        }
+    }
     if let Some(products) = &case.products {
-        if !products.contains(&profile.product) {
+        if !profile.product.is_some_and(|p| products.contains(&p)) {
             let names: Vec<&str> = products.iter().map(|p| p.name()).collect();
             return Some(format!(
                 "the statement is about {}, this run is {}",
@@ -197,17 +209,79 @@ fn describe(action: &Action) -> String {
         Action::Wait(d) => format!("wait {d:?}"),
         Action::Inject { inverter, error } => format!("inject {inverter}: error {error}"),
         Action::Observe { what, inverter } => format!("observe {inverter}: {what}"),
-        Action::Enip(e) => format!("enip {e:?}"),
+        Action::Enip(e) => format!("enip {}", describe_enip(e)),
     }
 }
 
-/// Bytes as `"70 66 02 00"`.
+fn describe_enip(e: &EnipStep) -> String {
+    let on = |client: u8| {
+        if client == 1 {
+            String::new()
+        } else {
+            format!(" (client {client})")
+        }
+    };
+    match e {
+        EnipStep::Raw {
+            bytes,
+            session,
+            client,
+        } => {
+            let s = if *session { ", session filled in" } else { "" };
+            format!("raw {}{s}{}", hex(bytes), on(*client))
+        }
+        EnipStep::Mr { bytes, client } => {
+            format!("message-router request {}{}", hex(bytes), on(*client))
+        }
+        EnipStep::Request {
+            service,
+            path,
+            data,
+            client,
+        } => format!(
+            "service {service:02X}h path {} data [{}]{}",
+            hex(path),
+            hex(data),
+            on(*client)
+        ),
+        EnipStep::ForwardOpen(f) => format!(
+            "{} {} -> {}, sizes {}/{}, RPI {} µs, transport {:02X}h, multiplier {}{}",
+            if f.large {
+                "Large_Forward_Open"
+            } else {
+                "Forward_Open"
+            },
+            f.o_t_point,
+            f.t_o_point,
+            f.o_t_size,
+            f.t_o_size,
+            f.rpi_us,
+            f.transport,
+            f.multiplier,
+            if f.run_idle {
+                ""
+            } else {
+                ", no run/idle header"
+            }
+        ),
+        EnipStep::StopIo { time } => format!("stop O→T data for {time:?}"),
+        EnipStep::Run(true) => "run/idle header: run".into(),
+        EnipStep::Run(false) => "run/idle header: idle".into(),
+    }
+}
+
+/// Bytes as `"70 66 02 00"` (one allocation: it runs for every exchange of a run).
 pub(crate) fn hex(bytes: &[u8]) -> String {
-    bytes
-        .iter()
-        .map(|b| format!("{b:02X}"))
-        .collect::<Vec<_>>()
-        .join(" ")
+    const DIGITS: &[u8; 16] = b"0123456789ABCDEF";
+    let mut s = String::with_capacity(bytes.len() * 3);
+    for (i, b) in bytes.iter().enumerate() {
+        if i > 0 {
+            s.push(' ');
+        }
+        s.push(char::from(DIGITS[usize::from(b >> 4)]));
+        s.push(char::from(DIGITS[usize::from(b & 0x0F)]));
+    }
+    s
 }
 
 fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding>>) -> StepResult {
@@ -221,9 +295,16 @@ fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding
             },
             _,
         ) => {
-            let ctx = Ctx {
-                product: product.unwrap_or(profile.product),
+            let Some(product) = product.or(profile.product) else {
+                return StepResult {
+                    step: line,
+                    verdict: crate::outcome::Verdict::Error,
+                    observed: Value::Null,
+                    message: "a reference-model step needs a NORD product".into(),
+                    exchanges: Vec::new(),
+                };
             };
+            let ctx = Ctx { product };
             let out = match (func.run)(&ctx, &Args(args.clone())) {
                 Ok(v) => Ok(v),
                 Err(ComputeError::Refused(m)) => Ok(json!({ "error": m })),
@@ -368,10 +449,10 @@ mod tests {
         }
         fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, String> {
             let dut = Box::new(Faulty {
-                inner: ppo_dut(profile),
+                inner: ppo_dut(profile)?,
                 fault: self.0,
             });
-            Ok(Box::new(Channel::new(dut, profile.product, retries)))
+            Ok(Box::new(Channel::new(dut, profile.nord()?, retries)))
         }
     }
 

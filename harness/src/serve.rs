@@ -1,15 +1,16 @@
 //! `harness serve enip`: the simulator as a real EtherNet/IP adapter on the network.
 //!
 //! TCP and UDP on the listen address (44818 by default) carry encapsulation messages, UDP 2222
-//! on the same IP carries class-1 I/O. One thread per TCP client and one per UDP socket share
-//! the sans-IO [`Adapter`] behind a mutex; time is the real clock since start. A client whose
+//! on the same IP carries class-1 I/O. One thread per TCP client, one for UDP 44818 and two for
+//! class-1 I/O (receiving O→T, producing T→O on the adapter's schedule) share the sans-IO
+//! [`Adapter`] behind a mutex; time is the real clock since start. A client whose
 //! message stays incomplete for [`STALL`] is disconnected, so a hung peer holds nothing.
 
 use std::io::{Read, Write};
 use std::net::{IpAddr, SocketAddr, TcpListener, TcpStream, UdpSocket};
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
-use std::thread;
+use std::sync::{Arc, Mutex, OnceLock};
+use std::thread::{self, Thread};
 use std::time::{Duration, Instant};
 
 use proto::enip::io::IO_PORT;
@@ -19,10 +20,15 @@ use sim::enip::{Adapter, Framer};
 /// How long a partial message may wait for its rest.
 pub(crate) const STALL: Duration = Duration::from_secs(10);
 
+/// The longest the I/O producer sleeps when nothing is due.
+const IO_IDLE: Duration = Duration::from_millis(50);
+
 /// A running adapter.
 struct Shared {
     adapter: Mutex<Adapter>,
     start: Instant,
+    /// The I/O producer thread, to wake when something becomes due earlier.
+    producer: OnceLock<Thread>,
 }
 
 impl Shared {
@@ -35,12 +41,18 @@ impl Shared {
     }
 }
 
-/// Serves until `duration` has passed (forever when `None`).
-pub(crate) fn serve_enip(
-    listen: SocketAddr,
-    config: DeviceConfig,
-    duration: Option<Duration>,
-) -> Result<(), String> {
+/// The addresses of an adapter that [`start_enip`] put on the network.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Served {
+    /// Encapsulation messages, TCP and UDP.
+    pub(crate) listen: SocketAddr,
+    /// Class-1 I/O (UDP 2222 on the same IP).
+    pub(crate) io: SocketAddr,
+}
+
+/// Binds the sockets and starts the adapter's threads, then returns; they serve until the
+/// process ends.
+pub(crate) fn start_enip(listen: SocketAddr, config: DeviceConfig) -> Result<Served, String> {
     let SocketAddr::V4(v4) = listen else {
         return Err("EtherNet/IP needs an IPv4 listen address".into());
     };
@@ -49,16 +61,21 @@ pub(crate) fn serve_enip(
     let udp = UdpSocket::bind(listen).map_err(|e| format!("cannot bind UDP {listen}: {e}"))?;
     let io_addr = SocketAddr::new(listen.ip(), IO_PORT);
     let io = UdpSocket::bind(io_addr).map_err(|e| format!("cannot bind UDP {io_addr}: {e}"))?;
-    let product = config.product;
-    let inverters = config.inverters;
     let shared = Arc::new(Shared {
         adapter: Mutex::new(Adapter::new(Device::new(config), v4)),
         start: Instant::now(),
+        producer: OnceLock::new(),
     });
-    println!(
-        "serving EtherNet/IP adapter ({}, {inverters} inverters) on {listen} (TCP, UDP) and {io_addr} (class-1 I/O)",
-        product.name()
-    );
+    let io_tx = io.try_clone().map_err(|e| format!("UDP {io_addr}: {e}"))?;
+    {
+        let s = shared.clone();
+        let producer = thread::spawn(move || io_produce(io_tx, s));
+        let _ = shared.producer.set(producer.thread().clone());
+    }
+    {
+        let s = shared.clone();
+        thread::spawn(move || io_receive(io, s));
+    }
     {
         let s = shared.clone();
         thread::spawn(move || accept(tcp, s));
@@ -67,10 +84,27 @@ pub(crate) fn serve_enip(
         let s = shared.clone();
         thread::spawn(move || discovery(udp, s));
     }
-    {
-        let s = shared.clone();
-        thread::spawn(move || io_loop(io, s));
-    }
+    Ok(Served {
+        listen,
+        io: io_addr,
+    })
+}
+
+/// Serves until `duration` has passed (forever when `None`).
+pub(crate) fn serve_enip(
+    listen: SocketAddr,
+    config: DeviceConfig,
+    duration: Option<Duration>,
+) -> Result<(), String> {
+    let product = config.product;
+    let inverters = config.inverters;
+    let served = start_enip(listen, config)?;
+    println!(
+        "serving EtherNet/IP adapter ({}, {inverters} inverters) on {} (TCP, UDP) and {} (class-1 I/O)",
+        product.name(),
+        served.listen,
+        served.io
+    );
     match duration {
         Some(d) => thread::sleep(d),
         None => loop {
@@ -124,7 +158,18 @@ fn client(mut stream: TcpStream, id: u64, shared: Arc<Shared>) {
         };
         let mut close = false;
         for m in messages {
-            let r = shared.lock().handle_tcp(id, peer, &m, shared.now());
+            let (r, sooner) = {
+                let mut a = shared.lock();
+                let before = a.next_due();
+                let r = a.handle_tcp(id, peer, &m, shared.now());
+                let after = a.next_due();
+                (r, after.is_some_and(|t| before.is_none_or(|b| t < b)))
+            };
+            if sooner {
+                if let Some(p) = shared.producer.get() {
+                    p.unpark();
+                }
+            }
             if let Some(reply) = r.reply {
                 if stream.write_all(&reply).is_err() {
                     close = true;
@@ -160,22 +205,33 @@ fn discovery(udp: UdpSocket, shared: Arc<Shared>) {
     }
 }
 
-fn io_loop(io: UdpSocket, shared: Arc<Shared>) {
+/// Receives O→T datagrams. Production runs apart, so it keeps its own schedule.
+fn io_receive(io: UdpSocket, shared: Arc<Shared>) {
     let mut buf = [0u8; 2048];
     loop {
-        let now = shared.now();
-        let due = shared.lock().next_due();
-        let wait = due
-            .map(|d| d.saturating_sub(now))
-            .unwrap_or(Duration::from_millis(50))
-            .clamp(Duration::from_micros(100), Duration::from_millis(50));
-        let _ = io.set_read_timeout(Some(wait));
         if let Ok((n, from)) = io.recv_from(&mut buf) {
             let _ = shared.lock().handle_io(from, &buf[..n], shared.now());
         }
-        let frames = shared.lock().poll(shared.now());
+    }
+}
+
+/// Sends T→O frames when due and runs the watchdogs. It parks until the adapter's next due
+/// time (at most [`IO_IDLE`]): parking is precise to tens of µs, where a socket receive timeout
+/// is rounded up to the kernel's tick (milliseconds). A client whose message makes something
+/// due earlier (a Forward_Open) unparks it.
+fn io_produce(io: UdpSocket, shared: Arc<Shared>) {
+    loop {
+        let (frames, due) = {
+            let mut a = shared.lock();
+            let frames = a.poll(shared.now());
+            (frames, a.next_due())
+        };
         for (to, frame) in frames {
             let _ = io.send_to(&frame, to);
+        }
+        let wait = due.map_or(IO_IDLE, |d| d.saturating_sub(shared.now()).min(IO_IDLE));
+        if !wait.is_zero() {
+            thread::park_timeout(wait);
         }
     }
 }

@@ -46,6 +46,9 @@ pub(crate) enum StepError {
     /// The link to the DUT broke or a request went unanswered (a hung, closing or silent DUT).
     #[error("link error: {0}")]
     Link(String),
+    /// The DUT answered with something that is not the protocol at all.
+    #[error("the DUT does not speak the protocol: {0}")]
+    Garbage(String),
 }
 
 impl StepError {
@@ -56,7 +59,8 @@ impl StepError {
             StepError::Silent { .. }
             | StepError::Refused(_)
             | StepError::Suite(_)
-            | StepError::Link(_) => Verdict::Error,
+            | StepError::Link(_)
+            | StepError::Garbage(_) => Verdict::Error,
         }
     }
 }

@@ -38,12 +38,13 @@ impl DutFactory for EmbeddedFactory {
     }
 
     fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, String> {
+        let product = profile.nord()?;
         let config = DeviceConfig {
             inverters: profile.inverters,
-            ..DeviceConfig::new(profile.product)
+            ..DeviceConfig::new(product)
         };
         Ok(match profile.binding {
-            BindingKind::Ppo => Box::new(Channel::new(ppo_dut(profile), profile.product, retries)),
+            BindingKind::Ppo => Box::new(Channel::new(ppo_dut(profile)?, product, retries)),
             BindingKind::Enip => Box::new(super::enip::Scanner::embedded(
                 Device::new(config),
                 self.tap.clone(),
@@ -53,12 +54,12 @@ impl DutFactory for EmbeddedFactory {
 }
 
 /// The simulator for a profile behind the in-memory PPO link.
-pub(crate) fn ppo_dut(profile: &Profile) -> Box<dyn Dut> {
+pub(crate) fn ppo_dut(profile: &Profile) -> Result<Box<dyn Dut>, String> {
     let config = DeviceConfig {
         inverters: profile.inverters,
-        ..DeviceConfig::new(profile.product)
+        ..DeviceConfig::new(profile.nord()?)
     };
-    Box::new(Embedded::new(Device::new(config)))
+    Ok(Box::new(Embedded::new(Device::new(config))))
 }
 
 /// The simulator and both ends of its link.

@@ -213,6 +213,14 @@ pub(crate) fn terminal(run: &RunResult) -> String {
     {
         let name = c.verdict.name().to_uppercase();
         let _ = writeln!(s, "{name:<5} [{}] {}: {}", c.profile, c.id, c.message);
+        // The statement the DUT broke, and where it stands.
+        let _ = writeln!(
+            s,
+            "      rule: {} ({} {})",
+            c.title,
+            c.manual.doc,
+            c.manual.place()
+        );
     }
     let line = |n: &Counts| {
         Verdict::ALL
@@ -324,7 +332,9 @@ mod tests {
             t.contains("5 cases under 2 profiles: 1 pass, 1 fail"),
             "{t}"
         );
-        assert!(t.lines().count() <= 6, "{t}");
+        assert!(t.contains("      rule: "), "{t}");
+        // Two lines per failed or errored case, one per profile, one total.
+        assert!(t.lines().count() <= 8, "{t}");
     }
 
     #[test]

@@ -4,14 +4,15 @@
 use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::net::{SocketAddr, SocketAddrV4, TcpStream, UdpSocket};
-
-use crate::pcap::SharedTap;
+use std::rc::Rc;
 use std::time::{Duration, Instant};
 
 use proto::enip::encap::{frame_len, HEADER_LEN};
 use proto::enip::io::IO_PORT;
-use sim::clock::{Clock, VirtualClock};
+use sim::clock::{Clock, RealClock, VirtualClock};
 use sim::enip::{Adapter, Framer};
+
+use crate::pcap::SharedTap;
 
 /// A way to an EtherNet/IP target.
 pub(crate) trait EnipLink {
@@ -24,8 +25,22 @@ pub(crate) trait EnipLink {
     /// Sends one O→T datagram (if any), lets `rpi` pass, and returns the T→O datagrams that
     /// arrived meanwhile.
     fn io_cycle(&mut self, datagram: Option<&[u8]>, rpi: Duration) -> Result<Vec<Vec<u8>>, String>;
+    /// Gets ready to receive T→O data (before a Forward_Open), so none arrives at a closed port.
+    fn prepare_io(&mut self) -> Result<(), String> {
+        Ok(())
+    }
     /// The embedded adapter, for fault injection and observation.
     fn adapter(&mut self) -> Option<(&mut Adapter, Duration)>;
+    /// Records the link's traffic into `tap` from now on, stamped with `clock` (the run's real
+    /// time): a network link, with the addresses its sockets really use. The embedded link
+    /// takes its tap when made and records on its virtual clock, so it refuses.
+    fn record(&mut self, tap: SharedTap, clock: Rc<RealClock>) -> Result<(), String> {
+        let _ = (tap, clock);
+        Err(format!(
+            "{} records from its creation only",
+            self.describe()
+        ))
+    }
 }
 
 /// The peer address the embedded adapter sees (the scanner's).
@@ -33,92 +48,162 @@ const SCANNER_V4: SocketAddrV4 =
     SocketAddrV4::new(std::net::Ipv4Addr::new(192, 168, 1, 10), 50_000);
 const SCANNER: SocketAddr = SocketAddr::V4(SCANNER_V4);
 
-/// Where captured packets of the embedded link go: the tap, this case's time base and its
-/// client address.
+/// A link's place in the run's capture: the tap, and the clock its packets are stamped with
+/// (plus `base`): an embedded case's virtual clock, placed after the run's last packet, or
+/// the run's real one.
+#[derive(Clone)]
 struct Recorder {
     tap: SharedTap,
+    clock: Rc<dyn Clock>,
     base: Duration,
-    client: SocketAddrV4,
-    server: SocketAddrV4,
 }
 
 impl Recorder {
-    fn new(tap: SharedTap, server: SocketAddrV4, now: Duration) -> Recorder {
-        let (base, client) = {
-            let mut t = tap.borrow_mut();
-            t.connections = t.connections.wrapping_add(1);
-            let port = 50_000u16.wrapping_add(t.connections % 10_000);
-            (
-                t.last + Duration::from_millis(1),
-                SocketAddrV4::new(*SCANNER_V4.ip(), port),
-            )
-        };
-        let r = Recorder {
-            tap,
-            base,
-            client,
-            server,
-        };
-        r.tap
-            .borrow_mut()
-            .capture
-            .tcp_open(client, server, base + now);
-        r
+    /// An embedded case's recorder: its virtual time starts 1 ms after the run's last packet.
+    fn embedded(tap: SharedTap, clock: Rc<VirtualClock>) -> Recorder {
+        let base = tap.borrow().last + Duration::from_millis(1);
+        Recorder { tap, clock, base }
     }
 
-    fn at(&self, now: Duration) -> Duration {
-        let t = self.base + now;
+    /// A network link's recorder: packets at the time since the run started.
+    fn network(tap: SharedTap, clock: Rc<RealClock>) -> Recorder {
+        Recorder {
+            tap,
+            clock,
+            base: Duration::ZERO,
+        }
+    }
+
+    /// Now on the capture's time line; the tap's latest time follows.
+    fn now(&self) -> Duration {
+        let t = self.base + self.clock.now();
         let mut tap = self.tap.borrow_mut();
         tap.last = tap.last.max(t);
         t
     }
 
-    fn tcp(&self, to_server: bool, bytes: &[u8], now: Duration) {
-        let t = self.at(now);
+    /// The scanner's address on the embedded link's next connection: a port of its own.
+    fn embedded_client(&self) -> SocketAddrV4 {
+        let port = 50_000u16.wrapping_add(self.tap.borrow().connections.wrapping_add(1) % 10_000);
+        SocketAddrV4::new(*SCANNER_V4.ip(), port)
+    }
+
+    /// A TCP connection from `client` to `server` opened: its handshake, now.
+    fn connect(&self, client: SocketAddrV4, server: SocketAddrV4) -> Connection {
+        let t = self.now();
+        let mut tap = self.tap.borrow_mut();
+        tap.connections = tap.connections.wrapping_add(1);
+        tap.capture.tcp_open(client, server, t);
+        Connection {
+            recorder: self.clone(),
+            client,
+            server,
+            open: true,
+        }
+    }
+
+    /// A UDP datagram, now.
+    fn udp(&self, from: SocketAddrV4, to: SocketAddrV4, bytes: &[u8]) {
+        let t = self.now();
+        self.tap.borrow_mut().capture.udp(from, to, bytes, t);
+    }
+}
+
+/// One recorded TCP connection.
+struct Connection {
+    recorder: Recorder,
+    client: SocketAddrV4,
+    server: SocketAddrV4,
+    /// Whether it is still open in the capture; nothing is recorded on it once closed.
+    open: bool,
+}
+
+impl Connection {
+    /// Stream bytes, client to server or back, now.
+    fn tcp(&self, to_server: bool, bytes: &[u8]) {
+        if !self.open {
+            return;
+        }
+        let t = self.recorder.now();
         let (from, to) = if to_server {
             (self.client, self.server)
         } else {
             (self.server, self.client)
         };
-        self.tap.borrow_mut().capture.tcp_data(from, to, bytes, t);
+        self.recorder
+            .tap
+            .borrow_mut()
+            .capture
+            .tcp_data(from, to, bytes, t);
     }
 
-    fn udp(&self, to_server: bool, bytes: &[u8], now: Duration) {
-        let t = self.at(now);
-        let c = SocketAddrV4::new(*self.client.ip(), IO_PORT);
-        let s = SocketAddrV4::new(*self.server.ip(), IO_PORT);
-        let (from, to) = if to_server { (c, s) } else { (s, c) };
-        self.tap.borrow_mut().capture.udp(from, to, bytes, t);
+    /// The connection closed now, by the server or by the client: the FIN exchange.
+    fn close(&mut self, by_server: bool) {
+        if !std::mem::replace(&mut self.open, false) {
+            return;
+        }
+        let t = self.recorder.now();
+        let (from, to) = if by_server {
+            (self.server, self.client)
+        } else {
+            (self.client, self.server)
+        };
+        self.recorder
+            .tap
+            .borrow_mut()
+            .capture
+            .tcp_close(from, to, t);
     }
 }
 
 /// The embedded adapter behind an in-memory link.
 pub(crate) struct Embedded {
     adapter: Adapter,
-    clock: VirtualClock,
+    /// The adapter's address.
+    server: SocketAddrV4,
+    clock: Rc<VirtualClock>,
     /// Per client, its framer; `None` once the adapter closed the connection.
     clients: BTreeMap<u8, Option<Framer>>,
     recorder: Option<Recorder>,
+    /// Per client, its recorded connection (the scanner's own from the start, the others
+    /// from their first message).
+    recorded: BTreeMap<u8, Connection>,
 }
 
 impl Embedded {
     pub(crate) fn new(adapter: Adapter, server: SocketAddrV4, tap: Option<SharedTap>) -> Embedded {
-        let clock = VirtualClock::new();
-        let recorder = tap.map(|t| Recorder::new(t, server, clock.now()));
+        let clock = Rc::new(VirtualClock::new());
+        let recorder = tap.map(|t| Recorder::embedded(t, clock.clone()));
+        let recorded = recorder
+            .iter()
+            .map(|r| (1, r.connect(r.embedded_client(), server)))
+            .collect();
         Embedded {
             adapter,
+            server,
             clock,
             clients: BTreeMap::new(),
             recorder,
+            recorded,
+        }
+    }
+
+    /// The UDP I/O addresses (2222 on both hosts), O→T or T→O.
+    fn io_addrs(&self, to_server: bool) -> (SocketAddrV4, SocketAddrV4) {
+        let c = SocketAddrV4::new(*SCANNER_V4.ip(), IO_PORT);
+        let s = SocketAddrV4::new(*self.server.ip(), IO_PORT);
+        if to_server {
+            (c, s)
+        } else {
+            (s, c)
         }
     }
 }
 
 impl Drop for Embedded {
     fn drop(&mut self) {
-        if let Some(r) = &self.recorder {
-            let t = r.at(self.clock.now());
-            r.tap.borrow_mut().capture.tcp_close(r.client, r.server, t);
+        for c in self.recorded.values_mut() {
+            c.close(false);
         }
     }
 }
@@ -133,10 +218,12 @@ impl EnipLink for Embedded {
 
     fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, String> {
         let now = self.clock.now();
-        // Only the scanner's own connection is captured.
-        let recorder = self.recorder.as_ref().filter(|_| client == 1);
-        if let Some(r) = recorder {
-            r.tcp(true, msg, now);
+        if let Some(r) = &self.recorder {
+            let server = self.server;
+            self.recorded
+                .entry(client)
+                .or_insert_with(|| r.connect(r.embedded_client(), server))
+                .tcp(true, msg);
         }
         let slot = self
             .clients
@@ -166,10 +253,13 @@ impl EnipLink for Embedded {
                 break;
             }
         }
-        if let (Some(r), Some(b)) = (recorder, &reply) {
-            r.tcp(false, b, now);
+        if let (Some(c), Some(b)) = (self.recorded.get(&client), &reply) {
+            c.tcp(false, b);
         }
         if close {
+            if let Some(c) = self.recorded.get_mut(&client) {
+                c.close(true);
+            }
             *slot = None;
             self.adapter.client_closed(id);
             if reply.is_none() {
@@ -182,7 +272,8 @@ impl EnipLink for Embedded {
     fn io_cycle(&mut self, datagram: Option<&[u8]>, rpi: Duration) -> Result<Vec<Vec<u8>>, String> {
         if let Some(d) = datagram {
             if let Some(r) = &self.recorder {
-                r.udp(true, d, self.clock.now());
+                let (from, to) = self.io_addrs(true);
+                r.udp(from, to, d);
             }
             // A datagram the adapter drops is what a real device would do too.
             let _ = self.adapter.handle_io(SCANNER, d, self.clock.now());
@@ -195,8 +286,9 @@ impl EnipLink for Embedded {
             .map(|(_, b)| b)
             .collect();
         if let Some(r) = &self.recorder {
+            let (from, to) = self.io_addrs(false);
             for b in &out {
-                r.udp(false, b, self.clock.now());
+                r.udp(from, to, b);
             }
         }
         Ok(out)
@@ -214,25 +306,56 @@ pub(crate) struct Network {
     tcp: Stream,
     /// Connections of other clients, opened on first use.
     others: BTreeMap<u8, Stream>,
-    udp: UdpSocket,
+    /// The local address of the scanner's TCP connection, where T→O data is expected.
+    local: std::net::IpAddr,
+    /// UDP 2222 on `local`, bound when I/O starts: a run without I/O (the `cip` profile)
+    /// does not hold the port, so other scanners on the machine can.
+    udp: Option<UdpSocket>,
     timeout: Duration,
+    /// Where the traffic is recorded, once [`EnipLink::record`] was called.
+    recorder: Option<Recorder>,
 }
 
 /// One TCP connection and the bytes received beyond the last reply.
 struct Stream {
     tcp: Option<TcpStream>,
     buf: Vec<u8>,
+    /// Its record: bytes as they were sent and as they arrived, with the real addresses.
+    recorded: Option<Connection>,
 }
 
 impl Stream {
-    fn connect(target: SocketAddr, timeout: Duration) -> Result<Stream, String> {
+    fn connect(
+        target: SocketAddr,
+        timeout: Duration,
+        recorder: Option<&Recorder>,
+    ) -> Result<Stream, String> {
         let tcp = TcpStream::connect_timeout(&target, timeout)
             .map_err(|e| format!("cannot connect to {target}: {e}"))?;
         tcp.set_nodelay(true).map_err(|e| e.to_string())?;
-        Ok(Stream {
+        let mut stream = Stream {
             tcp: Some(tcp),
             buf: Vec::new(),
-        })
+            recorded: None,
+        };
+        if let Some(r) = recorder {
+            stream.record(r)?;
+        }
+        Ok(stream)
+    }
+
+    /// Records the connection from now on: its handshake first.
+    fn record(&mut self, recorder: &Recorder) -> Result<(), String> {
+        let Some(tcp) = &self.tcp else {
+            return Ok(());
+        };
+        let local = tcp.local_addr().map_err(|e| e.to_string())?;
+        let peer = tcp.peer_addr().map_err(|e| e.to_string())?;
+        let (SocketAddr::V4(client), SocketAddr::V4(server)) = (local, peer) else {
+            return Err(format!("{local} → {peer}: a pcap records IPv4 only"));
+        };
+        self.recorded = Some(recorder.connect(client, server));
+        Ok(())
     }
 
     /// Sends `msg`, waits up to `timeout` for one whole reply.
@@ -243,6 +366,9 @@ impl Stream {
             .ok_or("the target closed the TCP connection")?;
         tcp.write_all(msg)
             .map_err(|e| format!("TCP send failed: {e}"))?;
+        if let Some(c) = &self.recorded {
+            c.tcp(true, msg);
+        }
         let deadline = Instant::now() + timeout;
         let mut chunk = [0u8; 4096];
         loop {
@@ -260,12 +386,21 @@ impl Stream {
             match tcp.read(&mut chunk) {
                 Ok(0) => {
                     self.tcp = None;
+                    if let Some(c) = &mut self.recorded {
+                        c.close(true);
+                    }
                     return Err(format!(
                         "the target closed the TCP connection ({} bytes of a reply pending)",
                         self.buf.len()
                     ));
                 }
-                Ok(n) => self.buf.extend_from_slice(&chunk[..n]),
+                Ok(n) => {
+                    // As it arrived: a reply that came in pieces stays in pieces.
+                    if let Some(c) = &self.recorded {
+                        c.tcp(false, &chunk[..n]);
+                    }
+                    self.buf.extend_from_slice(&chunk[..n]);
+                }
                 Err(e)
                     if matches!(
                         e.kind(),
@@ -282,7 +417,9 @@ impl Stream {
                     return Ok(None);
                 }
                 Err(e) => {
+                    // A reset, most likely: the capture has no way to show it and stops here.
                     self.tcp = None;
+                    self.recorded = None;
                     return Err(format!("TCP receive failed: {e}"));
                 }
             }
@@ -290,26 +427,44 @@ impl Stream {
     }
 }
 
+impl Drop for Stream {
+    fn drop(&mut self) {
+        if let Some(c) = &mut self.recorded {
+            c.close(false);
+        }
+    }
+}
+
 impl Network {
-    /// Connects to `target` (TCP) and binds UDP 2222 on the local address used for it, where
-    /// the target sends T→O data.
+    /// Connects to `target` (TCP).
     pub(crate) fn connect(target: SocketAddr, timeout: Duration) -> Result<Network, String> {
-        let tcp = Stream::connect(target, timeout)?;
+        let tcp = Stream::connect(target, timeout, None)?;
         let local = tcp
             .tcp
             .as_ref()
             .and_then(|t| t.local_addr().ok())
             .ok_or("no local address for the TCP connection")?;
-        let udp = UdpSocket::bind(SocketAddr::new(local.ip(), IO_PORT))
-            .map_err(|e| format!("cannot bind UDP {}:{IO_PORT} for T→O data: {e}", local.ip()))?;
         Ok(Network {
             target,
             tcp,
             others: BTreeMap::new(),
-            udp,
+            local: local.ip(),
+            udp: None,
             timeout,
+            recorder: None,
         })
     }
+}
+
+/// UDP 2222 on `local`, where the target sends T→O data; bound on first use.
+fn io_socket(slot: &mut Option<UdpSocket>, local: std::net::IpAddr) -> Result<&UdpSocket, String> {
+    if slot.is_none() {
+        let at = SocketAddr::new(local, IO_PORT);
+        let udp =
+            UdpSocket::bind(at).map_err(|e| format!("cannot bind UDP {at} for T→O data: {e}"))?;
+        *slot = Some(udp);
+    }
+    slot.as_ref().ok_or_else(|| "no UDP socket".into())
 }
 
 impl EnipLink for Network {
@@ -323,19 +478,31 @@ impl EnipLink for Network {
         } else {
             match self.others.entry(client) {
                 std::collections::btree_map::Entry::Occupied(e) => e.into_mut(),
-                std::collections::btree_map::Entry::Vacant(e) => {
-                    e.insert(Stream::connect(self.target, self.timeout)?)
-                }
+                std::collections::btree_map::Entry::Vacant(e) => e.insert(Stream::connect(
+                    self.target,
+                    self.timeout,
+                    self.recorder.as_ref(),
+                )?),
             }
         };
         stream.request(msg, self.timeout)
     }
 
     fn io_cycle(&mut self, datagram: Option<&[u8]>, rpi: Duration) -> Result<Vec<Vec<u8>>, String> {
+        let target = self.target.ip();
+        let udp = io_socket(&mut self.udp, self.local)?;
+        // The socket's own address, if IPv4 (the only kind recorded).
+        let local = match udp.local_addr() {
+            Ok(SocketAddr::V4(a)) => Some(a),
+            _ => None,
+        };
         if let Some(d) = datagram {
-            self.udp
-                .send_to(d, SocketAddr::new(self.target.ip(), IO_PORT))
+            let to = SocketAddr::new(target, IO_PORT);
+            udp.send_to(d, to)
                 .map_err(|e| format!("UDP send failed: {e}"))?;
+            if let (Some(r), Some(from), SocketAddr::V4(to)) = (&self.recorder, local, to) {
+                r.udp(from, to, d);
+            }
         }
         let deadline = Instant::now() + rpi;
         let mut out = Vec::new();
@@ -345,11 +512,16 @@ impl EnipLink for Network {
             if left.is_zero() {
                 return Ok(out);
             }
-            self.udp
-                .set_read_timeout(Some(left))
+            udp.set_read_timeout(Some(left))
                 .map_err(|e| e.to_string())?;
-            match self.udp.recv_from(&mut buf) {
-                Ok((n, _)) => out.push(buf[..n].to_vec()),
+            match udp.recv_from(&mut buf) {
+                Ok((n, from)) => {
+                    if let (Some(r), SocketAddr::V4(from), Some(to)) = (&self.recorder, from, local)
+                    {
+                        r.udp(from, to, &buf[..n]);
+                    }
+                    out.push(buf[..n].to_vec());
+                }
                 Err(e)
                     if matches!(
                         e.kind(),
@@ -363,7 +535,24 @@ impl EnipLink for Network {
         }
     }
 
+    fn prepare_io(&mut self) -> Result<(), String> {
+        io_socket(&mut self.udp, self.local).map(|_| ())
+    }
+
     fn adapter(&mut self) -> Option<(&mut Adapter, Duration)> {
         None
+    }
+
+    fn record(&mut self, tap: SharedTap, clock: Rc<RealClock>) -> Result<(), String> {
+        if self.recorder.is_some() {
+            return Err("the link is recorded already".into());
+        }
+        let recorder = Recorder::network(tap, clock);
+        self.tcp.record(&recorder)?;
+        for stream in self.others.values_mut() {
+            stream.record(&recorder)?;
+        }
+        self.recorder = Some(recorder);
+        Ok(())
     }
 }

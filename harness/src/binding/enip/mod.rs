@@ -65,7 +65,8 @@ struct IoConn {
 /// The scanner.
 pub(crate) struct Scanner {
     link: Box<dyn EnipLink>,
-    product: Product,
+    /// The NORD product; `None` for another maker's adapter (profile `cip`).
+    product: Option<Product>,
     caps: Vec<Capability>,
     /// Registered sessions by client (1 = the scanner's own connection).
     sessions: std::collections::BTreeMap<u8, u32>,
@@ -85,7 +86,7 @@ impl Scanner {
         let adapter = Adapter::new(device, EMBEDDED_ADDR);
         Scanner::new(
             Box::new(link::Embedded::new(adapter, EMBEDDED_ADDR, tap)),
-            product,
+            Some(product),
             Capability::ALL
                 .into_iter()
                 .filter(|c| *c != Capability::ParameterChannel)
@@ -96,18 +97,23 @@ impl Scanner {
     /// A target on the network.
     pub(crate) fn network(
         target: SocketAddr,
-        product: Product,
+        product: Option<Product>,
         timeout: Duration,
     ) -> Result<Scanner, String> {
         let link = Network::connect(target, timeout)?;
-        Ok(Scanner::new(
-            Box::new(link),
-            product,
-            vec![Capability::ParameterAccess, Capability::ProcessData],
-        ))
+        // NORD's parameter classes and assemblies only on a NORD product.
+        let caps = match product {
+            Some(_) => vec![
+                Capability::ParameterAccess,
+                Capability::ProcessData,
+                Capability::Ethernetip,
+            ],
+            None => vec![Capability::Ethernetip],
+        };
+        Ok(Scanner::new(Box::new(link), product, caps))
     }
 
-    fn new(link: Box<dyn EnipLink>, product: Product, caps: Vec<Capability>) -> Scanner {
+    fn new(link: Box<dyn EnipLink>, product: Option<Product>, caps: Vec<Capability>) -> Scanner {
         Scanner {
             link,
             product,
@@ -130,7 +136,15 @@ impl Scanner {
         what: String,
     ) -> Result<Option<EncapRepr>, StepError> {
         let bytes = msg.emit().map_err(|e| StepError::Suite(e.to_string()))?;
-        self.send_bytes(client, &bytes, what)
+        let reply = self.send_bytes(client, &bytes, what)?;
+        match reply {
+            Some(r) if r.command != msg.command => Err(StepError::Garbage(format!(
+                "the reply to {} is command {:04X}h",
+                Command(msg.command),
+                r.command
+            ))),
+            _ => Ok(reply),
+        }
     }
 
     fn send_bytes(
@@ -258,16 +272,26 @@ impl Scanner {
             .map_err(|e| StepError::Protocol(format!("message-router reply: {e}")))
     }
 
+    /// The NORD product, for steps about its parameters and assemblies.
+    fn product(&self) -> Result<Product, StepError> {
+        self.product
+            .ok_or_else(|| StepError::Suite("a NORD step against profile `cip`".into()))
+    }
+
     /// Class, instance and attribute of a parameter, and its catalogue entry.
-    fn param_path(&self, o: &OrderSpec) -> (EPath, Option<&'static params::ParamDef>) {
+    fn param_path(
+        &self,
+        o: &OrderSpec,
+    ) -> Result<(EPath, Option<&'static params::ParamDef>), StepError> {
+        let product = self.product()?;
         let instance = u32::from(cip_instance(o.set, o.element));
         let n = o.number;
-        let iface = params::lookup(self.product, Owner::Interface, n);
-        let (class, def) = match (o.target, self.product.family()) {
+        let iface = params::lookup(product, Owner::Interface, n);
+        let (class, def) = match (o.target, product.family()) {
             (Target::Interface, Family::Module) => (100, iface),
             (Target::Interface, Family::Integrated) => (101, iface),
             (Target::Inverter(i), fam) => {
-                let inv = params::lookup(self.product, Owner::Inverter, n);
+                let inv = params::lookup(product, Owner::Inverter, n);
                 let def = if fam == Family::Integrated && i.get() == 1 {
                     iface.or(inv)
                 } else {
@@ -276,11 +300,11 @@ impl Scanner {
                 (eip::param_class(Some(i)), def)
             }
         };
-        (EPath::attribute(class, instance, n.get()), def)
+        Ok((EPath::attribute(class, instance, n.get()), def))
     }
 
     fn read(&mut self, o: &OrderSpec) -> Result<Value, StepError> {
-        let (path, def) = self.param_path(o);
+        let (path, def) = self.param_path(o)?;
         let resp = self.explicit(&MrRequest {
             service: Service::GET_ATTRIBUTE_SINGLE.0,
             path,
@@ -305,7 +329,7 @@ impl Scanner {
     }
 
     fn write(&mut self, o: &OrderSpec) -> Result<Value, StepError> {
-        let (path, def) = self.param_path(o);
+        let (path, def) = self.param_path(o)?;
         let value = o.value.unwrap_or(0);
         let v = i32::try_from(value)
             .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
@@ -326,14 +350,15 @@ impl Scanner {
 
     /// The Forward_Open of the harness's own I/O connection.
     fn own_forward_open(&mut self) -> Result<(), StepError> {
-        let out = eip::assemblies(self.product)
+        let product = self.product()?;
+        let out = eip::assemblies(product)
             .iter()
             .filter(|a| a.direction == Direction::Output)
             .max_by_key(|a| a.len)
             .ok_or_else(|| StepError::Suite("the product has no output assembly".into()))?;
-        let inp = eip::assembly(self.product, out.instance + 1)
+        let inp = eip::assembly(product, out.instance + 1)
             .ok_or_else(|| StepError::Suite("no input assembly beside the output".into()))?;
-        let p166 = if self.product.family() == Family::Module {
+        let p166 = if product.family() == Family::Module {
             let o = OrderSpec {
                 target: Target::Interface,
                 number: ParamNumber::new(166).map_err(|e| StepError::Suite(e.to_string()))?,
@@ -351,7 +376,7 @@ impl Scanner {
         } else {
             0
         };
-        let run_idle = eip::o_t_run_idle(self.product, out.instance, p166);
+        let run_idle = eip::o_t_run_idle(product, out.instance, p166);
         let spec = ForwardOpenSpec {
             o_t_point: out.instance,
             t_o_point: inp.instance,
@@ -374,6 +399,7 @@ impl Scanner {
         &mut self,
         s: &ForwardOpenSpec,
     ) -> Result<(MrResponse, Option<ForwardOpenReply>), StepError> {
+        self.link.prepare_io().map_err(StepError::Link)?;
         self.serial = SERIAL
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
             .max(1);
@@ -425,8 +451,8 @@ impl Scanner {
             self.io = Some(IoConn {
                 o_t_id: reply.o_t_id,
                 t_o_id: reply.t_o_id,
-                o_t: eip::assembly(self.product, s.o_t_point),
-                t_o: eip::assembly(self.product, s.t_o_point),
+                o_t: self.product.and_then(|p| eip::assembly(p, s.o_t_point)),
+                t_o: self.product.and_then(|p| eip::assembly(p, s.t_o_point)),
                 o_t_len: usize::from(s.o_t_size.saturating_sub(header)),
                 run_idle: s.run_idle,
                 sequence: 0,
@@ -611,6 +637,10 @@ pub(crate) struct NetworkFactory {
     pub(crate) target: SocketAddr,
     /// How long one request may take.
     pub(crate) timeout: Duration,
+    /// Where `--pcap` collects the run's traffic.
+    pub(crate) tap: Option<crate::pcap::SharedTap>,
+    /// The run's clock: captured packets are stamped with the time since the run started.
+    pub(crate) clock: std::rc::Rc<sim::clock::RealClock>,
 }
 
 impl crate::runner::DutFactory for NetworkFactory {
@@ -623,11 +653,11 @@ impl crate::runner::DutFactory for NetworkFactory {
         profile: &crate::profile::Profile,
         _retries: u32,
     ) -> Result<Box<dyn Binding>, String> {
-        Ok(Box::new(Scanner::network(
-            self.target,
-            profile.product,
-            self.timeout,
-        )?))
+        let mut scanner = Scanner::network(self.target, profile.product, self.timeout)?;
+        if let Some(tap) = &self.tap {
+            scanner.link.record(tap.clone(), self.clock.clone())?;
+        }
+        Ok(Box::new(scanner))
     }
 }
 
