@@ -10,6 +10,7 @@ mod model;
 mod notation;
 pub mod outcome;
 mod pcap;
+mod poll;
 mod profile;
 mod report;
 mod runner;

@@ -6,7 +6,6 @@
 //! [`Adapter`] behind a mutex; time is the real clock since start. A client whose
 //! message stays incomplete for [`STALL`] is disconnected, so a hung peer holds nothing.
 
-use std::io::{Read, Write};
 use std::net::{IpAddr, SocketAddr, TcpListener, TcpStream, UdpSocket};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -17,8 +16,14 @@ use proto::enip::io::IO_PORT;
 use sim::device::{Device, DeviceConfig};
 use sim::enip::{Adapter, Framer};
 
+use crate::poll::PollingStream;
+
 /// How long a partial message may wait for its rest.
 pub(crate) const STALL: Duration = Duration::from_secs(10);
+
+/// How long a client's thread polls for its next request before it sleeps: a client that
+/// sends request after request is served without a thread wake-up (see [`PollingStream`]).
+const REQUEST_POLL: Duration = Duration::from_micros(50);
 
 /// The longest the I/O producer sleeps when nothing is due.
 const IO_IDLE: Duration = Duration::from_millis(50);
@@ -123,9 +128,12 @@ fn accept(listener: TcpListener, shared: Arc<Shared>) {
     }
 }
 
-fn client(mut stream: TcpStream, id: u64, shared: Arc<Shared>) {
+fn client(stream: TcpStream, id: u64, shared: Arc<Shared>) {
     let Ok(peer) = stream.peer_addr() else { return };
     let _ = stream.set_nodelay(true);
+    let Ok(mut stream) = PollingStream::new(stream, REQUEST_POLL) else {
+        return;
+    };
     let mut framer = Framer::new();
     let mut buf = [0u8; 8192];
     let mut pending_since: Option<Instant> = None;
@@ -135,8 +143,7 @@ fn client(mut stream: TcpStream, id: u64, shared: Arc<Shared>) {
         } else {
             Duration::from_secs(60)
         };
-        let _ = stream.set_read_timeout(Some(wait));
-        let n = match stream.read(&mut buf) {
+        let n = match stream.read(&mut buf, wait) {
             Ok(0) => break,
             Ok(n) => n,
             Err(e)
@@ -171,7 +178,7 @@ fn client(mut stream: TcpStream, id: u64, shared: Arc<Shared>) {
                 }
             }
             if let Some(reply) = r.reply {
-                if stream.write_all(&reply).is_err() {
+                if stream.write_all(&reply, STALL).is_err() {
                     close = true;
                 }
             }

@@ -2,7 +2,6 @@
 //! (same bytes, virtual clock) or a device on the network (TCP 44818, UDP 2222).
 
 use std::collections::BTreeMap;
-use std::io::{Read, Write};
 use std::net::{SocketAddr, SocketAddrV4, TcpStream, UdpSocket};
 use std::rc::Rc;
 use std::time::{Duration, Instant};
@@ -13,6 +12,7 @@ use sim::clock::{Clock, RealClock, VirtualClock};
 use sim::enip::{Adapter, Framer};
 
 use crate::pcap::SharedTap;
+use crate::poll::PollingStream;
 
 /// A way to an EtherNet/IP target.
 pub(crate) trait EnipLink {
@@ -42,6 +42,10 @@ pub(crate) trait EnipLink {
         ))
     }
 }
+
+/// How long the scanner polls for a reply before it sleeps: a device that answers within it
+/// (the simulator over loopback does, in tens of µs) is seen without a thread wake-up.
+const REPLY_POLL: Duration = Duration::from_micros(100);
 
 /// The peer address the embedded adapter sees (the scanner's).
 const SCANNER_V4: SocketAddrV4 =
@@ -318,7 +322,7 @@ pub(crate) struct Network {
 
 /// One TCP connection and the bytes received beyond the last reply.
 struct Stream {
-    tcp: Option<TcpStream>,
+    tcp: Option<PollingStream>,
     buf: Vec<u8>,
     /// Its record: bytes as they were sent and as they arrived, with the real addresses.
     recorded: Option<Connection>,
@@ -333,6 +337,7 @@ impl Stream {
         let tcp = TcpStream::connect_timeout(&target, timeout)
             .map_err(|e| format!("cannot connect to {target}: {e}"))?;
         tcp.set_nodelay(true).map_err(|e| e.to_string())?;
+        let tcp = PollingStream::new(tcp, REPLY_POLL).map_err(|e| e.to_string())?;
         let mut stream = Stream {
             tcp: Some(tcp),
             buf: Vec::new(),
@@ -349,8 +354,8 @@ impl Stream {
         let Some(tcp) = &self.tcp else {
             return Ok(());
         };
-        let local = tcp.local_addr().map_err(|e| e.to_string())?;
-        let peer = tcp.peer_addr().map_err(|e| e.to_string())?;
+        let local = tcp.get().local_addr().map_err(|e| e.to_string())?;
+        let peer = tcp.get().peer_addr().map_err(|e| e.to_string())?;
         let (SocketAddr::V4(client), SocketAddr::V4(server)) = (local, peer) else {
             return Err(format!("{local} → {peer}: a pcap records IPv4 only"));
         };
@@ -364,7 +369,7 @@ impl Stream {
             .tcp
             .as_mut()
             .ok_or("the target closed the TCP connection")?;
-        tcp.write_all(msg)
+        tcp.write_all(msg, timeout)
             .map_err(|e| format!("TCP send failed: {e}"))?;
         if let Some(c) = &self.recorded {
             c.tcp(true, msg);
@@ -381,9 +386,7 @@ impl Stream {
             if left.is_zero() {
                 return Ok(None);
             }
-            tcp.set_read_timeout(Some(left))
-                .map_err(|e| e.to_string())?;
-            match tcp.read(&mut chunk) {
+            match tcp.read(&mut chunk, left) {
                 Ok(0) => {
                     self.tcp = None;
                     if let Some(c) = &mut self.recorded {
@@ -442,7 +445,7 @@ impl Network {
         let local = tcp
             .tcp
             .as_ref()
-            .and_then(|t| t.local_addr().ok())
+            .and_then(|t| t.get().local_addr().ok())
             .ok_or("no local address for the TCP connection")?;
         Ok(Network {
             target,

@@ -1,0 +1,266 @@
+//! The jitter figure: T→O arrival times of a class-1 connection and how far they stray from
+//! the RPI.
+
+use std::net::{SocketAddr, UdpSocket};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread;
+use std::time::{Duration, Instant};
+
+use proto::enip::io::{IoFrame, IO_PORT};
+use proto::nord::eip::{self, Direction};
+
+use super::client::Client;
+use super::{Settings, PRODUCT};
+
+/// T→O arrival jitter of an Exclusive Owner connection: O→T every RPI from one thread, T→O
+/// arrival times recorded on this one.
+pub(super) fn io_jitter(s: &Settings) -> Result<Jitter, String> {
+    let mut client = Client::connect(s.listen)?;
+    let local = client.local_addr().map_err(|e| e.to_string())?.ip();
+    // Bound before Forward_Open: the first T→O frame follows its reply at once.
+    let udp = UdpSocket::bind(SocketAddr::new(local, IO_PORT))
+        .map_err(|e| format!("cannot bind UDP {local}:{IO_PORT} for T→O data: {e}"))?;
+    let out = eip::assemblies(PRODUCT)
+        .iter()
+        .filter(|a| a.direction == Direction::Output)
+        .max_by_key(|a| a.len)
+        .ok_or("no output assembly")?;
+    let inp = eip::assembly(PRODUCT, out.instance + 1).ok_or("no input assembly")?;
+    let run_idle = eip::o_t_run_idle(PRODUCT, out.instance, 0);
+    let rpi_us = u32::try_from(s.rpi.as_micros()).map_err(|e| e.to_string())?;
+    let conn = client.forward_open(
+        out.instance,
+        inp.instance,
+        2 + if run_idle { 4 } else { 0 } + out.len,
+        2 + inp.len,
+        rpi_us,
+    )?;
+
+    let stop = Arc::new(AtomicBool::new(false));
+    let sender = {
+        let udp = udp.try_clone().map_err(|e| e.to_string())?;
+        let stop = stop.clone();
+        let to = SocketAddr::new(s.listen.ip(), IO_PORT);
+        let (rpi, len, id) = (s.rpi, usize::from(out.len), conn.o_t_id);
+        thread::spawn(move || -> Result<(), String> {
+            let mut frame = IoFrame {
+                connection: id,
+                sequence: 0,
+                count: 0,
+                run_idle: run_idle.then_some(1),
+                data: vec![0; len],
+            };
+            let mut due = Instant::now();
+            while !stop.load(Ordering::Relaxed) {
+                frame.sequence = frame.sequence.wrapping_add(1);
+                frame.count = frame.count.wrapping_add(1);
+                let bytes = frame.emit().map_err(|e| e.to_string())?;
+                udp.send_to(&bytes, to)
+                    .map_err(|e| format!("O→T send failed: {e}"))?;
+                due += rpi;
+                thread::sleep(due.saturating_duration_since(Instant::now()));
+            }
+            Ok(())
+        })
+    };
+
+    let recorded = record_t_o(&udp, conn.t_o_id, s.record);
+    stop.store(true, Ordering::Relaxed);
+    let sent = sender
+        .join()
+        .map_err(|_| "the O→T thread panicked".to_string())?;
+    client.forward_close(conn.serial)?;
+    sent?;
+    let arrivals = recorded?;
+    jitter(&arrivals, s.rpi).ok_or_else(|| format!("only {} T→O frames", arrivals.len()))
+}
+
+/// (sequence, arrival time) of every T→O frame of connection `t_o_id` for `span` from the
+/// first.
+fn record_t_o(
+    udp: &UdpSocket,
+    t_o_id: u32,
+    span: Duration,
+) -> Result<Vec<(u32, Duration)>, String> {
+    udp.set_read_timeout(Some(Duration::from_millis(100)))
+        .map_err(|e| e.to_string())?;
+    let mut buf = [0u8; 1500];
+    let mut arrivals = Vec::with_capacity(span.as_millis() as usize + 64);
+    let begin = Instant::now();
+    let mut first: Option<Instant> = None;
+    loop {
+        let now = Instant::now();
+        match first {
+            Some(f) if now >= f + span => break,
+            None if now >= begin + Duration::from_secs(1) => {
+                return Err("no T→O frame within 1 s of Forward_Open".into())
+            }
+            _ => {}
+        }
+        match udp.recv_from(&mut buf) {
+            Ok((n, _)) => {
+                let at = Instant::now();
+                let Ok(frame) = IoFrame::parse(&buf[..n], false) else {
+                    continue;
+                };
+                if frame.connection != t_o_id {
+                    continue;
+                }
+                let f = *first.get_or_insert(at);
+                arrivals.push((frame.sequence, at - f));
+            }
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                if first.is_some() {
+                    return Err(format!(
+                        "T→O stopped after {} frames (connection timed out?)",
+                        arrivals.len()
+                    ));
+                }
+            }
+            Err(e) => return Err(format!("T→O receive failed: {e}")),
+        }
+    }
+    Ok(arrivals)
+}
+
+/// How far the arrivals of a periodic stream stray from its period.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Jitter {
+    /// Frames received.
+    pub(super) frames: usize,
+    /// Frames missing by their sequence numbers.
+    pub(super) lost: u64,
+    /// Frames whose sequence number did not advance (duplicates, reordering).
+    pub(super) disordered: u64,
+    /// Median of |interval − period| over consecutive sequence numbers.
+    pub(super) p50: Duration,
+    /// 99th percentile of the same.
+    pub(super) p99: Duration,
+    /// The largest.
+    pub(super) max: Duration,
+}
+
+/// Jitter of `arrivals` ((sequence number, arrival time), in arrival order) against `period`.
+/// Only intervals between consecutive sequence numbers count; a gap counts its missing frames
+/// as lost. `None` without a single such interval.
+pub(crate) fn jitter(arrivals: &[(u32, Duration)], period: Duration) -> Option<Jitter> {
+    let (mut lost, mut disordered) = (0u64, 0u64);
+    let mut deviations = Vec::with_capacity(arrivals.len());
+    for pair in arrivals.windows(2) {
+        let ((s0, t0), (s1, t1)) = (pair[0], pair[1]);
+        match s1.wrapping_sub(s0) {
+            1 => deviations.push(t1.saturating_sub(t0).abs_diff(period)),
+            gap if gap > 1 && gap < 1 << 31 => lost += u64::from(gap - 1),
+            _ => disordered += 1,
+        }
+    }
+    deviations.sort_unstable();
+    Some(Jitter {
+        frames: arrivals.len(),
+        lost,
+        disordered,
+        p50: percentile(&deviations, 50.0)?,
+        p99: percentile(&deviations, 99.0)?,
+        max: *deviations.last()?,
+    })
+}
+
+/// The `p`th percentile (nearest rank) of ascending `sorted`; `None` when empty.
+pub(crate) fn percentile(sorted: &[Duration], p: f64) -> Option<Duration> {
+    if sorted.is_empty() {
+        return None;
+    }
+    let rank = (p / 100.0 * sorted.len() as f64).ceil() as usize;
+    sorted.get(rank.clamp(1, sorted.len()) - 1).copied()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn us(n: u64) -> Duration {
+        Duration::from_micros(n)
+    }
+
+    #[test]
+    fn percentile_is_nearest_rank() {
+        let v: Vec<Duration> = (1..=100).map(us).collect();
+        assert_eq!(percentile(&v, 50.0), Some(us(50)));
+        assert_eq!(percentile(&v, 99.0), Some(us(99)));
+        assert_eq!(percentile(&v, 100.0), Some(us(100)));
+        assert_eq!(percentile(&v, 0.0), Some(us(1)));
+        // 10 values: rank ceil(9.9) = 10, the largest.
+        let ten: Vec<Duration> = (1..=10).map(us).collect();
+        assert_eq!(percentile(&ten, 99.0), Some(us(10)));
+        assert_eq!(percentile(&ten, 50.0), Some(us(5)));
+        assert_eq!(percentile(&[us(7)], 99.0), Some(us(7)));
+        assert_eq!(percentile(&[], 50.0), None);
+    }
+
+    #[test]
+    fn jitter_of_a_perfect_stream_is_zero() {
+        let a: Vec<(u32, Duration)> = (0..10).map(|i| (i + 1, us(1000 * u64::from(i)))).collect();
+        let j = jitter(&a, us(1000)).unwrap();
+        assert_eq!(
+            j,
+            Jitter {
+                frames: 10,
+                lost: 0,
+                disordered: 0,
+                p50: Duration::ZERO,
+                p99: Duration::ZERO,
+                max: Duration::ZERO,
+            }
+        );
+    }
+
+    #[test]
+    fn jitter_is_the_absolute_deviation_from_the_period() {
+        // Intervals 1100, 900, 1000, 1300 µs: deviations 100, 100, 0, 300.
+        let a = [
+            (1, us(0)),
+            (2, us(1100)),
+            (3, us(2000)),
+            (4, us(3000)),
+            (5, us(4300)),
+        ];
+        let j = jitter(&a, us(1000)).unwrap();
+        assert_eq!((j.p50, j.p99, j.max), (us(100), us(300), us(300)));
+    }
+
+    #[test]
+    fn gaps_count_as_lost_and_are_not_intervals() {
+        // 3 and 4 missing: the 3000 µs interval 2→5 is not a jitter sample.
+        let a = [(1, us(0)), (2, us(1000)), (5, us(4000)), (6, us(5050))];
+        let j = jitter(&a, us(1000)).unwrap();
+        assert_eq!((j.frames, j.lost, j.disordered), (4, 2, 0));
+        assert_eq!((j.p50, j.max), (us(0), us(50)));
+    }
+
+    #[test]
+    fn sequence_numbers_wrap_and_repeats_are_disordered() {
+        let a = [
+            (u32::MAX, us(0)),
+            (0, us(1000)),
+            (0, us(1500)),
+            (1, us(2000)),
+        ];
+        let j = jitter(&a, us(1000)).unwrap();
+        assert_eq!((j.lost, j.disordered), (0, 1));
+        // 0 → 1 counts from the repeat's arrival: 500 µs, deviation 500.
+        assert_eq!((j.p50, j.max), (us(0), us(500)));
+    }
+
+    #[test]
+    fn no_interval_no_jitter() {
+        assert_eq!(jitter(&[], us(1000)), None);
+        assert_eq!(jitter(&[(1, us(0))], us(1000)), None);
+        assert_eq!(jitter(&[(1, us(0)), (3, us(2000))], us(1000)), None);
+    }
+}
