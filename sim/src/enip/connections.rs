@@ -616,7 +616,9 @@ fn owner_timed_out(a: &mut Adapter) {
                     .read(p, None, ethernet)
                     .ok()
             })
-            .is_some_and(|v| v != 0)
+            // 0 "Off" and -0.1 "No error" both ignore field-bus errors (BU 0620 §4.5,
+            // BU 2100 §7.1.1 "Parameter P513"), as `Device::monitor` treats them.
+            .is_some_and(|v| v > 0)
         };
         if monitored {
             let _ = a.device.raise(fi, E10_2);

@@ -13,6 +13,8 @@
 mod connections;
 mod framer;
 mod objects;
+#[cfg(test)]
+mod tests;
 
 use std::collections::HashMap;
 use std::net::{SocketAddr, SocketAddrV4};
