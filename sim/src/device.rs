@@ -16,6 +16,7 @@ use proto::nord::ppo::{PpoRepr, PpoType};
 use proto::nord::{led, Inverter, ParamNumber, Product};
 use std::time::Duration;
 
+use crate::bus_status::{self, BusFlags};
 use crate::drive::{Drive, DriveParams, FaultCode};
 use crate::link::{LinkFrameError, LinkRepr, Unit};
 use crate::pkw_server;
@@ -212,15 +213,31 @@ impl Device {
             })
             .collect();
         let mut interface = ParamChannel::new(ParamStore::new(config.product, Target::Interface));
-        // P172 "Configuration level" (BU 2100 §7.1.3): 0 CU4, 1 TU4, 2 TU3.
+        // P172 "Configuration level" (BU 2100 §7.1.3, BU 0590 §5.1.3, BU 2200 §7.1.3): 0 CU4,
+        // 1 TU4, 2 TU3 (the simulated TU3 modules have no DIP-switch addressing: never 3).
         let level = match config.product {
-            Product::Cu4Eip => Some(0),
-            Product::Tu4Eip => Some(1),
-            Product::Tu3Eip => Some(2),
-            _ => None,
+            Product::Cu4Eip | Product::Cu4Pol => Some(0),
+            Product::Tu4Eip | Product::Tu4Pol => Some(1),
+            Product::Tu3Eip | Product::Tu3Pol | Product::Tu3Pnt => Some(2),
+            Product::Sk550p => None,
         };
         if let Some(l) = level {
             interface.store.set_info(172, 1, l);
+        }
+        // The MAC address's first three bytes: NORD's manufacturer id F0.5F.5A (BU 0620 §4.4.2
+        // P878, BU 2200 §7.1.4 P181); the SK TU3-PNT's "PROFINET identification" 00.0E.CF
+        // (BU 0590 §5.1.4 P181, example 00:0E:CF:03:60:00). The EtherNet/IP adapter sets the
+        // whole address of its products at power-on.
+        let mac: Option<(u16, [i32; 3])> = match config.product {
+            Product::Sk550p => Some((878, [0xF0, 0x5F, 0x5A])),
+            Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => Some((181, [0xF0, 0x5F, 0x5A])),
+            Product::Tu3Pnt => Some((181, [0x00, 0x0E, 0xCF])),
+            Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => None,
+        };
+        if let Some((number, id)) = mac {
+            for (e, b) in (1..).zip(id) {
+                interface.store.set_info(number, e, b);
+            }
         }
         Device {
             config: DeviceConfig {
@@ -252,27 +269,31 @@ impl Device {
     /// - P151 "Timeout for external bus" of a module (ms; 0 = control-word monitoring off, -1 =
     ///   all monitoring off): the same for the module's telegrams, E10.3 "Timeout by P151/P513"
     ///   (BU 2100 §7.1.1: "Invalid control word set (e.g. PLC to Stop)", 1 s → E10.3).
-    /// - P872 "Bus status" (§4.3): bit 0 module ready, bit 1 cyclic PZD communication, bit 3
-    ///   timeout P513 (while an inverter shows E10.3), bits 8–15 FI 1..8 online.
+    /// - the bus status (P872 of the SK 550P, P173 and P170 of the modules; see
+    ///   [`bus_status`]): ready, cyclic communication, field-bus timeout, timeout P513/P151
+    ///   (while an inverter shows E10.3), the inverters online.
     fn monitor(&mut self, now: Duration) {
-        let mut status: i32 = 1 | if self.fieldbus_timeout { 1 << 2 } else { 0 };
+        let mut flags = BusFlags {
+            fieldbus_timeout: self.fieldbus_timeout,
+            online: self.config.inverters,
+            ..BusFlags::default()
+        };
         let p151 = match self.config.product.family() {
             proto::nord::Family::Module => self.interface.store.read(P151, None, None).ok(),
             proto::nord::Family::Integrated => None,
         }
         .filter(|ms| *ms > 0)
         .map(|ms| Duration::from_millis(ms as u64));
-        for (n, unit) in self.inverters.iter_mut().enumerate() {
-            status |= 1 << (8 + n);
+        for unit in self.inverters.iter_mut() {
             if unit.drive.fault() == Some(E10_3) {
-                status |= 1 << 3;
+                flags.telegram_timeout = true;
             }
             let Some(last) = unit.last_process else {
                 continue;
             };
             let silent = now.saturating_sub(last);
             if silent <= PROCESS_DATA_WINDOW {
-                status |= 1 << 1;
+                flags.cyclic = true;
             }
             let p513 = unit
                 .params
@@ -286,14 +307,11 @@ impl Device {
                     unit.drive.inject_fault(E10_3);
                     unit.show_fault();
                 }
-                status |= 1 << 3;
+                flags.telegram_timeout = true;
             }
         }
-        // The SK 550P shows the bus status in P872; the EtherNet/IP modules in P173 [-01] with
-        // the same low bits (BU 2100 §7.1.3: ready, cyclic communication, timeout P151/P513).
-        match self.config.product.family() {
-            proto::nord::Family::Integrated => self.interface.store.set_info(872, 1, status),
-            proto::nord::Family::Module => self.interface.store.set_info(173, 1, status & 0x0F),
+        for (number, element, value) in bus_status::status_parameters(self.config.product, flags) {
+            self.interface.store.set_info(number, element, value);
         }
         self.change_protocol(now);
     }
@@ -331,9 +349,11 @@ impl Device {
         let (product, delay) = (self.config.product, self.config.answer_delay);
         let (pkw, pzd) = match link.unit {
             Unit::Interface => {
-                let pkw = ppo
-                    .pkw
-                    .map(|o| self.interface.cycle(o, delay, product, link.unit));
+                let pkw = ppo.pkw.map(|o| {
+                    let answer = self.interface.cycle(o, delay, product, link.unit);
+                    self.adopt_gateway(&o, &answer);
+                    answer
+                });
                 (pkw, vec![0; ppo.pzd.len()])
             }
             Unit::Inverter(i) => {
@@ -345,6 +365,7 @@ impl Device {
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
                 let mut pzd = unit.process(control, setpoints, now);
                 pzd.resize(ppo.pzd.len(), 0);
+                self.show_process_data(i, ppo_type, &ppo.pzd, &pzd);
                 (pkw, pzd)
             }
         };
@@ -355,6 +376,63 @@ impl Device {
             payload: answer.emit(ppo_type),
         }
         .emit())
+    }
+
+    /// P877 "Present IP gateway" (BU 0620 §4.4.3, p. 88) shows the gateway set in P852 once it
+    /// is saved, which happens when element [-04] is written (§4.2.4 P852, p. 83: "this is only
+    /// saved after a value is entered in the index [-04]").
+    fn adopt_gateway(&mut self, order: &PkwRepr, answer: &PkwRepr) {
+        let label = proto::nord::pkw::OrderLabel(order.ak);
+        let written = label.is_array()
+            && label != proto::nord::pkw::OrderLabel::REQUEST_ARRAY_VALUE
+            && answer.ak != 0
+            && answer.ak != proto::nord::pkw::ResponseLabel::CANNOT_EXECUTE.0;
+        let p852 = matches!(order.pnu, 852 | 1852);
+        if !(written && p852 && proto::nord::pkw::Ind(order.ind).subindex() == 3) {
+            return;
+        }
+        let store = &mut self.interface.store;
+        let Ok(n) = ParamNumber::new(852) else {
+            return;
+        };
+        for e in 1..=4u8 {
+            let element = proto::nord::ArrayElement::new(i64::from(e)).ok();
+            if let Ok(v) = store.read(n, None, element) {
+                store.set_info(877, e, v);
+            }
+        }
+    }
+
+    /// The modules' process-data display parameters, for the inverter a PPO frame addressed:
+    /// - SK TU3-PNT (BU 0590 §5.1.3–§5.1.4, p. 36–37): P176 [-02] control word, [-03]/[-04]
+    ///   setpoints 1/2; P177 [-02] status word, [-03]/[-04] actual values 1/2; P180 [-03] (slot
+    ///   3, the FI) the module id of the PPO type (3 = PPO3 … 7 = PPO2).
+    /// - SK TU3/TU4/CU4-POL (BU 2200 §7.1.3, p. 55): P176/P177 [-02 + 6(n-1)] control/status
+    ///   word of FI n and the next five elements its setpoints/actual values 1..5.
+    fn show_process_data(
+        &mut self,
+        inverter: Inverter,
+        ppo: PpoType,
+        sent: &[u16],
+        answer: &[u16],
+    ) {
+        let (first, words) = match self.config.product {
+            Product::Tu3Pnt => {
+                if let Some(code) = ppo.display_code(self.config.product) {
+                    self.interface.store.set_info(180, 3, i32::from(code));
+                }
+                (2, 3)
+            }
+            Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => {
+                (2 + 6 * (inverter.get() - 1), 6)
+            }
+            _ => return,
+        };
+        let store = &mut self.interface.store;
+        for (e, (i, o)) in (first..).zip(sent.iter().zip(answer)).take(words) {
+            store.set_info(176, e, i32::from(*i as i16));
+            store.set_info(177, e, i32::from(*o as i16));
+        }
     }
 
     /// One process-data cycle of an inverter outside a PPO frame (an EtherNet/IP assembly):
@@ -535,6 +613,58 @@ mod tests {
             Ok(1),
             "a repeated order is not executed twice"
         );
+    }
+
+    /// Sends `order` to the interface until it is answered.
+    fn interface_order(d: &mut Device, order: PkwRepr, t: u64) {
+        d.handle(&pkw_frame(100, order), ms(t)).unwrap();
+        d.handle(&pkw_frame(100, order), ms(t + 4)).unwrap();
+    }
+
+    fn read_interface(d: &mut Device, number: i64, element: i64) -> i32 {
+        let store = d.store(Unit::Interface).unwrap();
+        let element = proto::nord::ArrayElement::new(element).ok();
+        store
+            .read(ParamNumber::new(number).unwrap(), None, element)
+            .unwrap()
+    }
+
+    #[test]
+    fn p877_shows_p852_once_element_4_is_written() {
+        let mut d = Device::new(DeviceConfig::new(Product::Sk550p));
+        let write = |sub: u16, value: u32| PkwRepr {
+            ak: 7,
+            pnu: 1852,
+            ind: sub << 8,
+            pwe: value,
+            ..Default::default()
+        };
+        interface_order(&mut d, write(0, 192), 0);
+        assert_eq!(read_interface(&mut d, 877, 1), 0, "not saved before [-04]");
+        interface_order(&mut d, write(3, 1), 10);
+        assert_eq!(read_interface(&mut d, 877, 1), 192);
+        assert_eq!(read_interface(&mut d, 877, 4), 1);
+    }
+
+    #[test]
+    fn modules_show_their_process_data() {
+        let mut d = Device::new(DeviceConfig::new(Product::Tu4Pol));
+        let ppo = PpoRepr {
+            pkw: None,
+            pzd: vec![0x047E, 0x2000],
+        };
+        // FI 2: P176 [-08] control word, [-09] setpoint 1; P177 [-08] status word.
+        d.handle(&frame(102, 3, &ppo.emit(PpoType::TYPE_3)), ms(40))
+            .unwrap();
+        assert_eq!(read_interface(&mut d, 176, 8), 0x047E);
+        assert_eq!(read_interface(&mut d, 176, 9), 0x2000);
+        assert_eq!(read_interface(&mut d, 177, 8) & 0xFF, 0x31);
+        assert_eq!(read_interface(&mut d, 181, 1), 0xF0);
+        let mut pnt = Device::new(DeviceConfig::new(Product::Tu3Pnt));
+        pnt.handle(&frame(101, 3, &ppo.emit(PpoType::TYPE_3)), ms(40))
+            .unwrap();
+        assert_eq!(read_interface(&mut pnt, 180, 3), 3, "PPO3");
+        assert_eq!(read_interface(&mut pnt, 172, 1), 2);
     }
 
     #[test]

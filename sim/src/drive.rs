@@ -16,7 +16,13 @@
 //! - a fault blocks all functions (state G, then H after [`FAULT_REACTION`]).
 //!
 //! Setpoint functions (P546): 1 setpoint frequency, 4 frequency addition, 5 frequency
-//! subtraction; others (positions 23/24 need POSICON) have no effect. Actual-value functions
+//! subtraction, 23/24 setpoint position low/high word (BU 0620 §3.9, §6.1.2.4; BU 2100 §5.3:
+//! "a single speed and a single position specification"); others have no effect. With a
+//! position setpoint the drive in "Operation enabled" travels towards the position at the
+//! setpoint frequency (ramping with P102/P103) and stops there: a plain model of positioning
+//! (POSICON, BU 0510, is not among the manuals), in which "setpoint reached" (status bit 8)
+//! means the position is reached. A low word alone is a signed 16-bit position, ±32.767
+//! rotations (§6.1.2.4 p. 113). Actual-value functions
 //! (P543): 1, 21, 23, 24 actual frequency (no slip in the model), 8, 19 setpoint frequency,
 //! 20 setpoint after the ramp, 9 error number (as P700 [-01] shows it), 10/15 position
 //! low/high word; others send 0.
@@ -121,6 +127,8 @@ pub struct Drive {
     /// Motor position in rotations (one rotation per hertz-second: the model has no pole
     /// pairs or gear), for the actual-position functions of P543.
     position: f64,
+    /// Setpoint position in increments from the setpoints of functions 23/24, if any.
+    target: Option<i32>,
     fault: Option<FaultCode>,
     pending_fault: Option<FaultCode>,
     last_transition: Option<u8>,
@@ -144,6 +152,7 @@ impl Drive {
             setpoint: 0.0,
             goal: 0.0,
             position: 0.0,
+            target: None,
             fault: None,
             pending_fault: None,
             last_transition: None,
@@ -227,6 +236,7 @@ impl Drive {
         if control.valid() {
             self.evaluate(control, now);
             self.setpoint = setpoint_hz(control, setpoints, params, max_hz);
+            self.target = setpoint_position(setpoints, params);
         }
         self.run(params, max_hz, dt);
         if self.state == State::EmergencyStopActive && self.frequency == 0.0 {
@@ -281,9 +291,19 @@ impl Drive {
             State::OperationEnabled if !c.bit(ControlWord::ENABLE_RAMP) => (self.frequency, 0.0),
             State::OperationEnabled if !c.bit(ControlWord::ENABLE_SETPOINT) => (0.0, ramp(103)),
             State::OperationEnabled => {
-                let up = self.setpoint.abs() > self.frequency.abs()
-                    && self.setpoint * self.frequency >= 0.0;
-                (self.setpoint, ramp(if up { 102 } else { 103 }))
+                let goal = match self.target {
+                    Some(t) => {
+                        let remaining = rotations(t) - self.position;
+                        if remaining == 0.0 {
+                            0.0
+                        } else {
+                            self.setpoint.abs() * remaining.signum()
+                        }
+                    }
+                    None => self.setpoint,
+                };
+                let up = goal.abs() > self.frequency.abs() && goal * self.frequency >= 0.0;
+                (goal, ramp(if up { 102 } else { 103 }))
             }
             State::EmergencyStopActive => (
                 0.0,
@@ -310,7 +330,27 @@ impl Drive {
             self.frequency + step * diff.signum()
         };
         self.goal = goal;
+        let from = self.position;
         self.position += (before + self.frequency) / 2.0 * dt;
+        if let (State::OperationEnabled, Some(t)) = (self.state, self.target) {
+            // Reached or passed within this cycle: stop at the position.
+            let target = rotations(t);
+            if (target - self.position) * (target - from) <= 0.0 {
+                self.position = target;
+                self.frequency = 0.0;
+                self.goal = 0.0;
+            }
+        }
+    }
+
+    /// Whether the setpoint is reached (status bit 8): the frequency its goal, and with a
+    /// position setpoint in "Operation enabled" the position.
+    fn setpoint_reached(&self) -> bool {
+        let at_position = match (self.state, self.target) {
+            (State::OperationEnabled, Some(t)) => self.position_increments() == t,
+            _ => true,
+        };
+        (self.frequency - self.goal).abs() < 1e-6 && at_position
     }
 
     fn status_word(&self, control: ControlWord) -> u16 {
@@ -329,8 +369,7 @@ impl Drive {
             s |= u16::from(c.bit(ControlWord::DISABLE_VOLTAGE)) << 4
                 | u16::from(c.bit(ControlWord::EMERGENCY_STOP)) << 5;
         }
-        let reached = (self.frequency - self.goal).abs() < 1e-6;
-        s |= u16::from(reached) << 8;
+        s |= u16::from(self.setpoint_reached()) << 8;
         s |= u16::from(control.valid()) << 9;
         s |= if c.left() { 1 << 12 } else { 1 << 11 };
         s |= u16::from(c.parameter_set() - 1) << 14;
@@ -386,6 +425,31 @@ fn setpoint_hz(
         -sum
     } else {
         sum
+    }
+}
+
+/// Rotations of a position in increments.
+fn rotations(increments: i32) -> f64 {
+    f64::from(increments) / f64::from(INCREMENTS_PER_ROTATION)
+}
+
+/// The setpoint position the bus setpoints give per P546 functions 23 (low word) and 24 (high
+/// word) (§6.1.2.4 "Transmission of positions"), or `None` when no setpoint carries one. A low
+/// word without a high word is a signed 16-bit position (±32.767 rotations).
+fn setpoint_position(setpoints: &[u16], params: &dyn DriveParams) -> Option<i32> {
+    let (mut low, mut high) = (None, None);
+    for (raw, i) in setpoints.iter().zip(1u8..=5) {
+        let code = params.get(546, Some(i)).unwrap_or(i32::from(i == 1));
+        match scaling::setpoint_function(code).map(|f| f.transmission) {
+            Some(Transmission::PositionLow) => low = Some(*raw),
+            Some(Transmission::PositionHigh) => high = Some(*raw),
+            _ => {}
+        }
+    }
+    match (low, high) {
+        (None, None) => None,
+        (Some(l), None) => Some(scaling::position_of_low_word(l)),
+        (l, Some(h)) => Some(scaling::position_of(l.unwrap_or(0), h)),
     }
 }
 
@@ -510,6 +574,77 @@ mod tests {
         let out = d.cycle(0x047D, &[0x2000], &Example, ms(1204));
         assert_eq!((out.status & 0x4F, out.actuals[0]), (0x40, 0));
         assert_eq!(d.last_transition(), Some(9));
+    }
+
+    /// BU 0620 §3.9 (p. 73) / BU 2100 §5.3: P546 [-01] = 1 (speed), [-02] = 23, [-03] = 24
+    /// (position low/high word); P543 [-01] = 1, [-02] = 10, [-03] = 15.
+    struct Positioning;
+    impl DriveParams for Positioning {
+        fn get(&self, number: u16, element: Option<u8>) -> Option<i32> {
+            match (number, element) {
+                (105, _) => Some(500),
+                (102 | 103, _) => Some(200),
+                (543 | 546, Some(1)) => Some(1),
+                (543, Some(2)) => Some(10),
+                (543, Some(3)) => Some(15),
+                (546, Some(2)) => Some(23),
+                (546, Some(3)) => Some(24),
+                (543 | 546, Some(_)) => Some(0),
+                _ => None,
+            }
+        }
+    }
+
+    fn run_to(d: &mut Drive, word: u16, setpoints: &[u16], from: u64, to: u64) -> DriveOutput {
+        let mut out = d.cycle(word, setpoints, &Positioning, ms(from));
+        for t in (from + 4..=to).step_by(4) {
+            out = d.cycle(word, setpoints, &Positioning, ms(t));
+        }
+        out
+    }
+
+    #[rstest::rstest]
+    // 5.000 rotations = 5000 increments = 0000 1388h; -2.5 rotations = FFFF F63Ch.
+    #[case(0x1388, 0x0000, 5000)]
+    #[case(0xF63C, 0xFFFF, -2500)]
+    fn travels_to_the_setpoint_position(#[case] low: u16, #[case] high: u16, #[case] at: i32) {
+        let mut d = Drive::new();
+        d.cycle(0x047E, &[], &Positioning, ms(40));
+        // 50 % speed (25 Hz: 25 rotations per second in the model).
+        let out = run_to(&mut d, 0x047F, &[0x2000, low, high], 44, 120);
+        assert_eq!(out.status & 0x0100, 0, "on the way: not reached");
+        let out = run_to(&mut d, 0x047F, &[0x2000, low, high], 124, 3000);
+        assert_eq!(d.position_increments(), at);
+        assert_eq!(
+            (out.actuals[1], out.actuals[2]),
+            (low, high),
+            "P543 10/15 give the position back"
+        );
+        assert_eq!((out.actuals[0], out.status & 0x0100), (0, 0x0100));
+    }
+
+    #[test]
+    fn low_word_alone_is_signed_and_no_speed_no_travel() {
+        struct LowOnly;
+        impl DriveParams for LowOnly {
+            fn get(&self, number: u16, element: Option<u8>) -> Option<i32> {
+                match (number, element) {
+                    (546, Some(2)) => Some(23),
+                    _ => Positioning.get(number, element),
+                }
+            }
+        }
+        assert_eq!(setpoint_position(&[0x2000, 0xFC18], &LowOnly), Some(-1000));
+        assert_eq!(
+            setpoint_position(&[0x2000, 0x03E8, 0x0001], &Positioning),
+            Some(0x1_03E8)
+        );
+        assert_eq!(setpoint_position(&[0x2000], &Example), None);
+        // Speed setpoint 0: the drive stays where it is.
+        let mut d = Drive::new();
+        d.cycle(0x047E, &[], &Positioning, ms(40));
+        run_to(&mut d, 0x047F, &[0, 0x1388, 0], 44, 1000);
+        assert_eq!(d.position_increments(), 0);
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //! I/O. Time comes from a [`clock::Clock`]: virtual in tests (deterministic, instant), real when
 //! served.
 
+mod bus_status;
 pub mod clock;
 pub mod device;
 pub mod drive;

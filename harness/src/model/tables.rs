@@ -79,6 +79,27 @@ fn powerlink_nmt(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     )
 }
 
+fn powerlink_be(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    let s = a.str("state")?;
+    let state =
+        PlState::from_name(s).ok_or_else(|| bad("state", format!("no POWERLINK state `{s}`")))?;
+    serde_json::to_value(led::powerlink_module_be_red(state))
+        .map_err(|e| ComputeError::Refused(e.to_string()))
+}
+
+fn nmt_state_code(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    if let Some(s) = a.opt_str("state")? {
+        let state = PlState::from_name(s)
+            .ok_or_else(|| bad("state", format!("no POWERLINK state `{s}`")))?;
+        return Ok(json!({ "code": state.p182() }));
+    }
+    let code = a.int("code")?;
+    let entry = nmt::p182(code).ok_or_else(|| {
+        ComputeError::Refused(format!("{code} is not a P182 value of BU 2200 §7.1.4"))
+    })?;
+    Ok(json!({ "code": entry.code, "name": entry.name, "state": entry.state.map(PlState::name) }))
+}
+
 fn ethercat_nmt(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let state = |arg: &str| -> Result<EcState, ComputeError> {
         let s = a.str(arg)?;
@@ -177,6 +198,17 @@ pub(super) const FNS: &[ComputeFn] = &[
         name: "tables.powerlink_nmt",
         doc: "POWERLINK NMT: next state on an event (BU 0620 §2.4.4)",
         run: powerlink_nmt,
+    },
+    ComputeFn {
+        name: "tables.powerlink_be",
+        doc: "What a lit red BE LED of a POWERLINK module means in an NMT state (BU 2200 §6.2)",
+        run: powerlink_be,
+    },
+    ComputeFn {
+        name: "tables.nmt_state_code",
+        doc:
+            "P182 NMT State: the code of a POWERLINK state, or the name of a code (BU 2200 §7.1.4)",
+        run: nmt_state_code,
     },
     ComputeFn {
         name: "tables.ethercat_nmt",

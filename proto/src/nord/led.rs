@@ -1,10 +1,14 @@
 //! LED patterns per state: the SK 550P's "DEV" and "BUS" LEDs and the EtherCAT RUN/ERR LEDs.
 //!
-//! BU 0620 §5.5.1 (p. 100) and §5.5.2.1 (p. 101). The tables are data; [`dev`] and [`bus`]
-//! derive the pattern from the inverter's state, as the simulator shows it.
+//! BU 0620 §5.5.1 (p. 100) and §5.5.2 (p. 101–104), BU 0590 §2.2.4 (SK TU3-PNT) and BU 2200
+//! §6.2 (the POWERLINK modules' "BE" LED per NMT state). BU 2100 and BU 2200 print their LED
+//! tables only as figures of the data sheets, which the text editions do not carry. The tables
+//! are data; [`dev`] and [`bus`] derive the pattern from the inverter's state, as the simulator
+//! shows it.
 
 use serde::Serialize;
 
+use super::nmt::PlState;
 use super::state_machine::State;
 
 /// What an LED shows.
@@ -167,6 +171,20 @@ pub const POWERLINK_BE: &[Row] = &[
     row(Pattern::Red, "General POWERLINK error"),
 ];
 
+/// What a lit red "BE" LED of a POWERLINK module (SK TU3/TU4/CU4-POL) means in an NMT state
+/// (BU 2200 §6.2, p. 30): in "Pre-Operational 1", "Pre-Operational 2", "Ready To Operate" and
+/// "Basic Ethernet" the Managing Node has failed; elsewhere the general meaning of
+/// [`POWERLINK_BE`] applies.
+pub fn powerlink_module_be_red(state: PlState) -> Row {
+    match state {
+        PlState::PreOperational1
+        | PlState::PreOperational2
+        | PlState::ReadyToOperate
+        | PlState::BasicEthernet => row(Pattern::Red, "Managing Node has failed"),
+        PlState::Initialisation | PlState::Operational | PlState::Stopped => POWERLINK_BE[1],
+    }
+}
+
 /// PROFINET LED B "RUN" (Ethernet state). BU 0620 §5.5.2.4 prints "Lights up green: No Ethernet
 /// connection", against PROFINET practice and BU 0590 table 4 (off: initialisation, flashing:
 /// waiting for AR, on: AR established), which this table follows; the erratum is recorded in
@@ -237,6 +255,19 @@ mod tests {
             Pattern::ErrorCode { flashes: 10 }
         );
         assert_eq!(dev(State::NotReadyForSwitchOn, None).pattern, Pattern::Off);
+    }
+
+    #[rstest::rstest]
+    #[case(PlState::PreOperational1, "Managing Node has failed")]
+    #[case(PlState::PreOperational2, "Managing Node has failed")]
+    #[case(PlState::ReadyToOperate, "Managing Node has failed")]
+    #[case(PlState::BasicEthernet, "Managing Node has failed")]
+    #[case(PlState::Operational, "General POWERLINK error")]
+    #[case(PlState::Stopped, "General POWERLINK error")]
+    #[case(PlState::Initialisation, "General POWERLINK error")]
+    fn module_be_led(#[case] state: PlState, #[case] meaning: &str) {
+        let r = powerlink_module_be_red(state);
+        assert_eq!((r.pattern, r.meaning), (Pattern::Red, meaning));
     }
 
     #[test]

@@ -83,6 +83,55 @@ impl PlState {
     }
 }
 
+/// One display value of P182 "NMT State" (BU 2200 §7.1.4, p. 57).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct NmtStateCode {
+    /// The value P182 shows.
+    pub code: u8,
+    /// The name as the manual prints it (`PRE_OPERATIONAL_1`).
+    pub name: &'static str,
+    /// The state of the §2.4.4 state machine, where it is one of them.
+    #[serde(skip)]
+    pub state: Option<PlState>,
+}
+
+const fn nmt(code: u8, name: &'static str, state: Option<PlState>) -> NmtStateCode {
+    NmtStateCode { code, name, state }
+}
+
+/// P182 "NMT State" of the POWERLINK modules: the communication state (start-up phase) as a
+/// code (BU 2200 §7.1.4, p. 57, "Anzeigewerte"). The codes of the seven states of the state
+/// machine plus the reset and transition states the machine passes through.
+pub const P182_CODES: &[NmtStateCode] = &[
+    nmt(0x00, "OFF", None),
+    nmt(0x19, "INITIALISING", Some(PlState::Initialisation)),
+    nmt(0x1C, "NOT_ACTIVE", None),
+    nmt(0x1D, "PRE_OPERATIONAL_1", Some(PlState::PreOperational1)),
+    nmt(0x1E, "BASIC_ETHERNET", Some(PlState::BasicEthernet)),
+    nmt(0x29, "RESET_APPLICATION", None),
+    nmt(0x39, "RESET_COMMUNICATION", None),
+    nmt(0x4D, "STOPPED", Some(PlState::Stopped)),
+    nmt(0x5D, "PRE_OPERATIONAL_2", Some(PlState::PreOperational2)),
+    nmt(0x6D, "READY_TO_OPERATE", Some(PlState::ReadyToOperate)),
+    nmt(0x79, "RESET_CONFIGURATION", None),
+    nmt(0xFD, "OPERATIONAL", Some(PlState::Operational)),
+];
+
+/// The P182 entry of a displayed value, or `None` for a value the manual does not list.
+pub fn p182(code: i64) -> Option<&'static NmtStateCode> {
+    P182_CODES.iter().find(|c| i64::from(c.code) == code)
+}
+
+impl PlState {
+    /// The value P182 shows in this state (BU 2200 §7.1.4).
+    pub fn p182(self) -> u8 {
+        P182_CODES
+            .iter()
+            .find(|c| c.state == Some(self))
+            .map_or(0, |c| c.code)
+    }
+}
+
 /// What drives the POWERLINK state machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 pub enum PlEvent {
@@ -362,6 +411,33 @@ mod tests {
             ethercat_next(EcState::SafeOperational, EcState::Operational),
             Ok(EcState::Operational)
         );
+    }
+
+    #[rstest::rstest]
+    #[case(PlState::Initialisation, 0x19)]
+    #[case(PlState::PreOperational1, 0x1D)]
+    #[case(PlState::PreOperational2, 0x5D)]
+    #[case(PlState::ReadyToOperate, 0x6D)]
+    #[case(PlState::Operational, 0xFD)]
+    #[case(PlState::BasicEthernet, 0x1E)]
+    #[case(PlState::Stopped, 0x4D)]
+    fn p182_codes_of_the_states(#[case] state: PlState, #[case] code: u8) {
+        assert_eq!(state.p182(), code);
+        assert_eq!(p182(i64::from(code)).and_then(|c| c.state), Some(state));
+    }
+
+    #[test]
+    fn p182_other_codes() {
+        assert_eq!(P182_CODES.len(), 12);
+        assert_eq!(p182(0x79).map(|c| c.name), Some("RESET_CONFIGURATION"));
+        assert_eq!(p182(0).map(|c| c.name), Some("OFF"));
+        assert_eq!(p182(0x20), None);
+        assert_eq!(p182(-1), None);
+        // Every state of the §2.4.4 machine has its own code.
+        let mut codes: Vec<u8> = PlState::ALL.iter().map(|s| s.p182()).collect();
+        codes.sort_unstable();
+        codes.dedup();
+        assert!(codes.iter().all(|c| *c != 0) && codes.len() == 7);
     }
 
     #[test]

@@ -130,6 +130,13 @@ const fn array(p: ParamDef, n: u8) -> ParamDef {
     }
 }
 
+const fn dword(p: ParamDef) -> ParamDef {
+    ParamDef {
+        width: Width::Dword,
+        ..p
+    }
+}
+
 const fn ro(p: ParamDef) -> ParamDef {
     ParamDef {
         access: Access::ReadOnly,
@@ -159,6 +166,7 @@ const EIP_ALL: &[Product] = &[Product::Tu3Eip, Product::Tu4Eip, Product::Cu4Eip]
 const EIP_TU4_CU4: &[Product] = &[Product::Tu4Eip, Product::Cu4Eip];
 const POL_ALL: &[Product] = &[Product::Tu3Pol, Product::Tu4Pol, Product::Cu4Pol];
 const PNT: &[Product] = &[Product::Tu3Pnt];
+const POL_TU4_CU4: &[Product] = &[Product::Tu4Pol, Product::Cu4Pol];
 const TU4_CU4: &[Product] = &[
     Product::Tu4Eip,
     Product::Cu4Eip,
@@ -199,6 +207,10 @@ pub const CATALOGUE: &[ParamDef] = &[
     iface(array(inv(852, "IP Gateway", 0, 255, 0, 0, "BU 0620 §4.2.2: factory 0.0.0.0"), 4)),
     iface(inv(853, "Right TCP Ethernet", 0, 3, 0, 0, "BU 0620 §4.2.2: 0…3, factory 0")),
     iface(inv(856, "Addressing Mode", 0, 2, 1, 0, "BU 0620 §4.2.2: 0 fixed (P850–P852), 1 BOOTP, 2 DHCP; factory 1; read in at restart")),
+    iface(inv(854, "Device name", 0, 122, 0, 0, "BU 0620 §4.2.3 (POWERLINK, p. 80), §4.2.4 (PROFINET IO, p. 83): 0…122 (ASCII), factory 0 (no name); one character per value, the manual prints no array")),
+    iface(inv(857, "FI sets bus error", 0, 1, 1, 0, "BU 0620 §5.4.1 (p. 95): \"P163/P857 FI sets bus error\" factory 1 (a FI error stops the PLC), may be set to 0 (\"False\"); §4.2.3 prints no entry, range 0…1 as P163 of BU 2200 §7.1.2")),
+    iface(inv(858, "POWERLINK cycle", 400, 2000, 1000, 0, "BU 0620 §4.2.3 (p. 81): 400…2000 µs, factory 1000")),
+    iface(ro(array(inv(877, "Present IP gateway", 0, 255, 0, 0, "BU 0620 §4.4.2 (p. 87), §4.4.3 (p. 88): [-01]..[-04], the gateway set in P852"), 4))),
     iface(ro(array(inv(875, "Present IP address", 0, 255, 0, 0, "BU 0620 §4.4.1: [-01]..[-04]"), 4))),
     iface(ro(array(inv(876, "Present IP sub-net mask", 0, 255, 0, 0, "BU 0620 §4.4.1: [-01]..[-04]"), 4))),
     iface(ro(array(inv(878, "MAC Address", 0, 255, 0, 0, "BU 0620 §4.4.1: [-01]..[-03] manufacturer id F0.5F.5A, [-04]..[-06] free"), 6))),
@@ -223,13 +235,35 @@ pub const CATALOGUE: &[ParamDef] = &[
     module(inv(165, "POWERLINK Zyklus", 400, 4000, 1000, 0, "BU 2200 §7: 400…4000 µs, factory 1000"), POL_ALL),
     module(inv(166, "PZD transmission format", 0, 1, 0, 0, "BU 2100 §7.1.2: 0 = 32 bit header + status, 1 = modeless (instances 110/111 only); factory 0"), EIP_ALL),
     module(ro(array(inv(180, "Active assembly", 0, 255, 0, 0, "BU 2100 §7.1.4: [-01] consumer, [-02] producer assembly"), 2)), EIP_ALL),
-    module(ro(array(inv(181, "MAC address", 0, 255, 0, 0, "BU 2100 §7.1.4: [-01]..[-03] manufacturer id F0.5F.5A, [-04]..[-06] free"), 6)), EIP_ALL),
-    module(ro(array(inv(185, "Present IP address", 0, 255, 0, 0, "BU 2100 §7.1.4: [-01]..[-04]"), 4)), EIP_ALL),
-    module(ro(array(inv(186, "Present IP subnet mask", 0, 255, 0, 0, "BU 2100 §7.1.4: [-01]..[-04]"), 4)), EIP_ALL),
+    module(ro(array(inv(181, "MAC address", 0, 255, 0, 0, "BU 2100 §7.1.4, BU 2200 §7.1.4 (p. 57): [-01]..[-03] manufacturer id F0.5F.5A, [-04]..[-06] free"), 6)), EIP_POL_ALL),
+    module(ro(array(inv(185, "Present IP address", 0, 255, 0, 0, "BU 2100 §7.1.4, BU 2200 §7.1.4 (p. 58): [-01]..[-04]"), 4)), EIP_POL_ALL),
+    module(ro(array(inv(186, "Present IP subnet mask", 0, 255, 0, 0, "BU 2100 §7.1.4, BU 2200 §7.1.4 (p. 58): [-01]..[-04]"), 4)), EIP_POL_ALL),
     module(ro(array(inv(170, "Actual error", 0, 9999, 0, 0, "BU 2100 §7.1.3: [-01] actual, [-02] last error of the bus interface"), 2)), EIP_ALL),
     module(ro(inv(172, "Configuration level", 0, 3, 0, 0, "BU 2100 §7.1.3: 0 CU4, 1 TU4, 2 TU3, 3 TU3 with DIP switch")), EIP_ALL),
     module(ro(array(inv(173, "Module status", 0, 0xFFFF, 0, 0, "BU 2100 §7.1.3: [-01] bit 0 ready, 1 cyclic communication, 3 timeout P151/P513"), 2)), EIP_ALL),
     module(inv(152, "Factory setting", 0, 1, 0, 0, "BU 0590 §5.1.1: 0…1, factory 0"), PNT),
+    module(inv(162, "Device name", 0, 122, 0, 0, "BU 0590 §5.1.2 (p. 35): ASCII characters 45…122, up to 240 of them; a 0 ends and saves the name (so 0 is allowed, which the printed range 45…122 omits); no factory setting printed, 0 (no name) assumed"), PNT),
+    module(ro(array(inv(170, "Present error", 0, 5420, 0, 0, "BU 0590 §5.1.3 (p. 35): 0…5420, [-01] actual module error, [-02] last (printed \"actual\" twice); 1020 = bus time-out via P151/P513"), 2)), PNT),
+    module(ro(array(inv(171, "Software version", 0, 99999, 0, 1, "BU 0590 §5.1.3 (p. 35): 0.0…9999.9, [-01] version, [-02] revision, [-03] special version (0 = standard)"), 3)), PNT),
+    module(ro(inv(172, "Configuration level", 0, 2, 0, 0, "BU 0590 §5.1.3 (p. 36): 0 SK CU4, 1 SK TU4, 2 SK TU3-PNT")), PNT),
+    module(ro(inv(173, "Module status", 0, 0xFFFF, 0, 0, "BU 0590 §5.1.3 (p. 36): bit 0 initialisation, 1 AR installed, 3 timeout P151/P513, 5 Ethernet connection, bits 9–8 FI status (00 offline, 01 not supported, 10 online)")), PNT),
+    module(ro(array(inv(176, "PZD bus IN", -32768, 32767, 0, 0, "BU 0590 §5.1.3 (p. 36): [-01]..[-27], [-01] bus module outputs, [-02] control word, [-03]/[-04] setpoints 1/2 for FI 1"), 27)), PNT),
+    module(ro(array(inv(177, "PZD bus OUT", -32768, 32767, 0, 0, "BU 0590 §5.1.3 (p. 36): [-01]..[-27], [-01] bus module inputs, [-02] status word, [-03]/[-04] actual values 1/2 from FI 1"), 27)), PNT),
+    module(ro(array(inv(180, "PPO type", 0, 7, 0, 0, "BU 0590 §5.1.4 (p. 37): module id per slot [-01]..[-07], [-03] = slot 3 (FI): 0 empty, 1 reserved, 2 DIG-IO, 3 PPO3, 4 PPO4, 5 PPO6, 6 PPO1, 7 PPO2"), 7)), PNT),
+    module(ro(array(inv(181, "MAC address", 0, 255, 0, 0, "BU 0590 §5.1.4 (p. 37): [-01]..[-03] PROFINET identification, [-04]..[-06] NORD range 6000…6FFF; example 00:0E:CF:03:60:00"), 6)), PNT),
+    module(inv(162, "Geräte Name", 0, 122, 0, 0, "BU 2200 §7.1.2 (p. 51): 0…122 (ASCII), factory 0; without a name the node registers as \"Powerlink <nnn>-0xED\""), POL_ALL),
+    module(ro(array(inv(170, "Aktueller Fehler", 0, 9999, 0, 0, "BU 2200 §7.1.3 (p. 53): [-01] present, [-02] last error of the bus interface"), 2)), POL_ALL),
+    module(ro(array(inv(171, "Software-Version", 0, 99999, 0, 1, "BU 2200 §7.1.3 (p. 53): 0.0…9999.9, [-01] version, [-02] revision, [-03] special version"), 3)), POL_ALL),
+    module(ro(inv(172, "Ausbaustufe", 0, 3, 0, 0, "BU 2200 §7.1.3 (p. 53): 0 CU4, 1 TU4, 2 TU3, 3 TU3 with DIP switch (the printed range \"0…\" is cut off)")), POL_ALL),
+    module(ro(array(inv(173, "Baugruppen Zustand", 0, 0xFFFF, 0, 0, "BU 2200 §7.1.3 (p. 54): [-01] bit 0 ready, 1 cyclic communication, 2 timeout Ethernet bus, 3 timeout P151/P513, bits 8–15 status of FI 1..4; [-02] status of FI 1..8 in bit pairs (10 = online)"), 2)), POL_ALL),
+    module(ro(inv(174, "Zustand Digitaleing.", 0, 255, 0, 0, "BU 2200 §7.1.3 (p. 54): bit n = input n+1 of the bus interface")), POL_TU4_CU4),
+    module(ro(inv(175, "Zustand Relais", 0, 3, 0, 0, "BU 2200 §7.1.3 (p. 55): bit 0 DO1, bit 1 DO2")), &[Product::Tu4Pol]),
+    module(ro(array(inv(176, "Prozeßdaten Bus In", -32768, 32767, 0, 0, "BU 2200 §7.1.3 (p. 55): [-01] module outputs, [-02 + 6(n-1)] control word and the next five setpoints 1..5 to FI n"), 49)), POL_ALL),
+    module(ro(array(inv(177, "Prozessdaten Bus Out", -32768, 32767, 0, 0, "BU 2200 §7.1.3 (p. 55): [-01] module inputs, [-02 + 6(n-1)] status word and the next five actual values 1..5 of FI n"), 49)), POL_ALL),
+    module(ro(inv(178, "Innenraumtemperatur", -128, 127, 0, 0, "BU 2200 §7.1.3 (p. 56): -128…127 °C; above +97 °C an error is reported")), &[Product::Cu4Pol]),
+    module(ro(inv(182, "NMT State", 0, 0xFF, 0, 0, "BU 2200 §7.1.4 (p. 57): POWERLINK NMT state codes (proto::nord::nmt::P182_CODES)")), POL_ALL),
+    module(ro(inv(183, "NMT Error", -32768, 32767, 0, 0, "BU 2200 §7.1.4 (p. 58): errors of the Controlled Node (DS-301 codes)")), POL_ALL),
+    module(ro(array(dword(inv(184, "NMT Statechangecount", 0, i32::MAX, 0, 0, "BU 2200 §7.1.4 (p. 58): error counters 0…2^31 (the extraction prints \"0…231\"; 2^31 - 1 is the largest 32-bit value), [-01] loss of SoC … [-06] CRC error; cleared at restart")), 6)), POL_ALL),
     module(elements(inv(160, "IP address", 0, 255, 0, 0, "BU 0590 §5.1.2: factory 192.168.20.200"), &[192, 168, 20, 200]), PNT),
     module(elements(inv(161, "IP sub-net mask", 0, 255, 0, 0, "BU 0590 §5.1.2: factory 255.255.255.0"), MASK_DEFAULT), PNT),
     module(array(inv(163, "Test alarm", 0, 255, 0, 0, "BU 0590 §5.1.2: [-01]..[-07] slots, all {0}"), 7), PNT),
@@ -305,6 +339,54 @@ mod tests {
         assert!(lookup(Product::Sk550p, Owner::Interface, p(160)).is_none());
     }
 
+    #[rstest::rstest]
+    // BU 0620 §4.2.3/§4.2.4 (p. 80–83), §5.4.1 (p. 95), §4.4.2 (p. 87): (P, min, max, default).
+    #[case(Product::Sk550p, 854, 0, 122, 0)]
+    #[case(Product::Sk550p, 857, 0, 1, 1)]
+    #[case(Product::Sk550p, 858, 400, 2000, 1000)]
+    #[case(Product::Sk550p, 877, 0, 255, 0)]
+    // BU 0590 §5.1.2–§5.1.4 (p. 35–37).
+    #[case(Product::Tu3Pnt, 162, 0, 122, 0)]
+    #[case(Product::Tu3Pnt, 170, 0, 5420, 0)]
+    #[case(Product::Tu3Pnt, 172, 0, 2, 0)]
+    #[case(Product::Tu3Pnt, 180, 0, 7, 0)]
+    // BU 2200 §7.1.2–§7.1.4 (p. 51–58).
+    #[case(Product::Tu3Pol, 162, 0, 122, 0)]
+    #[case(Product::Tu3Pol, 170, 0, 9999, 0)]
+    #[case(Product::Cu4Pol, 178, -128, 127, 0)]
+    #[case(Product::Tu4Pol, 182, 0, 0xFF, 0)]
+    #[case(Product::Tu4Pol, 183, -32768, 32767, 0)]
+    fn bus_parameters(
+        #[case] product: Product,
+        #[case] number: i64,
+        #[case] min: i32,
+        #[case] max: i32,
+        #[case] default: i32,
+    ) {
+        let d = lookup(product, Owner::Interface, p(number)).unwrap();
+        assert_eq!((d.min, d.max, d.default), (min, max, default));
+    }
+
+    #[test]
+    fn information_parameters_of_the_modules() {
+        let gateway = lookup(Product::Sk550p, Owner::Interface, p(877)).unwrap();
+        assert_eq!((gateway.access, gateway.array), (Access::ReadOnly, Some(4)));
+        let counters = lookup(Product::Tu3Pol, Owner::Interface, p(184)).unwrap();
+        assert_eq!((counters.width, counters.array), (Width::Dword, Some(6)));
+        assert_eq!(
+            lookup(Product::Tu3Pol, Owner::Interface, p(176)).and_then(|d| d.array),
+            Some(49)
+        );
+        // Per product: P174 on SK TU4/CU4-POL, P175 on SK TU4-POL, P178 on SK CU4-POL only.
+        assert!(lookup(Product::Tu3Pol, Owner::Interface, p(174)).is_none());
+        assert!(lookup(Product::Cu4Pol, Owner::Interface, p(175)).is_none());
+        assert!(lookup(Product::Tu4Pol, Owner::Interface, p(178)).is_none());
+        // The modules' MAC address P181 and present address P185 on POWERLINK too.
+        assert!(lookup(Product::Cu4Pol, Owner::Interface, p(181)).is_some());
+        assert!(lookup(Product::Tu3Pol, Owner::Interface, p(185)).is_some());
+        assert!(lookup(Product::Tu3Pnt, Owner::Interface, p(185)).is_none());
+    }
+
     #[test]
     fn catalogue_is_consistent() {
         for d in CATALOGUE {
@@ -314,6 +396,16 @@ mod tests {
                 d.number
             );
             assert!(d.number <= 999 && !d.source.is_empty());
+            for product in Product::ALL {
+                let same = CATALOGUE.iter().filter(|o| {
+                    o.number == d.number && o.owner == d.owner && o.applies_to(product)
+                });
+                assert!(
+                    same.count() <= 1 || !d.applies_to(product),
+                    "P{} twice",
+                    d.number
+                );
+            }
         }
     }
 }

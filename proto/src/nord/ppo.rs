@@ -93,8 +93,8 @@ impl PpoType {
     }
 
     /// The code the product's PPO-type parameter shows for this type: P879 on the SK 550P
-    /// (BU 0620 §4.4.3: 6 = PPO3, 7 = PPO4, 8 = PPO6, 9 = PPO1, 10 = PPO2), P181 on modules
-    /// (BU 0590 §5: 3 = PPO3, 4 = PPO4, 5 = PPO6, 6 = PPO1, 7 = PPO2).
+    /// (BU 0620 §4.4.3: 6 = PPO3, 7 = PPO4, 8 = PPO6, 9 = PPO1, 10 = PPO2), P180 on the SK
+    /// TU3-PNT (BU 0590 §5.1.4: 3 = PPO3, 4 = PPO4, 5 = PPO6, 6 = PPO1, 7 = PPO2).
     pub fn display_code(self, product: Product) -> Option<u16> {
         let module = match self.0 {
             3 => 3,

@@ -1,0 +1,118 @@
+//! The bus interface's status parameters, derived from what the interface sees.
+//!
+//! Each product shows its bus status in its own parameters and bit layout:
+//! - SK 550P: P872 "Bus status" (BU 0620 §4.3, p. 84): bit 0 module ready, 1 cyclic PZD
+//!   communication, 2 field bus timeout, 3 timeout P513, bits 8–15 FI 1..8 online.
+//! - SK TU3/TU4/CU4-EIP: P173 [-01] "Module status" (BU 2100 §7.1.3, p. 51): bits 0–3 as the
+//!   SK 550P's (ready, cyclic communication, field bus timeout, timeout P151/P513).
+//! - SK TU3-PNT: P173 "Module status" (BU 0590 §5.1.3, p. 36): bit 1 AR installed, bit 3
+//!   timeout (P151/P513), bits 9–8 FI status (10b = online); P170 [-01] "Present error" 1020
+//!   "Bus Time Out via P151 or P513" (p. 35).
+//! - SK TU3/TU4/CU4-POL: P173 "Baugruppen Zustand" (BU 2200 §7.1.3, p. 54): [-01] bit 0 ready,
+//!   1 cyclic communication, 2 timeout Ethernet bus, 3 timeout P151/P513, bits 8–15 FI 1..4 in
+//!   bit pairs; [-02] FI 1..8 in bit pairs; a pair reads 00 offline, 01 unknown, 10 online,
+//!   11 lost.
+//!
+//! The embedded link stands in for the field bus: its cyclic process data count as cyclic
+//! communication (and, for PROFINET, as an established application relation). Bits the
+//! simulator has no cause for (TU3-PNT bit 0 "Initialisation" and bit 5 "Ethernet connection",
+//! whose polarity the manual does not give; POWERLINK ASIC and system-bus errors) stay 0.
+
+use proto::nord::Product;
+
+/// What the interface knows of its bus and its inverters at one moment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct BusFlags {
+    /// Valid process data arrived within the last window.
+    pub(crate) cyclic: bool,
+    /// The field-bus watchdog (the master's connection) has expired.
+    pub(crate) fieldbus_timeout: bool,
+    /// An inverter's telegram monitoring (P513 / P151) has tripped (E10.3).
+    pub(crate) telegram_timeout: bool,
+    /// Inverters on the system bus: FI 1..=online are online.
+    pub(crate) online: u8,
+}
+
+/// A bit pair "10b = online" for each of FI 1..=`online` among the first `slots`, from `first`.
+fn online_pairs(online: u8, slots: u8, first: u32) -> i32 {
+    (0..u32::from(online.min(slots))).fold(0, |w, n| w | 0b10 << (first + 2 * n))
+}
+
+/// The status parameters of `product` as (parameter, element, value).
+pub(crate) fn status_parameters(product: Product, f: BusFlags) -> Vec<(u16, u8, i32)> {
+    let low = 1
+        | i32::from(f.cyclic) << 1
+        | i32::from(f.fieldbus_timeout) << 2
+        | i32::from(f.telegram_timeout) << 3;
+    match product {
+        Product::Sk550p => {
+            let online = (0..f.online.min(8)).fold(0, |w, n| w | 1 << (8 + n));
+            vec![(872, 1, low | online)]
+        }
+        Product::Tu3Pnt => vec![
+            (
+                173,
+                1,
+                i32::from(f.cyclic) << 1
+                    | i32::from(f.telegram_timeout) << 3
+                    | online_pairs(f.online, 1, 8),
+            ),
+            (170, 1, if f.telegram_timeout { 1020 } else { 0 }),
+        ],
+        Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => vec![
+            (173, 1, low | online_pairs(f.online, 4, 8)),
+            (173, 2, online_pairs(f.online, 8, 0)),
+        ],
+        Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => vec![(173, 1, low)],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rstest::rstest;
+
+    fn flags(cyclic: bool, timeout: bool, online: u8) -> BusFlags {
+        BusFlags {
+            cyclic,
+            fieldbus_timeout: false,
+            telegram_timeout: timeout,
+            online,
+        }
+    }
+
+    #[rstest]
+    // BU 0620 §4.3: ready + cyclic + FI 1..3 online = 0703h.
+    #[case(Product::Sk550p, flags(true, false, 3), vec![(872, 1, 0x0703)])]
+    #[case(Product::Sk550p, flags(false, true, 8), vec![(872, 1, 0xFF09)])]
+    // BU 2100 §7.1.3: the low four bits only.
+    #[case(Product::Tu4Eip, flags(true, true, 4), vec![(173, 1, 0x000B)])]
+    // BU 0590 §5.1.3: AR installed, FI online = bits 9–8 10b; P170 1020 on a timeout.
+    #[case(Product::Tu3Pnt, flags(true, false, 1), vec![(173, 1, 0x0202), (170, 1, 0)])]
+    #[case(Product::Tu3Pnt, flags(false, true, 1), vec![(173, 1, 0x0208), (170, 1, 1020)])]
+    // BU 2200 §7.1.3: [-01] FI 1..4 in bits 8–15, [-02] FI 1..8 in bits 0–15, 10b each.
+    #[case(Product::Tu4Pol, flags(true, false, 4), vec![(173, 1, 0xAA03), (173, 2, 0x00AA)])]
+    #[case(Product::Tu3Pol, flags(false, false, 1), vec![(173, 1, 0x0201), (173, 2, 0x0002)])]
+    #[case(Product::Cu4Pol, flags(false, false, 8), vec![(173, 1, 0xAA01), (173, 2, 0xAAAA)])]
+    fn status_words(
+        #[case] product: Product,
+        #[case] f: BusFlags,
+        #[case] want: Vec<(u16, u8, i32)>,
+    ) {
+        assert_eq!(status_parameters(product, f), want);
+    }
+
+    #[test]
+    fn field_bus_timeout_is_bit_2() {
+        let f = BusFlags {
+            fieldbus_timeout: true,
+            online: 1,
+            ..BusFlags::default()
+        };
+        assert_eq!(
+            status_parameters(Product::Tu3Pol, f)[0],
+            (173, 1, 0x0205),
+            "ready, Ethernet bus timeout, FI 1 online"
+        );
+    }
+}
