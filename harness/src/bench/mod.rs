@@ -67,6 +67,8 @@ pub struct Settings {
     /// Not 127.0.0.1: the clients' end of a loopback connection is 127.0.0.1, and the T→O data
     /// arrives on its UDP 2222.
     pub listen: SocketAddr,
+    /// Rounds of the single-client figures (scanner, minimal client, pycomm3 in turn).
+    pub rounds: u32,
     /// Round trips of a single-client figure, at most.
     pub requests: u32,
     /// Time limit of each round-trip figure.
@@ -86,7 +88,7 @@ pub struct Settings {
 }
 
 impl Settings {
-    /// The figures: 20,000 round trips or 2 s per client figure, 8 clients × 5,000,
+    /// The figures: 3 rounds of 20,000 round trips or 2 s per client figure, 8 clients × 5,000,
     /// 10 s of I/O at RPI 1 ms; Python from `${INTEROP_VENV:-/tmp/nord-interop-venv}`.
     pub fn new(script: PathBuf) -> Settings {
         let venv =
@@ -94,6 +96,7 @@ impl Settings {
         let python = Path::new(&venv).join("bin/python");
         Settings {
             listen: SocketAddr::new(IpAddr::V4(Ipv4Addr::new(127, 0, 0, 5)), 44818),
+            rounds: 3,
             requests: 20_000,
             limit: Duration::from_secs(2),
             clients: 8,
@@ -117,42 +120,61 @@ pub fn run_enip(s: &Settings) -> Result<(), String> {
         served.io
     );
 
-    let scanner = scanner_round_trips(s, 1, s.requests);
-    match &scanner {
-        Ok(r) => println!("harness scanner, 1 client: {}", r.show("round trips")),
-        Err(e) => println!("harness scanner, 1 client: failed ({e})"),
-    }
-    // What the simulator and loopback allow one client, for comparison: a client that does
-    // nothing but encode and decode.
-    let minimal = minimal_round_trips(s, 1, s.requests);
-    match &minimal {
-        Ok(r) => println!(
-            "bench's minimal client, 1 client: {}",
-            r.show("round trips")
-        ),
-        Err(e) => println!("bench's minimal client, 1 client: failed ({e})"),
-    }
-
-    match pycomm3_round_trips(s) {
-        Pycomm3::Skipped(why) => println!("pycomm3: skipped ({why})"),
-        Pycomm3::Failed(why) => println!("pycomm3: failed ({why})"),
-        Pycomm3::Ran { client, rate } => {
-            println!("{client}, 1 client: {}", rate.show("round trips"));
-            if let Ok(sc) = &scanner {
-                let ratio = sc.per_sec() / rate.per_sec();
-                print!(
-                    "harness scanner / pycomm3: {ratio:.1}x (target >= {TARGET_RATIO}x: {})",
-                    met(ratio >= TARGET_RATIO)
-                );
-                if let Ok(m) = &minimal {
-                    print!(
-                        "; bench's minimal client / pycomm3: {:.1}x",
-                        m.per_sec() / rate.per_sec()
-                    );
-                }
-                println!();
+    // The single-client figures in interleaved rounds, so that a burst of load elsewhere on
+    // the machine falls on every client alike; each figure is the median of its rounds.
+    let mut scanner = Vec::new();
+    let mut minimal = Vec::new();
+    let mut pycomm3 = Vec::new();
+    let mut pycomm3_client = None;
+    for round in 1..=s.rounds {
+        let mut line = format!("round {round}/{}:", s.rounds);
+        match scanner_round_trips(s, 1, s.requests) {
+            Ok(r) => {
+                line += &format!(" harness scanner {:.0}/s", r.per_sec());
+                scanner.push(r.per_sec());
+            }
+            Err(e) => line += &format!(" harness scanner failed ({e})"),
+        }
+        // What the simulator and loopback allow one client, for comparison: a client that
+        // does nothing but encode and decode.
+        match minimal_round_trips(s, 1, s.requests) {
+            Ok(r) => {
+                line += &format!(", bench's minimal client {:.0}/s", r.per_sec());
+                minimal.push(r.per_sec());
+            }
+            Err(e) => line += &format!(", bench's minimal client failed ({e})"),
+        }
+        match pycomm3_round_trips(s) {
+            Pycomm3::Skipped(why) => line += &format!(", pycomm3 skipped ({why})"),
+            Pycomm3::Failed(why) => line += &format!(", pycomm3 failed ({why})"),
+            Pycomm3::Ran { client, rate } => {
+                line += &format!(", {client} {:.0}/s", rate.per_sec());
+                pycomm3.push(rate.per_sec());
+                pycomm3_client = Some(client);
             }
         }
+        println!("{line}");
+    }
+    let (scanner, minimal, pycomm3) = (median(scanner), median(minimal), median(pycomm3));
+    let show = |what: &str, rate: Option<f64>| match rate {
+        Some(r) => println!("{what}, 1 client, median of the rounds: {r:.0} round trips/s"),
+        None => println!("{what}, 1 client: no round completed"),
+    };
+    show("harness scanner", scanner);
+    show("bench's minimal client", minimal);
+    if let Some(client) = &pycomm3_client {
+        show(client, pycomm3);
+    }
+    if let (Some(sc), Some(py)) = (scanner, pycomm3) {
+        let ratio = sc / py;
+        print!(
+            "harness scanner / pycomm3: {ratio:.1}x (target >= {TARGET_RATIO}x: {})",
+            met(ratio >= TARGET_RATIO)
+        );
+        if let Some(m) = minimal {
+            print!("; bench's minimal client / pycomm3: {:.1}x", m / py);
+        }
+        println!();
     }
 
     match scanner_round_trips(s, s.clients, s.per_client) {
@@ -189,6 +211,17 @@ pub fn run_enip(s: &Settings) -> Result<(), String> {
         Err(e) => println!("{what}: failed ({e})"),
     }
     Ok(())
+}
+
+/// The median of `values` (the mean of the middle two of an even count); `None` when empty.
+fn median(mut values: Vec<f64>) -> Option<f64> {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(values[n / 2]),
+        _ => Some((values[n / 2 - 1] + values[n / 2]) / 2.0),
+    }
 }
 
 fn met(ok: bool) -> &'static str {
@@ -417,4 +450,16 @@ fn pycomm3_round_trips(s: &Settings) -> Pycomm3 {
 fn param_path() -> Result<EPath, String> {
     let fi = Inverter::new(1).map_err(|e| e.to_string())?;
     Ok(EPath::attribute(eip::param_class(Some(fi)), 0, PARAM))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::median;
+
+    #[test]
+    fn median_of_odd_even_and_no_rounds() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(vec![4.0, 1.0, 3.0, 2.0]), Some(2.5));
+        assert_eq!(median(Vec::new()), None);
+    }
 }

@@ -147,8 +147,8 @@ impl Item {
         })
     }
 
-    fn data(&self) -> Vec<u8> {
-        let mut out = Vec::new();
+    /// Appends the item's data to `out`.
+    fn put_data(&self, out: &mut Vec<u8>) {
         match self {
             Item::Null => {}
             Item::ConnectedAddress(c) => out.put_u32(*c),
@@ -162,9 +162,8 @@ impl Item {
             Item::UnconnectedData(d) | Item::ConnectedData(d) | Item::Other { data: d, .. } => {
                 out.extend_from_slice(d)
             }
-            Item::SockaddrOT(a) | Item::SockaddrTO(a) => out = sockaddr_bytes(*a),
+            Item::SockaddrOT(a) | Item::SockaddrTO(a) => out.extend(sockaddr_bytes(*a)),
         }
-        out
     }
 }
 
@@ -198,15 +197,23 @@ impl Cpf {
 
     /// The bytes.
     pub fn emit(&self) -> Result<Vec<u8>, WireError> {
-        let mut out = Vec::new();
+        let mut out = Vec::with_capacity(64);
+        self.emit_into(&mut out)?;
+        Ok(out)
+    }
+
+    /// Appends the encoded list to `out`: one buffer for a whole message.
+    pub fn emit_into(&self, out: &mut Vec<u8>) -> Result<(), WireError> {
         out.put_u16(len16("CPF item count", self.items.len())?);
         for item in &self.items {
-            let data = item.data();
             out.put_u16(item.type_id());
-            out.put_u16(len16("CPF item data", data.len())?);
-            out.extend(data);
+            let at = out.len();
+            out.put_u16(0);
+            item.put_data(out);
+            let len = len16("CPF item data", out.len() - at - 2)?;
+            out[at..at + 2].copy_from_slice(&len.to_le_bytes());
         }
-        Ok(out)
+        Ok(())
     }
 
     /// The first item of `type_id`.

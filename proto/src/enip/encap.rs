@@ -305,10 +305,10 @@ impl SendData {
 
     /// The bytes.
     pub fn emit(&self) -> Result<Vec<u8>, WireError> {
-        let mut out = Vec::new();
+        let mut out = Vec::with_capacity(64);
         out.put_u32(self.interface);
         out.put_u16(self.timeout);
-        out.extend(self.cpf.emit()?);
+        self.cpf.emit_into(&mut out)?;
         Ok(out)
     }
 }

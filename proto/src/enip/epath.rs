@@ -293,28 +293,30 @@ impl EPath {
 
 impl fmt::Display for EPath {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let parts: Vec<String> = self
-            .segments
-            .iter()
-            .map(|s| match s {
-                Segment::Class(v) => format!("class {v}"),
-                Segment::Instance(v) => format!("instance {v}"),
-                Segment::Attribute(v) => format!("attribute {v}"),
-                Segment::ConnectionPoint(v) => format!("connection point {v}"),
-                Segment::Member(v) => format!("member {v}"),
-                Segment::Port { port, link } => format!("port {port} link {link:02X?}"),
-                Segment::Key(k) => format!(
+        for (i, s) in self.segments.iter().enumerate() {
+            if i > 0 {
+                f.write_str(" / ")?;
+            }
+            match s {
+                Segment::Class(v) => write!(f, "class {v}")?,
+                Segment::Instance(v) => write!(f, "instance {v}")?,
+                Segment::Attribute(v) => write!(f, "attribute {v}")?,
+                Segment::ConnectionPoint(v) => write!(f, "connection point {v}")?,
+                Segment::Member(v) => write!(f, "member {v}")?,
+                Segment::Port { port, link } => write!(f, "port {port} link {link:02X?}")?,
+                Segment::Key(k) => write!(
+                    f,
                     "key vendor {} type {} product {} rev {}.{}",
                     k.vendor,
                     k.device_type,
                     k.product_code,
                     k.major & 0x7F,
                     k.minor
-                ),
-                Segment::Data(d) => format!("data {} bytes", d.len()),
-            })
-            .collect();
-        write!(f, "{}", parts.join(" / "))
+                )?,
+                Segment::Data(d) => write!(f, "data {} bytes", d.len())?,
+            }
+        }
+        Ok(())
     }
 }
 
