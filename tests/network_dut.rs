@@ -1,13 +1,21 @@
-//! A hung, closing or garbage-sending EtherNet/IP target becomes an error verdict within the
-//! scanner's timeout, never a hang of the harness: three fake targets on loopback, one
-//! `harness run --dut` each.
+//! `harness run --dut` against targets on loopback:
+//!
+//! - a hung, closing or garbage-sending EtherNet/IP target becomes an error verdict within the
+//!   scanner's timeout, never a hang of the harness: three fake targets, one run each;
+//! - the served simulator, one persistent device for a whole run as a real one is, passes the
+//!   full `tu4-eip@enip` and `sk550p@enip` runs: each case leaves it as it found it (the
+//!   scanner's cleanup), and what only a freshly powered-on or factory-set device can show is
+//!   not applicable there.
 
 use std::io::{Read, Write};
-use std::net::TcpListener;
+use std::net::{TcpListener, TcpStream};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
+
+mod common;
+use common::serve;
 
 #[derive(Clone, Copy)]
 enum Target {
@@ -81,6 +89,123 @@ fn hung_closing_and_garbage_targets_are_error_verdicts() {
         }
         // Four cases, each bounded by the 0.3 s timeout (plus process start).
         assert!(took < Duration::from_secs(10), "took {took:?}");
+        let _ = std::fs::remove_dir_all(&out_dir);
+    }
+}
+
+/// Where the served simulator listens (other tests take 127.0.0.2, .3, .5–.9 and .11).
+const SERVED: &str = "127.0.0.12:44818";
+
+/// One encapsulation message and its reply (header: command, length, session, status,
+/// context, options; CIP Vol 2 §2-3.2).
+fn encap(s: &mut TcpStream, command: u16, session: u32, data: &[u8]) -> Vec<u8> {
+    let mut msg = Vec::new();
+    msg.extend(command.to_le_bytes());
+    msg.extend((data.len() as u16).to_le_bytes());
+    msg.extend(session.to_le_bytes());
+    msg.extend([0u8; 16]); // status, sender context, options
+    msg.extend(data);
+    s.write_all(&msg).unwrap();
+    let mut header = [0u8; 24];
+    s.read_exact(&mut header).unwrap();
+    let mut reply = vec![0u8; usize::from(u16::from_le_bytes([header[2], header[3]]))];
+    s.read_exact(&mut reply).unwrap();
+    assert_eq!(header[8..12], [0, 0, 0, 0], "encapsulation status");
+    [header.to_vec(), reply].concat()
+}
+
+/// P102 of FI 1 (class 101, instance 0 = parameter set 1, attribute 102: BU 2100 §6.3,
+/// BU 0620 §2.3.5), read by a client of the test's own, apart from the harness.
+fn read_p102() -> u16 {
+    let mut s = TcpStream::connect(SERVED).expect("connect to the served simulator");
+    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    // RegisterSession (0065h): protocol version 1, options 0.
+    let reply = encap(&mut s, 0x65, 0, &[1, 0, 0, 0]);
+    let session = u32::from_le_bytes(reply[4..8].try_into().unwrap());
+    // SendRRData (006Fh): interface handle 0, timeout 0, two items: null address (0000h,
+    // length 0) and unconnected data (00B2h, length 8): Get_Attribute_Single (0Eh), path of
+    // 3 words 20 65 24 00 30 66.
+    let mut data = vec![0, 0, 0, 0, 0, 0, 2, 0, 0, 0, 0, 0, 0xB2, 0, 8, 0];
+    data.extend([0x0E, 0x03, 0x20, 0x65, 0x24, 0x00, 0x30, 0x66]);
+    let reply = encap(&mut s, 0x6F, session, &data);
+    // Header 24, interface handle and timeout 6, item count 2, null item 4, data item
+    // header 4; then the reply: service 8Eh, reserved, general status, extended size, value.
+    let mr = &reply[40..];
+    assert_eq!(
+        mr[..4],
+        [0x8E, 0, 0, 0],
+        "Get_Attribute_Single P102: {mr:02X?}"
+    );
+    u16::from_le_bytes([mr[4], mr[5]])
+}
+
+/// The transcript of `case` in a run's report folder.
+fn transcript(out: &std::path::Path, profile: &str, case: &str) -> String {
+    let file = out
+        .join("transcripts")
+        .join(profile)
+        .join(format!("{}.txt", case.replace('/', "__")));
+    std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()))
+}
+
+/// Takes about 100 s of real time per profile: the suites run their drive for seconds at a
+/// time, and a device on the network runs on its own clock.
+#[test]
+fn network_runs_leave_the_device_as_each_case_found_it() {
+    for (served, profile) in [("tu4-eip", "tu4-eip@enip"), ("sk550p", "sk550p@enip")] {
+        let _server = serve(SERVED, served, 900);
+        let p102 = read_p102();
+        let out_dir =
+            std::env::temp_dir().join(format!("harness-network-{}-{served}", std::process::id()));
+        let out = Command::new(env!("CARGO_BIN_EXE_harness"))
+            .args(["run", "--profile", profile])
+            .arg("--dut")
+            .arg(format!("enip://{SERVED}"))
+            .arg("--out")
+            .arg(&out_dir)
+            .output()
+            .expect("harness runs");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let run: Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
+        let cases = run["cases"].as_array().unwrap();
+        let bad: Vec<String> = cases
+            .iter()
+            .filter(|c| c["verdict"] == "fail" || c["verdict"] == "error")
+            .map(|c| format!("{} {}: {}", c["verdict"], c["id"], c["message"]))
+            .collect();
+        assert!(bad.is_empty(), "{profile}:\n{}", bad.join("\n"));
+        assert_eq!(out.status.code(), Some(0), "{stdout}");
+        let verdict = |id: &str| {
+            let c = cases.iter().find(|c| c["id"] == id).unwrap();
+            (
+                c["verdict"].as_str().unwrap(),
+                c["message"].as_str().unwrap(),
+            )
+        };
+        let passed = cases.iter().filter(|c| c["verdict"] == "pass").count();
+        assert!(passed > 150, "{profile}: only {passed} cases passed");
+
+        // A case that writes P102 (99.99 s) passes and sets it back in its cleanup: the
+        // device shows the run-up time it had before the run.
+        let case = "bu0620/pkw-dut/resolution-99-99-s";
+        assert_eq!(verdict(case), ("pass", ""));
+        let text = transcript(&out_dir, profile, case);
+        let cleanup = text
+            .split("cleanup: leave the DUT as the case found it")
+            .nth(1)
+            .unwrap_or_else(|| panic!("no cleanup step:\n{text}"));
+        assert!(
+            cleanup.contains("Set_Attribute_Single class 101 / instance 0 / attribute 102"),
+            "{text}"
+        );
+        assert_eq!(read_p102(), p102, "{profile}: P102 after the run");
+        assert_ne!(p102, 9999);
+
+        // What needs a freshly powered-on device is not applicable, and says so.
+        let (v, why) = verdict("bu0620/drive-switching/actual-position-words");
+        assert_eq!(v, "not_applicable");
+        assert!(why.contains("needs `power-on`"), "{why}");
         let _ = std::fs::remove_dir_all(&out_dir);
     }
 }

@@ -115,9 +115,10 @@ struct RunArgs {
     /// Seconds a network DUT may take to answer one request.
     #[arg(long, default_value_t = 2.0)]
     timeout: f64,
-    /// Write the run's EtherNet/IP traffic to this pcap file: the embedded simulator's on its
-    /// virtual clock, or what was sent to and received from a `--dut enip://` target, with the
-    /// real addresses and times (IPv4 only).
+    /// Write the run's EtherNet/IP traffic to this file as pcapng (whatever its name; each
+    /// packet's comment names the profile, case and step that produced it): the embedded
+    /// simulator's on its virtual clock, or what was sent to and received from a
+    /// `--dut enip://` target, with the real addresses and times (IPv4 only).
     #[arg(long)]
     pcap: Option<PathBuf>,
 }
@@ -233,12 +234,13 @@ fn run(a: RunArgs) -> Result<i32, String> {
         .collect();
     let dir = suites_dir(a.suites);
     let loaded = suite::load_dir(&dir).map_err(|e| e.to_string())?;
+    let tap = a.pcap.as_ref().map(|_| crate::pcap::SharedTap::default());
     let opts = RunOptions {
         profiles,
         filter: a.filter,
         retries: a.retries,
+        tap: tap.clone(),
     };
-    let tap = a.pcap.as_ref().map(|_| crate::pcap::SharedTap::default());
     let mut run = match &a.dut {
         None => {
             let mut factory = EmbeddedFactory { tap: tap.clone() };

@@ -25,6 +25,7 @@ pub fn run_embedded(suites: &std::path::Path) -> Result<outcome::RunResult, Stri
         profiles: profile::Profile::all(),
         filter: None,
         retries: 250,
+        tap: None,
     };
     Ok(runner::run(
         &loaded,

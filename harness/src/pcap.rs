@@ -1,24 +1,36 @@
-//! Packet capture of a run's EtherNet/IP traffic, written as a pcap file.
+//! Packet capture of a run's EtherNet/IP traffic, written as a pcapng file.
 //!
 //! The harness's links carry application payloads only (TCP stream bytes of encapsulation
 //! messages, UDP datagrams on 44818 and 2222), sometimes over an in-memory link, so this module
 //! synthesizes the framing around them: Ethernet II, IPv4 and TCP or UDP, with correct checksums
 //! and, for TCP, a handshake, sequence and acknowledgement numbers per direction and a closing
-//! FIN exchange. The result dissects cleanly in Wireshark/tshark as `enip`/`cip`/`cipio`.
+//! FIN exchange. The result dissects cleanly in Wireshark/tshark as `enip`/`cip`/`cipio`, but
+//! for the bytes a suite breaks on purpose (`tests/interop_enip.rs` holds a full run to that).
+//!
+//! Each packet carries a comment (pcapng `opt_comment`, Wireshark's `frame.comment`) naming what
+//! produced it: the runner labels the tap with the profile, the case and the step before each
+//! step (see [`Tap::label`]), so an engineer opening the file sees which case each frame belongs
+//! to, and a test can tell the frames a step broke on purpose from the others.
 //!
 //! MAC addresses are derived from the IPv4 address (`02:00:a:b:c:d`, locally administered),
-//! initial sequence numbers from the connection's 4-tuple, so a capture of the same run is
-//! byte-for-byte the same.
+//! initial sequence numbers from the connection's 4-tuple, and labels are the run's own, so a
+//! capture of the same embedded run is byte-for-byte the same.
 
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::net::SocketAddrV4;
 use std::path::Path;
+use std::rc::Rc;
 use std::time::Duration;
 
-use pcap_file::pcap::{PcapHeader, PcapPacket, PcapWriter};
-use pcap_file::{DataLink, Endianness, PcapError, TsResolution};
+use pcap_file::pcapng::blocks::enhanced_packet::{EnhancedPacketBlock, EnhancedPacketOption};
+use pcap_file::pcapng::blocks::interface_description::{
+    InterfaceDescriptionBlock, InterfaceDescriptionOption,
+};
+use pcap_file::pcapng::blocks::section_header::{SectionHeaderBlock, SectionHeaderOption};
+use pcap_file::pcapng::PcapNgWriter;
+use pcap_file::{DataLink, Endianness, PcapError};
 
 /// The capture's epoch: 2026-11-23T00:00:00Z, in seconds since the Unix epoch. Every `at` is
 /// an offset from it.
@@ -27,8 +39,14 @@ const EPOCH_SECS: u64 = 1_795_392_000;
 const MSS: usize = 1460;
 /// Largest UDP payload that fits an IPv4 datagram.
 const MAX_UDP_PAYLOAD: usize = 65_535 - IPV4_LEN - UDP_LEN;
-/// The pcap file's snapshot length: larger than any frame this module builds.
+/// The interface's snapshot length: larger than any frame this module builds.
 const SNAPLEN: u32 = 262_144;
+/// The interface's timestamp resolution (`if_tsresol`): 10^-9 s, the unit pcap-file writes
+/// Enhanced Packet Block timestamps in.
+const TSRESOL_NANOS: u8 = 9;
+/// Longest packet comment, in bytes (an option's length is 16 bits); a longer one is cut at a
+/// character boundary and ends in `…`.
+const MAX_COMMENT: usize = 4096;
 
 const ETH_LEN: usize = 14;
 const IPV4_LEN: usize = 20;
@@ -54,11 +72,24 @@ struct TcpState {
     server_next: u32,
 }
 
+/// One captured frame.
+#[derive(Debug)]
+struct Packet {
+    /// Time since [`EPOCH_SECS`].
+    at: Duration,
+    /// Ethernet II onwards.
+    frame: Vec<u8>,
+    /// What produced it (the capture's label when it was captured).
+    comment: Option<Rc<str>>,
+}
+
 /// A capture: packets collected in memory, written out with [`Capture::write`].
 #[derive(Debug, Default)]
 pub(crate) struct Capture {
-    /// Frames (Ethernet II onwards) with their time since [`EPOCH_SECS`].
-    packets: Vec<(Duration, Vec<u8>)>,
+    /// The frames, in capture order.
+    packets: Vec<Packet>,
+    /// The comment of the packets captured from now on.
+    label: Option<Rc<str>>,
     /// Open TCP connections, keyed by (client, server).
     tcp: HashMap<(SocketAddrV4, SocketAddrV4), TcpState>,
     /// Connections opened so far: mixed into each initial sequence number so that a reopened
@@ -172,6 +203,12 @@ impl Capture {
         self.push_ipv4(from, to, PROTO_UDP, false, &segment, at);
     }
 
+    /// Names what the packets captured from now on belong to: each one's comment in the file.
+    /// `None`: no comment.
+    pub(crate) fn label(&mut self, label: Option<&str>) {
+        self.label = label.map(|l| Rc::from(truncate(l, MAX_COMMENT)));
+    }
+
     /// Number of packets captured so far.
     pub(crate) fn len(&self) -> usize {
         self.packets.len()
@@ -183,27 +220,54 @@ impl Capture {
         self.packets.is_empty()
     }
 
-    /// Writes the capture as a pcap file (LINKTYPE_ETHERNET, microsecond timestamps, little
-    /// endian), each packet stamped 2026-11-23T00:00:00Z plus its `at`.
+    /// Writes the capture to `path` as pcapng (little endian): a section header naming the
+    /// harness, one Ethernet interface with nanosecond timestamps, and an Enhanced Packet Block
+    /// per packet, stamped 2026-11-23T00:00:00Z plus its `at`, with its comment.
     pub(crate) fn write(&self, path: &Path) -> std::io::Result<()> {
-        let header = PcapHeader {
-            version_major: 2,
-            version_minor: 4,
-            ts_correction: 0,
-            ts_accuracy: 0,
-            snaplen: SNAPLEN,
-            datalink: DataLink::ETHERNET,
-            ts_resolution: TsResolution::MicroSecond,
-            endianness: Endianness::Little,
-        };
         let file = BufWriter::new(File::create(path)?);
-        let mut writer = PcapWriter::with_header(file, header).map_err(io_error)?;
-        for (at, frame) in &self.packets {
-            let timestamp = Duration::from_secs(EPOCH_SECS) + *at;
-            let packet = PcapPacket::new(timestamp, frame.len() as u32, frame);
-            writer.write_packet(&packet).map_err(io_error)?;
+        self.write_to(file)?.flush()
+    }
+
+    /// Writes the capture as pcapng to `out`; returns it.
+    fn write_to<W: Write>(&self, out: W) -> std::io::Result<W> {
+        let section = SectionHeaderBlock {
+            endianness: Endianness::Little,
+            major_version: 1,
+            minor_version: 0,
+            section_length: -1,
+            options: vec![SectionHeaderOption::UserApplication(
+                concat!("nord-harness ", env!("CARGO_PKG_VERSION")).into(),
+            )],
+        };
+        let mut writer = PcapNgWriter::with_section_header(out, section).map_err(io_error)?;
+        let interface = InterfaceDescriptionBlock {
+            linktype: DataLink::ETHERNET,
+            snaplen: SNAPLEN,
+            options: vec![
+                InterfaceDescriptionOption::IfDescription(
+                    "EtherNet/IP traffic of a harness run (Ethernet, IPv4 and TCP/UDP framing \
+                     synthesized)"
+                        .into(),
+                ),
+                InterfaceDescriptionOption::IfTsResol(TSRESOL_NANOS),
+            ],
+        };
+        writer.write_pcapng_block(interface).map_err(io_error)?;
+        for p in &self.packets {
+            let block = EnhancedPacketBlock {
+                interface_id: 0,
+                timestamp: Duration::from_secs(EPOCH_SECS) + p.at,
+                original_len: p.frame.len() as u32,
+                data: p.frame.as_slice().into(),
+                options: p
+                    .comment
+                    .iter()
+                    .map(|c| EnhancedPacketOption::Comment(c.as_ref().into()))
+                    .collect(),
+            };
+            writer.write_pcapng_block(block).map_err(io_error)?;
         }
-        writer.into_writer().flush()
+        Ok(writer.into_inner())
     }
 
     /// The open connection between `a` and `b` in either direction, opened with `a` as client
@@ -292,7 +356,11 @@ impl Capture {
 
         frame.extend_from_slice(&ip);
         frame.extend_from_slice(segment);
-        self.packets.push((at, frame));
+        self.packets.push(Packet {
+            at,
+            frame,
+            comment: self.label.clone(),
+        });
     }
 }
 
@@ -339,6 +407,18 @@ fn splitmix64(x: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// `text` cut to at most `max` bytes at a character boundary, ending in `…` if cut.
+fn truncate(text: &str, max: usize) -> std::borrow::Cow<'_, str> {
+    if text.len() <= max {
+        return text.into();
+    }
+    let mut end = max - '…'.len_utf8();
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    format!("{}…", &text[..end]).into()
+}
+
 /// A pcap-file error as an I/O error.
 fn io_error(e: PcapError) -> std::io::Error {
     match e {
@@ -346,6 +426,31 @@ fn io_error(e: PcapError) -> std::io::Error {
         other => std::io::Error::new(std::io::ErrorKind::InvalidData, other),
     }
 }
+
+/// A capture shared by every connection of a run, with the run's own time line: each
+/// embedded case starts on a fresh virtual clock, so its times are placed after the last
+/// packet so far.
+#[derive(Debug, Default)]
+pub(crate) struct Tap {
+    /// The packets.
+    pub(crate) capture: Capture,
+    /// The latest time used.
+    pub(crate) last: Duration,
+    /// Connections opened so far (gives each its own client port).
+    pub(crate) connections: u16,
+}
+
+impl Tap {
+    /// Names what the packets captured from now on belong to, e.g. `tu4-eip@enip
+    /// cip/encapsulation/short-header step 2: enip raw 6F 00 …`: each one's comment in the
+    /// file. The runner calls it before each step.
+    pub(crate) fn label(&mut self, label: &str) {
+        self.capture.label(Some(label));
+    }
+}
+
+/// The run's tap, shared by the links.
+pub(crate) type SharedTap = std::rc::Rc<std::cell::RefCell<Tap>>;
 
 #[cfg(test)]
 mod tests {
@@ -401,7 +506,7 @@ mod tests {
         cap.tcp_open(client(), server(), ms(1));
         cap.tcp_data(client(), server(), &[0x65, 0, 4, 0, 9], ms(2));
         assert_eq!(cap.len(), 5);
-        for (_, frame) in &cap.packets {
+        for Packet { frame, .. } in &cap.packets {
             let (ip, segment) = split(frame);
             assert_eq!(ones_complement_sum(0, ip), 0xFFFF, "IPv4 header checksum");
             assert_eq!(ip[8], TTL);
@@ -411,12 +516,12 @@ mod tests {
             assert_eq!(&frame[6..8], &[0x02, 0x00], "source MAC");
             assert_eq!(&frame[8..12], &ip[12..16], "source MAC from IPv4");
         }
-        let (ip, udp) = split(&cap.packets[0].1);
+        let (ip, udp) = split(&cap.packets[0].frame);
         assert_eq!(ip[9], PROTO_UDP);
         assert_eq!(&ip[6..8], &[0, 0], "no DF on UDP");
         assert_eq!(u16::from_be_bytes([udp[4], udp[5]]), 15, "UDP length");
         assert_ne!(&udp[6..8], &[0, 0], "UDP checksum present");
-        let (ip, tcp) = split(&cap.packets[4].1);
+        let (ip, tcp) = split(&cap.packets[4].frame);
         assert_eq!(ip[9], PROTO_TCP);
         assert_eq!(&ip[6..8], &[0x40, 0], "DF on TCP");
         assert_eq!(tcp[12] >> 4, 5, "no options on data segments");
@@ -425,7 +530,7 @@ mod tests {
         let ids: Vec<u16> = cap
             .packets
             .iter()
-            .map(|(_, f)| u16::from_be_bytes([f[18], f[19]]))
+            .map(|p| u16::from_be_bytes([p.frame[18], p.frame[19]]))
             .collect();
         assert_eq!(ids, vec![0, 1, 2, 3, 4]);
     }
@@ -443,12 +548,12 @@ mod tests {
         assert_eq!(cap.len(), 3 + 1 + 1 + 3 + 1 + 3);
 
         let from_client = |frame: &[u8]| frame[6..12] == mac(client());
-        let lens: Vec<usize> = cap.packets.iter().map(|(_, f)| tcp_fields(f).3).collect();
+        let lens: Vec<usize> = cap.packets.iter().map(|p| tcp_fields(&p.frame).3).collect();
         assert_eq!(lens, vec![0, 0, 0, 28, 28, 1460, 1460, 80, 10, 0, 0, 0]);
 
         // next[0]: client's next sequence number, next[1]: server's.
         let mut next: [Option<u32>; 2] = [None, None];
-        for (i, (_, frame)) in cap.packets.iter().enumerate() {
+        for (i, Packet { frame, .. }) in cap.packets.iter().enumerate() {
             let (seq, ack, flags, len) = tcp_fields(frame);
             let (me, peer) = if from_client(frame) { (0, 1) } else { (1, 0) };
             if let Some(expected) = next[me] {
@@ -467,20 +572,20 @@ mod tests {
             let consumed = len as u32 + u32::from(flags & SYN != 0) + u32::from(flags & FIN != 0);
             next[me] = Some(seq.wrapping_add(consumed));
         }
-        let flags: Vec<u8> = cap.packets.iter().map(|(_, f)| tcp_fields(f).2).collect();
+        let flags: Vec<u8> = cap.packets.iter().map(|p| tcp_fields(&p.frame).2).collect();
         assert_eq!(&flags[..3], &[SYN, SYN | ACK, ACK]);
         assert_eq!(&flags[9..], &[FIN | ACK, FIN | ACK, ACK]);
-        assert!(from_client(&cap.packets[9].1) && !from_client(&cap.packets[10].1));
+        assert!(from_client(&cap.packets[9].frame) && !from_client(&cap.packets[10].frame));
 
         // The same run gives the same bytes; a reopened connection starts elsewhere.
         let mut again = Capture::default();
         again.tcp_open(client(), server(), ms(0));
-        assert_eq!(again.packets[0].1, cap.packets[0].1);
+        assert_eq!(again.packets[0].frame, cap.packets[0].frame);
         again.tcp_close(server(), client(), ms(1));
         again.tcp_open(client(), server(), ms(2));
         assert_ne!(
-            tcp_fields(&again.packets[6].1).0,
-            tcp_fields(&again.packets[0].1).0
+            tcp_fields(&again.packets[6].frame).0,
+            tcp_fields(&again.packets[0].frame).0
         );
     }
 
@@ -489,7 +594,42 @@ mod tests {
         let mut cap = Capture::default();
         cap.tcp_data(client(), server(), &[7; 4], ms(0));
         assert_eq!(cap.len(), 4);
-        assert_eq!(tcp_fields(&cap.packets[0].1).2, SYN);
+        assert_eq!(tcp_fields(&cap.packets[0].frame).2, SYN);
+    }
+
+    /// Every block of a pcapng file: the section header, the interfaces, and per packet its
+    /// timestamp, bytes and comments.
+    #[allow(clippy::type_complexity)]
+    fn read_pcapng(
+        bytes: &[u8],
+    ) -> (
+        SectionHeaderBlock<'static>,
+        Vec<InterfaceDescriptionBlock<'static>>,
+        Vec<(Duration, Vec<u8>, Vec<String>)>,
+    ) {
+        let mut reader = pcap_file::pcapng::PcapNgReader::new(bytes).unwrap();
+        let mut packets = Vec::new();
+        while let Some(block) = reader.next_block() {
+            let block = block.unwrap();
+            if let Some(epb) = block.into_enhanced_packet() {
+                assert_eq!(epb.interface_id, 0);
+                assert_eq!(epb.original_len as usize, epb.data.len());
+                let comments = epb
+                    .options
+                    .iter()
+                    .map(|o| match o {
+                        EnhancedPacketOption::Comment(c) => c.to_string(),
+                        other => panic!("unexpected option {other:?}"),
+                    })
+                    .collect();
+                packets.push((epb.timestamp, epb.data.into_owned(), comments));
+            }
+        }
+        (
+            reader.section().clone(),
+            reader.interfaces().to_vec(),
+            packets,
+        )
     }
 
     #[test]
@@ -503,26 +643,94 @@ mod tests {
             &[0x63, 0],
             Duration::from_micros(1_500_250),
         );
-        cap.tcp_close(server(), client(), ms(2000));
+        cap.tcp_close(server(), client(), Duration::from_nanos(2_000_000_007));
         let dir = tempdir("write_reads_back");
-        let path = dir.join("run.pcap");
+        let path = dir.join("run.pcapng");
         cap.write(&path).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        // Section Header Block, little endian: block type 0A0D0D0Ah, byte-order magic.
+        assert_eq!(&bytes[0..4], &[0x0A, 0x0D, 0x0D, 0x0A]);
+        assert_eq!(&bytes[8..12], &[0x4D, 0x3C, 0x2B, 0x1A]);
 
-        let file = File::open(&path).unwrap();
-        let mut reader = pcap_file::pcap::PcapReader::new(file).unwrap();
-        assert_eq!(reader.header().datalink, DataLink::ETHERNET);
-        assert_eq!(reader.header().ts_resolution, TsResolution::MicroSecond);
-        let mut read = Vec::new();
-        while let Some(packet) = reader.next_packet() {
-            let packet = packet.unwrap();
-            read.push((packet.timestamp, packet.data.into_owned()));
-        }
+        let (section, interfaces, read) = read_pcapng(&bytes);
+        assert_eq!(section.endianness, Endianness::Little);
+        assert!(section.options.iter().any(|o| matches!(
+            o,
+            SectionHeaderOption::UserApplication(a) if a.starts_with("nord-harness ")
+        )));
+        assert_eq!(interfaces.len(), 1);
+        assert_eq!(interfaces[0].linktype, DataLink::ETHERNET);
+        assert_eq!(interfaces[0].snaplen, SNAPLEN);
+        // pcap-file writes nanoseconds; the interface must say so, or readers take them as µs.
+        assert!(interfaces[0]
+            .options
+            .contains(&InterfaceDescriptionOption::IfTsResol(TSRESOL_NANOS)));
         assert_eq!(read.len(), cap.len());
-        for ((ts, data), (at, frame)) in read.iter().zip(&cap.packets) {
-            assert_eq!(*ts, Duration::from_secs(EPOCH_SECS) + *at);
-            assert_eq!(data, frame);
+        for ((ts, data, comments), p) in read.iter().zip(&cap.packets) {
+            assert_eq!(*ts, Duration::from_secs(EPOCH_SECS) + p.at);
+            assert_eq!(data, &p.frame);
+            assert!(comments.is_empty(), "no label, no comment: {comments:?}");
         }
         std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn each_packet_carries_the_label_it_was_captured_under() {
+        let mut cap = Capture::default();
+        cap.tcp_open(client(), server(), ms(0)); // 3 packets, no label
+        let step1 = "tu4-eip@enip cip/encapsulation/short-header step 1: enip raw 65 00 04 00";
+        cap.label(Some(step1));
+        cap.tcp_data(client(), server(), &[1; 3000], ms(1)); // 3 segments
+        cap.tcp_data(server(), client(), &[2; 28], ms(2));
+        let step2 = "tu4-eip@enip cip/encapsulation/short-header step 2: enip raw 6F 00 · ü ✓";
+        cap.label(Some(step2));
+        cap.udp(client(), server(), &[0x63, 0], ms(3));
+        cap.label(None);
+        cap.tcp_close(client(), server(), ms(4)); // 3 packets, no label again
+
+        let mut bytes = Vec::new();
+        cap.write_to(&mut bytes).unwrap();
+        let (_, _, read) = read_pcapng(&bytes);
+        let comments: Vec<Option<&str>> = read
+            .iter()
+            .map(|(_, _, c)| {
+                assert!(c.len() <= 1, "one comment per packet: {c:?}");
+                c.first().map(String::as_str)
+            })
+            .collect();
+        let mut expected = vec![None; 3];
+        expected.extend([Some(step1); 4]);
+        expected.push(Some(step2));
+        expected.extend([None; 3]);
+        assert_eq!(comments, expected);
+        // Labels are shared, not copied per packet.
+        assert!(Rc::ptr_eq(
+            cap.packets[3].comment.as_ref().unwrap(),
+            cap.packets[6].comment.as_ref().unwrap()
+        ));
+
+        // The same capture writes the same bytes.
+        let mut again = Vec::new();
+        cap.write_to(&mut again).unwrap();
+        assert!(again == bytes);
+    }
+
+    #[test]
+    fn a_long_label_is_cut_at_a_character_boundary() {
+        assert_eq!(truncate("short", 10), "short");
+        assert_eq!(truncate("0123456789", 10), "0123456789");
+        // '…' is 3 bytes: 7 bytes of text remain, and 'é' (2 bytes at 6..8) does not fit.
+        assert_eq!(truncate("abcdeféghij", 10), "abcdef…");
+        let long = "enip raw ".to_string() + &"6F ".repeat(5000);
+        let mut cap = Capture::default();
+        cap.label(Some(&long));
+        cap.udp(client(), server(), &[0x63, 0], ms(0));
+        let comment = cap.packets[0].comment.as_deref().unwrap();
+        assert!(comment.len() <= MAX_COMMENT, "{}", comment.len());
+        assert!(comment.starts_with("enip raw 6F 6F") && comment.ends_with('…'));
+        let mut bytes = Vec::new();
+        cap.write_to(&mut bytes).unwrap();
+        assert_eq!(read_pcapng(&bytes).2[0].2, [comment]);
     }
 
     #[test]
@@ -542,9 +750,12 @@ mod tests {
         let udp_client = SocketAddrV4::new(*client().ip(), 50_124);
 
         let mut cap = Capture::default();
+        cap.label(Some("case a: open"));
         cap.tcp_open(client(), server(), ms(0));
+        cap.label(Some("case a step 1: enip raw 65 00 04 00 …"));
         cap.tcp_data(client(), server(), &register, ms(1));
         cap.tcp_data(server(), client(), &registered, ms(2));
+        cap.label(Some("case b step 1: ListIdentity über UDP ✓"));
         cap.udp(udp_client, udp_server, &list_identity, ms(3));
         // Class 1 I/O on 2222: CPF with a sequenced address item and a connected data item.
         let io = [
@@ -558,6 +769,7 @@ mod tests {
         let data_frames = [4, 5, 6]; // 1-based frame numbers carrying encapsulation messages
         let io_frame = 7;
         let dir = tempdir("tshark");
+        // The name says pcap; tshark reads the pcapng inside regardless.
         let path = dir.join("enip.pcap");
         cap.write(&path).unwrap();
 
@@ -602,9 +814,16 @@ mod tests {
             "tcp.checksum.status",
             "-e",
             "udp.checksum.status",
+            "-e",
+            "frame.comment",
         ]);
         let rows: Vec<Vec<&str>> = fields.lines().map(|l| l.split(';').collect()).collect();
         assert_eq!(rows.len(), cap.len());
+        let comments: Vec<&str> = rows.iter().map(|r| r[5]).collect();
+        let mut expected = vec!["case a: open"; 3];
+        expected.extend(["case a step 1: enip raw 65 00 04 00 …"; 2]);
+        expected.extend(["case b step 1: ListIdentity über UDP ✓"; 5]);
+        assert_eq!(comments, expected, "Wireshark shows each packet's label");
         for row in &rows {
             let number: usize = row[0].parse().unwrap();
             let protocols = row[1];
@@ -652,19 +871,3 @@ mod tests {
         dir
     }
 }
-
-/// A capture shared by every connection of a run, with the run's own time line: each
-/// embedded case starts on a fresh virtual clock, so its times are placed after the last
-/// packet so far.
-#[derive(Debug, Default)]
-pub(crate) struct Tap {
-    /// The packets.
-    pub(crate) capture: Capture,
-    /// The latest time used.
-    pub(crate) last: Duration,
-    /// Connections opened so far (gives each its own client port).
-    pub(crate) connections: u16,
-}
-
-/// The run's tap, shared by the links.
-pub(crate) type SharedTap = std::rc::Rc<std::cell::RefCell<Tap>>;

@@ -21,17 +21,32 @@ pub(crate) enum Capability {
     Observe,
     /// EtherNet/IP encapsulation and CIP requests can be sent as such.
     Ethernetip,
+    /// The DUT is freshly powered on for every case: drive in its power-on state, counters
+    /// (e.g. the actual position) at zero. The embedded simulator is opened anew per case; a
+    /// device on the network is one persistent device, which the harness cannot power-cycle.
+    PowerOn,
+    /// The DUT's parameters are at their factory settings for every case. The embedded
+    /// simulator is; a device on the network carries its site's settings (its IP address
+    /// first of all), which the harness neither knows nor may overwrite.
+    FactoryState,
+    /// The DUT may be given a new IP address (P160–P165 or P850–P856 and an Identity Reset):
+    /// the simulator keeps its sockets whatever its parameters say; a device on the network
+    /// would move to the new address and the harness would lose it.
+    Readdressing,
 }
 
 impl Capability {
     /// All capabilities.
-    pub(crate) const ALL: [Capability; 6] = [
+    pub(crate) const ALL: [Capability; 9] = [
         Capability::ParameterAccess,
         Capability::ParameterChannel,
         Capability::ProcessData,
         Capability::FaultInjection,
         Capability::Observe,
         Capability::Ethernetip,
+        Capability::PowerOn,
+        Capability::FactoryState,
+        Capability::Readdressing,
     ];
 
     /// Name as suites write it.
@@ -43,6 +58,9 @@ impl Capability {
             Capability::FaultInjection => "fault-injection",
             Capability::Observe => "observe",
             Capability::Ethernetip => "ethernetip",
+            Capability::PowerOn => "power-on",
+            Capability::FactoryState => "factory-state",
+            Capability::Readdressing => "readdressing",
         }
     }
 
@@ -144,5 +162,23 @@ impl Profile {
                 names.join(", ")
             )
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_capability_parses_from_its_name() {
+        for c in Capability::ALL {
+            assert_eq!(Capability::from_name(c.name()), Some(c));
+        }
+        assert_eq!(Capability::from_name("power-on"), Some(Capability::PowerOn));
+        assert_eq!(
+            Capability::from_name("factory-state"),
+            Some(Capability::FactoryState)
+        );
+        assert_eq!(Capability::from_name("powered-on"), None);
     }
 }

@@ -22,6 +22,9 @@ pub(crate) struct RunOptions {
     pub(crate) filter: Option<String>,
     /// Bus cycles a parameter order is repeated before the step times out.
     pub(crate) retries: u32,
+    /// The run's capture (`--pcap`), if any: the runner labels its packets with the profile,
+    /// case and step that produce them.
+    pub(crate) tap: Option<crate::pcap::SharedTap>,
 }
 
 /// Opens a DUT for a profile; called once per case so every case starts from a known state.
@@ -136,6 +139,7 @@ fn run_case(
             start,
         );
     }
+    label(opts, || format!("{} {}: open", profile.name(), case.id));
     let mut channel = if needs_dut(case) {
         match factory.open(profile, opts.retries) {
             Ok(dut) => {
@@ -165,8 +169,28 @@ fn run_case(
     } else {
         None
     };
+    let mut r = run_steps(case, profile, opts, &mut channel, start);
+    if let Some(dut) = channel.as_mut() {
+        finish(&mut r, dut.as_mut(), opts);
+    }
+    r.duration = start.elapsed();
+    r
+}
+
+/// The case's steps in order, up to the first that does not pass.
+fn run_steps(
+    case: &Case,
+    profile: &Profile,
+    opts: &RunOptions,
+    channel: &mut Option<Box<dyn Binding>>,
+    start: Instant,
+) -> CaseResult {
     let mut steps = Vec::new();
-    for step in &case.steps {
+    for (n, step) in (1..).zip(&case.steps) {
+        let (p, id) = (profile.name(), &case.id);
+        label(opts, || {
+            format!("{p} {id} step {n}: {}", describe(&step.action))
+        });
         let r = run_step(step, profile, channel.as_mut());
         let verdict = r.verdict;
         let message = r.message.clone();
@@ -176,6 +200,49 @@ fn run_case(
         }
     }
     result(case, profile, Verdict::Pass, String::new(), steps, start)
+}
+
+/// What every case with a DUT ends with, whatever its verdict: the binding leaves the DUT as
+/// the case found it (see [`Binding::finish`]). What it exchanged is a last step, marked as the
+/// cleanup, when it did anything; a restore that fails turns a passing case into an error that
+/// names what could not be restored (a failed or inconclusive case keeps its verdict, and its
+/// message says so too).
+fn finish(r: &mut CaseResult, dut: &mut dyn Binding, opts: &RunOptions) {
+    label(opts, || format!("{} {} cleanup", r.profile, r.id));
+    let outcome = dut.finish();
+    let exchanges = dut.take_exchanges();
+    if outcome.is_ok() && exchanges.is_empty() {
+        return;
+    }
+    let (verdict, message) = match outcome {
+        Ok(()) => (Verdict::Pass, String::new()),
+        Err(e) => (
+            Verdict::Error,
+            format!("cleanup could not leave the DUT as the case found it: {e}"),
+        ),
+    };
+    r.steps.push(StepResult {
+        step: "cleanup: leave the DUT as the case found it".into(),
+        verdict,
+        observed: Value::Null,
+        message: message.clone(),
+        exchanges,
+    });
+    if verdict == Verdict::Error {
+        if r.verdict == Verdict::Pass {
+            r.verdict = Verdict::Error;
+            r.message = message;
+        } else {
+            r.message = format!("{}; {message}", r.message);
+        }
+    }
+}
+
+/// Labels the run's capture, if there is one, with `text` (made only then).
+fn label(opts: &RunOptions, text: impl FnOnce() -> String) {
+    if let Some(tap) = &opts.tap {
+        tap.borrow_mut().label(&text());
+    }
 }
 
 /// The step as one line, for reports.
@@ -273,15 +340,17 @@ fn describe_enip(e: &EnipStep) -> String {
 /// Bytes as `"70 66 02 00"` (one allocation: it runs for every exchange of a run).
 pub(crate) fn hex(bytes: &[u8]) -> String {
     const DIGITS: &[u8; 16] = b"0123456789ABCDEF";
-    let mut s = String::with_capacity(bytes.len() * 3);
-    for (i, b) in bytes.iter().enumerate() {
-        if i > 0 {
-            s.push(' ');
-        }
-        s.push(char::from(DIGITS[usize::from(b >> 4)]));
-        s.push(char::from(DIGITS[usize::from(b & 0x0F)]));
+    let mut s = Vec::with_capacity(bytes.len() * 3);
+    for b in bytes {
+        s.extend_from_slice(&[
+            DIGITS[usize::from(b >> 4)],
+            DIGITS[usize::from(b & 0x0F)],
+            b' ',
+        ]);
     }
-    s
+    s.pop();
+    // ASCII digits and spaces only.
+    String::from_utf8(s).unwrap_or_default()
 }
 
 fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding>>) -> StepResult {
@@ -480,13 +549,19 @@ cases:
         setup: true
 "#;
 
-    fn run_with(fault: Option<Fault>) -> RunResult {
-        let loaded = load_text_for_tests(SUITE);
-        let opts = RunOptions {
+    /// The test suite's run: SK 550P, 25 retries, no capture.
+    fn sk550p_options() -> RunOptions {
+        RunOptions {
             profiles: vec![Profile::builtin(Product::Sk550p)],
             filter: None,
             retries: 25,
-        };
+            tap: None,
+        }
+    }
+
+    fn run_with(fault: Option<Fault>) -> RunResult {
+        let loaded = load_text_for_tests(SUITE);
+        let opts = sk550p_options();
         match fault {
             None => run(&loaded, &opts, &mut EmbeddedFactory::default()),
             Some(f) => run(&loaded, &opts, &mut FaultyFactory(f)),
@@ -538,6 +613,107 @@ cases:
         assert!(
             m.contains("did not answer the order within 25 bus cycles"),
             "{m}"
+        );
+    }
+
+    /// The embedded simulator behind a binding whose cleanup does what the test says.
+    struct Restoring {
+        inner: Box<dyn Binding>,
+        /// What the cleanup returns, and whether it exchanged anything.
+        outcome: Result<(), String>,
+        exchanged: bool,
+        finished: bool,
+    }
+
+    impl Binding for Restoring {
+        fn describe(&self) -> String {
+            self.inner.describe()
+        }
+        fn capabilities(&self) -> &[Capability] {
+            self.inner.capabilities()
+        }
+        fn perform(&mut self, action: &Action) -> Result<Value, StepError> {
+            self.inner.perform(action)
+        }
+        fn take_exchanges(&mut self) -> Vec<crate::outcome::Exchange> {
+            let mut x = self.inner.take_exchanges();
+            if self.finished && std::mem::take(&mut self.exchanged) {
+                x.push(crate::outcome::Exchange {
+                    sent_hex: "10 03 20 65 24 01 30 66 C8 00".into(),
+                    sent: "Set_Attribute_Single P102 = 200".into(),
+                    received_hex: "90 00 00 00".into(),
+                    received: "success".into(),
+                });
+            }
+            x
+        }
+        fn finish(&mut self) -> Result<(), String> {
+            self.finished = true;
+            self.outcome.clone()
+        }
+    }
+
+    struct RestoringFactory(Result<(), String>, bool);
+
+    impl DutFactory for RestoringFactory {
+        fn describe(&self) -> String {
+            "restoring simulator".into()
+        }
+        fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, String> {
+            let inner = EmbeddedFactory::default().open(profile, retries)?;
+            Ok(Box::new(Restoring {
+                inner,
+                outcome: self.0.clone(),
+                exchanged: self.1,
+                finished: false,
+            }))
+        }
+    }
+
+    fn run_restoring(outcome: Result<(), String>, exchanged: bool) -> RunResult {
+        let loaded = load_text_for_tests(SUITE);
+        let opts = sk550p_options();
+        run(&loaded, &opts, &mut RestoringFactory(outcome, exchanged))
+    }
+
+    #[test]
+    fn a_cleanup_that_does_nothing_adds_no_step() {
+        let r = run_restoring(Ok(()), false);
+        assert_eq!(r.cases[0].verdict, Verdict::Pass);
+        assert_eq!(r.cases[0].steps.len(), 1);
+    }
+
+    #[test]
+    fn a_cleanup_shows_as_a_last_step_marked_as_such() {
+        let r = run_restoring(Ok(()), true);
+        let c = &r.cases[0];
+        assert_eq!(c.verdict, Verdict::Pass, "{}", c.message);
+        let last = c.steps.last().unwrap();
+        assert_eq!(last.step, "cleanup: leave the DUT as the case found it");
+        assert_eq!(last.verdict, Verdict::Pass);
+        assert_eq!(last.exchanges[0].sent, "Set_Attribute_Single P102 = 200");
+        // Whatever the verdict: the inconclusive case is cleaned up too.
+        assert!(r.cases[2].steps.last().unwrap().step.starts_with("cleanup"));
+    }
+
+    #[test]
+    fn a_failed_restore_makes_a_passing_case_an_error_naming_what_was_not_restored() {
+        let r = run_restoring(Err("P102 not set back to [C8 00]: 0Eh".into()), false);
+        let c = &r.cases[0];
+        assert_eq!(c.verdict, Verdict::Error);
+        assert_eq!(
+            c.message,
+            "cleanup could not leave the DUT as the case found it: P102 not set back to [C8 00]: 0Eh"
+        );
+        assert_eq!(c.steps.last().unwrap().verdict, Verdict::Error);
+        // A case that did not pass keeps its verdict; its message says both.
+        let c = &r.cases[2];
+        assert_eq!(c.verdict, Verdict::Inconclusive);
+        assert!(c.message.starts_with("setup step failed"), "{}", c.message);
+        assert!(
+            c.message.contains("; cleanup could not leave the DUT"),
+            "{}",
+            c.message
         );
     }
 }

@@ -16,13 +16,17 @@ use proto::nord::Inverter;
 /// Bus cycle of the embedded link: 4 ms, a common PROFINET send clock multiple.
 const CYCLE: Duration = Duration::from_millis(4);
 
-/// What the embedded PPO link offers: everything but EtherNet/IP messages.
-const PPO_CAPABILITIES: [Capability; 5] = [
+/// What the embedded PPO link offers: everything but EtherNet/IP messages (a fresh simulator
+/// per case is in its power-on and factory state, and keeps its link whatever its address).
+const PPO_CAPABILITIES: [Capability; 8] = [
     Capability::ParameterAccess,
     Capability::ParameterChannel,
     Capability::ProcessData,
     Capability::FaultInjection,
     Capability::Observe,
+    Capability::PowerOn,
+    Capability::FactoryState,
+    Capability::Readdressing,
 ];
 
 /// Opens a fresh simulator per case; EtherNet/IP traffic goes to the tap when there is one.

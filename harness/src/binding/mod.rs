@@ -28,6 +28,14 @@ pub(crate) trait Binding {
     fn perform(&mut self, action: &Action) -> Result<Value, StepError>;
     /// The exchanges since the last call, for the transcript.
     fn take_exchanges(&mut self) -> Vec<Exchange>;
+    /// Leaves the DUT as the case found it, once the case's steps are over, whatever the
+    /// verdict: a persistent DUT (a device on the network) must not carry one case's changes
+    /// into the next. Its exchanges are taken with [`Binding::take_exchanges`] afterwards.
+    /// The error names what could not be restored. A DUT opened afresh for every case (the
+    /// embedded simulator) has nothing to do.
+    fn finish(&mut self) -> Result<(), String> {
+        Ok(())
+    }
 }
 
 /// A device under test, one bus cycle at a time.

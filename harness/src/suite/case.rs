@@ -643,7 +643,12 @@ pub(super) fn case_head(
     let requires = doc
         .requires
         .iter()
-        .map(|r| Capability::from_name(r).ok_or(format!("unknown capability `{r}` (parameter-channel, process-data, fault-injection, observe)")))
+        .map(|r| {
+            Capability::from_name(r).ok_or_else(|| {
+                let known: Vec<&str> = Capability::ALL.iter().map(|c| c.name()).collect();
+                format!("unknown capability `{r}` (one of {})", known.join(", "))
+            })
+        })
         .collect::<Result<_, _>>()?;
     Ok(Case {
         id,

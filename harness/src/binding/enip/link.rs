@@ -47,6 +47,9 @@ pub(crate) trait EnipLink {
 /// (the simulator over loopback does, in tens of µs) is seen without a thread wake-up.
 const REPLY_POLL: Duration = Duration::from_micros(100);
 
+/// How often a network I/O cycle looks for T→O datagrams.
+const IO_POLL: Duration = Duration::from_micros(250);
+
 /// The peer address the embedded adapter sees (the scanner's).
 const SCANNER_V4: SocketAddrV4 =
     SocketAddrV4::new(std::net::Ipv4Addr::new(192, 168, 1, 10), 50_000);
@@ -465,6 +468,9 @@ fn io_socket(slot: &mut Option<UdpSocket>, local: std::net::IpAddr) -> Result<&U
         let at = SocketAddr::new(local, IO_PORT);
         let udp =
             UdpSocket::bind(at).map_err(|e| format!("cannot bind UDP {at} for T→O data: {e}"))?;
+        // Read without blocking: `io_cycle` keeps its own time.
+        udp.set_nonblocking(true)
+            .map_err(|e| format!("UDP {at}: {e}"))?;
         *slot = Some(udp);
     }
     slot.as_ref().ok_or_else(|| "no UDP socket".into())
@@ -511,30 +517,28 @@ impl EnipLink for Network {
         let mut out = Vec::new();
         let mut buf = [0u8; 1500];
         loop {
+            loop {
+                match udp.recv_from(&mut buf) {
+                    Ok((n, from)) => {
+                        if let (Some(r), SocketAddr::V4(from), Some(to)) =
+                            (&self.recorder, from, local)
+                        {
+                            r.udp(from, to, &buf[..n]);
+                        }
+                        out.push(buf[..n].to_vec());
+                    }
+                    Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                    Err(e) => return Err(format!("UDP receive failed: {e}")),
+                }
+            }
             let left = deadline.saturating_duration_since(Instant::now());
             if left.is_zero() {
                 return Ok(out);
             }
-            udp.set_read_timeout(Some(left))
-                .map_err(|e| e.to_string())?;
-            match udp.recv_from(&mut buf) {
-                Ok((n, from)) => {
-                    if let (Some(r), SocketAddr::V4(from), Some(to)) = (&self.recorder, from, local)
-                    {
-                        r.udp(from, to, &buf[..n]);
-                    }
-                    out.push(buf[..n].to_vec());
-                }
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                    ) =>
-                {
-                    return Ok(out)
-                }
-                Err(e) => return Err(format!("UDP receive failed: {e}")),
-            }
+            // A sleep is precise to tens of µs, where a socket timeout rounds up to the
+            // kernel's tick (4 ms here, a whole RPI).
+            std::thread::sleep(left.min(IO_POLL));
         }
     }
 

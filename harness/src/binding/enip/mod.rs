@@ -9,6 +9,7 @@
 //!   (SK 550P 100/101, TU3-EIP 102/103, TU4/CU4-EIP 110/111), one O→T frame per RPI.
 //! - raw encapsulation messages and Forward_Open variants for the EtherNet/IP suites.
 
+mod cleanup;
 mod link;
 
 use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4};
@@ -77,6 +78,9 @@ pub(crate) struct Scanner {
     run: bool,
     process: [(u16, Vec<u16>); 9],
     exchanges: Vec<Exchange>,
+    /// What the case changed on a network target, to put back when it ends; `None` for the
+    /// embedded adapter, made afresh for every case.
+    ledger: Option<cleanup::Ledger>,
 }
 
 impl Scanner {
@@ -110,7 +114,9 @@ impl Scanner {
             ],
             None => vec![Capability::Ethernetip],
         };
-        Ok(Scanner::new(Box::new(link), product, caps))
+        let mut scanner = Scanner::new(Box::new(link), product, caps);
+        scanner.ledger = Some(cleanup::Ledger::default());
+        Ok(scanner)
     }
 
     fn new(link: Box<dyn EnipLink>, product: Option<Product>, caps: Vec<Capability>) -> Scanner {
@@ -125,6 +131,7 @@ impl Scanner {
             run: true,
             process: Default::default(),
             exchanges: Vec::new(),
+            ledger: None,
         }
     }
 
@@ -337,11 +344,13 @@ impl Scanner {
             Some(Width::Dword) => 4,
             _ => 2,
         };
+        let noted = self.before_set(&path);
         let resp = self.explicit(&MrRequest {
             service: Service::SET_ATTRIBUTE_SINGLE.0,
             path,
             data: v.to_le_bytes()[..width].to_vec(),
         })?;
+        self.after_set(noted, resp.general == 0);
         if resp.general != 0 {
             return Ok(refused(&resp));
         }
@@ -445,6 +454,7 @@ impl Scanner {
         }
         let reply = ForwardOpenReply::parse(&resp.data)
             .map_err(|e| StepError::Protocol(format!("Forward_Open reply: {e}")))?;
+        self.note_opened(&fo);
         if s.o_t_point != eip::LISTEN_ONLY_POINT {
             // An owner connection: the following process-data steps run over it.
             let header = 2 + if s.run_idle { 4 } else { 0 };
@@ -522,15 +532,40 @@ impl Scanner {
     }
 
     fn run_process(&mut self, inverter: Inverter, cycles: u32) -> Result<Value, StepError> {
+        self.run_process_until(inverter, cycles, None)
+    }
+
+    /// Process data for `d`: on the embedded link's virtual clock as many RPIs; on a network
+    /// target `d` of real time, however long a cycle there lasts (a drive runs on its own
+    /// clock: a ramp or a watchdog sees the real time, not the cycles sent).
+    fn run_for(&mut self, inverter: Inverter, d: Duration) -> Result<Value, StepError> {
+        let deadline = self
+            .link
+            .adapter()
+            .is_none()
+            .then(|| std::time::Instant::now() + d);
+        self.run_process_until(inverter, cycles_for(d, RPI), deadline)
+    }
+
+    /// `cycles` I/O cycles, or with a `deadline` as many as it takes to pass it (at least
+    /// one); the status word and actual values of `inverter` last received.
+    fn run_process_until(
+        &mut self,
+        inverter: Inverter,
+        cycles: u32,
+        deadline: Option<std::time::Instant>,
+    ) -> Result<Value, StepError> {
         let first = self.exchanges.len();
         let mut last = None;
-        for _ in 0..cycles {
+        let mut n = 0;
+        while deadline.map_or(n < cycles, |t| n == 0 || std::time::Instant::now() < t) {
+            n += 1;
             if let Some(d) = self.io_cycle()? {
                 last = Some(d);
             }
         }
         compact(&mut self.exchanges, first);
-        let data = last.ok_or(StepError::Silent { cycles })?;
+        let data = last.ok_or(StepError::Silent { cycles: n })?;
         let io = self
             .io
             .as_ref()
@@ -580,7 +615,9 @@ impl Scanner {
             }
             EnipStep::Mr { bytes, client } => {
                 let what = format!("message-router request {}", hex(bytes));
+                let noted = self.before_request(bytes);
                 let resp = self.unconnected(*client, bytes.clone(), what)?;
+                self.after_request(noted, &resp);
                 Ok(mr_fields(&resp))
             }
             EnipStep::Request {
@@ -597,7 +634,10 @@ impl Scanner {
                     path,
                     data: data.clone(),
                 };
-                let resp = self.unconnected(*client, req.emit(), what)?;
+                let bytes = req.emit();
+                let noted = self.before_request(&bytes);
+                let resp = self.unconnected(*client, bytes, what)?;
+                self.after_request(noted, &resp);
                 Ok(mr_fields(&resp))
             }
             EnipStep::Run(run) => {
@@ -742,19 +782,23 @@ fn reply_fields(r: &EncapRepr) -> Value {
 }
 
 fn describe_reply(r: &EncapRepr) -> String {
-    let mut s = format!("{}", Command(r.command));
+    use std::fmt::Write as _;
+    // Written into one string: this runs once per exchange, on the scanner's hot path.
+    let mut s = String::with_capacity(96);
+    let _ = write!(s, "{}", Command(r.command));
     if r.status != 0 {
-        s += &format!(" status {}", EncapStatus(r.status));
+        let _ = write!(s, " status {}", EncapStatus(r.status));
     }
     if let Ok(sd) = SendData::parse(&r.data) {
         if let Some(Item::UnconnectedData(p)) = sd.cpf.items.get(1) {
             if let Ok(resp) = MrResponse::parse(p) {
-                s += &format!(": {}", GeneralStatus(resp.general));
+                let _ = write!(s, ": {}", GeneralStatus(resp.general));
                 if !resp.extended.is_empty() {
-                    s += &format!(" extended {:04X?}", resp.extended);
+                    let _ = write!(s, " extended {:04X?}", resp.extended);
                 }
                 if !resp.data.is_empty() && resp.data.len() <= 16 {
-                    s += &format!(" data {}", hex(&resp.data));
+                    s.push_str(" data ");
+                    s.push_str(&hex(&resp.data));
                 }
             }
         }
@@ -817,15 +861,14 @@ impl Binding for Scanner {
                 run,
             } => {
                 self.process[usize::from(inverter.get())] = (*control, setpoints.clone());
-                let cycles = match run {
-                    crate::suite::Run::Cycles(n) => *n,
-                    crate::suite::Run::For(d) => cycles_for(*d, RPI),
-                };
-                self.run_process(*inverter, cycles)
+                match run {
+                    crate::suite::Run::Cycles(n) => self.run_process(*inverter, *n),
+                    crate::suite::Run::For(d) => self.run_for(*inverter, *d),
+                }
             }
             Action::Wait(d) => {
                 let fi = Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?;
-                self.run_process(fi, cycles_for(*d, RPI))
+                self.run_for(fi, *d)
             }
             Action::Inject { inverter, error } => {
                 let (adapter, _) = self.link.adapter().ok_or_else(|| {
@@ -849,6 +892,10 @@ impl Binding for Scanner {
 
     fn take_exchanges(&mut self) -> Vec<Exchange> {
         std::mem::take(&mut self.exchanges)
+    }
+
+    fn finish(&mut self) -> Result<(), String> {
+        self.restore()
     }
 }
 

@@ -1,0 +1,870 @@
+//! Case isolation on a persistent target: what a case changes on a device on the network, and
+//! how the scanner puts it back when the case ends ([`Binding::finish`](super::Binding)).
+//!
+//! The embedded adapter is made afresh for every case and needs none of this. A device on the
+//! network is one device for the whole run, so the scanner keeps a [`Ledger`] while a case runs
+//! and, when it ends, whatever its verdict:
+//!
+//! 1. stops the inverters the case commanded through the case's own I/O connection while that
+//!    is still open: control word 0400h, "control data valid" with "disable voltage"
+//!    (BU 0620 §6.1.2.1, BU 2100 §6.2.2: bit 1 = 0 switches the output voltage off, "Switch-on
+//!    block");
+//! 2. writes back every attribute the case set (parameters first of all), with the value read
+//!    before its first write in the case, in the reverse order of the first writes;
+//! 3. closes every connection the case opened and did not close (Forward_Close; one already
+//!    gone, by its time-out or with its owner, counts as closed);
+//! 4. if the case ran I/O, brings every inverter it commanded, and every one in fault, back to
+//!    "Switch-on block" (xx40h) over a connection of its own: disable voltage, and for a fault
+//!    (the E10.2 of a connection time-out, the E10.3 of P151/P513) the bus acknowledgement —
+//!    control bit 7 from 0 to 1, "with the switch from 0 to 1, inactive errors are
+//!    acknowledged" (BU 0620 §5.2 and §6.1.2.1, BU 2100 §6.2.2 and §8.2) — then closes it,
+//!    and waits until the interface no longer shows cyclic process data (P872 bit 1 of the
+//!    SK 550P, BU 0620 §4.3; P173 [-01] bit 1 of the modules, BU 2100 §7.1.3), so that what
+//!    needs "no communication via Ethernet" (the P899 protocol change, BU 0620 §3.3) holds in
+//!    the next case as it did before this one;
+//! 5. repeats an Identity Reset the case made after setting attributes, so that what the reset
+//!    read in (the IP addressing, BU 2100 §7.1.2, BU 0620 §4.2.2) is read in again from the
+//!    restored values;
+//! 6. unregisters its sessions.
+//!
+//! A case's own observations are unchanged: the one exchange inside a step is the read of an
+//! attribute before its first write, marked as such in the transcript; everything else happens
+//! after the last step and shows as the case's cleanup step.
+
+use std::time::{Duration, Instant};
+
+use proto::enip::cip::{class, GeneralStatus, MrRequest, MrResponse, Service};
+use proto::enip::cm::{ext, ConnectionKey, ForwardClose, ForwardOpen};
+use proto::enip::encap::{Command, EncapRepr};
+use proto::enip::epath::EPath;
+use proto::nord::control::ControlWord;
+use proto::nord::status::StatusWord;
+use proto::nord::{ArrayElement, Family, Inverter, ParamNumber};
+use serde_json::Value;
+
+use super::{Scanner, RPI};
+use crate::binding::StepError;
+use crate::outcome::Exchange;
+use crate::runner::hex;
+use crate::suite::{OrderSpec, Target};
+
+/// "Control data valid" (bit 10) and nothing else: "disable voltage" (bit 1 = 0), the output
+/// off at once, "Switch-on block" (BU 0620 §6.1.2.1).
+const DISABLE: u16 = 1 << ControlWord::CONTROL_DATA_VALID;
+/// [`DISABLE`] with bit 7 "acknowledge the error": its rising edge acknowledges a fault.
+const ACKNOWLEDGE: u16 = DISABLE | 1 << ControlWord::ACKNOWLEDGE;
+/// Status bit 3 "Fault" (set in "Error reaction active" too).
+const FAULT: u16 = 1 << StatusWord::FAULT;
+/// Status bits 0–6 in "Switch-on block" with neither command present: xx40h.
+const SWITCH_ON_BLOCK: (u16, u16) = (0x007F, 0x0040);
+/// Cycles the stop of step 1 runs on the case's connection.
+const STOP_CYCLES: u32 = 5;
+/// Bound on the cycles of step 4 (1 s at the scanner's RPI).
+const SETTLE_CYCLES: u32 = 250;
+/// Cycles each half of the acknowledgement edge is held (0400h, then 0480h).
+const ACK_HOLD: u32 = 3;
+/// Cycles in a row an inverter must show xx40h to 0400h before it counts as settled (the T→O
+/// data may lag the O→T data by a cycle).
+const CALM: u8 = 2;
+/// How long the interface may go on showing cyclic communication after the last connection
+/// closed, and how often the cleanup looks.
+const QUIET_TIME: Duration = Duration::from_secs(2);
+const QUIET_POLL: Duration = Duration::from_millis(10);
+/// Bus status bit 1 "cyclic (PZD) communication" (P872, P173 [-01]).
+const CYCLIC: i64 = 1 << 1;
+
+/// An attribute the case set.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Written {
+    path: EPath,
+    /// Its value before the case's first write, or why it could not be read.
+    before: Result<Vec<u8>, String>,
+    /// A write was accepted: the value may differ from `before`.
+    changed: bool,
+}
+
+/// A connection the case opened.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(super) struct Opened {
+    key: ConnectionKey,
+    /// The connection path of its Forward_Open, which its Forward_Close repeats.
+    path: EPath,
+}
+
+/// What a case changed on the target, as far as the scanner saw it.
+#[derive(Debug, Default, Clone, PartialEq, Eq)]
+pub(super) struct Ledger {
+    /// Attributes in the order of their first write.
+    written: Vec<Written>,
+    /// Connections still open, in the order opened.
+    opened: Vec<Opened>,
+    /// An I/O (class 1) connection was opened: the drive may have moved, or faulted when the
+    /// connection timed out.
+    io: bool,
+    /// The case made an Identity Reset after a write was accepted.
+    reset_after_write: bool,
+}
+
+impl Ledger {
+    /// Whether the value of `path` must be read before the write about to be made: the first
+    /// write of each attribute in the case.
+    pub(super) fn wants_original(&self, path: &EPath) -> bool {
+        !self.written.iter().any(|w| w.path == *path)
+    }
+
+    /// The value of `path` before the case's first write of it.
+    pub(super) fn original(&mut self, path: EPath, before: Result<Vec<u8>, String>) {
+        if self.wants_original(&path) {
+            self.written.push(Written {
+                path,
+                before,
+                changed: false,
+            });
+        }
+    }
+
+    /// A write of `path` was answered; `accepted` when with success.
+    pub(super) fn wrote(&mut self, path: &EPath, accepted: bool) {
+        if let Some(w) = self.written.iter_mut().find(|w| w.path == *path) {
+            w.changed |= accepted;
+        }
+    }
+
+    /// A Forward_Open was accepted.
+    pub(super) fn opened(&mut self, fo: &ForwardOpen) {
+        self.io |= fo.transport.class() == 1;
+        self.opened.push(Opened {
+            key: fo.key(),
+            path: fo.path.clone(),
+        });
+    }
+
+    /// A Forward_Close was accepted.
+    pub(super) fn closed(&mut self, key: ConnectionKey) {
+        self.opened.retain(|o| o.key != key);
+    }
+
+    /// An Identity Reset was accepted.
+    pub(super) fn reset(&mut self) {
+        self.reset_after_write |= self.written.iter().any(|w| w.changed);
+    }
+
+    /// The attributes to write back, in the order to write them (the reverse of the first
+    /// writes), each with its original value or why there is none.
+    fn restores(&self) -> impl Iterator<Item = (&EPath, Result<&[u8], &str>)> {
+        self.written
+            .iter()
+            .rev()
+            .filter(|w| w.changed)
+            .map(|w| (&w.path, w.before.as_deref().map_err(String::as_str)))
+    }
+}
+
+/// A request of a raw or structured EtherNet/IP step, as the ledger sees it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(super) enum Noted {
+    /// Set_Attribute_Single of this path.
+    Set(EPath),
+    /// Forward_Open or Large_Forward_Open.
+    Open(Box<ForwardOpen>),
+    /// Forward_Close of this connection.
+    Close(ConnectionKey),
+    /// Reset of the Identity object.
+    Reset,
+}
+
+impl Noted {
+    /// What a message-router request as bytes does to the target, if the ledger cares.
+    pub(super) fn of(request: &[u8]) -> Option<Noted> {
+        let req = MrRequest::parse(request).ok()?;
+        match Service(req.service) {
+            Service::SET_ATTRIBUTE_SINGLE => Some(Noted::Set(req.path)),
+            s @ (Service::FORWARD_OPEN | Service::LARGE_FORWARD_OPEN) => {
+                let large = s == Service::LARGE_FORWARD_OPEN;
+                let fo = ForwardOpen::parse(&req.data, large).ok()?;
+                Some(Noted::Open(Box::new(fo)))
+            }
+            Service::FORWARD_CLOSE => {
+                Some(Noted::Close(ForwardClose::parse(&req.data).ok()?.key()))
+            }
+            Service::RESET if req.path.class_id() == Some(class::IDENTITY) => Some(Noted::Reset),
+            _ => None,
+        }
+    }
+}
+
+/// One inverter's way back to "Switch-on block" at the end of a case (step 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Settle {
+    /// The case commanded it, or it showed a fault: it gets valid control words. The others
+    /// get what the case sent them, 0000h (not evaluated, bit 10 clear).
+    involved: bool,
+    /// Its latest status word.
+    status: Option<u16>,
+    /// The control word sent last.
+    last: u16,
+    /// Status words in a row showing xx40h while 0400h is sent.
+    calm: u8,
+}
+
+impl Settle {
+    /// An inverter the case commanded (`true`) or not.
+    pub(super) fn new(commanded: bool) -> Settle {
+        Settle {
+            involved: commanded,
+            status: None,
+            last: 0,
+            calm: 0,
+        }
+    }
+
+    /// Takes the status word the inverter answered.
+    pub(super) fn observe(&mut self, status: u16) {
+        self.status = Some(status);
+        let (mask, value) = SWITCH_ON_BLOCK;
+        if status & FAULT != 0 {
+            self.involved = true;
+            self.calm = 0;
+        } else if self.involved && self.last == DISABLE && status & mask == value {
+            self.calm = self.calm.saturating_add(1);
+        } else {
+            self.calm = 0;
+        }
+    }
+
+    /// The control word for cleanup cycle `n`: 0400h, alternating with 0480h while a fault
+    /// shows (each change to 0480h is a rising edge of bit 7).
+    pub(super) fn control(&mut self, n: u32) -> u16 {
+        let faulted = self.status.is_some_and(|s| s & FAULT != 0);
+        self.last = match (self.involved, faulted) {
+            (false, _) => 0,
+            (true, true) if (n / ACK_HOLD) % 2 == 1 => ACKNOWLEDGE,
+            (true, _) => DISABLE,
+        };
+        self.last
+    }
+
+    /// Whether the inverter is as the next case expects it: seen, and, if it needed anything,
+    /// in "Switch-on block" without a fault under 0400h.
+    pub(super) fn done(&self) -> bool {
+        self.status.is_some() && (!self.involved || self.calm >= CALM)
+    }
+}
+
+/// Marks the exchanges from `first` on with `tag`.
+fn mark(exchanges: &mut [Exchange], first: usize, tag: &str) {
+    for x in exchanges.iter_mut().skip(first) {
+        x.sent = format!("{tag} {}", x.sent);
+    }
+}
+
+/// Keeps the first two and the last of a long run of cleanup cycles.
+fn shorten(exchanges: &mut Vec<Exchange>, from: usize) {
+    let n = exchanges.len().saturating_sub(from);
+    if n <= 4 {
+        return;
+    }
+    let last = exchanges.pop();
+    exchanges.truncate(from + 2);
+    exchanges.push(Exchange {
+        sent_hex: String::new(),
+        sent: format!("… {} more cleanup exchanges …", n - 3),
+        received_hex: String::new(),
+        received: String::new(),
+    });
+    exchanges.extend(last);
+}
+
+impl Scanner {
+    /// Before a Set_Attribute_Single of `path`: the first in the case reads the value to put
+    /// back (a network target only). Returns the path to pass to [`Scanner::after_set`].
+    pub(super) fn before_set(&mut self, path: &EPath) -> Option<EPath> {
+        if !self.ledger.as_ref()?.wants_original(path) {
+            return Some(path.clone());
+        }
+        // The session first, unmarked: the write would register it anyway.
+        let _ = self.session(1);
+        let first = self.exchanges.len();
+        let before = self
+            .explicit(&MrRequest {
+                service: Service::GET_ATTRIBUTE_SINGLE.0,
+                path: path.clone(),
+                data: Vec::new(),
+            })
+            .map_err(|e| e.to_string())
+            .and_then(|r| match r.general {
+                0 => Ok(r.data),
+                g => Err(format!("Get_Attribute_Single: {}", GeneralStatus(g))),
+            });
+        mark(
+            &mut self.exchanges,
+            first,
+            "[cleanup: the value before the write]",
+        );
+        self.ledger.as_mut()?.original(path.clone(), before);
+        Some(path.clone())
+    }
+
+    /// After the Set_Attribute_Single of [`Scanner::before_set`]: `accepted` when with success.
+    pub(super) fn after_set(&mut self, path: Option<EPath>, accepted: bool) {
+        if let (Some(ledger), Some(path)) = (self.ledger.as_mut(), path) {
+            ledger.wrote(&path, accepted);
+        }
+    }
+
+    /// Before a message-router request of a step, as bytes.
+    pub(super) fn before_request(&mut self, request: &[u8]) -> Option<Noted> {
+        self.ledger.as_ref()?;
+        let noted = Noted::of(request)?;
+        if let Noted::Set(path) = &noted {
+            self.before_set(path);
+        }
+        Some(noted)
+    }
+
+    /// After the request of [`Scanner::before_request`] was answered with `resp`.
+    pub(super) fn after_request(&mut self, noted: Option<Noted>, resp: &MrResponse) {
+        let (Some(ledger), Some(noted)) = (self.ledger.as_mut(), noted) else {
+            return;
+        };
+        let ok = resp.general == 0;
+        match noted {
+            Noted::Set(path) => ledger.wrote(&path, ok),
+            Noted::Open(fo) if ok => ledger.opened(&fo),
+            Noted::Close(key) if ok => ledger.closed(key),
+            Noted::Reset if ok => ledger.reset(),
+            _ => {}
+        }
+    }
+
+    /// A Forward_Open of the scanner's own was accepted.
+    pub(super) fn note_opened(&mut self, fo: &ForwardOpen) {
+        if let Some(ledger) = self.ledger.as_mut() {
+            ledger.opened(fo);
+        }
+    }
+
+    /// Leaves a network target as the case found it (the module's steps 1–6); `Ok` at once
+    /// for the embedded adapter, which keeps no ledger.
+    pub(super) fn restore(&mut self) -> Result<(), String> {
+        let Some(ledger) = self.ledger.take() else {
+            return Ok(());
+        };
+        let mut problems = Vec::new();
+        let commanded: Vec<Inverter> = (1..=8u8)
+            .filter(|n| self.process[usize::from(*n)] != (0, Vec::new()))
+            .filter_map(|n| Inverter::new(n.into()).ok())
+            .collect();
+        let drive = self.product.is_some() && ledger.io;
+        self.run = true;
+        if drive && self.io.is_some() && !commanded.is_empty() {
+            if let Err(e) = self.stop(&commanded) {
+                problems.push(format!("stopping the drive on the case's connection: {e}"));
+            }
+        }
+        for (path, before) in ledger.restores() {
+            if let Err(e) = self.put_back(path, before) {
+                problems.push(e);
+            }
+        }
+        self.io = None;
+        problems.extend(self.close_all(&ledger.opened));
+        if drive {
+            problems.extend(self.settle(&commanded));
+            if let Err(e) = self.quiet() {
+                problems.push(e);
+            }
+        }
+        if ledger.reset_after_write {
+            if let Err(e) = self.reset_again() {
+                problems.push(e);
+            }
+        }
+        self.unregister();
+        match problems.is_empty() {
+            true => Ok(()),
+            false => Err(problems.join("; ")),
+        }
+    }
+
+    /// Step 1: 0400h to the commanded inverters over the case's open connection.
+    fn stop(&mut self, commanded: &[Inverter]) -> Result<(), StepError> {
+        for fi in commanded {
+            self.process[usize::from(fi.get())] = (DISABLE, Vec::new());
+        }
+        let first = self.exchanges.len();
+        let result = (0..STOP_CYCLES).try_for_each(|_| self.io_cycle().map(|_| ()));
+        shorten(&mut self.exchanges, first);
+        result
+    }
+
+    /// Step 2 for one attribute.
+    fn put_back(&mut self, path: &EPath, before: Result<&[u8], &str>) -> Result<(), String> {
+        let before = before
+            .map_err(|e| format!("{path} was set but its value before could not be read ({e})"))?;
+        let resp = self
+            .explicit(&MrRequest {
+                service: Service::SET_ATTRIBUTE_SINGLE.0,
+                path: path.clone(),
+                data: before.to_vec(),
+            })
+            .map_err(|e| format!("{path} not set back to [{}]: {e}", hex(before)))?;
+        match resp.general {
+            0 => Ok(()),
+            g => Err(format!(
+                "{path} not set back to [{}]: {}",
+                hex(before),
+                GeneralStatus(g)
+            )),
+        }
+    }
+
+    /// Step 3, and the end of step 4: Forward_Close of each connection, the latest first.
+    fn close_all(&mut self, opened: &[Opened]) -> Vec<String> {
+        let mut problems = Vec::new();
+        for o in opened.iter().rev() {
+            let fc = ForwardClose {
+                priority_tick: 0x0A,
+                timeout_ticks: 0x0E,
+                serial: o.key.0,
+                vendor: o.key.1,
+                originator_serial: o.key.2,
+                path: o.path.clone(),
+            };
+            let resp = self.explicit(&MrRequest {
+                service: Service::FORWARD_CLOSE.0,
+                path: EPath::object(class::CONNECTION_MANAGER, 1),
+                data: fc.emit(),
+            });
+            let gone = |r: &MrResponse| {
+                r.general == GeneralStatus::CONNECTION_FAILURE.0
+                    && r.extended.first() == Some(&ext::CONNECTION_NOT_FOUND)
+            };
+            match resp {
+                Ok(r) if r.general == 0 || gone(&r) => {}
+                Ok(r) => problems.push(format!(
+                    "connection {:04X}h not closed: {} extended {:04X?}",
+                    o.key.0,
+                    GeneralStatus(r.general),
+                    r.extended
+                )),
+                Err(e) => problems.push(format!("connection {:04X}h not closed: {e}", o.key.0)),
+            }
+        }
+        problems
+    }
+
+    /// Step 4: every inverter the case commanded, and every one in fault, to "Switch-on
+    /// block" over a connection of the cleanup's own.
+    fn settle(&mut self, commanded: &[Inverter]) -> Vec<String> {
+        self.process = Default::default();
+        // The cleanup's connection goes into a ledger of its own, which closes it.
+        self.ledger = Some(Ledger::default());
+        let first = self.exchanges.len();
+        let outcome = self.settle_cycles(commanded);
+        shorten(&mut self.exchanges, first);
+        self.io = None;
+        let own = self.ledger.take().unwrap_or_default();
+        let mut problems = self.close_all(&own.opened);
+        if let Err(e) = outcome {
+            problems.insert(0, e);
+        }
+        problems
+    }
+
+    fn settle_cycles(&mut self, commanded: &[Inverter]) -> Result<(), String> {
+        let what = |e: StepError| format!("settling the drive: {e}");
+        if self.io.is_none() {
+            self.own_forward_open().map_err(what)?;
+        }
+        let asm = self
+            .io
+            .as_ref()
+            .and_then(|io| io.t_o)
+            .ok_or("settling the drive: the connection has no input assembly")?;
+        let mut fis: Vec<(Inverter, Settle)> = (1..=asm.inverters)
+            .filter_map(|n| Inverter::new(n.into()).ok())
+            .map(|fi| (fi, Settle::new(commanded.contains(&fi))))
+            .collect();
+        for n in 0..SETTLE_CYCLES {
+            for (fi, s) in &mut fis {
+                self.process[usize::from(fi.get())] = (s.control(n), Vec::new());
+            }
+            let Some(data) = self.io_cycle().map_err(what)? else {
+                continue;
+            };
+            for (fi, s) in &mut fis {
+                let word = asm
+                    .offset(*fi)
+                    .and_then(|off| data.get(off..off + 2))
+                    .map(|w| u16::from_le_bytes([w[0], w[1]]));
+                if let Some(w) = word {
+                    s.observe(w);
+                }
+            }
+            if fis.iter().all(|(_, s)| s.done()) {
+                return Ok(());
+            }
+        }
+        let stuck: Vec<String> = fis
+            .iter()
+            .filter(|(_, s)| !s.done())
+            .map(|(fi, s)| match s.status {
+                Some(w) => format!("{fi} status {w:04X}h"),
+                None => format!("{fi} no status word"),
+            })
+            .collect();
+        Err(format!(
+            "the drive did not return to 'Switch-on block' (xx40h, no fault) within {:?}: {}",
+            RPI * SETTLE_CYCLES,
+            stuck.join(", ")
+        ))
+    }
+
+    /// Step 4, last: waits until the bus status no longer shows cyclic communication.
+    fn quiet(&mut self) -> Result<(), String> {
+        let product = self.product.ok_or("no NORD product")?;
+        let (number, element) = match product.family() {
+            Family::Integrated => (872, None),
+            Family::Module => (173, ArrayElement::new(1).ok()),
+        };
+        let spec = OrderSpec {
+            target: Target::Interface,
+            number: ParamNumber::new(number).map_err(|e| e.to_string())?,
+            set: None,
+            element,
+            ak: None,
+            value: None,
+            eeprom: true,
+            dword: None,
+        };
+        let first = self.exchanges.len();
+        let deadline = Instant::now() + QUIET_TIME;
+        let outcome = loop {
+            let v = match self.read(&spec) {
+                Ok(v) => v,
+                Err(e) => break Err(format!("reading {}: {e}", spec.describe())),
+            };
+            match v.get("value").and_then(Value::as_i64) {
+                Some(w) if w & CYCLIC == 0 => break Ok(()),
+                Some(w) if Instant::now() >= deadline => {
+                    break Err(format!(
+                        "{} still shows cyclic communication (bit 1) {QUIET_TIME:?} after the \
+                         connections closed: {w:04X}h",
+                        spec.describe()
+                    ))
+                }
+                Some(_) => std::thread::sleep(QUIET_POLL),
+                None => break Err(format!("reading {}: {v}", spec.describe())),
+            }
+        };
+        shorten(&mut self.exchanges, first);
+        outcome
+    }
+
+    /// Step 5: the Identity Reset again, so the restored addressing is read in.
+    fn reset_again(&mut self) -> Result<(), String> {
+        let resp = self
+            .explicit(&MrRequest {
+                service: Service::RESET.0,
+                path: EPath::object(class::IDENTITY, 1),
+                data: Vec::new(),
+            })
+            .map_err(|e| format!("Identity Reset after the restore: {e}"))?;
+        match resp.general {
+            0 => Ok(()),
+            g => Err(format!(
+                "Identity Reset after the restore: {}",
+                GeneralStatus(g)
+            )),
+        }
+    }
+
+    /// Step 6: UnRegisterSession of every session; the target answers none and may close the
+    /// connection (CIP Vol 2 §2-4.5), so neither counts as a problem.
+    fn unregister(&mut self) {
+        for (client, session) in std::mem::take(&mut self.sessions) {
+            let bye = EncapRepr {
+                command: Command::UNREGISTER_SESSION.0,
+                session,
+                ..EncapRepr::default()
+            };
+            let Ok(bytes) = bye.emit() else { continue };
+            let reply = self.link.request(client, &bytes);
+            let client_note = if client == 1 {
+                String::new()
+            } else {
+                format!("[client {client}] ")
+            };
+            self.exchanges.push(Exchange {
+                sent_hex: hex(&bytes),
+                sent: format!("{client_note}UnRegisterSession"),
+                received_hex: match &reply {
+                    Ok(Some(b)) => hex(b),
+                    _ => String::new(),
+                },
+                received: match reply {
+                    Ok(Some(_)) => "an answer, where none is due".into(),
+                    Ok(None) => "(nothing, as due)".into(),
+                    Err(e) => format!("(nothing: {e})"),
+                },
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{ORIGINATOR_SERIAL, VENDOR};
+    use super::*;
+    use proto::enip::cm::{NetParams, Transport};
+    use proto::enip::epath::Segment;
+
+    fn param(n: u16) -> EPath {
+        EPath::attribute(101, 1, n)
+    }
+
+    #[test]
+    fn only_the_first_write_of_an_attribute_reads_its_value() {
+        let mut l = Ledger::default();
+        assert!(l.wants_original(&param(102)));
+        l.original(param(102), Ok(vec![0xC8, 0x00]));
+        assert!(!l.wants_original(&param(102)));
+        // A second original (a later write) does not replace the first.
+        l.original(param(102), Ok(vec![0xE8, 0x03]));
+        l.wrote(&param(102), true);
+        l.wrote(&param(102), true);
+        let r: Vec<_> = l.restores().collect();
+        assert_eq!(r, vec![(&param(102), Ok(&[0xC8u8, 0x00][..]))]);
+    }
+
+    #[test]
+    fn restores_run_in_reverse_order_of_the_first_writes_and_skip_refused_ones() {
+        let mut l = Ledger::default();
+        for (n, v) in [(102, 1u8), (165, 2), (151, 3), (166, 4)] {
+            l.original(param(n), Ok(vec![v, 0]));
+        }
+        l.wrote(&param(102), true);
+        l.wrote(&param(165), true);
+        l.wrote(&param(151), false); // refused: the value did not change
+        l.wrote(&param(166), true);
+        l.wrote(&param(102), false); // a later refusal does not undo the earlier change
+        let order: Vec<u16> = l
+            .restores()
+            .map(|(p, _)| p.attribute_id().unwrap())
+            .collect();
+        assert_eq!(order, vec![166, 165, 102]);
+    }
+
+    #[test]
+    fn an_unreadable_original_is_reported_when_the_write_was_accepted() {
+        let mut l = Ledger::default();
+        l.original(param(900), Err("Get_Attribute_Single: 14h".into()));
+        assert_eq!(l.restores().count(), 0);
+        l.wrote(&param(900), true);
+        let r: Vec<_> = l.restores().collect();
+        assert_eq!(r, vec![(&param(900), Err("Get_Attribute_Single: 14h"))]);
+    }
+
+    fn forward_open(serial: u16, transport: Transport) -> ForwardOpen {
+        let np = NetParams {
+            size: 18,
+            variable: false,
+            priority: 0,
+            kind: 2,
+            redundant_owner: false,
+        };
+        ForwardOpen {
+            large: false,
+            priority_tick: 0x0A,
+            timeout_ticks: 0x0E,
+            o_t_id: 0,
+            t_o_id: 1,
+            serial,
+            vendor: VENDOR,
+            originator_serial: ORIGINATOR_SERIAL,
+            timeout_multiplier: 2,
+            o_t_rpi: 4000,
+            o_t: np,
+            t_o_rpi: 4000,
+            t_o: np,
+            transport,
+            path: EPath {
+                segments: vec![
+                    Segment::Class(class::ASSEMBLY),
+                    Segment::Instance(1),
+                    Segment::ConnectionPoint(100),
+                    Segment::ConnectionPoint(101),
+                ],
+            },
+        }
+    }
+
+    #[test]
+    fn connections_are_kept_until_closed_and_io_marks_the_drive() {
+        let mut l = Ledger::default();
+        l.opened(&forward_open(7, Transport::CLASS3));
+        assert!(!l.io, "an explicit connection does not touch the drive");
+        l.opened(&forward_open(8, Transport::CLASS1_CYCLIC));
+        assert!(l.io);
+        l.closed(forward_open(7, Transport::CLASS3).key());
+        let keys: Vec<u16> = l.opened.iter().map(|o| o.key.0).collect();
+        assert_eq!(keys, vec![8]);
+        assert_eq!(l.opened[0].path.connection_points(), vec![100, 101]);
+    }
+
+    #[test]
+    fn a_reset_counts_only_after_an_accepted_write() {
+        let mut l = Ledger::default();
+        l.reset();
+        assert!(!l.reset_after_write);
+        l.original(param(165), Ok(vec![1, 0]));
+        l.wrote(&param(165), true);
+        l.reset();
+        assert!(l.reset_after_write);
+    }
+
+    #[test]
+    fn requests_as_bytes_are_noted_by_service() {
+        // Set_Attribute_Single class 64h instance 1 attribute 66h (P102 of FI 1... as bytes).
+        let set = [0x10, 0x03, 0x20, 0x65, 0x24, 0x01, 0x30, 0x66, 0xE8, 0x03];
+        assert_eq!(
+            Noted::of(&set),
+            Some(Noted::Set(EPath::attribute(0x65, 1, 0x66)))
+        );
+        // The duplicate-forward-open case's Forward_Open (suites/cip/connection-manager.yaml).
+        let fo = forward_open(0x7701, Transport::CLASS1_CYCLIC);
+        let mut bytes = vec![0x54, 0x02, 0x20, 0x06, 0x24, 0x01];
+        bytes.extend(fo.emit());
+        assert_eq!(Noted::of(&bytes), Some(Noted::Open(Box::new(fo.clone()))));
+        let fc = ForwardClose {
+            priority_tick: 0x0A,
+            timeout_ticks: 0x0E,
+            serial: 0x7701,
+            vendor: VENDOR,
+            originator_serial: ORIGINATOR_SERIAL,
+            path: EPath::object(class::ASSEMBLY, 1),
+        };
+        let mut bytes = vec![0x4E, 0x02, 0x20, 0x06, 0x24, 0x01];
+        bytes.extend(fc.emit());
+        assert_eq!(Noted::of(&bytes), Some(Noted::Close(fo.key())));
+        assert_eq!(
+            Noted::of(&[0x05, 0x02, 0x20, 0x01, 0x24, 0x01]),
+            Some(Noted::Reset)
+        );
+        // A Get, a reset of another object, a malformed request: nothing to note.
+        assert_eq!(
+            Noted::of(&[0x0E, 0x03, 0x20, 0x01, 0x24, 0x01, 0x30, 0x01]),
+            None
+        );
+        assert_eq!(Noted::of(&[0x05, 0x02, 0x20, 0xF5, 0x24, 0x01]), None);
+        assert_eq!(Noted::of(&[0x10]), None);
+    }
+
+    /// Runs `s` against statuses the drive answers, one per cycle; returns the controls sent.
+    fn drive(s: &mut Settle, answers: &[u16]) -> Vec<u16> {
+        let mut sent = Vec::new();
+        for (n, a) in (0..).zip(answers) {
+            sent.push(s.control(n));
+            s.observe(*a);
+        }
+        sent
+    }
+
+    #[test]
+    fn an_inverter_the_case_did_not_touch_gets_what_it_got_and_is_left_alone() {
+        let mut s = Settle::new(false);
+        assert!(!s.done(), "not seen yet");
+        // Ready for switch-on (xx31h): not the cleanup's business when the case never sent it
+        // a control word.
+        assert_eq!(drive(&mut s, &[0x0B31]), vec![0]);
+        assert!(s.done());
+    }
+
+    #[test]
+    fn a_commanded_inverter_gets_0400h_until_it_shows_xx40h_twice() {
+        let mut s = Settle::new(true);
+        // Operation enabled, then (one cycle late) switch-on block.
+        let sent = drive(&mut s, &[0x0337, 0x0B40]);
+        assert_eq!(sent, vec![DISABLE, DISABLE]);
+        assert!(!s.done());
+        drive(&mut s, &[0x0B40]);
+        assert!(s.done());
+    }
+
+    #[test]
+    fn switch_on_block_with_a_command_bit_shown_is_not_yet_settled() {
+        // xx60h: switch-on block, status bit 5 from the last evaluated control word.
+        let mut s = Settle::new(true);
+        drive(&mut s, &[0x0B60, 0x0B60, 0x0B60]);
+        assert!(!s.done());
+    }
+
+    #[test]
+    fn a_fault_is_acknowledged_by_a_rising_edge_of_bit_7_and_ends_under_0400h() {
+        let mut s = Settle::new(false);
+        // Fault (xx08h) for a while: 0400h and 0480h alternate, ACK_HOLD cycles each.
+        let sent = drive(&mut s, &[0x0208; 8]);
+        assert_eq!(
+            sent,
+            vec![
+                0,
+                DISABLE,
+                DISABLE,
+                ACKNOWLEDGE,
+                ACKNOWLEDGE,
+                ACKNOWLEDGE,
+                DISABLE,
+                DISABLE
+            ]
+        );
+        assert!(s.involved && !s.done());
+        // Still in fault at cycle 8 (0400h); acknowledged by the 0480h edge of cycle 9:
+        // switch-on block (xx40h), and 0400h from then on until it shows so twice.
+        let answers = [(0x0208, DISABLE), (0x0240, ACKNOWLEDGE), (0x0240, DISABLE)];
+        for (n, (answer, control)) in (8..).zip(answers) {
+            assert_eq!(s.control(n), control, "cycle {n}");
+            s.observe(answer);
+            assert!(
+                !s.done(),
+                "cycle {n}: the words sent so far end with bit 7 or a fault"
+            );
+        }
+        assert_eq!(s.control(11), DISABLE);
+        s.observe(0x0240);
+        assert!(s.done());
+    }
+
+    #[test]
+    fn the_control_words_are_the_manuals() {
+        // Bit 10 "control data valid" alone, then with bit 7 "acknowledge" (BU 0620 §6.1.2.1).
+        assert_eq!(DISABLE, 0x0400);
+        assert_eq!(ACKNOWLEDGE, 0x0480);
+        assert_eq!(FAULT, 0x0008);
+    }
+
+    #[test]
+    fn long_cleanup_runs_are_shortened_in_the_transcript() {
+        let x = |i: usize| Exchange {
+            sent_hex: format!("{i}"),
+            sent: format!("cycle {i}"),
+            received_hex: String::new(),
+            received: String::new(),
+        };
+        let mut v: Vec<Exchange> = (0..10).map(x).collect();
+        shorten(&mut v, 1);
+        let sent: Vec<&str> = v.iter().map(|e| e.sent.as_str()).collect();
+        assert_eq!(
+            sent,
+            vec![
+                "cycle 0",
+                "cycle 1",
+                "cycle 2",
+                "… 6 more cleanup exchanges …",
+                "cycle 9"
+            ]
+        );
+        mark(&mut v, 4, "[cleanup]");
+        assert_eq!(v[4].sent, "[cleanup] cycle 9");
+    }
+}

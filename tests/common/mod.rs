@@ -1,0 +1,49 @@
+//! What the end-to-end tests share: the simulator served by the `harness` binary.
+
+use std::io::{BufRead, BufReader};
+use std::net::{SocketAddr, TcpStream};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// A child process, killed when dropped (a served simulator, a third-party server).
+pub(crate) struct Server(pub(crate) Child);
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// `harness serve enip --listen LISTEN --profile PROFILE`, bounded to `seconds` should the
+/// test die without killing it; returns once it accepts TCP connections.
+pub(crate) fn serve(listen: &str, profile: &str, seconds: u32) -> Server {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["serve", "enip", "--listen", listen, "--profile", profile])
+        .args(["--seconds", &seconds.to_string()])
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("harness serve starts");
+    // It announces itself once its sockets are bound, and exits at once when it cannot bind
+    // them: then whatever holds the address would answer in its place.
+    let mut out = BufReader::new(child.stdout.take().expect("piped stdout"));
+    let mut line = String::new();
+    if out.read_line(&mut line).unwrap_or(0) == 0 {
+        let status = child.wait();
+        panic!("harness serve --listen {listen} did not start ({status:?}): address taken?");
+    }
+    print!("{line}");
+    std::thread::spawn(move || std::io::copy(&mut out, &mut std::io::stdout()));
+    wait_listening(listen, Duration::from_secs(10));
+    Server(child)
+}
+
+/// Returns once `listen` (HOST:PORT) accepts TCP connections; panics after `within`.
+pub(crate) fn wait_listening(listen: &str, within: Duration) {
+    let addr: SocketAddr = listen.parse().expect("listen is HOST:PORT");
+    let deadline = Instant::now() + within;
+    while TcpStream::connect_timeout(&addr, Duration::from_millis(200)).is_err() {
+        assert!(Instant::now() < deadline, "nothing listens on {listen}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
