@@ -441,9 +441,11 @@ pub(super) fn forward_close(a: &mut Adapter, req: &MrRequest) -> MrResponse {
     }
 }
 
-/// Ends every connection (Identity Reset).
+/// Ends every connection and forgets a time-out (Identity Reset emulates a power cycle: NS
+/// starts again flashing green, "no CIP connection").
 pub(super) fn close_all(a: &mut Adapter) {
     a.conns.conns.clear();
+    a.conns.timed_out = false;
 }
 
 /// The inverter in slot `n` (1-based) of an assembly, if the device has it.

@@ -1170,6 +1170,28 @@ fn identity_reset_ends_connections_and_reads_in_the_addressing_parameters() {
 }
 
 #[test]
+fn identity_reset_forgets_a_connection_time_out() {
+    let mut b = Bench::new(Product::Tu3Eip);
+    b.open_ok(&tu3_owner(1));
+    b.a.poll(ms(500));
+    assert_eq!(
+        b.a.ns_led().pattern,
+        led::Pattern::FlashingRed { tenths_hz: 10 }
+    );
+    let r = b.call(
+        Service::RESET,
+        EPath::object(class::IDENTITY, 1),
+        Vec::new(),
+    );
+    assert_eq!(r.status(), GS::SUCCESS);
+    // As after a power cycle: an IP address, no CIP connection (BU 0620 §5.5.2.2).
+    assert_eq!(
+        b.a.ns_led().pattern,
+        led::Pattern::FlashingGreen { tenths_hz: 10 }
+    );
+}
+
+#[test]
 fn identity_attributes_are_read_only() {
     let mut b = Bench::new(Product::Cu4Eip);
     let info = eip::identity(Product::Cu4Eip).unwrap();
