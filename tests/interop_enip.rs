@@ -24,7 +24,7 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 mod common;
-use common::{serve, wait_listening, Server};
+use common::{scanner_port, serve, wait_listening, Server};
 
 fn python() -> Option<PathBuf> {
     let venv = std::env::var("INTEROP_VENV").unwrap_or_else(|_| "/tmp/nord-interop-venv".into());
@@ -778,6 +778,7 @@ fn network_run_pcap_matches_a_wire_capture_and_both_dissect_cleanly() {
         eprintln!("SKIP: capturing on lo needs root (CI runs as root)");
         return;
     }
+    let _port = scanner_port();
     let dir = scratch("network-pcap");
     // The whole run (about 100 s of real time: the drive examples run in real time).
     let profile = "tu4-eip@enip";
@@ -862,6 +863,7 @@ fn generic_suite_against_cpppo_server_reports_deviations_as_failures() {
         eprintln!("SKIP: no interop venv (run `bash .ci/interop-setup`; CI does)");
         return;
     };
+    let _port = scanner_port();
     let listen = "127.0.0.8:44818";
     let server = Server(
         Command::new(&py)

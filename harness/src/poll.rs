@@ -11,18 +11,38 @@ use std::io::{ErrorKind, Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
+/// How long a client polls for a reply before it sleeps: a device that answers within it (the
+/// simulator over loopback does, in tens of µs) is seen without a thread wake-up.
+pub(crate) const REPLY_POLL: Duration = Duration::from_micros(100);
+
 /// A TCP stream read by polling for up to `spin` before blocking.
 #[derive(Debug)]
 pub(crate) struct PollingStream {
     tcp: TcpStream,
     spin: Duration,
+    /// The socket's mode as last set: a wait in blocking mode that could not switch back
+    /// leaves it `false`, and the next call switches back before it polls.
+    nonblocking: bool,
 }
 
 impl PollingStream {
     /// Wraps `tcp`, which is made non-blocking.
     pub(crate) fn new(tcp: TcpStream, spin: Duration) -> std::io::Result<PollingStream> {
-        tcp.set_nonblocking(true)?;
-        Ok(PollingStream { tcp, spin })
+        let mut s = PollingStream {
+            tcp,
+            spin,
+            nonblocking: false,
+        };
+        s.set_nonblocking(true)?;
+        Ok(s)
+    }
+
+    fn set_nonblocking(&mut self, on: bool) -> std::io::Result<()> {
+        if self.nonblocking != on {
+            self.tcp.set_nonblocking(on)?;
+            self.nonblocking = on;
+        }
+        Ok(())
     }
 
     /// The stream, to write to or ask for addresses.
@@ -33,6 +53,7 @@ impl PollingStream {
     /// Reads what has arrived into `buf`, waiting up to `timeout` for something: `Ok(0)` is
     /// the peer's close, `ErrorKind::TimedOut` that nothing came in time.
     pub(crate) fn read(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+        self.set_nonblocking(true)?;
         let start = Instant::now();
         loop {
             match (&self.tcp).read(buf) {
@@ -54,6 +75,7 @@ impl PollingStream {
 
     /// Writes all of `bytes`; a full send buffer is waited on for up to `timeout`.
     pub(crate) fn write_all(&mut self, bytes: &[u8], timeout: Duration) -> std::io::Result<()> {
+        self.set_nonblocking(true)?;
         let mut rest = bytes;
         while !rest.is_empty() {
             match (&self.tcp).write(rest) {
@@ -61,11 +83,13 @@ impl PollingStream {
                 Ok(n) => rest = &rest[n..],
                 Err(e) if e.kind() == ErrorKind::Interrupted => {}
                 Err(e) if e.kind() == ErrorKind::WouldBlock => {
-                    self.tcp.set_nonblocking(false)?;
+                    self.set_nonblocking(false)?;
                     self.tcp
                         .set_write_timeout(Some(timeout.max(Duration::from_millis(1))))?;
                     let r = (&self.tcp).write_all(rest);
-                    self.tcp.set_nonblocking(true)?;
+                    // The write's own outcome counts; a failed switch back is retried by
+                    // the next call.
+                    let _ = self.set_nonblocking(true);
                     return r;
                 }
                 Err(e) => return Err(e),
@@ -76,7 +100,7 @@ impl PollingStream {
 
     /// A blocking read of at most `timeout`; the stream is non-blocking again afterwards.
     fn read_blocking(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
-        self.tcp.set_nonblocking(false)?;
+        self.set_nonblocking(false)?;
         self.tcp.set_read_timeout(Some(timeout))?;
         let r = loop {
             match (&self.tcp).read(buf) {
@@ -87,7 +111,9 @@ impl PollingStream {
                 other => break other,
             }
         };
-        self.tcp.set_nonblocking(true)?;
+        // Bytes read are returned whatever the switch back gives; a failed one is retried by
+        // the next call.
+        let _ = self.set_nonblocking(true);
         r
     }
 }

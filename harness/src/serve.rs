@@ -146,12 +146,7 @@ fn client(stream: TcpStream, id: u64, shared: Arc<Shared>) {
         let n = match stream.read(&mut buf, wait) {
             Ok(0) => break,
             Ok(n) => n,
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                ) =>
-            {
+            Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {
                 if pending_since.is_some_and(|t| t.elapsed() > STALL) {
                     break;
                 }

@@ -39,32 +39,37 @@ fn online_pairs(online: u8, slots: u8, first: u32) -> i32 {
 }
 
 /// The status parameters of `product` as (parameter, element, value).
-pub(crate) fn status_parameters(product: Product, f: BusFlags) -> Vec<(u16, u8, i32)> {
+pub(crate) fn status_parameters(
+    product: Product,
+    f: BusFlags,
+) -> impl Iterator<Item = (u16, u8, i32)> {
     let low = 1
         | i32::from(f.cyclic) << 1
         | i32::from(f.fieldbus_timeout) << 2
         | i32::from(f.telegram_timeout) << 3;
-    match product {
+    // At most two words: no allocation, this runs for every process-data exchange.
+    let words = match product {
         Product::Sk550p => {
             let online = (0..f.online.min(8)).fold(0, |w, n| w | 1 << (8 + n));
-            vec![(872, 1, low | online)]
+            [Some((872, 1, low | online)), None]
         }
-        Product::Tu3Pnt => vec![
-            (
+        Product::Tu3Pnt => [
+            Some((
                 173,
                 1,
                 i32::from(f.cyclic) << 1
                     | i32::from(f.telegram_timeout) << 3
                     | online_pairs(f.online, 1, 8),
-            ),
-            (170, 1, if f.telegram_timeout { 1020 } else { 0 }),
+            )),
+            Some((170, 1, if f.telegram_timeout { 1020 } else { 0 })),
         ],
-        Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => vec![
-            (173, 1, low | online_pairs(f.online, 4, 8)),
-            (173, 2, online_pairs(f.online, 8, 0)),
+        Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => [
+            Some((173, 1, low | online_pairs(f.online, 4, 8))),
+            Some((173, 2, online_pairs(f.online, 8, 0))),
         ],
-        Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => vec![(173, 1, low)],
-    }
+        Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => [Some((173, 1, low)), None],
+    };
+    words.into_iter().flatten()
 }
 
 #[cfg(test)]
@@ -99,7 +104,7 @@ mod tests {
         #[case] f: BusFlags,
         #[case] want: Vec<(u16, u8, i32)>,
     ) {
-        assert_eq!(status_parameters(product, f), want);
+        assert_eq!(status_parameters(product, f).collect::<Vec<_>>(), want);
     }
 
     #[test]
@@ -110,7 +115,7 @@ mod tests {
             ..BusFlags::default()
         };
         assert_eq!(
-            status_parameters(Product::Tu3Pol, f)[0],
+            status_parameters(Product::Tu3Pol, f).next().unwrap(),
             (173, 1, 0x0205),
             "ready, Ethernet bus timeout, FI 1 online"
         );

@@ -46,6 +46,17 @@ const ELEMENT_ETHERNET: Option<proto::nord::ArrayElement> = match proto::nord::A
 const E10_3: FaultCode = FaultCode { group: 10, sub: 3 };
 const E10_5: FaultCode = FaultCode { group: 10, sub: 5 };
 
+/// P513 [-04] "Telegram timeout time" (Ethernet) of an inverter's store, in 0.1 s: `None` for
+/// 0 "Off" and -0.1 "No error", which both make the inverter ignore communication errors on
+/// the field bus (BU 0620 §4.5, BU 2100 §8.1 "Parameter P513").
+fn ethernet_timeout(store: &ParamStore) -> Option<Duration> {
+    let tenths = store.read(P513, None, ELEMENT_ETHERNET).ok()?;
+    u64::try_from(tenths)
+        .ok()
+        .filter(|t| *t > 0)
+        .map(|t| Duration::from_millis(100 * t))
+}
+
 /// How to build a device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DeviceConfig {
@@ -295,13 +306,7 @@ impl Device {
             if silent <= PROCESS_DATA_WINDOW {
                 flags.cyclic = true;
             }
-            let p513 = unit
-                .params
-                .store
-                .read(P513, None, ELEMENT_ETHERNET)
-                .ok()
-                .filter(|t| *t > 0)
-                .map(|t| Duration::from_millis(100 * t as u64));
+            let p513 = ethernet_timeout(&unit.params.store);
             if p513.into_iter().chain(p151).any(|limit| silent > limit) {
                 if unit.drive.fault().is_none() {
                     unit.drive.inject_fault(E10_3);
@@ -462,6 +467,15 @@ impl Device {
             Unit::Interface => Ok(&mut self.interface.store),
             Unit::Inverter(i) => Ok(&mut self.inverter_mut(i)?.params.store),
         }
+    }
+
+    /// The Ethernet telegram time-out of `inverter` (P513 [-04]), `None` when it ignores
+    /// field-bus errors.
+    pub fn ethernet_timeout(&self, inverter: Inverter) -> Option<Duration> {
+        let unit = self
+            .inverters
+            .get(usize::from(inverter.get()).checked_sub(1)?)?;
+        ethernet_timeout(&unit.params.store)
     }
 
     /// Raises an inverter error unless one is present (a bus watchdog, E10.x).

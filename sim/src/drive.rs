@@ -235,8 +235,9 @@ impl Drive {
         self.automatic_transitions(now);
         if control.valid() {
             self.evaluate(control, now);
-            self.setpoint = setpoint_hz(control, setpoints, params, max_hz);
-            self.target = setpoint_position(setpoints, params);
+            let functions = setpoint_functions(params);
+            self.setpoint = setpoint_hz(control, setpoints, &functions, max_hz);
+            self.target = setpoint_position(setpoints, &functions);
         }
         self.run(params, max_hz, dt);
         if self.state == State::EmergencyStopActive && self.frequency == 0.0 {
@@ -400,21 +401,27 @@ impl Drive {
     }
 }
 
-/// The setpoint frequency the bus setpoints give per P546 (§6.1.2.4; BU 0590 §5 p. 40):
-/// 1 setpoint frequency, 4 addition, 5 subtraction, as percentages of P105; bit 12 turns left.
-fn setpoint_hz(
-    control: ControlWord,
-    setpoints: &[u16],
-    params: &dyn DriveParams,
-    max_hz: f64,
-) -> f64 {
+/// The P546 function of each bus setpoint 1..5: [-01] "setpoint frequency" (1) unless set,
+/// the others off (0).
+fn setpoint_functions(params: &dyn DriveParams) -> [i32; 5] {
+    std::array::from_fn(|n| {
+        let element = n as u8 + 1;
+        params
+            .get(546, Some(element))
+            .unwrap_or(i32::from(element == 1))
+    })
+}
+
+/// The setpoint frequency the bus setpoints give per their P546 `functions` (§6.1.2.4;
+/// BU 0590 §5 p. 40): 1 setpoint frequency, 4 addition, 5 subtraction, as percentages of
+/// P105; bit 12 turns left.
+fn setpoint_hz(control: ControlWord, setpoints: &[u16], functions: &[i32; 5], max_hz: f64) -> f64 {
     let sum: f64 = setpoints
         .iter()
-        .zip(1u8..=5)
-        .map(|(raw, i)| {
-            let default = i32::from(i == 1);
+        .zip(functions)
+        .map(|(raw, code)| {
             let hz = scaling::raw_to_value(*raw as i16, max_hz);
-            match params.get(546, Some(i)).unwrap_or(default) {
+            match code {
                 1 | 4 => hz,
                 5 => -hz,
                 _ => 0.0,
@@ -436,11 +443,10 @@ fn rotations(increments: i32) -> f64 {
 /// The setpoint position the bus setpoints give per P546 functions 23 (low word) and 24 (high
 /// word) (§6.1.2.4 "Transmission of positions"), or `None` when no setpoint carries one. A low
 /// word without a high word is a signed 16-bit position (±32.767 rotations).
-fn setpoint_position(setpoints: &[u16], params: &dyn DriveParams) -> Option<i32> {
+fn setpoint_position(setpoints: &[u16], functions: &[i32; 5]) -> Option<i32> {
     let (mut low, mut high) = (None, None);
-    for (raw, i) in setpoints.iter().zip(1u8..=5) {
-        let code = params.get(546, Some(i)).unwrap_or(i32::from(i == 1));
-        match scaling::setpoint_function(code).map(|f| f.transmission) {
+    for (raw, code) in setpoints.iter().zip(functions) {
+        match scaling::setpoint_function(*code).map(|f| f.transmission) {
             Some(Transmission::PositionLow) => low = Some(*raw),
             Some(Transmission::PositionHigh) => high = Some(*raw),
             _ => {}
@@ -634,12 +640,18 @@ mod tests {
                 }
             }
         }
-        assert_eq!(setpoint_position(&[0x2000, 0xFC18], &LowOnly), Some(-1000));
         assert_eq!(
-            setpoint_position(&[0x2000, 0x03E8, 0x0001], &Positioning),
+            setpoint_position(&[0x2000, 0xFC18], &setpoint_functions(&LowOnly)),
+            Some(-1000)
+        );
+        assert_eq!(
+            setpoint_position(&[0x2000, 0x03E8, 0x0001], &setpoint_functions(&Positioning)),
             Some(0x1_03E8)
         );
-        assert_eq!(setpoint_position(&[0x2000], &Example), None);
+        assert_eq!(
+            setpoint_position(&[0x2000], &setpoint_functions(&Example)),
+            None
+        );
         // Speed setpoint 0: the drive stays where it is.
         let mut d = Drive::new();
         d.cycle(0x047E, &[], &Positioning, ms(40));

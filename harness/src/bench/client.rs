@@ -14,10 +14,8 @@ use proto::enip::encap::{
 use proto::enip::epath::{EPath, Segment};
 
 use super::{IO_MULTIPLIER, ORIGINATOR_SERIAL, VENDOR};
-use crate::poll::PollingStream;
+use crate::poll::{PollingStream, REPLY_POLL};
 
-/// How long the client polls for a reply before it sleeps, as the scanner does.
-const REPLY_POLL: Duration = Duration::from_micros(100);
 /// How long it waits for a reply at all.
 const TIMEOUT: Duration = Duration::from_secs(2);
 

@@ -148,3 +148,17 @@ pub(crate) fn observe_device(
         _ => return Ok(None),
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_ppo_link_offers_every_capability_but_ethernetip() {
+        let want: Vec<Capability> = Capability::ALL
+            .into_iter()
+            .filter(|c| *c != Capability::Ethernetip)
+            .collect();
+        assert_eq!(PPO_CAPABILITIES.to_vec(), want);
+    }
+}

@@ -21,7 +21,7 @@ use proto::enip::WireError;
 use proto::nord::eip::{
     self, Assembly, Direction, LISTEN_ONLY_POINT, RPI_RANGE, WORDS_PER_INVERTER,
 };
-use proto::nord::{ArrayElement, Family, Inverter, ParamNumber};
+use proto::nord::{Family, Inverter, ParamNumber};
 
 use super::objects;
 use super::{Adapter, ClientId};
@@ -594,8 +594,6 @@ fn owner_timed_out(a: &mut Adapter) {
     objects::show_active_assembly(a, 0, 0);
     let module = a.product().family() == Family::Module;
     let p151 = ParamNumber::new(151).ok();
-    let p513 = ParamNumber::new(513).ok();
-    let ethernet = ArrayElement::new(4).ok();
     let interface_off = module
         && p151.and_then(|n| {
             a.device
@@ -611,16 +609,7 @@ fn owner_timed_out(a: &mut Adapter) {
         let monitored = if module {
             !interface_off
         } else {
-            p513.and_then(|p| {
-                a.device
-                    .store(Unit::Inverter(fi))
-                    .ok()?
-                    .read(p, None, ethernet)
-                    .ok()
-            })
-            // 0 "Off" and -0.1 "No error" both ignore field-bus errors (BU 0620 §4.5,
-            // BU 2100 §7.1.1 "Parameter P513"), as `Device::monitor` treats them.
-            .is_some_and(|v| v > 0)
+            a.device.ethernet_timeout(fi).is_some()
         };
         if monitored {
             let _ = a.device.raise(fi, E10_2);

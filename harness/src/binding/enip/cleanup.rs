@@ -22,10 +22,16 @@
 //!    SK 550P, BU 0620 §4.3; P173 [-01] bit 1 of the modules, BU 2100 §7.1.3), so that what
 //!    needs "no communication via Ethernet" (the P899 protocol change, BU 0620 §3.3) holds in
 //!    the next case as it did before this one;
-//! 5. repeats an Identity Reset the case made after setting attributes, so that what the reset
-//!    read in (the IP addressing, BU 2100 §7.1.2, BU 0620 §4.2.2) is read in again from the
-//!    restored values;
-//! 6. unregisters its sessions.
+//! 5. unregisters its sessions.
+//!
+//! A write or a Forward_Open whose reply was lost, cut off or unreadable counts as made: the
+//! target may have carried it out, so the cleanup writes the attribute back and closes the
+//! connection (one the target never opened answers "connection not found", which counts as
+//! closed). Once the target stops answering the cleanup stops too, at its first link error,
+//! and names what it did not attempt: every further request would only wait out its time-out.
+//!
+//! A case's Identity Reset is not repeated: the cases that make one need `readdressing`, which
+//! a target on the network never offers, and a real device's reset drops the TCP connection.
 //!
 //! A case's own observations are unchanged: the one exchange inside a step is the read of an
 //! attribute before its first write, marked as such in the transcript; everything else happens
@@ -79,7 +85,8 @@ struct Written {
     path: EPath,
     /// Its value before the case's first write, or why it could not be read.
     before: Result<Vec<u8>, String>,
-    /// A write was accepted: the value may differ from `before`.
+    /// A write was accepted, or went without a readable answer: the value may differ from
+    /// `before`.
     changed: bool,
 }
 
@@ -89,6 +96,16 @@ pub(super) struct Opened {
     key: ConnectionKey,
     /// The connection path of its Forward_Open, which its Forward_Close repeats.
     path: EPath,
+}
+
+impl Opened {
+    /// The connection `fo` opens.
+    pub(super) fn of(fo: &ForwardOpen) -> Opened {
+        Opened {
+            key: fo.key(),
+            path: fo.path.clone(),
+        }
+    }
 }
 
 /// What a case changed on the target, as far as the scanner saw it.
@@ -101,8 +118,6 @@ pub(super) struct Ledger {
     /// An I/O (class 1) connection was opened: the drive may have moved, or faulted when the
     /// connection timed out.
     io: bool,
-    /// The case made an Identity Reset after a write was accepted.
-    reset_after_write: bool,
 }
 
 impl Ledger {
@@ -123,30 +138,23 @@ impl Ledger {
         }
     }
 
-    /// A write of `path` was answered; `accepted` when with success.
+    /// A write of `path` was sent; `accepted` when it may have taken effect (see
+    /// [`may_have_taken_effect`]).
     pub(super) fn wrote(&mut self, path: &EPath, accepted: bool) {
         if let Some(w) = self.written.iter_mut().find(|w| w.path == *path) {
             w.changed |= accepted;
         }
     }
 
-    /// A Forward_Open was accepted.
+    /// A Forward_Open was accepted, or may have been.
     pub(super) fn opened(&mut self, fo: &ForwardOpen) {
         self.io |= fo.transport.class() == 1;
-        self.opened.push(Opened {
-            key: fo.key(),
-            path: fo.path.clone(),
-        });
+        self.opened.push(Opened::of(fo));
     }
 
     /// A Forward_Close was accepted.
     pub(super) fn closed(&mut self, key: ConnectionKey) {
         self.opened.retain(|o| o.key != key);
-    }
-
-    /// An Identity Reset was accepted.
-    pub(super) fn reset(&mut self) {
-        self.reset_after_write |= self.written.iter().any(|w| w.changed);
     }
 
     /// The attributes to write back, in the order to write them (the reverse of the first
@@ -169,8 +177,6 @@ pub(super) enum Noted {
     Open(Box<ForwardOpen>),
     /// Forward_Close of this connection.
     Close(ConnectionKey),
-    /// Reset of the Identity object.
-    Reset,
 }
 
 impl Noted {
@@ -187,7 +193,6 @@ impl Noted {
             Service::FORWARD_CLOSE => {
                 Some(Noted::Close(ForwardClose::parse(&req.data).ok()?.key()))
             }
-            Service::RESET if req.path.class_id() == Some(class::IDENTITY) => Some(Noted::Reset),
             _ => None,
         }
     }
@@ -275,82 +280,178 @@ fn shorten(exchanges: &mut Vec<Exchange>, from: usize) {
     exchanges.extend(last);
 }
 
+/// Whether a request that got `resp` may have taken effect on the target: it was accepted, or
+/// it went out and no answer the scanner could read came back (none in time, the connection
+/// cut, a malformed reply, the reply of another service). A refusal did nothing, and so did a
+/// request the scanner could not even build (a suite error).
+pub(super) fn may_have_taken_effect(resp: Result<&MrResponse, &StepError>) -> bool {
+    match resp {
+        Ok(r) => r.general == 0,
+        Err(StepError::Suite(_)) => false,
+        Err(_) => true,
+    }
+}
+
+/// What one cleanup action could not do.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(super) struct Problem {
+    text: String,
+    /// The target did not answer or the link broke: nothing more is attempted.
+    link: bool,
+}
+
+impl Problem {
+    /// `e` of a request made for `what`.
+    fn step(what: impl std::fmt::Display, e: StepError) -> Problem {
+        Problem {
+            link: matches!(e, StepError::Link(_)),
+            text: format!("{what}: {e}"),
+        }
+    }
+
+    /// A refusal, or something the cleanup cannot do: the target still answers.
+    fn other(text: String) -> Problem {
+        Problem { text, link: false }
+    }
+}
+
+/// The cleanup's account of its steps: the problems, and after the first link error, what
+/// was left undone.
+#[derive(Debug, Default)]
+struct Account {
+    problems: Vec<String>,
+    /// A link error came: the rest is only listed.
+    down: bool,
+    undone: Vec<String>,
+}
+
+impl Account {
+    /// Whether to go on with `what`: not after a link error, when it is listed as undone.
+    fn attempt(&mut self, what: impl FnOnce() -> String) -> bool {
+        if self.down {
+            self.undone.push(what());
+        }
+        !self.down
+    }
+
+    fn note(&mut self, outcome: Result<(), Problem>) {
+        if let Err(p) = outcome {
+            self.down |= p.link;
+            self.problems.push(p.text);
+        }
+    }
+
+    fn into_result(mut self) -> Result<(), String> {
+        if !self.undone.is_empty() {
+            self.problems.push(format!(
+                "not attempted after the link error: {}",
+                self.undone.join(", ")
+            ));
+        }
+        match self.problems.is_empty() {
+            true => Ok(()),
+            false => Err(self.problems.join("; ")),
+        }
+    }
+}
+
 impl Scanner {
     /// Before a Set_Attribute_Single of `path`: the first in the case reads the value to put
-    /// back (a network target only). Returns the path to pass to [`Scanner::after_set`].
-    pub(super) fn before_set(&mut self, path: &EPath) -> Option<EPath> {
-        if !self.ledger.as_ref()?.wants_original(path) {
-            return Some(path.clone());
+    /// back (a network target only). Returns the path to pass to [`Scanner::after_set`]; a
+    /// link error of the read, for a target that does not answer it would not answer the
+    /// write either.
+    pub(super) fn before_set(&mut self, path: &EPath) -> Result<Option<EPath>, StepError> {
+        let Some(ledger) = self.ledger.as_ref() else {
+            return Ok(None);
+        };
+        if !ledger.wants_original(path) {
+            return Ok(Some(path.clone()));
         }
         // The session first, unmarked: the write would register it anyway.
-        let _ = self.session(1);
+        if let Err(e @ StepError::Link(_)) = self.session(1) {
+            return Err(e);
+        }
         let first = self.exchanges.len();
-        let before = self
-            .explicit(&MrRequest {
-                service: Service::GET_ATTRIBUTE_SINGLE.0,
-                path: path.clone(),
-                data: Vec::new(),
-            })
-            .map_err(|e| e.to_string())
-            .and_then(|r| match r.general {
-                0 => Ok(r.data),
-                g => Err(format!("Get_Attribute_Single: {}", GeneralStatus(g))),
-            });
+        let read = self.explicit(&MrRequest {
+            service: Service::GET_ATTRIBUTE_SINGLE.0,
+            path: path.clone(),
+            data: Vec::new(),
+        });
         mark(
             &mut self.exchanges,
             first,
             "[cleanup: the value before the write]",
         );
-        self.ledger.as_mut()?.original(path.clone(), before);
-        Some(path.clone())
+        let before = match read {
+            Err(e @ StepError::Link(_)) => return Err(e),
+            Err(e) => Err(e.to_string()),
+            Ok(r) => match r.general {
+                0 => Ok(r.data),
+                g => Err(format!("Get_Attribute_Single: {}", GeneralStatus(g))),
+            },
+        };
+        if let Some(ledger) = self.ledger.as_mut() {
+            ledger.original(path.clone(), before);
+        }
+        Ok(Some(path.clone()))
     }
 
-    /// After the Set_Attribute_Single of [`Scanner::before_set`]: `accepted` when with success.
-    pub(super) fn after_set(&mut self, path: Option<EPath>, accepted: bool) {
+    /// After the Set_Attribute_Single of [`Scanner::before_set`], whatever came of it (called
+    /// before an error ends the step: a write without a readable answer may have been made).
+    pub(super) fn after_set(&mut self, path: Option<EPath>, resp: Result<&MrResponse, &StepError>) {
         if let (Some(ledger), Some(path)) = (self.ledger.as_mut(), path) {
-            ledger.wrote(&path, accepted);
+            ledger.wrote(&path, may_have_taken_effect(resp));
         }
     }
 
     /// Before a message-router request of a step, as bytes.
-    pub(super) fn before_request(&mut self, request: &[u8]) -> Option<Noted> {
-        self.ledger.as_ref()?;
-        let noted = Noted::of(request)?;
-        if let Noted::Set(path) = &noted {
-            self.before_set(path);
+    pub(super) fn before_request(&mut self, request: &[u8]) -> Result<Option<Noted>, StepError> {
+        if self.ledger.is_none() {
+            return Ok(None);
         }
-        Some(noted)
+        let Some(noted) = Noted::of(request) else {
+            return Ok(None);
+        };
+        if let Noted::Set(path) = &noted {
+            self.before_set(path)?;
+        }
+        Ok(Some(noted))
     }
 
-    /// After the request of [`Scanner::before_request`] was answered with `resp`.
-    pub(super) fn after_request(&mut self, noted: Option<Noted>, resp: &MrResponse) {
+    /// After the request of [`Scanner::before_request`], whatever came of it (called before an
+    /// error ends the step). A Forward_Open without a readable answer counts as opened, a
+    /// Forward_Close only accepted as closed.
+    pub(super) fn after_request(
+        &mut self,
+        noted: Option<Noted>,
+        resp: Result<&MrResponse, &StepError>,
+    ) {
         let (Some(ledger), Some(noted)) = (self.ledger.as_mut(), noted) else {
             return;
         };
-        let ok = resp.general == 0;
         match noted {
-            Noted::Set(path) => ledger.wrote(&path, ok),
-            Noted::Open(fo) if ok => ledger.opened(&fo),
-            Noted::Close(key) if ok => ledger.closed(key),
-            Noted::Reset if ok => ledger.reset(),
+            Noted::Set(path) => ledger.wrote(&path, may_have_taken_effect(resp)),
+            Noted::Open(fo) if may_have_taken_effect(resp) => ledger.opened(&fo),
+            Noted::Close(key) if resp.is_ok_and(|r| r.general == 0) => ledger.closed(key),
             _ => {}
         }
     }
 
-    /// A Forward_Open of the scanner's own was accepted.
+    /// A Forward_Open of the scanner's own was accepted, or may have been.
     pub(super) fn note_opened(&mut self, fo: &ForwardOpen) {
         if let Some(ledger) = self.ledger.as_mut() {
             ledger.opened(fo);
         }
     }
 
-    /// Leaves a network target as the case found it (the module's steps 1–6); `Ok` at once
-    /// for the embedded adapter, which keeps no ledger.
+    /// Leaves a network target as the case found it (the module's steps 1–5); `Ok` at once
+    /// for the embedded adapter, which keeps no ledger. Stops at the first link error: what
+    /// is left shows in the error as not attempted.
     pub(super) fn restore(&mut self) -> Result<(), String> {
         let Some(ledger) = self.ledger.take() else {
             return Ok(());
         };
-        let mut problems = Vec::new();
+        let mut account = Account::default();
         let commanded: Vec<Inverter> = (1..=8u8)
             .filter(|n| self.process[usize::from(*n)] != (0, Vec::new()))
             .filter_map(|n| Inverter::new(n.into()).ok())
@@ -358,33 +459,37 @@ impl Scanner {
         let drive = self.product.is_some() && ledger.io;
         self.run = true;
         if drive && self.io.is_some() && !commanded.is_empty() {
-            if let Err(e) = self.stop(&commanded) {
-                problems.push(format!("stopping the drive on the case's connection: {e}"));
-            }
+            let outcome = self
+                .stop(&commanded)
+                .map_err(|e| Problem::step("stopping the drive on the case's connection", e));
+            account.note(outcome);
         }
         for (path, before) in ledger.restores() {
-            if let Err(e) = self.put_back(path, before) {
-                problems.push(e);
+            if account.attempt(|| format!("setting back {path}")) {
+                let outcome = self.put_back(path, before);
+                account.note(outcome);
             }
         }
         self.io = None;
-        problems.extend(self.close_all(&ledger.opened));
+        self.close_each(&ledger.opened, &mut account);
         if drive {
-            problems.extend(self.settle(&commanded));
-            if let Err(e) = self.quiet() {
-                problems.push(e);
+            if account.attempt(|| "settling the drive".into()) {
+                let (outcome, own) = self.settle(&commanded);
+                account.note(outcome);
+                self.close_each(&own, &mut account);
+            }
+            if account.attempt(|| "waiting for the end of cyclic communication".into()) {
+                let outcome = self.quiet();
+                account.note(outcome);
             }
         }
-        if ledger.reset_after_write {
-            if let Err(e) = self.reset_again() {
-                problems.push(e);
-            }
+        if account.attempt(|| "UnRegisterSession".into()) {
+            self.unregister();
+        } else {
+            // Gone with the link; not repeated when the scanner is dropped.
+            self.sessions.clear();
         }
-        self.unregister();
-        match problems.is_empty() {
-            true => Ok(()),
-            false => Err(problems.join("; ")),
-        }
+        account.into_result()
     }
 
     /// Step 1: 0400h to the commanded inverters over the case's open connection.
@@ -399,89 +504,91 @@ impl Scanner {
     }
 
     /// Step 2 for one attribute.
-    fn put_back(&mut self, path: &EPath, before: Result<&[u8], &str>) -> Result<(), String> {
-        let before = before
-            .map_err(|e| format!("{path} was set but its value before could not be read ({e})"))?;
+    fn put_back(&mut self, path: &EPath, before: Result<&[u8], &str>) -> Result<(), Problem> {
+        let before = before.map_err(|e| {
+            Problem::other(format!(
+                "{path} was set but its value before could not be read ({e})"
+            ))
+        })?;
+        let what = || format!("{path} not set back to [{}]", hex(before));
         let resp = self
             .explicit(&MrRequest {
                 service: Service::SET_ATTRIBUTE_SINGLE.0,
                 path: path.clone(),
                 data: before.to_vec(),
             })
-            .map_err(|e| format!("{path} not set back to [{}]: {e}", hex(before)))?;
+            .map_err(|e| Problem::step(what(), e))?;
         match resp.general {
             0 => Ok(()),
-            g => Err(format!(
-                "{path} not set back to [{}]: {}",
-                hex(before),
-                GeneralStatus(g)
-            )),
+            g => Err(Problem::other(format!("{}: {}", what(), GeneralStatus(g)))),
         }
     }
 
     /// Step 3, and the end of step 4: Forward_Close of each connection, the latest first.
-    fn close_all(&mut self, opened: &[Opened]) -> Vec<String> {
-        let mut problems = Vec::new();
+    fn close_each(&mut self, opened: &[Opened], account: &mut Account) {
         for o in opened.iter().rev() {
-            let fc = ForwardClose {
-                priority_tick: 0x0A,
-                timeout_ticks: 0x0E,
-                serial: o.key.0,
-                vendor: o.key.1,
-                originator_serial: o.key.2,
-                path: o.path.clone(),
-            };
-            let resp = self.explicit(&MrRequest {
+            if account.attempt(|| format!("closing connection {:04X}h", o.key.0)) {
+                let outcome = self.forward_close(o);
+                account.note(outcome);
+            }
+        }
+    }
+
+    /// Forward_Close of `o`: `Ok` when closed, or already gone (by its time-out or with its
+    /// owner).
+    pub(super) fn forward_close(&mut self, o: &Opened) -> Result<(), Problem> {
+        let fc = ForwardClose {
+            priority_tick: 0x0A,
+            timeout_ticks: 0x0E,
+            serial: o.key.0,
+            vendor: o.key.1,
+            originator_serial: o.key.2,
+            path: o.path.clone(),
+        };
+        let what = || format!("connection {:04X}h not closed", o.key.0);
+        let r = self
+            .explicit(&MrRequest {
                 service: Service::FORWARD_CLOSE.0,
                 path: EPath::object(class::CONNECTION_MANAGER, 1),
                 data: fc.emit(),
-            });
-            let gone = |r: &MrResponse| {
-                r.general == GeneralStatus::CONNECTION_FAILURE.0
-                    && r.extended.first() == Some(&ext::CONNECTION_NOT_FOUND)
-            };
-            match resp {
-                Ok(r) if r.general == 0 || gone(&r) => {}
-                Ok(r) => problems.push(format!(
-                    "connection {:04X}h not closed: {} extended {:04X?}",
-                    o.key.0,
-                    GeneralStatus(r.general),
-                    r.extended
-                )),
-                Err(e) => problems.push(format!("connection {:04X}h not closed: {e}", o.key.0)),
-            }
+            })
+            .map_err(|e| Problem::step(what(), e))?;
+        let gone = r.general == GeneralStatus::CONNECTION_FAILURE.0
+            && r.extended.first() == Some(&ext::CONNECTION_NOT_FOUND);
+        match r.general == 0 || gone {
+            true => Ok(()),
+            false => Err(Problem::other(format!(
+                "{}: {} extended {:04X?}",
+                what(),
+                GeneralStatus(r.general),
+                r.extended
+            ))),
         }
-        problems
     }
 
     /// Step 4: every inverter the case commanded, and every one in fault, to "Switch-on
-    /// block" over a connection of the cleanup's own.
-    fn settle(&mut self, commanded: &[Inverter]) -> Vec<String> {
+    /// block" over a connection of the cleanup's own; returns the connections it opened, to
+    /// close.
+    fn settle(&mut self, commanded: &[Inverter]) -> (Result<(), Problem>, Vec<Opened>) {
         self.process = Default::default();
-        // The cleanup's connection goes into a ledger of its own, which closes it.
+        // The cleanup's connection goes into a ledger of its own.
         self.ledger = Some(Ledger::default());
         let first = self.exchanges.len();
         let outcome = self.settle_cycles(commanded);
         shorten(&mut self.exchanges, first);
         self.io = None;
         let own = self.ledger.take().unwrap_or_default();
-        let mut problems = self.close_all(&own.opened);
-        if let Err(e) = outcome {
-            problems.insert(0, e);
-        }
-        problems
+        (outcome, own.opened)
     }
 
-    fn settle_cycles(&mut self, commanded: &[Inverter]) -> Result<(), String> {
-        let what = |e: StepError| format!("settling the drive: {e}");
+    fn settle_cycles(&mut self, commanded: &[Inverter]) -> Result<(), Problem> {
+        let what = |e: StepError| Problem::step("settling the drive", e);
         if self.io.is_none() {
             self.own_forward_open().map_err(what)?;
         }
-        let asm = self
-            .io
-            .as_ref()
-            .and_then(|io| io.t_o)
-            .ok_or("settling the drive: the connection has no input assembly")?;
+        let asm = self.io.as_ref().and_then(|io| io.t_o).ok_or_else(|| {
+            Problem::other("settling the drive: the connection has no input assembly".into())
+        })?;
         let mut fis: Vec<(Inverter, Settle)> = (1..=asm.inverters)
             .filter_map(|n| Inverter::new(n.into()).ok())
             .map(|fi| (fi, Settle::new(commanded.contains(&fi))))
@@ -514,23 +621,25 @@ impl Scanner {
                 None => format!("{fi} no status word"),
             })
             .collect();
-        Err(format!(
+        Err(Problem::other(format!(
             "the drive did not return to 'Switch-on block' (xx40h, no fault) within {:?}: {}",
             RPI * SETTLE_CYCLES,
             stuck.join(", ")
-        ))
+        )))
     }
 
     /// Step 4, last: waits until the bus status no longer shows cyclic communication.
-    fn quiet(&mut self) -> Result<(), String> {
-        let product = self.product.ok_or("no NORD product")?;
+    fn quiet(&mut self) -> Result<(), Problem> {
+        let product = self
+            .product
+            .ok_or_else(|| Problem::other("no NORD product".into()))?;
         let (number, element) = match product.family() {
             Family::Integrated => (872, None),
             Family::Module => (173, ArrayElement::new(1).ok()),
         };
         let spec = OrderSpec {
             target: Target::Interface,
-            number: ParamNumber::new(number).map_err(|e| e.to_string())?,
+            number: ParamNumber::new(number).map_err(|e| Problem::other(e.to_string()))?,
             set: None,
             element,
             ak: None,
@@ -543,46 +652,29 @@ impl Scanner {
         let outcome = loop {
             let v = match self.read(&spec) {
                 Ok(v) => v,
-                Err(e) => break Err(format!("reading {}: {e}", spec.describe())),
+                Err(e) => break Err(Problem::step(format!("reading {}", spec.describe()), e)),
             };
             match v.get("value").and_then(Value::as_i64) {
                 Some(w) if w & CYCLIC == 0 => break Ok(()),
                 Some(w) if Instant::now() >= deadline => {
-                    break Err(format!(
+                    break Err(Problem::other(format!(
                         "{} still shows cyclic communication (bit 1) {QUIET_TIME:?} after the \
                          connections closed: {w:04X}h",
                         spec.describe()
-                    ))
+                    )))
                 }
                 Some(_) => std::thread::sleep(QUIET_POLL),
-                None => break Err(format!("reading {}: {v}", spec.describe())),
+                None => break Err(Problem::other(format!("reading {}: {v}", spec.describe()))),
             }
         };
         shorten(&mut self.exchanges, first);
         outcome
     }
 
-    /// Step 5: the Identity Reset again, so the restored addressing is read in.
-    fn reset_again(&mut self) -> Result<(), String> {
-        let resp = self
-            .explicit(&MrRequest {
-                service: Service::RESET.0,
-                path: EPath::object(class::IDENTITY, 1),
-                data: Vec::new(),
-            })
-            .map_err(|e| format!("Identity Reset after the restore: {e}"))?;
-        match resp.general {
-            0 => Ok(()),
-            g => Err(format!(
-                "Identity Reset after the restore: {}",
-                GeneralStatus(g)
-            )),
-        }
-    }
-
-    /// Step 6: UnRegisterSession of every session; the target answers none and may close the
-    /// connection (CIP Vol 2 §2-4.5), so neither counts as a problem.
-    fn unregister(&mut self) {
+    /// Step 5, and the scanner's last act when dropped: UnRegisterSession of every session; the
+    /// target answers none and may close the connection (CIP Vol 2 §2-4.5), so neither counts
+    /// as a problem.
+    pub(super) fn unregister(&mut self) {
         for (client, session) in std::mem::take(&mut self.sessions) {
             let bye = EncapRepr {
                 command: Command::UNREGISTER_SESSION.0,
@@ -615,10 +707,19 @@ impl Scanner {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{ORIGINATOR_SERIAL, VENDOR};
+    use super::super::link::{Embedded, EnipLink};
+    use super::super::{EMBEDDED_ADDR, ORIGINATOR_SERIAL, VENDOR};
     use super::*;
     use proto::enip::cm::{NetParams, Transport};
+    use proto::enip::cpf::Item;
+    use proto::enip::encap::SendData;
     use proto::enip::epath::Segment;
+    use proto::nord::Product;
+    use serde_json::json;
+    use sim::device::{Device, DeviceConfig};
+    use sim::enip::Adapter;
+    use std::cell::{Cell, RefCell};
+    use std::rc::Rc;
 
     fn param(n: u16) -> EPath {
         EPath::attribute(101, 1, n)
@@ -714,17 +815,6 @@ mod tests {
     }
 
     #[test]
-    fn a_reset_counts_only_after_an_accepted_write() {
-        let mut l = Ledger::default();
-        l.reset();
-        assert!(!l.reset_after_write);
-        l.original(param(165), Ok(vec![1, 0]));
-        l.wrote(&param(165), true);
-        l.reset();
-        assert!(l.reset_after_write);
-    }
-
-    #[test]
     fn requests_as_bytes_are_noted_by_service() {
         // Set_Attribute_Single class 64h instance 1 attribute 66h (P102 of FI 1... as bytes).
         let set = [0x10, 0x03, 0x20, 0x65, 0x24, 0x01, 0x30, 0x66, 0xE8, 0x03];
@@ -748,11 +838,9 @@ mod tests {
         let mut bytes = vec![0x4E, 0x02, 0x20, 0x06, 0x24, 0x01];
         bytes.extend(fc.emit());
         assert_eq!(Noted::of(&bytes), Some(Noted::Close(fo.key())));
-        assert_eq!(
-            Noted::of(&[0x05, 0x02, 0x20, 0x01, 0x24, 0x01]),
-            Some(Noted::Reset)
-        );
-        // A Get, a reset of another object, a malformed request: nothing to note.
+        // A Get, an Identity Reset, a reset of another object, a malformed request: nothing to
+        // note.
+        assert_eq!(Noted::of(&[0x05, 0x02, 0x20, 0x01, 0x24, 0x01]), None);
         assert_eq!(
             Noted::of(&[0x0E, 0x03, 0x20, 0x01, 0x24, 0x01, 0x30, 0x01]),
             None
@@ -866,5 +954,219 @@ mod tests {
         );
         mark(&mut v, 4, "[cleanup]");
         assert_eq!(v[4].sent, "[cleanup] cycle 9");
+    }
+
+    /// Each request a link sent, with its reply if one came.
+    type Log = Vec<(Vec<u8>, Option<Vec<u8>>)>;
+
+    /// The embedded adapter behind a link that loses replies: those to the message-router
+    /// services in `lose` (the adapter still carries the requests out), and, once `hung`,
+    /// every one, as a target that stopped answering. Counts and logs the requests.
+    struct Lossy {
+        inner: Embedded,
+        lose: Rc<RefCell<Vec<u8>>>,
+        hung: Rc<Cell<bool>>,
+        log: Rc<RefCell<Log>>,
+    }
+
+    /// The message-router request in a SendRRData `msg`, or the reply in its answer.
+    fn routed(msg: &[u8]) -> Option<Vec<u8>> {
+        let e = EncapRepr::parse(msg).ok()?;
+        match SendData::parse(&e.data).ok()?.cpf.items.get(1)? {
+            Item::UnconnectedData(p) => Some(p.clone()),
+            _ => None,
+        }
+    }
+
+    impl EnipLink for Lossy {
+        fn describe(&self) -> String {
+            "the embedded adapter, losing replies".into()
+        }
+
+        fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, String> {
+            let reply = match self.hung.get() {
+                true => Ok(None),
+                false => self.inner.request(client, msg),
+            };
+            let service = routed(msg).and_then(|r| r.first().copied());
+            let lost = service.is_some_and(|s| self.lose.borrow().contains(&s));
+            let reply = reply.map(|r| r.filter(|_| !lost));
+            let logged = reply.clone().unwrap_or_default();
+            self.log.borrow_mut().push((msg.to_vec(), logged));
+            reply
+        }
+
+        fn io_cycle(
+            &mut self,
+            datagram: Option<&[u8]>,
+            rpi: Duration,
+        ) -> Result<Vec<Vec<u8>>, String> {
+            match self.hung.get() {
+                true => Ok(Vec::new()),
+                false => self.inner.io_cycle(datagram, rpi),
+            }
+        }
+
+        fn adapter(&mut self) -> Option<(&mut Adapter, Duration)> {
+            self.inner.adapter()
+        }
+    }
+
+    struct Rig {
+        scanner: Scanner,
+        lose: Rc<RefCell<Vec<u8>>>,
+        hung: Rc<Cell<bool>>,
+        log: Rc<RefCell<Log>>,
+    }
+
+    impl Rig {
+        /// An SK 550P kept like a network target (with a ledger), losing the replies to
+        /// `lose`.
+        fn new(lose: &[Service]) -> Rig {
+            let product = Product::Sk550p;
+            let adapter = Adapter::new(Device::new(DeviceConfig::new(product)), EMBEDDED_ADDR);
+            let lose = Rc::new(RefCell::new(lose.iter().map(|s| s.0).collect()));
+            let hung = Rc::new(Cell::new(false));
+            let log = Rc::new(RefCell::new(Vec::new()));
+            let link = Lossy {
+                inner: Embedded::new(adapter, EMBEDDED_ADDR, None),
+                lose: Rc::clone(&lose),
+                hung: Rc::clone(&hung),
+                log: Rc::clone(&log),
+            };
+            let mut scanner = Scanner::new(Box::new(link), Some(product), Vec::new());
+            scanner.ledger = Some(Ledger::default());
+            Rig {
+                scanner,
+                lose,
+                hung,
+                log,
+            }
+        }
+
+        /// The message-router requests sent of `service`, each with its reply if one came.
+        fn routed(&self, service: Service) -> Vec<(MrRequest, Option<MrResponse>)> {
+            routed_of(&self.log.borrow(), service)
+        }
+    }
+
+    /// The message-router requests in `log` of `service`, each with its reply if one came.
+    fn routed_of(log: &Log, service: Service) -> Vec<(MrRequest, Option<MrResponse>)> {
+        log.iter()
+            .filter_map(|(m, r)| {
+                let req = MrRequest::parse(&routed(m)?).ok()?;
+                let resp = r.as_deref().and_then(routed);
+                let resp = resp.and_then(|p| MrResponse::parse(&p).ok());
+                (req.service == service.0).then_some((req, resp))
+            })
+            .collect()
+    }
+
+    fn p102(value: Option<i64>) -> OrderSpec {
+        OrderSpec {
+            target: Target::Inverter(Inverter::new(1).unwrap()),
+            number: ParamNumber::new(102).unwrap(),
+            set: None,
+            element: None,
+            ak: None,
+            value,
+            eeprom: true,
+            dword: None,
+        }
+    }
+
+    #[test]
+    fn a_write_whose_reply_was_lost_is_set_back() {
+        let mut r = Rig::new(&[Service::SET_ATTRIBUTE_SINGLE]);
+        let before = r.scanner.read(&p102(None)).unwrap()["value"].clone();
+        assert_ne!(before, json!(9999));
+        let e = r.scanner.write(&p102(Some(9999))).unwrap_err();
+        assert!(matches!(e, StepError::Link(_)), "{e}");
+        assert_eq!(
+            r.scanner.read(&p102(None)).unwrap()["value"],
+            json!(9999),
+            "the adapter took the write"
+        );
+        r.lose.borrow_mut().clear();
+        r.scanner.restore().unwrap();
+        let sets = r.routed(Service::SET_ATTRIBUTE_SINGLE);
+        let (last, resp) = sets.last().unwrap();
+        assert_eq!(sets.len(), 2);
+        let value = i64::from(u16::from_le_bytes([last.data[0], last.data[1]]));
+        assert_eq!(json!(value), before, "set back to the value before");
+        assert_eq!(resp.as_ref().map(|r| r.general), Some(0));
+    }
+
+    #[test]
+    fn a_forward_open_whose_reply_was_lost_is_closed() {
+        let mut r = Rig::new(&[Service::FORWARD_OPEN]);
+        let e = r.scanner.own_forward_open().unwrap_err();
+        assert!(matches!(e, StepError::Link(_)), "{e}");
+        let ledger = r.scanner.ledger.as_ref().unwrap();
+        assert!(ledger.io);
+        let lost = ledger.opened.clone();
+        assert_eq!(lost.len(), 1);
+        r.lose.borrow_mut().clear();
+        r.scanner.restore().unwrap();
+        let closes = r.routed(Service::FORWARD_CLOSE);
+        let (first, resp) = closes.first().unwrap();
+        let fc = ForwardClose::parse(&first.data).unwrap();
+        assert_eq!((fc.key(), fc.path), (lost[0].key, lost[0].path.clone()));
+        assert_eq!(resp.as_ref().map(|r| r.general), Some(0), "it was open");
+        let (adapter, _) = r.scanner.link.adapter().unwrap();
+        assert_eq!(adapter.connection_counts(), (0, 0, 0));
+    }
+
+    #[test]
+    fn a_target_that_does_not_answer_costs_a_write_one_time_out() {
+        let mut r = Rig::new(&[]);
+        r.hung.set(true);
+        let e = r.scanner.write(&p102(Some(9999))).unwrap_err();
+        assert!(matches!(e, StepError::Link(_)), "{e}");
+        assert_eq!(r.log.borrow().len(), 1, "the RegisterSession only");
+        assert!(r.scanner.ledger.as_ref().unwrap().written.is_empty());
+    }
+
+    #[test]
+    fn the_cleanup_stops_at_its_first_link_error() {
+        let mut r = Rig::new(&[]);
+        r.scanner.read(&p102(None)).unwrap();
+        let ledger = r.scanner.ledger.as_mut().unwrap();
+        for n in [102, 103, 104] {
+            ledger.original(param(n), Ok(vec![1, 0]));
+            ledger.wrote(&param(n), true);
+        }
+        ledger.opened(&forward_open(7, Transport::CLASS3));
+        r.hung.set(true);
+        let sent = r.log.borrow().len();
+        let e = r.scanner.restore().unwrap_err();
+        assert_eq!(r.log.borrow().len(), sent + 1, "{e}");
+        assert_eq!(
+            e,
+            "class 101 / instance 1 / attribute 104 not set back to [01 00]: link error: no reply \
+             to Set_Attribute_Single; not attempted after the link error: setting back class \
+             101 / instance 1 / attribute 103, setting back class 101 / instance 1 / attribute \
+             102, closing connection 0007h, UnRegisterSession"
+        );
+        assert!(r.scanner.sessions.is_empty());
+    }
+
+    #[test]
+    fn dropping_the_scanner_closes_its_connection_with_the_path_it_opened_it_with() {
+        let mut r = Rig::new(&[]);
+        r.scanner.ledger = None;
+        r.scanner.io_cycle().unwrap();
+        let log = Rc::clone(&r.log);
+        let opens = r.routed(Service::FORWARD_OPEN);
+        drop(r);
+        let fo = ForwardOpen::parse(&opens[0].0.data, false).unwrap();
+        let closes = routed_of(&log.borrow(), Service::FORWARD_CLOSE);
+        assert_eq!(closes.len(), 1);
+        let fc = ForwardClose::parse(&closes[0].0.data).unwrap();
+        assert_eq!((fc.key(), fc.path), (fo.key(), fo.path));
+        assert_eq!(closes[0].1.as_ref().map(|r| r.general), Some(0));
+        let last = log.borrow().last().cloned().unwrap();
+        let bye = EncapRepr::parse(&last.0).unwrap();
+        assert_eq!(Command(bye.command), Command::UNREGISTER_SESSION);
     }
 }

@@ -12,7 +12,7 @@ use sim::clock::{Clock, RealClock, VirtualClock};
 use sim::enip::{Adapter, Framer};
 
 use crate::pcap::SharedTap;
-use crate::poll::PollingStream;
+use crate::poll::{PollingStream, REPLY_POLL};
 
 /// A way to an EtherNet/IP target.
 pub(crate) trait EnipLink {
@@ -42,10 +42,6 @@ pub(crate) trait EnipLink {
         ))
     }
 }
-
-/// How long the scanner polls for a reply before it sleeps: a device that answers within it
-/// (the simulator over loopback does, in tens of µs) is seen without a thread wake-up.
-const REPLY_POLL: Duration = Duration::from_micros(100);
 
 /// How often a network I/O cycle looks for T→O datagrams.
 const IO_POLL: Duration = Duration::from_micros(250);
@@ -407,12 +403,7 @@ impl Stream {
                     }
                     self.buf.extend_from_slice(&chunk[..n]);
                 }
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                    ) =>
-                {
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {
                     if self.buf.len() >= HEADER_LEN {
                         return Err(format!(
                             "incomplete reply: the header announces {} bytes, {} arrived",
@@ -500,10 +491,10 @@ impl EnipLink for Network {
     fn io_cycle(&mut self, datagram: Option<&[u8]>, rpi: Duration) -> Result<Vec<Vec<u8>>, String> {
         let target = self.target.ip();
         let udp = io_socket(&mut self.udp, self.local)?;
-        // The socket's own address, if IPv4 (the only kind recorded).
-        let local = match udp.local_addr() {
-            Ok(SocketAddr::V4(a)) => Some(a),
-            _ => None,
+        // The socket's own address (it is bound there), if IPv4: the only kind recorded.
+        let local = match self.local {
+            std::net::IpAddr::V4(ip) => Some(SocketAddrV4::new(ip, IO_PORT)),
+            std::net::IpAddr::V6(_) => None,
         };
         if let Some(d) = datagram {
             let to = SocketAddr::new(target, IO_PORT);

@@ -16,7 +16,7 @@ use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4};
 use std::time::Duration;
 
 use proto::enip::cip::{class, GeneralStatus, MrRequest, MrResponse, Service};
-use proto::enip::cm::{kind, ForwardClose, ForwardOpen, ForwardOpenReply, NetParams, Transport};
+use proto::enip::cm::{kind, ForwardOpen, ForwardOpenReply, NetParams, Transport};
 use proto::enip::cpf::{Cpf, Item};
 use proto::enip::encap::{Command, EncapRepr, EncapStatus, RegisterSession, SendData};
 use proto::enip::epath::{EPath, Segment};
@@ -51,6 +51,8 @@ static SERIAL: std::sync::atomic::AtomicU16 = std::sync::atomic::AtomicU16::new(
 
 /// An open I/O connection.
 struct IoConn {
+    /// Its key and connection path, for its Forward_Close.
+    opened: cleanup::Opened,
     o_t_id: u32,
     t_o_id: u32,
     /// The assemblies behind the connection points, if the product has them.
@@ -344,13 +346,14 @@ impl Scanner {
             Some(Width::Dword) => 4,
             _ => 2,
         };
-        let noted = self.before_set(&path);
+        let noted = self.before_set(&path)?;
         let resp = self.explicit(&MrRequest {
             service: Service::SET_ATTRIBUTE_SINGLE.0,
             path,
             data: v.to_le_bytes()[..width].to_vec(),
-        })?;
-        self.after_set(noted, resp.general == 0);
+        });
+        self.after_set(noted, resp.as_ref());
+        let resp = resp?;
         if resp.general != 0 {
             return Ok(refused(&resp));
         }
@@ -448,17 +451,23 @@ impl Scanner {
             service: service.0,
             path: EPath::object(class::CONNECTION_MANAGER, 1),
             data: fo.emit(),
-        })?;
+        });
+        // Noted before its reply is parsed: a connection the target may have opened is closed
+        // in the cleanup, when the reply was lost or does not parse too.
+        if cleanup::may_have_taken_effect(resp.as_ref()) {
+            self.note_opened(&fo);
+        }
+        let resp = resp?;
         if resp.general != 0 {
             return Ok((resp, None));
         }
         let reply = ForwardOpenReply::parse(&resp.data)
             .map_err(|e| StepError::Protocol(format!("Forward_Open reply: {e}")))?;
-        self.note_opened(&fo);
         if s.o_t_point != eip::LISTEN_ONLY_POINT {
             // An owner connection: the following process-data steps run over it.
             let header = 2 + if s.run_idle { 4 } else { 0 };
             self.io = Some(IoConn {
+                opened: cleanup::Opened::of(&fo),
                 o_t_id: reply.o_t_id,
                 t_o_id: reply.t_o_id,
                 o_t: self.product.and_then(|p| eip::assembly(p, s.o_t_point)),
@@ -615,10 +624,10 @@ impl Scanner {
             }
             EnipStep::Mr { bytes, client } => {
                 let what = format!("message-router request {}", hex(bytes));
-                let noted = self.before_request(bytes);
-                let resp = self.unconnected(*client, bytes.clone(), what)?;
-                self.after_request(noted, &resp);
-                Ok(mr_fields(&resp))
+                let noted = self.before_request(bytes)?;
+                let resp = self.unconnected(*client, bytes.clone(), what);
+                self.after_request(noted, resp.as_ref());
+                Ok(mr_fields(&resp?))
             }
             EnipStep::Request {
                 service,
@@ -635,10 +644,10 @@ impl Scanner {
                     data: data.clone(),
                 };
                 let bytes = req.emit();
-                let noted = self.before_request(&bytes);
-                let resp = self.unconnected(*client, bytes, what)?;
-                self.after_request(noted, &resp);
-                Ok(mr_fields(&resp))
+                let noted = self.before_request(&bytes)?;
+                let resp = self.unconnected(*client, bytes, what);
+                self.after_request(noted, resp.as_ref());
+                Ok(mr_fields(&resp?))
             }
             EnipStep::Run(run) => {
                 self.run = *run;
@@ -807,33 +816,16 @@ fn describe_reply(r: &EncapRepr) -> String {
 }
 
 impl Drop for Scanner {
-    /// Leaves the target as found: the I/O connection closed, the session unregistered.
+    /// Leaves the target as found: the I/O connection closed, the sessions unregistered (by
+    /// the cleanup's own Forward_Close and UnRegisterSession; after a network target's
+    /// cleanup there is nothing left to do).
     fn drop(&mut self) {
-        if self.io.take().is_some() && self.sessions.contains_key(&1) {
-            let fc = ForwardClose {
-                priority_tick: 0x0A,
-                timeout_ticks: 0x0E,
-                serial: self.serial,
-                vendor: VENDOR,
-                originator_serial: ORIGINATOR_SERIAL,
-                path: EPath::object(class::ASSEMBLY, 1),
-            };
-            let _ = self.explicit(&MrRequest {
-                service: Service::FORWARD_CLOSE.0,
-                path: EPath::object(class::CONNECTION_MANAGER, 1),
-                data: fc.emit(),
-            });
-        }
-        for (client, session) in std::mem::take(&mut self.sessions) {
-            let bye = EncapRepr {
-                command: Command::UNREGISTER_SESSION.0,
-                session,
-                ..EncapRepr::default()
-            };
-            if let Ok(b) = bye.emit() {
-                let _ = self.link.request(client, &b);
+        if let Some(io) = self.io.take() {
+            if self.sessions.contains_key(&1) {
+                let _ = self.forward_close(&io.opened);
             }
         }
+        self.unregister();
     }
 }
 
