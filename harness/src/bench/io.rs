@@ -1,12 +1,17 @@
 //! The jitter figure: T→O arrival times of a class-1 connection and how far they stray from
 //! the RPI.
 
+use std::io::IoSliceMut;
 use std::net::{SocketAddr, UdpSocket};
+use std::os::fd::AsRawFd;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread;
 use std::time::{Duration, Instant};
 
+use nix::errno::Errno;
+use nix::sys::socket::{recvmsg, setsockopt, sockopt, ControlMessageOwned, MsgFlags};
+use nix::sys::time::TimeSpec;
 use proto::enip::io::{IoFrame, IO_PORT};
 use proto::nord::eip::{self, Direction};
 
@@ -85,37 +90,35 @@ fn record_t_o(
 ) -> Result<Vec<(u32, Duration)>, String> {
     udp.set_read_timeout(Some(Duration::from_millis(100)))
         .map_err(|e| e.to_string())?;
+    // The kernel stamps each datagram as it arrives (SO_TIMESTAMPNS): the figure is the
+    // adapter's and the network's, not how soon this thread was scheduled to read it.
+    setsockopt(udp, sockopt::ReceiveTimestampns, &true)
+        .map_err(|e| format!("SO_TIMESTAMPNS: {e}"))?;
     let mut buf = [0u8; 1500];
     let mut arrivals = Vec::with_capacity(span.as_millis() as usize + 64);
     let begin = Instant::now();
-    let mut first: Option<Instant> = None;
+    let mut first: Option<(Instant, Duration)> = None;
     loop {
         let now = Instant::now();
         match first {
-            Some(f) if now >= f + span => break,
+            Some((f, _)) if now >= f + span => break,
             None if now >= begin + Duration::from_secs(1) => {
                 return Err("no T→O frame within 1 s of Forward_Open".into())
             }
             _ => {}
         }
-        match udp.recv_from(&mut buf) {
-            Ok((n, _)) => {
-                let at = Instant::now();
+        match receive_stamped(udp, &mut buf) {
+            Ok((n, stamp)) => {
                 let Ok(frame) = IoFrame::parse(&buf[..n], false) else {
                     continue;
                 };
                 if frame.connection != t_o_id {
                     continue;
                 }
-                let f = *first.get_or_insert(at);
-                arrivals.push((frame.sequence, at - f));
+                let (_, f) = *first.get_or_insert((Instant::now(), stamp));
+                arrivals.push((frame.sequence, stamp.saturating_sub(f)));
             }
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                ) =>
-            {
+            Err(Errno::EAGAIN) => {
                 if first.is_some() {
                     return Err(format!(
                         "T→O stopped after {} frames (connection timed out?)",
@@ -127,6 +130,25 @@ fn record_t_o(
         }
     }
     Ok(arrivals)
+}
+
+/// One datagram into `buf`: its length and the kernel's arrival stamp (wall clock, as a
+/// duration since the Unix epoch; only differences are used).
+fn receive_stamped(udp: &UdpSocket, buf: &mut [u8]) -> Result<(usize, Duration), Errno> {
+    let mut cmsg = nix::cmsg_space!(TimeSpec);
+    let mut iov = [IoSliceMut::new(buf)];
+    let msg = recvmsg::<()>(
+        udp.as_raw_fd(),
+        &mut iov,
+        Some(&mut cmsg),
+        MsgFlags::empty(),
+    )?;
+    let stamp = msg.cmsgs()?.find_map(|c| match c {
+        ControlMessageOwned::ScmTimestampns(t) => Some(Duration::from(t)),
+        _ => None,
+    });
+    // Without a stamp (the option refused) the datagram is unusable for the figure.
+    stamp.map(|t| (msg.bytes, t)).ok_or(Errno::ENOMSG)
 }
 
 /// How far the arrivals of a periodic stream stray from its period.

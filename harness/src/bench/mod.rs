@@ -16,8 +16,9 @@
 //!
 //! Everything runs on loopback and is bounded in count and time. Nothing here asserts on time:
 //! a missed target is printed, not failed. The I/O connection is the bench's own (the minimal
-//! client's Forward_Open, O→T from one thread every RPI, T→O timed on another), so arrival
-//! times are taken as the datagrams come, not once per scanner cycle.
+//! client's Forward_Open, O→T from one thread every RPI, T→O received on another), and each
+//! T→O datagram's arrival time is the kernel's receive stamp (SO_TIMESTAMPNS), not the moment
+//! a thread got round to reading it.
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::path::{Path, PathBuf};
