@@ -24,7 +24,7 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 mod common;
-use common::{scanner_port, serve, wait_listening, Server};
+use common::{serve, wait_listening, Server};
 
 fn python() -> Option<PathBuf> {
     let venv = std::env::var("INTEROP_VENV").unwrap_or_else(|_| "/tmp/nord-interop-venv".into());
@@ -778,7 +778,6 @@ fn network_run_pcap_matches_a_wire_capture_and_both_dissect_cleanly() {
         eprintln!("SKIP: capturing on lo needs root (CI runs as root)");
         return;
     }
-    let _port = scanner_port();
     let dir = scratch("network-pcap");
     // The whole run (about 100 s of real time: the drive examples run in real time).
     let profile = "tu4-eip@enip";
@@ -787,7 +786,14 @@ fn network_run_pcap_matches_a_wire_capture_and_both_dissect_cleanly() {
     let wire = WireCapture::start("host 127.0.0.6", &wire_file);
     let run_file = dir.join("run.pcapng");
     let packets = run_with_pcap(
-        &["--dut", "enip://127.0.0.6", "--profile", profile],
+        &[
+            "--dut",
+            "enip://127.0.0.6",
+            "--local",
+            "127.0.0.17",
+            "--profile",
+            profile,
+        ],
         &run_file,
         &dir.join("reports"),
     );
@@ -863,7 +869,6 @@ fn generic_suite_against_cpppo_server_reports_deviations_as_failures() {
         eprintln!("SKIP: no interop venv (run `bash .ci/interop-setup`; CI does)");
         return;
     };
-    let _port = scanner_port();
     let listen = "127.0.0.8:44818";
     let server = Server(
         Command::new(&py)
@@ -886,6 +891,8 @@ fn generic_suite_against_cpppo_server_reports_deviations_as_failures() {
             "run",
             "--dut",
             "enip://127.0.0.8",
+            "--local",
+            "127.0.0.18",
             "--profile",
             "cip",
             "--timeout",

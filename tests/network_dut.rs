@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 mod common;
-use common::{scanner_port, serve};
+use common::serve;
 
 #[derive(Clone, Copy)]
 enum Target {
@@ -152,7 +152,6 @@ fn transcript(out: &std::path::Path, profile: &str, case: &str) -> String {
 /// time, and a device on the network runs on its own clock.
 #[test]
 fn network_runs_leave_the_device_as_each_case_found_it() {
-    let _port = scanner_port();
     for (served, profile) in [("tu4-eip", "tu4-eip@enip"), ("sk550p", "sk550p@enip")] {
         let _server = serve(SERVED, served, 900);
         let p102 = read_p102();
@@ -162,6 +161,8 @@ fn network_runs_leave_the_device_as_each_case_found_it() {
             .args(["run", "--profile", profile])
             .arg("--dut")
             .arg(format!("enip://{SERVED}"))
+            // Its own UDP 2222 for T→O data, whatever else runs on this host.
+            .args(["--local", "127.0.0.19"])
             .arg("--out")
             .arg(&out_dir)
             .output()

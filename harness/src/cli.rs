@@ -115,6 +115,12 @@ struct RunArgs {
     /// Seconds a network DUT may take to answer one request.
     #[arg(long, default_value_t = 2.0)]
     timeout: f64,
+    /// The scanner's own IP address for `--dut enip://`: its TCP connections come from it and
+    /// the target sends T→O data to its UDP 2222 (a host with several interfaces, or several
+    /// runs at once on one host, each with its own address). By default the address the
+    /// routing table picks.
+    #[arg(long, requires = "dut")]
+    local: Option<std::net::IpAddr>,
     /// Write the run's EtherNet/IP traffic to this file as pcapng (whatever its name; each
     /// packet's comment names the profile, case and step that produced it): the embedded
     /// simulator's on its virtual clock, or what was sent to and received from a
@@ -278,6 +284,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
             }
             let mut factory = crate::binding::enip::NetworkFactory {
                 target,
+                local: a.local,
                 timeout: std::time::Duration::from_secs_f64(a.timeout),
                 tap: tap.clone(),
                 clock: std::rc::Rc::new(sim::clock::RealClock::new()),

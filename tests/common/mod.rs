@@ -3,7 +3,6 @@
 use std::io::{BufRead, BufReader};
 use std::net::{SocketAddr, TcpStream};
 use std::process::{Child, Command, Stdio};
-use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 /// A child process, killed when dropped (a served simulator, a third-party server).
@@ -47,12 +46,4 @@ pub(crate) fn wait_listening(listen: &str, within: Duration) {
         assert!(Instant::now() < deadline, "nothing listens on {listen}");
         std::thread::sleep(Duration::from_millis(50));
     }
-}
-
-/// Held by a test while it runs `harness run --dut`: the scanner binds UDP 2222 on its end of
-/// the TCP connection, 127.0.0.1 for every loopback target, so two such runs at once in one
-/// test binary would take the port from each other.
-pub(crate) fn scanner_port() -> MutexGuard<'static, ()> {
-    static PORT: Mutex<()> = Mutex::new(());
-    PORT.lock().unwrap_or_else(|p| p.into_inner())
 }

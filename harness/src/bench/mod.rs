@@ -283,7 +283,7 @@ fn scanner_round_trips(s: &Settings, clients: usize, per_client: u32) -> Result<
         }
     };
     let connect = || -> Result<Scanner, String> {
-        let mut scanner = Scanner::network(s.listen, Some(PRODUCT), Duration::from_secs(2))?;
+        let mut scanner = Scanner::network(s.listen, None, Some(PRODUCT), Duration::from_secs(2))?;
         for _ in 0..WARM_UP {
             one(&mut scanner)?;
         }

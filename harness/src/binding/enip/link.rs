@@ -2,9 +2,11 @@
 //! (same bytes, virtual clock) or a device on the network (TCP 44818, UDP 2222).
 
 use std::collections::BTreeMap;
-use std::net::{SocketAddr, SocketAddrV4, TcpStream, UdpSocket};
+use std::net::{IpAddr, SocketAddr, SocketAddrV4, TcpStream, UdpSocket};
 use std::rc::Rc;
 use std::time::{Duration, Instant};
+
+use socket2::{Domain, Protocol, SockAddr, Socket, Type};
 
 use proto::enip::encap::{frame_len, HEADER_LEN};
 use proto::enip::io::IO_PORT;
@@ -310,7 +312,7 @@ pub(crate) struct Network {
     /// Connections of other clients, opened on first use.
     others: BTreeMap<u8, Stream>,
     /// The local address of the scanner's TCP connection, where T→O data is expected.
-    local: std::net::IpAddr,
+    local: IpAddr,
     /// UDP 2222 on `local`, bound when I/O starts: a run without I/O (the `cip` profile)
     /// does not hold the port, so other scanners on the machine can.
     udp: Option<UdpSocket>,
@@ -330,10 +332,11 @@ struct Stream {
 impl Stream {
     fn connect(
         target: SocketAddr,
+        local: Option<IpAddr>,
         timeout: Duration,
         recorder: Option<&Recorder>,
     ) -> Result<Stream, String> {
-        let tcp = TcpStream::connect_timeout(&target, timeout)
+        let tcp = connect_from(target, local, timeout)
             .map_err(|e| format!("cannot connect to {target}: {e}"))?;
         tcp.set_nodelay(true).map_err(|e| e.to_string())?;
         let tcp = PollingStream::new(tcp, REPLY_POLL).map_err(|e| e.to_string())?;
@@ -424,6 +427,26 @@ impl Stream {
     }
 }
 
+/// A TCP connection to `target`, from `local` (any port) when given, else from the address
+/// the routing table picks.
+fn connect_from(
+    target: SocketAddr,
+    local: Option<IpAddr>,
+    timeout: Duration,
+) -> std::io::Result<TcpStream> {
+    let Some(local) = local else {
+        return TcpStream::connect_timeout(&target, timeout);
+    };
+    let socket = Socket::new(
+        Domain::for_address(target),
+        Type::STREAM,
+        Some(Protocol::TCP),
+    )?;
+    socket.bind(&SockAddr::from(SocketAddr::new(local, 0)))?;
+    socket.connect_timeout(&SockAddr::from(target), timeout)?;
+    Ok(socket.into())
+}
+
 impl Drop for Stream {
     fn drop(&mut self) {
         if let Some(c) = &mut self.recorded {
@@ -433,9 +456,14 @@ impl Drop for Stream {
 }
 
 impl Network {
-    /// Connects to `target` (TCP).
-    pub(crate) fn connect(target: SocketAddr, timeout: Duration) -> Result<Network, String> {
-        let tcp = Stream::connect(target, timeout, None)?;
+    /// Connects to `target` (TCP), from `local` when given: T→O data is then expected on
+    /// `local`'s UDP 2222.
+    pub(crate) fn connect(
+        target: SocketAddr,
+        local: Option<IpAddr>,
+        timeout: Duration,
+    ) -> Result<Network, String> {
+        let tcp = Stream::connect(target, local, timeout, None)?;
         let local = tcp
             .tcp
             .as_ref()
@@ -454,7 +482,7 @@ impl Network {
 }
 
 /// UDP 2222 on `local`, where the target sends T→O data; bound on first use.
-fn io_socket(slot: &mut Option<UdpSocket>, local: std::net::IpAddr) -> Result<&UdpSocket, String> {
+fn io_socket(slot: &mut Option<UdpSocket>, local: IpAddr) -> Result<&UdpSocket, String> {
     if slot.is_none() {
         let at = SocketAddr::new(local, IO_PORT);
         let udp =
@@ -480,6 +508,7 @@ impl EnipLink for Network {
                 std::collections::btree_map::Entry::Occupied(e) => e.into_mut(),
                 std::collections::btree_map::Entry::Vacant(e) => e.insert(Stream::connect(
                     self.target,
+                    Some(self.local),
                     self.timeout,
                     self.recorder.as_ref(),
                 )?),
@@ -493,8 +522,8 @@ impl EnipLink for Network {
         let udp = io_socket(&mut self.udp, self.local)?;
         // The socket's own address (it is bound there), if IPv4: the only kind recorded.
         let local = match self.local {
-            std::net::IpAddr::V4(ip) => Some(SocketAddrV4::new(ip, IO_PORT)),
-            std::net::IpAddr::V6(_) => None,
+            IpAddr::V4(ip) => Some(SocketAddrV4::new(ip, IO_PORT)),
+            IpAddr::V6(_) => None,
         };
         if let Some(d) = datagram {
             let to = SocketAddr::new(target, IO_PORT);
@@ -552,5 +581,39 @@ impl EnipLink for Network {
         }
         self.recorder = Some(recorder);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::net::{Ipv4Addr, TcpListener};
+
+    #[test]
+    fn a_network_link_connects_from_its_local_address_and_takes_its_io_port() {
+        let listener = TcpListener::bind("127.0.0.14:0").unwrap();
+        let target = listener.local_addr().unwrap();
+        let local = IpAddr::V4(Ipv4Addr::new(127, 0, 0, 15));
+        let mut link = Network::connect(target, Some(local), Duration::from_secs(2)).unwrap();
+        let (_, peer) = listener.accept().unwrap();
+        assert_eq!(peer.ip(), local);
+        link.prepare_io().unwrap();
+        let taken = UdpSocket::bind(SocketAddr::new(local, IO_PORT)).unwrap_err();
+        assert_eq!(taken.kind(), std::io::ErrorKind::AddrInUse);
+        // Another scanner on another address has its own UDP 2222.
+        let other = IpAddr::V4(Ipv4Addr::new(127, 0, 0, 16));
+        let mut second = Network::connect(target, Some(other), Duration::from_secs(2)).unwrap();
+        second.prepare_io().unwrap();
+    }
+
+    #[test]
+    fn a_local_address_that_is_not_ours_is_a_connect_error() {
+        let listener = TcpListener::bind("127.0.0.14:0").unwrap();
+        let target = listener.local_addr().unwrap();
+        let foreign = IpAddr::V4(Ipv4Addr::new(192, 0, 2, 1));
+        let e = Network::connect(target, Some(foreign), Duration::from_secs(1))
+            .err()
+            .unwrap();
+        assert!(e.starts_with("cannot connect to 127.0.0.14"), "{e}");
     }
 }

@@ -103,10 +103,11 @@ impl Scanner {
     /// A target on the network.
     pub(crate) fn network(
         target: SocketAddr,
+        local: Option<std::net::IpAddr>,
         product: Option<Product>,
         timeout: Duration,
     ) -> Result<Scanner, String> {
-        let link = Network::connect(target, timeout)?;
+        let link = Network::connect(target, local, timeout)?;
         // NORD's parameter classes and assemblies only on a NORD product.
         let caps = match product {
             Some(_) => vec![
@@ -684,6 +685,8 @@ impl Scanner {
 pub(crate) struct NetworkFactory {
     /// Encapsulation address of the target.
     pub(crate) target: SocketAddr,
+    /// The scanner's own address (`--local`): TCP from it, T→O data to its UDP 2222.
+    pub(crate) local: Option<std::net::IpAddr>,
     /// How long one request may take.
     pub(crate) timeout: Duration,
     /// Where `--pcap` collects the run's traffic.
@@ -702,7 +705,7 @@ impl crate::runner::DutFactory for NetworkFactory {
         profile: &crate::profile::Profile,
         _retries: u32,
     ) -> Result<Box<dyn Binding>, String> {
-        let mut scanner = Scanner::network(self.target, profile.product, self.timeout)?;
+        let mut scanner = Scanner::network(self.target, self.local, profile.product, self.timeout)?;
         if let Some(tap) = &self.tap {
             scanner.link.record(tap.clone(), self.clock.clone())?;
         }
