@@ -14,7 +14,7 @@
 use std::fmt::Write as _;
 
 use proto::enip::cip::class;
-use proto::enip::epath::{EPath, Segment};
+use proto::enip::epath::EPath;
 use proto::nord::addr::cip_instance;
 use proto::nord::eip::{
     self, Assembly, Direction, IdentityInfo, LISTEN_ONLY_MAX, LISTEN_ONLY_POINT, RPI_RANGE,
@@ -33,8 +33,6 @@ const HOME_URL: &str = "https://www.nord.com";
 const MAX_MSG_CONNECTIONS: usize = 6;
 /// Default RPI of the RPI parameter, µs.
 const RPI_DEFAULT: u32 = 10_000;
-/// The configuration instance of the connection paths (no configuration data).
-const CONFIG_INSTANCE: u32 = 1;
 
 /// CIP elementary data types (CIP Vol. 1, appendix C).
 const INT: u8 = 0xC3;
@@ -461,15 +459,7 @@ impl Connection {
 
     /// `20 04 24 01 2C <O→T> 2C <T→O>`.
     fn path(&self) -> Vec<u8> {
-        EPath {
-            segments: vec![
-                Segment::Class(class::ASSEMBLY),
-                Segment::Instance(CONFIG_INSTANCE),
-                Segment::ConnectionPoint(self.o_t_point()),
-                Segment::ConnectionPoint(self.t_o.instance),
-            ],
-        }
-        .emit()
+        EPath::io_connection(self.o_t_point(), self.t_o.instance).emit()
     }
 
     fn sizes(&self, product: Product) -> (u16, u16) {

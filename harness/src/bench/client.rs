@@ -11,7 +11,7 @@ use proto::enip::cpf::{Cpf, Item};
 use proto::enip::encap::{
     frame_len, Command as EncapCommand, EncapRepr, RegisterSession, SendData,
 };
-use proto::enip::epath::{EPath, Segment};
+use proto::enip::epath::EPath;
 
 use super::{IO_MULTIPLIER, ORIGINATOR_SERIAL, VENDOR};
 use crate::poll::{PollingStream, REPLY_POLL};
@@ -139,13 +139,7 @@ impl Client {
         t_o_size: u16,
         rpi_us: u32,
     ) -> Result<IoConnection, String> {
-        let np = |size: u16| NetParams {
-            size,
-            variable: false,
-            priority: 0,
-            kind: kind::POINT_TO_POINT,
-            redundant_owner: false,
-        };
+        let np = |size: u16| NetParams::fixed(size, kind::POINT_TO_POINT);
         let serial = 0x4245;
         let fo = ForwardOpen {
             large: false,
@@ -162,14 +156,7 @@ impl Client {
             t_o_rpi: rpi_us,
             t_o: np(t_o_size),
             transport: Transport::CLASS1_CYCLIC,
-            path: EPath {
-                segments: vec![
-                    Segment::Class(class::ASSEMBLY),
-                    Segment::Instance(1),
-                    Segment::ConnectionPoint(o_t),
-                    Segment::ConnectionPoint(t_o),
-                ],
-            },
+            path: EPath::io_connection(o_t, t_o),
         };
         let resp = self.request(&MrRequest {
             service: Service::FORWARD_OPEN.0,

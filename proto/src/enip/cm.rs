@@ -87,6 +87,18 @@ pub mod kind {
 }
 
 impl NetParams {
+    /// A fixed-size connection of `kind` (point to point, multicast), low priority, no
+    /// redundant owner: what a scanner asks for unless told otherwise.
+    pub fn fixed(size: u16, kind: u8) -> NetParams {
+        NetParams {
+            size,
+            variable: false,
+            priority: 0,
+            kind,
+            redundant_owner: false,
+        }
+    }
+
     /// From the 16-bit field.
     pub fn from_u16(v: u16) -> NetParams {
         NetParams {
@@ -503,14 +515,7 @@ mod tests {
                 redundant_owner: false,
             },
             transport: Transport::CLASS1_CYCLIC,
-            path: EPath {
-                segments: vec![
-                    Segment::Class(4),
-                    Segment::Instance(1),
-                    Segment::ConnectionPoint(100),
-                    Segment::ConnectionPoint(101),
-                ],
-            },
+            path: EPath::io_connection(100, 101),
         }
     }
 

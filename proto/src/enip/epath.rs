@@ -98,6 +98,20 @@ impl EPath {
         }
     }
 
+    /// The connection path of an I/O connection to assembly connection points `o_t` and
+    /// `t_o`: Assembly class, configuration instance 1 (no configuration data), the two
+    /// points (`20 04 24 01 2C o_t 2C t_o`).
+    pub fn io_connection(o_t: u16, t_o: u16) -> EPath {
+        EPath {
+            segments: vec![
+                Segment::Class(crate::enip::cip::class::ASSEMBLY),
+                Segment::Instance(1),
+                Segment::ConnectionPoint(o_t),
+                Segment::ConnectionPoint(t_o),
+            ],
+        }
+    }
+
     /// Parses a padded path filling `bytes`.
     pub fn parse(bytes: &[u8]) -> Result<EPath, WireError> {
         let mut r = Reader::new(bytes);

@@ -88,25 +88,28 @@ const SK550P: &[Assembly] = &[
         "8 frequency inverters (for each: STW + IW1 … IW5)",
     ),
 ];
+/// 100/101 of the modules (BU 2100 §6.2.1): FI 1 alone, 12 bytes, fixed size.
+const SINGLE_OUTPUT: Assembly = asm(
+    100,
+    Direction::Output,
+    12,
+    false,
+    false,
+    1,
+    "STW + SW1 + SW2 + SW3 + SW4 + SW5",
+);
+const SINGLE_INPUT: Assembly = asm(
+    101,
+    Direction::Input,
+    12,
+    false,
+    false,
+    1,
+    "ZSW + IW1 + IW2 + IW3 + IW4 + IW5",
+);
 const TU3: &[Assembly] = &[
-    asm(
-        100,
-        Direction::Output,
-        12,
-        false,
-        false,
-        1,
-        "STW + SW1 + SW2 + SW3 + SW4 + SW5",
-    ),
-    asm(
-        101,
-        Direction::Input,
-        12,
-        false,
-        false,
-        1,
-        "ZSW + IW1 + IW2 + IW3 + IW4 + IW5",
-    ),
+    SINGLE_OUTPUT,
+    SINGLE_INPUT,
     asm(
         102,
         Direction::Output,
@@ -127,24 +130,8 @@ const TU3: &[Assembly] = &[
     ),
 ];
 const XU4: &[Assembly] = &[
-    asm(
-        100,
-        Direction::Output,
-        12,
-        false,
-        false,
-        1,
-        "STW + SW1 + SW2 + SW3 + SW4 + SW5",
-    ),
-    asm(
-        101,
-        Direction::Input,
-        12,
-        false,
-        false,
-        1,
-        "ZSW + IW1 + IW2 + IW3 + IW4 + IW5",
-    ),
+    SINGLE_OUTPUT,
+    SINGLE_INPUT,
     asm(
         110,
         Direction::Output,

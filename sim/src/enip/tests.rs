@@ -85,13 +85,7 @@ fn send_rr_data(req: &MrRequest) -> Vec<u8> {
 }
 
 fn np(size: u16, kind: u8) -> NetParams {
-    NetParams {
-        size,
-        variable: false,
-        priority: 0,
-        kind,
-        redundant_owner: false,
-    }
+    NetParams::fixed(size, kind)
 }
 
 /// A class-1 Forward_Open: `20 04 24 01 2C o→t 2C t→o`, RPI 10 ms both ways.
@@ -117,14 +111,7 @@ fn io_open(
         t_o_rpi: RPI_US,
         t_o: np(t_o_size, kind::POINT_TO_POINT),
         transport: Transport::CLASS1_CYCLIC,
-        path: EPath {
-            segments: vec![
-                Segment::Class(class::ASSEMBLY),
-                Segment::Instance(1),
-                Segment::ConnectionPoint(o_t_point),
-                Segment::ConnectionPoint(t_o_point),
-            ],
-        },
+        path: EPath::io_connection(o_t_point, t_o_point),
     }
 }
 

@@ -713,7 +713,6 @@ mod tests {
     use proto::enip::cm::{NetParams, Transport};
     use proto::enip::cpf::Item;
     use proto::enip::encap::SendData;
-    use proto::enip::epath::Segment;
     use proto::nord::Product;
     use serde_json::json;
     use sim::device::{Device, DeviceConfig};
@@ -790,14 +789,7 @@ mod tests {
             t_o_rpi: 4000,
             t_o: np,
             transport,
-            path: EPath {
-                segments: vec![
-                    Segment::Class(class::ASSEMBLY),
-                    Segment::Instance(1),
-                    Segment::ConnectionPoint(100),
-                    Segment::ConnectionPoint(101),
-                ],
-            },
+            path: EPath::io_connection(100, 101),
         }
     }
 

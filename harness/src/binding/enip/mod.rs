@@ -19,7 +19,7 @@ use proto::enip::cip::{class, GeneralStatus, MrRequest, MrResponse, Service};
 use proto::enip::cm::{kind, ForwardOpen, ForwardOpenReply, NetParams, Transport};
 use proto::enip::cpf::{Cpf, Item};
 use proto::enip::encap::{Command, EncapRepr, EncapStatus, RegisterSession, SendData};
-use proto::enip::epath::{EPath, Segment};
+use proto::enip::epath::EPath;
 use proto::enip::io::IoFrame;
 use proto::nord::addr::cip_instance;
 use proto::nord::eip::{self, Assembly, Direction, WORDS_PER_INVERTER};
@@ -416,16 +416,7 @@ impl Scanner {
         self.serial = SERIAL
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
             .max(1);
-        let np = |size: u16, k: u8| NetParams {
-            size,
-            variable: false,
-            priority: 0,
-            kind: k,
-            redundant_owner: false,
-        };
-        let mut segments = vec![Segment::Class(class::ASSEMBLY), Segment::Instance(1)];
-        segments.push(Segment::ConnectionPoint(s.o_t_point));
-        segments.push(Segment::ConnectionPoint(s.t_o_point));
+        let np = NetParams::fixed;
         let fo = ForwardOpen {
             large: s.large,
             priority_tick: 0x0A,
@@ -441,7 +432,7 @@ impl Scanner {
             t_o_rpi: s.rpi_us,
             t_o: np(s.t_o_size, kind::POINT_TO_POINT),
             transport: Transport(s.transport),
-            path: EPath { segments },
+            path: EPath::io_connection(s.o_t_point, s.t_o_point),
         };
         let service = if s.large {
             Service::LARGE_FORWARD_OPEN
