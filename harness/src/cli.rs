@@ -1,4 +1,6 @@
-//! The `harness` command line: `run` (the default), `list`, `addr`, `decode`.
+//! The `harness` command line: `run` (the default), `list`, `addr`, `decode`, `serve`,
+//! `describe`. What is a bus's own (`serve <bus>`, `describe <format>`, `--dut <bus>://…`) is
+//! found through the bus registry (`crate::bus`).
 //!
 //! Exit codes: 0 every case passed (or did not apply), 1 a case failed or ended in error,
 //! 2 usage or configuration error (bad arguments, a suite file that does not load).
@@ -42,17 +44,20 @@ enum Command {
     Addr(crate::cli_tools::AddrArgs),
     /// Decode a telegram or word in the manuals' terms, e.g. `harness decode status 0B31h`.
     Decode(crate::cli_tools::DecodeArgs),
-    /// Serve the simulator on the network as a real device, e.g. `harness serve enip`.
+    /// Serve the simulator on the network as a real device, e.g. `harness serve enip` or
+    /// `harness serve ecat --iface veth0`; `harness serve <bus> --help` lists a bus's options.
     Serve(ServeArgs),
-    /// Print a device description file, e.g. `harness describe eds --profile tu3-eip`.
+    /// Print a device description file, e.g. `harness describe eds --profile tu3-eip` or
+    /// `harness describe esi --profile sk550p`.
     Describe(DescribeArgs),
 }
 
 #[derive(ClapArgs, Debug)]
 struct DescribeArgs {
-    /// What to describe: `eds` (EtherNet/IP electronic data sheet).
+    /// What to describe: `eds` (EtherNet/IP electronic data sheet), `esi` (EtherCAT slave
+    /// information).
     what: String,
-    /// Product profile: sk550p, tu3-eip, tu4-eip, cu4-eip.
+    /// Product profile, e.g. tu3-eip, sk550p.
     #[arg(long)]
     profile: String,
     /// Inverters behind the interface (default: the product's maximum).
@@ -62,20 +67,11 @@ struct DescribeArgs {
 
 #[derive(ClapArgs, Debug)]
 struct ServeArgs {
-    /// Protocol to serve: `enip` (EtherNet/IP adapter).
-    protocol: String,
-    /// Listen address, HOST[:PORT] (UDP 2222 on the same host carries I/O).
-    #[arg(long, default_value = "127.0.0.2:44818")]
-    listen: String,
-    /// Product profile: sk550p, tu3-eip, tu4-eip, cu4-eip.
-    #[arg(long, default_value = "tu3-eip")]
-    profile: String,
-    /// Inverters behind the interface (default: the product's maximum).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
-    inverters: Option<u8>,
-    /// Stop after this many seconds (default: serve until killed).
-    #[arg(long)]
-    seconds: Option<u64>,
+    /// The bus to serve: enip, ecat.
+    bus: String,
+    /// The bus's own options (`harness serve <bus> --help`).
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+    args: Vec<String>,
 }
 
 #[derive(ClapArgs, Debug, Default)]
@@ -108,23 +104,24 @@ struct RunArgs {
     /// Snapshot folder.
     #[arg(long, default_value = "vectors/snapshots")]
     snapshot_dir: PathBuf,
-    /// The DUT: the embedded simulator (default) or `enip://HOST[:PORT]`, an EtherNet/IP
-    /// device or another implementation on the network.
+    /// The DUT: the embedded simulator (default), or a device or another implementation on
+    /// the network: `enip://HOST[:PORT]` (EtherNet/IP), `ecat://IFACE` (EtherCAT segment on a
+    /// network interface).
     #[arg(long)]
     dut: Option<String>,
     /// Seconds a network DUT may take to answer one request.
     #[arg(long, default_value_t = 2.0)]
     timeout: f64,
-    /// The scanner's own IP address for `--dut enip://`: its TCP connections come from it and
-    /// the target sends T→O data to its UDP 2222 (a host with several interfaces, or several
-    /// runs at once on one host, each with its own address). By default the address the
-    /// routing table picks.
+    /// The harness's own IP address on the network, for a bus that sends from one: with
+    /// `--dut enip://` the scanner's TCP connections come from it and the target sends T→O data
+    /// to its UDP 2222 (a host with several interfaces, or several runs at once on one host,
+    /// each with its own address). By default the address the routing table picks.
     #[arg(long, requires = "dut")]
     local: Option<std::net::IpAddr>,
-    /// Write the run's EtherNet/IP traffic to this file as pcapng (whatever its name; each
-    /// packet's comment names the profile, case and step that produced it): the embedded
-    /// simulator's on its virtual clock, or what was sent to and received from a
-    /// `--dut enip://` target, with the real addresses and times (IPv4 only).
+    /// Write the run's bus traffic to this file as pcapng (whatever its name; each packet's
+    /// comment names the profile, case and step that produced it): the embedded simulator's on
+    /// its virtual clock, or what was sent to and received from a `--dut` target, with the real
+    /// addresses and times.
     #[arg(long)]
     pcap: Option<PathBuf>,
 }
@@ -187,39 +184,36 @@ pub fn main() -> i32 {
     }
 }
 
+/// Parses a subcommand's own arguments (a bus's `serve` options); `Err` is the exit code when
+/// clap printed help, a version or a usage error instead.
+pub(crate) fn parse_args<T: clap::Parser>(name: &str, args: &[String]) -> Result<T, i32> {
+    T::try_parse_from(std::iter::once(name).chain(args.iter().map(String::as_str))).map_err(|e| {
+        let _ = e.print();
+        if e.use_stderr() {
+            EXIT_USAGE
+        } else {
+            EXIT_PASS
+        }
+    })
+}
+
 fn describe(a: DescribeArgs) -> Result<i32, String> {
-    if a.what != "eds" {
-        return Err(format!("cannot describe `{}` (known: eds)", a.what));
-    }
-    let product = Profile::by_name(&a.profile)?.nord()?;
-    let text = crate::eds::eds(product, a.inverters.unwrap_or(product.max_inverters()))?;
+    let (bus, description) = crate::bus::description(&a.what)?;
+    let profile = Profile::by_name(&a.profile)?;
+    let product = profile.nord()?;
+    let profile = profile
+        .over(bus.name)
+        .ok_or_else(|| format!("{} has no {} interface", product.name(), bus.title))?;
+    let text = (description.write)(&profile, a.inverters.unwrap_or(product.max_inverters()))?;
     // A closed pipe (`| head`) ends the output, not the program with a panic.
     let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes());
     Ok(EXIT_PASS)
 }
 
 fn serve(a: ServeArgs) -> Result<i32, String> {
-    if a.protocol != "enip" {
-        return Err(format!("cannot serve `{}` (protocols: enip)", a.protocol));
-    }
-    let product = Profile::by_name(&a.profile)?.nord()?;
-    if proto::nord::eip::identity(product).is_none() {
-        return Err(format!("{} has no EtherNet/IP interface", product.name()));
-    }
-    let config = sim::device::DeviceConfig {
-        inverters: a
-            .inverters
-            .unwrap_or(product.max_inverters())
-            .min(product.max_inverters()),
-        ..sim::device::DeviceConfig::new(product)
-    };
-    let listen = crate::serve::parse_addr(&a.listen)?;
-    crate::serve::serve_enip(
-        listen,
-        config,
-        a.seconds.map(std::time::Duration::from_secs),
-    )?;
-    Ok(EXIT_PASS)
+    let bus = crate::bus::by_name(&a.bus)
+        .ok_or_else(|| format!("cannot serve `{}` (buses: {})", a.bus, crate::bus::names()))?;
+    (bus.serve)(&a.args)
 }
 
 fn run(a: RunArgs) -> Result<i32, String> {
@@ -233,9 +227,9 @@ fn run(a: RunArgs) -> Result<i32, String> {
     };
     let profiles: Vec<Profile> = profiles
         .into_iter()
-        .map(|p| Profile {
-            inverters: a.inverters.unwrap_or(p.inverters),
-            ..p
+        .map(|mut p| {
+            p.inverters = a.inverters.unwrap_or(p.inverters);
+            p
         })
         .collect();
     let dir = suites_dir(a.suites);
@@ -249,47 +243,38 @@ fn run(a: RunArgs) -> Result<i32, String> {
     };
     let mut run = match &a.dut {
         None => {
-            let mut factory = EmbeddedFactory { tap: tap.clone() };
+            let mut factory = EmbeddedFactory {
+                context: crate::bus::Embedded { tap: tap.clone() },
+            };
             runner::run(&loaded, &opts, &mut factory)
         }
         Some(url) => {
-            let target = url
-                .strip_prefix("enip://")
-                .ok_or_else(|| format!("`--dut {url}`: only enip://HOST[:PORT] is supported"))
-                .and_then(crate::serve::parse_addr)?;
-            if tap.is_some() && !target.is_ipv4() {
-                return Err(format!(
-                    "`--pcap` with `--dut {url}`: a pcap records IPv4 only"
-                ));
-            }
+            let (bus, target) = crate::bus::by_url(url)?;
             if !(0.01..=60.0).contains(&a.timeout) {
                 return Err(format!(
                     "`--timeout {}`: give 0.01 to 60 seconds",
                     a.timeout
                 ));
             }
-            let opts = RunOptions {
-                profiles: opts
-                    .profiles
-                    .iter()
-                    .filter_map(|p| match p.product {
-                        Some(product) => Profile::enip(product),
-                        None => Some(p.clone()),
-                    })
-                    .collect(),
-                ..opts
-            };
-            if opts.profiles.is_empty() {
-                return Err("none of the profiles speaks EtherNet/IP".into());
+            // Each product once, over the DUT's bus.
+            let mut profiles: Vec<Profile> = Vec::new();
+            for p in opts.profiles.iter().filter_map(|p| p.over(bus.name)) {
+                if !profiles.iter().any(|q| q.name() == p.name()) {
+                    profiles.push(p);
+                }
             }
-            let mut factory = crate::binding::enip::NetworkFactory {
-                target,
+            let opts = RunOptions { profiles, ..opts };
+            if opts.profiles.is_empty() {
+                return Err(format!("none of the profiles speaks {}", bus.title));
+            }
+            let mut factory = (bus.network)(&crate::bus::Network {
+                target: target.to_string(),
                 local: a.local,
                 timeout: std::time::Duration::from_secs_f64(a.timeout),
                 tap: tap.clone(),
-                clock: std::rc::Rc::new(sim::clock::RealClock::new()),
-            };
-            runner::run(&loaded, &opts, &mut factory)
+            })
+            .map_err(|e| e.to_string())?;
+            runner::run(&loaded, &opts, factory.as_mut())
         }
     };
     // Every link is closed by now, its FIN exchange recorded.

@@ -1,11 +1,12 @@
 //! The tester side: suites, bindings, runner, reports and the `harness` CLI.
 
-/// EtherNet/IP speed figures over loopback (`cargo bench -p harness --bench enip`).
-pub mod bench;
 mod binding;
+mod bus;
 pub mod cli;
 mod cli_tools;
-mod eds;
+mod ecat;
+mod enip;
+pub use enip::bench;
 mod model;
 mod notation;
 pub mod outcome;
@@ -14,7 +15,6 @@ mod poll;
 mod profile;
 mod report;
 mod runner;
-mod serve;
 mod suite;
 
 /// Runs every suite below `suites` against the embedded simulator under every built-in profile

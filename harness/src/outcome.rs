@@ -86,6 +86,26 @@ pub struct Erratum {
     pub why: String,
 }
 
+/// A device's refusal of a request, in its bus's own terms: a parameter-channel error number
+/// (response label 7), a CIP general status, an SDO abort code, an AL status code. It is data
+/// about the device — the request reached it and it said no — kept apart from a broken link or
+/// a broken protocol.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Refusal {
+    /// The kind of code, as the bus names it (`SDO abort code`).
+    pub kind: &'static str,
+    /// The code.
+    pub code: u32,
+    /// The code as the manual or the standard names it.
+    pub text: String,
+}
+
+impl std::fmt::Display for Refusal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} {}", self.kind, self.text)
+    }
+}
+
 /// One request/response pair on the link, for transcripts.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct Exchange {
@@ -108,6 +128,9 @@ pub struct StepResult {
     pub verdict: Verdict,
     /// What was observed (the compute result or the decoded DUT answer), as JSON.
     pub observed: serde_json::Value,
+    /// The device refused the step's request, in its bus's terms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refusal: Option<Refusal>,
     /// Why it failed or errored; empty on pass.
     pub message: String,
     /// Link exchanges of this step (empty for `compute`).

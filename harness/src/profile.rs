@@ -19,8 +19,6 @@ pub(crate) enum Capability {
     FaultInjection,
     /// The harness can see internal state: LEDs, status-machine state, EEPROM writes.
     Observe,
-    /// EtherNet/IP encapsulation and CIP requests can be sent as such.
-    Ethernetip,
     /// The DUT is freshly powered on for every case: drive in its power-on state, counters
     /// (e.g. the actual position) at zero. The embedded simulator is opened anew per case; a
     /// device on the network is one persistent device, which the harness cannot power-cycle.
@@ -29,27 +27,34 @@ pub(crate) enum Capability {
     /// simulator is; a device on the network carries its site's settings (its IP address
     /// first of all), which the harness neither knows nor may overwrite.
     FactoryState,
-    /// The DUT may be given a new IP address (P160–P165 or P850–P856 and an Identity Reset):
-    /// the simulator keeps its sockets whatever its parameters say; a device on the network
-    /// would move to the new address and the harness would lose it.
+    /// The DUT may be given a new address (P160–P165 or P850–P856 and a reset): the simulator
+    /// keeps its link whatever its parameters say; a device on the network would move to the
+    /// new address and the harness would lose it.
     Readdressing,
+    /// The bus's own steps (a registry name: `enip`, `ecat`) can be sent as such.
+    Bus(&'static str),
 }
 
 impl Capability {
-    /// All capabilities.
-    pub(crate) const ALL: [Capability; 9] = [
+    /// The capabilities that are not a bus.
+    pub(crate) const GENERAL: [Capability; 8] = [
         Capability::ParameterAccess,
         Capability::ParameterChannel,
         Capability::ProcessData,
         Capability::FaultInjection,
         Capability::Observe,
-        Capability::Ethernetip,
         Capability::PowerOn,
         Capability::FactoryState,
         Capability::Readdressing,
     ];
 
-    /// Name as suites write it.
+    /// Every capability: the general ones and one per bus.
+    pub(crate) fn all() -> Vec<Capability> {
+        let buses = crate::bus::BUSES.iter().map(|b| Capability::Bus(b.name));
+        Capability::GENERAL.into_iter().chain(buses).collect()
+    }
+
+    /// Name as suites write it (a bus capability is the bus's name).
     pub(crate) fn name(self) -> &'static str {
         match self {
             Capability::ParameterAccess => "parameter-access",
@@ -57,16 +62,16 @@ impl Capability {
             Capability::ProcessData => "process-data",
             Capability::FaultInjection => "fault-injection",
             Capability::Observe => "observe",
-            Capability::Ethernetip => "ethernetip",
             Capability::PowerOn => "power-on",
             Capability::FactoryState => "factory-state",
             Capability::Readdressing => "readdressing",
+            Capability::Bus(name) => name,
         }
     }
 
     /// Parses a suite's name.
     pub(crate) fn from_name(s: &str) -> Option<Capability> {
-        Capability::ALL.into_iter().find(|c| c.name() == s)
+        Capability::all().into_iter().find(|c| c.name() == s)
     }
 }
 
@@ -76,91 +81,113 @@ impl fmt::Display for Capability {
     }
 }
 
-/// How the harness talks to the DUT.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum BindingKind {
-    /// PPO telegrams: the NORD parameter channel and process data (data records 100..108).
-    Ppo,
-    /// EtherNet/IP: explicit messages to the parameter classes and a class-1 I/O connection.
-    Enip,
-}
-
-/// A device profile: the product, how many inverters sit behind it, and the binding.
+/// A device profile: the product, how many inverters sit behind it, and the bus its cases run
+/// over.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Profile {
-    /// The NORD product; `None` for the generic `cip` profile, any maker's EtherNet/IP
-    /// adapter, against which only the protocol's own cases run.
+    /// `sk550p` (the PPO link), `sk550p@ecat` (a bus), or a generic profile's name (`cip`).
+    name: String,
+    /// The NORD product; `None` for a generic profile, any maker's device of a bus, against
+    /// which only the bus's own cases run.
     pub(crate) product: Option<Product>,
     /// Inverters behind the interface (FI 1..=n).
     pub(crate) inverters: u8,
-    /// The binding the cases run over.
-    pub(crate) binding: BindingKind,
+    /// The bus (a registry name); `None` for the PPO link: the NORD parameter channel and
+    /// process data in data records 100..108.
+    pub(crate) bus: Option<&'static str>,
 }
 
 impl Profile {
     /// The built-in PPO profile of a product, with the product's maximum inverter count.
     pub(crate) fn builtin(product: Product) -> Profile {
         Profile {
+            name: product.name().to_string(),
             product: Some(product),
             inverters: product.max_inverters(),
-            binding: BindingKind::Ppo,
+            bus: None,
         }
     }
 
-    /// The EtherNet/IP profile of a product that speaks EtherNet/IP.
-    pub(crate) fn enip(product: Product) -> Option<Profile> {
-        proto::nord::eip::identity(product).map(|_| Profile {
-            binding: BindingKind::Enip,
+    /// A product over a bus: `<product>@<bus>`.
+    pub(crate) fn on_bus(product: Product, bus: &'static str) -> Profile {
+        Profile {
+            name: format!("{}@{bus}", product.name()),
+            bus: Some(bus),
             ..Profile::builtin(product)
-        })
+        }
     }
 
-    /// The generic profile `cip`: an EtherNet/IP adapter of any maker (`run --dut` only).
-    pub(crate) fn cip() -> Profile {
+    /// A generic profile of a bus: any maker's device (`run --dut` only).
+    pub(crate) fn generic(name: &str, bus: &'static str) -> Profile {
         Profile {
+            name: name.to_string(),
             product: None,
             inverters: 0,
-            binding: BindingKind::Enip,
+            bus: Some(bus),
         }
     }
 
-    /// Every built-in product profile: each product over PPO, and each EtherNet/IP product
-    /// over EtherNet/IP (`<product>@enip`), so every case runs over every binding it can.
+    /// The default run's profiles: each product over PPO, and each product over each bus it
+    /// speaks (`<product>@<bus>`), so every case runs over every binding it can.
     pub(crate) fn all() -> Vec<Profile> {
         let ppo = Product::ALL.into_iter().map(Profile::builtin);
-        let enip = Product::ALL.into_iter().filter_map(Profile::enip);
-        ppo.chain(enip).collect()
+        ppo.chain(Profile::of_buses().filter(|p| p.product.is_some()))
+            .collect()
     }
 
-    /// The NORD product, or why the generic profile has none.
+    fn of_buses() -> impl Iterator<Item = Profile> {
+        crate::bus::BUSES.iter().flat_map(|b| (b.profiles)())
+    }
+
+    /// The NORD product, or why a generic profile has none.
     pub(crate) fn nord(&self) -> Result<Product, String> {
         self.product.ok_or_else(|| {
-            "profile `cip` stands for any maker's EtherNet/IP adapter, not a NORD product".into()
+            format!(
+                "profile `{}` stands for any maker's device, not a NORD product",
+                self.name
+            )
         })
     }
 
-    /// Profile name (`sk550p`, `tu3-eip`, …, `tu3-eip@enip`, `cip`).
-    pub(crate) fn name(&self) -> &'static str {
-        match (self.binding, self.product) {
-            (_, None) => "cip",
-            (BindingKind::Ppo, Some(p)) => p.name(),
-            (BindingKind::Enip, Some(Product::Sk550p)) => "sk550p@enip",
-            (BindingKind::Enip, Some(Product::Tu3Eip)) => "tu3-eip@enip",
-            (BindingKind::Enip, Some(Product::Tu4Eip)) => "tu4-eip@enip",
-            (BindingKind::Enip, Some(Product::Cu4Eip)) => "cu4-eip@enip",
-            (BindingKind::Enip, Some(p)) => p.name(),
-        }
+    /// Profile name (`sk550p`, `tu3-eip@enip`, `sk550p@ecat`, `cip`).
+    pub(crate) fn name(&self) -> &str {
+        &self.name
     }
 
     /// Looks a built-in profile up by name; the error lists the valid names.
     pub(crate) fn by_name(name: &str) -> Result<Profile, String> {
-        let known = || Profile::all().into_iter().chain([Profile::cip()]);
+        let known = || {
+            Product::ALL
+                .into_iter()
+                .map(Profile::builtin)
+                .chain(Profile::of_buses())
+        };
         known().find(|p| p.name() == name).ok_or_else(|| {
-            let names: Vec<&str> = known().map(|p| p.name()).collect();
+            let names: Vec<String> = known().map(|p| p.name).collect();
             format!(
                 "unknown profile `{name}` (built-in profiles: {})",
                 names.join(", ")
             )
+        })
+    }
+
+    /// This profile's product over `bus`, if the product speaks it; a generic profile of
+    /// that bus stays as it is.
+    pub(crate) fn over(&self, bus: &'static str) -> Option<Profile> {
+        let found = Profile::of_buses().find(|p| {
+            p.bus == Some(bus)
+                && match self.product {
+                    Some(product) => p.product == Some(product),
+                    None => p.name == self.name,
+                }
+        })?;
+        Some(Profile {
+            inverters: if found.product.is_some() {
+                self.inverters
+            } else {
+                found.inverters
+            },
+            ..found
         })
     }
 }
@@ -171,7 +198,7 @@ mod tests {
 
     #[test]
     fn every_capability_parses_from_its_name() {
-        for c in Capability::ALL {
+        for c in Capability::all() {
             assert_eq!(Capability::from_name(c.name()), Some(c));
         }
         assert_eq!(Capability::from_name("power-on"), Some(Capability::PowerOn));
@@ -180,5 +207,6 @@ mod tests {
             Some(Capability::FactoryState)
         );
         assert_eq!(Capability::from_name("powered-on"), None);
+        assert_eq!(Capability::from_name("ecat"), Some(Capability::Bus("ecat")));
     }
 }

@@ -8,11 +8,11 @@
 use serde_json::{json, Value};
 use std::time::{Duration, Instant};
 
-use crate::binding::{Binding, StepError};
+use crate::binding::{Binding, Observation, OpenError, StepError};
 use crate::model::{Args, ComputeError, Ctx};
 use crate::outcome::{CaseResult, RunResult, StepResult, Verdict};
 use crate::profile::Profile;
-use crate::suite::{Action, Case, EnipStep, Loaded, Step};
+use crate::suite::{Action, Case, Loaded, Step};
 
 /// How to run.
 pub(crate) struct RunOptions {
@@ -32,7 +32,7 @@ pub(crate) trait DutFactory {
     /// What is tested, for reports.
     fn describe(&self) -> String;
     /// A DUT in its power-on state for the profile, behind the profile's binding.
-    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, String>;
+    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError>;
 }
 
 /// Runs the loaded suites.
@@ -83,10 +83,11 @@ fn not_applicable(case: &Case, profile: &Profile, dut: Option<&dyn Binding>) -> 
         if let Some(s) = case
             .steps
             .iter()
-            .find(|s| !matches!(s.action, Action::Enip(_)))
+            .find(|s| !matches!(s.action, Action::Bus(_)))
         {
             return Some(format!(
-                "profile `cip` (any maker's adapter) runs EtherNet/IP steps only; this case has `{}`",
+                "profile `{}` (any maker's device) runs its bus's own steps only; this case has `{}`",
+                profile.name(),
                 describe(&s.action)
             ));
         }
@@ -225,6 +226,7 @@ fn finish(r: &mut CaseResult, dut: &mut dyn Binding, opts: &RunOptions) {
         step: "cleanup: leave the DUT as the case found it".into(),
         verdict,
         observed: Value::Null,
+        refusal: None,
         message: message.clone(),
         exchanges,
     });
@@ -276,64 +278,7 @@ fn describe(action: &Action) -> String {
         Action::Wait(d) => format!("wait {d:?}"),
         Action::Inject { inverter, error } => format!("inject {inverter}: error {error}"),
         Action::Observe { what, inverter } => format!("observe {inverter}: {what}"),
-        Action::Enip(e) => format!("enip {}", describe_enip(e)),
-    }
-}
-
-fn describe_enip(e: &EnipStep) -> String {
-    let on = |client: u8| {
-        if client == 1 {
-            String::new()
-        } else {
-            format!(" (client {client})")
-        }
-    };
-    match e {
-        EnipStep::Raw {
-            bytes,
-            session,
-            client,
-        } => {
-            let s = if *session { ", session filled in" } else { "" };
-            format!("raw {}{s}{}", hex(bytes), on(*client))
-        }
-        EnipStep::Mr { bytes, client } => {
-            format!("message-router request {}{}", hex(bytes), on(*client))
-        }
-        EnipStep::Request {
-            service,
-            path,
-            data,
-            client,
-        } => format!(
-            "service {service:02X}h path {} data [{}]{}",
-            hex(path),
-            hex(data),
-            on(*client)
-        ),
-        EnipStep::ForwardOpen(f) => format!(
-            "{} {} -> {}, sizes {}/{}, RPI {} µs, transport {:02X}h, multiplier {}{}",
-            if f.large {
-                "Large_Forward_Open"
-            } else {
-                "Forward_Open"
-            },
-            f.o_t_point,
-            f.t_o_point,
-            f.o_t_size,
-            f.t_o_size,
-            f.rpi_us,
-            f.transport,
-            f.multiplier,
-            if f.run_idle {
-                ""
-            } else {
-                ", no run/idle header"
-            }
-        ),
-        EnipStep::StopIo { time } => format!("stop O→T data for {time:?}"),
-        EnipStep::Run(true) => "run/idle header: run".into(),
-        EnipStep::Run(false) => "run/idle header: idle".into(),
+        Action::Bus(step) => format!("{} {}", step.bus(), step.describe()),
     }
 }
 
@@ -369,14 +314,15 @@ fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding
                     step: line,
                     verdict: crate::outcome::Verdict::Error,
                     observed: Value::Null,
+                    refusal: None,
                     message: "a reference-model step needs a NORD product".into(),
                     exchanges: Vec::new(),
                 };
             };
             let ctx = Ctx { product };
             let out = match (func.run)(&ctx, &Args(args.clone())) {
-                Ok(v) => Ok(v),
-                Err(ComputeError::Refused(m)) => Ok(json!({ "error": m })),
+                Ok(v) => Ok(Observation::from(v)),
+                Err(ComputeError::Refused(m)) => Ok(json!({ "error": m }).into()),
                 Err(e @ ComputeError::BadArg { .. }) => Err(StepError::Suite(e.to_string())),
             };
             (out, Vec::new())
@@ -390,21 +336,24 @@ fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding
             Vec::new(),
         ),
     };
-    let (verdict, observed, message) = match outcome {
-        Err(e) => (e.verdict(), Value::Null, e.to_string()),
-        Ok(observed) => {
-            let judged = match &step.expect {
-                Some(m) => m.check(&observed).map_err(|e| e.to_string()),
-                None => implicit_expectation(&step.action, &observed),
+    let (verdict, observed, refusal, message) = match outcome {
+        Err(e) => (e.verdict(), Value::Null, None, e.to_string()),
+        Ok(Observation { fields, refusal }) => {
+            // A step that expects nothing expects the device to do it: a refusal fails it.
+            let judged = match (&step.expect, &refusal) {
+                (Some(m), _) => m.check(&fields).map_err(|e| e.to_string()),
+                (None, Some(r)) => Err(format!("the DUT refused the request: {r}")),
+                (None, None) => Ok(()),
             };
             match judged {
-                Ok(()) => (Verdict::Pass, observed, String::new()),
+                Ok(()) => (Verdict::Pass, fields, refusal, String::new()),
                 Err(m) if step.setup => (
                     Verdict::Inconclusive,
-                    observed,
+                    fields,
+                    refusal,
                     format!("setup step failed: {m}"),
                 ),
-                Err(m) => (Verdict::Fail, observed, m),
+                Err(m) => (Verdict::Fail, fields, refusal, m),
             }
         }
     };
@@ -412,36 +361,9 @@ fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding
         step: line,
         verdict,
         observed,
+        refusal,
         message,
         exchanges,
-    }
-}
-
-/// A parameter order without `expect:` must be answered positively (BU 0620 §2.5.6.3: response
-/// label 7 = order cannot be executed).
-fn implicit_expectation(action: &Action, observed: &Value) -> Result<(), String> {
-    match action {
-        Action::Read(_) | Action::Write(_)
-            if observed.get("ak").and_then(Value::as_i64) == Some(7) =>
-        {
-            Err(format!(
-                "the DUT refused the order: response label 7, error {}",
-                observed.get("error").cloned().unwrap_or(Value::Null)
-            ))
-        }
-        Action::Read(_) | Action::Write(_)
-            if observed
-                .get("cip_status")
-                .and_then(Value::as_i64)
-                .unwrap_or(0)
-                != 0 =>
-        {
-            Err(format!(
-                "the DUT refused the request: {}",
-                observed.get("refused").cloned().unwrap_or(Value::Null)
-            ))
-        }
-        _ => Ok(()),
     }
 }
 
@@ -456,7 +378,7 @@ mod tests {
     use super::*;
     use crate::binding::channel::Channel;
     use crate::binding::embedded::{ppo_dut, EmbeddedFactory};
-    use crate::binding::Dut;
+    use crate::binding::{CleanupError, Dut, DutError};
     use crate::profile::Capability;
     use crate::suite::load_text_for_tests;
     use proto::nord::{Inverter, Product};
@@ -502,10 +424,14 @@ mod tests {
                 }),
             }
         }
-        fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
+        fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), DutError> {
             self.inner.inject(inverter, error)
         }
-        fn observe(&mut self, what: &str, inverter: Inverter) -> Result<serde_json::Value, String> {
+        fn observe(
+            &mut self,
+            what: &str,
+            inverter: Inverter,
+        ) -> Result<serde_json::Value, DutError> {
             self.inner.observe(what, inverter)
         }
     }
@@ -516,12 +442,13 @@ mod tests {
         fn describe(&self) -> String {
             "faulty simulator".into()
         }
-        fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, String> {
+        fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
             let dut = Box::new(Faulty {
                 inner: ppo_dut(profile)?,
                 fault: self.0,
             });
-            Ok(Box::new(Channel::new(dut, profile.nord()?, retries)))
+            let product = profile.nord().map_err(OpenError::Profile)?;
+            Ok(Box::new(Channel::new(dut, product, retries)))
         }
     }
 
@@ -620,7 +547,7 @@ cases:
     struct Restoring {
         inner: Box<dyn Binding>,
         /// What the cleanup returns, and whether it exchanged anything.
-        outcome: Result<(), String>,
+        outcome: Result<(), CleanupError>,
         exchanged: bool,
         finished: bool,
     }
@@ -632,7 +559,7 @@ cases:
         fn capabilities(&self) -> &[Capability] {
             self.inner.capabilities()
         }
-        fn perform(&mut self, action: &Action) -> Result<Value, StepError> {
+        fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
             self.inner.perform(action)
         }
         fn take_exchanges(&mut self) -> Vec<crate::outcome::Exchange> {
@@ -647,19 +574,19 @@ cases:
             }
             x
         }
-        fn finish(&mut self) -> Result<(), String> {
+        fn finish(&mut self) -> Result<(), CleanupError> {
             self.finished = true;
             self.outcome.clone()
         }
     }
 
-    struct RestoringFactory(Result<(), String>, bool);
+    struct RestoringFactory(Result<(), CleanupError>, bool);
 
     impl DutFactory for RestoringFactory {
         fn describe(&self) -> String {
             "restoring simulator".into()
         }
-        fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, String> {
+        fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
             let inner = EmbeddedFactory::default().open(profile, retries)?;
             Ok(Box::new(Restoring {
                 inner,
@@ -670,7 +597,7 @@ cases:
         }
     }
 
-    fn run_restoring(outcome: Result<(), String>, exchanged: bool) -> RunResult {
+    fn run_restoring(outcome: Result<(), CleanupError>, exchanged: bool) -> RunResult {
         let loaded = load_text_for_tests(SUITE);
         let opts = sk550p_options();
         run(&loaded, &opts, &mut RestoringFactory(outcome, exchanged))
@@ -698,7 +625,10 @@ cases:
 
     #[test]
     fn a_failed_restore_makes_a_passing_case_an_error_naming_what_was_not_restored() {
-        let r = run_restoring(Err("P102 not set back to [C8 00]: 0Eh".into()), false);
+        let r = run_restoring(
+            Err(CleanupError("P102 not set back to [C8 00]: 0Eh".into())),
+            false,
+        );
         let c = &r.cases[0];
         assert_eq!(c.verdict, Verdict::Error);
         assert_eq!(

@@ -49,6 +49,9 @@ pub(crate) enum StepError {
     /// The DUT answered with something that is not the protocol at all.
     #[error("the DUT does not speak the protocol: {0}")]
     Garbage(String),
+    /// The binding cannot perform this step over its bus (a PKW telegram over EtherCAT).
+    #[error("{0}")]
+    NotApplicable(String),
 }
 
 impl StepError {
@@ -61,6 +64,7 @@ impl StepError {
             | StepError::Suite(_)
             | StepError::Link(_)
             | StepError::Garbage(_) => Verdict::Error,
+            StepError::NotApplicable(_) => Verdict::NotApplicable,
         }
     }
 }
@@ -91,7 +95,7 @@ impl super::Binding for Channel {
         self.dut.capabilities()
     }
 
-    fn perform(&mut self, action: &Action) -> Result<Value, StepError> {
+    fn perform(&mut self, action: &Action) -> Result<super::Observation, StepError> {
         Channel::perform(self, action)
     }
 
@@ -119,23 +123,23 @@ impl Channel {
     }
 
     /// Runs one DUT step.
-    pub(crate) fn perform(&mut self, action: &Action) -> Result<Value, StepError> {
-        match action {
-            Action::Compute { .. } => Err(StepError::Suite("compute is not a DUT step".into())),
+    pub(crate) fn perform(&mut self, action: &Action) -> Result<super::Observation, StepError> {
+        Ok(match action {
+            Action::Compute { .. } => {
+                return Err(StepError::Suite("compute is not a DUT step".into()))
+            }
             Action::Read(o) | Action::Write(o) => {
                 let order = self.order_for(o)?;
                 let unit = unit(o.target);
                 let resp = self.param_order(unit, order)?;
-                Ok(pkw_result(&resp))
+                pkw_result(&resp, json!({}))
             }
             Action::Pkw { inverter, bytes } => {
                 let order = PkwRepr::parse(bytes)
                     .map_err(|e| StepError::Suite(format!("pkw bytes: {e}")))?;
                 let resp = self.param_order(Unit::Inverter(*inverter), order)?;
-                let mut v = pkw_result(&resp);
-                v["bytes"] = json!(hex(&resp.emit_bytes()));
-                v["pwe"] = json!(resp.pwe);
-                Ok(v)
+                let extra = json!({ "bytes": hex(&resp.emit_bytes()), "pwe": resp.pwe });
+                pkw_result(&resp, extra)
             }
             Action::Process {
                 inverter,
@@ -150,26 +154,31 @@ impl Channel {
                     crate::suite::Run::Cycles(n) => *n,
                     crate::suite::Run::For(d) => cycles_for(*d, self.dut.cycle_time()),
                 };
-                self.run_process(*inverter, cycles)
+                self.run_process(*inverter, cycles)?.into()
             }
             Action::Wait(d) => {
                 let cycles = cycles_for(*d, self.dut.cycle_time());
-                self.run_process(Inverter::new(1).expect("FI 1 exists"), cycles)
+                self.run_process(Inverter::new(1).expect("FI 1 exists"), cycles)?
+                    .into()
             }
             Action::Inject { inverter, error } => {
                 self.dut
                     .inject(*inverter, error)
-                    .map_err(StepError::Refused)?;
-                Ok(json!({}))
+                    .map_err(|e| StepError::Refused(e.0))?;
+                json!({}).into()
             }
             Action::Observe { what, inverter } => self
                 .dut
                 .observe(what, *inverter)
-                .map_err(StepError::Refused),
-            Action::Enip(_) => Err(StepError::Suite(
-                "the PPO link carries no EtherNet/IP messages".into(),
-            )),
-        }
+                .map_err(|e| StepError::Refused(e.0))?
+                .into(),
+            Action::Bus(step) => {
+                return Err(StepError::NotApplicable(format!(
+                    "the PPO link carries no `{}:` steps",
+                    step.bus()
+                )))
+            }
+        })
     }
 
     /// Builds the order for a `read`/`write` step (BU 0620 §2.5.6.3: array elements need the
@@ -333,13 +342,24 @@ fn decode_answer(bytes: &[u8], sent_to: Unit, ppo: PpoType) -> Result<PpoRepr, S
 }
 
 /// A parameter response as step result fields (suites/README.md).
-fn pkw_result(r: &PkwRepr) -> Value {
-    let error = (r.ak == 7).then_some(r.pwe & 0xFFFF);
-    json!({
-        "ak": r.ak,
-        "pnu": r.pnu,
-        "ind": r.ind,
-        "value": r.pwe as i32,
-        "error": error,
-    })
+/// A PKW response as the fields suites match (plus `extra`), refused when its response label
+/// is 7 (BU 0620 §2.5.6.3: "order cannot be executed", with the error number in PWE).
+fn pkw_result(r: &PkwRepr, mut fields: Value) -> super::Observation {
+    let error = (r.ak == 7).then(|| r.error_number());
+    fields["ak"] = json!(r.ak);
+    fields["pnu"] = json!(r.pnu);
+    fields["ind"] = json!(r.ind);
+    fields["value"] = json!(r.pwe as i32);
+    fields["error"] = json!(error.map(|e| e.0));
+    match error {
+        None => fields.into(),
+        Some(e) => super::Observation::refused(
+            fields,
+            crate::outcome::Refusal {
+                kind: "parameter channel",
+                code: u32::from(e.0),
+                text: format!("response label 7, error {} ({})", e.0, e.meaning()),
+            },
+        ),
+    }
 }

@@ -8,16 +8,16 @@ use sim::link::{mem_pair, MemEnd};
 use std::time::Duration;
 
 use super::channel::Channel;
-use super::{Binding, Dut};
-use crate::profile::{BindingKind, Capability, Profile};
+use super::{Binding, Dut, DutError, OpenError};
+use crate::profile::{Capability, Profile};
 use crate::runner::DutFactory;
 use proto::nord::Inverter;
 
 /// Bus cycle of the embedded link: 4 ms, a common PROFINET send clock multiple.
 const CYCLE: Duration = Duration::from_millis(4);
 
-/// What the embedded PPO link offers: everything but EtherNet/IP messages (a fresh simulator
-/// per case is in its power-on and factory state, and keeps its link whatever its address).
+/// What the embedded PPO link offers: everything but a bus's own steps (a fresh simulator per
+/// case is in its power-on and factory state, and keeps its link whatever its address).
 const PPO_CAPABILITIES: [Capability; 8] = [
     Capability::ParameterAccess,
     Capability::ParameterChannel,
@@ -29,11 +29,12 @@ const PPO_CAPABILITIES: [Capability; 8] = [
     Capability::Readdressing,
 ];
 
-/// Opens a fresh simulator per case; EtherNet/IP traffic goes to the tap when there is one.
+/// Opens a fresh simulator per case, behind the profile's binding: the PPO link, or the bus's
+/// own binding; a bus's frames go to the tap when there is one.
 #[derive(Default)]
 pub(crate) struct EmbeddedFactory {
-    /// Where `--pcap` collects the run's EtherNet/IP traffic.
-    pub(crate) tap: Option<crate::pcap::SharedTap>,
+    /// What the buses' bindings may use.
+    pub(crate) context: crate::bus::Embedded,
 }
 
 impl DutFactory for EmbeddedFactory {
@@ -41,28 +42,32 @@ impl DutFactory for EmbeddedFactory {
         "embedded simulator".into()
     }
 
-    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, String> {
-        let product = profile.nord()?;
-        let config = DeviceConfig {
-            inverters: profile.inverters,
-            ..DeviceConfig::new(product)
-        };
-        Ok(match profile.binding {
-            BindingKind::Ppo => Box::new(Channel::new(ppo_dut(profile)?, product, retries)),
-            BindingKind::Enip => Box::new(super::enip::Scanner::embedded(
-                Device::new(config),
-                self.tap.clone(),
-            )),
-        })
+    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+        match profile.bus {
+            None => {
+                let product = profile.nord().map_err(OpenError::Profile)?;
+                Ok(Box::new(Channel::new(ppo_dut(profile)?, product, retries)))
+            }
+            Some(name) => {
+                let bus = crate::bus::by_name(name)
+                    .ok_or_else(|| OpenError::Profile(format!("no bus `{name}`")))?;
+                (bus.embedded)(profile, &self.context)
+            }
+        }
     }
 }
 
-/// The simulator for a profile behind the in-memory PPO link.
-pub(crate) fn ppo_dut(profile: &Profile) -> Result<Box<dyn Dut>, String> {
-    let config = DeviceConfig {
+/// The simulated device of a profile: its product with the profile's inverters.
+pub(crate) fn device_config(profile: &Profile) -> Result<DeviceConfig, OpenError> {
+    Ok(DeviceConfig {
         inverters: profile.inverters,
-        ..DeviceConfig::new(profile.nord()?)
-    };
+        ..DeviceConfig::new(profile.nord().map_err(OpenError::Profile)?)
+    })
+}
+
+/// The simulator for a profile behind the in-memory PPO link.
+pub(crate) fn ppo_dut(profile: &Profile) -> Result<Box<dyn Dut>, OpenError> {
+    let config = device_config(profile)?;
     Ok(Box::new(Embedded::new(Device::new(config))))
 }
 
@@ -116,13 +121,13 @@ impl Dut for Embedded {
         self.harness_end.recv()
     }
 
-    fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
-        self.device.inject_fault(inverter, error)
+    fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), DutError> {
+        Ok(self.device.inject_fault(inverter, error)?)
     }
 
-    fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, String> {
+    fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, DutError> {
         observe_device(&mut self.device, what, inverter, self.clock.now())?
-            .ok_or_else(|| format!("cannot observe `{what}` ({OBSERVABLE})"))
+            .ok_or_else(|| DutError(format!("cannot observe `{what}` ({OBSERVABLE})")))
     }
 }
 
@@ -154,11 +159,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_ppo_link_offers_every_capability_but_ethernetip() {
-        let want: Vec<Capability> = Capability::ALL
-            .into_iter()
-            .filter(|c| *c != Capability::Ethernetip)
-            .collect();
-        assert_eq!(PPO_CAPABILITIES.to_vec(), want);
+    fn the_ppo_link_offers_every_general_capability() {
+        assert_eq!(PPO_CAPABILITIES, Capability::GENERAL);
     }
 }

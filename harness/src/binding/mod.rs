@@ -1,22 +1,86 @@
 //! Bindings: how the harness reaches a DUT.
 //!
-//! A [`Dut`] moves link frames (real bytes) one bus cycle at a time; [`channel::Channel`] holds
-//! the protocol logic above it (parameter orders repeated until answered, process data), so the
-//! same logic drives the embedded simulator and any other DUT.
+//! A [`Binding`] performs the manual-level steps of a case over one protocol and answers with
+//! an [`Observation`]: the decoded answer as fields the suites match, and the device's refusal
+//! in its bus's own terms when it refused. Each bus's binding lives in its own folder
+//! (`crate::enip`, `crate::ecat`); this module holds what they share and the PPO link: a
+//! [`Dut`] moving link frames (real bytes) one bus cycle at a time, with
+//! [`channel::Channel`] holding the parameter-channel logic above it.
 
 pub(crate) mod channel;
 pub(crate) mod embedded;
-pub(crate) mod enip;
 
 use serde_json::Value;
 use std::time::Duration;
 
 pub(crate) use channel::StepError;
 
-use crate::outcome::Exchange;
+use crate::outcome::{Exchange, Refusal};
 use crate::profile::Capability;
 use crate::suite::Action;
 use proto::nord::Inverter;
+
+/// What a step observed.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Observation {
+    /// The decoded answer, as the fields suites match (`value`, `status`, `abort`, …).
+    pub(crate) fields: Value,
+    /// The device refused the request (AK 7 + error number, CIP general status, SDO abort
+    /// code, AL status code…): data about the device, not a broken link.
+    pub(crate) refusal: Option<Refusal>,
+}
+
+impl Observation {
+    /// A refusal, with the fields that show it.
+    pub(crate) fn refused(fields: Value, refusal: Refusal) -> Observation {
+        Observation {
+            fields,
+            refusal: Some(refusal),
+        }
+    }
+}
+
+impl From<Value> for Observation {
+    fn from(fields: Value) -> Observation {
+        Observation {
+            fields,
+            refusal: None,
+        }
+    }
+}
+
+/// Why a DUT could not be opened.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum OpenError {
+    /// The profile does not fit the binding (no such product, no such bus on it).
+    #[error("{0}")]
+    Profile(String),
+    /// The DUT cannot be reached (no such host or interface, refused connection, no answer).
+    #[error("cannot reach the DUT: {0}")]
+    Unreachable(String),
+    /// The DUT answered, but not as the bus requires (bring-up failed).
+    #[error("the DUT did not come up: {0}")]
+    BringUp(String),
+    /// The host does not allow it (raw sockets need root or CAP_NET_RAW).
+    #[error("not permitted here: {0}")]
+    NotPermitted(String),
+}
+
+/// What a cleanup could not put back, by name.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub(crate) struct CleanupError(pub(crate) String);
+
+/// Why the harness could not act on the DUT outside the protocol (`inject`, `observe`).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub(crate) struct DutError(pub(crate) String);
+
+impl From<String> for DutError {
+    fn from(s: String) -> DutError {
+        DutError(s)
+    }
+}
 
 /// The harness's end of a binding: performs the manual-level steps over one protocol.
 pub(crate) trait Binding {
@@ -24,8 +88,9 @@ pub(crate) trait Binding {
     fn describe(&self) -> String;
     /// What this binding lets the harness do.
     fn capabilities(&self) -> &[Capability];
-    /// Runs one DUT step, returning what was observed.
-    fn perform(&mut self, action: &Action) -> Result<Value, StepError>;
+    /// Runs one DUT step, returning what was observed. A manual-level step the bus cannot
+    /// perform is [`StepError::NotApplicable`] with the reason.
+    fn perform(&mut self, action: &Action) -> Result<Observation, StepError>;
     /// The exchanges since the last call, for the transcript.
     fn take_exchanges(&mut self) -> Vec<Exchange>;
     /// Leaves the DUT as the case found it, once the case's steps are over, whatever the
@@ -33,7 +98,7 @@ pub(crate) trait Binding {
     /// into the next. Its exchanges are taken with [`Binding::take_exchanges`] afterwards.
     /// The error names what could not be restored. A DUT opened afresh for every case (the
     /// embedded simulator) has nothing to do.
-    fn finish(&mut self) -> Result<(), String> {
+    fn finish(&mut self) -> Result<(), CleanupError> {
         Ok(())
     }
 }
@@ -49,7 +114,7 @@ pub(crate) trait Dut {
     /// One bus cycle: sends `frame`, returns the frame the DUT answered within the cycle, if any.
     fn cycle(&mut self, frame: &[u8]) -> Option<Vec<u8>>;
     /// Raises an inverter error (`fault-injection`).
-    fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), String>;
+    fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), DutError>;
     /// Shows internal state (`observe`).
-    fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, String>;
+    fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, DutError>;
 }

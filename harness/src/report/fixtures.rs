@@ -32,6 +32,7 @@ fn step(line: &str, verdict: Verdict, message: &str, exchanges: Vec<Exchange>) -
         step: line.into(),
         verdict,
         observed: json!({"ak": 1, "pwe": 250}),
+        refusal: None,
         message: message.into(),
         exchanges,
     }

@@ -4,6 +4,7 @@ use proto::nord::{ArrayElement, Inverter, ParamNumber, ParamSet, Product};
 use serde_json::{Map, Value};
 use std::time::Duration;
 
+use super::fields::Fields;
 use super::schema::{CaseDoc, StepDoc};
 use crate::model::{self, ComputeFn};
 use crate::notation::{int_of, Matcher};
@@ -123,39 +124,8 @@ pub(crate) enum Action {
     Inject { inverter: Inverter, error: String },
     /// Look at internal state.
     Observe { what: String, inverter: Inverter },
-    /// An EtherNet/IP message of the protocol suites.
-    Enip(EnipStep),
-}
-
-/// An `enip:` step. `client` picks the TCP connection: 1 is the scanner's own, 2.. are other
-/// clients of the same target (each with its own session), to show a target keeps serving
-/// others after one client misbehaved.
-#[derive(Debug, Clone)]
-pub(crate) enum EnipStep {
-    /// Encapsulation bytes as written; `session` puts the client's session handle in bytes
-    /// 4..8 (registering one first).
-    Raw {
-        bytes: Vec<u8>,
-        session: bool,
-        client: u8,
-    },
-    /// A message-router request as written (service, path size, path, data; may be malformed)
-    /// in a SendRRData of the client's session.
-    Mr { bytes: Vec<u8>, client: u8 },
-    /// An unconnected CIP request.
-    Request {
-        service: u8,
-        path: Vec<u8>,
-        data: Vec<u8>,
-        client: u8,
-    },
-    /// A Forward_Open with the given parameters; an accepted owner connection carries the
-    /// following process-data steps.
-    ForwardOpen(crate::binding::enip::ForwardOpenSpec),
-    /// The scanner stops sending O→T data for this long.
-    StopIo { time: Duration },
-    /// The run/idle header of the following O→T frames: run (`true`) or idle.
-    Run(bool),
+    /// A step in a bus's own terms, performed only by that bus's binding.
+    Bus(Box<dyn crate::bus::BusStep>),
 }
 
 /// How long a `process:` step runs.
@@ -175,7 +145,7 @@ impl Action {
             Action::Process { .. } | Action::Wait(_) => Some(Capability::ProcessData),
             Action::Inject { .. } => Some(Capability::FaultInjection),
             Action::Observe { .. } => Some(Capability::Observe),
-            Action::Enip(_) => Some(Capability::Ethernetip),
+            Action::Bus(step) => Some(Capability::Bus(step.bus())),
         }
     }
 }
@@ -195,84 +165,6 @@ pub(crate) fn parse_duration(s: &str) -> Result<Duration, String> {
             Ok(Duration::from_secs_f64(v * scale))
         }
         _ => Err(format!("`{s}` is not a duration between 0 and 1 h")),
-    }
-}
-
-/// Reads the fields of an action map, refusing unknown keys.
-struct Fields<'a> {
-    action: &'static str,
-    map: &'a Map<String, Value>,
-}
-
-impl<'a> Fields<'a> {
-    fn new(
-        action: &'static str,
-        map: &'a Map<String, Value>,
-        allowed: &[&str],
-    ) -> Result<Self, String> {
-        if let Some(k) = map.keys().find(|k| !allowed.contains(&k.as_str())) {
-            return Err(format!(
-                "`{action}` has no field `{k}` (fields: {})",
-                allowed.join(", ")
-            ));
-        }
-        Ok(Fields { action, map })
-    }
-
-    fn int(&self, key: &str) -> Result<Option<i64>, String> {
-        self.map
-            .get(key)
-            .map(|v| int_of(v).map_err(|e| format!("`{}.{key}`: {e}", self.action)))
-            .transpose()
-    }
-
-    fn req_int(&self, key: &str) -> Result<i64, String> {
-        self.int(key)?
-            .ok_or_else(|| format!("`{}` needs `{key}`", self.action))
-    }
-
-    fn ranged<T>(
-        &self,
-        key: &str,
-        f: fn(i64) -> Result<T, proto::nord::RangeError>,
-    ) -> Result<Option<T>, String> {
-        self.int(key)?
-            .map(|v| f(v).map_err(|e| format!("`{}.{key}`: {e}", self.action)))
-            .transpose()
-    }
-
-    fn inverter(&self) -> Result<Inverter, String> {
-        Ok(self
-            .ranged("inverter", Inverter::new)?
-            .unwrap_or(Inverter::new(1).expect("FI 1 exists")))
-    }
-
-    fn word(&self, key: &str) -> Result<u16, String> {
-        let v = self.req_int(key)?;
-        u16::try_from(v).map_err(|_| format!("`{}.{key}`: {v} is not a 16-bit word", self.action))
-    }
-
-    fn text(&self, key: &str) -> Result<Option<String>, String> {
-        match self.map.get(key) {
-            None => Ok(None),
-            Some(Value::String(s)) => Ok(Some(s.clone())),
-            Some(Value::Number(n)) => Ok(Some(n.to_string())),
-            Some(other) => Err(format!(
-                "`{}.{key}`: expected text, got {other}",
-                self.action
-            )),
-        }
-    }
-
-    fn bool(&self, key: &str) -> Result<Option<bool>, String> {
-        match self.map.get(key) {
-            None => Ok(None),
-            Some(Value::Bool(b)) => Ok(Some(*b)),
-            Some(other) => Err(format!(
-                "`{}.{key}`: expected true or false, got {other}",
-                self.action
-            )),
-        }
     }
 }
 
@@ -343,6 +235,9 @@ fn hex8(text: &str) -> Result<[u8; 8], String> {
     }
 }
 
+/// The manual-level actions a step may have (besides a bus's own step).
+const ACTIONS: &str = "compute, read, write, pkw, process, wait, inject, observe";
+
 fn action(step: StepDoc) -> Result<Action, String> {
     let mut found: Vec<&str> = Vec::new();
     for (name, present) in [
@@ -354,16 +249,29 @@ fn action(step: StepDoc) -> Result<Action, String> {
         ("wait", step.wait.is_some()),
         ("inject", step.inject.is_some()),
         ("observe", step.observe.is_some()),
-        ("enip", step.enip.is_some()),
     ] {
         if present {
             found.push(name);
         }
     }
+    for key in step.bus.keys() {
+        if crate::bus::by_name(key).is_none() {
+            return Err(format!(
+                "a step has no key `{key}` (actions: {ACTIONS}, or a bus: {})",
+                crate::bus::names()
+            ));
+        }
+        found.push(key);
+    }
     if found.len() != 1 {
         return Err(format!(
-            "a step needs exactly one action (compute, read, write, pkw, process, wait, inject, observe, enip); found {}",
-            if found.is_empty() { "none".to_string() } else { found.join(", ") }
+            "a step needs exactly one action ({ACTIONS}, or a bus: {}); found {}",
+            crate::bus::names(),
+            if found.is_empty() {
+                "none".to_string()
+            } else {
+                found.join(", ")
+            }
         ));
     }
     if step.args.is_some() && step.compute.is_none() {
@@ -456,8 +364,9 @@ fn action(step: StepDoc) -> Result<Action, String> {
             error: f.text("error")?.ok_or("`inject` needs `error`")?,
         });
     }
-    if let Some(m) = step.enip {
-        return Ok(Action::Enip(enip_step(&m)?));
+    if let Some((key, value)) = step.bus.into_iter().next() {
+        let bus = crate::bus::by_name(&key).expect("checked above");
+        return Ok(Action::Bus((bus.parse_step)(&value)?));
     }
     let m = step.observe.unwrap_or_default();
     let f = Fields::new("observe", &m, &["what", "inverter"])?;
@@ -465,116 +374,6 @@ fn action(step: StepDoc) -> Result<Action, String> {
         what: f.text("what")?.ok_or("`observe` needs `what`")?,
         inverter: f.inverter()?,
     })
-}
-
-/// Hex bytes separated by spaces (`"65 00 04 00"`); empty text is no bytes.
-/// Hex bytes in wire order: `"65 00 04 00"`, or grouped as `"6500 0400"`.
-fn hex_bytes(action: &str, text: &str) -> Result<Vec<u8>, String> {
-    let bad = || format!("`{action}`: `{text}` is not hex bytes like \"65 00 04 00\"");
-    let mut out = Vec::new();
-    for t in text.split_whitespace() {
-        if t.len() % 2 != 0 {
-            return Err(bad());
-        }
-        for i in (0..t.len()).step_by(2) {
-            let b = t.get(i..i + 2).ok_or_else(bad)?;
-            out.push(u8::from_str_radix(b, 16).map_err(|_| bad())?);
-        }
-    }
-    Ok(out)
-}
-
-fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
-    let client = |f: &Fields| -> Result<u8, String> {
-        match f.int("client")? {
-            None => Ok(1),
-            Some(v @ 1..=99) => Ok(v as u8),
-            Some(v) => Err(format!("`enip.client`: {v} is not 1..=99")),
-        }
-    };
-    if m.contains_key("raw") {
-        let f = Fields::new("enip", m, &["raw", "session", "client"])?;
-        return Ok(EnipStep::Raw {
-            bytes: hex_bytes("enip.raw", &f.text("raw")?.unwrap_or_default())?,
-            session: f.bool("session")?.unwrap_or(false),
-            client: client(&f)?,
-        });
-    }
-    if m.contains_key("mr") {
-        let f = Fields::new("enip", m, &["mr", "client"])?;
-        return Ok(EnipStep::Mr {
-            bytes: hex_bytes("enip.mr", &f.text("mr")?.unwrap_or_default())?,
-            client: client(&f)?,
-        });
-    }
-    if m.contains_key("service") {
-        let f = Fields::new("enip", m, &["service", "path", "data", "client"])?;
-        let service = u8::try_from(f.req_int("service")?)
-            .map_err(|_| "`enip.service` is not a byte".to_string())?;
-        return Ok(EnipStep::Request {
-            service,
-            path: hex_bytes("enip.path", &f.text("path")?.unwrap_or_default())?,
-            data: hex_bytes("enip.data", &f.text("data")?.unwrap_or_default())?,
-            client: client(&f)?,
-        });
-    }
-    if m.contains_key("forward_open") {
-        let f = Fields::new(
-            "enip",
-            m,
-            &[
-                "forward_open",
-                "o_t",
-                "t_o",
-                "o_t_size",
-                "t_o_size",
-                "rpi_us",
-                "transport",
-                "multiplier",
-                "large",
-                "run_idle",
-            ],
-        )?;
-        let d = crate::binding::enip::ForwardOpenSpec::default();
-        let small = |k: &str| -> Result<Option<u16>, String> {
-            f.int(k)?
-                .map(|v| u16::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not 0..=65535")))
-                .transpose()
-        };
-        let byte = |k: &str| -> Result<Option<u8>, String> {
-            f.int(k)?
-                .map(|v| u8::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not a byte")))
-                .transpose()
-        };
-        let rpi = f
-            .int("rpi_us")?
-            .map(|v| u32::try_from(v).map_err(|_| format!("`enip.rpi_us`: {v} is not 32-bit")))
-            .transpose()?;
-        return Ok(EnipStep::ForwardOpen(
-            crate::binding::enip::ForwardOpenSpec {
-                o_t_point: small("o_t")?.unwrap_or(d.o_t_point),
-                t_o_point: small("t_o")?.unwrap_or(d.t_o_point),
-                o_t_size: small("o_t_size")?.ok_or("`enip` needs `o_t_size`")?,
-                t_o_size: small("t_o_size")?.ok_or("`enip` needs `t_o_size`")?,
-                rpi_us: rpi.unwrap_or(d.rpi_us),
-                transport: byte("transport")?.unwrap_or(d.transport),
-                multiplier: byte("multiplier")?.unwrap_or(d.multiplier),
-                large: f.bool("large")?.unwrap_or(false),
-                run_idle: f.bool("run_idle")?.unwrap_or(d.run_idle),
-            },
-        ));
-    }
-    if m.contains_key("stop_io") {
-        let f = Fields::new("enip", m, &["stop_io"])?;
-        return Ok(EnipStep::StopIo {
-            time: parse_duration(&f.text("stop_io")?.unwrap_or_default())?,
-        });
-    }
-    if m.contains_key("run") {
-        let f = Fields::new("enip", m, &["run"])?;
-        return Ok(EnipStep::Run(f.bool("run")?.unwrap_or(true)));
-    }
-    Err("`enip` needs one of `raw`, `mr`, `service`, `forward_open`, `stop_io`, `run`".into())
 }
 
 /// Converts one step; the error text is placed by the loader.
@@ -645,7 +444,7 @@ pub(super) fn case_head(
         .iter()
         .map(|r| {
             Capability::from_name(r).ok_or_else(|| {
-                let known: Vec<&str> = Capability::ALL.iter().map(|c| c.name()).collect();
+                let known: Vec<&str> = Capability::all().iter().map(|c| c.name()).collect();
                 format!("unknown capability `{r}` (one of {})", known.join(", "))
             })
         })

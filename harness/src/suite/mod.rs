@@ -1,10 +1,11 @@
 //! Suites: YAML files of cases, checked at load and turned into validated [`Case`]s.
 
 mod case;
+pub(crate) mod fields;
 mod load;
 mod schema;
 
-pub(crate) use case::{Action, Case, EnipStep, OrderSpec, Run, Step, Target};
+pub(crate) use case::{parse_duration, Action, Case, OrderSpec, Run, Step, Target};
 pub(crate) use load::{load_dir, Loaded};
 
 /// Loads suite text for tests in other modules.

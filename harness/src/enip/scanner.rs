@@ -9,9 +9,6 @@
 //!   (SK 550P 100/101, TU3-EIP 102/103, TU4/CU4-EIP 110/111), one O→T frame per RPI.
 //! - raw encapsulation messages and Forward_Open variants for the EtherNet/IP suites.
 
-mod cleanup;
-mod link;
-
 use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4};
 use std::time::Duration;
 
@@ -29,60 +26,62 @@ use serde_json::{json, Value};
 use sim::device::Device;
 use sim::enip::Adapter;
 
-pub(crate) use link::{EnipLink, Network};
-
-use super::channel::compact;
-use super::embedded::{observe_device, OBSERVABLE};
-use super::{Binding, StepError};
-use crate::outcome::Exchange;
+use super::cleanup;
+use super::link::{self, EnipLink, Network};
+use super::step::EnipStep;
+use crate::binding::channel::compact;
+use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
+use crate::outcome::{Exchange, Refusal};
 use crate::profile::Capability;
 use crate::runner::{cycles_for, hex};
-use crate::suite::{Action, EnipStep, OrderSpec, Target};
+use crate::suite::{Action, OrderSpec, Target};
 
 /// RPI of the harness's I/O connection.
-pub(crate) const RPI: Duration = Duration::from_millis(4);
+pub(super) const RPI: Duration = Duration::from_millis(4);
 /// The harness's originator vendor id and serial number in Forward_Open.
-const VENDOR: u16 = 0x4E48;
-const ORIGINATOR_SERIAL: u32 = 0x4E48_5331;
+pub(super) const VENDOR: u16 = 0x4E48;
+pub(super) const ORIGINATOR_SERIAL: u32 = 0x4E48_5331;
 /// The embedded adapter's address.
-const EMBEDDED_ADDR: SocketAddrV4 = SocketAddrV4::new(Ipv4Addr::new(192, 168, 1, 100), 44818);
+pub(super) const EMBEDDED_ADDR: SocketAddrV4 =
+    SocketAddrV4::new(Ipv4Addr::new(192, 168, 1, 100), 44818);
 
 static SERIAL: std::sync::atomic::AtomicU16 = std::sync::atomic::AtomicU16::new(1);
 
 /// An open I/O connection.
-struct IoConn {
+pub(super) struct IoConn {
     /// Its key and connection path, for its Forward_Close.
-    opened: cleanup::Opened,
-    o_t_id: u32,
-    t_o_id: u32,
+    pub(super) opened: cleanup::Opened,
+    pub(super) o_t_id: u32,
+    pub(super) t_o_id: u32,
     /// The assemblies behind the connection points, if the product has them.
-    o_t: Option<&'static Assembly>,
-    t_o: Option<&'static Assembly>,
+    pub(super) o_t: Option<&'static Assembly>,
+    pub(super) t_o: Option<&'static Assembly>,
     /// O→T application data bytes (a connection may be shorter than its assembly).
-    o_t_len: usize,
-    run_idle: bool,
-    sequence: u32,
-    count: u16,
+    pub(super) o_t_len: usize,
+    pub(super) run_idle: bool,
+    pub(super) sequence: u32,
+    pub(super) count: u16,
 }
 
 /// The scanner.
 pub(crate) struct Scanner {
-    link: Box<dyn EnipLink>,
+    pub(super) link: Box<dyn EnipLink>,
     /// The NORD product; `None` for another maker's adapter (profile `cip`).
-    product: Option<Product>,
-    caps: Vec<Capability>,
+    pub(super) product: Option<Product>,
+    pub(super) caps: Vec<Capability>,
     /// Registered sessions by client (1 = the scanner's own connection).
-    sessions: std::collections::BTreeMap<u8, u32>,
-    context: u64,
-    serial: u16,
-    io: Option<IoConn>,
+    pub(super) sessions: std::collections::BTreeMap<u8, u32>,
+    pub(super) context: u64,
+    pub(super) serial: u16,
+    pub(super) io: Option<IoConn>,
     /// Run (`true`) or idle in the run/idle header of O→T frames.
-    run: bool,
-    process: [(u16, Vec<u16>); 9],
-    exchanges: Vec<Exchange>,
+    pub(super) run: bool,
+    pub(super) process: [(u16, Vec<u16>); 9],
+    pub(super) exchanges: Vec<Exchange>,
     /// What the case changed on a network target, to put back when it ends; `None` for the
     /// embedded adapter, made afresh for every case.
-    ledger: Option<cleanup::Ledger>,
+    pub(super) ledger: Option<cleanup::Ledger>,
 }
 
 impl Scanner {
@@ -93,9 +92,13 @@ impl Scanner {
         Scanner::new(
             Box::new(link::Embedded::new(adapter, EMBEDDED_ADDR, tap)),
             Some(product),
-            Capability::ALL
+            Capability::all()
                 .into_iter()
-                .filter(|c| *c != Capability::ParameterChannel)
+                .filter(|c| match c {
+                    Capability::ParameterChannel => false,
+                    Capability::Bus(b) => *b == "enip",
+                    _ => true,
+                })
                 .collect(),
         )
     }
@@ -113,16 +116,20 @@ impl Scanner {
             Some(_) => vec![
                 Capability::ParameterAccess,
                 Capability::ProcessData,
-                Capability::Ethernetip,
+                Capability::Bus("enip"),
             ],
-            None => vec![Capability::Ethernetip],
+            None => vec![Capability::Bus("enip")],
         };
         let mut scanner = Scanner::new(Box::new(link), product, caps);
         scanner.ledger = Some(cleanup::Ledger::default());
         Ok(scanner)
     }
 
-    fn new(link: Box<dyn EnipLink>, product: Option<Product>, caps: Vec<Capability>) -> Scanner {
+    pub(super) fn new(
+        link: Box<dyn EnipLink>,
+        product: Option<Product>,
+        caps: Vec<Capability>,
+    ) -> Scanner {
         Scanner {
             link,
             product,
@@ -139,7 +146,7 @@ impl Scanner {
     }
 
     /// One encapsulation message of `client` and its reply, recorded.
-    fn send(
+    pub(super) fn send(
         &mut self,
         client: u8,
         msg: EncapRepr,
@@ -157,7 +164,7 @@ impl Scanner {
         }
     }
 
-    fn send_bytes(
+    pub(super) fn send_bytes(
         &mut self,
         client: u8,
         bytes: &[u8],
@@ -196,13 +203,13 @@ impl Scanner {
         result
     }
 
-    fn context(&mut self) -> [u8; 8] {
+    pub(super) fn context(&mut self) -> [u8; 8] {
         self.context += 1;
         self.context.to_le_bytes()
     }
 
     /// The session of `client`, registered on first use.
-    fn session(&mut self, client: u8) -> Result<u32, StepError> {
+    pub(super) fn session(&mut self, client: u8) -> Result<u32, StepError> {
         if let Some(s) = self.sessions.get(&client) {
             return Ok(*s);
         }
@@ -227,7 +234,7 @@ impl Scanner {
 
     /// An unconnected explicit request (SendRRData) of the scanner and its message-router
     /// reply.
-    fn explicit(&mut self, req: &MrRequest) -> Result<MrResponse, StepError> {
+    pub(super) fn explicit(&mut self, req: &MrRequest) -> Result<MrResponse, StepError> {
         let what = format!("{} {}", Service(req.service), req.path);
         let resp = self.unconnected(1, req.emit(), what)?;
         if resp.service != req.service {
@@ -240,7 +247,7 @@ impl Scanner {
     }
 
     /// A message-router request as bytes, in a SendRRData of `client`'s session.
-    fn unconnected(
+    pub(super) fn unconnected(
         &mut self,
         client: u8,
         request: Vec<u8>,
@@ -283,13 +290,13 @@ impl Scanner {
     }
 
     /// The NORD product, for steps about its parameters and assemblies.
-    fn product(&self) -> Result<Product, StepError> {
+    pub(super) fn product(&self) -> Result<Product, StepError> {
         self.product
             .ok_or_else(|| StepError::Suite("a NORD step against profile `cip`".into()))
     }
 
     /// Class, instance and attribute of a parameter, and its catalogue entry.
-    fn param_path(
+    pub(super) fn param_path(
         &self,
         o: &OrderSpec,
     ) -> Result<(EPath, Option<&'static params::ParamDef>), StepError> {
@@ -313,7 +320,7 @@ impl Scanner {
         Ok((EPath::attribute(class, instance, n.get()), def))
     }
 
-    fn read(&mut self, o: &OrderSpec) -> Result<Value, StepError> {
+    pub(super) fn read(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
         let (path, def) = self.param_path(o)?;
         let resp = self.explicit(&MrRequest {
             service: Service::GET_ATTRIBUTE_SINGLE.0,
@@ -335,10 +342,10 @@ impl Scanner {
                 )))
             }
         };
-        Ok(json!({ "value": value, "cip_status": 0, "bytes": hex(&resp.data) }))
+        Ok(json!({ "value": value, "cip_status": 0, "bytes": hex(&resp.data) }).into())
     }
 
-    fn write(&mut self, o: &OrderSpec) -> Result<Value, StepError> {
+    pub(super) fn write(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
         let (path, def) = self.param_path(o)?;
         let value = o.value.unwrap_or(0);
         let v = i32::try_from(value)
@@ -358,11 +365,11 @@ impl Scanner {
         if resp.general != 0 {
             return Ok(refused(&resp));
         }
-        Ok(json!({ "cip_status": 0 }))
+        Ok(json!({ "cip_status": 0 }).into())
     }
 
     /// The Forward_Open of the harness's own I/O connection.
-    fn own_forward_open(&mut self) -> Result<(), StepError> {
+    pub(super) fn own_forward_open(&mut self) -> Result<(), StepError> {
         let product = self.product()?;
         let out = eip::assemblies(product)
             .iter()
@@ -383,6 +390,7 @@ impl Scanner {
                 dword: None,
             };
             self.read(&o)?
+                .fields
                 .get("value")
                 .and_then(Value::as_i64)
                 .unwrap_or(0) as i32
@@ -408,7 +416,7 @@ impl Scanner {
         }
     }
 
-    fn forward_open(
+    pub(super) fn forward_open(
         &mut self,
         s: &ForwardOpenSpec,
     ) -> Result<(MrResponse, Option<ForwardOpenReply>), StepError> {
@@ -474,7 +482,7 @@ impl Scanner {
     }
 
     /// One I/O cycle: O→T with every inverter's process data, T→O back.
-    fn io_cycle(&mut self) -> Result<Option<Vec<u8>>, StepError> {
+    pub(super) fn io_cycle(&mut self) -> Result<Option<Vec<u8>>, StepError> {
         if self.io.is_none() {
             self.own_forward_open()?;
         }
@@ -532,14 +540,18 @@ impl Scanner {
         Ok(last.map(|f| f.data.clone()))
     }
 
-    fn run_process(&mut self, inverter: Inverter, cycles: u32) -> Result<Value, StepError> {
+    pub(super) fn run_process(
+        &mut self,
+        inverter: Inverter,
+        cycles: u32,
+    ) -> Result<Value, StepError> {
         self.run_process_until(inverter, cycles, None)
     }
 
     /// Process data for `d`: on the embedded link's virtual clock as many RPIs; on a network
     /// target `d` of real time, however long a cycle there lasts (a drive runs on its own
     /// clock: a ramp or a watchdog sees the real time, not the cycles sent).
-    fn run_for(&mut self, inverter: Inverter, d: Duration) -> Result<Value, StepError> {
+    pub(super) fn run_for(&mut self, inverter: Inverter, d: Duration) -> Result<Value, StepError> {
         let deadline = self
             .link
             .adapter()
@@ -550,7 +562,7 @@ impl Scanner {
 
     /// `cycles` I/O cycles, or with a `deadline` as many as it takes to pass it (at least
     /// one); the status word and actual values of `inverter` last received.
-    fn run_process_until(
+    pub(super) fn run_process_until(
         &mut self,
         inverter: Inverter,
         cycles: u32,
@@ -593,7 +605,7 @@ impl Scanner {
     }
 
     /// A raw or structured EtherNet/IP step of the protocol suites.
-    fn enip_step(&mut self, step: &EnipStep) -> Result<Value, StepError> {
+    pub(super) fn enip_step(&mut self, step: &EnipStep) -> Result<Value, StepError> {
         match step {
             EnipStep::Raw {
                 bytes,
@@ -695,10 +707,14 @@ impl crate::runner::DutFactory for NetworkFactory {
         &mut self,
         profile: &crate::profile::Profile,
         _retries: u32,
-    ) -> Result<Box<dyn Binding>, String> {
-        let mut scanner = Scanner::network(self.target, self.local, profile.product, self.timeout)?;
+    ) -> Result<Box<dyn Binding>, OpenError> {
+        let mut scanner = Scanner::network(self.target, self.local, profile.product, self.timeout)
+            .map_err(OpenError::Unreachable)?;
         if let Some(tap) = &self.tap {
-            scanner.link.record(tap.clone(), self.clock.clone())?;
+            scanner
+                .link
+                .record(tap.clone(), self.clock.clone())
+                .map_err(OpenError::Unreachable)?;
         }
         Ok(Box::new(scanner))
     }
@@ -743,13 +759,22 @@ impl Default for ForwardOpenSpec {
     }
 }
 
-fn refused(resp: &MrResponse) -> Value {
-    json!({
-        "value": null,
-        "cip_status": resp.general,
-        "extended": resp.extended,
-        "refused": GeneralStatus(resp.general).to_string(),
-    })
+/// A parameter request the target refused with a CIP general status.
+fn refused(resp: &MrResponse) -> Observation {
+    let text = GeneralStatus(resp.general).to_string();
+    Observation::refused(
+        json!({
+            "value": null,
+            "cip_status": resp.general,
+            "extended": resp.extended,
+            "refused": text,
+        }),
+        Refusal {
+            kind: "CIP general status",
+            code: u32::from(resp.general),
+            text,
+        },
+    )
 }
 
 fn mr_fields(resp: &MrResponse) -> Value {
@@ -832,12 +857,12 @@ impl Binding for Scanner {
         &self.caps
     }
 
-    fn perform(&mut self, action: &Action) -> Result<Value, StepError> {
-        match action {
+    fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+        let fields = match action {
             Action::Compute { .. } => Err(StepError::Suite("compute is not a DUT step".into())),
-            Action::Read(o) => self.read(o),
-            Action::Write(o) => self.write(o),
-            Action::Pkw { .. } => Err(StepError::Suite(
+            Action::Read(o) => return self.read(o),
+            Action::Write(o) => return self.write(o),
+            Action::Pkw { .. } => Err(StepError::NotApplicable(
                 "EtherNet/IP has no PKW parameter channel".into(),
             )),
             Action::Process {
@@ -872,16 +897,20 @@ impl Binding for Scanner {
                 })?;
                 observe(adapter, what, *inverter, now).map_err(StepError::Refused)
             }
-            Action::Enip(step) => self.enip_step(step),
-        }
+            Action::Bus(step) => {
+                let step = crate::bus::own_step::<EnipStep>(step.as_ref(), "EtherNet/IP")?;
+                self.enip_step(step)
+            }
+        };
+        fields.map(Observation::from)
     }
 
     fn take_exchanges(&mut self) -> Vec<Exchange> {
         std::mem::take(&mut self.exchanges)
     }
 
-    fn finish(&mut self) -> Result<(), String> {
-        self.restore()
+    fn finish(&mut self) -> Result<(), CleanupError> {
+        self.restore().map_err(CleanupError)
     }
 }
 

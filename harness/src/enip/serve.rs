@@ -102,6 +102,52 @@ pub(crate) fn start_enip(listen: SocketAddr, config: DeviceConfig) -> Result<Ser
     })
 }
 
+/// `harness serve enip` arguments.
+#[derive(clap::Parser, Debug)]
+#[command(
+    name = "harness serve enip",
+    about = "Serve the simulator as an EtherNet/IP adapter"
+)]
+struct ServeArgs {
+    /// Listen address, HOST[:PORT] (UDP 2222 on the same host carries I/O).
+    #[arg(long, default_value = "127.0.0.2:44818")]
+    listen: String,
+    /// Product profile: sk550p, tu3-eip, tu4-eip, cu4-eip.
+    #[arg(long, default_value = "tu3-eip")]
+    profile: String,
+    /// Inverters behind the interface (default: the product's maximum).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
+    inverters: Option<u8>,
+    /// Stop after this many seconds (default: serve until killed).
+    #[arg(long)]
+    seconds: Option<u64>,
+}
+
+/// `harness serve enip ARGS…`; returns the exit code.
+pub(super) fn command(args: &[String]) -> Result<i32, String> {
+    let a = match crate::cli::parse_args::<ServeArgs>("harness serve enip", args) {
+        Ok(a) => a,
+        Err(code) => return Ok(code),
+    };
+    let product = crate::profile::Profile::by_name(&a.profile)?.nord()?;
+    if proto::nord::eip::identity(product).is_none() {
+        return Err(format!("{} has no EtherNet/IP interface", product.name()));
+    }
+    let config = DeviceConfig {
+        inverters: a
+            .inverters
+            .unwrap_or(product.max_inverters())
+            .min(product.max_inverters()),
+        ..DeviceConfig::new(product)
+    };
+    serve_enip(
+        parse_addr(&a.listen)?,
+        config,
+        a.seconds.map(Duration::from_secs),
+    )?;
+    Ok(crate::cli::EXIT_PASS)
+}
+
 /// Serves until `duration` has passed (forever when `None`).
 pub(crate) fn serve_enip(
     listen: SocketAddr,

@@ -48,7 +48,7 @@ use proto::nord::status::StatusWord;
 use proto::nord::{ArrayElement, Family, Inverter, ParamNumber};
 use serde_json::Value;
 
-use super::{Scanner, RPI};
+use super::scanner::{Scanner, RPI};
 use crate::binding::StepError;
 use crate::outcome::Exchange;
 use crate::runner::hex;
@@ -651,7 +651,7 @@ impl Scanner {
         let deadline = Instant::now() + QUIET_TIME;
         let outcome = loop {
             let v = match self.read(&spec) {
-                Ok(v) => v,
+                Ok(v) => v.fields,
                 Err(e) => break Err(Problem::step(format!("reading {}", spec.describe()), e)),
             };
             match v.get("value").and_then(Value::as_i64) {
@@ -708,7 +708,7 @@ impl Scanner {
 #[cfg(test)]
 mod tests {
     use super::super::link::{Embedded, EnipLink};
-    use super::super::{EMBEDDED_ADDR, ORIGINATOR_SERIAL, VENDOR};
+    use super::super::scanner::{EMBEDDED_ADDR, ORIGINATOR_SERIAL, VENDOR};
     use super::*;
     use proto::enip::cm::{NetParams, Transport};
     use proto::enip::cpf::Item;
@@ -1070,12 +1070,12 @@ mod tests {
     #[test]
     fn a_write_whose_reply_was_lost_is_set_back() {
         let mut r = Rig::new(&[Service::SET_ATTRIBUTE_SINGLE]);
-        let before = r.scanner.read(&p102(None)).unwrap()["value"].clone();
+        let before = r.scanner.read(&p102(None)).unwrap().fields["value"].clone();
         assert_ne!(before, json!(9999));
         let e = r.scanner.write(&p102(Some(9999))).unwrap_err();
         assert!(matches!(e, StepError::Link(_)), "{e}");
         assert_eq!(
-            r.scanner.read(&p102(None)).unwrap()["value"],
+            r.scanner.read(&p102(None)).unwrap().fields["value"],
             json!(9999),
             "the adapter took the write"
         );

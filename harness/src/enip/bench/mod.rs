@@ -38,7 +38,7 @@ mod io;
 use client::Client;
 use io::io_jitter;
 
-use crate::binding::enip::Scanner;
+use super::Scanner;
 use crate::binding::Binding;
 use crate::suite::{Action, OrderSpec, Target};
 
@@ -113,7 +113,7 @@ impl Settings {
 /// Serves the simulator and prints every figure. An error means the bench could not run at
 /// all (the listen address is taken, say); a figure that fails prints why and the rest go on.
 pub fn run_enip(s: &Settings) -> Result<(), String> {
-    let served = crate::serve::start_enip(s.listen, DeviceConfig::new(PRODUCT))?;
+    let served = super::serve::start_enip(s.listen, DeviceConfig::new(PRODUCT))?;
     println!(
         "EtherNet/IP bench: simulated {} served on {} (I/O on {}), loopback",
         PRODUCT.name(),
@@ -274,7 +274,7 @@ fn scanner_round_trips(s: &Settings, clients: usize, per_client: u32) -> Result<
         dword: None,
     });
     let one = |scanner: &mut Scanner| -> Result<(), String> {
-        let v = scanner.perform(&read).map_err(|e| format!("{e:?}"))?;
+        let v = scanner.perform(&read).map_err(|e| format!("{e:?}"))?.fields;
         // The transcript of the step, as the runner takes it after each step.
         scanner.take_exchanges();
         match v.get("cip_status").and_then(serde_json::Value::as_u64) {

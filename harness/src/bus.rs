@@ -1,0 +1,195 @@
+//! The buses the harness speaks, one entry per `harness/src/<bus>/` folder.
+//!
+//! This registry is the only shared place that names a bus. The runner, the suite loader and
+//! the reports reach a bus through its entry: its profiles (`sk550p@ecat`), the suite steps
+//! written under its key (`ecat:`), the binding that opens the embedded simulator or a DUT
+//! given by URL (`--dut ecat://IFACE`), its `serve` command and its device-description writers.
+//! Adding a bus adds a folder and a line to [`BUSES`].
+
+use serde_json::Value;
+use std::any::Any;
+use std::fmt;
+use std::net::IpAddr;
+use std::time::Duration;
+
+use crate::binding::{Binding, OpenError};
+use crate::pcap::SharedTap;
+use crate::profile::Profile;
+use crate::runner::DutFactory;
+
+impl fmt::Debug for Bus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Bus({})", self.name)
+    }
+}
+
+impl fmt::Debug for Description {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Description({})", self.format)
+    }
+}
+
+/// Every bus, in report order.
+pub(crate) const BUSES: &[&Bus] = &[&crate::enip::BUS, &crate::ecat::BUS];
+
+/// A bus: what the shared code may ask of it.
+pub(crate) struct Bus {
+    /// Its name in profile names (`sk550p@enip`), suite step keys (`enip:`), URL schemes
+    /// (`enip://`) and the `serve` command.
+    pub(crate) name: &'static str,
+    /// As people write it (`EtherNet/IP`).
+    pub(crate) title: &'static str,
+    /// Its built-in profiles: the NORD products speaking it, and generic ones (any maker's
+    /// device, no product) that only run against a DUT given with `--dut`.
+    pub(crate) profiles: fn() -> Vec<Profile>,
+    /// Parses a suite step written under the bus's key; the error says what is wrong.
+    pub(crate) parse_step: fn(&Value) -> Result<Box<dyn BusStep>, String>,
+    /// Opens the embedded simulator for one case, behind the bus's binding.
+    pub(crate) embedded: fn(&Profile, &Embedded) -> Result<Box<dyn Binding>, OpenError>,
+    /// Reaches a DUT given as `<name>://<target>`.
+    pub(crate) network: fn(&Network) -> Result<Box<dyn DutFactory>, OpenError>,
+    /// `harness serve <name> ARGS…`: serves the simulator as a device on the network; the
+    /// arguments are the bus's own. Returns the process exit code.
+    pub(crate) serve: fn(&[String]) -> Result<i32, String>,
+    /// Device descriptions it writes: `harness describe <format>`.
+    pub(crate) descriptions: &'static [Description],
+}
+
+/// A device-description file a bus writes.
+pub(crate) struct Description {
+    /// Format name on the command line (`eds`, `esi`).
+    pub(crate) format: &'static str,
+    /// Writes it for a product profile of the bus with `inverters` inverters.
+    pub(crate) write: fn(&Profile, u8) -> Result<String, String>,
+}
+
+/// What opening the embedded simulator may use.
+#[derive(Default)]
+pub(crate) struct Embedded {
+    /// Where `--pcap` collects the run's frames.
+    pub(crate) tap: Option<SharedTap>,
+}
+
+/// A DUT on the network, as the command line gives it.
+pub(crate) struct Network {
+    /// What follows `<name>://`: a host, an interface name…
+    pub(crate) target: String,
+    /// The harness's own address, where a bus sends from (`--local`).
+    pub(crate) local: Option<IpAddr>,
+    /// How long one request may take.
+    pub(crate) timeout: Duration,
+    /// Where `--pcap` collects the run's frames.
+    pub(crate) tap: Option<SharedTap>,
+}
+
+/// A step in a bus's own terms (an encapsulation message, a datagram, an SDO), carried by the
+/// suite model as [`crate::suite::Action::Bus`]; only the bus's binding looks inside.
+pub(crate) trait BusStep: fmt::Debug + Send + Sync {
+    /// The bus it belongs to.
+    fn bus(&self) -> &'static str;
+    /// One line for reports.
+    fn describe(&self) -> String;
+    /// Lets the bus's own binding recover its step type.
+    fn as_any(&self) -> &dyn Any;
+}
+
+/// The bus of that name.
+pub(crate) fn by_name(name: &str) -> Option<&'static Bus> {
+    BUSES.iter().copied().find(|b| b.name == name)
+}
+
+/// The bus names, for messages.
+pub(crate) fn names() -> String {
+    let v: Vec<&str> = BUSES.iter().map(|b| b.name).collect();
+    v.join(", ")
+}
+
+/// The bus and target of a `--dut` URL (`ecat://veth0`).
+pub(crate) fn by_url(url: &str) -> Result<(&'static Bus, &str), String> {
+    let schemes = || {
+        let v: Vec<String> = BUSES.iter().map(|b| format!("{}://", b.name)).collect();
+        v.join(", ")
+    };
+    let (scheme, target) = url
+        .split_once("://")
+        .ok_or_else(|| format!("`--dut {url}`: give a URL ({})", schemes()))?;
+    let bus = by_name(scheme).ok_or_else(|| {
+        format!(
+            "`--dut {url}`: unknown scheme `{scheme}://` ({})",
+            schemes()
+        )
+    })?;
+    if target.is_empty() {
+        return Err(format!("`--dut {url}`: nothing after `{scheme}://`"));
+    }
+    Ok((bus, target))
+}
+
+/// The description writer for `format`, with its bus.
+pub(crate) fn description(format: &str) -> Result<(&'static Bus, &'static Description), String> {
+    BUSES
+        .iter()
+        .flat_map(|b| b.descriptions.iter().map(move |d| (*b, d)))
+        .find(|(_, d)| d.format == format)
+        .ok_or_else(|| {
+            let known: Vec<&str> = BUSES
+                .iter()
+                .flat_map(|b| b.descriptions.iter().map(|d| d.format))
+                .collect();
+            format!("cannot describe `{format}` (known: {})", known.join(", "))
+        })
+}
+
+/// Downcasts a bus step to the bus's own step type; the error is a suite error naming the
+/// bus, for a step handed to the wrong binding.
+pub(crate) fn own_step<'a, T: 'static>(
+    step: &'a dyn BusStep,
+    binding: &str,
+) -> Result<&'a T, crate::binding::StepError> {
+    step.as_any().downcast_ref::<T>().ok_or_else(|| {
+        crate::binding::StepError::NotApplicable(format!(
+            "a `{}:` step cannot run over {binding}",
+            step.bus()
+        ))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_urls_resolve_through_the_registry() {
+        assert_eq!(by_name("enip").map(|b| b.title), Some("EtherNet/IP"));
+        assert_eq!(by_name("ecat").map(|b| b.title), Some("EtherCAT"));
+        let (bus, target) = by_url("ecat://veth0").unwrap();
+        assert_eq!((bus.name, target), ("ecat", "veth0"));
+        assert!(by_url("ecat://").unwrap_err().contains("nothing after"));
+        let e = by_url("can://x").unwrap_err();
+        assert!(e.contains("unknown scheme `can://`"), "{e}");
+        assert!(e.contains("enip://, ecat://"), "{e}");
+        assert!(by_url("veth0").unwrap_err().contains("give a URL"));
+    }
+
+    #[test]
+    fn every_profile_of_a_bus_names_the_bus() {
+        for bus in BUSES {
+            for p in (bus.profiles)() {
+                assert_eq!(p.bus, Some(bus.name), "{}", p.name());
+                if p.product.is_some() {
+                    assert!(
+                        p.name().ends_with(&format!("@{}", bus.name)),
+                        "{}",
+                        p.name()
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn description_formats_are_found_by_name() {
+        assert_eq!(description("eds").unwrap().0.name, "enip");
+        assert!(description("gsdml").unwrap_err().contains("known: eds"));
+    }
+}

@@ -1,0 +1,214 @@
+//! The `enip:` steps of the EtherNet/IP suites: encapsulation and CIP messages as written,
+//! Forward_Open variants, and control of the scanner's I/O.
+
+use serde_json::{Map, Value};
+use std::any::Any;
+use std::time::Duration;
+
+use super::ForwardOpenSpec;
+use crate::bus::BusStep;
+use crate::runner::hex;
+use crate::suite::fields::{hex_bytes, Fields};
+use crate::suite::parse_duration;
+
+/// An `enip:` step. `client` picks the TCP connection: 1 is the scanner's own, 2.. are other
+/// clients of the same target (each with its own session), to show a target keeps serving
+/// others after one client misbehaved.
+#[derive(Debug, Clone)]
+pub(crate) enum EnipStep {
+    /// Encapsulation bytes as written; `session` puts the client's session handle in bytes
+    /// 4..8 (registering one first).
+    Raw {
+        bytes: Vec<u8>,
+        session: bool,
+        client: u8,
+    },
+    /// A message-router request as written (service, path size, path, data; may be malformed)
+    /// in a SendRRData of the client's session.
+    Mr { bytes: Vec<u8>, client: u8 },
+    /// An unconnected CIP request.
+    Request {
+        service: u8,
+        path: Vec<u8>,
+        data: Vec<u8>,
+        client: u8,
+    },
+    /// A Forward_Open with the given parameters; an accepted owner connection carries the
+    /// following process-data steps.
+    ForwardOpen(ForwardOpenSpec),
+    /// The scanner stops sending O→T data for this long.
+    StopIo { time: Duration },
+    /// The run/idle header of the following O→T frames: run (`true`) or idle.
+    Run(bool),
+}
+
+impl BusStep for EnipStep {
+    fn bus(&self) -> &'static str {
+        "enip"
+    }
+
+    fn describe(&self) -> String {
+        describe(self)
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+}
+
+/// The step as one line, for reports.
+fn describe(e: &EnipStep) -> String {
+    let on = |client: u8| {
+        if client == 1 {
+            String::new()
+        } else {
+            format!(" (client {client})")
+        }
+    };
+    match e {
+        EnipStep::Raw {
+            bytes,
+            session,
+            client,
+        } => {
+            let s = if *session { ", session filled in" } else { "" };
+            format!("raw {}{s}{}", hex(bytes), on(*client))
+        }
+        EnipStep::Mr { bytes, client } => {
+            format!("message-router request {}{}", hex(bytes), on(*client))
+        }
+        EnipStep::Request {
+            service,
+            path,
+            data,
+            client,
+        } => format!(
+            "service {service:02X}h path {} data [{}]{}",
+            hex(path),
+            hex(data),
+            on(*client)
+        ),
+        EnipStep::ForwardOpen(f) => format!(
+            "{} {} -> {}, sizes {}/{}, RPI {} µs, transport {:02X}h, multiplier {}{}",
+            if f.large {
+                "Large_Forward_Open"
+            } else {
+                "Forward_Open"
+            },
+            f.o_t_point,
+            f.t_o_point,
+            f.o_t_size,
+            f.t_o_size,
+            f.rpi_us,
+            f.transport,
+            f.multiplier,
+            if f.run_idle {
+                ""
+            } else {
+                ", no run/idle header"
+            }
+        ),
+        EnipStep::StopIo { time } => format!("stop O→T data for {time:?}"),
+        EnipStep::Run(true) => "run/idle header: run".into(),
+        EnipStep::Run(false) => "run/idle header: idle".into(),
+    }
+}
+
+/// Parses an `enip:` step.
+pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
+    let m = v
+        .as_object()
+        .ok_or_else(|| format!("`enip`: expected a map of fields, got {v}"))?;
+    Ok(Box::new(enip_step(m)?))
+}
+
+fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
+    let client = |f: &Fields| -> Result<u8, String> {
+        match f.int("client")? {
+            None => Ok(1),
+            Some(v @ 1..=99) => Ok(v as u8),
+            Some(v) => Err(format!("`enip.client`: {v} is not 1..=99")),
+        }
+    };
+    if m.contains_key("raw") {
+        let f = Fields::new("enip", m, &["raw", "session", "client"])?;
+        return Ok(EnipStep::Raw {
+            bytes: hex_bytes("enip.raw", &f.text("raw")?.unwrap_or_default())?,
+            session: f.bool("session")?.unwrap_or(false),
+            client: client(&f)?,
+        });
+    }
+    if m.contains_key("mr") {
+        let f = Fields::new("enip", m, &["mr", "client"])?;
+        return Ok(EnipStep::Mr {
+            bytes: hex_bytes("enip.mr", &f.text("mr")?.unwrap_or_default())?,
+            client: client(&f)?,
+        });
+    }
+    if m.contains_key("service") {
+        let f = Fields::new("enip", m, &["service", "path", "data", "client"])?;
+        let service = u8::try_from(f.req_int("service")?)
+            .map_err(|_| "`enip.service` is not a byte".to_string())?;
+        return Ok(EnipStep::Request {
+            service,
+            path: hex_bytes("enip.path", &f.text("path")?.unwrap_or_default())?,
+            data: hex_bytes("enip.data", &f.text("data")?.unwrap_or_default())?,
+            client: client(&f)?,
+        });
+    }
+    if m.contains_key("forward_open") {
+        let f = Fields::new(
+            "enip",
+            m,
+            &[
+                "forward_open",
+                "o_t",
+                "t_o",
+                "o_t_size",
+                "t_o_size",
+                "rpi_us",
+                "transport",
+                "multiplier",
+                "large",
+                "run_idle",
+            ],
+        )?;
+        let d = ForwardOpenSpec::default();
+        let small = |k: &str| -> Result<Option<u16>, String> {
+            f.int(k)?
+                .map(|v| u16::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not 0..=65535")))
+                .transpose()
+        };
+        let byte = |k: &str| -> Result<Option<u8>, String> {
+            f.int(k)?
+                .map(|v| u8::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not a byte")))
+                .transpose()
+        };
+        let rpi = f
+            .int("rpi_us")?
+            .map(|v| u32::try_from(v).map_err(|_| format!("`enip.rpi_us`: {v} is not 32-bit")))
+            .transpose()?;
+        return Ok(EnipStep::ForwardOpen(ForwardOpenSpec {
+            o_t_point: small("o_t")?.unwrap_or(d.o_t_point),
+            t_o_point: small("t_o")?.unwrap_or(d.t_o_point),
+            o_t_size: small("o_t_size")?.ok_or("`enip` needs `o_t_size`")?,
+            t_o_size: small("t_o_size")?.ok_or("`enip` needs `t_o_size`")?,
+            rpi_us: rpi.unwrap_or(d.rpi_us),
+            transport: byte("transport")?.unwrap_or(d.transport),
+            multiplier: byte("multiplier")?.unwrap_or(d.multiplier),
+            large: f.bool("large")?.unwrap_or(false),
+            run_idle: f.bool("run_idle")?.unwrap_or(d.run_idle),
+        }));
+    }
+    if m.contains_key("stop_io") {
+        let f = Fields::new("enip", m, &["stop_io"])?;
+        return Ok(EnipStep::StopIo {
+            time: parse_duration(&f.text("stop_io")?.unwrap_or_default())?,
+        });
+    }
+    if m.contains_key("run") {
+        let f = Fields::new("enip", m, &["run"])?;
+        return Ok(EnipStep::Run(f.bool("run")?.unwrap_or(true)));
+    }
+    Err("`enip` needs one of `raw`, `mr`, `service`, `forward_open`, `stop_io`, `run`".into())
+}
