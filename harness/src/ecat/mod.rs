@@ -1,6 +1,8 @@
 //! EtherCAT: the master binding (CoE SDO and cyclic PDOs over raw Ethernet or the in-memory
 //! link to the simulated slave), `harness serve ecat`, the ESI writer and the `ecat:` steps.
 
+mod step;
+
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Embedded, Network};
 use crate::profile::Profile;
@@ -11,7 +13,7 @@ pub(crate) const BUS: Bus = Bus {
     name: "ecat",
     title: "EtherCAT",
     profiles,
-    parse_step,
+    parse_step: step::parse,
     embedded,
     network,
     serve,
@@ -20,10 +22,6 @@ pub(crate) const BUS: Bus = Bus {
 
 fn profiles() -> Vec<Profile> {
     Vec::new()
-}
-
-fn parse_step(_: &serde_json::Value) -> Result<Box<dyn crate::bus::BusStep>, String> {
-    Err("`ecat` steps are not there yet".into())
 }
 
 fn embedded(_: &Profile, _: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
