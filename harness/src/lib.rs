@@ -8,6 +8,7 @@ mod ecat;
 mod enip;
 pub use enip::bench;
 mod model;
+mod net;
 mod notation;
 pub mod outcome;
 mod pcap;
