@@ -5,6 +5,8 @@ use std::net::{SocketAddr, TcpStream};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+pub(crate) mod netns;
+
 /// A child process, killed when dropped (a served simulator, a third-party server).
 pub(crate) struct Server(pub(crate) Child);
 

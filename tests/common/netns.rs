@@ -1,0 +1,214 @@
+//! Network namespaces for end-to-end tests on raw Ethernet: a namespace of the test's own with
+//! a veth pair, one end in this (the root) namespace and one inside, removed again when the
+//! test ends, also when it panics.
+//!
+//! Uses `ip` (iproute2), and needs root (`CAP_SYS_ADMIN` for the namespace, `CAP_NET_ADMIN`
+//! for the links): call [`require_root_or_skip`] first. A namespace left behind by a test that
+//! was killed (no unwinding, so no `Drop`) is removed by the next [`Netns::new`], which finds
+//! it by its name (the prefix and the id of a process that no longer runs).
+
+#![allow(dead_code)] // each test binary uses a part
+
+use std::process::{Command, Output, Stdio};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+/// Every namespace made here is named `PREFIX<pid>-<n>-<tag>`.
+const PREFIX: &str = "nord-test-";
+
+/// Whether this run is CI's (the `CI` environment variable set and not empty): there a test
+/// that cannot run fails instead of skipping, so a CI run never passes by skipping.
+pub(crate) fn in_ci() -> bool {
+    std::env::var_os("CI").is_some_and(|v| !v.is_empty())
+}
+
+/// Skips (`false`, after printing why) or fails the test (`CI` set) that needs something this
+/// machine lacks; `true` when `have` holds.
+pub(crate) fn require_or_skip(have: bool, what: &str, why: &str) -> bool {
+    if have {
+        return true;
+    }
+    assert!(!in_ci(), "{why}: needs {what}, and CI must not skip it");
+    eprintln!("skipped: {why}: needs {what}");
+    false
+}
+
+/// Whether the test can make network namespaces: root, and `ip` (iproute2) on the `PATH`.
+/// On a developer's machine without them it prints "skipped: needs root for network
+/// namespaces" with `why` (what the test would have checked) and returns `false`; when `CI`
+/// is set it fails the test instead.
+pub(crate) fn require_root_or_skip(why: &str) -> bool {
+    require_or_skip(
+        effective_uid() == Some(0),
+        "root for network namespaces",
+        why,
+    ) && require_or_skip(
+        Command::new("ip")
+            .arg("-V")
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success()),
+        "`ip` (iproute2: apt-get install iproute2) for network namespaces",
+        why,
+    )
+}
+
+/// The effective user id, from `/proc/self/status` (`Uid: real effective saved fs`).
+fn effective_uid() -> Option<u32> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("Uid:"))?;
+    line.split_whitespace().nth(2)?.parse().ok()
+}
+
+/// Runs `ip ARGS…`; panics with its message when it fails.
+fn ip(args: &[&str]) {
+    let out = Command::new("ip").args(args).output().expect("`ip` runs");
+    assert!(
+        out.status.success(),
+        "ip {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr).trim()
+    );
+}
+
+/// A network namespace with a veth pair into it; everything is removed when it is dropped.
+#[derive(Debug)]
+pub(crate) struct Netns {
+    name: String,
+    root_if: String,
+    ns_if: String,
+}
+
+impl Netns {
+    /// Makes a namespace named after `tag` and this process, and a veth pair: one end stays
+    /// in the root namespace, the other goes inside; both ends and the namespace's `lo` are
+    /// brought up, and IPv6 is off on both ends (no router solicitations or MLD reports on
+    /// the wire). Panics when `ip` fails: call [`require_root_or_skip`] first.
+    pub(crate) fn new(tag: &str) -> Netns {
+        static NEXT: AtomicU32 = AtomicU32::new(0);
+        remove_stale();
+        let pid = std::process::id();
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        // Interface names have at most 15 bytes: "nt" + pid and n in hex + "r"/"n".
+        let link = format!("nt{pid:x}x{n:x}");
+        let ns = Netns {
+            name: format!("{PREFIX}{pid}-{n}-{tag}"),
+            root_if: format!("{link}r"),
+            ns_if: format!("{link}n"),
+        };
+        ip(&["netns", "add", &ns.name]);
+        // From here on `Drop` removes what exists, should a step below panic.
+        ip(&[
+            "link",
+            "add",
+            &ns.root_if,
+            "type",
+            "veth",
+            "peer",
+            "name",
+            &ns.ns_if,
+            "netns",
+            &ns.name,
+        ]);
+        let _ = std::fs::write(
+            format!("/proc/sys/net/ipv6/conf/{}/disable_ipv6", ns.root_if),
+            "1",
+        );
+        // Best effort: a kernel without IPv6 has nothing to turn off.
+        let _ = ns.exec(&[
+            "sh",
+            "-c",
+            &format!("echo 1 > /proc/sys/net/ipv6/conf/{}/disable_ipv6", ns.ns_if),
+        ]);
+        ip(&["link", "set", &ns.root_if, "up"]);
+        ns.ip_inside(&["link", "set", &ns.ns_if, "up"]);
+        ns.ip_inside(&["link", "set", "lo", "up"]);
+        ns
+    }
+
+    /// Gives the root-side end the IPv4 address `root` and the inside end `inside`, both in
+    /// CIDR notation (`10.200.0.1/24`). Use addresses of a private range that nothing else on
+    /// the machine routes.
+    pub(crate) fn add_ipv4(&self, root: &str, inside: &str) {
+        ip(&["addr", "add", root, "dev", &self.root_if]);
+        self.ip_inside(&["addr", "add", inside, "dev", &self.ns_if]);
+    }
+
+    /// The namespace's name.
+    pub(crate) fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The veth end in the root namespace.
+    pub(crate) fn root_if(&self) -> &str {
+        &self.root_if
+    }
+
+    /// The veth end inside the namespace.
+    pub(crate) fn ns_if(&self) -> &str {
+        &self.ns_if
+    }
+
+    /// A command that runs `program` inside the namespace (`ip netns exec NAME program`): add
+    /// arguments, pipes and environment, then spawn or run it.
+    pub(crate) fn command(&self, program: impl AsRef<std::ffi::OsStr>) -> Command {
+        let mut c = Command::new("ip");
+        c.args(["netns", "exec", &self.name]).arg(program);
+        c
+    }
+
+    /// Runs `argv` inside the namespace to its end and returns what it printed.
+    pub(crate) fn exec(&self, argv: &[&str]) -> Output {
+        let (program, args) = argv.split_first().expect("a program to run");
+        self.command(program)
+            .args(args)
+            .output()
+            .expect("`ip netns exec` runs")
+    }
+
+    /// `ip ARGS…` inside the namespace.
+    fn ip_inside(&self, args: &[&str]) {
+        ip(&[&["-n", self.name.as_str()], args].concat());
+    }
+}
+
+impl Drop for Netns {
+    fn drop(&mut self) {
+        // Deleting one end deletes the pair; deleting the namespace would too, but only once
+        // no process holds it, so the root-side end goes first.
+        let quiet = |args: &[&str]| {
+            let _ = Command::new("ip")
+                .args(args)
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .status();
+        };
+        quiet(&["link", "del", &self.root_if]);
+        quiet(&["netns", "del", &self.name]);
+    }
+}
+
+/// Deletes the namespaces that tests of processes no longer running left behind.
+fn remove_stale() {
+    let Ok(out) = Command::new("ip").args(["netns", "list"]).output() else {
+        return;
+    };
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let Some(name) = line.split_whitespace().next() else {
+            continue;
+        };
+        let Some(pid) = name
+            .strip_prefix(PREFIX)
+            .and_then(|rest| rest.split('-').next())
+            .and_then(|p| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid != std::process::id() && !std::path::Path::new(&format!("/proc/{pid}")).exists() {
+            let _ = Command::new("ip")
+                .args(["netns", "del", name])
+                .stderr(Stdio::null())
+                .status();
+        }
+    }
+}
