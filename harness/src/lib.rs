@@ -5,6 +5,8 @@ mod bus;
 pub mod cli;
 mod cli_tools;
 mod ecat;
+/// `harness serve ecat` in a thread of the caller (EtherCAT end-to-end tests and benches).
+pub use ecat::serve as ecat_serve;
 mod enip;
 pub use enip::bench;
 mod model;

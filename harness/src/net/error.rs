@@ -4,7 +4,7 @@ use std::io;
 
 /// A raw Ethernet link could not be opened or used.
 #[derive(Debug, thiserror::Error)]
-pub(crate) enum LinkError {
+pub enum LinkError {
     /// No interface of that name (the known names are listed to help the user).
     #[error("no network interface named `{name}` (there are: {})", known.join(", "))]
     NoSuchInterface {

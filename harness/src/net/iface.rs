@@ -53,7 +53,7 @@ pub(crate) struct Interface {
 
 /// The interface named `name`.
 pub(crate) fn interface(name: &str) -> Result<Interface, LinkError> {
-    Ok(Interface::from_pnet(&lookup(name)?)?)
+    Interface::from_pnet(&lookup(name)?)
 }
 
 /// pnet's view of the interface named `name`, which [`super::RawLink`] needs to open it.

@@ -130,11 +130,6 @@ impl RawLink {
         })
     }
 
-    /// The interface.
-    pub(crate) fn interface(&self) -> &Interface {
-        &self.iface
-    }
-
     /// The interface's Ethernet address.
     pub(crate) fn mac(&self) -> Mac {
         self.iface.mac
@@ -266,39 +261,7 @@ impl RawLink {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::process::Command;
-
-    /// A veth pair in this namespace, deleted when dropped.
-    struct Veth(String, String);
-
-    impl Veth {
-        /// Creates and brings up a pair, or says why not: `None` skips the test on a developer's
-        /// machine without root; with `CI` set a run must not pass by skipping.
-        fn new(tag: &str) -> Option<Veth> {
-            if let Err(e) = RawLink::open("lo", None) {
-                assert!(std::env::var_os("CI").is_none(), "CI needs root here: {e}");
-                eprintln!("skipped: needs root for raw Ethernet ({e})");
-                return None;
-            }
-            let a = format!("h3{tag}{}a", std::process::id() % 100_000);
-            let b = format!("h3{tag}{}b", std::process::id() % 100_000);
-            let ip = |args: &[&str]| {
-                let ok = Command::new("ip").args(args).status().map(|s| s.success());
-                assert!(matches!(ok, Ok(true)), "ip {args:?}: {ok:?}");
-            };
-            ip(&["link", "add", &a, "type", "veth", "peer", "name", &b]);
-            let v = Veth(a, b);
-            ip(&["link", "set", &v.0, "up"]);
-            ip(&["link", "set", &v.1, "up"]);
-            Some(v)
-        }
-    }
-
-    impl Drop for Veth {
-        fn drop(&mut self) {
-            let _ = Command::new("ip").args(["link", "del", &self.0]).status();
-        }
-    }
+    use crate::net::veth::Veth;
 
     /// An EtherCAT-typed frame (EtherType 88A4h) from `src` to the broadcast address,
     /// padded to the 60-byte minimum, with `tag` as its first payload byte.

@@ -3,13 +3,17 @@
 //! EtherType filter, send a frame, receive the next one by a deadline, with the kernel's
 //! receive stamp.
 
-// Used by `harness serve ecat` (next): until then nothing calls it outside its tests.
-#![allow(dead_code, unused_imports)]
+// Until `harness serve ecat` starts the simulated slave (sim::ecat), only tests use it.
+#![cfg_attr(not(test), allow(dead_code))]
 
 mod error;
 mod iface;
 mod link;
+#[cfg(test)]
+pub(crate) mod veth;
 
-pub(crate) use error::LinkError;
+pub use error::LinkError;
+#[allow(unused_imports)] // the module's API, not all of it used yet
 pub(crate) use iface::{interface, Interface, Mac};
-pub(crate) use link::{RawLink, Received};
+#[allow(unused_imports)]
+pub(crate) use link::{RawLink, Received, MAX_FRAME};

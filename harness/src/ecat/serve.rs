@@ -1,0 +1,314 @@
+//! `harness serve ecat`: the simulated EtherCAT slave on a network interface.
+//!
+//! One thread owns the raw Ethernet link ([`crate::net::RawLink`], EtherType 88A4h, BU 0620
+//! §2.2.3; the manual's figure prints 88ABh, an erratum) and the sans-IO slave. Each frame that
+//! arrives is processed in place, as an EtherCAT slave controller processes a frame on the fly,
+//! and sent back out of the same interface: the slave is the last (and only) one on its
+//! segment, so its port 0 returns what it processed (ETG.1000.4 §5, "processing and
+//! forwarding"). The slave sets the locally administered bit in the source address of what it
+//! sends. Between frames the thread waits at most until the slave's next timer (watchdogs) and
+//! lets it run with the real clock since start.
+
+// Until `start` serves the simulated slave (sim::ecat), only tests use the loop.
+#![cfg_attr(not(test), allow(dead_code))]
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::{self, JoinHandle};
+use std::time::{Duration, Instant};
+
+pub use crate::net::LinkError;
+use crate::net::{RawLink, MAX_FRAME};
+
+/// EtherType of EtherCAT frames (ETG.1000.4 §5.3; BU 0620 §2.2.3, whose figure 3 prints 88ABh:
+/// an erratum, the text above it has 88A4h).
+pub const ETHERTYPE: u16 = 0x88A4;
+
+/// How long the slave's thread polls the socket after a frame before it sleeps: a master that
+/// sends frame after frame (mailbox polling, an SDO burst) is served without a thread wake-up.
+const FRAME_POLL: Duration = Duration::from_micros(50);
+
+/// The longest the thread sleeps without looking at its stop flag.
+const STOP_CHECK: Duration = Duration::from_millis(20);
+
+/// What `harness serve ecat` serves.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ServeOptions {
+    /// The network interface (`--iface`), e.g. one end of a veth pair.
+    pub iface: String,
+    /// The product profile (`--profile`, default `sk550p`).
+    pub profile: String,
+    /// Inverters behind the interface (`--inverters`; default the product's maximum).
+    pub inverters: Option<u8>,
+}
+
+impl ServeOptions {
+    /// `iface` with the defaults: SK 550P, the product's maximum of inverters.
+    pub fn new(iface: &str) -> ServeOptions {
+        ServeOptions {
+            iface: iface.into(),
+            profile: "sk550p".into(),
+            inverters: None,
+        }
+    }
+}
+
+/// Why the slave cannot be served, or stopped serving.
+#[derive(Debug, thiserror::Error)]
+pub enum ServeError {
+    /// The profile is unknown or its product has no EtherCAT interface.
+    #[error("{0}")]
+    Profile(String),
+    /// The raw Ethernet link failed (no such interface, no root, I/O).
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// The serving thread panicked (a bug).
+    #[error("the EtherCAT slave's thread panicked: {0}")]
+    Panicked(String),
+}
+
+/// What a served slave did, as counted by its thread.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Frames received and sent back.
+    pub frames: u64,
+    /// Frames received and not sent back (the slave dropped them).
+    pub dropped: u64,
+    /// Frames skipped because they were longer than a standard Ethernet frame.
+    pub oversized: u64,
+}
+
+/// A slave served in a thread by [`start`]; dropping it stops the thread.
+#[derive(Debug)]
+pub struct Served {
+    iface: String,
+    mac: [u8; 6],
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<Result<Stats, ServeError>>>,
+}
+
+impl Served {
+    /// The interface it serves on.
+    pub fn iface(&self) -> &str {
+        &self.iface
+    }
+
+    /// The interface's own Ethernet address (frames the slave sends carry the master's source
+    /// address with the locally administered bit set instead).
+    pub fn mac(&self) -> [u8; 6] {
+        self.mac
+    }
+
+    /// Whether the thread still serves (it ends on a link error).
+    pub fn is_running(&self) -> bool {
+        self.thread.as_ref().is_some_and(|t| !t.is_finished())
+    }
+
+    /// Stops the thread (within [`STOP_CHECK`]) and returns what it counted, or why it had
+    /// stopped before.
+    pub fn stop(mut self) -> Result<Stats, ServeError> {
+        self.join()
+    }
+
+    fn join(&mut self) -> Result<Stats, ServeError> {
+        self.stop.store(true, Ordering::Relaxed);
+        match self.thread.take() {
+            Some(t) => t.join().unwrap_or_else(|p| {
+                let why = p
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| p.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                Err(ServeError::Panicked(why))
+            }),
+            None => Ok(Stats::default()),
+        }
+    }
+}
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.join();
+    }
+}
+
+/// The sans-IO slave as the serving thread drives it.
+pub(crate) trait Core: Send {
+    /// Processes `frame` in place at `now` (time since start); `true` when it is to be sent
+    /// back.
+    fn process(&mut self, frame: &mut [u8], now: Duration) -> bool;
+    /// Runs the timers due at `now`; the time (since start) at which to call again at the
+    /// latest, `None` when nothing is pending.
+    fn poll(&mut self, now: Duration) -> Option<Duration>;
+}
+
+/// Opens the interface and serves `core` on it in a thread.
+pub(crate) fn start_core(iface: &str, core: Box<dyn Core>) -> Result<Served, ServeError> {
+    let mut link = RawLink::open(iface, Some(ETHERTYPE))?;
+    link.set_spin(FRAME_POLL);
+    let stop = Arc::new(AtomicBool::new(false));
+    let mac = link.mac().0;
+    let thread = {
+        let stop = stop.clone();
+        thread::Builder::new()
+            .name(format!("ecat-slave-{iface}"))
+            .spawn(move || run(link, core, &stop))
+            .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))?
+    };
+    Ok(Served {
+        iface: iface.into(),
+        mac,
+        stop,
+        thread: Some(thread),
+    })
+}
+
+/// The serving loop: frames in, processed, back out; timers between them.
+fn run(mut link: RawLink, mut core: Box<dyn Core>, stop: &AtomicBool) -> Result<Stats, ServeError> {
+    let start = Instant::now();
+    let mut stats = Stats::default();
+    let mut buf = vec![0u8; MAX_FRAME];
+    while !stop.load(Ordering::Relaxed) {
+        let now = start.elapsed();
+        let due = core.poll(now).map_or(STOP_CHECK, |t| t.saturating_sub(now));
+        let deadline = Instant::now() + due.min(STOP_CHECK);
+        let received = match link.recv(&mut buf, deadline) {
+            Ok(r) => r,
+            Err(e) if link_down(&e) => {
+                // The cable is out (the link went down): an ESC waits for it to come back.
+                thread::sleep(STOP_CHECK);
+                continue;
+            }
+            Err(e) => return Err(e.into()),
+        };
+        let Some(r) = received else { continue };
+        let frame = &mut buf[..r.len];
+        if !core.process(frame, start.elapsed()) {
+            stats.dropped += 1;
+            continue;
+        }
+        match link.send(frame) {
+            Ok(()) => stats.frames += 1,
+            Err(e) if link_down(&e) => stats.dropped += 1,
+            Err(e) => return Err(e.into()),
+        }
+    }
+    stats.oversized = link.oversized();
+    Ok(stats)
+}
+
+/// Whether `e` says the interface went down while it still exists.
+fn link_down(e: &LinkError) -> bool {
+    match e {
+        LinkError::Io { source, iface, .. } => {
+            source.raw_os_error() == Some(nix::errno::Errno::ENETDOWN as i32)
+                && crate::net::interface(iface).is_ok()
+        }
+        _ => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::net::veth::Veth;
+
+    /// A stand-in for the slave: sets the locally administered bit in the source address and
+    /// increments the first payload byte; drops frames whose first payload byte is FFh. Its
+    /// timer is due every 5 ms and counts how often it ran.
+    struct Echo {
+        polls: Arc<std::sync::atomic::AtomicU64>,
+        next: Duration,
+    }
+
+    impl Core for Echo {
+        fn process(&mut self, frame: &mut [u8], _: Duration) -> bool {
+            if frame[14] == 0xFF {
+                return false;
+            }
+            frame[6] |= 0x02;
+            frame[14] += 1;
+            true
+        }
+
+        fn poll(&mut self, now: Duration) -> Option<Duration> {
+            if now >= self.next {
+                self.polls.fetch_add(1, Ordering::Relaxed);
+                self.next = now + Duration::from_millis(5);
+            }
+            Some(self.next)
+        }
+    }
+
+    fn frame(tag: u8) -> Vec<u8> {
+        let mut f = vec![0xFF; 6]; // destination: broadcast
+        f.extend_from_slice(&[0x01, 0x01, 0x01, 0x01, 0x01, 0x01]); // source: SOEM's
+        f.extend_from_slice(&ETHERTYPE.to_be_bytes()); // EtherType 88A4h
+        f.push(tag);
+        f.resize(60, 0);
+        f
+    }
+
+    #[test]
+    fn frames_come_back_processed_and_timers_run_between_them() {
+        let Some(v) = Veth::new("e") else { return };
+        let polls = Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let core = Echo {
+            polls: polls.clone(),
+            next: Duration::ZERO,
+        };
+        let served = start_core(&v.0, Box::new(core)).expect("serve");
+        assert!(served.is_running());
+        let mut master = RawLink::open(&v.1, Some(ETHERTYPE)).unwrap();
+        let mut buf = [0u8; MAX_FRAME];
+        for tag in [1u8, 0xFF, 7] {
+            master.send(&frame(tag)).unwrap();
+        }
+        let mut back = Vec::new();
+        while let Some(r) = master
+            .recv(&mut buf, Instant::now() + Duration::from_millis(300))
+            .unwrap()
+        {
+            assert_eq!(buf[6], 0x03, "locally administered bit set");
+            back.push(buf[14]);
+            assert_eq!(r.len, 60);
+        }
+        assert_eq!(back, [2, 8]);
+        std::thread::sleep(Duration::from_millis(50));
+        let stats = served.stop().expect("stops cleanly");
+        assert_eq!((stats.frames, stats.dropped), (2, 1));
+        let polls = polls.load(Ordering::Relaxed);
+        assert!(polls >= 5, "timers ran {polls} times in >300 ms");
+    }
+
+    #[test]
+    fn a_vanished_interface_ends_the_thread_with_an_error() {
+        let Some(v) = Veth::new("g") else { return };
+        let core = Echo {
+            polls: Default::default(),
+            next: Duration::ZERO,
+        };
+        let served = start_core(&v.0, Box::new(core)).expect("serve");
+        drop(v);
+        let t = Instant::now();
+        while served.is_running() && t.elapsed() < Duration::from_secs(2) {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        match served.stop() {
+            Err(ServeError::Link(LinkError::Io { .. })) => {}
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn an_unknown_interface_is_refused_before_any_thread() {
+        let core = Echo {
+            polls: Default::default(),
+            next: Duration::ZERO,
+        };
+        match start_core("no-such-if0", Box::new(core)) {
+            Err(ServeError::Link(LinkError::NoSuchInterface { .. })) => {}
+            other => panic!("{other:?}"),
+        }
+    }
+}

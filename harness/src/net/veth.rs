@@ -1,0 +1,37 @@
+//! A veth pair for the unit tests of raw Ethernet code (root only).
+
+use std::process::Command;
+
+use super::RawLink;
+
+/// A veth pair in this namespace, deleted when dropped.
+pub(crate) struct Veth(pub(crate) String, pub(crate) String);
+
+impl Veth {
+    /// Creates and brings up a pair, or says why not: `None` skips the test on a developer's
+    /// machine without root; with `CI` set a run must not pass by skipping.
+    pub(crate) fn new(tag: &str) -> Option<Veth> {
+        if let Err(e) = RawLink::open("lo", None) {
+            assert!(std::env::var_os("CI").is_none(), "CI needs root here: {e}");
+            eprintln!("skipped: needs root for raw Ethernet ({e})");
+            return None;
+        }
+        let a = format!("vt{tag}{}a", std::process::id() % 100_000);
+        let b = format!("vt{tag}{}b", std::process::id() % 100_000);
+        let ip = |args: &[&str]| {
+            let ok = Command::new("ip").args(args).status().map(|s| s.success());
+            assert!(matches!(ok, Ok(true)), "ip {args:?}: {ok:?}");
+        };
+        ip(&["link", "add", &a, "type", "veth", "peer", "name", &b]);
+        let v = Veth(a, b);
+        ip(&["link", "set", &v.0, "up"]);
+        ip(&["link", "set", &v.1, "up"]);
+        Some(v)
+    }
+}
+
+impl Drop for Veth {
+    fn drop(&mut self) {
+        let _ = Command::new("ip").args(["link", "del", &self.0]).status();
+    }
+}
