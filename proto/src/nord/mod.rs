@@ -11,6 +11,7 @@
 
 pub mod addr;
 pub mod control;
+pub mod ecat;
 pub mod eip;
 pub mod errors;
 pub mod led;
