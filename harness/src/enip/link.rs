@@ -89,16 +89,15 @@ impl Recorder {
 
     /// The scanner's address on the embedded link's next connection: a port of its own.
     fn embedded_client(&self) -> SocketAddrV4 {
-        let port = 50_000u16.wrapping_add(self.tap.borrow().connections.wrapping_add(1) % 10_000);
+        let connections = self.tap.borrow_mut().capture.tcp_connections();
+        let port = 50_000u16.wrapping_add(connections.wrapping_add(1) % 10_000);
         SocketAddrV4::new(*SCANNER_V4.ip(), port)
     }
 
     /// A TCP connection from `client` to `server` opened: its handshake, now.
     fn connect(&self, client: SocketAddrV4, server: SocketAddrV4) -> Connection {
         let t = self.now();
-        let mut tap = self.tap.borrow_mut();
-        tap.connections = tap.connections.wrapping_add(1);
-        tap.capture.tcp_open(client, server, t);
+        self.tap.borrow_mut().capture.tcp_connect(client, server, t);
         Connection {
             recorder: self.clone(),
             client,

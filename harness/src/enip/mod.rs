@@ -6,6 +6,7 @@ pub mod bench;
 mod cleanup;
 mod eds;
 mod link;
+mod pcap;
 mod scanner;
 pub(crate) mod serve;
 mod step;
