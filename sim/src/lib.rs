@@ -9,6 +9,7 @@ mod bus_status;
 pub mod clock;
 pub mod device;
 pub mod drive;
+pub mod ecat;
 pub mod enip;
 pub mod link;
 pub mod pkw_server;

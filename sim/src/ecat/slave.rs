@@ -1,0 +1,507 @@
+//! The slave: ESC, AL state machine, mailbox with CoE, process data — around one [`Device`].
+
+use std::time::Duration;
+
+use proto::nord::ecat as def;
+use proto::nord::led::Row;
+use proto::nord::nmt::EcState;
+use proto::nord::{Inverter, ParamNumber};
+
+use super::al::{self, Al, Outcome};
+use super::esc::{reg, Done, Esc, Event, Op};
+use super::mailbox::{kind, Mailbox};
+use super::od::{Context, Dictionary};
+use super::pdo::{self, ProcessWords};
+use super::sii;
+use super::sm::{SmConfig, SmEvent};
+use super::wire::{self, DropReason, Payload, Span};
+use crate::device::Device;
+use crate::link::Unit;
+
+/// How often the slave wants [`Slave::poll`] while process data may run (drive model, P513
+/// monitoring).
+pub const POLL_PERIOD: Duration = Duration::from_millis(10);
+
+/// What the slave did with a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Processed {
+    /// An EtherCAT frame, processed in place: send it on (back to the master).
+    Forwarded,
+    /// Not an EtherCAT command frame (another EtherType or frame type): passed unchanged.
+    Passed,
+    /// A malformed EtherCAT frame: not processed, counted in the invalid frame counter
+    /// (0300h), and not sent on (an ESC destroys it).
+    Dropped(DropReason),
+}
+
+impl Processed {
+    /// Whether the frame is to be sent on.
+    pub fn send_back(&self) -> bool {
+        !matches!(self, Processed::Dropped(_))
+    }
+}
+
+/// How the slave is set up beyond its device.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SlaveConfig {
+    /// P850 "Second Address" at power-on (BU 0620 §4.2.1: 0…4096; the DIP-switch address of
+    /// Hot Connect, §2.2.4), answered to an ID request in the AL status code register.
+    pub second_address: u16,
+}
+
+/// A device that cannot be an EtherCAT slave.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SlaveError {
+    /// The product has no EtherCAT interface.
+    #[error("{0} has no EtherCAT interface")]
+    NoEthercat(&'static str),
+}
+
+/// The SK 550P's EtherCAT slave (sans-IO).
+#[derive(Debug)]
+pub struct Slave {
+    device: Device,
+    inverters: u8,
+    esc: Esc,
+    image: Vec<u16>,
+    al: Al,
+    mailbox: Mailbox,
+    od: Dictionary,
+    words: ProcessWords,
+    /// P850 as set now (adopted at the next power-on).
+    second_address: u16,
+    /// The Hot Connect ID adopted at power-on.
+    id: u16,
+    dropped: u64,
+    faults: [i32; 8],
+}
+
+impl Slave {
+    /// The slave of `device` with the factory second address 0.
+    pub fn new(device: Device) -> Result<Slave, SlaveError> {
+        Slave::with_config(device, SlaveConfig::default())
+    }
+
+    /// The slave of `device`.
+    pub fn with_config(mut device: Device, config: SlaveConfig) -> Result<Slave, SlaveError> {
+        let product = device.config().product;
+        if !product
+            .protocols()
+            .contains(&proto::nord::Protocol::Ethercat)
+        {
+            return Err(SlaveError::NoEthercat(product.name()));
+        }
+        let inverters = device.config().inverters;
+        // P870 "Present bus protocol" (BU 0620 §4.3): 2 = EtherCAT.
+        if let Ok(s) = device.store(Unit::Interface) {
+            s.set_info(870, 1, 2);
+        }
+        let second = config.second_address.min(def::SECOND_ADDRESS_MAX);
+        let mut slave = Slave {
+            device,
+            inverters,
+            esc: Esc::new(),
+            image: sii::image(inverters, 0),
+            al: Al::default(),
+            mailbox: Mailbox::default(),
+            od: Dictionary::new(inverters),
+            words: ProcessWords::default(),
+            second_address: second,
+            id: second,
+            dropped: 0,
+            faults: [0; 8],
+        };
+        sii::load(&mut slave.esc, &slave.image);
+        slave.show_al();
+        Ok(slave)
+    }
+
+    /// Processes one whole Ethernet II frame in place at `now`, as an ESC does on the fly.
+    pub fn process(&mut self, frame: &mut [u8], now: Duration) -> Processed {
+        let Some(start) = wire::ethercat_offset(frame) else {
+            return Processed::Passed;
+        };
+        let spans = match wire::datagrams(frame, start) {
+            Ok(Payload::Other) => return Processed::Passed,
+            Ok(Payload::Datagrams(s)) => s,
+            Err(reason) => {
+                self.esc.count_invalid_frame();
+                self.dropped += 1;
+                return Processed::Dropped(reason);
+            }
+        };
+        // The locally administered bit of the source address (ETG.1000.4 §5.3).
+        frame[6] |= 0x02;
+        self.tick(now);
+        for span in spans {
+            self.datagram(frame, span, now);
+        }
+        Processed::Forwarded
+    }
+
+    fn datagram(&mut self, frame: &mut [u8], span: Span, now: Duration) {
+        let at = span.at;
+        let cmd = frame[at];
+        let adp = u16::from_le_bytes([frame[at + 2], frame[at + 3]]);
+        let ado = u16::from_le_bytes([frame[at + 4], frame[at + 5]]);
+        let logical =
+            u32::from_le_bytes([frame[at + 2], frame[at + 3], frame[at + 4], frame[at + 5]]);
+        let station = self.esc.u16(reg::STATION_ADDRESS);
+        let alias_on = self.esc.u8(reg::DL_CONTROL + 3) & 0x01 != 0;
+        let fixed = adp == station || (alias_on && adp == self.esc.u16(reg::STATION_ALIAS));
+        let mut events = Vec::new();
+        let data = &mut frame[span.data()..span.wkc()];
+        let (op, done, next_adp) = match cmd {
+            1..=3 => {
+                let op = op_of(cmd - 1);
+                let done = if adp == 0 {
+                    self.esc.physical(ado, data, op, false, now, &mut events)
+                } else {
+                    Done::default()
+                };
+                (op, done, Some(adp.wrapping_add(1)))
+            }
+            4..=6 => {
+                let op = op_of(cmd - 4);
+                let done = if fixed {
+                    self.esc.physical(ado, data, op, false, now, &mut events)
+                } else {
+                    Done::default()
+                };
+                (op, done, None)
+            }
+            7..=9 => {
+                let op = op_of(cmd - 7);
+                let done = self.esc.physical(ado, data, op, true, now, &mut events);
+                (op, done, Some(adp.wrapping_add(1)))
+            }
+            10..=12 => {
+                let op = op_of(cmd - 10);
+                (
+                    op,
+                    self.esc.logical(logical, data, op, now, &mut events),
+                    None,
+                )
+            }
+            13 | 14 => {
+                // ARMW/FRMW: the addressed slave reads, every other one writes.
+                let addressed = if cmd == 13 { adp == 0 } else { fixed };
+                let op = if addressed { Op::Read } else { Op::Write };
+                let done = self.esc.physical(ado, data, op, false, now, &mut events);
+                (op, done, (cmd == 13).then(|| adp.wrapping_add(1)))
+            }
+            // NOP and unknown commands: not processed, passed on.
+            _ => return,
+        };
+        if let Some(a) = next_adp {
+            frame[at + 2..at + 4].copy_from_slice(&a.to_le_bytes());
+        }
+        let add = u16::from(done.read)
+            + if done.write {
+                if op == Op::ReadWrite {
+                    2
+                } else {
+                    1
+                }
+            } else {
+                0
+            };
+        let w = span.wkc();
+        let wkc = u16::from_le_bytes([frame[w], frame[w + 1]]).wrapping_add(add);
+        frame[w..w + 2].copy_from_slice(&wkc.to_le_bytes());
+        for e in events {
+            self.event(e, now);
+        }
+    }
+
+    fn event(&mut self, e: Event, now: Duration) {
+        match e {
+            Event::AlControl => self.al_control(now),
+            Event::EepromCommand => sii::command(&mut self.esc, &mut self.image),
+            Event::Sm(SmEvent::MailboxWritten(0)) => {
+                if let Some(buf) = self.esc.take_mailbox(0) {
+                    let room = SmConfig::read(self.esc.mem(), 1).len;
+                    let mut cx = Context {
+                        device: &mut self.device,
+                        words: &self.words,
+                        second_address: &mut self.second_address,
+                    };
+                    self.mailbox
+                        .receive(&buf, room, self.al.state, &self.od, &mut cx);
+                }
+                self.fill_mailbox();
+            }
+            Event::Sm(SmEvent::MailboxRead(1)) => self.fill_mailbox(),
+            Event::Sm(SmEvent::OutputsWritten(2)) => {
+                if self.al.state == EcState::Operational {
+                    let sm = SmConfig::read(self.esc.mem(), 2);
+                    let out = self.esc.bytes(sm.start, sm.len).to_vec();
+                    pdo::cycle(&mut self.device, &mut self.words, Some(&out), true, now);
+                    self.show_inputs();
+                }
+            }
+            Event::Sm(SmEvent::Repeat(1)) => {
+                if !self.esc.sms.is_full(1) {
+                    if let Some(m) = self.mailbox.last_sent.clone() {
+                        self.esc.put_mailbox(1, &m);
+                    }
+                }
+                self.esc.ack_repeat(1);
+            }
+            Event::Sm(SmEvent::Repeat(n)) => self.esc.ack_repeat(n),
+            Event::Sm(_) => {}
+        }
+    }
+
+    /// Moves queued replies into the send mailbox while it is free.
+    fn fill_mailbox(&mut self) {
+        if !matches!(
+            self.al.state,
+            EcState::PreOperational
+                | EcState::SafeOperational
+                | EcState::Operational
+                | EcState::Bootstrap
+        ) {
+            return;
+        }
+        while !self.esc.sms.is_full(1) {
+            let Some(m) = self.mailbox.next() else { break };
+            if self.esc.put_mailbox(1, &m) {
+                self.mailbox.last_sent = Some(m);
+            } else {
+                self.mailbox.unsend(m);
+                break;
+            }
+        }
+    }
+
+    fn show_inputs(&mut self) {
+        let sm = SmConfig::read(self.esc.mem(), 3);
+        if sm.active() {
+            let image = self.words.input_image(self.inverters);
+            self.esc.put(sm.start, &image[..image.len().min(sm.len)]);
+        }
+    }
+
+    fn show_al(&mut self) {
+        self.esc.set_u16(reg::AL_STATUS, self.al.status());
+        self.esc
+            .set_u16(reg::AL_STATUS_CODE, self.al.status_code(self.id));
+    }
+
+    fn al_control(&mut self, now: Duration) {
+        let control = self.esc.u16(reg::AL_CONTROL);
+        let (mem, inverters) = (self.esc.mem(), self.inverters);
+        let outcome = self.al.control(control, |to| match to {
+            EcState::PreOperational => al::check_mailbox(mem, false),
+            EcState::Bootstrap => al::check_mailbox(mem, true),
+            EcState::SafeOperational => al::check_process_data(mem, inverters),
+            _ => Ok(()),
+        });
+        if let Outcome::Changed(from, to) = outcome {
+            self.enter(from, to, now);
+        }
+        self.show_al();
+    }
+
+    /// What entering `to` from `from` does to the SyncManagers, the mailbox and the watchdog.
+    fn enter(&mut self, from: EcState, to: EcState, now: Duration) {
+        match to {
+            EcState::Init => {
+                for n in 0..4 {
+                    self.esc.deactivate(n, true);
+                }
+                self.mailbox.reset();
+            }
+            EcState::PreOperational | EcState::Bootstrap => {
+                if from == EcState::Init {
+                    self.esc.deactivate(0, false);
+                    self.esc.deactivate(1, false);
+                }
+                self.esc.deactivate(2, true);
+                self.esc.deactivate(3, true);
+            }
+            EcState::SafeOperational => {
+                if from == EcState::PreOperational {
+                    self.esc.deactivate(2, false);
+                    self.esc.deactivate(3, false);
+                    pdo::cycle(&mut self.device, &mut self.words, None, false, now);
+                    self.show_inputs();
+                }
+            }
+            EcState::Operational => {
+                self.esc.wd_trigger = Some(now);
+                self.esc.set_u16(reg::WD_SM_STATUS, 1);
+                self.device.set_fieldbus_timeout(false);
+            }
+        }
+    }
+
+    /// Timers: the SM watchdog in Operational, the inputs in Safe Operational, the device's
+    /// monitoring, emergencies for new inverter errors.
+    fn tick(&mut self, now: Duration) {
+        if self.al.state == EcState::Operational {
+            let sm2 = SmConfig::read(self.esc.mem(), 2);
+            let watched = sm2.control & 0x40 != 0;
+            if let (true, Some(t), Some(limit)) =
+                (watched, self.esc.wd_trigger, self.esc.sm_watchdog())
+            {
+                if now.saturating_sub(t) > limit {
+                    self.esc.wd_trigger = None;
+                    self.esc.set_u16(reg::WD_SM_STATUS, 0);
+                    let c = self.esc.u8(reg::WD_SM_COUNTER);
+                    self.esc.set_u8(reg::WD_SM_COUNTER, c.saturating_add(1));
+                    if let Outcome::Changed(from, to) = self
+                        .al
+                        .fall_back(EcState::SafeOperational, al::code::SM_WATCHDOG)
+                    {
+                        self.enter(from, to, now);
+                    }
+                    pdo::watchdog_expired(&mut self.device);
+                    self.show_al();
+                }
+            }
+        }
+        if self.al.state == EcState::SafeOperational {
+            pdo::cycle(&mut self.device, &mut self.words, None, false, now);
+            self.show_inputs();
+        } else {
+            self.device.tick(now);
+        }
+        self.emergencies();
+    }
+
+    /// A CoE emergency for each inverter error that appeared (P700 [-01] from 0 to a value):
+    /// the DS402 code of BU 0620 §5.3 for communication errors (error register 11h), else
+    /// FF00h (manufacturer specific, error register 81h); bytes 3–4 the P700 value, byte 5
+    /// the FI.
+    fn emergencies(&mut self) {
+        let (Ok(p700), Ok(first)) = (ParamNumber::new(700), proto::nord::ArrayElement::new(1))
+        else {
+            return;
+        };
+        for n in 1..=self.inverters {
+            let Ok(fi) = Inverter::new(i64::from(n)) else {
+                continue;
+            };
+            let value = self
+                .device
+                .store(Unit::Inverter(fi))
+                .ok()
+                .and_then(|s| s.read(p700, None, Some(first)).ok())
+                .unwrap_or(0);
+            let i = usize::from(n - 1);
+            if value != self.faults[i] && value != 0 && self.al.state != EcState::Init {
+                let (code, register) = proto::nord::errors::COMM_ERRORS
+                    .iter()
+                    .find(|c| i32::from(c.p700) == value)
+                    .map_or((0xFF00, 0x81), |c| (c.ds402, 0x11));
+                let v = (value as u16).to_le_bytes();
+                self.mailbox.send(
+                    kind::COE,
+                    &wire::emergency(code, register, [v[0], v[1], n, 0, 0]),
+                );
+                self.fill_mailbox();
+            }
+            self.faults[i] = value;
+        }
+    }
+
+    /// Runs the timers due at `now`; returns when to call again at the latest (`None`: nothing
+    /// pending).
+    pub fn poll(&mut self, now: Duration) -> Option<Duration> {
+        self.tick(now);
+        self.fill_mailbox();
+        let mut next = None;
+        if self.al.state == EcState::Operational {
+            if let (Some(t), Some(limit)) = (self.esc.wd_trigger, self.esc.sm_watchdog()) {
+                next = Some(t + limit + Duration::from_micros(1));
+            }
+        }
+        if self.al.state != EcState::Init {
+            let p = now + POLL_PERIOD;
+            next = Some(next.map_or(p, |n: Duration| n.min(p)));
+        }
+        next
+    }
+
+    /// The AL state.
+    pub fn al_state(&self) -> EcState {
+        self.al.state
+    }
+
+    /// The AL status register (0130h): state, error indication (bit 4), ID loaded (bit 5).
+    pub fn al_status(&self) -> u16 {
+        self.al.status()
+    }
+
+    /// The AL status code register (0134h).
+    pub fn al_status_code(&self) -> u16 {
+        self.al.status_code(self.id)
+    }
+
+    /// LED A "RUN" (BU 0620 §5.5.2.1).
+    pub fn run_led(&self) -> Row {
+        self.al.run_led()
+    }
+
+    /// LED B "ERR" (BU 0620 §5.5.2.1).
+    pub fn err_led(&self) -> Row {
+        self.al.err_led()
+    }
+
+    /// The simulated device.
+    pub fn device(&self) -> &Device {
+        &self.device
+    }
+
+    /// The simulated device, for fault injection and observation.
+    pub fn device_mut(&mut self) -> &mut Device {
+        &mut self.device
+    }
+
+    /// The configured station address (0010h).
+    pub fn station_address(&self) -> u16 {
+        self.esc.u16(reg::STATION_ADDRESS)
+    }
+
+    /// The Hot Connect ID adopted at power-on (P850 "Second Address").
+    pub fn device_id(&self) -> u16 {
+        self.id
+    }
+
+    /// P850 "Second Address" as set now (taken over at the next power-on).
+    pub fn second_address_setting(&self) -> u16 {
+        self.second_address
+    }
+
+    /// ESC registers or process RAM as the master would read them, without side effects.
+    pub fn registers(&self, address: u16, len: usize) -> Vec<u8> {
+        let mut v = self.esc.bytes(usize::from(address), len).to_vec();
+        v.resize(len, 0);
+        v
+    }
+
+    /// The SII EEPROM image, little-endian words as bytes.
+    pub fn sii_image(&self) -> Vec<u8> {
+        self.image.iter().flat_map(|w| w.to_le_bytes()).collect()
+    }
+
+    /// Frames dropped as malformed.
+    pub fn dropped(&self) -> u64 {
+        self.dropped
+    }
+
+    /// Mailbox messages answered with a mailbox error.
+    pub fn mailbox_errors(&self) -> u64 {
+        self.mailbox.errors
+    }
+}
+
+fn op_of(n: u8) -> Op {
+    match n {
+        0 => Op::Read,
+        1 => Op::Write,
+        _ => Op::ReadWrite,
+    }
+}
