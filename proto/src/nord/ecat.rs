@@ -795,7 +795,7 @@ mod tests {
         assert_eq!(sms[2].len, 96);
         // Three buffers of SM2 end before SM3 starts.
         assert!(OUTPUTS_START + 3 * sms[2].len <= INPUTS_START);
-        assert!(SM_MAILBOX_IN.start + SM_MAILBOX_IN.len <= OUTPUTS_START);
+        const { assert!(SM_MAILBOX_IN.start + SM_MAILBOX_IN.len <= OUTPUTS_START) };
         let mut idx: Vec<u16> = od.iter().map(|o| o.index).collect();
         idx.dedup();
         assert_eq!(idx.len(), od.len(), "indices unique");

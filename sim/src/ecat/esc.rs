@@ -202,7 +202,7 @@ impl Esc {
                 }
             }
             0x0900..=0x09FF | 0x0F00..=0x0F1F => true,
-            a => a >= RAM_START && a < RAM_END,
+            a => (RAM_START..RAM_END).contains(&a),
         }
     }
 

@@ -175,10 +175,11 @@ impl SyncManagers {
     fn show(&self, mem: &mut [u8], n: usize) {
         let sm = SmConfig::read(mem, n);
         let status = if sm.mailbox() {
-            if self.full[n] {
-                0x08 | if sm.master_writes() { 0x01 } else { 0x00 }
-            } else {
-                0x00 | if sm.master_writes() { 0x00 } else { 0x02 }
+            match (self.full[n], sm.master_writes()) {
+                (true, true) => 0x09,
+                (true, false) => 0x08,
+                (false, true) => 0x00,
+                (false, false) => 0x02,
             }
         } else {
             0x01

@@ -13,6 +13,9 @@ use proto::nord::Product;
 use super::*;
 use crate::device::{Device, DeviceConfig};
 
+mod coe;
+mod pdo;
+
 const STATION: u16 = 0x1001;
 
 fn ms(n: u64) -> Duration {
@@ -84,9 +87,21 @@ fn parse_back(f: &[u8]) -> Vec<Back> {
     out
 }
 
+/// The data of an upload response (expedited or normal), or the abort code.
+fn sdo_result(resp: &[u8]) -> Result<Vec<u8>, u32> {
+    let code = u32::from_le_bytes([resp[4], resp[5], resp[6], resp[7]]);
+    match resp[0] {
+        0x80 => Err(code),
+        c if c & 0xE3 == 0x43 => Ok(resp[4..8 - usize::from((c >> 2) & 3)].to_vec()),
+        c if c & 0xE3 == 0x41 => Ok(resp[8..8 + code as usize].to_vec()),
+        c => panic!("unexpected response {c:02X}"),
+    }
+}
+
 struct Master {
     slave: Slave,
     now: Duration,
+    counter: u8,
 }
 
 impl Master {
@@ -102,6 +117,7 @@ impl Master {
         Master {
             slave: Slave::with_config(device, config).unwrap(),
             now: ms(100),
+            counter: 0,
         }
     }
 
@@ -179,7 +195,66 @@ impl Master {
         assert_eq!(self.fpwr(0x0600, &both), 1);
     }
 
-    fn to_op(&mut self, inverters: u8) {
+    /// Writes a mailbox message (header and body) into SM0, padded to its 128 bytes.
+    fn mbx_write(&mut self, msg: &[u8]) -> u16 {
+        let mut buf = msg.to_vec();
+        buf.resize(self.sm_len(0), 0);
+        self.fpwr(0x1000, &buf)
+    }
+
+    fn sm_len(&mut self, n: u16) -> usize {
+        usize::from(self.u16_at(0x0802 + 8 * n))
+    }
+
+    /// Reads SM1 whole; `None` when empty (working counter 0).
+    fn mbx_read(&mut self) -> Option<Vec<u8>> {
+        let len = self.sm_len(1);
+        let b = self.fprd(0x1080, len);
+        (b.wkc == 1).then_some(b.data)
+    }
+
+    /// A CoE SDO request (the 8+ bytes after the CoE header) in a mailbox with the next
+    /// counter; the reply's bytes after the CoE header, or the whole reply if not CoE.
+    fn sdo(&mut self, request: &[u8]) -> Vec<u8> {
+        self.counter = self.counter % 7 + 1;
+        let mut msg = ((request.len() + 2) as u16).to_le_bytes().to_vec(); // length
+        msg.extend([0, 0, 0, 0x03 | self.counter << 4]); // address, channel, CoE + counter
+        msg.extend([0x00, 0x20]); // CoE: number 0, service 2 (SDO request)
+        msg.extend(request);
+        assert_eq!(self.mbx_write(&msg), 1, "receive mailbox free");
+        let reply = self.mbx_read().expect("a reply");
+        let len = usize::from(u16::from_le_bytes([reply[0], reply[1]]));
+        assert_eq!(reply[5] & 0x0F, 3, "CoE reply: {reply:02X?}");
+        assert_eq!(reply[7] >> 4, 3, "SDO response");
+        reply[8..6 + len].to_vec()
+    }
+
+    /// Expedited or normal upload; the data or the abort code.
+    fn upload(&mut self, index: u16, sub: u8) -> Result<Vec<u8>, u32> {
+        let mut r = vec![0x40]; // initiate upload
+        r.extend(index.to_le_bytes());
+        r.extend([sub, 0, 0, 0, 0]);
+        sdo_result(&self.sdo(&r))
+    }
+
+    /// Expedited download with size; `Ok` or the abort code.
+    fn download(&mut self, index: u16, sub: u8, data: &[u8]) -> Result<(), u32> {
+        let n = 4 - data.len().min(4) as u8;
+        let mut r = vec![0x23 | n << 2]; // initiate download, expedited, size indicated
+        r.extend(index.to_le_bytes());
+        r.push(sub);
+        let mut d = data.to_vec();
+        d.resize(4, 0);
+        r.extend(d);
+        let resp = self.sdo(&r);
+        match resp[0] {
+            0x60 => Ok(()),
+            0x80 => Err(u32::from_le_bytes([resp[4], resp[5], resp[6], resp[7]])),
+            c => panic!("unexpected response {c:02X}"),
+        }
+    }
+
+    fn go_op(&mut self, inverters: u8) {
         self.preop();
         self.pd_sms(inverters);
         assert_eq!(self.request(0x04), (0x04, 0));
@@ -418,7 +493,7 @@ fn explicit_device_id_for_hot_connect() {
 #[test]
 fn leds_show_the_watchdog() {
     let mut m = Master::new(1);
-    m.to_op(1);
+    m.go_op(1);
     let t = m.now;
     m.slave.poll(t + ms(50));
     assert_eq!(m.slave.al_state(), EcState::Operational);
