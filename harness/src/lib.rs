@@ -8,16 +8,19 @@ mod ecat;
 /// `harness serve ecat` in a thread of the caller (EtherCAT end-to-end tests and benches).
 pub use ecat::serve as ecat_serve;
 mod enip;
-pub use enip::bench;
+/// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the
+/// simulator served as an adapter, the harness scanner reading a parameter.
+pub use enip::bench_support as enip_bench;
 mod model;
 mod net;
 mod notation;
 pub mod outcome;
 mod pcap;
-mod poll;
+pub mod poll;
 mod profile;
 mod report;
 mod runner;
+pub mod stats;
 mod suite;
 
 /// Runs every suite below `suites` against the embedded simulator under every built-in profile

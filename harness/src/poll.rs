@@ -13,11 +13,11 @@ use std::time::{Duration, Instant};
 
 /// How long a client polls for a reply before it sleeps: a device that answers within it (the
 /// simulator over loopback does, in tens of µs) is seen without a thread wake-up.
-pub(crate) const REPLY_POLL: Duration = Duration::from_micros(100);
+pub const REPLY_POLL: Duration = Duration::from_micros(100);
 
 /// A TCP stream read by polling for up to `spin` before blocking.
 #[derive(Debug)]
-pub(crate) struct PollingStream {
+pub struct PollingStream {
     tcp: TcpStream,
     spin: Duration,
     /// The socket's mode as last set: a wait in blocking mode that could not switch back
@@ -27,7 +27,7 @@ pub(crate) struct PollingStream {
 
 impl PollingStream {
     /// Wraps `tcp`, which is made non-blocking.
-    pub(crate) fn new(tcp: TcpStream, spin: Duration) -> std::io::Result<PollingStream> {
+    pub fn new(tcp: TcpStream, spin: Duration) -> std::io::Result<PollingStream> {
         let mut s = PollingStream {
             tcp,
             spin,
@@ -46,13 +46,13 @@ impl PollingStream {
     }
 
     /// The stream, to write to or ask for addresses.
-    pub(crate) fn get(&self) -> &TcpStream {
+    pub fn get(&self) -> &TcpStream {
         &self.tcp
     }
 
     /// Reads what has arrived into `buf`, waiting up to `timeout` for something: `Ok(0)` is
     /// the peer's close, `ErrorKind::TimedOut` that nothing came in time.
-    pub(crate) fn read(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+    pub fn read(&mut self, buf: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
         self.set_nonblocking(true)?;
         let start = Instant::now();
         loop {
@@ -74,7 +74,7 @@ impl PollingStream {
     }
 
     /// Writes all of `bytes`; a full send buffer is waited on for up to `timeout`.
-    pub(crate) fn write_all(&mut self, bytes: &[u8], timeout: Duration) -> std::io::Result<()> {
+    pub fn write_all(&mut self, bytes: &[u8], timeout: Duration) -> std::io::Result<()> {
         self.set_nonblocking(true)?;
         let mut rest = bytes;
         while !rest.is_empty() {

@@ -1,8 +1,8 @@
 //! EtherNet/IP: the scanner binding (explicit messages to NORD's parameter classes and a
 //! class-1 I/O connection), `harness serve enip`, the EDS writer and the `enip:` suite steps.
 
-/// EtherNet/IP speed figures over loopback (`cargo bench -p harness --bench enip`).
-pub mod bench;
+/// What the EtherNet/IP speed bench needs of the library (`harness::enip_bench`).
+pub mod bench_support;
 mod cleanup;
 mod eds;
 mod link;

@@ -13,8 +13,9 @@ use proto::enip::encap::{
 };
 use proto::enip::epath::EPath;
 
+use harness::poll::{PollingStream, REPLY_POLL};
+
 use super::{IO_MULTIPLIER, ORIGINATOR_SERIAL, VENDOR};
-use crate::poll::{PollingStream, REPLY_POLL};
 
 /// How long it waits for a reply at all.
 const TIMEOUT: Duration = Duration::from_secs(2);

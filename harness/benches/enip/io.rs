@@ -1,5 +1,5 @@
 //! The jitter figure: T→O arrival times of a class-1 connection and how far they stray from
-//! the RPI.
+//! the RPI (`harness::stats::jitter`), from the kernel's receive stamps.
 
 use std::io::IoSliceMut;
 use std::net::{SocketAddr, UdpSocket};
@@ -9,6 +9,7 @@ use std::sync::Arc;
 use std::thread;
 use std::time::{Duration, Instant};
 
+use harness::stats::{jitter, Jitter};
 use nix::errno::Errno;
 use nix::sys::socket::{recvmsg, setsockopt, sockopt, ControlMessageOwned, MsgFlags};
 use nix::sys::time::TimeSpec;
@@ -149,140 +150,4 @@ fn receive_stamped(udp: &UdpSocket, buf: &mut [u8]) -> Result<(usize, Duration),
     });
     // Without a stamp (the option refused) the datagram is unusable for the figure.
     stamp.map(|t| (msg.bytes, t)).ok_or(Errno::ENOMSG)
-}
-
-/// How far the arrivals of a periodic stream stray from its period.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) struct Jitter {
-    /// Frames received.
-    pub(super) frames: usize,
-    /// Frames missing by their sequence numbers.
-    pub(super) lost: u64,
-    /// Frames whose sequence number did not advance (duplicates, reordering).
-    pub(super) disordered: u64,
-    /// Median of |interval − period| over consecutive sequence numbers.
-    pub(super) p50: Duration,
-    /// 99th percentile of the same.
-    pub(super) p99: Duration,
-    /// The largest.
-    pub(super) max: Duration,
-}
-
-/// Jitter of `arrivals` ((sequence number, arrival time), in arrival order) against `period`.
-/// Only intervals between consecutive sequence numbers count; a gap counts its missing frames
-/// as lost. `None` without a single such interval.
-pub(crate) fn jitter(arrivals: &[(u32, Duration)], period: Duration) -> Option<Jitter> {
-    let (mut lost, mut disordered) = (0u64, 0u64);
-    let mut deviations = Vec::with_capacity(arrivals.len());
-    for pair in arrivals.windows(2) {
-        let ((s0, t0), (s1, t1)) = (pair[0], pair[1]);
-        match s1.wrapping_sub(s0) {
-            1 => deviations.push(t1.saturating_sub(t0).abs_diff(period)),
-            gap if gap > 1 && gap < 1 << 31 => lost += u64::from(gap - 1),
-            _ => disordered += 1,
-        }
-    }
-    deviations.sort_unstable();
-    Some(Jitter {
-        frames: arrivals.len(),
-        lost,
-        disordered,
-        p50: percentile(&deviations, 50.0)?,
-        p99: percentile(&deviations, 99.0)?,
-        max: *deviations.last()?,
-    })
-}
-
-/// The `p`th percentile (nearest rank) of ascending `sorted`; `None` when empty.
-pub(crate) fn percentile(sorted: &[Duration], p: f64) -> Option<Duration> {
-    if sorted.is_empty() {
-        return None;
-    }
-    let rank = (p / 100.0 * sorted.len() as f64).ceil() as usize;
-    sorted.get(rank.clamp(1, sorted.len()) - 1).copied()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn us(n: u64) -> Duration {
-        Duration::from_micros(n)
-    }
-
-    #[test]
-    fn percentile_is_nearest_rank() {
-        let v: Vec<Duration> = (1..=100).map(us).collect();
-        assert_eq!(percentile(&v, 50.0), Some(us(50)));
-        assert_eq!(percentile(&v, 99.0), Some(us(99)));
-        assert_eq!(percentile(&v, 100.0), Some(us(100)));
-        assert_eq!(percentile(&v, 0.0), Some(us(1)));
-        // 10 values: rank ceil(9.9) = 10, the largest.
-        let ten: Vec<Duration> = (1..=10).map(us).collect();
-        assert_eq!(percentile(&ten, 99.0), Some(us(10)));
-        assert_eq!(percentile(&ten, 50.0), Some(us(5)));
-        assert_eq!(percentile(&[us(7)], 99.0), Some(us(7)));
-        assert_eq!(percentile(&[], 50.0), None);
-    }
-
-    #[test]
-    fn jitter_of_a_perfect_stream_is_zero() {
-        let a: Vec<(u32, Duration)> = (0..10).map(|i| (i + 1, us(1000 * u64::from(i)))).collect();
-        let j = jitter(&a, us(1000)).unwrap();
-        assert_eq!(
-            j,
-            Jitter {
-                frames: 10,
-                lost: 0,
-                disordered: 0,
-                p50: Duration::ZERO,
-                p99: Duration::ZERO,
-                max: Duration::ZERO,
-            }
-        );
-    }
-
-    #[test]
-    fn jitter_is_the_absolute_deviation_from_the_period() {
-        // Intervals 1100, 900, 1000, 1300 µs: deviations 100, 100, 0, 300.
-        let a = [
-            (1, us(0)),
-            (2, us(1100)),
-            (3, us(2000)),
-            (4, us(3000)),
-            (5, us(4300)),
-        ];
-        let j = jitter(&a, us(1000)).unwrap();
-        assert_eq!((j.p50, j.p99, j.max), (us(100), us(300), us(300)));
-    }
-
-    #[test]
-    fn gaps_count_as_lost_and_are_not_intervals() {
-        // 3 and 4 missing: the 3000 µs interval 2→5 is not a jitter sample.
-        let a = [(1, us(0)), (2, us(1000)), (5, us(4000)), (6, us(5050))];
-        let j = jitter(&a, us(1000)).unwrap();
-        assert_eq!((j.frames, j.lost, j.disordered), (4, 2, 0));
-        assert_eq!((j.p50, j.max), (us(0), us(50)));
-    }
-
-    #[test]
-    fn sequence_numbers_wrap_and_repeats_are_disordered() {
-        let a = [
-            (u32::MAX, us(0)),
-            (0, us(1000)),
-            (0, us(1500)),
-            (1, us(2000)),
-        ];
-        let j = jitter(&a, us(1000)).unwrap();
-        assert_eq!((j.lost, j.disordered), (0, 1));
-        // 0 → 1 counts from the repeat's arrival: 500 µs, deviation 500.
-        assert_eq!((j.p50, j.max), (us(0), us(500)));
-    }
-
-    #[test]
-    fn no_interval_no_jitter() {
-        assert_eq!(jitter(&[], us(1000)), None);
-        assert_eq!(jitter(&[(1, us(0))], us(1000)), None);
-        assert_eq!(jitter(&[(1, us(0)), (3, us(2000))], us(1000)), None);
-    }
 }

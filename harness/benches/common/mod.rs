@@ -1,0 +1,169 @@
+//! What the speed benches share (each bench target includes this file as its `common`
+//! module): the interop venv's Python and its bench scripts, clients run concurrently, and the
+//! wording of a target met. The figures themselves are in `harness::stats`.
+
+// Each bench uses part of this.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::Barrier;
+use std::thread;
+use std::time::{Duration, Instant};
+
+use harness::stats::Rate;
+
+/// `met` or `NOT met`: a bench prints whether a target was met, it does not fail.
+pub(crate) fn met(ok: bool) -> &'static str {
+    if ok {
+        "met"
+    } else {
+        "NOT met"
+    }
+}
+
+/// The interop venv's Python (`${INTEROP_VENV:-/tmp/nord-interop-venv}/bin/python`, made by
+/// `.ci/interop-setup`), when it exists.
+pub(crate) fn interop_python() -> Option<PathBuf> {
+    let venv = std::env::var("INTEROP_VENV").unwrap_or_else(|_| "/tmp/nord-interop-venv".into());
+    let python = Path::new(&venv).join("bin/python");
+    python.exists().then_some(python)
+}
+
+/// What a Python bench script did.
+pub(crate) enum Script {
+    /// It could not run here: no venv, or its library not importable (exit code 3).
+    Skipped(String),
+    /// It ran and failed, overran its time, or said nothing readable.
+    Failed(String),
+    /// Its last JSON line, without an `error` member.
+    Ran(serde_json::Value),
+}
+
+/// Runs `script ARGS` with the interop venv's `python`, waiting up to `limit` (plus start-up
+/// time); the script prints one JSON line at the end (`{"error": …}` when it failed) and exits
+/// with 3 when `library` cannot be imported.
+pub(crate) fn run_script(
+    python: Option<&Path>,
+    script: &Path,
+    args: &[String],
+    library: &str,
+    limit: Duration,
+) -> Script {
+    let name = script
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| script.display().to_string());
+    let Some(python) = python else {
+        return Script::Skipped(
+            "no interop venv at ${INTEROP_VENV:-/tmp/nord-interop-venv}; run `bash .ci/interop-setup`"
+                .into(),
+        );
+    };
+    let child = Command::new(python)
+        .arg(script)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn();
+    let mut child = match child {
+        Ok(c) => c,
+        Err(e) => return Script::Failed(format!("cannot run {}: {e}", python.display())),
+    };
+    // Python's start and the library's import on top of the measured time.
+    let deadline = Instant::now() + limit + Duration::from_secs(30);
+    loop {
+        match child.try_wait() {
+            Ok(Some(_)) => break,
+            Ok(None) if Instant::now() < deadline => thread::sleep(Duration::from_millis(20)),
+            Ok(None) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Script::Failed(format!("{name} overran its time limit"));
+            }
+            Err(e) => return Script::Failed(e.to_string()),
+        }
+    }
+    let out = match child.wait_with_output() {
+        Ok(o) => o,
+        Err(e) => return Script::Failed(e.to_string()),
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr).trim().to_string();
+    match out.status.code() {
+        Some(0) => {}
+        Some(3) => return Script::Skipped(format!("{library} not importable: {stderr}")),
+        _ => return Script::Failed(format!("{name} {}: {stderr}", out.status)),
+    }
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let Some(v) = stdout
+        .lines()
+        .rev()
+        .find_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+    else {
+        return Script::Failed(format!("no JSON line from {name}: {stdout}"));
+    };
+    match v.get("error").and_then(serde_json::Value::as_str) {
+        Some(e) => Script::Failed(e.to_string()),
+        None => Script::Ran(v),
+    }
+}
+
+/// Aggregate rate of `clients` threads, each with its own client from `connect` (made in the
+/// thread: a scanner stays on the thread that made it), all started together, each doing
+/// `one` up to `per_client` times within `limit`. The first error of any thread is returned.
+pub(crate) fn concurrent<C>(
+    clients: usize,
+    per_client: u32,
+    limit: Duration,
+    connect: impl Fn() -> Result<C, String> + Sync,
+    one: impl Fn(&mut C) -> Result<(), String> + Sync,
+) -> Result<Rate, String> {
+    let go = Barrier::new(clients + 1);
+    thread::scope(|scope| {
+        let threads: Vec<_> = (0..clients)
+            .map(|_| {
+                scope.spawn(|| -> Result<(u64, Instant), String> {
+                    let client = connect();
+                    // Every thread reaches the barrier, even one that could not connect.
+                    go.wait();
+                    let mut client = client?;
+                    let start = Instant::now();
+                    let mut n = 0u64;
+                    while n < u64::from(per_client) && start.elapsed() < limit {
+                        one(&mut client)?;
+                        n += 1;
+                    }
+                    // Ended before the client is dropped (its session closed).
+                    Ok((n, Instant::now()))
+                })
+            })
+            .collect();
+        go.wait();
+        let start = Instant::now();
+        let mut count = 0;
+        let mut end = start;
+        let mut error = None;
+        for t in threads {
+            match t.join() {
+                Ok(Ok((n, at))) => {
+                    count += n;
+                    end = end.max(at);
+                }
+                Ok(Err(e)) => {
+                    error.get_or_insert(e);
+                }
+                Err(_) => {
+                    error.get_or_insert("a client thread panicked".into());
+                }
+            }
+        }
+        match error {
+            Some(e) => Err(e),
+            None => Ok(Rate {
+                count,
+                secs: (end - start).as_secs_f64(),
+            }),
+        }
+    })
+}
