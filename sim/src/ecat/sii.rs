@@ -119,7 +119,9 @@ pub(crate) fn image(inverters: u8, alias: u16) -> Vec<u16> {
     w[0x3E] = (def::EEPROM_BYTES * 8 / 1024 - 1) as u16;
     w[0x3F] = 1;
 
+    // String 1 is the device name: masters take the first string as the name (SOEM).
     let mut strings = Strings::default();
+    strings.index(def::DEVICE_NAME);
     let rx = def::rx_pdos(inverters);
     let tx = def::tx_pdos(inverters);
     let rx_bytes = pdo_category(&rx, &mut strings);

@@ -254,7 +254,8 @@ pub(crate) fn sdo_request(b: &[u8]) -> Option<SdoRequest> {
     })
 }
 
-/// The bytes of an SDO response, with the CoE header (service 3, SDO response).
+/// The bytes of an SDO response, with the CoE header (service 3, SDO response; 2 for an
+/// abort).
 pub(crate) fn sdo_response(r: &SdoResponse) -> Vec<u8> {
     let mut b = 0x3000u16.to_le_bytes().to_vec();
     let head = |b: &mut Vec<u8>, cmd: u8, index: u16, sub: u8| {
@@ -306,6 +307,9 @@ pub(crate) fn sdo_response(r: &SdoResponse) -> Vec<u8> {
             b.resize(b.len() + usize::from(n), 0);
         }
         SdoResponse::Abort { index, sub, code } => {
+            // Abort transfer travels as an SDO *request* in both directions (ETG.1000.6
+            // §5.6.2.7: CoE service 2), which masters (SOEM) rely on.
+            b = 0x2000u16.to_le_bytes().to_vec();
             head(&mut b, 0x80, *index, *sub);
             b.extend(code.0.to_le_bytes());
         }

@@ -225,7 +225,12 @@ impl Master {
         let reply = self.mbx_read().expect("a reply");
         let len = usize::from(u16::from_le_bytes([reply[0], reply[1]]));
         assert_eq!(reply[5] & 0x0F, 3, "CoE reply: {reply:02X?}");
-        assert_eq!(reply[7] >> 4, 3, "SDO response");
+        let service = if reply[8] == 0x80 { 2 } else { 3 };
+        assert_eq!(
+            reply[7] >> 4,
+            service,
+            "SDO response, an abort as SDO request"
+        );
         reply[8..6 + len].to_vec()
     }
 
