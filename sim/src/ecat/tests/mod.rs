@@ -513,3 +513,44 @@ fn leds_show_the_watchdog() {
     assert_eq!(m.slave.err_led().pattern, Pattern::DoubleFlashRed);
     assert_eq!(m.slave.err_led().meaning, "Application Watchdog Timeout");
 }
+
+#[test]
+fn no_byte_sequence_panics() {
+    let mut m = Master::new(8);
+    m.go_op(8);
+    let good = frame(&[
+        dg(12, 0, 0, &[0; 96]),
+        dg(4, STATION, 0x1080, &[0; 128]),
+        dg(5, STATION, 0x0120, &[0x08, 0]),
+    ]);
+    // Every truncation, and every byte set to 00h, FFh or flipped.
+    for len in 0..good.len() {
+        let mut f = good[..len].to_vec();
+        let _ = m.slave.process(&mut f, m.now);
+    }
+    for i in 0..good.len().min(200) {
+        for v in [0x00, 0xFF, !good[i]] {
+            let mut f = good.clone();
+            f[i] = v;
+            let _ = m.slave.process(&mut f, m.now);
+        }
+    }
+    // Mailbox messages of every length with every type nibble.
+    m.preop_again();
+    for len in 0..24u8 {
+        for ty in 0..16u8 {
+            let mut msg = vec![len, 0, 0, 0, 0, ty | 0x10 * (len % 7 + 1)];
+            msg.extend((0..len).map(|b| b.wrapping_mul(37)));
+            m.mbx_write(&msg);
+            m.mbx_read();
+        }
+    }
+}
+
+impl Master {
+    /// Back to Pre-Op with the error acknowledged.
+    fn preop_again(&mut self) {
+        self.request(0x12);
+        assert_eq!(self.slave.al_state(), EcState::PreOperational);
+    }
+}
