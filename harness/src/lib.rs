@@ -11,6 +11,7 @@ mod enip;
 /// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the
 /// simulator served as an adapter, the harness scanner reading a parameter.
 pub use enip::bench_support as enip_bench;
+mod ledger;
 mod model;
 mod net;
 mod notation;

@@ -3,7 +3,8 @@
 //!
 //! The embedded adapter is made afresh for every case and needs none of this. A device on the
 //! network is one device for the whole run, so the scanner keeps a [`Ledger`] while a case runs
-//! and, when it ends, whatever its verdict:
+//! (the attributes it set, in the shared [`crate::ledger::Ledger`], and the connections it
+//! opened) and, when it ends, whatever its verdict:
 //!
 //! 1. stops the inverters the case commanded through the case's own I/O connection while that
 //!    is still open: control word 0400h, "control data valid" with "disable voltage"
@@ -50,6 +51,7 @@ use serde_json::Value;
 
 use super::scanner::{Scanner, RPI};
 use crate::binding::StepError;
+use crate::ledger::{self, Account, Problem};
 use crate::outcome::Exchange;
 use crate::runner::hex;
 use crate::suite::{OrderSpec, Target};
@@ -79,17 +81,6 @@ const QUIET_POLL: Duration = Duration::from_millis(10);
 /// Bus status bit 1 "cyclic (PZD) communication" (P872, P173 [-01]).
 const CYCLIC: i64 = 1 << 1;
 
-/// An attribute the case set.
-#[derive(Debug, Clone, PartialEq, Eq)]
-struct Written {
-    path: EPath,
-    /// Its value before the case's first write, or why it could not be read.
-    before: Result<Vec<u8>, String>,
-    /// A write was accepted, or went without a readable answer: the value may differ from
-    /// `before`.
-    changed: bool,
-}
-
 /// A connection the case opened.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(super) struct Opened {
@@ -111,8 +102,8 @@ impl Opened {
 /// What a case changed on the target, as far as the scanner saw it.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]
 pub(super) struct Ledger {
-    /// Attributes in the order of their first write.
-    written: Vec<Written>,
+    /// Attributes set, with their values before.
+    written: ledger::Ledger<EPath>,
     /// Connections still open, in the order opened.
     opened: Vec<Opened>,
     /// An I/O (class 1) connection was opened: the drive may have moved, or faulted when the
@@ -124,26 +115,18 @@ impl Ledger {
     /// Whether the value of `path` must be read before the write about to be made: the first
     /// write of each attribute in the case.
     pub(super) fn wants_original(&self, path: &EPath) -> bool {
-        !self.written.iter().any(|w| w.path == *path)
+        self.written.wants_original(path)
     }
 
     /// The value of `path` before the case's first write of it.
     pub(super) fn original(&mut self, path: EPath, before: Result<Vec<u8>, String>) {
-        if self.wants_original(&path) {
-            self.written.push(Written {
-                path,
-                before,
-                changed: false,
-            });
-        }
+        self.written.original(path, before);
     }
 
     /// A write of `path` was sent; `accepted` when it may have taken effect (see
     /// [`may_have_taken_effect`]).
     pub(super) fn wrote(&mut self, path: &EPath, accepted: bool) {
-        if let Some(w) = self.written.iter_mut().find(|w| w.path == *path) {
-            w.changed |= accepted;
-        }
+        self.written.wrote(path, accepted);
     }
 
     /// A Forward_Open was accepted, or may have been.
@@ -159,12 +142,9 @@ impl Ledger {
 
     /// The attributes to write back, in the order to write them (the reverse of the first
     /// writes), each with its original value or why there is none.
+    #[cfg(test)]
     fn restores(&self) -> impl Iterator<Item = (&EPath, Result<&[u8], &str>)> {
-        self.written
-            .iter()
-            .rev()
-            .filter(|w| w.changed)
-            .map(|w| (&w.path, w.before.as_deref().map_err(String::as_str)))
+        self.written.restores()
     }
 }
 
@@ -285,74 +265,7 @@ fn shorten(exchanges: &mut Vec<Exchange>, from: usize) {
 /// cut, a malformed reply, the reply of another service). A refusal did nothing, and so did a
 /// request the scanner could not even build (a suite error).
 pub(super) fn may_have_taken_effect(resp: Result<&MrResponse, &StepError>) -> bool {
-    match resp {
-        Ok(r) => r.general == 0,
-        Err(StepError::Suite(_)) => false,
-        Err(_) => true,
-    }
-}
-
-/// What one cleanup action could not do.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub(super) struct Problem {
-    text: String,
-    /// The target did not answer or the link broke: nothing more is attempted.
-    link: bool,
-}
-
-impl Problem {
-    /// `e` of a request made for `what`.
-    fn step(what: impl std::fmt::Display, e: StepError) -> Problem {
-        Problem {
-            link: matches!(e, StepError::Link(_)),
-            text: format!("{what}: {e}"),
-        }
-    }
-
-    /// A refusal, or something the cleanup cannot do: the target still answers.
-    fn other(text: String) -> Problem {
-        Problem { text, link: false }
-    }
-}
-
-/// The cleanup's account of its steps: the problems, and after the first link error, what
-/// was left undone.
-#[derive(Debug, Default)]
-struct Account {
-    problems: Vec<String>,
-    /// A link error came: the rest is only listed.
-    down: bool,
-    undone: Vec<String>,
-}
-
-impl Account {
-    /// Whether to go on with `what`: not after a link error, when it is listed as undone.
-    fn attempt(&mut self, what: impl FnOnce() -> String) -> bool {
-        if self.down {
-            self.undone.push(what());
-        }
-        !self.down
-    }
-
-    fn note(&mut self, outcome: Result<(), Problem>) {
-        if let Err(p) = outcome {
-            self.down |= p.link;
-            self.problems.push(p.text);
-        }
-    }
-
-    fn into_result(mut self) -> Result<(), String> {
-        if !self.undone.is_empty() {
-            self.problems.push(format!(
-                "not attempted after the link error: {}",
-                self.undone.join(", ")
-            ));
-        }
-        match self.problems.is_empty() {
-            true => Ok(()),
-            false => Err(self.problems.join("; ")),
-        }
-    }
+    ledger::may_have_taken_effect(resp.map(|r| r.general == 0))
 }
 
 impl Scanner {
@@ -464,12 +377,9 @@ impl Scanner {
                 .map_err(|e| Problem::step("stopping the drive on the case's connection", e));
             account.note(outcome);
         }
-        for (path, before) in ledger.restores() {
-            if account.attempt(|| format!("setting back {path}")) {
-                let outcome = self.put_back(path, before);
-                account.note(outcome);
-            }
-        }
+        ledger
+            .written
+            .restore(&mut account, |path, before| self.put_back(path, before));
         self.io = None;
         self.close_each(&ledger.opened, &mut account);
         if drive {
@@ -504,12 +414,7 @@ impl Scanner {
     }
 
     /// Step 2 for one attribute.
-    fn put_back(&mut self, path: &EPath, before: Result<&[u8], &str>) -> Result<(), Problem> {
-        let before = before.map_err(|e| {
-            Problem::other(format!(
-                "{path} was set but its value before could not be read ({e})"
-            ))
-        })?;
+    fn put_back(&mut self, path: &EPath, before: &[u8]) -> Result<(), Problem> {
         let what = || format!("{path} not set back to [{}]", hex(before));
         let resp = self
             .explicit(&MrRequest {
