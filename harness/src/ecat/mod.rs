@@ -1,11 +1,12 @@
 //! EtherCAT: the master binding (CoE SDO and cyclic PDOs over raw Ethernet or the in-memory
 //! link to the simulated slave), `harness serve ecat`, the ESI writer and the `ecat:` steps.
 
+mod esi;
 pub mod serve;
 mod step;
 
 use crate::binding::{Binding, OpenError};
-use crate::bus::{Bus, Embedded, Network};
+use crate::bus::{Bus, Description, Embedded, Network};
 use crate::profile::Profile;
 use crate::runner::DutFactory;
 
@@ -17,9 +18,25 @@ pub(crate) const BUS: Bus = Bus {
     parse_step: step::parse,
     embedded,
     network,
-    serve,
-    descriptions: &[],
+    serve: serve::command,
+    descriptions: &[Description {
+        format: "esi",
+        write: describe_esi,
+    }],
 };
+
+/// `harness describe esi`: the products speaking EtherCAT have their ESI from
+/// `proto::nord::ecat` (the SK 550P's integrated interface, BU 0620 §2.2).
+fn describe_esi(profile: &Profile, inverters: u8) -> Result<String, String> {
+    let product = profile.nord()?;
+    if !product
+        .protocols()
+        .contains(&proto::nord::Protocol::Ethercat)
+    {
+        return Err(format!("{} has no EtherCAT interface", product.name()));
+    }
+    esi::esi(inverters).map_err(|e| e.to_string())
+}
 
 fn profiles() -> Vec<Profile> {
     Vec::new()
@@ -31,8 +48,4 @@ fn embedded(_: &Profile, _: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
 
 fn network(_: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
     Err(OpenError::Profile("EtherCAT is not there yet".into()))
-}
-
-fn serve(_: &[String]) -> Result<i32, String> {
-    Err("EtherCAT is not there yet".into())
 }
