@@ -1,0 +1,277 @@
+//! The mailbox (ETG.1000.6 §5.5; ETG.1000.4 §6.7.2): the master writes a message into the
+//! slave's receive mailbox (SM0, the whole buffer: the SyncManager hands it over when its last
+//! byte is written), polls the send mailbox's status (SM1 status bit 3 "mailbox full") and
+//! reads the reply (the whole buffer, which empties it).
+//!
+//! Each message carries the master's counter, 1..7 cycling (0 is reserved for "no counter");
+//! a slave takes a message with the same counter as the one before for a repetition.
+//! The first frame of an exchange reads a message left in SM1 (an emergency, a stale reply),
+//! writes the request and tries to read the reply at once; a slave that needs longer is
+//! polled. CoE emergencies that arrive meanwhile are kept ([`Master::take_emergencies`]).
+//! A mailbox error reply (type 0) is the slave's refusal ([`Refusal::Mailbox`]).
+
+use super::codes::MailboxErrorCode;
+use super::engine::{Master, SmSetup};
+use super::error::{Awaited, LinkFailure, ProtocolError, Refusal, Result, UsageError};
+use super::port::check_wkc;
+use super::segment::Segment;
+use super::sii::SmKind;
+use super::wire::{Command, Datagram};
+
+/// Mailbox header bytes (ETG.1000.6 table 29).
+pub(crate) const HEADER: usize = 6;
+/// Mailbox type: error reply.
+pub(crate) const TYPE_ERROR: u8 = 0;
+/// Mailbox type: CoE.
+pub(crate) const TYPE_COE: u8 = 3;
+/// CoE service: emergency.
+const COE_EMERGENCY: u8 = 1;
+/// SM status bit 3: mailbox full.
+const MAILBOX_FULL: u8 = 0x08;
+/// Control byte of SM0 when the SII has none: mailbox, written by the master, AL event.
+const SM0_CONTROL: u8 = 0x26;
+/// Control byte of SM1: mailbox, read by the master, AL event.
+const SM1_CONTROL: u8 = 0x22;
+
+/// A mailbox message taken apart (stopgap until `proto::ecat::mailbox` lands).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Message {
+    /// Mailbox type (0 error, 3 CoE…).
+    pub(crate) kind: u8,
+    /// The sender's counter.
+    pub(crate) counter: u8,
+    /// The body (the header's length of it).
+    pub(crate) body: Vec<u8>,
+}
+
+impl Message {
+    /// Parses a whole mailbox buffer.
+    pub(crate) fn parse(buf: &[u8]) -> std::result::Result<Message, ProtocolError> {
+        let h = buf.get(..HEADER).ok_or_else(|| {
+            ProtocolError::Mailbox(format!("truncated: need {HEADER} bytes, got {}", buf.len()))
+        })?;
+        let len = usize::from(u16::from_le_bytes([h[0], h[1]]));
+        let body = buf.get(HEADER..HEADER + len).ok_or_else(|| {
+            ProtocolError::Mailbox(format!(
+                "length {len} exceeds the {} bytes of the mailbox",
+                buf.len() - HEADER
+            ))
+        })?;
+        Ok(Message {
+            kind: h[5] & 0x0F,
+            counter: (h[5] >> 4) & 0x07,
+            body: body.to_vec(),
+        })
+    }
+
+    /// The header and body of a message.
+    pub(crate) fn emit(kind: u8, counter: u8, body: &[u8]) -> Vec<u8> {
+        let mut m = Vec::with_capacity(HEADER + body.len());
+        m.extend((body.len() as u16).to_le_bytes());
+        m.extend([0, 0, 0, (kind & 0x0F) | (counter & 0x07) << 4]);
+        m.extend(body);
+        m
+    }
+
+    /// A CoE emergency (CoE service 1).
+    fn is_emergency(&self) -> bool {
+        self.kind == TYPE_COE && self.body.get(1).map(|b| b >> 4) == Some(COE_EMERGENCY)
+    }
+}
+
+/// One line for a mailbox message.
+fn describe(m: &Message) -> String {
+    match m.kind {
+        TYPE_ERROR => format!("mailbox error reply, counter {}", m.counter),
+        TYPE_COE => format!("mailbox CoE, counter {}, {} bytes", m.counter, m.body.len()),
+        k => format!(
+            "mailbox type {k}, counter {}, {} bytes",
+            m.counter,
+            m.body.len()
+        ),
+    }
+}
+
+impl<S: Segment> Master<S> {
+    /// Configures SM0/SM1 of `station` as its SII's standard mailbox says (the SyncM
+    /// category's control bytes when it has them).
+    pub(crate) fn configure_mailbox(&mut self, station: u16) -> Result<(SmSetup, SmSetup)> {
+        let sii = &self
+            .slave(station)
+            .ok_or(UsageError::NoSuchSlave { station })?
+            .sii;
+        if !sii.has_mailbox() {
+            return Err(UsageError::NoMailbox { station }.into());
+        }
+        let control = |kind: SmKind, default: u8| {
+            sii.sync_managers
+                .iter()
+                .find(|s| s.kind == kind)
+                .map_or(default, |s| s.control)
+        };
+        let out = SmSetup {
+            start: sii.mailbox.out_start,
+            len: sii.mailbox.out_len,
+            control: control(SmKind::MailboxOut, SM0_CONTROL),
+        };
+        let inn = SmSetup {
+            start: sii.mailbox.in_start,
+            len: sii.mailbox.in_len,
+            control: control(SmKind::MailboxIn, SM1_CONTROL),
+        };
+        let mut regs = Vec::with_capacity(16);
+        for sm in [out, inn] {
+            regs.extend(sm.start.to_le_bytes());
+            regs.extend(sm.len.to_le_bytes());
+            regs.extend([sm.control, 0, 1, 0]);
+        }
+        self.write_register(station, 0x0800, &regs)?;
+        if let Some(s) = self.slave_mut(station) {
+            s.mailbox = Some((out, inn));
+        }
+        Ok((out, inn))
+    }
+
+    fn mailboxes(&self, station: u16) -> Result<(SmSetup, SmSetup)> {
+        self.slave(station)
+            .ok_or(UsageError::NoSuchSlave { station })?
+            .mailbox
+            .ok_or_else(|| UsageError::NoMailbox { station }.into())
+    }
+
+    /// The next counter of `station`'s messages, 1..7.
+    pub(crate) fn next_counter(&mut self, station: u16) -> u8 {
+        match self.slave_mut(station) {
+            Some(s) => {
+                s.counter = s.counter % 7 + 1;
+                s.counter
+            }
+            None => 1,
+        }
+    }
+
+    /// Sends a message of `kind` with `body` and the next counter, and returns the slave's
+    /// reply (emergencies set aside). A mailbox error reply is [`Refusal::Mailbox`].
+    pub(crate) fn mailbox_request(
+        &mut self,
+        station: u16,
+        kind: u8,
+        body: &[u8],
+    ) -> Result<Message> {
+        let counter = self.next_counter(station);
+        let msg = Message::emit(kind, counter, body);
+        let reply = self
+            .mailbox_transfer(station, &msg)?
+            .ok_or(LinkFailure::Timeout {
+                awaited: Awaited::MailboxReply,
+                after: self.config.mailbox_timeout,
+            })?;
+        let m = Message::parse(&reply)?;
+        if m.kind == TYPE_ERROR {
+            let detail = m.body.get(2..4).map(|b| u16::from_le_bytes([b[0], b[1]]));
+            return match detail {
+                Some(d) => Err(Refusal::Mailbox(MailboxErrorCode(d)).into()),
+                None => Err(ProtocolError::Mailbox("error reply without its detail".into()).into()),
+            };
+        }
+        Ok(m)
+    }
+
+    /// Writes `bytes` (a mailbox message as given, maybe malformed) into the receive mailbox
+    /// of `station` and returns the reply in the send mailbox (emergencies set aside), or
+    /// `None` when none came within [`super::MasterConfig::mailbox_timeout`].
+    pub(crate) fn mailbox_raw(&mut self, station: u16, bytes: &[u8]) -> Result<Option<Vec<u8>>> {
+        self.mailbox_transfer(station, bytes)
+    }
+
+    /// The mailbox exchange: write `msg` (padded to SM0's length), wait for the reply.
+    fn mailbox_transfer(&mut self, station: u16, msg: &[u8]) -> Result<Option<Vec<u8>>> {
+        let (out, inn) = self.mailboxes(station)?;
+        if msg.len() > usize::from(out.len) {
+            return Err(UsageError::TooLong {
+                what: "mailbox message",
+                len: msg.len(),
+                max: usize::from(out.len),
+            }
+            .into());
+        }
+        let mut padded = msg.to_vec();
+        padded.resize(usize::from(out.len), 0);
+        let read = Datagram::read(Command::FPRD, station, inn.start, usize::from(inn.len));
+        let write = Datagram::new(Command::FPWR, station, out.start, padded);
+        let access = write.describe();
+        let r = self
+            .port
+            .exchange(&[read.clone(), write.clone(), read.clone()])?;
+        if r[0].wkc == 1 {
+            self.set_aside(&r[0].data);
+        }
+        if r[1].wkc == 0 {
+            // The receive mailbox is still full: wait for room.
+            let timeout = self.config.mailbox_timeout;
+            self.poll(timeout, Awaited::MailboxRoom, |m| {
+                let r = m.port.one(write.clone())?;
+                Ok((r.wkc == 1).then_some(()))
+            })?;
+        } else {
+            check_wkc(&access, &r[1], 1)?;
+            if r[2].wkc == 1 {
+                if let Some(reply) = self.keep_reply(&r[2].data) {
+                    return Ok(Some(reply));
+                }
+            }
+        }
+        let timeout = self.config.mailbox_timeout;
+        let status = 0x0805 + 8;
+        let got = self.poll(timeout, Awaited::MailboxReply, |m| {
+            let s = m
+                .port
+                .one(Datagram::read(Command::FPRD, station, status, 1))?;
+            if s.wkc != 1 || s.data[0] & MAILBOX_FULL == 0 {
+                return Ok(None);
+            }
+            let r = m.port.one(read.clone())?;
+            if r.wkc != 1 {
+                return Ok(None);
+            }
+            Ok(m.keep_reply(&r.data))
+        });
+        match got {
+            Ok(reply) => Ok(Some(reply)),
+            Err(super::error::MasterError::Link(LinkFailure::Timeout {
+                awaited: Awaited::MailboxReply,
+                ..
+            })) => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// A message read from SM1 while looking for a reply: an emergency is set aside (`None`),
+    /// anything else is the reply.
+    fn keep_reply(&mut self, buf: &[u8]) -> Option<Vec<u8>> {
+        match Message::parse(buf) {
+            Ok(m) if m.is_emergency() => {
+                self.port
+                    .recorder
+                    .annotate("", &format!("CoE emergency set aside ({})", describe(&m)));
+                self.emergencies.push(m.body);
+                None
+            }
+            Ok(m) => {
+                self.port.recorder.annotate("", &describe(&m));
+                Some(buf.to_vec())
+            }
+            Err(_) => Some(buf.to_vec()),
+        }
+    }
+
+    /// A message left in SM1 before the request went out: emergencies are kept, anything
+    /// else (a stale reply) is dropped.
+    fn set_aside(&mut self, buf: &[u8]) {
+        if let Ok(m) = Message::parse(buf) {
+            if m.is_emergency() {
+                self.emergencies.push(m.body);
+            }
+        }
+    }
+}

@@ -1,0 +1,243 @@
+//! Frames on the segment: the master's datagrams go out in one EtherCAT frame with an index,
+//! and the frame that comes back with that index and the same datagrams is their answer
+//! (ETG.1000.4 §5.4: the index "is a key for the master to identify the datagram").
+//!
+//! - Frames of another index (stale answers of an earlier frame, duplicates, another master's
+//!   frames) and frames of another EtherType are skipped.
+//! - A frame that comes back byte for byte as sent was processed by no slave (every ESC sets
+//!   the locally administered bit of the source address, and the master's own address has it
+//!   clear): "no slave answered", at once.
+//! - An EtherCAT frame that cannot be parsed, or has the index but not the datagrams sent, is
+//!   remembered; when nothing good came by the deadline it is the error (malformed), else the
+//!   timeout is.
+//!
+//! Every exchange is recorded with its bytes and one decoded line each way.
+
+use std::time::Duration;
+
+use super::error::{Awaited, LinkFailure, MasterError, NoSlave, ProtocolError, Result, UsageError};
+use super::record::Recorder;
+use super::segment::Segment;
+use super::wire::{self, Command, Datagram, Returned};
+
+/// The master's source address: a unicast address with the locally administered bit clear, so
+/// that a frame some ESC processed (which sets that bit, ETG.1000.4 §5.3) differs from one that
+/// came back unprocessed. Any address works on a raw link; this one is ethercrab's choice too.
+pub(crate) const MASTER_MAC: [u8; 6] = [0x10, 0x10, 0x10, 0x10, 0x10, 0x10];
+
+/// Largest Ethernet frame the master builds or receives (no 802.1Q tag, no FCS).
+pub(crate) const MAX_FRAME: usize = 1514;
+
+/// Statistics of the port.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct PortStats {
+    /// Frames sent.
+    pub(crate) sent: u64,
+    /// Frames matched to what was sent.
+    pub(crate) matched: u64,
+    /// Frames skipped (other index, other type, stale).
+    pub(crate) skipped: u64,
+    /// Malformed EtherCAT frames received.
+    pub(crate) malformed: u64,
+    /// Exchanges that timed out.
+    pub(crate) timeouts: u64,
+}
+
+/// The segment with the master's framing on top.
+#[derive(Debug)]
+pub(crate) struct Port<S> {
+    segment: S,
+    index: u8,
+    mac: [u8; 6],
+    timeout: Duration,
+    rx: Vec<u8>,
+    pub(crate) recorder: Recorder,
+    stats: PortStats,
+}
+
+impl<S: Segment> Port<S> {
+    /// A port over `segment` that waits `timeout` for each frame.
+    pub(crate) fn new(segment: S, timeout: Duration) -> Port<S> {
+        Port {
+            segment,
+            index: 0,
+            mac: MASTER_MAC,
+            timeout,
+            rx: vec![0; MAX_FRAME + 4],
+            recorder: Recorder::new(),
+            stats: PortStats::default(),
+        }
+    }
+
+    /// The segment.
+    pub(crate) fn segment(&self) -> &S {
+        &self.segment
+    }
+
+    /// The segment, mutable.
+    pub(crate) fn segment_mut(&mut self) -> &mut S {
+        &mut self.segment
+    }
+
+    /// Gives the segment back.
+    pub(crate) fn into_segment(self) -> S {
+        self.segment
+    }
+
+    /// Time on the segment's clock.
+    pub(crate) fn now(&self) -> Duration {
+        self.segment.now()
+    }
+
+    /// Lets time pass on the segment.
+    pub(crate) fn wait_until(&mut self, t: Duration) {
+        self.segment.wait_until(t)
+    }
+
+    /// How long a frame may take.
+    pub(crate) fn timeout(&self) -> Duration {
+        self.timeout
+    }
+
+    /// Sets how long a frame may take.
+    pub(crate) fn set_timeout(&mut self, t: Duration) {
+        self.timeout = t;
+    }
+
+    /// The counters.
+    pub(crate) fn stats(&self) -> PortStats {
+        self.stats
+    }
+
+    /// Sends `datagrams` in one frame and returns what came back for each, in order. A working
+    /// counter of 0 is returned as it came (the caller judges it).
+    pub(crate) fn exchange(&mut self, datagrams: &[Datagram]) -> Result<Vec<Returned>> {
+        let index = self.index;
+        self.index = self.index.wrapping_add(1);
+        let frame = wire::frame(self.mac, index, datagrams).map_err(UsageError::from)?;
+        let sent_line = wire::describe_sent(datagrams);
+        self.segment.send(&frame)?;
+        self.stats.sent += 1;
+        let deadline = self.segment.now() + self.timeout;
+        let mut malformed: Option<String> = None;
+        loop {
+            let Some(arrival) = self.segment.recv(&mut self.rx, deadline)? else {
+                self.stats.timeouts += 1;
+                let line = match &malformed {
+                    Some(m) => format!("malformed frame only: {m}"),
+                    None => format!("nothing came back within {:?}", self.timeout),
+                };
+                self.recorder.push(&frame, sent_line, &[], line);
+                return Err(match malformed {
+                    Some(m) => ProtocolError::Malformed(m).into(),
+                    None => LinkFailure::Timeout {
+                        awaited: Awaited::Frame,
+                        after: self.timeout,
+                    }
+                    .into(),
+                });
+            };
+            let got = &self.rx[..arrival.len];
+            if got == frame.as_slice() {
+                self.recorder
+                    .push(&frame, sent_line, got, "came back unprocessed".into());
+                return Err(LinkFailure::NoSlave(NoSlave::Unprocessed).into());
+            }
+            match wire::parse_reply(got, index, datagrams) {
+                wire::Reply::Foreign => self.stats.skipped += 1,
+                wire::Reply::Malformed(why) => {
+                    self.stats.malformed += 1;
+                    malformed = Some(why);
+                }
+                wire::Reply::Ours(returned) => {
+                    self.stats.matched += 1;
+                    let line = wire::describe_returned(&returned);
+                    let got = got.to_vec();
+                    self.recorder.push(&frame, sent_line, &got, line);
+                    return Ok(returned);
+                }
+            }
+        }
+    }
+
+    /// Sends one datagram and returns what came back.
+    pub(crate) fn one(&mut self, d: Datagram) -> Result<Returned> {
+        let mut r = self.exchange(std::slice::from_ref(&d))?;
+        r.pop().ok_or_else(|| {
+            MasterError::from(ProtocolError::Malformed("no datagram came back".into()))
+        })
+    }
+
+    /// Sends one datagram and requires working counter `expected` (0 everywhere: no slave).
+    pub(crate) fn expect(&mut self, d: Datagram, expected: u16) -> Result<Vec<u8>> {
+        let access = d.describe();
+        let r = self.one(d)?;
+        check_wkc(&access, &r, expected)?;
+        Ok(r.data)
+    }
+
+    /// Sends an EtherCAT payload (frame header and datagrams, maybe lying about its lengths)
+    /// behind the master's Ethernet header as it is, and returns the EtherCAT payload of the
+    /// first EtherCAT frame of the same length that comes back (`None`: none by the timeout —
+    /// an ESC destroys a frame it finds malformed).
+    pub(crate) fn exchange_raw(&mut self, payload: &[u8]) -> Result<Option<Vec<u8>>> {
+        let frame = wire::raw_frame(self.mac, payload).map_err(UsageError::from)?;
+        let sent_line = format!("raw EtherCAT frame, {} bytes", payload.len());
+        self.segment.send(&frame)?;
+        self.stats.sent += 1;
+        let deadline = self.segment.now() + self.timeout;
+        loop {
+            let Some(arrival) = self.segment.recv(&mut self.rx, deadline)? else {
+                self.recorder.push(
+                    &frame,
+                    sent_line,
+                    &[],
+                    format!("nothing came back within {:?}", self.timeout),
+                );
+                return Ok(None);
+            };
+            let got = &self.rx[..arrival.len];
+            if got == frame.as_slice() {
+                self.recorder
+                    .push(&frame, sent_line, got, "came back unprocessed".into());
+                return Err(LinkFailure::NoSlave(NoSlave::Unprocessed).into());
+            }
+            match wire::ethercat_payload(got) {
+                Some(p) if got.len() == frame.len() => {
+                    let p = p.to_vec();
+                    let got = got.to_vec();
+                    self.recorder.push(
+                        &frame,
+                        sent_line,
+                        &got,
+                        format!("EtherCAT frame, {} bytes", p.len()),
+                    );
+                    return Ok(Some(p));
+                }
+                _ => self.stats.skipped += 1,
+            }
+        }
+    }
+}
+
+/// Checks a working counter: 0 when more was expected is "no slave answered".
+pub(crate) fn check_wkc(access: &str, r: &Returned, expected: u16) -> Result<()> {
+    if r.wkc == expected {
+        Ok(())
+    } else if r.wkc == 0 {
+        Err(LinkFailure::NoSlave(NoSlave::WorkingCounters).into())
+    } else {
+        Err(ProtocolError::WorkingCounter {
+            access: access.to_string(),
+            expected,
+            got: r.wkc,
+        }
+        .into())
+    }
+}
+
+/// The commands by name, for callers that build datagrams.
+#[allow(dead_code)]
+pub(crate) fn command_name(c: Command) -> String {
+    c.to_string()
+}
