@@ -123,6 +123,10 @@ impl Netns {
         ip(&["link", "set", &ns.root_if, "up"]);
         ns.ip_inside(&["link", "set", &ns.ns_if, "up"]);
         ns.ip_inside(&["link", "set", "lo", "up"]);
+        // Frames sent before the kernel's link watch has seen the carrier (a moment after
+        // `up`, while the qdisc is still `noop`) are dropped: wait until both ends carry.
+        wait_carrier(&[], &ns.root_if);
+        wait_carrier(&["-n", &ns.name], &ns.ns_if);
         ns
     }
 
@@ -185,6 +189,28 @@ impl Drop for Netns {
         };
         quiet(&["link", "del", &self.root_if]);
         quiet(&["netns", "del", &self.name]);
+    }
+}
+
+/// Waits (5 s at most, then panics) until `ip [NETNS] link show dev IFACE` says the link is up
+/// with its queueing discipline attached.
+fn wait_carrier(netns: &[&str], iface: &str) {
+    let start = std::time::Instant::now();
+    loop {
+        let out = Command::new("ip")
+            .args(netns)
+            .args(["-o", "link", "show", "dev", iface])
+            .output()
+            .expect("`ip` runs");
+        let text = String::from_utf8_lossy(&out.stdout);
+        if text.contains("state UP") && !text.contains("qdisc noop") {
+            return;
+        }
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(5),
+            "{iface} does not come up: {text}"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
     }
 }
 

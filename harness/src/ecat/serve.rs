@@ -16,10 +16,11 @@ use std::time::{Duration, Instant};
 
 pub use crate::net::LinkError;
 use crate::net::{RawLink, MAX_FRAME};
+use sim::ecat::Slave;
 
-/// EtherType of EtherCAT frames (ETG.1000.4 §5.3; BU 0620 §2.2.3, whose figure 3 prints 88ABh:
-/// an erratum, the text above it has 88A4h).
-pub const ETHERTYPE: u16 = 0x88A4;
+/// EtherType of EtherCAT frames, 88A4h (the simulator's constant; BU 0620 §2.2.3 figure 3
+/// prints 88ABh, an erratum).
+pub use sim::ecat::ETHERTYPE;
 
 /// How long the slave's thread polls the socket after a frame before it sleeps: a master that
 /// sends frame after frame (mailbox polling, an SDO burst) is served without a thread wake-up.
@@ -138,7 +139,6 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
 
 /// Serves until `duration` has passed (forever when `None`), after a line on stdout that says
 /// what is served where.
-#[allow(dead_code)] // until the registry entry (ecat/mod.rs) calls `command`
 pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeError> {
     let config = device_config(opts)?;
     let served = start_core(&opts.iface, slave_core(config)?)?;
@@ -187,7 +187,6 @@ struct ServeArgs {
 }
 
 /// `harness serve ecat ARGS…`; returns the exit code.
-#[allow(dead_code)] // until the registry entry (ecat/mod.rs) calls it
 pub(crate) fn command(args: &[String]) -> Result<i32, String> {
     let a = match crate::cli::parse_args::<ServeArgs>("harness serve ecat", args) {
         Ok(a) => a,
@@ -225,10 +224,19 @@ fn device_config(opts: &ServeOptions) -> Result<sim::device::DeviceConfig, Serve
 
 /// The simulated slave of `config` as the loop drives it.
 fn slave_core(config: sim::device::DeviceConfig) -> Result<Box<dyn Core>, ServeError> {
-    let _ = config;
-    Err(ServeError::Profile(
-        "the simulated EtherCAT slave (sim::ecat) is not there yet".into(),
-    ))
+    let slave = Slave::new(sim::device::Device::new(config))
+        .map_err(|e| ServeError::Profile(e.to_string()))?;
+    Ok(Box::new(slave))
+}
+
+impl Core for Slave {
+    fn process(&mut self, frame: &mut [u8], now: Duration) -> bool {
+        Slave::process(self, frame, now).send_back()
+    }
+
+    fn poll(&mut self, now: Duration) -> Option<Duration> {
+        Slave::poll(self, now)
+    }
 }
 
 /// The sans-IO slave as the serving thread drives it.

@@ -8,6 +8,7 @@ use super::LinkError;
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub(crate) struct Mac(pub(crate) [u8; 6]);
 
+#[allow(dead_code)] // for the bindings and benches on raw Ethernet; tested below
 impl Mac {
     /// The broadcast address, all ones.
     pub(crate) const BROADCAST: Mac = Mac([0xFF; 6]);

@@ -3,9 +3,6 @@
 //! EtherType filter, send a frame, receive the next one by a deadline, with the kernel's
 //! receive stamp.
 
-// Until `harness serve ecat` starts the simulated slave (sim::ecat), only tests use it.
-#![cfg_attr(not(test), allow(dead_code))]
-
 mod error;
 mod iface;
 mod link;

@@ -26,6 +26,23 @@ impl Veth {
         let v = Veth(a, b);
         ip(&["link", "set", &v.0, "up"]);
         ip(&["link", "set", &v.1, "up"]);
+        // Frames sent before the kernel's link watch has seen the carrier (a moment after
+        // `up`, with the qdisc still `noop`) are dropped: wait for it.
+        for name in [&v.0, &v.1] {
+            let t = std::time::Instant::now();
+            loop {
+                let out = Command::new("ip")
+                    .args(["-o", "link", "show", "dev", name])
+                    .output();
+                let text = out.map(|o| String::from_utf8_lossy(&o.stdout).into_owned());
+                let text = text.unwrap_or_default();
+                if text.contains("state UP") && !text.contains("qdisc noop") {
+                    break;
+                }
+                assert!(t.elapsed().as_secs() < 5, "{name} not up: {text}");
+                std::thread::sleep(std::time::Duration::from_millis(5));
+            }
+        }
         Some(v)
     }
 }
