@@ -79,17 +79,55 @@ impl Message {
     }
 }
 
-/// One line for a mailbox message.
-fn describe(m: &Message) -> String {
-    match m.kind {
-        TYPE_ERROR => format!("mailbox error reply, counter {}", m.counter),
-        TYPE_COE => format!("mailbox CoE, counter {}, {} bytes", m.counter, m.body.len()),
-        k => format!(
-            "mailbox type {k}, counter {}, {} bytes",
-            m.counter,
-            m.body.len()
-        ),
-    }
+/// One line for a mailbox message: `mailbox #3 CoE SDO upload request 3066h:01h`.
+pub(crate) fn describe(m: &Message) -> String {
+    let b = &m.body;
+    let what = match m.kind {
+        TYPE_ERROR => match b.get(2..4) {
+            Some(d) => format!("error reply {:04X}h", u16::from_le_bytes([d[0], d[1]])),
+            None => "error reply (truncated)".into(),
+        },
+        TYPE_COE => describe_coe(b),
+        k => format!("type {k}, {} bytes", b.len()),
+    };
+    format!("mailbox #{} {what}", m.counter)
+}
+
+/// One line for a CoE body (ETG.1000.6 §5.6: CoE header, then the SDO command byte).
+fn describe_coe(b: &[u8]) -> String {
+    let service = b.get(1).map_or(0, |x| x >> 4);
+    let (Some(&cmd), obj) = (b.get(2), b.get(3..6)) else {
+        return format!("CoE service {service}, {} bytes", b.len());
+    };
+    let obj = obj.map_or(String::new(), |o| {
+        format!(" {:04X}h:{:02X}h", u16::from_le_bytes([o[0], o[1]]), o[2])
+    });
+    let toggle = (cmd >> 4) & 1;
+    let what = match (service, cmd >> 5) {
+        (1, _) => return format!("CoE emergency {}", crate::runner::hex(&b[2..])),
+        (2 | 3, 4) => {
+            let code = b
+                .get(6..10)
+                .map_or(0, |c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]));
+            return format!("CoE SDO abort{obj} {code:08X}h");
+        }
+        (2, 1) => format!("download request{obj}"),
+        (2, 0) => format!("download segment, toggle {toggle}"),
+        (2, 2) => format!("upload request{obj}"),
+        (2, 3) => format!("upload segment request, toggle {toggle}"),
+        (3, 3) => format!("download response{obj}"),
+        (3, 1) => format!("download segment response, toggle {toggle}"),
+        (3, 2) => format!("upload response{obj}"),
+        (3, 0) => format!("upload segment, toggle {toggle}"),
+        (s, c) => format!("service {s} command {c}"),
+    };
+    let initiate = matches!((service, cmd >> 5), (2, 1) | (2, 2) | (3, 2));
+    let ca = if initiate && cmd & 0x10 != 0 {
+        " complete access"
+    } else {
+        ""
+    };
+    format!("CoE SDO {what}{ca}")
 }
 
 impl<S: Segment> Master<S> {
@@ -200,6 +238,11 @@ impl<S: Segment> Master<S> {
         let read = Datagram::read(Command::FPRD, station, inn.start, usize::from(inn.len));
         let write = Datagram::new(Command::FPWR, station, out.start, padded);
         let access = write.describe();
+        let note = match Message::parse(msg) {
+            Ok(m) => describe(&m),
+            Err(_) => format!("mailbox {} bytes as given", msg.len()),
+        };
+        self.port.recorder.note_next(note);
         let r = self
             .port
             .exchange(&[read.clone(), write.clone(), read.clone()])?;

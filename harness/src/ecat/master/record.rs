@@ -10,6 +10,8 @@ pub(crate) struct Recorder {
     exchanges: Vec<Exchange>,
     /// Whether to record at all.
     on: bool,
+    /// What the next exchange's request means one layer up.
+    note: Option<String>,
 }
 
 impl Recorder {
@@ -18,6 +20,7 @@ impl Recorder {
         Recorder {
             exchanges: Vec::new(),
             on: true,
+            note: None,
         }
     }
 
@@ -39,6 +42,10 @@ impl Recorder {
         received: &[u8],
         received_line: String,
     ) {
+        let sent_line = match self.note.take() {
+            Some(n) => format!("{n}: {sent_line}"),
+            None => sent_line,
+        };
         if self.on {
             self.exchanges.push(Exchange {
                 sent_hex: hex(sent),
@@ -47,6 +54,12 @@ impl Recorder {
                 received: received_line,
             });
         }
+    }
+
+    /// Says what the next exchange's request means one layer up ("mailbox CoE SDO upload
+    /// 3066h:01h"); it prefixes that exchange's decoded request.
+    pub(crate) fn note_next(&mut self, note: String) {
+        self.note = Some(note);
     }
 
     /// Adds a note to the last exchange's decoded lines (the meaning one layer up: "CoE SDO
