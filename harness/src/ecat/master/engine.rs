@@ -178,6 +178,12 @@ impl<S: Segment> Master<S> {
         self.port.stats()
     }
 
+    /// When the kernel received the last frame that came back (real-time clock; network
+    /// segments only): for jitter figures of the cycle.
+    pub(crate) fn last_receive_stamp(&self) -> Option<Duration> {
+        self.port.last_stamp()
+    }
+
     /// The exchanges recorded since the last call (for a step's transcript).
     pub(crate) fn take_exchanges(&mut self) -> Vec<Exchange> {
         self.port.recorder.take()

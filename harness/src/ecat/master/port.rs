@@ -53,6 +53,8 @@ pub(crate) struct Port<S> {
     rx: Vec<u8>,
     pub(crate) recorder: Recorder,
     stats: PortStats,
+    /// The receive stamp of the last frame matched.
+    last_stamp: Option<Duration>,
 }
 
 impl<S: Segment> Port<S> {
@@ -66,6 +68,7 @@ impl<S: Segment> Port<S> {
             rx: vec![0; MAX_FRAME + 4],
             recorder: Recorder::new(),
             stats: PortStats::default(),
+            last_stamp: None,
         }
     }
 
@@ -102,6 +105,11 @@ impl<S: Segment> Port<S> {
     /// Sets how long a frame may take.
     pub(crate) fn set_timeout(&mut self, t: Duration) {
         self.timeout = t;
+    }
+
+    /// The kernel's receive stamp of the last frame matched (network segments).
+    pub(crate) fn last_stamp(&self) -> Option<Duration> {
+        self.last_stamp
     }
 
     /// The counters.
@@ -151,6 +159,7 @@ impl<S: Segment> Port<S> {
                 }
                 wire::Reply::Ours(returned) => {
                     self.stats.matched += 1;
+                    self.last_stamp = arrival.stamp;
                     let line = wire::describe_returned(&returned);
                     let got = got.to_vec();
                     self.recorder.push(&frame, sent_line, &got, line);

@@ -238,13 +238,21 @@ impl Segment for NetSegment {
         }))
     }
 
+    /// Sleeps until shortly before `until`, then watches the clock for the rest: a thread's
+    /// wake-up comes tens of microseconds late, which would move every process data cycle.
     fn wait_until(&mut self, until: Duration) {
         let now = self.now();
-        if until > now {
-            std::thread::sleep(until - now);
+        if until > now + SPIN {
+            std::thread::sleep(until - now - SPIN);
+        }
+        while self.now() < until {
+            std::thread::yield_now();
         }
     }
 }
+
+/// How long before a deadline [`NetSegment::wait_until`] stops sleeping and watches the clock.
+const SPIN: Duration = Duration::from_micros(300);
 
 /// What a [`Faulty`] segment does to the frames sent.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
