@@ -217,18 +217,16 @@ impl<S: Segment> Master<S> {
         address: u16,
         len: usize,
     ) -> Result<Vec<u8>> {
-        self.port
-            .expect(Datagram::read(Command::FPRD, station, address, len), 1)
+        self.expect(Datagram::read(Command::FPRD, station, address, len), 1)
     }
 
     /// Writes ESC registers of `station` (FPWR, working counter 1).
     pub(crate) fn write_register(&mut self, station: u16, address: u16, data: &[u8]) -> Result<()> {
-        self.port
-            .expect(
-                Datagram::new(Command::FPWR, station, address, data.to_vec()),
-                1,
-            )
-            .map(drop)
+        self.expect(
+            Datagram::new(Command::FPWR, station, address, data.to_vec()),
+            1,
+        )
+        .map(drop)
     }
 
     /// A 16-bit register.
@@ -244,7 +242,7 @@ impl<S: Segment> Master<S> {
         &mut self,
         datagrams: &[Datagram],
     ) -> Result<Option<Vec<Returned>>> {
-        match self.port.exchange(datagrams) {
+        match self.exchange(datagrams) {
             Ok(r) => Ok(Some(r)),
             Err(MasterError::Link(LinkFailure::Timeout { .. })) => Ok(None),
             Err(e) => Err(e),
@@ -256,7 +254,34 @@ impl<S: Segment> Master<S> {
     /// that came back (`None`: nothing within the frame timeout; an ESC destroys frames it
     /// finds malformed).
     pub(crate) fn raw_frame(&mut self, payload: &[u8]) -> Result<Option<Vec<u8>>> {
+        self.keep_cycle();
         self.port.exchange_raw(payload)
+    }
+
+    /// Runs the process data cycle if it runs and is due: called before every other frame,
+    /// so that a long burst of requests (SDO after SDO) does not starve the SM watchdog.
+    pub(super) fn keep_cycle(&mut self) {
+        if self.cyclic.due().is_some_and(|due| due <= self.now()) {
+            self.background_cycle();
+        }
+    }
+
+    /// [`Port::exchange`] after a due cycle.
+    pub(super) fn exchange(&mut self, datagrams: &[Datagram]) -> Result<Vec<Returned>> {
+        self.keep_cycle();
+        self.port.exchange(datagrams)
+    }
+
+    /// [`Port::one`] after a due cycle.
+    pub(super) fn one(&mut self, d: Datagram) -> Result<Returned> {
+        self.keep_cycle();
+        self.port.one(d)
+    }
+
+    /// [`Port::expect`] after a due cycle.
+    pub(super) fn expect(&mut self, d: Datagram, wkc: u16) -> Result<Vec<u8>> {
+        self.keep_cycle();
+        self.port.expect(d, wkc)
     }
 
     /// Lets `time` pass, running the process data cycle if it runs.

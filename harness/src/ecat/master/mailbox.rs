@@ -243,9 +243,7 @@ impl<S: Segment> Master<S> {
             Err(_) => format!("mailbox {} bytes as given", msg.len()),
         };
         self.port.recorder.note_next(note);
-        let r = self
-            .port
-            .exchange(&[read.clone(), write.clone(), read.clone()])?;
+        let r = self.exchange(&[read.clone(), write.clone(), read.clone()])?;
         if r[0].wkc == 1 {
             self.set_aside(&r[0].data);
         }
@@ -253,7 +251,7 @@ impl<S: Segment> Master<S> {
             // The receive mailbox is still full: wait for room.
             let timeout = self.config.mailbox_timeout;
             self.poll(timeout, Awaited::MailboxRoom, |m| {
-                let r = m.port.one(write.clone())?;
+                let r = m.one(write.clone())?;
                 Ok((r.wkc == 1).then_some(()))
             })?;
         } else {
@@ -267,13 +265,11 @@ impl<S: Segment> Master<S> {
         let timeout = self.config.mailbox_timeout;
         let status = 0x0805 + 8;
         let got = self.poll(timeout, Awaited::MailboxReply, |m| {
-            let s = m
-                .port
-                .one(Datagram::read(Command::FPRD, station, status, 1))?;
+            let s = m.one(Datagram::read(Command::FPRD, station, status, 1))?;
             if s.wkc != 1 || s.data[0] & MAILBOX_FULL == 0 {
                 return Ok(None);
             }
-            let r = m.port.one(read.clone())?;
+            let r = m.one(read.clone())?;
             if r.wkc != 1 {
                 return Ok(None);
             }

@@ -31,7 +31,7 @@ impl<S: Segment> Master<S> {
     /// Counts the slaves on the segment: the working counter of a broadcast read of register
     /// 0000h (each slave adds 1). 0 is [`NoSlave::NoneCounted`].
     pub(crate) fn count_slaves(&mut self) -> Result<u16> {
-        let r = self.port.one(Datagram::read(Command::BRD, 0, 0x0000, 2))?;
+        let r = self.one(Datagram::read(Command::BRD, 0, 0x0000, 2))?;
         if r.wkc == 0 {
             return Err(LinkFailure::NoSlave(NoSlave::NoneCounted).into());
         }
@@ -57,7 +57,7 @@ impl<S: Segment> Master<S> {
         for position in 0..n {
             let station = self.config.station_base.wrapping_add(position);
             let adp = 0u16.wrapping_sub(position);
-            self.port.expect(
+            self.expect(
                 Datagram::new(
                     Command::APWR,
                     adp,
@@ -91,8 +91,7 @@ impl<S: Segment> Master<S> {
 
     /// A broadcast write that every one of `n` slaves must take.
     fn broadcast(&mut self, ado: u16, data: Vec<u8>, n: u16) -> Result<()> {
-        self.port
-            .expect(Datagram::new(Command::BWR, 0, ado, data), n)
+        self.expect(Datagram::new(Command::BWR, 0, ado, data), n)
             .map(drop)
     }
 

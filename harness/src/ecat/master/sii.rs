@@ -181,7 +181,7 @@ impl<S: Segment> Master<S> {
         let mut command = CMD_READ.to_le_bytes().to_vec();
         command.extend(address.to_le_bytes());
         // The command, and at once the status and the data (a fast ESC is done by then).
-        let r = self.port.exchange(&[
+        let r = self.exchange(&[
             Datagram::new(Command::FPWR, station, EEPROM_CONTROL, command),
             Datagram::read(Command::FPRD, station, EEPROM_CONTROL, 14),
         ])?;
