@@ -355,3 +355,50 @@ fn pdos(data: &[u8]) -> std::result::Result<Vec<SiiPdo>, String> {
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small SII: identity, mailbox 1000h/128 and 1080h/128, CoE; strings ("X"), general
+    /// (name = string 1), SyncM (SM2 1100h/12 bytes, control 64h, outputs), end.
+    fn image() -> Vec<u8> {
+        let mut w = vec![0u16; 0x40];
+        w[0x08] = 0x0538; // vendor
+        w[0x0A] = 0x0550; // product
+        w[0x18..0x1C].copy_from_slice(&[0x1000, 128, 0x1080, 128]);
+        w[0x1C] = 0x0004; // CoE
+        w.extend([10, 2, 0x0101, 0x0058]); // strings: 1 string "X" (+ pad)
+        w.extend([30, 2, 0x0000, 0x0100]); // general: name index 1 (byte 3)
+        w.extend([41, 4, 0x1100, 12, 0x0064, 0x0301]); // SyncM: outputs
+        w.push(0xFFFF);
+        w.iter().flat_map(|x| x.to_le_bytes()).collect()
+    }
+
+    #[test]
+    fn identity_mailbox_strings_and_sync_managers() {
+        let i = parse(&image()).unwrap();
+        assert_eq!((i.vendor, i.product), (0x538, 0x550));
+        assert_eq!((i.mailbox.out_start, i.mailbox.in_len), (0x1000, 128));
+        assert!(i.has_mailbox());
+        assert_eq!(i.name.as_deref(), Some("X"));
+        assert_eq!(
+            i.sync_managers,
+            [SiiSm {
+                start: 0x1100,
+                len: 12,
+                control: 0x64,
+                enable: 1,
+                kind: SmKind::Outputs
+            }]
+        );
+    }
+
+    #[test]
+    fn every_truncation_is_an_error_not_a_panic() {
+        let img = image();
+        for n in 0..img.len() {
+            assert!(parse(&img[..n]).is_err(), "{n} bytes");
+        }
+    }
+}

@@ -327,3 +327,83 @@ pub(crate) fn describe_returned(returned: &[Returned]) -> String {
         .collect();
     v.join(" + ")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// BRD 0000h, 2 bytes, index 5 (ETG.1000.4 §5.4).
+    fn brd() -> Vec<Datagram> {
+        vec![Datagram::read(Command::BRD, 0, 0x0000, 2)]
+    }
+
+    #[test]
+    fn a_frame_with_one_datagram() {
+        let f = frame([0x10; 6], 5, &brd()).unwrap();
+        assert_eq!(
+            f[..30],
+            [
+                0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, // destination: broadcast
+                0x10, 0x10, 0x10, 0x10, 0x10, 0x10, // source: the master
+                0x88, 0xA4, // EtherType EtherCAT
+                0x0E, 0x10, // length 14, type 1
+                0x07, 0x05, // BRD, index 5
+                0x00, 0x00, 0x00, 0x00, // ADP, ADO
+                0x02, 0x00, // length 2, last
+                0x00, 0x00, // IRQ
+                0x00, 0x00, // data
+                0x00, 0x00, // working counter
+            ]
+        );
+        assert_eq!(f.len(), 60, "padded");
+    }
+
+    #[test]
+    fn the_reply_is_matched_by_index_and_datagrams() {
+        let sent = brd();
+        let mut f = frame([0x10; 6], 5, &sent).unwrap();
+        f[6] |= 0x02;
+        f[26] = 0x80; // data as an ESC fills it
+        f[28] = 1; // working counter 1
+        match parse_reply(&f, 5, &sent) {
+            Reply::Ours(r) => assert_eq!((r[0].wkc, r[0].data.clone()), (1, vec![0x80, 0])),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(parse_reply(&f, 6, &sent), Reply::Foreign, "other index");
+        let other = vec![Datagram::read(Command::BRD, 0, 0x0000, 4)];
+        assert!(matches!(parse_reply(&f, 5, &other), Reply::Malformed(_)));
+        let mut ip = f.clone();
+        ip[12..14].copy_from_slice(&[0x08, 0x00]);
+        assert_eq!(parse_reply(&ip, 5, &sent), Reply::Foreign, "IPv4");
+    }
+
+    #[test]
+    fn every_truncation_and_bit_flip_is_handled() {
+        let sent = vec![
+            Datagram::read(Command::FPRD, 0x1001, 0x0130, 6),
+            Datagram::new(Command::LRW, 0, 1, vec![1, 2, 3, 4]),
+        ];
+        let f = frame([0x10; 6], 9, &sent).unwrap();
+        for n in 0..f.len() {
+            let _ = parse_reply(&f[..n], 9, &sent);
+        }
+        for at in 0..f.len() {
+            for bit in 0..8 {
+                let mut g = f.clone();
+                g[at] ^= 1 << bit;
+                let _ = parse_reply(&g, 9, &sent);
+            }
+        }
+    }
+
+    #[test]
+    fn too_long_is_refused() {
+        let big = vec![Datagram::read(Command::FPRD, 1, 0, 1500)];
+        assert!(matches!(
+            frame([0; 6], 0, &big),
+            Err(BuildError::TooLong { .. })
+        ));
+        assert_eq!(Command(0x0C).to_string(), "LRW");
+        assert_eq!(Command(0x2A).to_string(), "command 2Ah");
+    }
+}
