@@ -2,6 +2,7 @@
 //! link to the simulated slave), `harness serve ecat`, the ESI writer and the `ecat:` steps.
 
 mod esi;
+pub(crate) mod master;
 pub mod serve;
 mod step;
 
