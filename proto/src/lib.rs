@@ -6,5 +6,7 @@
 //! Every parser in this crate returns `Err` on malformed input; none panics on any byte
 //! sequence.
 
+pub mod ecat;
 pub mod enip;
+pub mod eth;
 pub mod nord;
