@@ -1,23 +1,7 @@
-//! The codes a slave refuses with. Stopgap until `proto::ecat` lands: then these become
-//! re-exports of its open newtypes.
+//! The codes a slave refuses with in the mailbox. Stopgap until `proto::ecat::{mailbox, coe}`
+//! land: then these become re-exports of their open newtypes.
 
 use std::fmt;
-
-/// An AL status code (register 0134h, ETG.1000.6 table 11).
-#[derive(Clone, Copy, PartialEq, Eq, Hash)]
-pub(crate) struct AlStatusCode(pub(crate) u16);
-
-impl fmt::Display for AlStatusCode {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{:04X}h", self.0)
-    }
-}
-
-impl fmt::Debug for AlStatusCode {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "AlStatusCode({:04X}h)", self.0)
-    }
-}
 
 /// An SDO abort code (ETG.1000.6 §5.6.2.7.2; BU 0620 §2.2.7.2).
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]

@@ -15,8 +15,9 @@ use super::pdo::Cyclic;
 use super::port::{Port, PortStats};
 use super::segment::Segment;
 use super::sii::SiiInfo;
-use super::wire::{Command, Datagram, Returned};
+use super::wire;
 use crate::outcome::Exchange;
+use proto::ecat::{Command, DatagramRepr};
 
 /// How the master works; the defaults suit a network segment (1 ms cycle).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -217,13 +218,13 @@ impl<S: Segment> Master<S> {
         address: u16,
         len: usize,
     ) -> Result<Vec<u8>> {
-        self.expect(Datagram::read(Command::FPRD, station, address, len), 1)
+        self.expect(wire::read(Command::FPRD, station, address, len), 1)
     }
 
     /// Writes ESC registers of `station` (FPWR, working counter 1).
     pub(crate) fn write_register(&mut self, station: u16, address: u16, data: &[u8]) -> Result<()> {
         self.expect(
-            Datagram::new(Command::FPWR, station, address, data.to_vec()),
+            wire::write(Command::FPWR, station, address, data.to_vec()),
             1,
         )
         .map(drop)
@@ -240,8 +241,8 @@ impl<S: Segment> Master<S> {
     /// within the frame timeout. A frame that comes back unprocessed is still an error.
     pub(crate) fn raw_datagrams(
         &mut self,
-        datagrams: &[Datagram],
-    ) -> Result<Option<Vec<Returned>>> {
+        datagrams: &[DatagramRepr],
+    ) -> Result<Option<Vec<DatagramRepr>>> {
         match self.exchange(datagrams) {
             Ok(r) => Ok(Some(r)),
             Err(MasterError::Link(LinkFailure::Timeout { .. })) => Ok(None),
@@ -267,19 +268,19 @@ impl<S: Segment> Master<S> {
     }
 
     /// [`Port::exchange`] after a due cycle.
-    pub(super) fn exchange(&mut self, datagrams: &[Datagram]) -> Result<Vec<Returned>> {
+    pub(super) fn exchange(&mut self, datagrams: &[DatagramRepr]) -> Result<Vec<DatagramRepr>> {
         self.keep_cycle();
         self.port.exchange(datagrams)
     }
 
     /// [`Port::one`] after a due cycle.
-    pub(super) fn one(&mut self, d: Datagram) -> Result<Returned> {
+    pub(super) fn one(&mut self, d: DatagramRepr) -> Result<DatagramRepr> {
         self.keep_cycle();
         self.port.one(d)
     }
 
     /// [`Port::expect`] after a due cycle.
-    pub(super) fn expect(&mut self, d: Datagram, wkc: u16) -> Result<Vec<u8>> {
+    pub(super) fn expect(&mut self, d: DatagramRepr, wkc: u16) -> Result<Vec<u8>> {
         self.keep_cycle();
         self.port.expect(d, wkc)
     }

@@ -12,9 +12,10 @@
 
 use std::time::Duration;
 
-use super::codes::{AlStatusCode, MailboxErrorCode, SdoAbortCode};
+use super::codes::{MailboxErrorCode, SdoAbortCode};
 use super::segment::SegmentError;
 use crate::outcome;
+use proto::ecat::al::AlStatusCode;
 
 /// Which of the three kinds an error is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -139,10 +140,17 @@ impl Refusal {
 /// What a slave sent that breaks EtherCAT.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub(crate) enum ProtocolError {
-    /// An EtherCAT frame came back that cannot be parsed, or whose datagrams are not the ones
-    /// sent (the last such frame; no good frame came within the timeout).
+    /// An EtherCAT frame came back that cannot be parsed (the last such frame; no good frame
+    /// came within the timeout).
     #[error("malformed EtherCAT frame came back: {0}")]
-    Malformed(String),
+    Malformed(proto::ecat::Error),
+    /// A frame came back with the index of the frame sent but other datagrams (other commands
+    /// or lengths).
+    #[error("the frame with index {index:02X}h came back with other datagrams than were sent")]
+    Mismatch {
+        /// The frame's index.
+        index: u8,
+    },
     /// A datagram's working counter is not what the access must give.
     #[error("{access}: working counter {got}, expected {expected}")]
     WorkingCounter {
@@ -221,7 +229,10 @@ pub(crate) enum UsageError {
         /// Word 0..=5.
         word: u8,
     },
-    /// Data too large for a frame, a datagram or a mailbox.
+    /// The datagrams cannot be put into one frame.
+    #[error("cannot build the frame: {0}")]
+    Frame(super::wire::BuildError),
+    /// Data too large for a mailbox.
     #[error("{what}: {len} bytes do not fit ({max} at most)")]
     TooLong {
         /// What was to be sent.

@@ -11,12 +11,16 @@
 //! A mailbox error reply (type 0) is the slave's refusal ([`Refusal::Mailbox`]).
 
 use super::codes::MailboxErrorCode;
+use proto::ecat::register::{self, sm_status};
+
 use super::engine::{Master, SmSetup};
 use super::error::{Awaited, LinkFailure, ProtocolError, Refusal, Result, UsageError};
+use super::pdo::sm_block;
 use super::port::check_wkc;
 use super::segment::Segment;
 use super::sii::SmKind;
-use super::wire::{Command, Datagram};
+use super::wire;
+use proto::ecat::Command;
 
 /// Mailbox header bytes (ETG.1000.6 table 29).
 pub(crate) const HEADER: usize = 6;
@@ -26,8 +30,6 @@ pub(crate) const TYPE_ERROR: u8 = 0;
 pub(crate) const TYPE_COE: u8 = 3;
 /// CoE service: emergency.
 const COE_EMERGENCY: u8 = 1;
-/// SM status bit 3: mailbox full.
-const MAILBOX_FULL: u8 = 0x08;
 /// Control byte of SM0 when the SII has none: mailbox, written by the master, AL event.
 const SM0_CONTROL: u8 = 0x26;
 /// Control byte of SM1: mailbox, read by the master, AL event.
@@ -157,13 +159,8 @@ impl<S: Segment> Master<S> {
             len: sii.mailbox.in_len,
             control: control(SmKind::MailboxIn, SM1_CONTROL),
         };
-        let mut regs = Vec::with_capacity(16);
-        for sm in [out, inn] {
-            regs.extend(sm.start.to_le_bytes());
-            regs.extend(sm.len.to_le_bytes());
-            regs.extend([sm.control, 0, 1, 0]);
-        }
-        self.write_register(station, 0x0800, &regs)?;
+        let regs: Vec<u8> = [out, inn].iter().flat_map(|sm| sm_block(*sm)).collect();
+        self.write_register(station, register::sm(0), &regs)?;
         if let Some(s) = self.slave_mut(station) {
             s.mailbox = Some((out, inn));
         }
@@ -235,9 +232,9 @@ impl<S: Segment> Master<S> {
         }
         let mut padded = msg.to_vec();
         padded.resize(usize::from(out.len), 0);
-        let read = Datagram::read(Command::FPRD, station, inn.start, usize::from(inn.len));
-        let write = Datagram::new(Command::FPWR, station, out.start, padded);
-        let access = write.describe();
+        let read = wire::read(Command::FPRD, station, inn.start, usize::from(inn.len));
+        let write = wire::write(Command::FPWR, station, out.start, padded);
+        let access = wire::describe(&write);
         let note = match Message::parse(msg) {
             Ok(m) => describe(&m),
             Err(_) => format!("mailbox {} bytes as given", msg.len()),
@@ -263,10 +260,10 @@ impl<S: Segment> Master<S> {
             }
         }
         let timeout = self.config.mailbox_timeout;
-        let status = 0x0805 + 8;
+        let status = register::sm(1) + 5;
         let got = self.poll(timeout, Awaited::MailboxReply, |m| {
-            let s = m.one(Datagram::read(Command::FPRD, station, status, 1))?;
-            if s.wkc != 1 || s.data[0] & MAILBOX_FULL == 0 {
+            let s = m.one(wire::read(Command::FPRD, station, status, 1))?;
+            if s.wkc != 1 || s.data[0] & sm_status::MAILBOX_FULL == 0 {
                 return Ok(None);
             }
             let r = m.one(read.clone())?;

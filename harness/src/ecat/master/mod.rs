@@ -28,9 +28,9 @@ mod tests;
 mod wire;
 
 #[allow(unused_imports)] // the module's API, not all of it used yet
-pub(crate) use al::{state_code, state_of, AlStatus};
+pub(crate) use al::AlReading;
 #[allow(unused_imports)]
-pub(crate) use codes::{AlStatusCode, MailboxErrorCode, SdoAbortCode};
+pub(crate) use codes::{MailboxErrorCode, SdoAbortCode};
 #[allow(unused_imports)]
 pub(crate) use engine::{EscInfo, Master, MasterConfig, ProcessSetup, SlaveInfo, SmSetup};
 #[allow(unused_imports)]
@@ -45,8 +45,10 @@ pub(crate) use pdo::CyclicStats;
 #[allow(unused_imports)]
 pub(crate) use port::PortStats;
 #[allow(unused_imports)]
+pub(crate) use proto::ecat::al::{AlStatus, AlStatusCode};
+#[allow(unused_imports)]
+pub(crate) use proto::ecat::{Command, DatagramRepr};
+#[allow(unused_imports)]
 pub(crate) use segment::{EmbeddedSegment, Fault, Faulty, NetSegment, Segment, SegmentError};
 #[allow(unused_imports)]
 pub(crate) use sii::{SiiInfo, SiiPdo, SiiSm, SmKind};
-#[allow(unused_imports)]
-pub(crate) use wire::{Command, Datagram, Returned};

@@ -10,6 +10,7 @@
 
 use std::time::Duration;
 
+use proto::ecat::register::{self, fmmu_type, FmmuRepr, SmRepr};
 use proto::nord::ecat::{BYTES_PER_INVERTER, WORDS_PER_INVERTER};
 
 use super::engine::{Master, ProcessSetup, SmSetup};
@@ -17,7 +18,8 @@ use super::error::{Result, UsageError};
 use super::port::check_wkc;
 use super::segment::Segment;
 use super::sii::SmKind;
-use super::wire::{Command, Datagram};
+use super::wire;
+use proto::ecat::{Command, DatagramRepr};
 
 /// Counters of the cyclic exchange.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -48,6 +50,13 @@ impl Cyclic {
     pub(super) fn due(&self) -> Option<Duration> {
         self.running.then_some(self.next)
     }
+}
+
+/// The register block of a SyncManager the master configures (enabled unless its length is 0).
+pub(super) fn sm_block(sm: SmSetup) -> [u8; 8] {
+    let mut r = SmRepr::enabled(sm.start, sm.len, sm.control);
+    r.activate = u8::from(sm.len > 0);
+    r.emit()
 }
 
 /// The byte offset of word `word` (0 = control/status word, 1..=5 values) of FI `inverter`
@@ -97,28 +106,26 @@ impl<S: Segment> Master<S> {
             out_offset,
             in_offset,
         };
-        let mut sms = Vec::with_capacity(16);
-        for sm in [outputs, inputs] {
-            sms.extend(sm.start.to_le_bytes());
-            sms.extend(sm.len.to_le_bytes());
-            sms.extend([sm.control, 0, u8::from(sm.len > 0), 0]);
-        }
-        self.write_register(station, 0x0810, &sms)?;
+        let sms: Vec<u8> = [outputs, inputs]
+            .iter()
+            .flat_map(|sm| sm_block(*sm))
+            .collect();
+        self.write_register(station, register::sm(2), &sms)?;
         let out_len = (out_offset + usize::from(outputs.len)).max(self.cyclic.outputs.len());
         let in_len = (in_offset + usize::from(inputs.len)).max(self.cyclic.inputs.len());
         let base = self.config.logical_base;
-        let mut fmmus = Vec::with_capacity(32);
-        for (log, sm, kind) in [
-            (base + out_offset as u32, outputs, 2u8),
-            (base + (out_len + in_offset) as u32, inputs, 1u8),
-        ] {
-            fmmus.extend(log.to_le_bytes());
-            fmmus.extend(sm.len.to_le_bytes());
-            fmmus.extend([0, 7]); // logical start bit 0, end bit 7
-            fmmus.extend(sm.start.to_le_bytes());
-            fmmus.extend([0, kind, u8::from(sm.len > 0), 0, 0, 0]);
-        }
-        self.write_register(station, 0x0600, &fmmus)?;
+        let fmmus: Vec<u8> = [
+            (base + out_offset as u32, outputs, fmmu_type::WRITE),
+            (base + (out_len + in_offset) as u32, inputs, fmmu_type::READ),
+        ]
+        .iter()
+        .flat_map(|(log, sm, kind)| {
+            let mut f = FmmuRepr::bytes(*log, sm.len, sm.start, *kind);
+            f.activate = u8::from(sm.len > 0);
+            f.emit()
+        })
+        .collect();
+        self.write_register(station, register::fmmu(0), &fmmus)?;
         if let Some(s) = self.slave_mut(station) {
             s.process = Some(setup);
         }
@@ -144,8 +151,8 @@ impl<S: Segment> Master<S> {
         let out_len = self.cyclic.outputs.len();
         let mut data = self.cyclic.outputs.clone();
         data.resize(out_len + self.cyclic.inputs.len(), 0);
-        let d = Datagram::logical(Command::LRW, self.config.logical_base, data);
-        let access = d.describe();
+        let d = DatagramRepr::logical(Command::LRW, 0, self.config.logical_base, data);
+        let access = wire::describe(&d);
         let now = self.now();
         self.cyclic.next = now + self.config.cycle;
         let r = match self.port.one(d) {

@@ -18,7 +18,8 @@ use std::time::Duration;
 use super::error::{Awaited, LinkFailure, MasterError, NoSlave, ProtocolError, Result, UsageError};
 use super::record::Recorder;
 use super::segment::Segment;
-use super::wire::{self, Command, Datagram, Returned};
+use super::wire;
+use proto::ecat::DatagramRepr;
 
 /// The master's source address: a unicast address with the locally administered bit clear, so
 /// that a frame some ESC processed (which sets that bit, ETG.1000.4 §5.3) differs from one that
@@ -119,25 +120,25 @@ impl<S: Segment> Port<S> {
 
     /// Sends `datagrams` in one frame and returns what came back for each, in order. A working
     /// counter of 0 is returned as it came (the caller judges it).
-    pub(crate) fn exchange(&mut self, datagrams: &[Datagram]) -> Result<Vec<Returned>> {
+    pub(crate) fn exchange(&mut self, datagrams: &[DatagramRepr]) -> Result<Vec<DatagramRepr>> {
         let index = self.index;
         self.index = self.index.wrapping_add(1);
-        let frame = wire::frame(self.mac, index, datagrams).map_err(UsageError::from)?;
+        let frame = wire::frame(self.mac, index, datagrams).map_err(UsageError::Frame)?;
         let sent_line = wire::describe_sent(datagrams);
         self.segment.send(&frame)?;
         self.stats.sent += 1;
         let deadline = self.segment.now() + self.timeout;
-        let mut malformed: Option<String> = None;
+        let mut malformed: Option<ProtocolError> = None;
         loop {
             let Some(arrival) = self.segment.recv(&mut self.rx, deadline)? else {
                 self.stats.timeouts += 1;
                 let line = match &malformed {
-                    Some(m) => format!("malformed frame only: {m}"),
+                    Some(m) => format!("only a frame that is not the answer: {m}"),
                     None => format!("nothing came back within {:?}", self.timeout),
                 };
                 self.recorder.push(&frame, sent_line, &[], line);
                 return Err(match malformed {
-                    Some(m) => ProtocolError::Malformed(m).into(),
+                    Some(m) => m.into(),
                     None => LinkFailure::Timeout {
                         awaited: Awaited::Frame,
                         after: self.timeout,
@@ -153,9 +154,13 @@ impl<S: Segment> Port<S> {
             }
             match wire::parse_reply(got, index, datagrams) {
                 wire::Reply::Foreign => self.stats.skipped += 1,
-                wire::Reply::Malformed(why) => {
+                wire::Reply::Malformed(e) => {
                     self.stats.malformed += 1;
-                    malformed = Some(why);
+                    malformed = Some(ProtocolError::Malformed(e));
+                }
+                wire::Reply::Mismatch => {
+                    self.stats.malformed += 1;
+                    malformed = Some(ProtocolError::Mismatch { index });
                 }
                 wire::Reply::Ours(returned) => {
                     self.stats.matched += 1;
@@ -170,16 +175,18 @@ impl<S: Segment> Port<S> {
     }
 
     /// Sends one datagram and returns what came back.
-    pub(crate) fn one(&mut self, d: Datagram) -> Result<Returned> {
+    pub(crate) fn one(&mut self, d: DatagramRepr) -> Result<DatagramRepr> {
         let mut r = self.exchange(std::slice::from_ref(&d))?;
         r.pop().ok_or_else(|| {
-            MasterError::from(ProtocolError::Malformed("no datagram came back".into()))
+            MasterError::from(ProtocolError::Mismatch {
+                index: self.index.wrapping_sub(1),
+            })
         })
     }
 
     /// Sends one datagram and requires working counter `expected` (0 everywhere: no slave).
-    pub(crate) fn expect(&mut self, d: Datagram, expected: u16) -> Result<Vec<u8>> {
-        let access = d.describe();
+    pub(crate) fn expect(&mut self, d: DatagramRepr, expected: u16) -> Result<Vec<u8>> {
+        let access = wire::describe(&d);
         let r = self.one(d)?;
         check_wkc(&access, &r, expected)?;
         Ok(r.data)
@@ -190,7 +197,7 @@ impl<S: Segment> Port<S> {
     /// first EtherCAT frame of the same length that comes back (`None`: none by the timeout —
     /// an ESC destroys a frame it finds malformed).
     pub(crate) fn exchange_raw(&mut self, payload: &[u8]) -> Result<Option<Vec<u8>>> {
-        let frame = wire::raw_frame(self.mac, payload).map_err(UsageError::from)?;
+        let frame = wire::raw_frame(self.mac, payload).map_err(UsageError::Frame)?;
         let sent_line = format!("raw EtherCAT frame, {} bytes", payload.len());
         self.segment.send(&frame)?;
         self.stats.sent += 1;
@@ -230,7 +237,7 @@ impl<S: Segment> Port<S> {
 }
 
 /// Checks a working counter: 0 when more was expected is "no slave answered".
-pub(crate) fn check_wkc(access: &str, r: &Returned, expected: u16) -> Result<()> {
+pub(crate) fn check_wkc(access: &str, r: &DatagramRepr, expected: u16) -> Result<()> {
     if r.wkc == expected {
         Ok(())
     } else if r.wkc == 0 {
@@ -243,10 +250,4 @@ pub(crate) fn check_wkc(access: &str, r: &Returned, expected: u16) -> Result<()>
         }
         .into())
     }
-}
-
-/// The commands by name, for callers that build datagrams.
-#[allow(dead_code)]
-pub(crate) fn command_name(c: Command) -> String {
-    c.to_string()
 }

@@ -7,21 +7,16 @@
 
 use proto::nord::nmt::EcState;
 
-use super::al::{state_code, ACK, AL_CONTROL};
 use super::engine::{EscInfo, Master, SlaveInfo};
 use super::error::{LinkFailure, NoSlave, Result};
 use super::segment::Segment;
 use super::sii::SiiInfo;
-use super::wire::{Command, Datagram};
-
-/// Register of the configured station address.
-const STATION_ADDRESS: u16 = 0x0010;
-/// Register of the configured station alias.
-const STATION_ALIAS: u16 = 0x0012;
-/// FMMU registers (16 × 16 bytes).
-const FMMUS: u16 = 0x0600;
-/// SyncManager registers (8 × 8 bytes).
-const SYNC_MANAGERS: u16 = 0x0800;
+use super::wire;
+use proto::ecat::al::AlControl;
+use proto::ecat::register::{
+    AL_CONTROL, FMMU_BASE, FMMU_LEN, SM_BASE, SM_LEN, STATION_ADDRESS, STATION_ALIAS, TYPE,
+};
+use proto::ecat::Command;
 
 /// Cycles of valid outputs the master sends in Safe-Operational before it asks for
 /// Operational (ETG.1000.6 §6.4.1: the slave expects valid outputs on that transition).
@@ -31,7 +26,7 @@ impl<S: Segment> Master<S> {
     /// Counts the slaves on the segment: the working counter of a broadcast read of register
     /// 0000h (each slave adds 1). 0 is [`NoSlave::NoneCounted`].
     pub(crate) fn count_slaves(&mut self) -> Result<u16> {
-        let r = self.one(Datagram::read(Command::BRD, 0, 0x0000, 2))?;
+        let r = self.one(wire::read(Command::BRD, 0, 0x0000, 2))?;
         if r.wkc == 0 {
             return Err(LinkFailure::NoSlave(NoSlave::NoneCounted).into());
         }
@@ -47,18 +42,18 @@ impl<S: Segment> Master<S> {
         self.cyclic = Default::default();
         self.slaves.clear();
         let n = self.count_slaves()?;
-        let init = u16::from(state_code(EcState::Init)) | ACK;
-        self.broadcast(AL_CONTROL, init.to_le_bytes().to_vec(), n)?;
-        self.broadcast(FMMUS, vec![0; 256], n)?;
+        let init = AlControl::request(EcState::Init, true);
+        self.broadcast(AL_CONTROL, init.emit().to_vec(), n)?;
+        self.broadcast(FMMU_BASE, vec![0; 16 * FMMU_LEN], n)?;
         // Twice: an ESC takes SyncManager start/length/control only while the SyncManager is
         // disabled, and the first write disables it.
-        self.broadcast(SYNC_MANAGERS, vec![0; 64], n)?;
-        self.broadcast(SYNC_MANAGERS, vec![0; 64], n)?;
+        self.broadcast(SM_BASE, vec![0; 8 * SM_LEN], n)?;
+        self.broadcast(SM_BASE, vec![0; 8 * SM_LEN], n)?;
         for position in 0..n {
             let station = self.config.station_base.wrapping_add(position);
             let adp = 0u16.wrapping_sub(position);
             self.expect(
-                Datagram::new(
+                wire::write(
                     Command::APWR,
                     adp,
                     STATION_ADDRESS,
@@ -91,13 +86,13 @@ impl<S: Segment> Master<S> {
 
     /// A broadcast write that every one of `n` slaves must take.
     fn broadcast(&mut self, ado: u16, data: Vec<u8>, n: u16) -> Result<()> {
-        self.expect(Datagram::new(Command::BWR, 0, ado, data), n)
+        self.expect(wire::write(Command::BWR, 0, ado, data), n)
             .map(drop)
     }
 
     /// Reads registers 0000h–0009h and the alias of `station`.
     pub(crate) fn read_esc_info(&mut self, station: u16) -> Result<EscInfo> {
-        let b = self.read_register(station, 0x0000, 10)?;
+        let b = self.read_register(station, TYPE, 10)?;
         let alias = self.read_u16(station, STATION_ALIAS)?;
         Ok(EscInfo {
             kind: b[0],

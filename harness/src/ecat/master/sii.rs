@@ -7,23 +7,17 @@
 //! bit 15) is set, checks the error bits (13 "missing acknowledge / invalid command", 14
 //! "write enable error") and reads 4 or 8 bytes from 0508h (0502h bit 6: 8-byte reads).
 
+use proto::ecat::register::{SiiControl, SII_CONFIG, SII_CONTROL};
+
 use super::engine::Master;
 use super::error::{Awaited, ProtocolError, Result};
 use super::segment::Segment;
-use super::wire::{Command, Datagram};
+use super::wire;
+use proto::ecat::Command;
 
-/// EEPROM configuration/access register (ECAT owns the EEPROM when 0).
-const EEPROM_CONFIG: u16 = 0x0500;
-/// EEPROM control/status.
-const EEPROM_CONTROL: u16 = 0x0502;
-/// The "read" command in the control register's high byte.
-const CMD_READ: u16 = 0x0100;
-/// Busy (bit 15).
-const BUSY: u16 = 0x8000;
-/// Error bits: 13 missing acknowledge / invalid command, 14 write enable error.
-const ERRORS: u16 = 0x6000;
-/// 8-byte reads (bit 6).
-const READ_8: u16 = 0x0040;
+/// The error bits that fail a read: 13 missing acknowledge / invalid command, 14 write enable
+/// error (a checksum or load error of the configuration area does not stop reading).
+const READ_ERRORS: u16 = SiiControl::ACK_ERROR | SiiControl::WRITE_ENABLE_ERROR;
 
 /// Word address where the categories start (ETG.2010 table 1).
 const CATEGORIES: usize = 0x40;
@@ -158,7 +152,7 @@ impl SiiInfo {
 impl<S: Segment> Master<S> {
     /// Reads `words` SII words from word address `word` of `station`.
     pub(crate) fn read_sii(&mut self, station: u16, word: u16, words: u16) -> Result<Vec<u8>> {
-        self.write_register(station, EEPROM_CONFIG, &[0])?;
+        self.write_register(station, SII_CONFIG, &[0])?;
         let mut out = Vec::with_capacity(2 * usize::from(words));
         let mut at = u32::from(word);
         while out.len() < 2 * usize::from(words) {
@@ -175,40 +169,44 @@ impl<S: Segment> Master<S> {
         let timeout = self.config.eeprom_timeout;
         // Wait for a command still running.
         let mut status = self.poll(timeout, Awaited::Eeprom, |m| {
-            let s = m.read_u16(station, EEPROM_CONTROL)?;
-            Ok((s & BUSY == 0).then_some(s))
+            let s = m.read_u16(station, SII_CONTROL)?;
+            Ok((s & SiiControl::BUSY == 0).then_some(s))
         })?;
-        let mut command = CMD_READ.to_le_bytes().to_vec();
+        let mut command = SiiControl::CMD_READ.to_le_bytes().to_vec();
         command.extend(address.to_le_bytes());
         // The command, and at once the status and the data (a fast ESC is done by then).
         let r = self.exchange(&[
-            Datagram::new(Command::FPWR, station, EEPROM_CONTROL, command),
-            Datagram::read(Command::FPRD, station, EEPROM_CONTROL, 14),
+            wire::write(Command::FPWR, station, SII_CONTROL, command),
+            wire::read(Command::FPRD, station, SII_CONTROL, 14),
         ])?;
-        let access = format!("FPWR {station:04X}h:{EEPROM_CONTROL:04X}h");
+        let access = format!("FPWR {station:04X}h:{SII_CONTROL:04X}h");
         super::port::check_wkc(&access, &r[0], 1)?;
         let mut data = r[1].data.clone();
         if r[1].wkc == 1 {
             status = u16::from_le_bytes([data[0], data[1]]);
         }
-        if r[1].wkc != 1 || status & BUSY != 0 {
+        if r[1].wkc != 1 || status & SiiControl::BUSY != 0 {
             status = self.poll(timeout, Awaited::Eeprom, |m| {
-                let s = m.read_u16(station, EEPROM_CONTROL)?;
-                Ok((s & BUSY == 0).then_some(s))
+                let s = m.read_u16(station, SII_CONTROL)?;
+                Ok((s & SiiControl::BUSY == 0).then_some(s))
             })?;
-            data = self.read_register(station, EEPROM_CONTROL, 14)?;
+            data = self.read_register(station, SII_CONTROL, 14)?;
         }
-        if status & ERRORS != 0 {
+        if status & READ_ERRORS != 0 {
             return Err(ProtocolError::Eeprom { status }.into());
         }
-        let n = if status & READ_8 != 0 { 8 } else { 4 };
+        let n = if status & SiiControl::READ_8_BYTES != 0 {
+            8
+        } else {
+            4
+        };
         Ok(data[6..6 + n].to_vec())
     }
 
     /// Reads the whole SII of `station` (the header and the categories up to the end marker)
     /// and takes its contents apart.
     pub(crate) fn read_sii_info(&mut self, station: u16) -> Result<SiiInfo> {
-        self.write_register(station, EEPROM_CONFIG, &[0])?;
+        self.write_register(station, SII_CONFIG, &[0])?;
         let mut words: Vec<u16> = Vec::new();
         let mut need = CATEGORIES + 2;
         let mut at = CATEGORIES;

@@ -237,7 +237,7 @@ fn raw_frames_datagrams_and_mailboxes() {
     at(&mut m, EcState::PreOperational);
     // An unknown command: passed on, working counter 0.
     let r = m
-        .raw_datagrams(&[Datagram::read(Command(0x0F), STATION, 0x0130, 2)])
+        .raw_datagrams(&[wire::read(Command(0x0F), STATION, 0x0130, 2)])
         .unwrap()
         .unwrap();
     assert_eq!(r[0].wkc, 0);
@@ -330,12 +330,8 @@ fn stale_and_foreign_frames_are_skipped() {
     m.scan().unwrap();
     // A frame with another index arrives first (a late duplicate): skipped.
     let mut seg = m.into_segment();
-    let mut stale = wire::frame(
-        port::MASTER_MAC,
-        0xEE,
-        &[Datagram::read(Command::BRD, 0, 0, 2)],
-    )
-    .unwrap();
+    let mut stale =
+        wire::frame(port::MASTER_MAC, 0xEE, &[wire::read(Command::BRD, 0, 0, 2)]).unwrap();
     stale[6] |= 0x02;
     seg.set_fault(Fault::None);
     let mut m = Master::new(seg, MasterConfig::default());
