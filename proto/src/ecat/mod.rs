@@ -15,9 +15,11 @@
 //! is little-endian throughout.
 
 pub mod al;
+pub mod coe;
 pub mod datagram;
 mod error;
 pub mod frame;
+pub mod mailbox;
 pub mod register;
 mod wire;
 

@@ -33,7 +33,6 @@ impl<'a> Reader<'a> {
         Ok(s)
     }
 
-    #[allow(dead_code)]
     pub(crate) fn rest(&mut self) -> &'a [u8] {
         let s = &self.buf[self.pos..];
         self.pos = self.buf.len();
