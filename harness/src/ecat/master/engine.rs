@@ -17,6 +17,7 @@ use super::segment::Segment;
 use super::sii::SiiInfo;
 use super::wire;
 use crate::outcome::Exchange;
+use proto::ecat::coe::Emergency;
 use proto::ecat::{Command, DatagramRepr};
 
 /// How the master works; the defaults suit a network segment (1 ms cycle).
@@ -129,7 +130,7 @@ pub(crate) struct Master<S> {
     pub(super) slaves: Vec<SlaveInfo>,
     pub(super) cyclic: Cyclic,
     /// CoE emergencies read from the mailbox while waiting for something else.
-    pub(super) emergencies: Vec<Vec<u8>>,
+    pub(super) emergencies: Vec<Emergency>,
 }
 
 impl<S: Segment> Master<S> {
@@ -196,8 +197,8 @@ impl<S: Segment> Master<S> {
         self.port.recorder.set_on(on);
     }
 
-    /// CoE emergency messages (their CoE payload) that arrived since the last call.
-    pub(crate) fn take_emergencies(&mut self) -> Vec<Vec<u8>> {
+    /// CoE emergencies that arrived since the last call.
+    pub(crate) fn take_emergencies(&mut self) -> Vec<Emergency> {
         std::mem::take(&mut self.emergencies)
     }
 

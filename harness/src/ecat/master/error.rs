@@ -12,10 +12,12 @@
 
 use std::time::Duration;
 
-use super::codes::{MailboxErrorCode, SdoAbortCode};
+use proto::ecat::al::AlStatusCode;
+use proto::ecat::coe::SdoAbortCode;
+use proto::ecat::mailbox::MailboxErrorCode;
+
 use super::segment::SegmentError;
 use crate::outcome;
-use proto::ecat::al::AlStatusCode;
 
 /// Which of the three kinds an error is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -172,7 +174,10 @@ pub(crate) enum ProtocolError {
     Sii(String),
     /// A mailbox message from the slave cannot be parsed.
     #[error("mailbox reply: {0}")]
-    Mailbox(String),
+    Mailbox(proto::ecat::Error),
+    /// A CoE message from the slave cannot be parsed.
+    #[error("CoE reply: {0}")]
+    Coe(proto::ecat::Error),
     /// A reply that does not answer the request (an SDO response of another service, index or
     /// sub-index; a mailbox type not asked for).
     #[error("unexpected reply: expected {expected}, got {got}")]
@@ -232,6 +237,9 @@ pub(crate) enum UsageError {
     /// The datagrams cannot be put into one frame.
     #[error("cannot build the frame: {0}")]
     Frame(super::wire::BuildError),
+    /// The mailbox message cannot be built (too long for its length field).
+    #[error("cannot build the mailbox message: {0}")]
+    Mailbox(proto::ecat::Error),
     /// Data too large for a mailbox.
     #[error("{what}: {len} bytes do not fit ({max} at most)")]
     TooLong {

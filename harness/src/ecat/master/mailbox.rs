@@ -10,126 +10,138 @@
 //! polled. CoE emergencies that arrive meanwhile are kept ([`Master::take_emergencies`]).
 //! A mailbox error reply (type 0) is the slave's refusal ([`Refusal::Mailbox`]).
 
-use super::codes::MailboxErrorCode;
-use proto::ecat::register::{self, sm_status};
+use proto::ecat::coe::{CoeHeader, CoeMessage, CoeService, Emergency, SdoRequest, SdoResponse};
+use proto::ecat::mailbox::{self, MailboxError, MailboxRepr, MailboxType};
+use proto::ecat::register::{self, sm_control, sm_status};
+use proto::ecat::Command;
 
 use super::engine::{Master, SmSetup};
-use super::error::{Awaited, LinkFailure, ProtocolError, Refusal, Result, UsageError};
+use super::error::{Awaited, LinkFailure, MasterError, ProtocolError, Refusal, Result, UsageError};
 use super::pdo::sm_block;
 use super::port::check_wkc;
 use super::segment::Segment;
 use super::sii::SmKind;
 use super::wire;
-use proto::ecat::Command;
 
-/// Mailbox header bytes (ETG.1000.6 table 29).
-pub(crate) const HEADER: usize = 6;
-/// Mailbox type: error reply.
-pub(crate) const TYPE_ERROR: u8 = 0;
-/// Mailbox type: CoE.
-pub(crate) const TYPE_COE: u8 = 3;
-/// CoE service: emergency.
-const COE_EMERGENCY: u8 = 1;
 /// Control byte of SM0 when the SII has none: mailbox, written by the master, AL event.
-const SM0_CONTROL: u8 = 0x26;
+const SM0_CONTROL: u8 = sm_control::MODE_MAILBOX | sm_control::DIRECTION_WRITE | sm_control::IRQ_AL;
 /// Control byte of SM1: mailbox, read by the master, AL event.
-const SM1_CONTROL: u8 = 0x22;
+const SM1_CONTROL: u8 = sm_control::MODE_MAILBOX | sm_control::DIRECTION_READ | sm_control::IRQ_AL;
 
-/// A mailbox message taken apart (stopgap until `proto::ecat::mailbox` lands).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) struct Message {
-    /// Mailbox type (0 error, 3 CoE…).
-    pub(crate) kind: u8,
-    /// The sender's counter.
-    pub(crate) counter: u8,
-    /// The body (the header's length of it).
-    pub(crate) body: Vec<u8>,
-}
-
-impl Message {
-    /// Parses a whole mailbox buffer.
-    pub(crate) fn parse(buf: &[u8]) -> std::result::Result<Message, ProtocolError> {
-        let h = buf.get(..HEADER).ok_or_else(|| {
-            ProtocolError::Mailbox(format!("truncated: need {HEADER} bytes, got {}", buf.len()))
-        })?;
-        let len = usize::from(u16::from_le_bytes([h[0], h[1]]));
-        let body = buf.get(HEADER..HEADER + len).ok_or_else(|| {
-            ProtocolError::Mailbox(format!(
-                "length {len} exceeds the {} bytes of the mailbox",
-                buf.len() - HEADER
-            ))
-        })?;
-        Ok(Message {
-            kind: h[5] & 0x0F,
-            counter: (h[5] >> 4) & 0x07,
-            body: body.to_vec(),
-        })
+/// The emergency a mailbox message carries, if it is one (CoE service 1).
+fn emergency(m: &MailboxRepr) -> Option<Emergency> {
+    if m.kind != MailboxType::COE {
+        return None;
     }
-
-    /// The header and body of a message.
-    pub(crate) fn emit(kind: u8, counter: u8, body: &[u8]) -> Vec<u8> {
-        let mut m = Vec::with_capacity(HEADER + body.len());
-        m.extend((body.len() as u16).to_le_bytes());
-        m.extend([0, 0, 0, (kind & 0x0F) | (counter & 0x07) << 4]);
-        m.extend(body);
-        m
-    }
-
-    /// A CoE emergency (CoE service 1).
-    fn is_emergency(&self) -> bool {
-        self.kind == TYPE_COE && self.body.get(1).map(|b| b >> 4) == Some(COE_EMERGENCY)
+    match CoeHeader::split(&m.data) {
+        Ok((h, rest)) if h.service == CoeService::EMERGENCY => Emergency::parse(rest).ok(),
+        _ => None,
     }
 }
 
 /// One line for a mailbox message: `mailbox #3 CoE SDO upload request 3066h:01h`.
-pub(crate) fn describe(m: &Message) -> String {
-    let b = &m.body;
+pub(crate) fn describe(m: &MailboxRepr) -> String {
     let what = match m.kind {
-        TYPE_ERROR => match b.get(2..4) {
-            Some(d) => format!("error reply {:04X}h", u16::from_le_bytes([d[0], d[1]])),
-            None => "error reply (truncated)".into(),
+        MailboxType::ERR => match MailboxError::parse(&m.data) {
+            Ok(e) => format!("error reply {}", e.detail),
+            Err(e) => format!("error reply, malformed: {e}"),
         },
-        TYPE_COE => describe_coe(b),
-        k => format!("type {k}, {} bytes", b.len()),
+        MailboxType::COE => match CoeMessage::parse(&m.data) {
+            Ok(c) => describe_coe(&c),
+            Err(e) => format!("CoE, malformed: {e}"),
+        },
+        k => format!("{k}, {} bytes", m.data.len()),
     };
     format!("mailbox #{} {what}", m.counter)
 }
 
-/// One line for a CoE body (ETG.1000.6 §5.6: CoE header, then the SDO command byte).
-fn describe_coe(b: &[u8]) -> String {
-    let service = b.get(1).map_or(0, |x| x >> 4);
-    let (Some(&cmd), obj) = (b.get(2), b.get(3..6)) else {
-        return format!("CoE service {service}, {} bytes", b.len());
-    };
-    let obj = obj.map_or(String::new(), |o| {
-        format!(" {:04X}h:{:02X}h", u16::from_le_bytes([o[0], o[1]]), o[2])
-    });
-    let toggle = (cmd >> 4) & 1;
-    let what = match (service, cmd >> 5) {
-        (1, _) => return format!("CoE emergency {}", crate::runner::hex(&b[2..])),
-        (2 | 3, 4) => {
-            let code = b
-                .get(6..10)
-                .map_or(0, |c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]));
-            return format!("CoE SDO abort{obj} {code:08X}h");
-        }
-        (2, 1) => format!("download request{obj}"),
-        (2, 0) => format!("download segment, toggle {toggle}"),
-        (2, 2) => format!("upload request{obj}"),
-        (2, 3) => format!("upload segment request, toggle {toggle}"),
-        (3, 3) => format!("download response{obj}"),
-        (3, 1) => format!("download segment response, toggle {toggle}"),
-        (3, 2) => format!("upload response{obj}"),
-        (3, 0) => format!("upload segment, toggle {toggle}"),
-        (s, c) => format!("service {s} command {c}"),
-    };
-    let initiate = matches!((service, cmd >> 5), (2, 1) | (2, 2) | (3, 2));
-    let ca = if initiate && cmd & 0x10 != 0 {
+fn ca(on: bool) -> &'static str {
+    if on {
         " complete access"
     } else {
         ""
-    };
-    format!("CoE SDO {what}{ca}")
+    }
+}
+
+/// One line for a CoE message.
+fn describe_coe(c: &CoeMessage) -> String {
+    let t = u8::from;
+    match c {
+        CoeMessage::Emergency(e) => format!(
+            "CoE emergency {:04X}h, register {:02X}h, {}",
+            e.code,
+            e.register,
+            crate::runner::hex(&e.data)
+        ),
+        CoeMessage::SdoRequest(r) => match r {
+            SdoRequest::Download {
+                index,
+                sub,
+                complete_access,
+                data,
+            } => format!(
+                "CoE SDO download request {index:04X}h:{sub:02X}h{} = {}",
+                ca(*complete_access),
+                crate::runner::hex(data.data())
+            ),
+            SdoRequest::DownloadSegment { toggle, last, data } => format!(
+                "CoE SDO download segment, toggle {}, {} bytes{}",
+                t(*toggle),
+                data.len(),
+                if *last { ", last" } else { "" }
+            ),
+            SdoRequest::Upload {
+                index,
+                sub,
+                complete_access,
+            } => format!(
+                "CoE SDO upload request {index:04X}h:{sub:02X}h{}",
+                ca(*complete_access)
+            ),
+            SdoRequest::UploadSegment { toggle } => {
+                format!("CoE SDO upload segment request, toggle {}", t(*toggle))
+            }
+            SdoRequest::Abort { index, sub, code } => {
+                format!("CoE SDO abort {index:04X}h:{sub:02X}h {code}")
+            }
+        },
+        CoeMessage::SdoResponse(r) => match r {
+            SdoResponse::Download {
+                index,
+                sub,
+                complete_access,
+            } => format!(
+                "CoE SDO download response {index:04X}h:{sub:02X}h{}",
+                ca(*complete_access)
+            ),
+            SdoResponse::DownloadSegment { toggle } => {
+                format!("CoE SDO download segment response, toggle {}", t(*toggle))
+            }
+            SdoResponse::Upload {
+                index,
+                sub,
+                complete_access,
+                data,
+            } => format!(
+                "CoE SDO upload response {index:04X}h:{sub:02X}h{} = {}",
+                ca(*complete_access),
+                crate::runner::hex(data.data())
+            ),
+            SdoResponse::UploadSegment { toggle, last, data } => format!(
+                "CoE SDO upload segment, toggle {}, {} bytes{}",
+                t(*toggle),
+                data.len(),
+                if *last { ", last" } else { "" }
+            ),
+            SdoResponse::Abort { index, sub, code } => {
+                format!("CoE SDO abort {index:04X}h:{sub:02X}h {code}")
+            }
+        },
+        CoeMessage::SdoInfo(i) => format!("CoE SDO information {:?}", i.opcode),
+        CoeMessage::Other { header, data } => {
+            format!("CoE {}, {} bytes", header.service, data.len())
+        }
+    }
 }
 
 impl<S: Segment> Master<S> {
@@ -178,36 +190,35 @@ impl<S: Segment> Master<S> {
     pub(crate) fn next_counter(&mut self, station: u16) -> u8 {
         match self.slave_mut(station) {
             Some(s) => {
-                s.counter = s.counter % 7 + 1;
+                s.counter = mailbox::next_counter(s.counter);
                 s.counter
             }
             None => 1,
         }
     }
 
-    /// Sends a message of `kind` with `body` and the next counter, and returns the slave's
+    /// Sends a message of `kind` with `data` and the next counter, and returns the slave's
     /// reply (emergencies set aside). A mailbox error reply is [`Refusal::Mailbox`].
     pub(crate) fn mailbox_request(
         &mut self,
         station: u16,
-        kind: u8,
-        body: &[u8],
-    ) -> Result<Message> {
+        kind: MailboxType,
+        data: Vec<u8>,
+    ) -> Result<MailboxRepr> {
         let counter = self.next_counter(station);
-        let msg = Message::emit(kind, counter, body);
+        let msg = MailboxRepr::new(kind, counter, data)
+            .emit()
+            .map_err(UsageError::Mailbox)?;
         let reply = self
             .mailbox_transfer(station, &msg)?
             .ok_or(LinkFailure::Timeout {
                 awaited: Awaited::MailboxReply,
                 after: self.config.mailbox_timeout,
             })?;
-        let m = Message::parse(&reply)?;
-        if m.kind == TYPE_ERROR {
-            let detail = m.body.get(2..4).map(|b| u16::from_le_bytes([b[0], b[1]]));
-            return match detail {
-                Some(d) => Err(Refusal::Mailbox(MailboxErrorCode(d)).into()),
-                None => Err(ProtocolError::Mailbox("error reply without its detail".into()).into()),
-            };
+        let m = MailboxRepr::parse_bytes(&reply).map_err(ProtocolError::Mailbox)?;
+        if m.kind == MailboxType::ERR {
+            let e = MailboxError::parse(&m.data).map_err(ProtocolError::Mailbox)?;
+            return Err(Refusal::Mailbox(e.detail).into());
         }
         Ok(m)
     }
@@ -235,7 +246,7 @@ impl<S: Segment> Master<S> {
         let read = wire::read(Command::FPRD, station, inn.start, usize::from(inn.len));
         let write = wire::write(Command::FPWR, station, out.start, padded);
         let access = wire::describe(&write);
-        let note = match Message::parse(msg) {
+        let note = match MailboxRepr::parse_bytes(msg) {
             Ok(m) => describe(&m),
             Err(_) => format!("mailbox {} bytes as given", msg.len()),
         };
@@ -274,7 +285,7 @@ impl<S: Segment> Master<S> {
         });
         match got {
             Ok(reply) => Ok(Some(reply)),
-            Err(super::error::MasterError::Link(LinkFailure::Timeout {
+            Err(MasterError::Link(LinkFailure::Timeout {
                 awaited: Awaited::MailboxReply,
                 ..
             })) => Ok(None),
@@ -285,18 +296,19 @@ impl<S: Segment> Master<S> {
     /// A message read from SM1 while looking for a reply: an emergency is set aside (`None`),
     /// anything else is the reply.
     fn keep_reply(&mut self, buf: &[u8]) -> Option<Vec<u8>> {
-        match Message::parse(buf) {
-            Ok(m) if m.is_emergency() => {
-                self.port
-                    .recorder
-                    .annotate("", &format!("CoE emergency set aside ({})", describe(&m)));
-                self.emergencies.push(m.body);
-                None
-            }
-            Ok(m) => {
-                self.port.recorder.annotate("", &describe(&m));
-                Some(buf.to_vec())
-            }
+        match MailboxRepr::parse_bytes(buf) {
+            Ok(m) => match emergency(&m) {
+                Some(e) => {
+                    let line = format!("set aside: {}", describe(&m));
+                    self.port.recorder.annotate("", &line);
+                    self.emergencies.push(e);
+                    None
+                }
+                None => {
+                    self.port.recorder.annotate("", &describe(&m));
+                    Some(buf.to_vec())
+                }
+            },
             Err(_) => Some(buf.to_vec()),
         }
     }
@@ -304,10 +316,12 @@ impl<S: Segment> Master<S> {
     /// A message left in SM1 before the request went out: emergencies are kept, anything
     /// else (a stale reply) is dropped.
     fn set_aside(&mut self, buf: &[u8]) {
-        if let Ok(m) = Message::parse(buf) {
-            if m.is_emergency() {
-                self.emergencies.push(m.body);
-            }
+        if let Some(e) = MailboxRepr::parse_bytes(buf)
+            .ok()
+            .as_ref()
+            .and_then(emergency)
+        {
+            self.emergencies.push(e);
         }
     }
 }

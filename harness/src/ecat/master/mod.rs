@@ -12,7 +12,6 @@
 #![allow(dead_code)]
 
 mod al;
-mod codes;
 mod engine;
 mod error;
 mod mailbox;
@@ -30,8 +29,6 @@ mod wire;
 #[allow(unused_imports)] // the module's API, not all of it used yet
 pub(crate) use al::AlReading;
 #[allow(unused_imports)]
-pub(crate) use codes::{MailboxErrorCode, SdoAbortCode};
-#[allow(unused_imports)]
 pub(crate) use engine::{EscInfo, Master, MasterConfig, ProcessSetup, SlaveInfo, SmSetup};
 #[allow(unused_imports)]
 pub(crate) use error::{
@@ -39,13 +36,15 @@ pub(crate) use error::{
     UsageError,
 };
 #[allow(unused_imports)]
-pub(crate) use mailbox::Message;
-#[allow(unused_imports)]
 pub(crate) use pdo::CyclicStats;
 #[allow(unused_imports)]
 pub(crate) use port::PortStats;
 #[allow(unused_imports)]
 pub(crate) use proto::ecat::al::{AlStatus, AlStatusCode};
+#[allow(unused_imports)]
+pub(crate) use proto::ecat::coe::{Emergency, SdoAbortCode};
+#[allow(unused_imports)]
+pub(crate) use proto::ecat::mailbox::{MailboxErrorCode, MailboxRepr, MailboxType};
 #[allow(unused_imports)]
 pub(crate) use proto::ecat::{Command, DatagramRepr};
 #[allow(unused_imports)]

@@ -257,8 +257,11 @@ fn raw_frames_datagrams_and_mailboxes() {
         .mailbox_raw(STATION, &[2, 0, 0, 0, 0, 0x15, 0, 0])
         .unwrap()
         .unwrap();
-    let msg = Message::parse(&reply).unwrap();
-    assert_eq!((msg.kind, &msg.body[..4]), (0, &[1, 0, 2, 0][..]));
+    let msg = MailboxRepr::parse_bytes(&reply).unwrap();
+    assert_eq!(
+        (msg.kind, &msg.data[..]),
+        (MailboxType::ERR, &[1, 0, 2, 0][..])
+    );
 }
 
 #[test]
