@@ -21,6 +21,7 @@ mod error;
 pub mod frame;
 pub mod mailbox;
 pub mod register;
+pub mod sii;
 mod wire;
 
 pub use datagram::{Command, Datagram, DatagramRepr};
