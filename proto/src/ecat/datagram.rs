@@ -164,6 +164,22 @@ impl Command {
         )
     }
 
+    /// How much a slave adds to the working counter (ETG.1000.4 §5.4.4 "Working counter"):
+    /// `read`/`write` say whether it performed that part of the command. A read or a write
+    /// counts 1; in a read/write command the read counts 1 and the write 2 (3 for both); ARMW
+    /// and FRMW count 1 for the read at the addressed slave and 1 for a write elsewhere. NOP and
+    /// undefined commands count nothing.
+    pub fn wkc_increment(self, read: bool, write: bool) -> u16 {
+        let (r, w) = match self.access() {
+            Access::None => (0, 0),
+            Access::Read => (1, 0),
+            Access::Write => (0, 1),
+            Access::ReadWrite => (1, 2),
+            Access::ReadMultipleWrite => (1, 1),
+        };
+        u16::from(read) * r + u16::from(write) * w
+    }
+
     /// Whether the address field is one 32-bit logical address rather than ADP/ADO.
     pub fn is_logical(self) -> bool {
         self.addressing() == Some(Addressing::Logical)
@@ -653,6 +669,14 @@ mod tests {
         assert!(!Command::BWR.reads() && Command::BWR.writes());
         assert!(Command::FRMW.reads() && Command::FRMW.writes());
         assert_eq!(Command::NOP.access(), Access::None);
+        assert_eq!(Command::FPRD.wkc_increment(true, false), 1);
+        assert_eq!(Command::FPWR.wkc_increment(false, true), 1);
+        assert_eq!(Command::LRW.wkc_increment(true, true), 3);
+        assert_eq!(Command::LRW.wkc_increment(false, true), 2);
+        assert_eq!(Command::BRW.wkc_increment(true, false), 1);
+        assert_eq!(Command::ARMW.wkc_increment(false, true), 1);
+        assert_eq!(Command::NOP.wkc_increment(true, true), 0);
+        assert_eq!(Command::APRD.wkc_increment(false, true), 0);
         assert_eq!(Command(200).access(), Access::None);
     }
 

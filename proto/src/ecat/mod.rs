@@ -24,6 +24,9 @@ pub mod register;
 pub mod sii;
 mod wire;
 
+#[cfg(test)]
+mod no_panic;
+
 pub use datagram::{Command, Datagram, DatagramRepr};
 pub use error::Error;
 pub use frame::{EcatFrame, EcatFrameRepr, ECAT_UDP_PORT};
