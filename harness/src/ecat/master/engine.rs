@@ -14,10 +14,10 @@ use super::error::{Awaited, LinkFailure, MasterError, Result};
 use super::pdo::Cyclic;
 use super::port::{Port, PortStats};
 use super::segment::Segment;
-use super::sii::SiiInfo;
 use super::wire;
 use crate::outcome::Exchange;
 use proto::ecat::coe::Emergency;
+use proto::ecat::sii::{SiiRepr, SiiSm, SmType};
 use proto::ecat::{Command, DatagramRepr};
 
 /// How the master works; the defaults suit a network segment (1 ms cycle).
@@ -113,13 +113,48 @@ pub(crate) struct SlaveInfo {
     /// ESC identification.
     pub(crate) esc: EscInfo,
     /// The SII contents (identity, mailbox, SyncManagers, PDOs).
-    pub(crate) sii: SiiInfo,
+    pub(crate) sii: SiiRepr,
+    /// The SII image as read (header and categories up to the end marker).
+    pub(crate) sii_raw: Vec<u8>,
     /// Mailbox SyncManagers (SM0 receive, SM1 send) once configured.
     pub(crate) mailbox: Option<(SmSetup, SmSetup)>,
     /// Process data once configured.
     pub(crate) process: Option<ProcessSetup>,
     /// The master's mailbox counter, 1..7 (0 before the first message).
     pub(crate) counter: u8,
+}
+
+impl SlaveInfo {
+    /// Vendor ID (SII word 08h).
+    pub(crate) fn vendor(&self) -> u32 {
+        self.sii.header.vendor_id
+    }
+
+    /// Product code (SII word 0Ah).
+    pub(crate) fn product(&self) -> u32 {
+        self.sii.header.product_code
+    }
+
+    /// Revision number (SII word 0Ch).
+    pub(crate) fn revision(&self) -> u32 {
+        self.sii.header.revision
+    }
+
+    /// The device name: the general category's name string.
+    pub(crate) fn name(&self) -> Option<&str> {
+        self.sii.general().and_then(|g| self.sii.string(g.name))
+    }
+
+    /// Whether the SII gives a standard mailbox (both sizes not 0).
+    pub(crate) fn has_mailbox(&self) -> bool {
+        let m = self.sii.header.standard_mailbox;
+        m.rx_size > 0 && m.tx_size > 0
+    }
+
+    /// The first SyncManager of the SII's SyncM category used as `kind`.
+    pub(crate) fn sync_manager(&self, kind: SmType) -> Option<&SiiSm> {
+        self.sii.sync_managers().iter().find(|s| s.kind == kind)
+    }
 }
 
 /// The EtherCAT master over a segment.

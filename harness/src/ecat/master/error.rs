@@ -169,9 +169,15 @@ pub(crate) enum ProtocolError {
         /// The EEPROM control/status register.
         status: u16,
     },
-    /// The SII contents cannot be parsed.
+    /// The SII contents cannot be parsed (a wrong checksum of the configuration area too).
     #[error("SII contents: {0}")]
-    Sii(String),
+    Sii(proto::ecat::Error),
+    /// The SII's categories have no end marker within the words the master reads at most.
+    #[error("SII: no end marker within {words} words")]
+    SiiEnd {
+        /// Words read.
+        words: usize,
+    },
     /// A mailbox message from the slave cannot be parsed.
     #[error("mailbox reply: {0}")]
     Mailbox(proto::ecat::Error),

@@ -13,6 +13,7 @@
 use proto::ecat::coe::{CoeHeader, CoeMessage, CoeService, Emergency, SdoRequest, SdoResponse};
 use proto::ecat::mailbox::{self, MailboxError, MailboxRepr, MailboxType};
 use proto::ecat::register::{self, sm_control, sm_status};
+use proto::ecat::sii::SmType;
 use proto::ecat::Command;
 
 use super::engine::{Master, SmSetup};
@@ -20,7 +21,6 @@ use super::error::{Awaited, LinkFailure, MasterError, ProtocolError, Refusal, Re
 use super::pdo::sm_block;
 use super::port::check_wkc;
 use super::segment::Segment;
-use super::sii::SmKind;
 use super::wire;
 
 /// Control byte of SM0 when the SII has none: mailbox, written by the master, AL event.
@@ -148,28 +148,24 @@ impl<S: Segment> Master<S> {
     /// Configures SM0/SM1 of `station` as its SII's standard mailbox says (the SyncM
     /// category's control bytes when it has them).
     pub(crate) fn configure_mailbox(&mut self, station: u16) -> Result<(SmSetup, SmSetup)> {
-        let sii = &self
+        let slave = self
             .slave(station)
-            .ok_or(UsageError::NoSuchSlave { station })?
-            .sii;
-        if !sii.has_mailbox() {
+            .ok_or(UsageError::NoSuchSlave { station })?;
+        if !slave.has_mailbox() {
             return Err(UsageError::NoMailbox { station }.into());
         }
-        let control = |kind: SmKind, default: u8| {
-            sii.sync_managers
-                .iter()
-                .find(|s| s.kind == kind)
-                .map_or(default, |s| s.control)
-        };
+        let control =
+            |kind: SmType, default: u8| slave.sync_manager(kind).map_or(default, |s| s.control);
+        let m = slave.sii.header.standard_mailbox;
         let out = SmSetup {
-            start: sii.mailbox.out_start,
-            len: sii.mailbox.out_len,
-            control: control(SmKind::MailboxOut, SM0_CONTROL),
+            start: m.rx_offset,
+            len: m.rx_size,
+            control: control(SmType::MAILBOX_OUT, SM0_CONTROL),
         };
         let inn = SmSetup {
-            start: sii.mailbox.in_start,
-            len: sii.mailbox.in_len,
-            control: control(SmKind::MailboxIn, SM1_CONTROL),
+            start: m.tx_offset,
+            len: m.tx_size,
+            control: control(SmType::MAILBOX_IN, SM1_CONTROL),
         };
         let regs: Vec<u8> = [out, inn].iter().flat_map(|sm| sm_block(*sm)).collect();
         self.write_register(station, register::sm(0), &regs)?;

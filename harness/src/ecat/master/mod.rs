@@ -46,8 +46,8 @@ pub(crate) use proto::ecat::coe::{Emergency, SdoAbortCode};
 #[allow(unused_imports)]
 pub(crate) use proto::ecat::mailbox::{MailboxErrorCode, MailboxRepr, MailboxType};
 #[allow(unused_imports)]
+pub(crate) use proto::ecat::sii::{SiiRepr, SiiSm, SmType};
+#[allow(unused_imports)]
 pub(crate) use proto::ecat::{Command, DatagramRepr};
 #[allow(unused_imports)]
 pub(crate) use segment::{EmbeddedSegment, Fault, Faulty, NetSegment, Segment, SegmentError};
-#[allow(unused_imports)]
-pub(crate) use sii::{SiiInfo, SiiPdo, SiiSm, SmKind};

@@ -11,13 +11,13 @@
 use std::time::Duration;
 
 use proto::ecat::register::{self, fmmu_type, FmmuRepr, SmRepr};
+use proto::ecat::sii::SmType;
 use proto::nord::ecat::{BYTES_PER_INVERTER, WORDS_PER_INVERTER};
 
 use super::engine::{Master, ProcessSetup, SmSetup};
 use super::error::{Result, UsageError};
 use super::port::check_wkc;
 use super::segment::Segment;
-use super::sii::SmKind;
 use super::wire;
 use proto::ecat::{Command, DatagramRepr};
 
@@ -75,24 +75,21 @@ impl<S: Segment> Master<S> {
             .slave(station)
             .ok_or(UsageError::NoSuchSlave { station })?
             .clone();
-        let find = |kind: SmKind| {
-            slave
-                .sii
-                .sync_managers
-                .iter()
-                .find(|s| s.kind == kind)
-                .map(|s| SmSetup {
-                    start: s.start,
-                    len: s.len,
-                    control: s.control,
-                })
-                .unwrap_or(SmSetup {
+        let find = |kind: SmType| {
+            slave.sync_manager(kind).map_or(
+                SmSetup {
                     start: 0,
                     len: 0,
                     control: 0,
-                })
+                },
+                |s| SmSetup {
+                    start: s.start,
+                    len: s.length,
+                    control: s.control,
+                },
+            )
         };
-        let (outputs, inputs) = (find(SmKind::Outputs), find(SmKind::Inputs));
+        let (outputs, inputs) = (find(SmType::OUTPUTS), find(SmType::INPUTS));
         // Other slaves keep their place; this one goes after them (or where it was).
         let (out_offset, in_offset) = match slave.process {
             Some(p) if p.outputs.len == outputs.len && p.inputs.len == inputs.len => {

@@ -10,7 +10,6 @@ use proto::nord::nmt::EcState;
 use super::engine::{EscInfo, Master, SlaveInfo};
 use super::error::{LinkFailure, NoSlave, Result};
 use super::segment::Segment;
-use super::sii::SiiInfo;
 use super::wire;
 use proto::ecat::al::AlControl;
 use proto::ecat::register::{
@@ -65,7 +64,8 @@ impl<S: Segment> Master<S> {
                 position,
                 station,
                 esc: EscInfo::default(),
-                sii: SiiInfo::default(),
+                sii: Default::default(),
+                sii_raw: Vec::new(),
                 mailbox: None,
                 process: None,
                 counter: 0,
@@ -75,10 +75,11 @@ impl<S: Segment> Master<S> {
             let station = self.config.station_base.wrapping_add(position);
             let esc = self.read_esc_info(station)?;
             self.set_state(station, EcState::Init)?;
-            let sii = self.read_sii_info(station)?;
+            let (raw, sii) = self.read_sii_image(station)?;
             if let Some(s) = self.slave_mut(station) {
                 s.esc = esc;
                 s.sii = sii;
+                s.sii_raw = raw;
             }
         }
         Ok(&self.slaves)
@@ -122,7 +123,7 @@ impl<S: Segment> Master<S> {
         };
         if target == EcState::Bootstrap {
             for &s in &stations {
-                if self.slave(s).is_some_and(|x| x.sii.has_mailbox()) {
+                if self.slave(s).is_some_and(|x| x.has_mailbox()) {
                     self.configure_mailbox(s)?;
                 }
                 self.set_state(s, EcState::Bootstrap)?;
@@ -131,7 +132,7 @@ impl<S: Segment> Master<S> {
         }
         if rank(target) >= 1 {
             for &s in &stations {
-                if self.slave(s).is_some_and(|x| x.sii.has_mailbox()) {
+                if self.slave(s).is_some_and(|x| x.has_mailbox()) {
                     self.configure_mailbox(s)?;
                 }
                 self.set_state(s, EcState::PreOperational)?;

@@ -42,15 +42,18 @@ fn bring_up_to_op_reads_the_identity_from_the_sii() {
     let s = &m.slaves()[0];
     assert_eq!((m.slaves().len(), s.position, s.station), (1, 0, STATION));
     // BU 0620 §2.2.7.1: vendor 538h (Getriebebau NORD).
-    assert_eq!(s.sii.vendor, 0x538);
-    assert_eq!(s.sii.product, proto::nord::ecat::PRODUCT_CODE);
-    assert_eq!(s.sii.name.as_deref(), Some("NORDAC PRO SK 550P"));
+    assert_eq!(s.vendor(), 0x538);
+    assert_eq!(s.product(), proto::nord::ecat::PRODUCT_CODE);
+    assert_eq!(s.name(), Some("NORDAC PRO SK 550P"));
     assert_eq!(
-        (s.sii.mailbox.out_start, s.sii.mailbox.out_len),
+        (
+            s.sii.header.standard_mailbox.rx_offset,
+            s.sii.header.standard_mailbox.rx_size
+        ),
         (0x1000, 128)
     );
-    assert_eq!(s.sii.protocols & 0x04, 0x04, "CoE");
-    assert_eq!(s.sii.rx_pdos.len(), 3);
+    assert_eq!(s.sii.header.mailbox_protocols & 0x04, 0x04, "CoE");
+    assert_eq!(s.sii.rx_pdos().len(), 3);
     assert_eq!(s.esc.fmmus, 8);
     let p = s.process.unwrap();
     assert_eq!((p.outputs.len, p.inputs.len), (36, 36));
@@ -98,7 +101,7 @@ fn segmented_transfers_with_a_small_send_mailbox() {
     let mut m = master(3);
     m.scan().unwrap();
     // A 20-byte send mailbox: the 18-byte device name comes in segments of 11 and 7.
-    m.slaves[0].sii.mailbox.in_len = 20;
+    m.slaves[0].sii.header.standard_mailbox.tx_size = 20;
     m.configure_mailbox(STATION).unwrap();
     m.set_state(STATION, EcState::PreOperational).unwrap();
     assert_eq!(
@@ -112,7 +115,7 @@ fn segmented_transfers_with_a_small_send_mailbox() {
 fn segmented_download_with_a_small_receive_mailbox() {
     let mut m = master(3);
     m.scan().unwrap();
-    m.slaves[0].sii.mailbox.out_len = 20;
+    m.slaves[0].sii.header.standard_mailbox.rx_size = 20;
     m.configure_mailbox(STATION).unwrap();
     m.set_state(STATION, EcState::PreOperational).unwrap();
     // 8 bytes with complete access: 4 in the initiate request (20 − 16), 4 in a segment.
@@ -355,7 +358,7 @@ fn over_a_veth_pair_against_the_served_slave() {
     let served = crate::ecat::serve::start(&opts).unwrap();
     let mut m = Master::new(NetSegment::open(&veth.0).unwrap(), MasterConfig::default());
     m.bring_up(EcState::Operational).unwrap();
-    assert_eq!(m.slaves()[0].sii.vendor, 0x538);
+    assert_eq!(m.slaves()[0].vendor(), 0x538);
     m.sdo_download(STATION, P102_FI3, 1, &700u16.to_le_bytes(), false)
         .unwrap();
     assert_eq!(
