@@ -8,9 +8,9 @@
 //! | 12–13 | EtherType (big-endian), or 8100h followed by a 2-byte tag (TCI) and the EtherType |
 //! | 14.. | payload, padded to a 60-byte frame (64 with the FCS the NIC adds) |
 //!
-//! IEEE 802.3 §3.1.1 (MAC frame format), §3.2.6 (length/type field), §4.2.3.3 (minimum frame
-//! size: 64 bytes including the 4-byte FCS, so 60 bytes as a NIC hands them over); IEEE 802.1Q
-//! §9.6 (the VLAN tag). The FCS is never part of these buffers.
+//! IEEE 802.3 clause 3 (MAC frame format, length/type field) and clause 4 (minimum frame size:
+//! 64 bytes including the 4-byte FCS, so 60 bytes as a NIC hands them over); IEEE 802.1Q (the
+//! VLAN tag). The FCS is never part of these buffers.
 //!
 //! [`EthernetFrame`] is a checked view (it never panics on any buffer it accepted);
 //! [`EthernetRepr`] parses and emits the header.
@@ -20,7 +20,7 @@ use std::fmt;
 /// EtherCAT (ETG.1000.4 §5.3). BU 0620 §2.2.3 figure 3 prints 88ABh, which is POWERLINK's: an
 /// erratum of the manual.
 pub const ETHERTYPE_ECAT: u16 = 0x88A4;
-/// POWERLINK (EPSG DS 301 §4.6.1.1).
+/// POWERLINK (EPSG DS 301).
 pub const ETHERTYPE_POWERLINK: u16 = 0x88AB;
 /// PROFINET real-time (IEC 61158-6-10).
 pub const ETHERTYPE_PROFINET: u16 = 0x8892;
@@ -37,7 +37,7 @@ pub const ETHERTYPE_LLDP: u16 = 0x88CC;
 pub const HEADER_LEN: usize = 14;
 /// Length of a header with one 802.1Q tag.
 pub const TAGGED_HEADER_LEN: usize = 18;
-/// The shortest frame on the wire without its FCS (IEEE 802.3 §4.2.3.3: 64 bytes with the FCS).
+/// The shortest frame on the wire without its FCS (IEEE 802.3: 64 bytes with the FCS).
 /// [`EthernetRepr::emit`] pads to it.
 pub const MIN_FRAME_LEN: usize = 60;
 /// The longest untagged frame without its FCS (1500 bytes of payload).
@@ -78,7 +78,7 @@ pub enum Error {
     },
 }
 
-/// A MAC address (IEEE 802 §8.2).
+/// A MAC address (IEEE 802).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct MacAddr(pub [u8; 6]);
 
@@ -99,8 +99,8 @@ impl MacAddr {
     }
 
     /// Locally administered: bit 1 of the first byte (U/L bit). An EtherCAT slave controller
-    /// sets it in the source address of every frame it forwards (ET1100 datasheet section I
-    /// §3.4 "Frame processing": "the source MAC address is changed … bit 1 of the first byte").
+    /// sets it in the source address of every frame it processes, so a master sees its frames
+    /// came back through a slave (ESC datasheet section I, frame processing).
     pub fn is_locally_administered(self) -> bool {
         self.0[0] & 0x02 != 0
     }

@@ -1,10 +1,11 @@
 //! The application layer state machine's registers: AL control (0120h), AL status (0130h) and
-//! AL status code (0134h) (ETG.1000.6 §6.4.1 "AL control", §6.4.2 "AL status", table 11 "AL
-//! status codes"; ETG.1000.4 §6.2 tables 37–39; ET1100 section II registers 0120h–0135h).
+//! AL status code (0134h) (ETG.1000.6 "AL control" / "AL status" and table 11 "AL status
+//! codes"; ETG.1000.4 register descriptions; ET1100 datasheet section II, registers
+//! 0120h–0135h).
 //!
 //! The state set is [`EcState`] of `proto::nord::nmt` (BU 0620 §2.2.5): this module gives it
-//! its wire codes (INIT 1, PRE-OP 2, BOOT 3, SAFE-OP 4, OP 8 — ETG.1000.6 §6.4.1) rather than
-//! defining the states a second time. The registers keep the raw 4-bit state so that a tester
+//! its wire codes (INIT 1, PRE-OP 2, BOOT 3, SAFE-OP 4, OP 8 — ETG.1000.6 "AL control") rather
+//! than defining the states a second time. The registers keep the raw 4-bit state so that a tester
 //! can request an undefined state (the slave must answer 0012h "unknown requested state").
 //!
 //! | AL control bits | | AL status bits | |
@@ -29,8 +30,8 @@ pub const DEVICE_ID_FLAG: u8 = 0x20;
 pub const STATE_MASK: u8 = 0x0F;
 
 impl EcState {
-    /// The state's code in AL control/status bits 0–3 (ETG.1000.6 §6.4.1): INIT 1, PRE-OP 2,
-    /// BOOT 3, SAFE-OP 4, OP 8.
+    /// The state's code in AL control/status bits 0–3 (ETG.1000.6 "AL control"): INIT 1,
+    /// PRE-OP 2, BOOT 3, SAFE-OP 4, OP 8.
     pub const fn code(self) -> u8 {
         match self {
             EcState::Init => 1,

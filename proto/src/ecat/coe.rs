@@ -1,6 +1,6 @@
 //! CANopen over EtherCAT: the CoE header, the SDO protocol it carries, SDO abort codes, the
-//! emergency message and the SDO information header (ETG.1000.6 §5.6.2 "CoE", tables 33–56;
-//! CiA 301 v4.2 §7.2.4 "SDO protocol" for the command specifiers, table 22 for abort codes;
+//! emergency message and the SDO information header (ETG.1000.6 "CANopen over EtherCAT";
+//! CiA 301 "SDO protocol" for the command specifiers and "SDO abort codes";
 //! BU 0620 §2.2.7 for the SK 550P's objects and §2.2.7.2 for the abort codes it prints).
 //!
 //! | CoE header (u16) | |
@@ -12,12 +12,12 @@
 //! The 8-byte SDO header after it: command byte, index (u16), sub-index (u8), 4 data bytes.
 //! The command byte's top 3 bits are the client command specifier (ccs, in requests) or the
 //! server command specifier (scs, in responses); the CoE service (2 request, 3 response) says
-//! which. An SDO abort travels with service 2 in both directions (ETG.1000.6 §5.6.2.7).
+//! which. An SDO abort travels with service 2 in both directions (ETG.1000.6 "Abort SDO transfer").
 //!
 //! | transfer | how |
 //! |---|---|
 //! | expedited | e = 1: 1..4 bytes in the header; s = 1: n (bits 2–3) = 4 − size |
-//! | normal | e = 0, s = 1: the 4 header bytes hold the complete size, the data follow the 8-byte header — CoE may carry more than 4 bytes in one mailbox (ETG.1000.6 §5.6.2.2/§5.6.2.5) |
+//! | normal | e = 0, s = 1: the 4 header bytes hold the complete size, the data follow the 8-byte header — CoE may carry more than 4 bytes in one mailbox (ETG.1000.6 "SDO download normal" / "SDO upload normal") |
 //! | segmented | after a normal transfer whose data did not fit: command byte with toggle (bit 4), n (bits 1–3: unused of 7 bytes when a segment is shorter than 7), c (bit 0: last segment), then the data; a segment longer than 7 bytes has n = 0 and the mailbox length gives its size |
 //! | complete access | bit 4 of the initiate command: the whole object from sub-index 0 or 1 |
 //!
@@ -38,7 +38,7 @@ pub const SDO_HEADER_LEN: usize = 8;
 /// Data bytes of a segment of minimal size (CiA 301: 7).
 pub const SEGMENT_MIN_DATA: usize = 7;
 
-/// A CoE service (ETG.1000.6 table 34; open).
+/// A CoE service (ETG.1000.6 "CoE header"; open).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct CoeService(pub u8);
 
@@ -143,8 +143,8 @@ impl CoeHeader {
     }
 }
 
-/// An SDO abort code (CiA 301 §7.2.4.3.17 table 22; ETG.1000.6 table 41 adds 0601_0003h–
-/// 0601_0006h; open: unknown codes are kept).
+/// An SDO abort code (CiA 301 "SDO abort codes"; ETG.1000.6 adds 0601_0003h–0601_0006h; open:
+/// unknown codes are kept).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct SdoAbortCode(pub u32);
 
@@ -156,7 +156,7 @@ macro_rules! abort_codes {
                 pub const $name: SdoAbortCode = SdoAbortCode($v);
             )*
 
-            /// Every code of CiA 301 table 22 and ETG.1000.6, with its meaning.
+            /// Every code of CiA 301 and ETG.1000.6, with its meaning.
             pub const ALL: &'static [(SdoAbortCode, &'static str)] = &[
                 $((SdoAbortCode($v), $text),)*
             ];
@@ -448,7 +448,7 @@ const TOGGLE: u8 = 0x10;
 /// Command byte of an abort.
 const ABORT: u8 = 0x80;
 
-/// An SDO request: client → server, CoE service 2 (CiA 301 §7.2.4.3).
+/// An SDO request: client → server, CoE service 2 (CiA 301 "SDO protocol").
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub enum SdoRequest {
     /// Initiate download (ccs 1).
@@ -709,7 +709,7 @@ impl SdoResponse {
     }
 
     /// Parses mailbox data: a CoE header of service 3 and the response, or of service 2 with
-    /// an abort (how slaves send aborts, ETG.1000.6 §5.6.2.7).
+    /// an abort (how slaves send aborts, ETG.1000.6 "Abort SDO transfer").
     pub fn parse_coe(data: &[u8]) -> Result<SdoResponse, Error> {
         let (h, rest) = CoeHeader::split(data)?;
         match h.service {
@@ -786,11 +786,11 @@ impl SdoResponse {
     }
 }
 
-/// A CoE emergency (ETG.1000.6 §5.6.4 table 50; CiA 301 §7.2.7.3.1): CoE service 1, then the
+/// A CoE emergency (ETG.1000.6 "Emergency"; CiA 301 "Emergency object"): CoE service 1, then the
 /// error code (u16), the error register (object 1001h) and 5 manufacturer-specific bytes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct Emergency {
-    /// Emergency error code (CiA 301 table 21; 0000h = error reset / no error).
+    /// Emergency error code (CiA 301 "Emergency error codes"; 0000h = error reset / no error).
     pub code: u16,
     /// Error register (object 1001h).
     pub register: u8,
@@ -843,7 +843,7 @@ impl Emergency {
     }
 }
 
-/// An SDO information opcode (ETG.1000.6 §5.6.3 table 43; open).
+/// An SDO information opcode (ETG.1000.6 "SDO information"; open).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct SdoInfoOpcode(pub u8);
 
@@ -870,7 +870,7 @@ impl fmt::Debug for SdoInfoOpcode {
     }
 }
 
-/// An SDO information message (CoE service 8; ETG.1000.6 §5.6.3 table 42): opcode (bits 0–6)
+/// An SDO information message (CoE service 8; ETG.1000.6 "SDO information"): opcode (bits 0–6)
 /// with the incomplete bit (7), a reserved byte, the fragments left (u16), then the
 /// opcode's data (not interpreted here; for [`SdoInfoOpcode::ERROR`] see
 /// [`SdoInfo::abort_code`]).

@@ -1,5 +1,5 @@
-//! EtherCAT datagrams (ETG.1000.4 §5.4 "EtherCAT DLPDU structure", table 13 "EtherCAT
-//! datagram"; ETG.1000.3 §4.5 for the commands' services).
+//! EtherCAT datagrams (ETG.1000.4 "EtherCAT DLPDU structure" / "EtherCAT datagram"; ETG.1000.3
+//! for the commands' services).
 //!
 //! | bytes | field |
 //! |---|---|
@@ -26,7 +26,7 @@ pub const WKC_LEN: usize = 2;
 /// The largest data length the 11-bit length field holds.
 pub const MAX_DATA_LEN: usize = 0x07FF;
 
-/// How a command addresses slaves (ETG.1000.4 §5.4.1–§5.4.3).
+/// How a command addresses slaves (ETG.1000.4 "Addressing modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Addressing {
     /// Auto-increment ("position") addressing: each slave increments ADP; the one that sees 0
@@ -55,7 +55,8 @@ pub enum Access {
     ReadMultipleWrite,
 }
 
-/// A datagram command (ETG.1000.4 table 13, ETG.1000.3 table 4; open: unknown codes are kept).
+/// A datagram command (ETG.1000.4 "EtherCAT datagram" command codes, ETG.1000.3; open:
+/// unknown codes are kept).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct Command(pub u8);
 
@@ -164,7 +165,7 @@ impl Command {
         )
     }
 
-    /// How much a slave adds to the working counter (ETG.1000.4 §5.4.4 "Working counter"):
+    /// How much a slave adds to the working counter (ETG.1000.4 "Working counter"):
     /// `read`/`write` say whether it performed that part of the command. A read or a write
     /// counts 1; in a read/write command the read counts 1 and the write 2 (3 for both); ARMW
     /// and FRMW count 1 for the read at the addressed slave and 1 for a write elsewhere. NOP and
@@ -318,7 +319,7 @@ impl<T: AsRef<[u8]>> Datagram<T> {
         ((self.len_flags() >> 11) & 0x7) as u8
     }
     /// Circulating frame bit (set by a slave that closes the loop on a frame that has passed
-    /// it once, ETG.1000.4 §5.4).
+    /// it once, ETG.1000.4 "EtherCAT datagram").
     pub fn circulating(&self) -> bool {
         self.len_flags() & field::CIRCULATING != 0
     }

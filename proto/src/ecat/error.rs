@@ -25,7 +25,7 @@ pub enum Error {
         available: usize,
     },
     /// A datagram of an EtherCAT frame does not fit what is left of the frame's length
-    /// (ETG.1000.4 §5.4: header 10 bytes, data, working counter 2 bytes).
+    /// (ETG.1000.4 "EtherCAT datagram": header 10 bytes, data, working counter 2 bytes).
     #[error("datagram {index}: needs {need} bytes, only {got} left in the EtherCAT frame")]
     DatagramTruncated {
         /// Datagram number in the frame, from 0.
@@ -62,7 +62,7 @@ pub enum Error {
         /// Why.
         why: &'static str,
     },
-    /// The SII configuration area's checksum (word 7, ETG.2010 §2.2) is wrong.
+    /// The SII configuration area's checksum (word 7, ETG.2010) is wrong.
     #[error("SII checksum: word 7 holds {stored:02X}h, words 0..6 give {computed:02X}h")]
     Checksum {
         /// The low byte of word 7.

@@ -1,5 +1,5 @@
-//! The EtherCAT frame: a 2-byte header and the datagrams (ETG.1000.4 §5.3 "Frame structure",
-//! table 12 "EtherCAT frame"), carried in an Ethernet II frame of EtherType 88A4h
+//! The EtherCAT frame: a 2-byte header and the datagrams (ETG.1000.4 "Frame structure" /
+//! "EtherCAT frame"), carried in an Ethernet II frame of EtherType 88A4h
 //! ([`crate::eth::ETHERTYPE_ECAT`]) or in a UDP datagram to port 88A4h ([`ECAT_UDP_PORT`]).
 //!
 //! | bits of the little-endian header word | field |
@@ -21,7 +21,8 @@ use super::wire::{fit, le16};
 use super::Error;
 use crate::eth::{EthernetRepr, MacAddr, ETHERTYPE_ECAT};
 
-/// UDP port of EtherCAT frames over UDP (ETG.1000.4 §5.3.2: 88A4h = 34980).
+/// UDP port of EtherCAT frames over UDP (ETG.1000.4 "EtherCAT frame inside a UDP datagram":
+/// 88A4h = 34980).
 pub const ECAT_UDP_PORT: u16 = 0x88A4;
 /// EtherCAT header length.
 pub const HEADER_LEN: usize = 2;
@@ -30,7 +31,7 @@ pub const MAX_LEN: usize = 0x07FF;
 /// The largest EtherCAT payload a standard Ethernet frame carries (1500 − 2 header bytes).
 pub const MAX_DATAGRAMS_LEN: usize = 1498;
 
-/// The frame type of the EtherCAT header (ETG.1000.4 table 12; open).
+/// The frame type of the EtherCAT header (ETG.1000.4 "EtherCAT frame"; open).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct FrameType(pub u8);
 

@@ -1,7 +1,7 @@
 //! The EtherCAT mailbox: a 6-byte header in front of every acyclic message (CoE, EoE, FoE,
 //! SoE, AoE, VoE), written by the master into the mailbox-out SyncManager (SM0) and read from
-//! the mailbox-in SyncManager (SM1) (ETG.1000.4 §5.6 "Mailbox", table 29 "Mailbox";
-//! ETG.1000.6 §5.6 "Mailbox", table 28; the error reply: ETG.1000.6 §5.6.2.1, tables 29–30).
+//! the mailbox-in SyncManager (SM1) (ETG.1000.4 "Mailbox"; ETG.1000.6
+//! "Mailbox" and, for the error reply, "Mailbox error reply").
 //!
 //! | bytes | field |
 //! |---|---|
@@ -21,7 +21,7 @@ use super::Error;
 /// Mailbox header length.
 pub const HEADER_LEN: usize = 6;
 
-/// The type of a mailbox message (ETG.1000.4 table 29; open).
+/// The type of a mailbox message (ETG.1000.4 / ETG.1000.6 "Mailbox" type field; open).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct MailboxType(pub u8);
 
@@ -55,7 +55,7 @@ impl MailboxType {
         })
     }
 
-    /// The bit of this protocol in SII word 1Ch "mailbox protocol" (ETG.2010 table 2: AoE
+    /// The bit of this protocol in SII word 1Ch "mailbox protocol" (ETG.2010 fixed header: AoE
     /// bit 0, EoE 1, CoE 2, FoE 3, SoE 4, VoE 5); `None` for ERR and undefined types.
     pub fn sii_protocol_bit(self) -> Option<u16> {
         Some(match self {
@@ -88,7 +88,7 @@ impl fmt::Debug for MailboxType {
     }
 }
 
-/// The counter that follows `c` (1..7 cycling, ETG.1000.4 §5.6: 0 is "not used", so it is
+/// The counter that follows `c` (1..7 cycling, ETG.1000.4 "Mailbox": 0 is "not used", so it is
 /// skipped; a repeated counter marks a repeated message).
 pub fn next_counter(c: u8) -> u8 {
     if (1..7).contains(&c) {
@@ -280,7 +280,7 @@ impl MailboxRepr {
     }
 
     /// The message padded with zeros to a SyncManager's length `sm_len` (a mailbox is written
-    /// whole: the write of its last byte hands it over, ETG.1000.4 §6.7.2).
+    /// whole: the write of its last byte hands it over, ETG.1000.4 "SyncManager" mailbox mode).
     pub fn emit_padded(&self, sm_len: usize) -> Result<Vec<u8>, Error> {
         fit("mailbox message", self.buffer_len(), sm_len)?;
         let mut out = self.emit()?;
@@ -289,7 +289,7 @@ impl MailboxRepr {
     }
 }
 
-/// A mailbox error detail code (ETG.1000.6 table 30; open).
+/// A mailbox error detail code (ETG.1000.6 "Mailbox error reply"; open).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct MailboxErrorCode(pub u16);
 
@@ -350,7 +350,7 @@ impl fmt::Debug for MailboxErrorCode {
     }
 }
 
-/// The service word of a mailbox error reply (always 1, ETG.1000.6 table 29).
+/// The service word of a mailbox error reply (always 1, ETG.1000.6 "Mailbox error reply").
 pub const ERROR_SERVICE: u16 = 0x0001;
 
 /// The data of a mailbox error reply (type [`MailboxType::ERR`]): service 1 and the detail.

@@ -1,6 +1,6 @@
-//! ESC registers a master needs (ETG.1000.4 §6 "Local structures" and tables 30–60; Beckhoff
-//! "EtherCAT Slave Controller — Section II Register Description" (ET1100/ET1200/IP core),
-//! table 1 "Register address space"), with typed reprs for the blocks masters read and write
+//! ESC registers a master needs (ETG.1000.4 register descriptions; Beckhoff "EtherCAT Slave
+//! Controller — Section II Register Description" (ET1100/ET1200/IP core), "Register address
+//! space"), with typed reprs for the blocks masters read and write
 //! whole: the SyncManager channel (8 bytes), the FMMU (16 bytes), the SII EEPROM
 //! control/status word, the DL status. AL control and status live in [`super::al`] and are
 //! re-exported here.
@@ -350,7 +350,7 @@ pub mod sm_activate {
     pub const PDI_REPEAT_ACK: u8 = 0x02;
 }
 
-/// A SyncManager channel block (0800h + 8·n; ETG.1000.4 §6.7.2 table 58; ET1100 section II
+/// A SyncManager channel block (0800h + 8·n; ETG.1000.4 "SyncManager"; ET1100 section II
 /// registers 0800h–0807h).
 ///
 /// | byte | field |
@@ -459,7 +459,7 @@ pub mod fmmu_type {
     pub const WRITE: u8 = 0x02;
 }
 
-/// An FMMU block (0600h + 10h·n; ETG.1000.4 §6.6 table 56; ET1100 section II registers
+/// An FMMU block (0600h + 10h·n; ETG.1000.4 "FMMU"; ET1100 section II registers
 /// 0600h–060Fh): maps a logical address range bit-wise onto physical memory.
 ///
 /// | byte | field |
@@ -559,7 +559,7 @@ impl FmmuRepr {
     }
 }
 
-/// The SII EEPROM control/status word (0502h; ETG.1000.4 §6.4.3 table 48; ET1100 section II
+/// The SII EEPROM control/status word (0502h; ETG.1000.4 "SII access"; ET1100 section II
 /// register 0502h). Open: every bit is kept.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct SiiControl(pub u16);
@@ -649,7 +649,7 @@ impl fmt::Debug for SiiControl {
     }
 }
 
-/// The DL status word (0110h; ETG.1000.4 §6.1.3 table 36; ET1100 section II register 0110h).
+/// The DL status word (0110h; ETG.1000.4 "DL status"; ET1100 section II register 0110h).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct DlStatus(pub u16);
 

@@ -1,7 +1,7 @@
 //! The SII EEPROM ("slave information interface"): a word-addressed image that the ESC loads
-//! its configuration from and a master reads through registers 0500h–050Fh (ETG.1000.6 §5.4
-//! table 16 "Slave information interface area"; ETG.2010 "EtherCAT Slave Information
-//! Interface", §2 tables 2–3 for the fixed header, §2.3–§2.10 tables 4–17 for the categories).
+//! its configuration from and a master reads through registers 0500h–050Fh (ETG.1000.6
+//! "Slave information interface"; ETG.2010 "EtherCAT Slave Information Interface": the fixed
+//! header and the category structures).
 //!
 //! | word | field |
 //! |---|---|
@@ -85,7 +85,7 @@ pub mod word {
     pub const CATEGORIES: u16 = 0x40;
 }
 
-/// Bits of word 1Ch "mailbox protocol" (ETG.2010 table 2).
+/// Bits of word 1Ch "mailbox protocol" (ETG.2010 fixed header).
 pub mod protocol {
     /// ADS over EtherCAT.
     pub const AOE: u16 = 0x0001;
@@ -105,8 +105,8 @@ pub mod protocol {
 pub const HEADER_LEN: usize = 128;
 
 /// The SII checksum: CRC-8 with polynomial 07h, initial value FFh, no reflection, no final
-/// XOR, over the 14 bytes of words 0–6 (ETG.2010 §2.1; ETG.1000.6 §5.4). The ESC refuses the
-/// configuration area on a mismatch (0502h bit 11).
+/// XOR, over the 14 bytes of words 0–6 (ETG.2010 fixed header; ETG.1000.6 "Slave information
+/// interface"). The ESC refuses the configuration area on a mismatch (0502h bit 11).
 pub fn crc8(bytes: &[u8]) -> u8 {
     bytes.iter().fold(0xFF, |mut c, b| {
         c ^= b;
@@ -261,7 +261,7 @@ impl SiiHeader {
     }
 }
 
-/// A category type (ETG.2010 table 4; open).
+/// A category type (ETG.2010 category types; open).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct CategoryType(pub u16);
 
@@ -278,9 +278,9 @@ impl CategoryType {
     pub const FMMU: CategoryType = CategoryType(40);
     /// SyncManagers.
     pub const SYNCM: CategoryType = CategoryType(41);
-    /// FMMU extension (ETG.2010 §2.7).
+    /// FMMU extension (ETG.2010).
     pub const FMMU_EX: CategoryType = CategoryType(42);
-    /// SyncUnit assignment (ETG.2010 §2.8).
+    /// SyncUnit assignment (ETG.2010).
     pub const SYNC_UNIT: CategoryType = CategoryType(43);
     /// TxPDOs (inputs).
     pub const TXPDO: CategoryType = CategoryType(50);
@@ -320,7 +320,7 @@ impl fmt::Debug for CategoryType {
     }
 }
 
-/// Bits of the general category's "CoE details" byte (ETG.2010 table 5).
+/// Bits of the general category's "CoE details" byte (ETG.2010 category General).
 pub mod coe_details {
     /// Bit 0: SDO supported.
     pub const SDO: u8 = 0x01;
@@ -336,7 +336,7 @@ pub mod coe_details {
     pub const COMPLETE_ACCESS: u8 = 0x20;
 }
 
-/// Bits of the general category's "flags" byte (ETG.2010 table 5).
+/// Bits of the general category's "flags" byte (ETG.2010 category General).
 pub mod general_flags {
     /// Bit 0: enable SAFE-OP.
     pub const ENABLE_SAFEOP: u8 = 0x01;
@@ -350,7 +350,7 @@ pub mod general_flags {
     pub const IDENT_PHY_M: u8 = 0x10;
 }
 
-/// The general category (type 30, 32 bytes; ETG.2010 table 5). String indices count from 1
+/// The general category (type 30, 32 bytes; ETG.2010 category General). String indices count from 1
 /// (0 = none).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct General {
@@ -438,7 +438,7 @@ impl General {
     }
 }
 
-/// An FMMU usage byte of the FMMU category (type 40; ETG.2010 table 7; open).
+/// An FMMU usage byte of the FMMU category (type 40; ETG.2010 category FMMU; open).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct FmmuUsage(pub u8);
 
@@ -468,7 +468,7 @@ impl fmt::Debug for FmmuUsage {
     }
 }
 
-/// The type of a SyncManager in the SyncM category (ETG.2010 table 8; open).
+/// The type of a SyncManager in the SyncM category (ETG.2010 category SyncM; open).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct SmType(pub u8);
 
@@ -499,7 +499,7 @@ impl fmt::Debug for SmType {
     }
 }
 
-/// Bits of a SyncM category entry's "enable" byte (ETG.2010 table 8).
+/// Bits of a SyncM category entry's "enable" byte (ETG.2010 category SyncM).
 pub mod sm_enable {
     /// Bit 0: enable.
     pub const ENABLE: u8 = 0x01;
@@ -511,7 +511,7 @@ pub mod sm_enable {
     pub const OP_ONLY: u8 = 0x08;
 }
 
-/// One SyncManager of the SyncM category (type 41, 8 bytes each; ETG.2010 table 8).
+/// One SyncManager of the SyncM category (type 41, 8 bytes each; ETG.2010 category SyncM).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct SiiSm {
     /// Physical start address.
@@ -550,7 +550,7 @@ impl SiiSm {
     }
 }
 
-/// One entry of a PDO (8 bytes; ETG.2010 table 14).
+/// One entry of a PDO (8 bytes; ETG.2010 category TxPDO/RxPDO).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct SiiPdoEntry {
     /// Mapped object index (0 for a gap).
@@ -559,7 +559,8 @@ pub struct SiiPdoEntry {
     pub sub: u8,
     /// Name string index.
     pub name: u8,
-    /// Data type (CiA 301 / ETG.1000.6 table 64 index: 05h UNSIGNED8, 06h UNSIGNED16 …).
+    /// Data type (the CoE data type index of ETG.1000.6 / CiA 301: 05h UNSIGNED8, 06h
+    /// UNSIGNED16 …).
     pub data_type: u8,
     /// Length in bits.
     pub bit_len: u8,
@@ -567,7 +568,7 @@ pub struct SiiPdoEntry {
     pub flags: u16,
 }
 
-/// A PDO of the TxPDO/RxPDO categories (types 50/51; ETG.2010 table 13).
+/// A PDO of the TxPDO/RxPDO categories (types 50/51; ETG.2010 category TxPDO/RxPDO).
 #[derive(Debug, Clone, PartialEq, Eq, Hash, Default)]
 pub struct SiiPdo {
     /// PDO index (1600h… RxPDO, 1A00h… TxPDO).
@@ -1033,8 +1034,8 @@ mod tests {
         assert_eq!(odd, [0x01, 0x00]);
         assert_eq!(back.rx_pdos()[0].bit_len(), 96);
         assert!(back.tx_pdos().is_empty());
-        // The categories start at word 40h: strings, 9 words (count, 1+7, 1+6, 1+1 bytes), "SK 550P"
-        // first.
+        // The categories start at word 40h: strings, 9 words (count, 1+7, 1+6, 1+1 bytes),
+        // "SK 550P" first.
         assert_eq!(&img[128..134], [10, 0, 9, 0, 3, 7]);
         assert_eq!(&img[134..141], b"SK 550P");
     }

@@ -1,5 +1,5 @@
 //! Length-checked little-endian reading shared by the EtherCAT codecs (EtherCAT is
-//! little-endian throughout, ETG.1000.4 §5.2; only the Ethernet header is big-endian).
+//! little-endian throughout, ETG.1000.4; only the Ethernet header is big-endian).
 
 use super::Error;
 
