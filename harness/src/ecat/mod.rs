@@ -1,6 +1,7 @@
 //! EtherCAT: the master binding (CoE SDO and cyclic PDOs over raw Ethernet or the in-memory
 //! link to the simulated slave), `harness serve ecat`, the ESI writer and the `ecat:` steps.
 
+pub mod bench_support;
 mod esi;
 pub(crate) mod master;
 pub mod serve;

@@ -1,0 +1,1 @@
+//! What the EtherCAT speed bench (`harness/benches/ecat/`) needs of the library.
