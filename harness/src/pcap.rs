@@ -83,7 +83,6 @@ impl fmt::Debug for Capture {
 impl Capture {
     /// A whole Ethernet frame (destination MAC onwards, without the frame check sequence),
     /// captured as it is at `at`, with the current label as its comment.
-    #[allow(dead_code)] // until a bus on raw Ethernet records into the run's tap
     pub(crate) fn frame(&mut self, frame: &[u8], at: Duration) {
         self.push(frame.to_vec(), at);
     }

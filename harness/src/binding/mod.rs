@@ -49,6 +49,15 @@ impl From<Value> for Observation {
     }
 }
 
+/// The fields of a process-data step: the status word, `actuals` IW1..IW3 (the actual values
+/// every binding carries: PPO types 2 and 4 have three), so that manual-level expectations
+/// hold over every bus, and `actuals_4_5` for the further ones a bus carries (EtherNet/IP
+/// assemblies, EtherCAT PDOs).
+pub(crate) fn process_fields(status: u16, actuals: &[u16]) -> Value {
+    let (common, extra) = actuals.split_at(actuals.len().min(3));
+    serde_json::json!({ "status": status, "actuals": common, "actuals_4_5": extra })
+}
+
 /// Why a DUT could not be opened.
 #[derive(Debug, thiserror::Error)]
 pub(crate) enum OpenError {

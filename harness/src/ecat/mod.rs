@@ -2,13 +2,24 @@
 //! link to the simulated slave), `harness serve ecat`, the ESI writer and the `ecat:` steps.
 
 pub mod bench_support;
+mod binding;
 mod esi;
 pub(crate) mod master;
+mod pcap;
 pub mod serve;
 mod step;
 
+use binding::{DutSegment, EcatBinding};
+use master::{EmbeddedSegment, NetSegment, SegmentError};
+use pcap::Tapped;
+use proto::nord::{Product, Protocol};
+use sim::device::Device;
+use sim::ecat::Slave;
+
+use crate::binding::embedded::device_config;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
+use crate::net::LinkError;
 use crate::profile::Profile;
 use crate::runner::DutFactory;
 
@@ -31,23 +42,75 @@ pub(crate) const BUS: Bus = Bus {
 /// `proto::nord::ecat` (the SK 550P's integrated interface, BU 0620 §2.2).
 fn describe_esi(profile: &Profile, inverters: u8) -> Result<String, String> {
     let product = profile.nord()?;
-    if !product
-        .protocols()
-        .contains(&proto::nord::Protocol::Ethercat)
-    {
+    if !product.protocols().contains(&Protocol::Ethercat) {
         return Err(format!("{} has no EtherCAT interface", product.name()));
     }
     esi::esi(inverters).map_err(|e| e.to_string())
 }
 
 fn profiles() -> Vec<Profile> {
-    Vec::new()
+    Product::ALL
+        .into_iter()
+        .filter(|p| p.protocols().contains(&Protocol::Ethercat))
+        .map(|p| Profile::on_bus(p, "ecat"))
+        .collect()
 }
 
-fn embedded(_: &Profile, _: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
-    Err(OpenError::Profile("EtherCAT is not there yet".into()))
+/// The simulated slave of the profile's product on a segment of its own, behind the master.
+fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
+    let product = profile.nord().map_err(OpenError::Profile)?;
+    let device = Device::new(device_config(profile)?);
+    let slave = Slave::new(device).map_err(|e| OpenError::Profile(e.to_string()))?;
+    let segment = EmbeddedSegment::new(slave);
+    let what = "embedded EtherCAT slave".to_string();
+    match &context.tap {
+        None => open(segment, product, what, false),
+        Some(tap) => open(Tapped::new(segment, tap.clone()), product, what, false),
+    }
 }
 
-fn network(_: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
-    Err(OpenError::Profile("EtherCAT is not there yet".into()))
+fn open<S: DutSegment + 'static>(
+    segment: S,
+    product: Product,
+    what: String,
+    persistent: bool,
+) -> Result<Box<dyn Binding>, OpenError> {
+    let b = EcatBinding::open(segment, product, what, persistent).map_err(binding::open_error)?;
+    binding::check_vendor(&b)?;
+    Ok(Box::new(b))
+}
+
+/// `--dut ecat://IFACE`: the slave on the segment behind that interface.
+fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
+    Ok(Box::new(NetworkFactory {
+        iface: n.target.clone(),
+        tap: n.tap.clone(),
+    }))
+}
+
+/// Opens the segment behind an interface for each case (one device for the whole run).
+struct NetworkFactory {
+    iface: String,
+    tap: Option<crate::pcap::SharedTap>,
+}
+
+impl DutFactory for NetworkFactory {
+    fn describe(&self) -> String {
+        format!("EtherCAT segment on {}", self.iface)
+    }
+
+    fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+        let product = profile.nord().map_err(OpenError::Profile)?;
+        let segment = NetSegment::open(&self.iface).map_err(|e| match e {
+            SegmentError::Link(LinkError::NeedsRoot { .. }) => {
+                OpenError::NotPermitted(e.to_string())
+            }
+            other => OpenError::Unreachable(other.to_string()),
+        })?;
+        let what = format!("EtherCAT segment on {}", self.iface);
+        match &self.tap {
+            None => open(segment, product, what, true),
+            Some(tap) => open(Tapped::new(segment, tap.clone()), product, what, true),
+        }
+    }
 }

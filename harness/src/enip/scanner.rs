@@ -598,10 +598,7 @@ impl Scanner {
         let (status, actuals) = words
             .split_first()
             .ok_or_else(|| StepError::Protocol("T→O data without a status word".into()))?;
-        // `actuals` holds IW1..IW3, the actual values every binding carries (PPO types 2 and
-        // 4 have three), so manual-level expectations hold over both; IW4/IW5 follow apart.
-        let (common, extra) = actuals.split_at(actuals.len().min(3));
-        Ok(json!({ "status": status, "actuals": common, "actuals_4_5": extra }))
+        Ok(crate::binding::process_fields(*status, actuals))
     }
 
     /// A raw or structured EtherNet/IP step of the protocol suites.

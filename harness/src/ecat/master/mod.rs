@@ -50,4 +50,6 @@ pub(crate) use proto::ecat::sii::{SiiRepr, SiiSm, SmType};
 #[allow(unused_imports)]
 pub(crate) use proto::ecat::{Command, DatagramRepr};
 #[allow(unused_imports)]
-pub(crate) use segment::{EmbeddedSegment, Fault, Faulty, NetSegment, Segment, SegmentError};
+pub(crate) use segment::{
+    Arrival, EmbeddedSegment, Fault, Faulty, NetSegment, Segment, SegmentError,
+};

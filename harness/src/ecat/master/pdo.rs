@@ -199,12 +199,15 @@ impl<S: Segment> Master<S> {
         self.cyclic.running
     }
 
-    /// Runs `n` cycles one period apart (recorded); the first error ends them.
+    /// Runs `n` cycles one period apart (recorded), each due a period after the start of
+    /// the one before (not after its end: the round trip must not stretch the period); the
+    /// first error ends them.
     pub(crate) fn run_cycles(&mut self, n: u64) -> Result<()> {
+        let mut due = self.now();
         for i in 0..n {
             if i > 0 {
-                let next = self.now() + self.config.cycle;
-                self.port.wait_until(next);
+                due += self.config.cycle;
+                self.port.wait_until(due);
             }
             self.cycle()?;
         }

@@ -1,0 +1,745 @@
+//! The EtherCAT binding: the harness as EtherCAT master of the SK 550P's integrated interface
+//! (BU 0620 §2.2), in-process against the simulated slave or on a network interface.
+//!
+//! Opening a DUT scans the segment, gives the slave its station address, reads its SII and
+//! brings it to Pre-Operational (mailbox running), as a master does at start-up. The
+//! manual-level steps go over CoE and process data: `read`/`write` are SDO transfers of the
+//! parameter objects 2000h + 800h·(FI−1) + P (§2.2.7), `process`/`wait` exchange the 12 bytes
+//! of each inverter cyclically (1 ms) in Operational, which the binding enters the first time
+//! a case needs process data. The `ecat:` steps go to the master as written. A device that
+//! refuses answers with its own code: an SDO abort code, an AL status code, a mailbox error.
+//!
+//! On a device on the network (one device for the whole run) every SDO download goes through
+//! the shared [`Ledger`]; when the case ends the binding stops the drives, writes back what the
+//! case changed and leaves the slave in Pre-Operational, as it found it.
+
+use proto::ecat::al::EcState;
+use proto::ecat::mailbox::{MailboxError, MailboxRepr, MailboxType};
+use proto::ecat::{DatagramRepr, EcatFrameRepr};
+use proto::nord::ecat::{parameter_data_type, DataType, VENDOR_ID};
+use proto::nord::params::{self, Owner};
+use proto::nord::{addr, Inverter, ParamAddress, Product};
+use serde_json::{json, Value};
+use sim::ecat::Slave;
+use std::fmt;
+use std::time::Duration;
+
+use super::master::{
+    EmbeddedSegment, ErrorKind, Master, MasterConfig, MasterError, NetSegment, Refusal, Segment,
+};
+use super::step::{state_name, EcatStep};
+use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::{Binding, CleanupError, Observation, StepError};
+use crate::ledger::{self, Account, Ledger, Problem};
+use crate::outcome::Exchange;
+use crate::profile::Capability;
+use crate::runner::{cycles_for, hex};
+use crate::suite::{Action, OrderSpec, Run, Target};
+
+/// A segment the binding can run on: the embedded one also hands out the simulated slave,
+/// for `inject` and `observe`.
+pub(crate) trait DutSegment: Segment {
+    /// The simulated slave and the segment's time, when the slave is in-process.
+    fn simulated(&mut self) -> Option<(&mut Slave, Duration)>;
+}
+
+impl DutSegment for EmbeddedSegment {
+    fn simulated(&mut self) -> Option<(&mut Slave, Duration)> {
+        let now = self.now();
+        Some((self.slave_mut(), now))
+    }
+}
+
+impl DutSegment for NetSegment {
+    fn simulated(&mut self) -> Option<(&mut Slave, Duration)> {
+        None
+    }
+}
+
+/// What the embedded slave offers: every general capability but the PKW parameter channel
+/// (EtherCAT reaches parameters as CoE objects), and the `ecat:` steps.
+pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 8] = [
+    Capability::ParameterAccess,
+    Capability::ProcessData,
+    Capability::FaultInjection,
+    Capability::Observe,
+    Capability::PowerOn,
+    Capability::FactoryState,
+    Capability::Readdressing,
+    Capability::Bus("ecat"),
+];
+
+/// What a device on the network offers: it is one persistent device, which the harness can
+/// neither power-cycle, reset to factory settings nor look into.
+pub(crate) const NETWORK_CAPABILITIES: [Capability; 3] = [
+    Capability::ParameterAccess,
+    Capability::ProcessData,
+    Capability::Bus("ecat"),
+];
+
+/// Cycles with the drives' control words at 0 at the end of a case on a persistent device:
+/// enough for the inverter to see "disable voltage" (BU 0620 §2.5.3).
+const STOP_CYCLES: u64 = 10;
+
+/// A CoE object the case wrote, the ledger's key.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Object {
+    index: u16,
+    sub: u8,
+}
+
+impl fmt::Display for Object {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "object {:04X}h:{:02X}h", self.index, self.sub)
+    }
+}
+
+/// The harness as master of one EtherCAT slave.
+pub(crate) struct EcatBinding<S> {
+    master: Master<S>,
+    product: Product,
+    station: u16,
+    what: String,
+    capabilities: &'static [Capability],
+    /// What the case wrote, on a persistent device.
+    ledger: Option<Ledger<Object>>,
+    /// Exchanges taken from the master already (a process-data run, compacted).
+    pending: Vec<Exchange>,
+}
+
+impl<S: DutSegment> EcatBinding<S> {
+    /// Scans `segment` and brings its first slave to Pre-Operational; `persistent` for a
+    /// device on the network (a ledger, a cleanup).
+    pub(crate) fn open(
+        segment: S,
+        product: Product,
+        what: String,
+        persistent: bool,
+    ) -> Result<EcatBinding<S>, MasterError> {
+        let mut master = Master::new(segment, MasterConfig::default());
+        master.set_recording(false);
+        master.bring_up(EcState::PreOperational)?;
+        let slave = &master.slaves()[0];
+        let station = slave.station;
+        let what = format!(
+            "{what}: {} (vendor {:08X}h, product {:08X}h)",
+            slave.name().unwrap_or("unnamed slave"),
+            slave.vendor(),
+            slave.product()
+        );
+        master.take_exchanges();
+        master.set_recording(true);
+        Ok(EcatBinding {
+            master,
+            product,
+            station,
+            what,
+            capabilities: if persistent {
+                &NETWORK_CAPABILITIES
+            } else {
+                &EMBEDDED_CAPABILITIES
+            },
+            ledger: persistent.then(Ledger::default),
+            pending: Vec::new(),
+        })
+    }
+
+    /// The vendor ID of the slave found.
+    pub(crate) fn vendor(&self) -> u32 {
+        self.master.slaves()[0].vendor()
+    }
+
+    /// The CoE object of a `read`/`write` step, with the parameter's definition if the
+    /// catalogue has it. A set-dependent parameter without a set is set 1 and an array without
+    /// an element is element 1, as the parameter channel reads them (sub-index 0 of such a
+    /// parameter is its number of sub-indices, §2.2.7). The SK 550P's interface parameters
+    /// are those of FI 1 (§2.2.7: one device offset per inverter, none for the interface).
+    fn object(
+        &self,
+        o: &OrderSpec,
+    ) -> Result<(Object, Option<&'static params::ParamDef>), StepError> {
+        let (inverter, def) = match o.target {
+            Target::Interface => (
+                Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?,
+                params::lookup(self.product, Owner::Interface, o.number),
+            ),
+            Target::Inverter(i) => {
+                let inv = params::lookup(self.product, Owner::Inverter, o.number);
+                let iface = (i.get() == 1)
+                    .then(|| params::lookup(self.product, Owner::Interface, o.number))
+                    .flatten();
+                (i, iface.or(inv))
+            }
+        };
+        let set = o.set.or_else(|| {
+            def.filter(|d| d.set_dependent)
+                .and_then(|_| proto::nord::ParamSet::new(1).ok())
+        });
+        let element = o.element.or_else(|| {
+            def.filter(|d| d.array.is_some())
+                .and_then(|_| proto::nord::ArrayElement::new(1).ok())
+        });
+        let a = addr::coe(
+            self.product,
+            ParamAddress {
+                inverter,
+                number: o.number,
+                set,
+                element,
+            },
+        )
+        .map_err(|e| StepError::Suite(e.to_string()))?;
+        Ok((
+            Object {
+                index: a.index,
+                sub: a.subindex,
+            },
+            def,
+        ))
+    }
+
+    fn read(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
+        let (obj, def) = self.object(o)?;
+        let data = match self
+            .master
+            .sdo_upload(self.station, obj.index, obj.sub, false)
+        {
+            Ok(d) => d,
+            Err(e) => return refused_or(e),
+        };
+        let ty = def.map(parameter_data_type);
+        let value = match (data.as_slice(), ty) {
+            ([a, b], Some(DataType::U16)) => i64::from(u16::from_le_bytes([*a, *b])),
+            ([a, b], _) => i64::from(i16::from_le_bytes([*a, *b])),
+            ([a, b, c, d], _) => i64::from(i32::from_le_bytes([*a, *b, *c, *d])),
+            (other, _) => {
+                return Err(StepError::Protocol(format!(
+                    "{obj}: a parameter value of {} bytes (2 or 4 expected)",
+                    other.len()
+                )))
+            }
+        };
+        Ok(json!({ "value": value, "data": hex(&data), "abort": null }).into())
+    }
+
+    fn write(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
+        let (obj, def) = self.object(o)?;
+        let value = o.value.unwrap_or(0);
+        let v = i32::try_from(value)
+            .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
+        let width = def.map_or(2, |d| parameter_data_type(d).bytes());
+        let data = v.to_le_bytes()[..width].to_vec();
+        self.download(obj, &data, false)
+    }
+
+    /// An SDO download, through the ledger on a persistent device.
+    fn download(
+        &mut self,
+        obj: Object,
+        data: &[u8],
+        complete: bool,
+    ) -> Result<Observation, StepError> {
+        if !complete && self.ledger.as_ref().is_some_and(|l| l.wants_original(&obj)) {
+            let before = self
+                .master
+                .sdo_upload(self.station, obj.index, obj.sub, false)
+                .map_err(|e| e.to_string());
+            if let Some(l) = self.ledger.as_mut() {
+                l.original(obj, before);
+            }
+        }
+        let r = self
+            .master
+            .sdo_download(self.station, obj.index, obj.sub, data, complete);
+        if let Some(l) = self.ledger.as_mut() {
+            let outcome = match &r {
+                Ok(()) => Ok(true),
+                Err(e) if e.kind() == ErrorKind::Refused => Ok(false),
+                Err(e) => Err(step_error(e)),
+            };
+            l.wrote(
+                &obj,
+                ledger::may_have_taken_effect(outcome.as_ref().copied()),
+            );
+        }
+        match r {
+            Ok(()) => Ok(json!({ "abort": null }).into()),
+            Err(e) => refused_or(e),
+        }
+    }
+
+    /// Brings the slave to Operational with the cycle running, unless it is there.
+    fn operational(&mut self) -> Result<(), StepError> {
+        let s = self
+            .master
+            .al_status(self.station)
+            .map_err(|e| step_error(&e))?;
+        if s.state() == Some(EcState::Operational) && !s.error() && self.master.is_cycling() {
+            return Ok(());
+        }
+        self.master.set_recording(false);
+        let r = self.enter(EcState::Operational);
+        self.master.set_recording(true);
+        r.map_err(|e| match e.refusal() {
+            Some(r) => StepError::Refused(format!("the slave did not enter Operational: {r}")),
+            None => step_error(&e),
+        })
+    }
+
+    /// Requests `target` as a master does: state by state upwards, the mailbox configured
+    /// before Pre-Operational (an ESC forgets its sync managers in Init), the process data
+    /// configured and cycling before Safe-Operational, some cycles before Operational; a
+    /// state at or below the present one at once. An error indication is acknowledged first.
+    fn enter(&mut self, target: EcState) -> Result<(), MasterError> {
+        let now = self.master.al_status(self.station)?;
+        if now.error() {
+            self.master.acknowledge_error(self.station)?;
+        }
+        let mut at = now.state();
+        let at_rank = at.map_or(0, rank);
+        if at_rank >= rank(target) || matches!(target, EcState::Init | EcState::Bootstrap) {
+            self.prepare(at, target)?;
+            return self.master.set_state(self.station, target);
+        }
+        for step in [
+            EcState::PreOperational,
+            EcState::SafeOperational,
+            EcState::Operational,
+        ] {
+            if rank(step) > at_rank && rank(step) <= rank(target) {
+                self.prepare(at, step)?;
+                self.master.set_state(self.station, step)?;
+                at = Some(step);
+            }
+        }
+        Ok(())
+    }
+
+    /// What a master sets up before requesting `target` from `from`.
+    fn prepare(&mut self, from: Option<EcState>, target: EcState) -> Result<(), MasterError> {
+        let below = |s: EcState| from.is_none_or(|f| rank(f) < rank(s));
+        if target != EcState::Init && from.is_none_or(|f| f == EcState::Init) {
+            self.master.configure_mailbox(self.station)?;
+        }
+        if matches!(target, EcState::SafeOperational | EcState::Operational)
+            && below(EcState::SafeOperational)
+        {
+            self.master.configure_process_data(self.station)?;
+            self.master.start_cycling();
+        }
+        if target == EcState::Operational && from != Some(EcState::Operational) {
+            self.master.start_cycling();
+            self.master.run_cycles(3)?;
+        }
+        if matches!(
+            target,
+            EcState::Init | EcState::PreOperational | EcState::Bootstrap
+        ) {
+            self.master.stop_cycling();
+        }
+        Ok(())
+    }
+
+    fn process(
+        &mut self,
+        inverter: Inverter,
+        words: Option<[u16; 6]>,
+        cycles: u32,
+    ) -> Result<Value, StepError> {
+        self.operational()?;
+        let fi = inverter.get();
+        if let Some(w) = words {
+            self.master
+                .set_inverter_outputs(self.station, fi, w)
+                .map_err(|e| step_error(&e))?;
+        }
+        self.pending.extend(self.master.take_exchanges());
+        let from = self.pending.len();
+        // The inputs of a cycle were written by the slave before it saw that cycle's outputs:
+        // one more cycle brings the inverter's answer to the last of them.
+        let r = self.master.run_cycles(u64::from(cycles) + 1);
+        self.pending.extend(self.master.take_exchanges());
+        crate::binding::channel::compact(&mut self.pending, from);
+        r.map_err(|e| step_error(&e))?;
+        let i = self
+            .master
+            .inverter_inputs(self.station, fi)
+            .map_err(|e| step_error(&e))?;
+        Ok(crate::binding::process_fields(i[0], &i[1..]))
+    }
+}
+
+impl<S: DutSegment> EcatBinding<S> {
+    /// An `ecat:` step, as written.
+    fn ecat_step(&mut self, step: &EcatStep) -> Result<Observation, StepError> {
+        let st = self.station;
+        let m = &mut self.master;
+        let fields = match step {
+            EcatStep::State { state, ack } => {
+                let target = EcState::from_code(*state);
+                if let Some(t) = target {
+                    let now = m.al_status(st).map_err(|e| step_error(&e))?;
+                    if !now.error() {
+                        // Set up what the state needs, as a master does; the request itself
+                        // is sent as written, so invalid transitions are refused as such.
+                        self.prepare(now.state(), t).map_err(|e| step_error(&e))?;
+                    }
+                }
+                let control = u16::from(*state) | if *ack { 0x10 } else { 0 };
+                let s = self
+                    .master
+                    .request_state(st, control)
+                    .map_err(|e| step_error(&e))?;
+                let fields = json!({
+                    "state": state_name(s.state_bits()),
+                    "error": s.error(),
+                    "code": s.code.0,
+                });
+                if s.error() {
+                    let r = Refusal::Al(super::master::AlRefused {
+                        requested: *state,
+                        state: s.state_bits(),
+                        code: s.code,
+                    });
+                    return Ok(Observation::refused(fields, r.to_outcome()));
+                }
+                fields
+            }
+            EcatStep::ReadRegister { address, length } => {
+                match m.read_register(st, *address, usize::from(*length)) {
+                    Ok(d) => data_fields(&d),
+                    Err(e) => return refused_or(e),
+                }
+            }
+            EcatStep::WriteRegister { address, data } => match m.write_register(st, *address, data)
+            {
+                Ok(()) => json!({}),
+                Err(e) => return refused_or(e),
+            },
+            EcatStep::Frame { bytes } => match m.raw_frame(bytes).map_err(|e| step_error(&e))? {
+                None => json!({ "answered": false, "reply": null }),
+                Some(reply) => {
+                    let mut f = json!({ "answered": true, "reply": hex(&reply) });
+                    if let Ok(frame) = EcatFrameRepr::parse_bytes(&reply) {
+                        f["datagrams"] = frame.datagrams.iter().map(datagram_fields).collect();
+                        if let Some(d) = frame.datagrams.first() {
+                            f["wkc"] = json!(d.wkc);
+                            f["data"] = json!(hex(&d.data));
+                        }
+                    }
+                    f
+                }
+            },
+            EcatStep::Datagram {
+                command,
+                adp,
+                ado,
+                data,
+            } => {
+                let d = DatagramRepr::physical(
+                    proto::ecat::Command(*command),
+                    0,
+                    *adp,
+                    *ado,
+                    data.clone(),
+                );
+                match m.raw_datagrams(&[d]).map_err(|e| step_error(&e))? {
+                    None => json!({ "answered": false }),
+                    Some(r) => {
+                        let mut f = r.first().map(datagram_fields).unwrap_or_else(|| json!({}));
+                        f["answered"] = json!(true);
+                        f
+                    }
+                }
+            }
+            EcatStep::Sii { word, words } => match m.read_sii(st, *word, *words) {
+                Ok(d) => data_fields(&d),
+                Err(e) => return refused_or(e),
+            },
+            EcatStep::Upload {
+                index,
+                sub,
+                complete,
+            } => match m.sdo_upload(st, *index, *sub, *complete) {
+                Ok(d) => {
+                    let mut f = data_fields(&d);
+                    f["size"] = json!(d.len());
+                    f["abort"] = Value::Null;
+                    f
+                }
+                Err(e) => return refused_or(e),
+            },
+            EcatStep::Download {
+                index,
+                sub,
+                data,
+                complete,
+            } => {
+                let obj = Object {
+                    index: *index,
+                    sub: *sub,
+                };
+                return self.download(obj, data, *complete);
+            }
+            EcatStep::Mailbox { bytes } => {
+                match m.mailbox_raw(st, bytes).map_err(|e| step_error(&e))? {
+                    None => json!({ "answered": false, "reply": null }),
+                    Some(reply) => mailbox_fields(&reply),
+                }
+            }
+            EcatStep::StopPdo { time } => {
+                let was = m.is_cycling();
+                m.stop_cycling();
+                m.idle(*time);
+                let s = m.al_status(st).map_err(|e| step_error(&e))?;
+                if was {
+                    m.start_cycling();
+                }
+                json!({
+                    "state": state_name(s.state_bits()),
+                    "error": s.error(),
+                    "code": s.code.0,
+                })
+            }
+            EcatStep::Identify => match m.identify(st) {
+                Ok(id) => json!({ "id": id }),
+                Err(e) => return refused_or(e),
+            },
+        };
+        Ok(fields.into())
+    }
+
+    /// `inject`/`observe` reach into the simulated slave.
+    fn simulated(&mut self) -> Result<(&mut Slave, Duration), StepError> {
+        self.master
+            .segment_mut()
+            .simulated()
+            .ok_or_else(|| StepError::Refused("only the embedded slave can be looked into".into()))
+    }
+
+    fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, StepError> {
+        let (slave, now) = self.simulated()?;
+        let (run, err) = (slave.run_led(), slave.err_led());
+        let al = json!({
+            "state": state_name((slave.al_status() & 0x0F) as u8),
+            "code": slave.al_status_code(),
+        });
+        if what == "al" {
+            return Ok(al);
+        }
+        let mut v = observe_device(slave.device_mut(), what, inverter, now)
+            .map_err(StepError::Refused)?
+            .ok_or_else(|| {
+                StepError::Refused(format!("cannot observe `{what}` ({OBSERVABLE}, al)"))
+            })?;
+        if what == "leds" {
+            v["run"] = json!(run);
+            v["err"] = json!(err);
+        }
+        Ok(v)
+    }
+
+    /// A persistent device's cleanup: drives stopped, the case's writes put back, the slave
+    /// back in Pre-Operational with no error indication.
+    fn restore(&mut self) -> Result<(), String> {
+        let Some(ledger) = self.ledger.take() else {
+            return Ok(());
+        };
+        let mut account = Account::default();
+        let st = self.station;
+        if self.master.is_cycling() && account.attempt(|| "stopping the drives".into()) {
+            let outs = self.master.outputs_mut();
+            outs.iter_mut().for_each(|b| *b = 0);
+            let r = self.master.run_cycles(STOP_CYCLES);
+            account.note(r.map_err(|e| Problem::step("stopping the drives", step_error(&e))));
+        }
+        ledger.restore(&mut account, |obj, before| {
+            self.master
+                .sdo_download(st, obj.index, obj.sub, before, false)
+                .map_err(|e| Problem::step(format!("setting back {obj}"), step_error(&e)))
+        });
+        if account.attempt(|| "back to Pre-Operational".into()) {
+            let r = self.enter(EcState::PreOperational);
+            account.note(r.map_err(|e| Problem::step("back to Pre-Operational", step_error(&e))));
+        }
+        self.ledger = Some(Ledger::default());
+        account.into_result()
+    }
+}
+
+impl<S: DutSegment> Binding for EcatBinding<S> {
+    fn describe(&self) -> String {
+        self.what.clone()
+    }
+
+    fn capabilities(&self) -> &[Capability] {
+        self.capabilities
+    }
+
+    fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+        let fields = match action {
+            Action::Compute { .. } => {
+                return Err(StepError::Suite("compute is not a DUT step".into()))
+            }
+            Action::Read(o) => return self.read(o),
+            Action::Write(o) => return self.write(o),
+            Action::Pkw { .. } => {
+                return Err(StepError::NotApplicable(
+                    "EtherCAT has no PKW parameter channel: parameters are CoE objects \
+                     (BU 0620 §2.2.7)"
+                        .into(),
+                ))
+            }
+            Action::Process {
+                inverter,
+                control,
+                setpoints,
+                run,
+            } => {
+                let mut words = [0; 6];
+                words[0] = *control;
+                for (w, s) in words[1..].iter_mut().zip(setpoints) {
+                    *w = *s;
+                }
+                let cycles = match run {
+                    Run::Cycles(n) => *n,
+                    Run::For(d) => cycles_for(*d, self.master.config().cycle),
+                };
+                self.process(*inverter, Some(words), cycles)?
+            }
+            Action::Wait(d) => {
+                let fi = Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?;
+                let cycles = cycles_for(*d, self.master.config().cycle);
+                self.process(fi, None, cycles)?
+            }
+            Action::Inject { inverter, error } => {
+                let (slave, _) = self.simulated()?;
+                slave
+                    .device_mut()
+                    .inject_fault(*inverter, error)
+                    .map_err(StepError::Refused)?;
+                json!({})
+            }
+            Action::Observe { what, inverter } => self.observe(what, *inverter)?,
+            Action::Bus(step) => {
+                let step = crate::bus::own_step::<EcatStep>(step.as_ref(), "EtherCAT")?;
+                return self.ecat_step(step);
+            }
+        };
+        Ok(fields.into())
+    }
+
+    fn take_exchanges(&mut self) -> Vec<Exchange> {
+        let mut v = std::mem::take(&mut self.pending);
+        v.extend(self.master.take_exchanges());
+        v
+    }
+
+    fn finish(&mut self) -> Result<(), CleanupError> {
+        self.restore().map_err(CleanupError)
+    }
+}
+
+/// Order of the states on the way up (Bootstrap beside Init).
+fn rank(s: EcState) -> u8 {
+    match s {
+        EcState::Init | EcState::Bootstrap => 0,
+        EcState::PreOperational => 1,
+        EcState::SafeOperational => 2,
+        EcState::Operational => 3,
+    }
+}
+
+/// A master error that is not a refusal, as the runner's step error.
+fn step_error(e: &MasterError) -> StepError {
+    match e.kind() {
+        ErrorKind::Protocol => StepError::Protocol(e.to_string()),
+        ErrorKind::Refused => StepError::Refused(e.to_string()),
+        ErrorKind::Link => match e {
+            MasterError::Usage(_) => StepError::Suite(e.to_string()),
+            _ => StepError::Link(e.to_string()),
+        },
+    }
+}
+
+/// The device's refusal as an observation (the fields suites match: `abort`, `state`/`code`,
+/// `mailbox_error`); any other error as the step's error.
+fn refused_or(e: MasterError) -> Result<Observation, StepError> {
+    let Some(r) = e.refusal() else {
+        return Err(step_error(&e));
+    };
+    let fields = match r {
+        Refusal::SdoAbort { code, .. } => json!({ "abort": code.0 }),
+        Refusal::Al(a) => json!({
+            "state": state_name(a.state),
+            "error": true,
+            "code": a.code.0,
+        }),
+        Refusal::Mailbox(code) => json!({ "mailbox_error": code.0 }),
+    };
+    Ok(Observation::refused(fields, r.to_outcome()))
+}
+
+/// Bytes as `data` (hex) and, up to 8 bytes, `value` (little-endian, as EtherCAT carries it).
+fn data_fields(d: &[u8]) -> Value {
+    let mut f = json!({ "data": hex(d) });
+    if d.len() <= 8 {
+        let mut b = [0u8; 8];
+        b[..d.len()].copy_from_slice(d);
+        f["value"] = json!(u64::from_le_bytes(b));
+    }
+    f
+}
+
+/// A datagram that came back: command, working counter, data.
+fn datagram_fields(d: &DatagramRepr) -> Value {
+    let mut f = data_fields(&d.data);
+    f["command"] = json!(d.command.0);
+    f["wkc"] = json!(d.wkc);
+    f
+}
+
+/// A mailbox reply as given: its type and counter, and for an error reply its code, for a CoE
+/// SDO abort its abort code.
+fn mailbox_fields(reply: &[u8]) -> Value {
+    let mut f = json!({ "answered": true, "reply": hex(reply) });
+    let Ok(m) = MailboxRepr::parse_bytes(reply) else {
+        return f;
+    };
+    f["type"] = json!(m.kind.0);
+    f["counter"] = json!(m.counter);
+    if m.kind == MailboxType::ERR {
+        if let Ok(e) = MailboxError::parse(&m.data) {
+            f["mailbox_error"] = json!(e.detail.0);
+        }
+    }
+    if m.kind == MailboxType::COE {
+        if let Ok(proto::ecat::coe::SdoResponse::Abort { code, .. }) =
+            proto::ecat::coe::SdoResponse::parse_coe(&m.data)
+        {
+            f["abort"] = json!(code.0);
+        }
+    }
+    f
+}
+
+/// The error of a master that could not open the DUT.
+pub(crate) fn open_error(e: MasterError) -> crate::binding::OpenError {
+    use crate::binding::OpenError;
+    match e.kind() {
+        ErrorKind::Link => OpenError::Unreachable(e.to_string()),
+        _ => OpenError::BringUp(e.to_string()),
+    }
+}
+
+/// Whether the slave found is NORD's (vendor 538h, BU 0620 §2.2.7.1 object 1018h).
+pub(crate) fn check_vendor<S: DutSegment>(
+    b: &EcatBinding<S>,
+) -> Result<(), crate::binding::OpenError> {
+    match b.vendor() {
+        VENDOR_ID => Ok(()),
+        other => Err(crate::binding::OpenError::BringUp(format!(
+            "the slave's vendor ID is {other:08X}h, not NORD's {VENDOR_ID:08X}h"
+        ))),
+    }
+}
