@@ -465,6 +465,9 @@ impl<S: DutSegment> EcatBinding<S> {
                     let mut f = data_fields(&d);
                     f["size"] = json!(d.len());
                     f["abort"] = Value::Null;
+                    if let Some(t) = visible_string(&d) {
+                        f["text"] = json!(t);
+                    }
                     f
                 }
                 Err(e) => return refused_or(e),
@@ -689,6 +692,14 @@ fn data_fields(d: &[u8]) -> Value {
         f["value"] = json!(u64::from_le_bytes(b));
     }
     f
+}
+
+/// Data that reads as a VISIBLE_STRING (printable ASCII, maybe NUL-padded), as text.
+fn visible_string(d: &[u8]) -> Option<String> {
+    let end = d.iter().position(|b| *b == 0).unwrap_or(d.len());
+    let (text, pad) = d.split_at(end);
+    let printable = !text.is_empty() && text.iter().all(|b| (0x20..0x7F).contains(b));
+    (printable && pad.iter().all(|b| *b == 0)).then(|| String::from_utf8_lossy(text).into_owned())
 }
 
 /// A datagram that came back: command, working counter, data.
