@@ -16,7 +16,7 @@
 use proto::ecat::al::EcState;
 use proto::ecat::mailbox::{MailboxError, MailboxRepr, MailboxType};
 use proto::ecat::{DatagramRepr, EcatFrameRepr};
-use proto::nord::ecat::{parameter_data_type, DataType, VENDOR_ID};
+use proto::nord::ecat::{parameter_data_type, DataType, BYTES_PER_INVERTER, VENDOR_ID};
 use proto::nord::params::{self, Owner};
 use proto::nord::{addr, Inverter, ParamAddress, Product};
 use serde_json::{json, Value};
@@ -29,6 +29,7 @@ use super::master::{
 };
 use super::step::{state_name, EcatStep};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::settle::{Drives, SETTLE_CYCLES};
 use crate::binding::{Binding, CleanupError, Observation, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::Exchange;
@@ -77,9 +78,12 @@ pub(crate) const NETWORK_CAPABILITIES: [Capability; 3] = [
     Capability::Bus("ecat"),
 ];
 
-/// Cycles with the drives' control words at 0 at the end of a case on a persistent device:
-/// enough for the inverter to see "disable voltage" (BU 0620 §2.5.3).
-const STOP_CYCLES: u64 = 10;
+/// How long the interface may go on showing cyclic process data after the cycle stopped,
+/// and how often the cleanup looks.
+const QUIET_TIME: Duration = Duration::from_secs(2);
+const QUIET_POLL: Duration = Duration::from_millis(10);
+/// P872 bit 1 "Cyclic PZD communication" (BU 0620 §4.3).
+const CYCLIC: u8 = 1 << 1;
 
 /// A CoE object the case wrote, the ledger's key.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -105,6 +109,8 @@ pub(crate) struct EcatBinding<S> {
     ledger: Option<Ledger<Object>>,
     /// Exchanges taken from the master already (a process-data run, compacted).
     pending: Vec<Exchange>,
+    /// The inverters the case sent control words.
+    commanded: Vec<Inverter>,
 }
 
 impl<S: DutSegment> EcatBinding<S> {
@@ -141,6 +147,7 @@ impl<S: DutSegment> EcatBinding<S> {
             },
             ledger: persistent.then(Ledger::default),
             pending: Vec::new(),
+            commanded: Vec::new(),
         })
     }
 
@@ -349,6 +356,9 @@ impl<S: DutSegment> EcatBinding<S> {
         self.operational()?;
         let fi = inverter.get();
         if let Some(w) = words {
+            if !self.commanded.contains(&inverter) {
+                self.commanded.push(inverter);
+            }
             self.master
                 .set_inverter_outputs(self.station, fi, w)
                 .map_err(|e| step_error(&e))?;
@@ -542,19 +552,22 @@ impl<S: DutSegment> EcatBinding<S> {
         Ok(v)
     }
 
-    /// A persistent device's cleanup: drives stopped, the case's writes put back, the slave
-    /// back in Pre-Operational with no error indication.
+    /// A persistent device's cleanup, whatever the case's verdict: the drives the case ran
+    /// back in "Switch-on block" without a fault ([`Drives`]; the interface brought back to
+    /// Operational for it, acknowledging an AL error such as a watchdog's), the case's writes
+    /// put back (the shared [`Ledger`]), the interface in Pre-Operational without an error
+    /// indication, and no cyclic process data shown any more (P872 bit 1, BU 0620 §4.3), so
+    /// that what needs "no communication via Ethernet" (§3.3) holds in the next case as it did
+    /// before this one. Stops at the first link error and names what it did not attempt.
     fn restore(&mut self) -> Result<(), String> {
         let Some(ledger) = self.ledger.take() else {
             return Ok(());
         };
         let mut account = Account::default();
         let st = self.station;
-        if self.master.is_cycling() && account.attempt(|| "stopping the drives".into()) {
-            let outs = self.master.outputs_mut();
-            outs.iter_mut().for_each(|b| *b = 0);
-            let r = self.master.run_cycles(STOP_CYCLES);
-            account.note(r.map_err(|e| Problem::step("stopping the drives", step_error(&e))));
+        let drove = !self.commanded.is_empty();
+        if drove && account.attempt(|| "settling the drives".into()) {
+            account.note(self.settle());
         }
         ledger.restore(&mut account, |obj, before| {
             self.master
@@ -565,8 +578,80 @@ impl<S: DutSegment> EcatBinding<S> {
             let r = self.enter(EcState::PreOperational);
             account.note(r.map_err(|e| Problem::step("back to Pre-Operational", step_error(&e))));
         }
+        if drove && account.attempt(|| "waiting for the end of cyclic communication".into()) {
+            account.note(self.quiet());
+        }
         self.ledger = Some(Ledger::default());
+        self.commanded.clear();
         account.into_result()
+    }
+
+    /// Cycles the drives back to "Switch-on block".
+    fn settle(&mut self) -> Result<(), Problem> {
+        let what = |e: MasterError| Problem::step("settling the drives", step_error(&e));
+        self.enter(EcState::Operational).map_err(what)?;
+        let inverters = (self.master.inputs().len() / usize::from(BYTES_PER_INVERTER)) as u8;
+        let mut drives = Drives::new(inverters, &self.commanded);
+        let first = self.master.take_exchanges();
+        self.pending.extend(first);
+        let from = self.pending.len();
+        let mut outcome = Err(drives.stuck(self.master.config().cycle * SETTLE_CYCLES));
+        for n in 0..SETTLE_CYCLES {
+            for (fi, control) in drives.controls(n) {
+                let mut words = [0; 6];
+                words[0] = control;
+                self.master
+                    .set_inverter_outputs(self.station, fi.get(), words)
+                    .map_err(what)?;
+            }
+            self.master.run_cycles(1).map_err(what)?;
+            for fi in drives.inverters() {
+                let status = self
+                    .master
+                    .input_word(self.station, fi.get(), 0)
+                    .map_err(what)?;
+                drives.observe(fi, status);
+            }
+            if drives.done() {
+                outcome = Ok(());
+                break;
+            }
+        }
+        self.pending.extend(self.master.take_exchanges());
+        crate::binding::channel::compact(&mut self.pending, from);
+        outcome
+    }
+
+    /// Waits until P872 no longer shows cyclic process data (bit 1).
+    fn quiet(&mut self) -> Result<(), Problem> {
+        let p872 = addr::coe(
+            self.product,
+            ParamAddress {
+                inverter: Inverter::new(1).map_err(|e| Problem::other(e.to_string()))?,
+                number: proto::nord::ParamNumber::new(872)
+                    .map_err(|e| Problem::other(e.to_string()))?,
+                set: None,
+                element: None,
+            },
+        )
+        .map_err(|e| Problem::other(e.to_string()))?;
+        let deadline = self.master.now() + QUIET_TIME;
+        loop {
+            let v = self
+                .master
+                .sdo_upload(self.station, p872.index, p872.subindex, false)
+                .map_err(|e| Problem::step("reading P872", step_error(&e)))?;
+            let bits = v.first().copied().unwrap_or(0);
+            if bits & CYCLIC == 0 {
+                return Ok(());
+            }
+            if self.master.now() >= deadline {
+                return Err(Problem::other(format!(
+                    "P872 still shows cyclic process data {QUIET_TIME:?} after the cycle stopped"
+                )));
+            }
+            self.master.idle(QUIET_POLL);
+        }
     }
 }
 

@@ -44,36 +44,19 @@ use proto::enip::cip::{class, GeneralStatus, MrRequest, MrResponse, Service};
 use proto::enip::cm::{ext, ConnectionKey, ForwardClose, ForwardOpen};
 use proto::enip::encap::{Command, EncapRepr};
 use proto::enip::epath::EPath;
-use proto::nord::control::ControlWord;
-use proto::nord::status::StatusWord;
 use proto::nord::{ArrayElement, Family, Inverter, ParamNumber};
 use serde_json::Value;
 
 use super::scanner::{Scanner, RPI};
+use crate::binding::settle::{Drives, DISABLE, SETTLE_CYCLES};
 use crate::binding::StepError;
 use crate::ledger::{self, Account, Problem};
 use crate::outcome::Exchange;
 use crate::runner::hex;
 use crate::suite::{OrderSpec, Target};
 
-/// "Control data valid" (bit 10) and nothing else: "disable voltage" (bit 1 = 0), the output
-/// off at once, "Switch-on block" (BU 0620 §6.1.2.1).
-const DISABLE: u16 = 1 << ControlWord::CONTROL_DATA_VALID;
-/// [`DISABLE`] with bit 7 "acknowledge the error": its rising edge acknowledges a fault.
-const ACKNOWLEDGE: u16 = DISABLE | 1 << ControlWord::ACKNOWLEDGE;
-/// Status bit 3 "Fault" (set in "Error reaction active" too).
-const FAULT: u16 = 1 << StatusWord::FAULT;
-/// Status bits 0–6 in "Switch-on block" with neither command present: xx40h.
-const SWITCH_ON_BLOCK: (u16, u16) = (0x007F, 0x0040);
 /// Cycles the stop of step 1 runs on the case's connection.
 const STOP_CYCLES: u32 = 5;
-/// Bound on the cycles of step 4 (1 s at the scanner's RPI).
-const SETTLE_CYCLES: u32 = 250;
-/// Cycles each half of the acknowledgement edge is held (0400h, then 0480h).
-const ACK_HOLD: u32 = 3;
-/// Cycles in a row an inverter must show xx40h to 0400h before it counts as settled (the T→O
-/// data may lag the O→T data by a cycle).
-const CALM: u8 = 2;
 /// How long the interface may go on showing cyclic communication after the last connection
 /// closed, and how often the cleanup looks.
 const QUIET_TIME: Duration = Duration::from_secs(2);
@@ -175,64 +158,6 @@ impl Noted {
             }
             _ => None,
         }
-    }
-}
-
-/// One inverter's way back to "Switch-on block" at the end of a case (step 4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) struct Settle {
-    /// The case commanded it, or it showed a fault: it gets valid control words. The others
-    /// get what the case sent them, 0000h (not evaluated, bit 10 clear).
-    involved: bool,
-    /// Its latest status word.
-    status: Option<u16>,
-    /// The control word sent last.
-    last: u16,
-    /// Status words in a row showing xx40h while 0400h is sent.
-    calm: u8,
-}
-
-impl Settle {
-    /// An inverter the case commanded (`true`) or not.
-    pub(super) fn new(commanded: bool) -> Settle {
-        Settle {
-            involved: commanded,
-            status: None,
-            last: 0,
-            calm: 0,
-        }
-    }
-
-    /// Takes the status word the inverter answered.
-    pub(super) fn observe(&mut self, status: u16) {
-        self.status = Some(status);
-        let (mask, value) = SWITCH_ON_BLOCK;
-        if status & FAULT != 0 {
-            self.involved = true;
-            self.calm = 0;
-        } else if self.involved && self.last == DISABLE && status & mask == value {
-            self.calm = self.calm.saturating_add(1);
-        } else {
-            self.calm = 0;
-        }
-    }
-
-    /// The control word for cleanup cycle `n`: 0400h, alternating with 0480h while a fault
-    /// shows (each change to 0480h is a rising edge of bit 7).
-    pub(super) fn control(&mut self, n: u32) -> u16 {
-        let faulted = self.status.is_some_and(|s| s & FAULT != 0);
-        self.last = match (self.involved, faulted) {
-            (false, _) => 0,
-            (true, true) if (n / ACK_HOLD) % 2 == 1 => ACKNOWLEDGE,
-            (true, _) => DISABLE,
-        };
-        self.last
-    }
-
-    /// Whether the inverter is as the next case expects it: seen, and, if it needed anything,
-    /// in "Switch-on block" without a fault under 0400h.
-    pub(super) fn done(&self) -> bool {
-        self.status.is_some() && (!self.involved || self.calm >= CALM)
     }
 }
 
@@ -494,43 +419,28 @@ impl Scanner {
         let asm = self.io.as_ref().and_then(|io| io.t_o).ok_or_else(|| {
             Problem::other("settling the drive: the connection has no input assembly".into())
         })?;
-        let mut fis: Vec<(Inverter, Settle)> = (1..=asm.inverters)
-            .filter_map(|n| Inverter::new(n.into()).ok())
-            .map(|fi| (fi, Settle::new(commanded.contains(&fi))))
-            .collect();
+        let mut drives = Drives::new(asm.inverters, commanded);
         for n in 0..SETTLE_CYCLES {
-            for (fi, s) in &mut fis {
-                self.process[usize::from(fi.get())] = (s.control(n), Vec::new());
+            for (fi, control) in drives.controls(n) {
+                self.process[usize::from(fi.get())] = (control, Vec::new());
             }
             let Some(data) = self.io_cycle().map_err(what)? else {
                 continue;
             };
-            for (fi, s) in &mut fis {
+            for fi in drives.inverters() {
                 let word = asm
-                    .offset(*fi)
+                    .offset(fi)
                     .and_then(|off| data.get(off..off + 2))
                     .map(|w| u16::from_le_bytes([w[0], w[1]]));
                 if let Some(w) = word {
-                    s.observe(w);
+                    drives.observe(fi, w);
                 }
             }
-            if fis.iter().all(|(_, s)| s.done()) {
+            if drives.done() {
                 return Ok(());
             }
         }
-        let stuck: Vec<String> = fis
-            .iter()
-            .filter(|(_, s)| !s.done())
-            .map(|(fi, s)| match s.status {
-                Some(w) => format!("{fi} status {w:04X}h"),
-                None => format!("{fi} no status word"),
-            })
-            .collect();
-        Err(Problem::other(format!(
-            "the drive did not return to 'Switch-on block' (xx40h, no fault) within {:?}: {}",
-            RPI * SETTLE_CYCLES,
-            stuck.join(", ")
-        )))
+        Err(drives.stuck(RPI * SETTLE_CYCLES))
     }
 
     /// Step 4, last: waits until the bus status no longer shows cyclic communication.
@@ -744,88 +654,6 @@ mod tests {
         );
         assert_eq!(Noted::of(&[0x05, 0x02, 0x20, 0xF5, 0x24, 0x01]), None);
         assert_eq!(Noted::of(&[0x10]), None);
-    }
-
-    /// Runs `s` against statuses the drive answers, one per cycle; returns the controls sent.
-    fn drive(s: &mut Settle, answers: &[u16]) -> Vec<u16> {
-        let mut sent = Vec::new();
-        for (n, a) in (0..).zip(answers) {
-            sent.push(s.control(n));
-            s.observe(*a);
-        }
-        sent
-    }
-
-    #[test]
-    fn an_inverter_the_case_did_not_touch_gets_what_it_got_and_is_left_alone() {
-        let mut s = Settle::new(false);
-        assert!(!s.done(), "not seen yet");
-        // Ready for switch-on (xx31h): not the cleanup's business when the case never sent it
-        // a control word.
-        assert_eq!(drive(&mut s, &[0x0B31]), vec![0]);
-        assert!(s.done());
-    }
-
-    #[test]
-    fn a_commanded_inverter_gets_0400h_until_it_shows_xx40h_twice() {
-        let mut s = Settle::new(true);
-        // Operation enabled, then (one cycle late) switch-on block.
-        let sent = drive(&mut s, &[0x0337, 0x0B40]);
-        assert_eq!(sent, vec![DISABLE, DISABLE]);
-        assert!(!s.done());
-        drive(&mut s, &[0x0B40]);
-        assert!(s.done());
-    }
-
-    #[test]
-    fn switch_on_block_with_a_command_bit_shown_is_not_yet_settled() {
-        // xx60h: switch-on block, status bit 5 from the last evaluated control word.
-        let mut s = Settle::new(true);
-        drive(&mut s, &[0x0B60, 0x0B60, 0x0B60]);
-        assert!(!s.done());
-    }
-
-    #[test]
-    fn a_fault_is_acknowledged_by_a_rising_edge_of_bit_7_and_ends_under_0400h() {
-        let mut s = Settle::new(false);
-        // Fault (xx08h) for a while: 0400h and 0480h alternate, ACK_HOLD cycles each.
-        let sent = drive(&mut s, &[0x0208; 8]);
-        assert_eq!(
-            sent,
-            vec![
-                0,
-                DISABLE,
-                DISABLE,
-                ACKNOWLEDGE,
-                ACKNOWLEDGE,
-                ACKNOWLEDGE,
-                DISABLE,
-                DISABLE
-            ]
-        );
-        assert!(s.involved && !s.done());
-        // Still in fault at cycle 8 (0400h); acknowledged by the 0480h edge of cycle 9:
-        // switch-on block (xx40h), and 0400h from then on until it shows so twice.
-        let answers = [(0x0208, DISABLE), (0x0240, ACKNOWLEDGE), (0x0240, DISABLE)];
-        for (n, (answer, control)) in (8..).zip(answers) {
-            assert_eq!(s.control(n), control, "cycle {n}");
-            s.observe(answer);
-            assert!(
-                !s.done(),
-                "cycle {n}: the words sent so far end with bit 7 or a fault"
-            );
-        }
-        assert_eq!(s.control(11), DISABLE);
-        s.observe(0x0240);
-        assert!(s.done());
-    }
-
-    #[test]
-    fn the_control_words_are_the_manuals() {
-        // Bit 10 "control data valid" alone, then with bit 7 "acknowledge" (BU 0620 §6.1.2.1).
-        assert_eq!(DISABLE, 0x0400);
-        assert_eq!(ACKNOWLEDGE, 0x0480);
-        assert_eq!(FAULT, 0x0008);
     }
 
     #[test]
