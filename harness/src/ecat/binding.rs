@@ -25,7 +25,8 @@ use std::fmt;
 use std::time::Duration;
 
 use super::master::{
-    EmbeddedSegment, ErrorKind, Master, MasterConfig, MasterError, NetSegment, Refusal, Segment,
+    EmbeddedSegment, ErrorKind, Master, MasterConfig, MasterError, NetSegment, ProtocolError,
+    Refusal, Segment,
 };
 use super::step::{state_name, EcatStep};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
@@ -738,10 +739,18 @@ fn rank(s: EcState) -> u8 {
     }
 }
 
-/// A master error that is not a refusal, as the runner's step error.
+/// A master error that is not a refusal, as the runner's step error: frames that are no
+/// EtherCAT replies at all (unparsable, or other datagrams than were sent) are garbage, an
+/// error verdict like silence — nothing can be judged; a slave that answers but breaks the
+/// rules (working counter, mailbox, CoE) fails.
 fn step_error(e: &MasterError) -> StepError {
     match e.kind() {
-        ErrorKind::Protocol => StepError::Protocol(e.to_string()),
+        ErrorKind::Protocol => match e {
+            MasterError::Protocol(ProtocolError::Malformed(_) | ProtocolError::Mismatch { .. }) => {
+                StepError::Garbage(e.to_string())
+            }
+            _ => StepError::Protocol(e.to_string()),
+        },
         ErrorKind::Refused => StepError::Refused(e.to_string()),
         ErrorKind::Link => match e {
             MasterError::Usage(_) => StepError::Suite(e.to_string()),
@@ -837,5 +846,105 @@ pub(crate) fn check_vendor<S: DutSegment>(
         other => Err(crate::binding::OpenError::BringUp(format!(
             "the slave's vendor ID is {other:08X}h, not NORD's {VENDOR_ID:08X}h"
         ))),
+    }
+}
+
+#[cfg(test)]
+impl<S: DutSegment> DutSegment for super::master::Faulty<S> {
+    fn simulated(&mut self) -> Option<(&mut Slave, Duration)> {
+        self.inner_mut().simulated()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::master::{Fault, Faulty};
+    use super::*;
+    use crate::outcome::Verdict;
+    use crate::suite::Run;
+    use proto::nord::ParamNumber;
+    use sim::device::{Device, DeviceConfig};
+
+    fn binding() -> EcatBinding<Faulty<EmbeddedSegment>> {
+        let device = Device::new(DeviceConfig::new(Product::Sk550p));
+        let segment = Faulty::new(EmbeddedSegment::new(Slave::new(device).unwrap()));
+        EcatBinding::open(segment, Product::Sk550p, "test".into(), false).unwrap()
+    }
+
+    fn read_p102() -> Action {
+        Action::Read(OrderSpec {
+            target: Target::Inverter(Inverter::new(3).unwrap()),
+            number: ParamNumber::new(102).unwrap(),
+            set: None,
+            element: None,
+            ak: None,
+            value: None,
+            eeprom: true,
+            dword: None,
+        })
+    }
+
+    #[test]
+    fn parameters_go_over_coe_at_the_manuals_index() {
+        let mut b = binding();
+        let o = b.perform(&read_p102()).unwrap();
+        // P102 factory 2.00 s; FI 3's P102 is 3066h, set 1 at sub-index 1 (BU 0620 §2.2.7).
+        assert_eq!(o.fields["value"], 200);
+        assert!(o.refusal.is_none());
+        let x = b.take_exchanges();
+        assert!(
+            x.iter().any(|e| e.sent.contains("3066h:01h")),
+            "{:?}",
+            x.iter().map(|e| &e.sent).collect::<Vec<_>>()
+        );
+    }
+
+    #[test]
+    fn a_refusal_is_the_sdo_abort_code() {
+        let mut b = binding();
+        let Action::Read(mut o) = read_p102() else {
+            unreachable!()
+        };
+        o.value = Some(32001);
+        let obs = b.perform(&Action::Write(o)).unwrap();
+        let r = obs.refusal.expect("refused");
+        assert_eq!((r.kind, r.code), ("SDO abort code", 0x0609_0031));
+        assert_eq!(obs.fields["abort"], 0x0609_0031);
+    }
+
+    #[test]
+    fn a_pkw_step_is_not_applicable() {
+        let mut b = binding();
+        let e = b
+            .perform(&Action::Pkw {
+                inverter: Inverter::new(1).unwrap(),
+                bytes: [0; 8],
+            })
+            .unwrap_err();
+        assert_eq!(e.verdict(), Verdict::NotApplicable);
+    }
+
+    /// A segment that goes silent, loops every frame back unprocessed, or returns garbage gives
+    /// an error verdict, within the master's time-outs (on the embedded segment's clock).
+    #[test]
+    fn a_broken_segment_is_an_error_verdict_within_the_timeout() {
+        for fault in [Fault::Silent, Fault::Loop, Fault::Garbage] {
+            let mut b = binding();
+            b.master.segment_mut().set_fault(fault);
+            let start = b.master.now();
+            let process = Action::Process {
+                inverter: Inverter::new(1).unwrap(),
+                control: 0x047E,
+                setpoints: vec![],
+                run: Run::Cycles(3),
+            };
+            for action in [read_p102(), process] {
+                let e = b.perform(&action).unwrap_err();
+                assert_eq!(e.verdict(), Verdict::Error, "{fault:?}: {e}");
+            }
+            let took = b.master.now() - start;
+            let bound = b.master.config().mailbox_timeout * 2 + b.master.config().al_timeout;
+            assert!(took <= bound, "{fault:?}: {took:?}");
+        }
     }
 }
