@@ -221,9 +221,16 @@ impl<S: Segment> Master<S> {
 
     /// Writes `bytes` (a mailbox message as given, maybe malformed) into the receive mailbox
     /// of `station` and returns the reply in the send mailbox (emergencies set aside), or
-    /// `None` when none came within [`super::MasterConfig::mailbox_timeout`].
+    /// `None` when none came within [`super::MasterConfig::mailbox_timeout`]. A counter in
+    /// the message's header (1..7) becomes the station's last: the master's next message
+    /// counts on from it, so the slave does not take it for a repeat (ETG.1000.6 §5.6.1).
     pub(crate) fn mailbox_raw(&mut self, station: u16, bytes: &[u8]) -> Result<Option<Vec<u8>>> {
-        self.mailbox_transfer(station, bytes)
+        let counter = bytes.get(5).map(|b| (b >> 4) & 0x07).filter(|c| *c != 0);
+        let reply = self.mailbox_transfer(station, bytes);
+        if let (Some(c), Some(s)) = (counter, self.slave_mut(station)) {
+            s.counter = c;
+        }
+        reply
     }
 
     /// The mailbox exchange: write `msg` (padded to SM0's length), wait for the reply.
