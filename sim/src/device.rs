@@ -209,6 +209,9 @@ pub struct Device {
     interface: ParamChannel,
     inverters: Vec<InverterUnit>,
     fieldbus_timeout: bool,
+    /// The flags the bus status parameters show (written again only when they change: the
+    /// monitoring runs on every frame).
+    shown: Option<BusFlags>,
 }
 
 impl Device {
@@ -258,6 +261,7 @@ impl Device {
             interface,
             inverters,
             fieldbus_timeout: false,
+            shown: None,
         }
     }
 
@@ -315,8 +319,13 @@ impl Device {
                 flags.telegram_timeout = true;
             }
         }
-        for (number, element, value) in bus_status::status_parameters(self.config.product, flags) {
-            self.interface.store.set_info(number, element, value);
+        if self.shown != Some(flags) {
+            for (number, element, value) in
+                bus_status::status_parameters(self.config.product, flags)
+            {
+                self.interface.store.set_info(number, element, value);
+            }
+            self.shown = Some(flags);
         }
         self.change_protocol(now);
     }

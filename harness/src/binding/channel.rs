@@ -307,13 +307,18 @@ pub(crate) fn compact(exchanges: &mut Vec<Exchange>, from: usize) {
     let skipped = n - KEEP_HEAD - 1;
     let last = exchanges.pop();
     exchanges.truncate(from + KEEP_HEAD);
-    exchanges.push(Exchange {
+    exchanges.push(cycles_left_out(skipped as u64));
+    exchanges.extend(last);
+}
+
+/// The transcript's note standing for `n` process-data cycles left out.
+pub(crate) fn cycles_left_out(n: u64) -> Exchange {
+    Exchange {
         sent_hex: String::new(),
-        sent: format!("… {skipped} more cycles with the same process data …"),
+        sent: format!("… {n} more cycles with the same process data …"),
         received_hex: String::new(),
         received: String::new(),
-    });
-    exchanges.extend(last);
+    }
 }
 
 fn unit(target: Target) -> Unit {

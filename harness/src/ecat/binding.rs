@@ -29,6 +29,7 @@ use super::master::{
     Refusal, Segment,
 };
 use super::step::{state_name, EcatStep};
+use crate::binding::channel::{compact, cycles_left_out};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::settle::{Drives, SETTLE_CYCLES};
 use crate::binding::{Binding, CleanupError, Observation, StepError};
@@ -364,14 +365,10 @@ impl<S: DutSegment> EcatBinding<S> {
                 .set_inverter_outputs(self.station, fi, w)
                 .map_err(|e| step_error(&e))?;
         }
-        self.pending.extend(self.master.take_exchanges());
-        let from = self.pending.len();
         // The inputs of a cycle were written by the slave before it saw that cycle's outputs:
         // one more cycle brings the inverter's answer to the last of them.
-        let r = self.master.run_cycles(u64::from(cycles) + 1);
-        self.pending.extend(self.master.take_exchanges());
-        crate::binding::channel::compact(&mut self.pending, from);
-        r.map_err(|e| step_error(&e))?;
+        self.cycles(u64::from(cycles) + 1)
+            .map_err(|e| step_error(&e))?;
         let i = self
             .master
             .inverter_inputs(self.station, fi)
@@ -587,6 +584,27 @@ impl<S: DutSegment> EcatBinding<S> {
         account.into_result()
     }
 
+    /// Runs `n` cycles; the transcript keeps the first two and the last (as
+    /// [`compact`] shortens a long run), and the cycles between are
+    /// not even recorded.
+    fn cycles(&mut self, n: u64) -> Result<(), MasterError> {
+        const HEAD: u64 = 2;
+        self.master.run_cycles(n.min(HEAD))?;
+        let middle = n.saturating_sub(HEAD + 1);
+        if middle > 0 {
+            self.pending.extend(self.master.take_exchanges());
+            self.master.set_recording(false);
+            let r = self.master.run_cycles(middle);
+            self.master.set_recording(true);
+            r?;
+            self.pending.push(cycles_left_out(middle));
+        }
+        if n > HEAD {
+            self.master.run_cycles(1)?;
+        }
+        Ok(())
+    }
+
     /// Cycles the drives back to "Switch-on block".
     fn settle(&mut self) -> Result<(), Problem> {
         let what = |e: MasterError| Problem::step("settling the drives", step_error(&e));
@@ -619,7 +637,7 @@ impl<S: DutSegment> EcatBinding<S> {
             }
         }
         self.pending.extend(self.master.take_exchanges());
-        crate::binding::channel::compact(&mut self.pending, from);
+        compact(&mut self.pending, from);
         outcome
     }
 

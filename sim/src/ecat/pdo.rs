@@ -67,6 +67,7 @@ pub(crate) fn cycle(
 ) {
     let count = device.config().inverters;
     for (i, fi) in inverters(count) {
+        let before = (words.outputs[i], words.inputs[i]);
         if let Some(data) = outputs {
             for (w, chunk) in data
                 .get(i * 12..(i + 1) * 12)
@@ -88,7 +89,11 @@ pub(crate) fn cycle(
                 *d = s;
             }
         }
-        show(device, i, words);
+        // P873/P874 change only with the words (a parameter write costs a catalogue lookup,
+        // and this runs every cycle for every inverter).
+        if (words.outputs[i], words.inputs[i]) != before {
+            show(device, i, words);
+        }
     }
 }
 

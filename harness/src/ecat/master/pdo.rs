@@ -199,19 +199,19 @@ impl<S: Segment> Master<S> {
         self.cyclic.running
     }
 
-    /// Runs `n` cycles one period apart (recorded), each due a period after the start of
-    /// the one before (not after its end: the round trip must not stretch the period); the
-    /// first error ends them.
+    /// Runs `n` cycles one period apart (recorded), the first when the cycle is next due
+    /// (at once when it is not running), each a period after the start of the one before
+    /// (not after its end: the round trip must not stretch the period); the first error ends
+    /// them.
     pub(crate) fn run_cycles(&mut self, n: u64) -> Result<()> {
-        let mut due = self.now();
+        let mut due = self.cyclic.next.max(self.now());
         for i in 0..n {
             if i > 0 {
                 due += self.config.cycle;
-                self.port.wait_until(due);
             }
+            self.port.wait_until(due);
             self.cycle()?;
         }
-        self.cyclic.next = self.now() + self.config.cycle;
         Ok(())
     }
 

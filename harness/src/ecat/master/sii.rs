@@ -31,8 +31,9 @@ impl<S: Segment> Master<S> {
         self.write_register(station, SII_CONFIG, &[0])?;
         let mut out = Vec::with_capacity(2 * usize::from(words));
         let mut at = u32::from(word);
+        let mut idle = None;
         while out.len() < 2 * usize::from(words) {
-            let chunk = self.sii_chunk(station, at)?;
+            let chunk = self.sii_chunk(station, at, &mut idle)?;
             at += (chunk.len() / 2) as u32;
             out.extend(chunk);
         }
@@ -40,14 +41,19 @@ impl<S: Segment> Master<S> {
         Ok(out)
     }
 
-    /// One read command at word `address`: 4 or 8 bytes.
-    fn sii_chunk(&mut self, station: u16, address: u32) -> Result<Vec<u8>> {
+    /// One read command at word `address`: 4 or 8 bytes. `idle` is the status the last
+    /// command of this master ended with, if it just read one: then the interface is known
+    /// to be idle and is not polled first.
+    fn sii_chunk(&mut self, station: u16, address: u32, idle: &mut Option<u16>) -> Result<Vec<u8>> {
         let timeout = self.config.eeprom_timeout;
-        // Wait for a command still running.
-        let mut status = self.poll(timeout, Awaited::Eeprom, |m| {
-            let s = m.read_u16(station, SII_CONTROL)?;
-            Ok((s & SiiControl::BUSY == 0).then_some(s))
-        })?;
+        // Wait for a command still running (another master's, or one before this read).
+        let mut status = match idle.take() {
+            Some(s) => s,
+            None => self.poll(timeout, Awaited::Eeprom, |m| {
+                let s = m.read_u16(station, SII_CONTROL)?;
+                Ok((s & SiiControl::BUSY == 0).then_some(s))
+            })?,
+        };
         let mut command = SiiControl::CMD_READ.to_le_bytes().to_vec();
         command.extend(address.to_le_bytes());
         // The command, and at once the status and the data (a fast ESC is done by then).
@@ -71,6 +77,7 @@ impl<S: Segment> Master<S> {
         if status & READ_ERRORS != 0 {
             return Err(ProtocolError::Eeprom { status }.into());
         }
+        *idle = Some(status);
         let n = if status & SiiControl::READ_8_BYTES != 0 {
             8
         } else {
@@ -86,12 +93,13 @@ impl<S: Segment> Master<S> {
         let mut words: Vec<u16> = Vec::new();
         let mut need = CATEGORIES + 2;
         let mut at = CATEGORIES;
+        let mut idle = None;
         loop {
             while words.len() < need {
                 if words.len() >= MAX_WORDS {
                     return Err(ProtocolError::SiiEnd { words: MAX_WORDS }.into());
                 }
-                let chunk = self.sii_chunk(station, words.len() as u32)?;
+                let chunk = self.sii_chunk(station, words.len() as u32, &mut idle)?;
                 words.extend(
                     chunk
                         .chunks_exact(2)
