@@ -75,3 +75,59 @@ impl<S: DutSegment> DutSegment for Tapped<S> {
         self.inner.simulated()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::binding::EcatBinding;
+    use super::super::master::EmbeddedSegment;
+    use super::*;
+    use crate::binding::Binding;
+    use crate::pcap::testing::{description, read_pcapng};
+    use crate::pcap::Tap;
+    use crate::suite::Action;
+    use proto::ecat::EcatFrameRepr;
+    use proto::nord::{Inverter, Product};
+    use sim::device::{Device, DeviceConfig};
+    use std::cell::RefCell;
+    use std::rc::Rc;
+
+    #[test]
+    fn a_run_captures_both_directions_labelled_on_one_time_line() {
+        let tap: SharedTap = Rc::new(RefCell::new(Tap::default()));
+        for case in ["case 1", "case 2"] {
+            tap.borrow_mut().label(case);
+            let device = Device::new(DeviceConfig::new(Product::Sk550p));
+            let segment = Tapped::new(
+                EmbeddedSegment::new(Slave::new(device).unwrap()),
+                tap.clone(),
+            );
+            let mut b = EcatBinding::open(segment, Product::Sk550p, "t".into(), false).unwrap();
+            let process = Action::Process {
+                inverter: Inverter::new(1).unwrap(),
+                control: 0x047E,
+                setpoints: vec![],
+                run: crate::suite::Run::Cycles(2),
+            };
+            b.perform(&process).unwrap();
+        }
+        let bytes = tap.borrow().capture.write_to(Vec::new()).unwrap();
+        let (_, interfaces, packets) = read_pcapng(&bytes);
+        assert_eq!(description(&interfaces[0]).as_deref(), Some(SOURCE));
+        // Every frame is an EtherCAT frame that parses; the master's and the slave's
+        // (locally administered source address) alternate.
+        let mut from_slave = 0;
+        for (_, frame, _) in &packets {
+            assert_eq!(frame[12..14], [0x88, 0xA4]);
+            EcatFrameRepr::parse_bytes(&frame[14..]).unwrap();
+            from_slave += usize::from(frame[6] & 0x02 != 0);
+        }
+        assert_eq!(from_slave * 2, packets.len());
+        // Both cases, labelled, the second after the first.
+        let first_of = |label: &str| packets.iter().position(|p| p.2 == [label]).unwrap();
+        assert!(first_of("case 1") < first_of("case 2"));
+        assert!(
+            packets.windows(2).all(|w| w[0].0 <= w[1].0),
+            "one time line"
+        );
+    }
+}
