@@ -19,8 +19,6 @@ pub(crate) const DISABLE: u16 = 1 << ControlWord::CONTROL_DATA_VALID;
 const ACKNOWLEDGE: u16 = DISABLE | 1 << ControlWord::ACKNOWLEDGE;
 /// Status bit 3 "Fault" (set in "Error reaction active" too).
 const FAULT: u16 = 1 << StatusWord::FAULT;
-/// Status bits 0–6 in "Switch-on block" with neither command present: xx40h.
-const SWITCH_ON_BLOCK: (u16, u16) = (0x007F, 0x0040);
 /// Bound on the cycles of the way back (1 s at EtherNet/IP's 4 ms RPI; 250 ms at EtherCAT's
 /// 1 ms cycle, longer than any ramp the cases leave running would need to be cut).
 pub(crate) const SETTLE_CYCLES: u32 = 250;
@@ -57,11 +55,13 @@ impl Settle {
     /// Takes the status word the inverter answered.
     pub(crate) fn observe(&mut self, status: u16) {
         self.status = Some(status);
-        let (mask, value) = SWITCH_ON_BLOCK;
         if status & FAULT != 0 {
             self.involved = true;
             self.calm = 0;
-        } else if self.involved && self.last == DISABLE && status & mask == value {
+        } else if self.involved
+            && self.last == DISABLE
+            && StatusWord(status).switch_on_block_disabled()
+        {
             self.calm = self.calm.saturating_add(1);
         } else {
             self.calm = 0;

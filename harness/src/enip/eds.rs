@@ -18,6 +18,7 @@ use proto::enip::epath::EPath;
 use proto::nord::addr::cip_instance;
 use proto::nord::eip::{
     self, Assembly, Direction, IdentityInfo, LISTEN_ONLY_MAX, LISTEN_ONLY_POINT, RPI_RANGE,
+    RUN_IDLE_HEADER_LEN, SEQUENCE_COUNT_LEN,
 };
 use proto::nord::params::{self, Access, Owner, ParamDef, Width, CATALOGUE};
 use proto::nord::{ArrayElement, Family, Inverter, ParamNumber, ParamSet, Product};
@@ -66,36 +67,6 @@ const T_O_MULTICAST: u32 = 1 << 21;
 const T_O_POINT_TO_POINT: u32 = 1 << 22;
 const O_T_SCHEDULED: u32 = 1 << 26;
 const T_O_SCHEDULED: u32 = 1 << 30;
-
-/// Sequence count in front of class-1 data, bytes.
-const SEQUENCE_COUNT: u16 = 2;
-/// The 32-bit run/idle header, bytes.
-const RUN_IDLE_HEADER: u16 = 4;
-
-/// The CIP network connection sizes (O→T, T→O) a scanner configures for a class-1
-/// connection between `o_t_instance` and `t_o_instance` at full assembly length: the 2-byte
-/// sequence count, the 4-byte run/idle header where [`eip::o_t_run_idle`] says the O→T data
-/// carries it (P166), and the data. A listen-only connection ([`LISTEN_ONLY_POINT`]) sends
-/// heartbeats without data: O→T 0. An instance the product does not have counts no data.
-pub(crate) fn connection_sizes(
-    product: Product,
-    o_t_instance: u16,
-    t_o_instance: u16,
-    p166: i32,
-) -> (u16, u16) {
-    let len = |instance| eip::assembly(product, instance).map_or(0, |a| a.len);
-    let o_t = if o_t_instance == LISTEN_ONLY_POINT {
-        0
-    } else {
-        let header = if eip::o_t_run_idle(product, o_t_instance, p166) {
-            RUN_IDLE_HEADER
-        } else {
-            0
-        };
-        SEQUENCE_COUNT + header + len(o_t_instance)
-    };
-    (o_t, SEQUENCE_COUNT + len(t_o_instance))
-}
 
 /// The EDS of an EtherNet/IP product with `inverters` inverters (FI 1..=n) behind the
 /// interface. `Err` for products without EtherNet/IP and for an inverter count outside
@@ -463,15 +434,14 @@ impl Connection {
     }
 
     fn sizes(&self, product: Product) -> (u16, u16) {
-        connection_sizes(product, self.o_t_point(), self.t_o.instance, self.p166)
+        eip::connection_sizes(product, self.o_t_point(), self.t_o.instance, self.p166)
     }
 }
 
 /// The P166 factory setting of a product, and its other values (none without P166: the
 /// SK 550P's O→T data always carries the header).
 fn p166_values(product: Product) -> (i32, Vec<i32>) {
-    let def = ParamNumber::new(166)
-        .ok()
+    let def = eip::transmission_format(product)
         .and_then(|n| params::lookup(product, Owner::Interface, n));
     match def {
         Some(d) => (
@@ -493,24 +463,24 @@ fn pairs(product: Product) -> Vec<(&'static Assembly, &'static Assembly)> {
 fn size_text(o_t: Option<&Assembly>, run_idle: bool, t_o: &Assembly, sizes: (u16, u16)) -> String {
     let o_t_text = match o_t {
         Some(a) => format!(
-            "O->T {} bytes ({SEQUENCE_COUNT} sequence count{} + {} data)",
+            "O->T {} bytes ({SEQUENCE_COUNT_LEN} sequence count{} + {} data)",
             sizes.0,
             if run_idle {
-                format!(" + {RUN_IDLE_HEADER} run/idle header")
+                format!(" + {RUN_IDLE_HEADER_LEN} run/idle header")
             } else {
                 String::new()
             },
             a.len
         ),
         None => format!(
-            "O->T {} bytes (heartbeat without data; the adapter also accepts {SEQUENCE_COUNT}, \
+            "O->T {} bytes (heartbeat without data; the adapter also accepts {SEQUENCE_COUNT_LEN}, \
              the sequence count alone)",
             sizes.0
         ),
     };
     format!(
         "CIP network connection sizes as a scanner configures them: {o_t_text}, T->O {} bytes \
-         ({SEQUENCE_COUNT} sequence count + {} data).",
+         ({SEQUENCE_COUNT_LEN} sequence count + {} data).",
         sizes.1, t_o.len
     )
 }
@@ -986,26 +956,6 @@ mod tests {
     }
 
     #[rstest]
-    #[case(Product::Sk550p, 100, 101, 0, 102, 98)]
-    #[case(Product::Tu3Eip, 100, 101, 0, 18, 14)]
-    #[case(Product::Tu3Eip, 102, 103, 0, 102, 98)]
-    #[case(Product::Tu3Eip, 102, 103, 1, 98, 98)]
-    #[case(Product::Tu4Eip, 110, 111, 1, 52, 52)]
-    #[case(Product::Tu4Eip, 110, 111, 0, 56, 52)]
-    #[case(Product::Cu4Eip, 100, 101, 1, 18, 14)]
-    #[case(Product::Sk550p, LISTEN_ONLY_POINT, 101, 0, 0, 98)]
-    fn network_sizes(
-        #[case] p: Product,
-        #[case] o_t: u16,
-        #[case] t_o: u16,
-        #[case] p166: i32,
-        #[case] want_o_t: u16,
-        #[case] want_t_o: u16,
-    ) {
-        assert_eq!(connection_sizes(p, o_t, t_o, p166), (want_o_t, want_t_o));
-    }
-
-    #[rstest]
     fn every_eip_product_has_the_sections_and_keys(
         #[values(Product::Sk550p, Product::Tu3Eip, Product::Tu4Eip, Product::Cu4Eip)] p: Product,
     ) {
@@ -1127,7 +1077,10 @@ mod tests {
                 assert_eq!(trigger, 0x0101_0002, "{key}");
                 assert_eq!(f[3], "0");
                 assert!(
-                    help.contains(&format!("T->O {} bytes", input.len + 2)),
+                    help.contains(&format!(
+                        "T->O {} bytes",
+                        eip::connection_size(input.len, false)
+                    )),
                     "{help}"
                 );
             } else {
@@ -1141,7 +1094,7 @@ mod tests {
                 let run_idle = (params >> 8) & 7 == 4;
                 let p166 = if run_idle { 0 } else { 1 };
                 assert_eq!(eip::o_t_run_idle(p, o_t, p166), run_idle);
-                let (n_o_t, n_t_o) = connection_sizes(p, o_t, t_o, p166);
+                let (n_o_t, n_t_o) = eip::connection_sizes(p, o_t, t_o, p166);
                 assert!(help.contains(&format!("O->T {n_o_t} bytes")), "{help}");
                 assert!(help.contains(&format!("T->O {n_t_o} bytes")), "{help}");
             }

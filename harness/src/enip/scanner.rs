@@ -21,7 +21,7 @@ use proto::enip::io::IoFrame;
 use proto::nord::addr::cip_instance;
 use proto::nord::eip::{self, Assembly, Direction, WORDS_PER_INVERTER};
 use proto::nord::params::{self, Owner, Width};
-use proto::nord::{Family, Inverter, ParamNumber, Product};
+use proto::nord::{Family, Inverter, Product};
 use serde_json::{json, Value};
 use sim::device::Device;
 use sim::enip::Adapter;
@@ -378,10 +378,10 @@ impl Scanner {
             .ok_or_else(|| StepError::Suite("the product has no output assembly".into()))?;
         let inp = eip::assembly(product, out.instance + 1)
             .ok_or_else(|| StepError::Suite("no input assembly beside the output".into()))?;
-        let p166 = if product.family() == Family::Module {
+        let p166 = if let Some(number) = eip::transmission_format(product) {
             let o = OrderSpec {
                 target: Target::Interface,
-                number: ParamNumber::new(166).map_err(|e| StepError::Suite(e.to_string()))?,
+                number,
                 set: None,
                 element: None,
                 ak: None,
@@ -397,13 +397,13 @@ impl Scanner {
         } else {
             0
         };
-        let run_idle = eip::o_t_run_idle(product, out.instance, p166);
+        let (o_t_size, t_o_size) = eip::connection_sizes(product, out.instance, inp.instance, p166);
         let spec = ForwardOpenSpec {
             o_t_point: out.instance,
             t_o_point: inp.instance,
-            o_t_size: 2 + if run_idle { 4 } else { 0 } + out.len,
-            t_o_size: 2 + inp.len,
-            run_idle,
+            o_t_size,
+            t_o_size,
+            run_idle: eip::o_t_run_idle(product, out.instance, p166),
             ..ForwardOpenSpec::default()
         };
         match self.forward_open(&spec)? {
@@ -465,14 +465,13 @@ impl Scanner {
             .map_err(|e| StepError::Protocol(format!("Forward_Open reply: {e}")))?;
         if s.o_t_point != eip::LISTEN_ONLY_POINT {
             // An owner connection: the following process-data steps run over it.
-            let header = 2 + if s.run_idle { 4 } else { 0 };
             self.io = Some(IoConn {
                 opened: cleanup::Opened::of(&fo),
                 o_t_id: reply.o_t_id,
                 t_o_id: reply.t_o_id,
                 o_t: self.product.and_then(|p| eip::assembly(p, s.o_t_point)),
                 t_o: self.product.and_then(|p| eip::assembly(p, s.t_o_point)),
-                o_t_len: usize::from(s.o_t_size.saturating_sub(header)),
+                o_t_len: usize::from(eip::connection_data(s.o_t_size, s.run_idle).unwrap_or(0)),
                 run_idle: s.run_idle,
                 sequence: 0,
                 count: 0,

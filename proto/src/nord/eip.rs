@@ -1,12 +1,14 @@
 //! What the manuals state about the EtherNet/IP side of each product: assembly instances and
-//! their layout, the parameter classes, the run/idle header rule (P166) and the identity.
+//! their layout, the parameter classes, the run/idle header rule (P166), the class-1
+//! connection sizes that follow from them and the identity.
 //!
 //! BU 0620 §2.3.4.1 (SK 550P: 100/101, 96 bytes, variable) and BU 2100 §6.2.1 (TU3-EIP:
 //! 100/101 12 bytes fixed, 102/103 96 bytes variable; TU4/CU4-EIP: 100/101 and 110/111, 50
 //! bytes variable with the interface I/O word first, "truncated … from the end").
 
+use super::params::{self, Owner};
 use super::product::Product;
-use super::types::Inverter;
+use super::types::{Inverter, ParamNumber};
 
 /// Which way an assembly's data flows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -188,18 +190,76 @@ impl Assembly {
     }
 }
 
+/// P166 "PZD transmission format" of the bus interface, where the product has it: the
+/// EtherNet/IP modules (BU 2100 §7.1.2). `None` for the SK 550P, whose parameters stop at
+/// P850–P899 and have no such setting (BU 0620 §5), and for products without EtherNet/IP.
+///
+/// The one place that says whether P166 applies: the simulator reads it from its store, the
+/// scanner over the wire and the EDS writer from the catalogue only where this is `Some`.
+pub fn transmission_format(product: Product) -> Option<ParamNumber> {
+    let number = ParamNumber::new(166).ok()?;
+    params::lookup(product, Owner::Interface, number).map(|_| number)
+}
+
 /// Whether O→T data of `instance` carries the 32-bit run/idle header.
 ///
 /// BU 2100 §7.1.2 P166 "PZD transmission format": 0 = "32 Bit header + status", 1 = "Modeless
 /// Format", which "can only be used for the assembly instances 110 and 111 … For instances 100
 /// and 101 the data length is fixed and contains the 32 bit header." The TU3-EIP's variable
-/// instance 102 follows P166 like 110. The SK 550P has no such parameter: its O→T data carries
-/// the header, as CIP's default for class-1 O→T data.
+/// instance 102 follows P166 like 110. The SK 550P has no such parameter
+/// ([`transmission_format`]): its O→T data carries the header, as CIP's default for class-1
+/// O→T data.
 pub fn o_t_run_idle(product: Product, instance: u16, p166: i32) -> bool {
     match assembly(product, instance) {
-        Some(a) if a.variable && product != Product::Sk550p => p166 == 0,
+        Some(a) if a.variable && transmission_format(product).is_some() => p166 == 0,
         _ => true,
     }
+}
+
+/// Bytes of the CIP sequence count in front of every class-1 datagram's data (CIP Vol. 1,
+/// class 1 transport: a 16-bit sequence count; [`crate::enip::io`]).
+pub const SEQUENCE_COUNT_LEN: u16 = 2;
+/// Bytes of the run/idle header ("32 Bit header", BU 2100 §7.1.2 P166; CIP Vol. 1, real-time
+/// format "32-bit header").
+pub const RUN_IDLE_HEADER_LEN: u16 = 4;
+
+/// Bytes a class-1 connection carries in front of the assembly data: the sequence count, and
+/// the run/idle header where the data carries it ([`o_t_run_idle`]; T→O data never does).
+pub const fn io_header_len(run_idle: bool) -> u16 {
+    SEQUENCE_COUNT_LEN + if run_idle { RUN_IDLE_HEADER_LEN } else { 0 }
+}
+
+/// The network connection size a Forward_Open gives for `data` bytes of an assembly: the
+/// header of [`io_header_len`] plus the data (BU 2100 §6.2.1 "Truncation of data length": the
+/// data may be shorter than the assembly, the header is always there).
+pub const fn connection_size(data: u16, run_idle: bool) -> u16 {
+    data.saturating_add(io_header_len(run_idle))
+}
+
+/// The assembly data bytes a network connection size carries; `None` when the size is smaller
+/// than the header of [`io_header_len`].
+pub const fn connection_data(size: u16, run_idle: bool) -> Option<u16> {
+    size.checked_sub(io_header_len(run_idle))
+}
+
+/// The network connection sizes (O→T, T→O) of a class-1 connection between `o_t_instance` and
+/// `t_o_instance` at full assembly length: [`connection_size`] of each assembly, with the
+/// run/idle header on O→T where [`o_t_run_idle`] says so for `p166`. A listen-only connection
+/// ([`LISTEN_ONLY_POINT`]) sends heartbeats without data: O→T 0. An instance the product does
+/// not have counts no data.
+pub fn connection_sizes(
+    product: Product,
+    o_t_instance: u16,
+    t_o_instance: u16,
+    p166: i32,
+) -> (u16, u16) {
+    let len = |instance| assembly(product, instance).map_or(0, |a| a.len);
+    let o_t = if o_t_instance == LISTEN_ONLY_POINT {
+        0
+    } else {
+        connection_size(len(o_t_instance), o_t_run_idle(product, o_t_instance, p166))
+    };
+    (o_t, connection_size(len(t_o_instance), false))
 }
 
 /// The CIP class of a unit's parameters: 100 for a module's own parameters, 100 + n for FI n
@@ -303,7 +363,55 @@ mod tests {
         assert!(!o_t_run_idle(Product::Tu4Eip, 110, 1));
         assert!(o_t_run_idle(Product::Tu4Eip, 110, 0));
         assert!(o_t_run_idle(Product::Sk550p, 100, 1));
+        assert!(o_t_run_idle(Product::Tu3Eip, 100, 1));
+        assert!(!o_t_run_idle(Product::Tu3Eip, 102, 1));
         assert_eq!(param_class(None), 100);
         assert_eq!(param_class(Some(fi(8))), 108);
+    }
+
+    #[test]
+    fn p166_only_on_the_ethernet_ip_modules() {
+        let p166 = ParamNumber::new(166).unwrap();
+        for p in [Product::Tu3Eip, Product::Tu4Eip, Product::Cu4Eip] {
+            assert_eq!(transmission_format(p), Some(p166), "{p:?}");
+        }
+        for p in [Product::Sk550p, Product::Tu3Pnt, Product::Tu4Pol] {
+            assert_eq!(transmission_format(p), None, "{p:?}");
+        }
+    }
+
+    #[rstest]
+    // 2 sequence count + 4 run/idle header + 12 data; T→O 2 + 12 (BU 2100 §6.2.1).
+    #[case(Product::Tu3Eip, 100, 101, 1, (18, 14))]
+    #[case(Product::Tu3Eip, 102, 103, 0, (102, 98))]
+    // Modeless 102 (P166 = 1): 2 + 96.
+    #[case(Product::Tu3Eip, 102, 103, 1, (98, 98))]
+    #[case(Product::Tu4Eip, 110, 111, 0, (56, 52))]
+    #[case(Product::Cu4Eip, 110, 111, 1, (52, 52))]
+    #[case(Product::Cu4Eip, 100, 101, 1, (18, 14))]
+    // SK 550P: the header whatever the argument says (no P166).
+    #[case(Product::Sk550p, 100, 101, 1, (102, 98))]
+    // Listen-only: heartbeats, O→T 0.
+    #[case(Product::Tu4Eip, LISTEN_ONLY_POINT, 111, 0, (0, 52))]
+    fn connection_sizes_at_full_length(
+        #[case] p: Product,
+        #[case] o_t: u16,
+        #[case] t_o: u16,
+        #[case] p166: i32,
+        #[case] want: (u16, u16),
+    ) {
+        assert_eq!(connection_sizes(p, o_t, t_o, p166), want);
+    }
+
+    #[test]
+    fn connection_size_and_data_are_inverse() {
+        assert_eq!(io_header_len(true), 6);
+        assert_eq!(io_header_len(false), 2);
+        assert_eq!(connection_size(10, true), 16);
+        assert_eq!(connection_data(16, true), Some(10));
+        assert_eq!(connection_data(16, false), Some(14));
+        assert_eq!(connection_data(5, true), None);
+        assert_eq!(connection_data(2, false), Some(0));
+        assert_eq!(connection_size(u16::MAX, true), u16::MAX);
     }
 }

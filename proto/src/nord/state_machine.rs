@@ -433,6 +433,20 @@ mod tests {
     }
 
     #[test]
+    fn switch_on_block_mask_is_the_decoded_status_tables() {
+        // BU 0620 §6.1.2.3 p. 111 "Starting disabled": bit 6 = 1, bits 5 and 4 X, bits 3–0 = 0.
+        // The mask is 004Fh, not 007Fh: bits 4/5 report commands (§6.1.2.2), not the state.
+        assert_eq!(SwitchOnBlock.status_bits(), (0x004F, 0x0040));
+        for w in [0x0040, 0x0050, 0x0060, 0x0070, 0x0B60] {
+            assert_eq!(
+                State::from_status(StatusWord(w)),
+                Some(SwitchOnBlock),
+                "{w:04X}h"
+            );
+        }
+    }
+
+    #[test]
     fn names_and_letters() {
         assert_eq!(State::from_name("Standby"), Some(ReadyForSwitchOn));
         assert_eq!(State::from_name("Einschaltsperre"), Some(SwitchOnBlock));

@@ -121,6 +121,10 @@ pub struct StatusFields {
 impl StatusWord {
     /// Bit 3 "Fault".
     pub const FAULT: u8 = 3;
+    /// Bit 4 "Voltage enabled": 0 while "Disable voltage" is commanded.
+    pub const VOLTAGE_ENABLED: u8 = 4;
+    /// Bit 5 "Emergency stop": 0 while "Emergency stop" is commanded.
+    pub const EMERGENCY_STOP: u8 = 5;
     /// Bit 8 "Setpoint reached".
     pub const SETPOINT_REACHED: u8 = 8;
     /// Bit 9 "Bus control active".
@@ -140,6 +144,18 @@ impl StatusWord {
     /// The state the word shows (decoded-status table, §6.1.2.3 p. 111).
     pub fn state(self) -> Option<State> {
         State::from_status(self)
+    }
+
+    /// Whether the word shows "Switch-on block" under "Disable voltage": the state B row of the
+    /// decoded-status table (bits 6–0 = 1XX0000b, §6.1.2.3 p. 111) with bits 4 and 5 at 0, the
+    /// "Disable voltage" and "Emergency stop" commands present (§6.1.2.2 p. 107): xx40h, what
+    /// an inverter answers once it has evaluated 0400h. The table leaves bits 4 and 5 open in
+    /// state B, so xx50h, xx60h and xx70h are "Switch-on block" too, still showing an earlier
+    /// control word.
+    pub fn switch_on_block_disabled(self) -> bool {
+        self.state() == Some(State::SwitchOnBlock)
+            && !self.bit(Self::VOLTAGE_ENABLED)
+            && !self.bit(Self::EMERGENCY_STOP)
     }
 
     /// The bits by name and the decoded state.
@@ -202,6 +218,17 @@ mod tests {
         assert!(StatusWord(0x0B31)
             .describe()
             .contains("Ready for switch-on (C)"));
+    }
+
+    #[test]
+    fn switch_on_block_under_disable_voltage_is_xx40h_only() {
+        // State B (bits 6–0 1XX0000b) with bits 4/5 showing the commands of 0400h.
+        assert!(StatusWord(0x0B40).switch_on_block_disabled());
+        assert!(StatusWord(0x0040).switch_on_block_disabled());
+        for w in [0x0B50, 0x0B60, 0x0B70, 0x0B31, 0x0000, 0x0248] {
+            assert!(!StatusWord(w).switch_on_block_disabled(), "{w:04X}h");
+        }
+        assert_eq!(StatusWord(0x0B60).state(), Some(State::SwitchOnBlock));
     }
 
     #[test]

@@ -161,12 +161,9 @@ fn refuse(req: &MrRequest, key: ConnectionKey, extended: Vec<u16>) -> MrResponse
     }
 }
 
-/// P166 of a module (0 = run/idle header), 0 for the SK 550P.
+/// P166 where the product has it (0 = run/idle header), else 0 ([`eip::transmission_format`]).
 fn p166(a: &mut Adapter) -> i32 {
-    if a.product().family() != Family::Module {
-        return 0;
-    }
-    let Ok(n) = ParamNumber::new(166) else {
+    let Some(n) = eip::transmission_format(a.product()) else {
         return 0;
     };
     a.device
@@ -381,14 +378,19 @@ fn io_connection(a: &mut Adapter, fo: &ForwardOpen, mut c: Conn) -> Result<Conn,
     let t_o_asm = eip::assembly(product, t_o)
         .filter(|x| x.direction == Direction::Input)
         .ok_or(vec![ext::INVALID_PRODUCING_PATH])?;
-    let t_o_len = usize::from(fo.t_o.size)
-        .checked_sub(2)
+    let t_o_len = eip::connection_data(fo.t_o.size, false)
+        .map(usize::from)
         .filter(|n| t_o_asm.accepts(*n))
-        .ok_or(vec![ext::INVALID_T_O_SIZE, t_o_asm.len + 2])?;
+        .ok_or(vec![
+            ext::INVALID_T_O_SIZE,
+            eip::connection_size(t_o_asm.len, false),
+        ])?;
     if o_t == LISTEN_ONLY_POINT {
         c.kind = Kind::ListenOnly;
-        if !matches!(fo.o_t.size, 0 | 2) {
-            return Err(vec![ext::INVALID_O_T_SIZE, 2]);
+        // Heartbeats: the sequence count alone, or a size of 0.
+        let heartbeat = eip::connection_size(0, false);
+        if fo.o_t.size != 0 && fo.o_t.size != heartbeat {
+            return Err(vec![ext::INVALID_O_T_SIZE, heartbeat]);
         }
         if !a.conns.has_owner() {
             return Err(vec![ext::NON_LISTEN_ONLY_NOT_OPENED]);
@@ -401,11 +403,13 @@ fn io_connection(a: &mut Adapter, fo: &ForwardOpen, mut c: Conn) -> Result<Conn,
             .filter(|x| x.direction == Direction::Output)
             .ok_or(vec![ext::INVALID_CONSUMING_PATH])?;
         let run_idle = eip::o_t_run_idle(product, o_t, p166(a));
-        let overhead = 2 + if run_idle { 4 } else { 0 };
-        let o_t_len = usize::from(fo.o_t.size)
-            .checked_sub(overhead)
+        let o_t_len = eip::connection_data(fo.o_t.size, run_idle)
+            .map(usize::from)
             .filter(|n| o_t_asm.accepts(*n))
-            .ok_or(vec![ext::INVALID_O_T_SIZE, o_t_asm.len + overhead as u16])?;
+            .ok_or(vec![
+                ext::INVALID_O_T_SIZE,
+                eip::connection_size(o_t_asm.len, run_idle),
+            ])?;
         if a.conns.has_owner() {
             return Err(vec![ext::OWNERSHIP_CONFLICT]);
         }

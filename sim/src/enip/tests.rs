@@ -752,8 +752,9 @@ fn forward_open_accepts_the_products_assemblies(
     assert_eq!(word(&b.get(class, 0, number)), active);
     assert_eq!(word(&b.get(class, 1, number)), i16::try_from(t_o).unwrap());
     // The whole exchange of the O→T size: a frame of that size is accepted.
-    let header = eip::o_t_run_idle(product, o_t, 0).then_some(1);
-    let data_len = usize::from(o_t_size) - 2 - if header.is_some() { 4 } else { 0 };
+    let run_idle = eip::o_t_run_idle(product, o_t, 0);
+    let header = run_idle.then_some(1);
+    let data_len = usize::from(eip::connection_data(o_t_size, run_idle).unwrap());
     assert_eq!(
         b.io(&io(reply.o_t_id, 1, header, vec![0; data_len])),
         Ok(())
