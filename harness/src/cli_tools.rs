@@ -7,7 +7,7 @@ use clap::{Args, Subcommand};
 use proto::nord::pkw::PkwRepr;
 use proto::nord::{addr, control::ControlWord, status::StatusWord};
 use proto::nord::{ArrayElement, Inverter, ParamAddress, ParamNumber, ParamSet, Product};
-use serde_json::json;
+use serde_json::{json, Value};
 
 use crate::cli::EXIT_PASS;
 use crate::notation::int_of;
@@ -39,7 +39,8 @@ pub(crate) struct AddrArgs {
 pub(crate) struct DecodeArgs {
     #[command(subcommand)]
     what: DecodeWhat,
-    /// Print JSON.
+    /// Print JSON: every reading as a typed field (PKW: `set`, `element`, `subindex` of IND,
+    /// `parameter`, `value`, `error` …), the sentence as `meaning`.
     #[arg(long, global = true)]
     json: bool,
 }
@@ -109,45 +110,7 @@ pub(crate) fn addr(a: AddrArgs) -> Result<i32, String> {
 
 /// Runs `harness decode`.
 pub(crate) fn decode(a: DecodeArgs) -> Result<i32, String> {
-    let (text, value) = match a.what {
-        DecodeWhat::Status { word: w } => {
-            let s = StatusWord(word(&w)?);
-            (
-                s.describe(),
-                serde_json::to_value(s.fields()).map_err(|e| e.to_string())?,
-            )
-        }
-        DecodeWhat::Control { word: w } => {
-            let c = ControlWord(word(&w)?);
-            (
-                c.describe(),
-                serde_json::to_value(c.fields()).map_err(|e| e.to_string())?,
-            )
-        }
-        DecodeWhat::Pkw { bytes, response } => {
-            let joined = bytes.join(" ");
-            let raw: Vec<u8> = joined
-                .split_whitespace()
-                .map(|t| {
-                    u8::from_str_radix(t.trim_end_matches(['h', 'H']), 16)
-                        .map_err(|_| format!("pkw: `{t}` is not a hex byte"))
-                })
-                .collect::<Result<_, _>>()?;
-            if raw.len() > proto::nord::pkw::PKW_LEN {
-                return Err(format!("pkw: a telegram is 8 bytes, got {}", raw.len()));
-            }
-            let r = PkwRepr::parse(&raw).map_err(|e| format!("pkw: {e}"))?;
-            let text = if response {
-                r.describe_response()
-            } else {
-                r.describe_order()
-            };
-            (
-                text.clone(),
-                json!({ "ak": r.ak, "spm": r.spm, "pnu": r.pnu, "ind": r.ind, "pwe": r.pwe, "meaning": text }),
-            )
-        }
-    };
+    let (text, value) = decoded(a.what)?;
     if a.json {
         println!(
             "{}",
@@ -157,4 +120,137 @@ pub(crate) fn decode(a: DecodeArgs) -> Result<i32, String> {
         println!("{text}");
     }
     Ok(EXIT_PASS)
+}
+
+/// The sentence, and the JSON: every reading as a typed field, with the sentence as `meaning`.
+fn decoded(what: DecodeWhat) -> Result<(String, Value), String> {
+    let (text, mut value) = match what {
+        DecodeWhat::Status { word: w } => {
+            let s = StatusWord(word(&w)?);
+            (s.describe(), to_json(s.fields())?)
+        }
+        DecodeWhat::Control { word: w } => {
+            let c = ControlWord(word(&w)?);
+            (c.describe(), to_json(c.fields())?)
+        }
+        DecodeWhat::Pkw { bytes, response } => {
+            let r = PkwRepr::parse(&pkw_bytes(&bytes)?).map_err(|e| format!("pkw: {e}"))?;
+            let fields = if response {
+                r.response_fields()
+            } else {
+                r.order_fields()
+            };
+            (fields.meaning.clone(), to_json(fields)?)
+        }
+    };
+    if let Value::Object(m) = &mut value {
+        m.insert("meaning".into(), Value::String(text.clone()));
+    }
+    Ok((text, value))
+}
+
+fn to_json(fields: impl serde::Serialize) -> Result<Value, String> {
+    serde_json::to_value(fields).map_err(|e| e.to_string())
+}
+
+/// The bytes of a PKW telegram given as hex tokens (`70`, `66h`), at most 8.
+fn pkw_bytes(tokens: &[String]) -> Result<Vec<u8>, String> {
+    let joined = tokens.join(" ");
+    let raw: Vec<u8> = joined
+        .split_whitespace()
+        .map(|t| {
+            u8::from_str_radix(t.trim_end_matches(['h', 'H']), 16)
+                .map_err(|_| format!("pkw: `{t}` is not a hex byte"))
+        })
+        .collect::<Result<_, _>>()?;
+    if raw.len() > proto::nord::pkw::PKW_LEN {
+        return Err(format!("pkw: a telegram is 8 bytes, got {}", raw.len()));
+    }
+    Ok(raw)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pkw(bytes: &str, response: bool) -> Value {
+        let what = DecodeWhat::Pkw {
+            bytes: bytes.split(' ').map(String::from).collect(),
+            response,
+        };
+        decoded(what).unwrap().1
+    }
+
+    #[test]
+    fn pkw_order_ind_0200h_as_set_element_and_subindex() {
+        // BU 0590 §4.2.4.4: `70 66 02 00 00 00 03 E8` writes 1000 to P102, IND 0200h.
+        let v = pkw("70 66 02 00 00 00 03 E8", false);
+        assert_eq!(v["set"], 3);
+        assert_eq!(v["element"], 1);
+        assert_eq!(v["subindex"], 2);
+        assert_eq!(v["ind"], 0x0200);
+        assert_eq!(v["ak"], 7);
+        assert_eq!(v["label"], "Change parameter value (array, word)");
+        assert_eq!(v["pnu"], 0x66);
+        assert_eq!(v["parameter"], 102);
+        assert_eq!(v["value"], 1000);
+        assert_eq!(v["pwe"], 1000);
+        assert_eq!(
+            (v["array"].clone(), v["dword"].clone()),
+            (json!(true), json!(false))
+        );
+        assert_eq!(v["ram_only"], false);
+        assert!(v["meaning"].as_str().unwrap().contains("PWE 1000"), "{v}");
+    }
+
+    #[test]
+    fn pkw_response_gives_the_value_or_the_error_number() {
+        // BU 0620 §2.5.6.4 p. 58: P717 read answered with 1020.
+        let v = pkw("16 B5 00 00 00 00 03 FC", true);
+        assert_eq!(
+            (v["parameter"].clone(), v["value"].clone()),
+            (json!(717), json!(1020))
+        );
+        assert_eq!(v["error"], Value::Null);
+        assert!(v.get("array").is_none(), "order-only fields: {v}");
+        // AK 7, error 3 "Incorrect sub-index".
+        let v = pkw("74 4E 00 00 00 00 00 03", true);
+        assert_eq!(v["error"], 3);
+        assert_eq!(v["error_meaning"], "Incorrect sub-index");
+        assert_eq!(v["value"], Value::Null);
+        assert_eq!(v["parameter"], 102);
+    }
+
+    #[test]
+    fn status_and_control_carry_their_fields_beside_the_sentence() {
+        let (text, v) = decoded(DecodeWhat::Status {
+            word: "0B31h".into(),
+        })
+        .unwrap();
+        assert_eq!(v["meaning"], text);
+        assert_eq!(v["word"], 0x0B31);
+        assert_eq!(v["state"], "Ready for switch-on");
+        assert_eq!(v["letter"], "C");
+        assert_eq!(v["parameter_set"], 1);
+        let (text, v) = decoded(DecodeWhat::Control {
+            word: "047Eh".into(),
+        })
+        .unwrap();
+        assert_eq!(v["meaning"], text);
+        assert_eq!(v["commands"][0], "Shut down");
+        assert_eq!(v["valid"], true);
+        assert_eq!(v["rotation"], "right");
+    }
+
+    #[test]
+    fn bad_pkw_bytes_name_the_problem() {
+        let bad = |t: &str| pkw_bytes(&[t.to_string()]).unwrap_err();
+        assert!(bad("70 zz").contains("`zz` is not a hex byte"));
+        assert!(bad("0 1 2 3 4 5 6 7 8").contains("8 bytes, got 9"));
+        let what = DecodeWhat::Pkw {
+            bytes: vec!["70".into()],
+            response: false,
+        };
+        assert!(decoded(what).unwrap_err().contains("truncated"));
+    }
 }

@@ -54,12 +54,8 @@ fn serve(
     if positive.is_empty() || !supported.contains(&ak) {
         return Err(ErrorNumber::INVALID_ORDER);
     }
-    let plain = if order.pnu >= 1000 {
-        order.pnu - 1000
-    } else {
-        order.pnu
-    };
-    let number = ParamNumber::new(i64::from(plain)).map_err(|_| ErrorNumber::INVALID_PNU)?;
+    let number =
+        ParamNumber::new(i64::from(order.parameter())).map_err(|_| ErrorNumber::INVALID_PNU)?;
     let def = store.def(number).ok_or(ErrorNumber::INVALID_PNU)?;
     let ind = Ind(order.ind);
     let set = if def.set_dependent {

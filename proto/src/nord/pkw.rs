@@ -14,6 +14,8 @@
 
 use std::fmt;
 
+use serde::Serialize;
+
 use super::product::{Family, Product};
 use super::types::{ArrayElement, ParamSet};
 
@@ -168,10 +170,17 @@ impl PkwRepr {
         ErrorNumber((self.pwe & 0xFFFF) as u16)
     }
 
+    /// The NORD parameter number PNU addresses: PNU − 1000 where it carries the offset
+    /// (BU 0620 §2.5.6.2: "The parameter number plus '1000'"), else PNU as it stands (BU 0590
+    /// §4.2.4.4: `70 66 …` for P102 in the cyclic PKW).
+    pub fn parameter(&self) -> u16 {
+        self.pnu.checked_sub(PNU_OFFSET).unwrap_or(self.pnu)
+    }
+
     fn common(&self, label: &str) -> String {
         let mut s = format!("AK {} {label}, PNU {}", self.ak, self.pnu);
-        if self.pnu >= 1000 {
-            s += &format!(" = P{:03}", self.pnu - 1000);
+        if self.pnu >= PNU_OFFSET {
+            s += &format!(" = P{:03}", self.parameter());
         }
         s += &format!(", IND {:04X}h ({})", self.ind, Ind(self.ind).describe());
         s
@@ -199,6 +208,106 @@ impl PkwRepr {
         }
         s
     }
+
+    fn fields(&self, label: &'static str, meaning: String) -> PkwFields {
+        let ind = Ind(self.ind);
+        PkwFields {
+            ak: self.ak,
+            label,
+            spm: self.spm,
+            pnu: self.pnu,
+            parameter: self.parameter(),
+            ind: self.ind,
+            set: ind.set(),
+            element: ind.element(),
+            subindex: ind.subindex(),
+            pwe: self.pwe,
+            value: None,
+            array: None,
+            dword: None,
+            ram_only: None,
+            error: None,
+            error_meaning: None,
+            meaning,
+        }
+    }
+
+    /// The telegram read as an order, field by field, with [`PkwRepr::describe_order`]'s
+    /// sentence as `meaning`.
+    pub fn order_fields(&self) -> PkwFields {
+        let label = OrderLabel(self.ak);
+        PkwFields {
+            value: label.is_change().then(|| self.value()),
+            array: Some(label.is_array()),
+            dword: Some(label.is_dword()),
+            ram_only: Some(label.is_ram_only()),
+            ..self.fields(label.meaning(), self.describe_order())
+        }
+    }
+
+    /// The telegram read as a response, field by field, with
+    /// [`PkwRepr::describe_response`]'s sentence as `meaning`.
+    pub fn response_fields(&self) -> PkwFields {
+        let label = ResponseLabel(self.ak);
+        let refused = label == ResponseLabel::CANNOT_EXECUTE;
+        let error = refused.then(|| self.error_number());
+        PkwFields {
+            value: (!refused && label != ResponseLabel::NONE).then(|| self.value()),
+            error: error.map(|e| e.0),
+            error_meaning: error.map(ErrorNumber::meaning),
+            ..self.fields(label.meaning(), self.describe_response())
+        }
+    }
+}
+
+/// The offset PNU carries over the parameter number in data records and acyclic services
+/// (BU 0620 §2.5.6.2 "PKE").
+pub const PNU_OFFSET: u16 = 1000;
+
+/// A PKW telegram's readings as typed fields (`harness decode pkw --json`): every part of the
+/// sentence of [`PkwRepr::describe_order`] / [`PkwRepr::describe_response`] as a value of its
+/// own. IND is given in each of the readings §2.5.6.3 allows; which one counts depends on
+/// the parameter (set-dependent or not) and the label (array or not).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct PkwFields {
+    /// Order or response label, bits 12–15 of PKE.
+    pub ak: u8,
+    /// The label's name in the manual's table of order or response labels.
+    pub label: &'static str,
+    /// SPM, bit 11 of PKE.
+    pub spm: bool,
+    /// PNU as transmitted, bits 0–10 of PKE.
+    pub pnu: u16,
+    /// The parameter number it addresses ([`PkwRepr::parameter`]).
+    pub parameter: u16,
+    /// IND as transmitted.
+    pub ind: u16,
+    /// IND read as parameter set, bits 8–9 (1..4).
+    pub set: u8,
+    /// IND read as array element, bits 10–15 (1..64).
+    pub element: u8,
+    /// IND read as sub-index, bits 8–15 (0-based).
+    pub subindex: u8,
+    /// PWE as transmitted, PWE1:PWE2.
+    pub pwe: u32,
+    /// The value PWE carries, signed, where the label carries one (change orders, positive
+    /// responses).
+    pub value: Option<i32>,
+    /// Order only: the label addresses an array element.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub array: Option<bool>,
+    /// Order only: the label transfers a double word.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dword: Option<bool>,
+    /// Order only: the label writes RAM only (11–14), not the EEPROM.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ram_only: Option<bool>,
+    /// Response AK 7 only: the error number in PWE2.
+    pub error: Option<u16>,
+    /// Response AK 7 only: the manual's meaning of the error number.
+    pub error_meaning: Option<&'static str>,
+    /// The whole reading as one sentence.
+    pub meaning: String,
 }
 
 /// Order label AK, master → inverter (§2.5.6.3 "Meaning of order labels").
@@ -618,6 +727,53 @@ mod tests {
         assert_eq!(supported_orders(Product::Sk550p, true).len(), 12);
         assert!(!supported_orders(Product::Sk550p, false).contains(&OrderLabel::CHANGE_WORD_RAM));
         assert!(!supported_orders(Product::Tu3Pnt, true).contains(&OrderLabel::REQUEST_ARRAY_LEN));
+    }
+
+    #[test]
+    fn order_fields_give_every_reading() {
+        // BU 0590 §4.2.4.4: `70 66 02 00 00 00 03 E8`, AK 7 (array, word), P102, IND 0200h,
+        // PWE 1000.
+        let r = PkwRepr::parse(&[0x70, 0x66, 0x02, 0x00, 0x00, 0x00, 0x03, 0xE8]).unwrap();
+        let f = r.order_fields();
+        assert_eq!((f.ak, f.pnu, f.parameter, f.ind), (7, 0x66, 102, 0x0200));
+        // IND 0200h: set 3 (bits 8–9 = 10b), element 1 (bits 10–15 = 0), sub-index 2.
+        assert_eq!((f.set, f.element, f.subindex), (3, 1, 2));
+        assert_eq!(f.label, "Change parameter value (array, word)");
+        assert_eq!(f.value, Some(1000));
+        assert_eq!(
+            (f.array, f.dword, f.ram_only),
+            (Some(true), Some(false), Some(false))
+        );
+        assert_eq!((f.error, f.error_meaning), (None, None));
+        assert_eq!(f.meaning, r.describe_order());
+        // A read order carries no value.
+        let read = PkwRepr::parse(&[0x16, 0xB5, 0, 0, 0, 0, 0, 0]).unwrap();
+        let f = read.order_fields();
+        assert_eq!((f.pnu, f.parameter, f.value), (1717, 717, None));
+    }
+
+    #[test]
+    fn response_fields_give_the_value_or_the_error() {
+        // §2.5.6.4 p. 58: "16h,B5h, 00h,00h, 00h,00h, 03h,FCh": AK 1, P717 = 1020.
+        let ok = PkwRepr::parse(&[0x16, 0xB5, 0, 0, 0, 0, 0x03, 0xFC]).unwrap();
+        let f = ok.response_fields();
+        assert_eq!(
+            (f.ak, f.parameter, f.value, f.error),
+            (1, 717, Some(1020), None)
+        );
+        assert_eq!(f.label, "Transfer parameter value (word)");
+        assert_eq!(f.array, None);
+        let refused = PkwRepr {
+            ak: 7,
+            pnu: 1102,
+            pwe: 2,
+            ..Default::default()
+        };
+        let f = refused.response_fields();
+        assert_eq!((f.value, f.error), (None, Some(2)));
+        assert_eq!(f.error_meaning, Some("Lower or upper value limit exceeded"));
+        assert_eq!(f.meaning, refused.describe_response());
+        assert_eq!(f.parameter, 102);
     }
 
     #[test]
