@@ -97,27 +97,24 @@ pub(crate) fn addr(a: AddrArgs) -> Result<i32, String> {
             .transpose()?,
     };
     let all = addr::all(product, address).map_err(|e| e.to_string())?;
-    if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&all).map_err(|e| e.to_string())?
-        );
-    } else {
-        print!("{all}");
-    }
-    Ok(EXIT_PASS)
+    print_out(a.json, &all, &all.to_string())
 }
 
 /// Runs `harness decode`.
 pub(crate) fn decode(a: DecodeArgs) -> Result<i32, String> {
     let (text, value) = decoded(a.what)?;
-    if a.json {
+    print_out(a.json, &value, &format!("{text}\n"))
+}
+
+/// Prints `value` as JSON with `--json`, else `text` (its own line ends included).
+fn print_out(json: bool, value: &impl serde::Serialize, text: &str) -> Result<i32, String> {
+    if json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?
+            serde_json::to_string_pretty(value).map_err(|e| e.to_string())?
         );
     } else {
-        println!("{text}");
+        print!("{text}");
     }
     Ok(EXIT_PASS)
 }

@@ -56,7 +56,8 @@ impl ParamReader {
         number: ParamNumber,
         timeout: Duration,
     ) -> Result<ParamReader, String> {
-        let scanner = Scanner::network(target, None, Some(product), timeout)?;
+        let scanner =
+            Scanner::network(target, None, Some(product), timeout).map_err(|e| e.to_string())?;
         Ok(ParamReader {
             scanner,
             read: Action::Read(OrderSpec {

@@ -522,7 +522,7 @@ impl Scanner {
 
 #[cfg(test)]
 mod tests {
-    use super::super::link::{Embedded, EnipLink};
+    use super::super::link::{Embedded, EnipLink, LinkError};
     use super::super::scanner::{EMBEDDED_ADDR, ORIGINATOR_SERIAL, VENDOR};
     use super::*;
     use proto::enip::cm::{NetParams, Transport};
@@ -708,7 +708,7 @@ mod tests {
             "the embedded adapter, losing replies".into()
         }
 
-        fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, String> {
+        fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, LinkError> {
             let reply = match self.hung.get() {
                 true => Ok(None),
                 false => self.inner.request(client, msg),
@@ -716,7 +716,7 @@ mod tests {
             let service = routed(msg).and_then(|r| r.first().copied());
             let lost = service.is_some_and(|s| self.lose.borrow().contains(&s));
             let reply = reply.map(|r| r.filter(|_| !lost));
-            let logged = reply.clone().unwrap_or_default();
+            let logged = reply.as_ref().ok().cloned().flatten();
             self.log.borrow_mut().push((msg.to_vec(), logged));
             reply
         }
@@ -725,7 +725,7 @@ mod tests {
             &mut self,
             datagram: Option<&[u8]>,
             rpi: Duration,
-        ) -> Result<Vec<Vec<u8>>, String> {
+        ) -> Result<Vec<Vec<u8>>, LinkError> {
             match self.hung.get() {
                 true => Ok(Vec::new()),
                 false => self.inner.io_cycle(datagram, rpi),

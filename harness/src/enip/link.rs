@@ -13,8 +13,66 @@ use proto::enip::io::IO_PORT;
 use sim::clock::{Clock, RealClock, VirtualClock};
 use sim::enip::{Adapter, Framer};
 
+use crate::binding::StepError;
 use crate::pcap::SharedTap;
 use crate::poll::{PollingStream, REPLY_POLL};
+
+/// Why a link to an EtherNet/IP target failed: the link or the host, never the protocol (a
+/// reply that breaks the protocol is the scanner's to judge). Every variant is an error
+/// verdict for the step that met it.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum LinkError {
+    /// The target closed the TCP connection, now or before: a connection it closed stays
+    /// closed.
+    #[error("the target closed the TCP connection{}", pending_text(.pending))]
+    Closed {
+        /// Bytes of an unfinished reply that had arrived when it closed.
+        pending: Option<usize>,
+    },
+    /// The request's time ran out within a reply: its header announced more than arrived.
+    #[error("incomplete reply: the header announces {announced} bytes, {arrived} arrived")]
+    Incomplete {
+        /// The reply's length by its encapsulation header.
+        announced: usize,
+        /// Bytes that arrived.
+        arrived: usize,
+    },
+    /// A socket operation failed (connect, send, receive, bind).
+    #[error("{what}: {source}")]
+    Io {
+        /// The operation, in words ("TCP send failed", "cannot connect to 10.0.0.2:44818").
+        what: String,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The link cannot be recorded as asked (`--pcap`).
+    #[error("{0}")]
+    Record(String),
+}
+
+fn pending_text(pending: &Option<usize>) -> String {
+    pending.map_or(String::new(), |n| {
+        format!(" ({n} bytes of a reply pending)")
+    })
+}
+
+/// A link error is an error verdict for the step ([`StepError::Link`]).
+impl From<LinkError> for StepError {
+    fn from(e: LinkError) -> StepError {
+        StepError::Link(e.to_string())
+    }
+}
+
+impl LinkError {
+    /// A closed connection, no reply pending.
+    const CLOSED: LinkError = LinkError::Closed { pending: None };
+
+    /// Wraps an I/O error of the operation `what`.
+    fn io(what: impl Into<String>) -> impl FnOnce(std::io::Error) -> LinkError {
+        let what = what.into();
+        move |source| LinkError::Io { what, source }
+    }
+}
 
 /// A way to an EtherNet/IP target.
 pub(crate) trait EnipLink {
@@ -23,12 +81,16 @@ pub(crate) trait EnipLink {
     /// Sends one encapsulation message on the TCP connection of `client` (1 = the scanner's
     /// own; others are opened on first use); returns the reply, or `None` if none came in
     /// time. A connection the target closed stays closed: every later request is an error.
-    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, String>;
+    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, LinkError>;
     /// Sends one O→T datagram (if any), lets `rpi` pass, and returns the T→O datagrams that
     /// arrived meanwhile.
-    fn io_cycle(&mut self, datagram: Option<&[u8]>, rpi: Duration) -> Result<Vec<Vec<u8>>, String>;
+    fn io_cycle(
+        &mut self,
+        datagram: Option<&[u8]>,
+        rpi: Duration,
+    ) -> Result<Vec<Vec<u8>>, LinkError>;
     /// Gets ready to receive T→O data (before a Forward_Open), so none arrives at a closed port.
-    fn prepare_io(&mut self) -> Result<(), String> {
+    fn prepare_io(&mut self) -> Result<(), LinkError> {
         Ok(())
     }
     /// The embedded adapter, for fault injection and observation.
@@ -36,12 +98,12 @@ pub(crate) trait EnipLink {
     /// Records the link's traffic into `tap` from now on, stamped with `clock` (the run's real
     /// time): a network link, with the addresses its sockets really use. The embedded link
     /// takes its tap when made and records on its virtual clock, so it refuses.
-    fn record(&mut self, tap: SharedTap, clock: Rc<RealClock>) -> Result<(), String> {
+    fn record(&mut self, tap: SharedTap, clock: Rc<RealClock>) -> Result<(), LinkError> {
         let _ = (tap, clock);
-        Err(format!(
+        Err(LinkError::Record(format!(
             "{} records from its creation only",
             self.describe()
-        ))
+        )))
     }
 }
 
@@ -220,7 +282,7 @@ impl EnipLink for Embedded {
         )
     }
 
-    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, String> {
+    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, LinkError> {
         let now = self.clock.now();
         if let Some(r) = &self.recorder {
             let server = self.server;
@@ -234,7 +296,7 @@ impl EnipLink for Embedded {
             .entry(client)
             .or_insert_with(|| Some(Framer::new()));
         let Some(framer) = slot else {
-            return Err("the target closed the TCP connection".into());
+            return Err(LinkError::CLOSED);
         };
         // The served adapter drops a client whose message exceeds the framer's limit.
         let (messages, mut close) = match framer.push(msg) {
@@ -267,13 +329,17 @@ impl EnipLink for Embedded {
             *slot = None;
             self.adapter.client_closed(id);
             if reply.is_none() {
-                return Err("the target closed the TCP connection".into());
+                return Err(LinkError::CLOSED);
             }
         }
         Ok(reply)
     }
 
-    fn io_cycle(&mut self, datagram: Option<&[u8]>, rpi: Duration) -> Result<Vec<Vec<u8>>, String> {
+    fn io_cycle(
+        &mut self,
+        datagram: Option<&[u8]>,
+        rpi: Duration,
+    ) -> Result<Vec<Vec<u8>>, LinkError> {
         if let Some(d) = datagram {
             if let Some(r) = &self.recorder {
                 let (from, to) = self.io_addrs(true);
@@ -334,11 +400,13 @@ impl Stream {
         local: Option<IpAddr>,
         timeout: Duration,
         recorder: Option<&Recorder>,
-    ) -> Result<Stream, String> {
+    ) -> Result<Stream, LinkError> {
         let tcp = connect_from(target, local, timeout)
-            .map_err(|e| format!("cannot connect to {target}: {e}"))?;
-        tcp.set_nodelay(true).map_err(|e| e.to_string())?;
-        let tcp = PollingStream::new(tcp, REPLY_POLL).map_err(|e| e.to_string())?;
+            .map_err(LinkError::io(format!("cannot connect to {target}")))?;
+        tcp.set_nodelay(true)
+            .map_err(LinkError::io(format!("TCP_NODELAY to {target}")))?;
+        let tcp = PollingStream::new(tcp, REPLY_POLL)
+            .map_err(LinkError::io(format!("TCP to {target}")))?;
         let mut stream = Stream {
             tcp: Some(tcp),
             buf: Vec::new(),
@@ -351,27 +419,32 @@ impl Stream {
     }
 
     /// Records the connection from now on: its handshake first.
-    fn record(&mut self, recorder: &Recorder) -> Result<(), String> {
+    fn record(&mut self, recorder: &Recorder) -> Result<(), LinkError> {
         let Some(tcp) = &self.tcp else {
             return Ok(());
         };
-        let local = tcp.get().local_addr().map_err(|e| e.to_string())?;
-        let peer = tcp.get().peer_addr().map_err(|e| e.to_string())?;
+        let local = tcp
+            .get()
+            .local_addr()
+            .map_err(LinkError::io("the TCP connection's local address"))?;
+        let peer = tcp
+            .get()
+            .peer_addr()
+            .map_err(LinkError::io("the TCP connection's peer address"))?;
         let (SocketAddr::V4(client), SocketAddr::V4(server)) = (local, peer) else {
-            return Err(format!("{local} → {peer}: a pcap records IPv4 only"));
+            return Err(LinkError::Record(format!(
+                "{local} → {peer}: a pcap records IPv4 only"
+            )));
         };
         self.recorded = Some(recorder.connect(client, server));
         Ok(())
     }
 
     /// Sends `msg`, waits up to `timeout` for one whole reply.
-    fn request(&mut self, msg: &[u8], timeout: Duration) -> Result<Option<Vec<u8>>, String> {
-        let tcp = self
-            .tcp
-            .as_mut()
-            .ok_or("the target closed the TCP connection")?;
+    fn request(&mut self, msg: &[u8], timeout: Duration) -> Result<Option<Vec<u8>>, LinkError> {
+        let tcp = self.tcp.as_mut().ok_or(LinkError::CLOSED)?;
         tcp.write_all(msg, timeout)
-            .map_err(|e| format!("TCP send failed: {e}"))?;
+            .map_err(LinkError::io("TCP send failed"))?;
         if let Some(c) = &self.recorded {
             c.tcp(true, msg);
         }
@@ -393,10 +466,9 @@ impl Stream {
                     if let Some(c) = &mut self.recorded {
                         c.close(true);
                     }
-                    return Err(format!(
-                        "the target closed the TCP connection ({} bytes of a reply pending)",
-                        self.buf.len()
-                    ));
+                    return Err(LinkError::Closed {
+                        pending: Some(self.buf.len()),
+                    });
                 }
                 Ok(n) => {
                     // As it arrived: a reply that came in pieces stays in pieces.
@@ -407,11 +479,10 @@ impl Stream {
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {
                     if self.buf.len() >= HEADER_LEN {
-                        return Err(format!(
-                            "incomplete reply: the header announces {} bytes, {} arrived",
-                            frame_len(&self.buf).unwrap_or(0),
-                            self.buf.len()
-                        ));
+                        return Err(LinkError::Incomplete {
+                            announced: frame_len(&self.buf).unwrap_or(0),
+                            arrived: self.buf.len(),
+                        });
                     }
                     return Ok(None);
                 }
@@ -419,7 +490,7 @@ impl Stream {
                     // A reset, most likely: the capture has no way to show it and stops here.
                     self.tcp = None;
                     self.recorded = None;
-                    return Err(format!("TCP receive failed: {e}"));
+                    return Err(LinkError::io("TCP receive failed")(e));
                 }
             }
         }
@@ -461,13 +532,15 @@ impl Network {
         target: SocketAddr,
         local: Option<IpAddr>,
         timeout: Duration,
-    ) -> Result<Network, String> {
+    ) -> Result<Network, LinkError> {
         let tcp = Stream::connect(target, local, timeout, None)?;
-        let local = tcp
-            .tcp
-            .as_ref()
-            .and_then(|t| t.get().local_addr().ok())
-            .ok_or("no local address for the TCP connection")?;
+        let local = match &tcp.tcp {
+            Some(t) => t
+                .get()
+                .local_addr()
+                .map_err(LinkError::io("the TCP connection's local address"))?,
+            None => return Err(LinkError::CLOSED),
+        };
         Ok(Network {
             target,
             tcp,
@@ -481,17 +554,17 @@ impl Network {
 }
 
 /// UDP 2222 on `local`, where the target sends T→O data; bound on first use.
-fn io_socket(slot: &mut Option<UdpSocket>, local: IpAddr) -> Result<&UdpSocket, String> {
-    if slot.is_none() {
-        let at = SocketAddr::new(local, IO_PORT);
-        let udp =
-            UdpSocket::bind(at).map_err(|e| format!("cannot bind UDP {at} for T→O data: {e}"))?;
-        // Read without blocking: `io_cycle` keeps its own time.
-        udp.set_nonblocking(true)
-            .map_err(|e| format!("UDP {at}: {e}"))?;
-        *slot = Some(udp);
+fn io_socket(slot: &mut Option<UdpSocket>, local: IpAddr) -> Result<&UdpSocket, LinkError> {
+    if let Some(udp) = slot {
+        return Ok(udp);
     }
-    slot.as_ref().ok_or_else(|| "no UDP socket".into())
+    let at = SocketAddr::new(local, IO_PORT);
+    let udp =
+        UdpSocket::bind(at).map_err(LinkError::io(format!("cannot bind UDP {at} for T→O data")))?;
+    // Read without blocking: `io_cycle` keeps its own time.
+    udp.set_nonblocking(true)
+        .map_err(LinkError::io(format!("UDP {at}")))?;
+    Ok(slot.insert(udp))
 }
 
 impl EnipLink for Network {
@@ -499,7 +572,7 @@ impl EnipLink for Network {
         format!("EtherNet/IP target at {}", self.target)
     }
 
-    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, String> {
+    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, LinkError> {
         let stream = if client == 1 {
             &mut self.tcp
         } else {
@@ -516,7 +589,11 @@ impl EnipLink for Network {
         stream.request(msg, self.timeout)
     }
 
-    fn io_cycle(&mut self, datagram: Option<&[u8]>, rpi: Duration) -> Result<Vec<Vec<u8>>, String> {
+    fn io_cycle(
+        &mut self,
+        datagram: Option<&[u8]>,
+        rpi: Duration,
+    ) -> Result<Vec<Vec<u8>>, LinkError> {
         let target = self.target.ip();
         let udp = io_socket(&mut self.udp, self.local)?;
         // The socket's own address (it is bound there), if IPv4: the only kind recorded.
@@ -527,7 +604,7 @@ impl EnipLink for Network {
         if let Some(d) = datagram {
             let to = SocketAddr::new(target, IO_PORT);
             udp.send_to(d, to)
-                .map_err(|e| format!("UDP send failed: {e}"))?;
+                .map_err(LinkError::io("UDP send failed"))?;
             if let (Some(r), Some(from), SocketAddr::V4(to)) = (&self.recorder, local, to) {
                 r.udp(from, to, d);
             }
@@ -548,7 +625,7 @@ impl EnipLink for Network {
                     }
                     Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => break,
                     Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                    Err(e) => return Err(format!("UDP receive failed: {e}")),
+                    Err(e) => return Err(LinkError::io("UDP receive failed")(e)),
                 }
             }
             let left = deadline.saturating_duration_since(Instant::now());
@@ -561,7 +638,7 @@ impl EnipLink for Network {
         }
     }
 
-    fn prepare_io(&mut self) -> Result<(), String> {
+    fn prepare_io(&mut self) -> Result<(), LinkError> {
         io_socket(&mut self.udp, self.local).map(|_| ())
     }
 
@@ -569,9 +646,9 @@ impl EnipLink for Network {
         None
     }
 
-    fn record(&mut self, tap: SharedTap, clock: Rc<RealClock>) -> Result<(), String> {
+    fn record(&mut self, tap: SharedTap, clock: Rc<RealClock>) -> Result<(), LinkError> {
         if self.recorder.is_some() {
-            return Err("the link is recorded already".into());
+            return Err(LinkError::Record("the link is recorded already".into()));
         }
         let recorder = Recorder::network(tap, clock);
         self.tcp.record(&recorder)?;
@@ -613,6 +690,9 @@ mod tests {
         let e = Network::connect(target, Some(foreign), Duration::from_secs(1))
             .err()
             .unwrap();
-        assert!(e.starts_with("cannot connect to 127.0.0.14"), "{e}");
+        assert!(
+            matches!(&e, LinkError::Io { what, .. } if what.starts_with("cannot connect to 127.0.0.14")),
+            "{e}"
+        );
     }
 }

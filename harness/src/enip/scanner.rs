@@ -27,7 +27,7 @@ use sim::device::Device;
 use sim::enip::Adapter;
 
 use super::cleanup;
-use super::link::{self, EnipLink, Network};
+use super::link::{self, EnipLink, LinkError, Network};
 use super::step::EnipStep;
 use crate::binding::channel::compact;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
@@ -109,7 +109,7 @@ impl Scanner {
         local: Option<std::net::IpAddr>,
         product: Option<Product>,
         timeout: Duration,
-    ) -> Result<Scanner, String> {
+    ) -> Result<Scanner, LinkError> {
         let link = Network::connect(target, local, timeout)?;
         // NORD's parameter classes and assemblies only on a NORD product.
         let caps = match product {
@@ -180,7 +180,7 @@ impl Scanner {
             Err(e) => (
                 String::new(),
                 format!("link error: {e}"),
-                Err(StepError::Link(e)),
+                Err(StepError::from(e)),
             ),
             Ok(None) => (String::new(), "(nothing)".into(), Ok(None)),
             Ok(Some(b)) => match EncapRepr::parse(&b) {
@@ -420,7 +420,7 @@ impl Scanner {
         &mut self,
         s: &ForwardOpenSpec,
     ) -> Result<(MrResponse, Option<ForwardOpenReply>), StepError> {
-        self.link.prepare_io().map_err(StepError::Link)?;
+        self.link.prepare_io().map_err(StepError::from)?;
         self.serial = SERIAL
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
             .max(1);
@@ -520,7 +520,7 @@ impl Scanner {
         let received = self
             .link
             .io_cycle(Some(&bytes), RPI)
-            .map_err(StepError::Link)?;
+            .map_err(StepError::from)?;
         let mine: Vec<IoFrame> = received
             .iter()
             .filter_map(|d| IoFrame::parse(d, false).ok())
@@ -670,7 +670,7 @@ impl Scanner {
                     frames += self
                         .link
                         .io_cycle(None, RPI)
-                        .map_err(StepError::Link)?
+                        .map_err(StepError::from)?
                         .len();
                 }
                 self.io = None;
@@ -705,12 +705,12 @@ impl crate::runner::DutFactory for NetworkFactory {
         _retries: u32,
     ) -> Result<Box<dyn Binding>, OpenError> {
         let mut scanner = Scanner::network(self.target, self.local, profile.product, self.timeout)
-            .map_err(OpenError::Unreachable)?;
+            .map_err(|e| OpenError::Unreachable(e.to_string()))?;
         if let Some(tap) = &self.tap {
             scanner
                 .link
                 .record(tap.clone(), self.clock.clone())
-                .map_err(OpenError::Unreachable)?;
+                .map_err(|e| OpenError::Unreachable(e.to_string()))?;
         }
         Ok(Box::new(scanner))
     }
