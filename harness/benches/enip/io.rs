@@ -34,14 +34,9 @@ pub(super) fn io_jitter(s: &Settings) -> Result<Jitter, String> {
         .ok_or("no output assembly")?;
     let inp = eip::assembly(PRODUCT, out.instance + 1).ok_or("no input assembly")?;
     let run_idle = eip::o_t_run_idle(PRODUCT, out.instance, 0);
+    let (o_t_size, t_o_size) = eip::connection_sizes(PRODUCT, out.instance, inp.instance, 0);
     let rpi_us = u32::try_from(s.rpi.as_micros()).map_err(|e| e.to_string())?;
-    let conn = client.forward_open(
-        out.instance,
-        inp.instance,
-        2 + if run_idle { 4 } else { 0 } + out.len,
-        2 + inp.len,
-        rpi_us,
-    )?;
+    let conn = client.forward_open(out.instance, inp.instance, o_t_size, t_o_size, rpi_us)?;
 
     let stop = Arc::new(AtomicBool::new(false));
     let sender = {
