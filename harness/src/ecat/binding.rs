@@ -890,16 +890,10 @@ mod tests {
     }
 
     fn read_p102() -> Action {
-        Action::Read(OrderSpec {
-            target: Target::Inverter(Inverter::new(3).unwrap()),
-            number: ParamNumber::new(102).unwrap(),
-            set: None,
-            element: None,
-            ak: None,
-            value: None,
-            eeprom: true,
-            dword: None,
-        })
+        Action::Read(OrderSpec::read(
+            Target::Inverter(Inverter::new(3).unwrap()),
+            ParamNumber::new(102).unwrap(),
+        ))
     }
 
     #[test]

@@ -60,16 +60,7 @@ impl ParamReader {
             Scanner::network(target, None, Some(product), timeout).map_err(|e| e.to_string())?;
         Ok(ParamReader {
             scanner,
-            read: Action::Read(OrderSpec {
-                target: Target::Inverter(inverter),
-                number,
-                set: None,
-                element: None,
-                ak: None,
-                value: None,
-                eeprom: true,
-                dword: None,
-            }),
+            read: Action::Read(OrderSpec::read(Target::Inverter(inverter), number)),
             name: format!("P{}", number.get()),
         })
     }

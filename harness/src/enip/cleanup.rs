@@ -452,15 +452,10 @@ impl Scanner {
             Family::Integrated => (872, None),
             Family::Module => (173, ArrayElement::new(1).ok()),
         };
+        let number = ParamNumber::new(number).map_err(|e| Problem::other(e.to_string()))?;
         let spec = OrderSpec {
-            target: Target::Interface,
-            number: ParamNumber::new(number).map_err(|e| Problem::other(e.to_string()))?,
-            set: None,
             element,
-            ak: None,
-            value: None,
-            eeprom: true,
-            dword: None,
+            ..OrderSpec::read(Target::Interface, number)
         };
         let first = self.exchanges.len();
         let deadline = Instant::now() + QUIET_TIME;
@@ -788,15 +783,10 @@ mod tests {
     }
 
     fn p102(value: Option<i64>) -> OrderSpec {
+        let fi1 = Target::Inverter(Inverter::new(1).unwrap());
         OrderSpec {
-            target: Target::Inverter(Inverter::new(1).unwrap()),
-            number: ParamNumber::new(102).unwrap(),
-            set: None,
-            element: None,
-            ak: None,
             value,
-            eeprom: true,
-            dword: None,
+            ..OrderSpec::read(fi1, ParamNumber::new(102).unwrap())
         }
     }
 

@@ -379,16 +379,7 @@ impl Scanner {
         let inp = eip::assembly(product, out.instance + 1)
             .ok_or_else(|| StepError::Suite("no input assembly beside the output".into()))?;
         let p166 = if let Some(number) = eip::transmission_format(product) {
-            let o = OrderSpec {
-                target: Target::Interface,
-                number,
-                set: None,
-                element: None,
-                ak: None,
-                value: None,
-                eeprom: true,
-                dword: None,
-            };
+            let o = OrderSpec::read(Target::Interface, number);
             self.read(&o)?
                 .fields
                 .get("value")

@@ -80,6 +80,21 @@ pub(crate) struct OrderSpec {
 }
 
 impl OrderSpec {
+    /// A plain read of `number` at `target`: no set, no element, the default labels (what a
+    /// binding reads for itself, e.g. before a write or in a cleanup).
+    pub(crate) fn read(target: Target, number: ParamNumber) -> OrderSpec {
+        OrderSpec {
+            target,
+            number,
+            set: None,
+            element: None,
+            ak: None,
+            value: None,
+            eeprom: true,
+            dword: None,
+        }
+    }
+
     /// `P102 set 3 [-02] FI 5`, or `P850 interface`.
     pub(crate) fn describe(&self) -> String {
         let mut s = self.number.to_string();
