@@ -200,7 +200,9 @@ pub(crate) struct NetSegment {
 impl NetSegment {
     /// Opens interface `iface` for EtherCAT frames (needs root or `CAP_NET_RAW`).
     pub(crate) fn open(iface: &str) -> Result<NetSegment, SegmentError> {
-        Ok(NetSegment::over(RawLink::open(iface, Some(ETHERTYPE))?))
+        let mut link = RawLink::open(iface, Some(ETHERTYPE))?;
+        link.set_spin(REPLY_POLL);
+        Ok(NetSegment::over(link))
     }
 
     /// A segment over a link already open (it should filter EtherType 88A4h).
@@ -250,6 +252,11 @@ impl Segment for NetSegment {
         }
     }
 }
+
+/// How long [`NetSegment::open`]'s link polls for a returning frame before it sleeps: a slave
+/// segment returns a frame within tens of microseconds, so the reply is seen without a thread
+/// wake-up (see `crate::poll`), at the cost of the processor while it polls.
+const REPLY_POLL: Duration = crate::poll::REPLY_POLL;
 
 /// How long before a deadline [`NetSegment::wait_until`] stops sleeping and watches the clock.
 const SPIN: Duration = Duration::from_micros(300);
