@@ -107,8 +107,12 @@ pub struct Cycles {
     pub unstamped: u64,
     /// Cycles whose working counter was not the expected one (3: outputs and inputs).
     pub wkc_errors: u64,
-    /// The latest a cycle's frame was sent after it was due (the master's own lateness).
-    pub max_late: Duration,
+    /// How late each cycle's frame was sent after it was due (the master's wake-up), in
+    /// cycle order.
+    pub late: Vec<Duration>,
+    /// Send to return of each cycle whose frame came back, on the master's clock (the wire
+    /// and the slave), in cycle order.
+    pub round_trips: Vec<Duration>,
 }
 
 /// The process data cycle of the harness master on `iface` in Operational for `duration`: one
@@ -128,12 +132,14 @@ pub fn pdo_cycles(iface: &str, cycle: Duration, duration: Duration) -> Result<Cy
         lost: 0,
         unstamped: 0,
         wkc_errors: 0,
-        max_late: Duration::ZERO,
+        late: Vec::with_capacity(n as usize),
+        round_trips: Vec::with_capacity(n as usize),
     };
     let mut due = m.now() + cycle;
     for i in 0..n {
         m.idle_until(due);
-        out.max_late = out.max_late.max(m.now().saturating_sub(due));
+        let sent = m.now();
+        out.late.push(sent.saturating_sub(due));
         let stamp_before = m.last_receive_stamp();
         let lost_before = m.cyclic_stats().lost;
         // A working counter error still brought the frame back: counted below.
@@ -147,6 +153,7 @@ pub fn pdo_cycles(iface: &str, cycle: Duration, duration: Duration) -> Result<Cy
                 return Err(format!("{} cycles lost, the last: {e}", out.lost));
             }
         } else {
+            out.round_trips.push(m.now().saturating_sub(sent));
             match m.last_receive_stamp() {
                 Some(t) if Some(t) != stamp_before => out.arrivals.push((i, t)),
                 _ => out.unstamped += 1,
