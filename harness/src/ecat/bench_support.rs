@@ -164,3 +164,20 @@ pub fn pdo_cycles(iface: &str, cycle: Duration, duration: Duration) -> Result<Cy
     out.wkc_errors = m.cyclic_stats().wkc_errors - before.wkc_errors;
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_unknown_interface_is_an_error_naming_it() {
+        let short = Duration::from_millis(10);
+        for e in [
+            round_trips("no-such-if0", 1, short).unwrap_err(),
+            sdo_uploads("no-such-if0", 0x1018, 1, 1, short).unwrap_err(),
+            pdo_cycles("no-such-if0", short, short).unwrap_err(),
+        ] {
+            assert!(e.contains("no-such-if0"), "{e}");
+        }
+    }
+}
