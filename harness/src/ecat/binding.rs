@@ -516,6 +516,16 @@ impl<S: DutSegment> EcatBinding<S> {
                 Ok(id) => json!({ "id": id }),
                 Err(e) => return refused_or(e),
             },
+            EcatStep::Emergencies => {
+                let list = m.collect_emergencies(st).map_err(|e| step_error(&e))?;
+                let each: Vec<Value> = list
+                    .iter()
+                    .map(
+                        |e| json!({ "code": e.code, "register": e.register, "data": hex(&e.data) }),
+                    )
+                    .collect();
+                json!({ "count": each.len(), "emergencies": each })
+            }
         };
         Ok(fields.into())
     }

@@ -95,6 +95,8 @@ pub(crate) enum EcatStep {
     /// Hot Connect explicit device identification: the ID request bit of AL control, the ID
     /// answered in the AL status code register (ETG.1020).
     Identify,
+    /// The CoE emergencies the slave sent since the case began (or since the last such step).
+    Emergencies,
 }
 
 /// AL states by the names suites write.
@@ -164,6 +166,7 @@ impl BusStep for EcatStep {
             EcatStep::Mailbox { bytes } => format!("mailbox {}", hex(bytes)),
             EcatStep::StopPdo { time } => format!("no process data for {time:?}"),
             EcatStep::Identify => "explicit device identification (AL control ID request)".into(),
+            EcatStep::Emergencies => "CoE emergencies received".into(),
         }
     }
 
@@ -274,10 +277,13 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
     } else if has("identify") {
         Fields::new("ecat", m, &["identify"])?;
         EcatStep::Identify
+    } else if has("emergencies") {
+        Fields::new("ecat", m, &["emergencies"])?;
+        EcatStep::Emergencies
     } else {
         return Err(
             "`ecat` needs one of `state`, `read`, `write`, `frame`, `datagram`, `sii`, \
-                    `upload`, `download`, `mailbox`, `stop_pdo`, `identify`"
+                    `upload`, `download`, `mailbox`, `stop_pdo`, `identify`, `emergencies`"
                 .into(),
         );
     };
@@ -343,6 +349,7 @@ mod tests {
             }
         );
         assert_eq!(step(json!({ "identify": true })), EcatStep::Identify);
+        assert_eq!(step(json!({ "emergencies": true })), EcatStep::Emergencies);
     }
 
     #[test]

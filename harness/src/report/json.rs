@@ -20,8 +20,8 @@ struct Case<'a> {
     message: &'a str,
     /// Seconds.
     duration: f64,
-    /// The transcript, relative to the output folder.
-    transcript: String,
+    /// The transcript, relative to the output folder (none for a case that did not apply).
+    transcript: Option<String>,
 }
 
 impl<'a> From<&'a CaseResult> for Case<'a> {
@@ -34,7 +34,7 @@ impl<'a> From<&'a CaseResult> for Case<'a> {
             manual: &c.manual,
             message: &c.message,
             duration: c.duration.as_secs_f64(),
-            transcript: transcript_file(c).to_string_lossy().replace('\\', "/"),
+            transcript: transcript_file(c).map(|f| f.to_string_lossy().replace('\\', "/")),
         }
     }
 }

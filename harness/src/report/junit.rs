@@ -90,7 +90,7 @@ fn testcase(c: &CaseResult, dut: &str) -> TestCase {
         c.profile,
         dut,
         c.title,
-        transcript_file(c).to_string_lossy().replace('\\', "/")
+        transcript_file(c).map_or("-".into(), |f| f.to_string_lossy().replace('\\', "/"))
     );
     TestCase {
         name: xml_safe(&c.id),

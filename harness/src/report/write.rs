@@ -7,7 +7,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use super::{json, junit, summary, transcript};
-use crate::outcome::{CaseResult, RunResult};
+use crate::outcome::{CaseResult, RunResult, Verdict};
 
 /// A report could not be written or read. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
@@ -100,9 +100,12 @@ pub(super) fn case_file(case: &CaseResult, ext: &str) -> PathBuf {
     Path::new(&component(&case.profile)).join(format!("{}.{ext}", component(&case.id)))
 }
 
-/// A case's transcript, relative to the output folder.
-pub(super) fn transcript_file(case: &CaseResult) -> PathBuf {
-    Path::new("transcripts").join(case_file(case, "txt"))
+/// A case's transcript, relative to the output folder; none for a case that did not apply
+/// (it exchanged nothing, and `run.json` and `junit.xml` give the reason): most cases do not
+/// apply to most profiles, and a file each made the reports the slowest part of a run.
+pub(super) fn transcript_file(case: &CaseResult) -> Option<PathBuf> {
+    (case.verdict != Verdict::NotApplicable)
+        .then(|| Path::new("transcripts").join(case_file(case, "txt")))
 }
 
 /// Writes `junit.xml`, `run.json`, `summary.md` and every case's transcript into `out`, after
@@ -118,7 +121,7 @@ pub(crate) fn write_all(run: &RunResult, out: &Path) -> Result<Written, ReportEr
         run_json: out.join("run.json"),
         summary: out.join("summary.md"),
         transcripts,
-        transcript_count: run.cases.len(),
+        transcript_count: run.cases.iter().filter_map(transcript_file).count(),
     };
     let xml = junit::render(run).map_err(|source| ReportError::Junit {
         path: written.junit.clone(),
@@ -132,10 +135,9 @@ pub(crate) fn write_all(run: &RunResult, out: &Path) -> Result<Written, ReportEr
     write_file(&written.run_json, doc.as_bytes())?;
     write_file(&written.summary, summary::markdown(run).as_bytes())?;
     for case in &run.cases {
-        write_file(
-            &out.join(transcript_file(case)),
-            transcript::render(case).as_bytes(),
-        )?;
+        if let Some(file) = transcript_file(case) {
+            write_file(&out.join(file), transcript::render(case).as_bytes())?;
+        }
     }
     Ok(written)
 }
@@ -156,14 +158,22 @@ mod tests {
         for f in [&w.junit, &w.run_json, &w.summary] {
             assert!(f.is_file(), "{}", f.display());
         }
-        assert_eq!(w.transcript_count, run.cases.len());
+        // One case did not apply: it has no transcript.
+        assert_eq!(w.transcript_count, run.cases.len() - 1);
+        let na = run
+            .cases
+            .iter()
+            .find(|c| c.verdict == Verdict::NotApplicable)
+            .unwrap();
+        assert_eq!(transcript_file(na), None);
+        assert!(!out.join("transcripts").join(case_file(na, "txt")).exists());
         let t = out.join("transcripts/sk550p/bu0620__pkw-telegrams__p102-write.txt");
         let text = std::fs::read_to_string(&t).unwrap();
         assert!(
             text.starts_with("case: bu0620/pkw-telegrams/p102-write\n"),
             "{text}"
         );
-        assert!(w.to_string().contains("5 transcripts"), "{w}");
+        assert!(w.to_string().contains("4 transcripts"), "{w}");
         let _ = std::fs::remove_dir_all(&out);
     }
 
@@ -184,7 +194,7 @@ mod tests {
         c.id = "../..\\x/y".into();
         assert_eq!(
             transcript_file(&c),
-            Path::new("transcripts/sk550p/..__..__x__y.txt")
+            Some(PathBuf::from("transcripts/sk550p/..__..__x__y.txt"))
         );
         c.profile = "..".into();
         assert_eq!(case_file(&c, "snap"), Path::new("_../..__..__x__y.snap"));

@@ -294,9 +294,26 @@ impl ParamDef {
 
 /// The parameter `number` of a unit of `product`.
 pub fn lookup(product: Product, owner: Owner, number: ParamNumber) -> Option<&'static ParamDef> {
-    CATALOGUE
+    by_number(number.get())
         .iter()
-        .find(|d| d.number == number.get() && d.owner == owner && d.applies_to(product))
+        .map(|&i| &CATALOGUE[i])
+        .find(|d| d.owner == owner && d.applies_to(product))
+}
+
+/// The catalogue's entries of parameter `number`, in catalogue order: an index built once, as
+/// the simulator looks parameters up on every bus cycle.
+fn by_number(number: u16) -> &'static [usize] {
+    static INDEX: std::sync::OnceLock<Vec<Vec<usize>>> = std::sync::OnceLock::new();
+    let index = INDEX.get_or_init(|| {
+        let mut index = vec![Vec::new(); 1000];
+        for (i, d) in CATALOGUE.iter().enumerate() {
+            if let Some(entries) = index.get_mut(usize::from(d.number)) {
+                entries.push(i);
+            }
+        }
+        index
+    });
+    index.get(usize::from(number)).map_or(&[], Vec::as_slice)
 }
 
 #[cfg(test)]
@@ -385,6 +402,21 @@ mod tests {
         assert!(lookup(Product::Cu4Pol, Owner::Interface, p(181)).is_some());
         assert!(lookup(Product::Tu3Pol, Owner::Interface, p(185)).is_some());
         assert!(lookup(Product::Tu3Pnt, Owner::Interface, p(185)).is_none());
+    }
+
+    #[test]
+    fn lookup_finds_every_entry_of_the_catalogue() {
+        for d in CATALOGUE {
+            let n = ParamNumber::new(i64::from(d.number)).unwrap();
+            for product in Product::ALL.into_iter().filter(|p| d.applies_to(*p)) {
+                let found = lookup(product, d.owner, n).unwrap();
+                // The first entry that applies, as a scan of the catalogue finds it.
+                let first = CATALOGUE
+                    .iter()
+                    .find(|e| e.number == d.number && e.owner == d.owner && e.applies_to(product));
+                assert_eq!(found, first.unwrap(), "P{}", d.number);
+            }
+        }
     }
 
     #[test]

@@ -12,7 +12,9 @@ use std::time::Duration;
 
 use super::error::{Awaited, LinkFailure, MasterError, Result};
 use super::pdo::Cyclic;
-use super::port::{Port, PortStats};
+use super::port::Port;
+#[cfg(test)]
+use super::port::PortStats;
 use super::segment::Segment;
 use super::wire;
 use crate::outcome::Exchange;
@@ -135,11 +137,6 @@ impl SlaveInfo {
         self.sii.header.product_code
     }
 
-    /// Revision number (SII word 0Ch).
-    pub(crate) fn revision(&self) -> u32 {
-        self.sii.header.revision
-    }
-
     /// The device name: the general category's name string.
     pub(crate) fn name(&self) -> Option<&str> {
         self.sii.general().and_then(|g| self.sii.string(g.name))
@@ -191,6 +188,7 @@ impl<S: Segment> Master<S> {
     }
 
     /// The segment.
+    #[cfg(test)]
     pub(crate) fn segment(&self) -> &S {
         self.port.segment()
     }
@@ -201,6 +199,7 @@ impl<S: Segment> Master<S> {
     }
 
     /// Gives the segment back.
+    #[cfg(test)]
     pub(crate) fn into_segment(self) -> S {
         self.port.into_segment()
     }
@@ -211,6 +210,7 @@ impl<S: Segment> Master<S> {
     }
 
     /// Frame counters.
+    #[cfg(test)]
     pub(crate) fn port_stats(&self) -> PortStats {
         self.port.stats()
     }

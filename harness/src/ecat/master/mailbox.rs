@@ -318,6 +318,18 @@ impl<S: Segment> Master<S> {
 
     /// A message left in SM1 before the request went out: emergencies are kept, anything
     /// else (a stale reply) is dropped.
+    /// The CoE emergencies `station` sent since the last call: those set aside during
+    /// mailbox transfers, and one waiting in its send mailbox now (read once).
+    pub(crate) fn collect_emergencies(&mut self, station: u16) -> Result<Vec<Emergency>> {
+        let (_, inn) = self.mailboxes(station)?;
+        let read = wire::read(Command::FPRD, station, inn.start, usize::from(inn.len));
+        let r = self.one(read)?;
+        if r.wkc == 1 {
+            self.set_aside(&r.data);
+        }
+        Ok(self.take_emergencies())
+    }
+
     fn set_aside(&mut self, buf: &[u8]) {
         if let Some(e) = MailboxRepr::parse_bytes(buf)
             .ok()

@@ -8,9 +8,6 @@
 //! segment. Errors come in three kinds ([`ErrorKind`]): the slave's refusal (data), a broken
 //! protocol, a failed link.
 
-// The binding (harness/src/ecat) uses part of the API; tests and benches use the rest.
-#![allow(dead_code)]
-
 mod al;
 mod engine;
 mod error;
@@ -26,30 +23,8 @@ mod sii;
 mod tests;
 mod wire;
 
-#[allow(unused_imports)] // the module's API, not all of it used yet
-pub(crate) use al::AlReading;
-#[allow(unused_imports)]
-pub(crate) use engine::{EscInfo, Master, MasterConfig, ProcessSetup, SlaveInfo, SmSetup};
-#[allow(unused_imports)]
-pub(crate) use error::{
-    AlRefused, Awaited, ErrorKind, LinkFailure, MasterError, NoSlave, ProtocolError, Refusal,
-    UsageError,
-};
-#[allow(unused_imports)]
-pub(crate) use pdo::CyclicStats;
-#[allow(unused_imports)]
-pub(crate) use port::PortStats;
-#[allow(unused_imports)]
-pub(crate) use proto::ecat::al::{AlStatus, AlStatusCode};
-#[allow(unused_imports)]
-pub(crate) use proto::ecat::coe::{Emergency, SdoAbortCode};
-#[allow(unused_imports)]
-pub(crate) use proto::ecat::mailbox::{MailboxErrorCode, MailboxRepr, MailboxType};
-#[allow(unused_imports)]
-pub(crate) use proto::ecat::sii::{SiiRepr, SiiSm, SmType};
-#[allow(unused_imports)]
-pub(crate) use proto::ecat::{Command, DatagramRepr};
-#[allow(unused_imports)]
-pub(crate) use segment::{
-    Arrival, EmbeddedSegment, Fault, Faulty, NetSegment, Segment, SegmentError,
-};
+pub(crate) use engine::{Master, MasterConfig};
+pub(crate) use error::{AlRefused, ErrorKind, MasterError, ProtocolError, Refusal};
+pub(crate) use segment::{Arrival, EmbeddedSegment, NetSegment, Segment, SegmentError};
+#[cfg(test)]
+pub(crate) use segment::{Fault, Faulty};

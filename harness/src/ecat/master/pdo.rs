@@ -138,6 +138,7 @@ impl<S: Segment> Master<S> {
     }
 
     /// The working counter a cycle must come back with.
+    #[cfg(test)]
     pub(crate) fn expected_wkc(&self) -> u16 {
         self.cyclic.expected_wkc
     }
@@ -216,6 +217,7 @@ impl<S: Segment> Master<S> {
     }
 
     /// Runs the cycle for `time` (not recorded); returns the counters of those cycles.
+    #[cfg(test)]
     pub(crate) fn run_for(&mut self, time: Duration) -> CyclicStats {
         let before = self.cyclic.stats;
         let was = self.cyclic.running;
@@ -234,16 +236,6 @@ impl<S: Segment> Master<S> {
     /// Counters since the master started.
     pub(crate) fn cyclic_stats(&self) -> CyclicStats {
         self.cyclic.stats
-    }
-
-    /// The output part of the image.
-    pub(crate) fn outputs(&self) -> &[u8] {
-        &self.cyclic.outputs
-    }
-
-    /// The output part of the image, to set.
-    pub(crate) fn outputs_mut(&mut self) -> &mut [u8] {
-        &mut self.cyclic.outputs
     }
 
     /// The input part of the image as of the last cycle.

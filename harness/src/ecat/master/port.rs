@@ -74,6 +74,7 @@ impl<S: Segment> Port<S> {
     }
 
     /// The segment.
+    #[cfg(test)]
     pub(crate) fn segment(&self) -> &S {
         &self.segment
     }
@@ -84,6 +85,7 @@ impl<S: Segment> Port<S> {
     }
 
     /// Gives the segment back.
+    #[cfg(test)]
     pub(crate) fn into_segment(self) -> S {
         self.segment
     }
@@ -98,22 +100,13 @@ impl<S: Segment> Port<S> {
         self.segment.wait_until(t)
     }
 
-    /// How long a frame may take.
-    pub(crate) fn timeout(&self) -> Duration {
-        self.timeout
-    }
-
-    /// Sets how long a frame may take.
-    pub(crate) fn set_timeout(&mut self, t: Duration) {
-        self.timeout = t;
-    }
-
     /// The kernel's receive stamp of the last frame matched (network segments).
     pub(crate) fn last_stamp(&self) -> Option<Duration> {
         self.last_stamp
     }
 
     /// The counters.
+    #[cfg(test)]
     pub(crate) fn stats(&self) -> PortStats {
         self.stats
     }

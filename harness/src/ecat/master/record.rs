@@ -79,9 +79,4 @@ impl Recorder {
     pub(crate) fn take(&mut self) -> Vec<Exchange> {
         std::mem::take(&mut self.exchanges)
     }
-
-    /// How many are held.
-    pub(crate) fn len(&self) -> usize {
-        self.exchanges.len()
-    }
 }

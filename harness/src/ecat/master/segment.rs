@@ -110,6 +110,7 @@ impl EmbeddedSegment {
     }
 
     /// The slave, for observation.
+    #[cfg(test)]
     pub(crate) fn slave(&self) -> &Slave {
         &self.slave
     }
@@ -117,11 +118,6 @@ impl EmbeddedSegment {
     /// The slave, for fault injection (its device) and observation.
     pub(crate) fn slave_mut(&mut self) -> &mut Slave {
         &mut self.slave
-    }
-
-    /// The virtual clock.
-    pub(crate) fn clock(&self) -> &VirtualClock {
-        &self.clock
     }
 
     /// Moves the clock to `t` (never back), running the slave's timers on the way.
@@ -212,11 +208,6 @@ impl NetSegment {
             start: Instant::now(),
         }
     }
-
-    /// The link, e.g. to set how long it polls before it sleeps.
-    pub(crate) fn link_mut(&mut self) -> &mut RawLink {
-        &mut self.link
-    }
 }
 
 impl Segment for NetSegment {
@@ -266,6 +257,7 @@ const REPLY_POLL: Duration = crate::poll::REPLY_POLL;
 const SPIN: Duration = Duration::from_micros(300);
 
 /// What a [`Faulty`] segment does to the frames sent.
+#[cfg(test)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(crate) enum Fault {
     /// Nothing: frames go to the segment underneath.
@@ -282,6 +274,7 @@ pub(crate) enum Fault {
 }
 
 /// A segment with a fault injected between the master and the segment underneath.
+#[cfg(test)]
 #[derive(Debug)]
 pub(crate) struct Faulty<S> {
     inner: S,
@@ -289,6 +282,7 @@ pub(crate) struct Faulty<S> {
     back: VecDeque<Vec<u8>>,
 }
 
+#[cfg(test)]
 impl<S: Segment> Faulty<S> {
     /// `inner` without a fault yet.
     pub(crate) fn new(inner: S) -> Faulty<S> {
@@ -323,6 +317,7 @@ impl<S: Segment> Faulty<S> {
 
 /// `frame` broken as [`Fault::Garbage`] breaks it: the EtherCAT length field claims 7FFh bytes
 /// and every byte after the EtherCAT header is scrambled.
+#[cfg(test)]
 fn garbage(frame: &[u8]) -> Vec<u8> {
     let mut f = frame.to_vec();
     if f.len() >= 16 {
@@ -336,6 +331,7 @@ fn garbage(frame: &[u8]) -> Vec<u8> {
     f
 }
 
+#[cfg(test)]
 impl<S: Segment> Segment for Faulty<S> {
     fn now(&self) -> Duration {
         self.inner.now()

@@ -9,7 +9,10 @@ use proto::nord::Product;
 use sim::device::{Device, DeviceConfig};
 use sim::ecat::{Slave, SlaveConfig};
 
+use super::error::{Awaited, LinkFailure, NoSlave};
 use super::*;
+use proto::ecat::mailbox::{MailboxRepr, MailboxType};
+use proto::ecat::Command;
 
 const STATION: u16 = 0x1001;
 /// P102 of FI 3: 2000h + 1000h + 66h (BU 0620 §2.2.7).
