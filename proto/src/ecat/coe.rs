@@ -323,8 +323,9 @@ impl SdoData {
     }
 
     /// Reads the e/s/n bits of `cmd` and the bytes from offset 4 of an SDO header `b` (at
-    /// least 8 bytes).
-    fn parse(cmd: u8, b: &[u8]) -> Result<SdoData, Error> {
+    /// least 8 bytes). `lenient`: as a tolerant server reads a download (see
+    /// [`SdoRequest::parse_lenient`]).
+    fn parse(cmd: u8, b: &[u8], lenient: bool) -> Result<SdoData, Error> {
         let expedited = cmd & 0x02 != 0;
         let sized = cmd & 0x01 != 0;
         if expedited {
@@ -334,6 +335,12 @@ impl SdoData {
                 sized,
                 data: b[4..4 + len].to_vec(),
             })
+        } else if !sized && lenient {
+            let data = &b[SDO_HEADER_LEN..];
+            Ok(SdoData::Normal {
+                size: data.len() as u32,
+                data: data.to_vec(),
+            })
         } else if !sized {
             Err(Error::Invalid {
                 field: "SDO command",
@@ -342,7 +349,10 @@ impl SdoData {
             })
         } else {
             let size = le32(b, 4);
-            let data = &b[SDO_HEADER_LEN..];
+            let mut data = &b[SDO_HEADER_LEN..];
+            if lenient && data.len() as u64 > u64::from(size) {
+                data = &data[..size as usize];
+            }
             if data.len() as u64 > u64::from(size) {
                 return Err(Error::BadLength {
                     field: "SDO complete size",
@@ -401,12 +411,12 @@ impl SdoData {
 
 /// Reads a segment's data: a minimal segment (7 data bytes) has n unused ones, a longer one
 /// must have n = 0.
-fn segment_data(cmd: u8, b: &[u8]) -> Result<Vec<u8>, Error> {
+fn segment_data(cmd: u8, b: &[u8], lenient: bool) -> Result<Vec<u8>, Error> {
     let n = usize::from((cmd >> 1) & 0x07);
     let carried = &b[1..];
     if carried.len() == SEGMENT_MIN_DATA {
         Ok(carried[..SEGMENT_MIN_DATA - n].to_vec())
-    } else if n == 0 {
+    } else if n == 0 || lenient {
         Ok(carried.to_vec())
     } else {
         Err(Error::Invalid {
@@ -499,6 +509,19 @@ pub enum SdoRequest {
 impl SdoRequest {
     /// Parses the bytes after the CoE header.
     pub fn parse(b: &[u8]) -> Result<SdoRequest, Error> {
+        SdoRequest::parse_with(b, false)
+    }
+
+    /// Parses the bytes after the CoE header as a tolerant SDO server does (the simulated
+    /// slave): an initiate download with e = 0 and s = 0 (reserved) is a normal download of
+    /// the bytes carried; normal data beyond the indicated size are ignored; a segment longer
+    /// than 7 bytes is taken whole whatever its n bits say. An unknown command specifier, or
+    /// fewer than 8 bytes, is still an error.
+    pub fn parse_lenient(b: &[u8]) -> Result<SdoRequest, Error> {
+        SdoRequest::parse_with(b, true)
+    }
+
+    fn parse_with(b: &[u8], lenient: bool) -> Result<SdoRequest, Error> {
         check_sdo_len(b)?;
         let cmd = b[0];
         let (index, sub) = (le16(b, 1), b[3]);
@@ -507,12 +530,12 @@ impl SdoRequest {
                 index,
                 sub,
                 complete_access: cmd & CA != 0,
-                data: SdoData::parse(cmd, b)?,
+                data: SdoData::parse(cmd, b, lenient)?,
             },
             0 => SdoRequest::DownloadSegment {
                 toggle: cmd & TOGGLE != 0,
                 last: cmd & 0x01 != 0,
-                data: segment_data(cmd, b)?,
+                data: segment_data(cmd, b, lenient)?,
             },
             2 => SdoRequest::Upload {
                 index,
@@ -687,12 +710,12 @@ impl SdoResponse {
                 index,
                 sub,
                 complete_access: cmd & CA != 0,
-                data: SdoData::parse(cmd, b)?,
+                data: SdoData::parse(cmd, b, false)?,
             },
             0 => SdoResponse::UploadSegment {
                 toggle: cmd & TOGGLE != 0,
                 last: cmd & 0x01 != 0,
-                data: segment_data(cmd, b)?,
+                data: segment_data(cmd, b, false)?,
             },
             4 => SdoResponse::Abort {
                 index,
@@ -1491,5 +1514,54 @@ mod tests {
         assert_eq!(normal_capacity(10), 0);
         assert!(check_fits(122, 128).is_ok());
         assert!(check_fits(123, 128).is_err());
+    }
+
+    #[test]
+    fn lenient_parse_takes_what_a_tolerant_server_takes() {
+        // cmd 20h: initiate download, e = 0, s = 0 (reserved); index 2000h, sub 1; bytes 4..8
+        // (size field, unused), then 2 data bytes.
+        let no_size = [0x20, 0x00, 0x20, 0x01, 0, 0, 0, 0, 0xAA, 0xBB];
+        assert!(SdoRequest::parse(&no_size).is_err());
+        assert_eq!(
+            SdoRequest::parse_lenient(&no_size).unwrap(),
+            SdoRequest::Download {
+                index: 0x2000,
+                sub: 1,
+                complete_access: false,
+                data: SdoData::Normal {
+                    size: 2,
+                    data: vec![0xAA, 0xBB]
+                }
+            }
+        );
+        // cmd 21h: normal download, size 1, but 2 data bytes: the second is ignored.
+        let long = [0x21, 0x00, 0x20, 0x01, 1, 0, 0, 0, 0xAA, 0xBB];
+        assert!(SdoRequest::parse(&long).is_err());
+        assert_eq!(
+            SdoRequest::parse_lenient(&long).unwrap(),
+            SdoRequest::Download {
+                index: 0x2000,
+                sub: 1,
+                complete_access: false,
+                data: SdoData::Normal {
+                    size: 1,
+                    data: vec![0xAA]
+                }
+            }
+        );
+        // cmd 02h: download segment, n = 1, but 8 data bytes: taken whole.
+        let seg = [0x02, 1, 2, 3, 4, 5, 6, 7, 8];
+        assert!(SdoRequest::parse(&seg).is_err());
+        assert_eq!(
+            SdoRequest::parse_lenient(&seg).unwrap(),
+            SdoRequest::DownloadSegment {
+                toggle: false,
+                last: false,
+                data: vec![1, 2, 3, 4, 5, 6, 7, 8]
+            }
+        );
+        // ccs 5: still an error; 7 bytes: still truncated.
+        assert!(SdoRequest::parse_lenient(&[0xA0, 0, 0x20, 1, 0, 0, 0, 0]).is_err());
+        assert!(SdoRequest::parse_lenient(&[0x40, 0, 0x20, 1, 0, 0, 0]).is_err());
     }
 }

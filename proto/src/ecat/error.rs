@@ -2,7 +2,7 @@
 //! is wrong, so a negative test can assert on it.
 
 /// A malformed EtherCAT structure (frame, datagram, register block, SII image, mailbox, CoE).
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum Error {
     /// The bytes end before the field or structure.
     #[error("{what}: truncated, need {need} bytes, got {got}")]

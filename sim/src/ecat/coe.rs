@@ -7,6 +7,7 @@
 //! transfer with 05030000h, a segment without a transfer or an unknown command specifier with
 //! 05040001h. A download's data is checked against the object only when it is complete.
 
+use proto::ecat::coe::{SdoAbortCode, SdoData, SdoRequest, SdoResponse};
 use proto::nord::errors::SdoAbort;
 
 use super::od::{abort, Context, Dictionary};
@@ -15,120 +16,6 @@ use super::od::{abort, Context, Dictionary};
 /// (05040005h). The largest object, a complete access to an array of 64 words per set, is
 /// 514 bytes.
 pub(crate) const MAX_DOWNLOAD: u32 = 1024;
-
-/// An SDO request as the mailbox carried it.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) enum SdoRequest {
-    /// Initiate download: expedited (data in the request, `size` 1..4 or unspecified) or
-    /// normal (`size` the complete size, the first part of the data in the request).
-    InitiateDownload {
-        /// Index.
-        index: u16,
-        /// Sub-index.
-        sub: u8,
-        /// Complete access.
-        complete: bool,
-        /// Data in the request.
-        expedited: bool,
-        /// Indicated size.
-        size: Option<u32>,
-        /// Data carried.
-        data: Vec<u8>,
-    },
-    /// Download segment.
-    DownloadSegment {
-        /// Toggle bit.
-        toggle: bool,
-        /// No more segments.
-        last: bool,
-        /// Segment data.
-        data: Vec<u8>,
-    },
-    /// Initiate upload.
-    InitiateUpload {
-        /// Index.
-        index: u16,
-        /// Sub-index.
-        sub: u8,
-        /// Complete access.
-        complete: bool,
-    },
-    /// Upload segment.
-    UploadSegment {
-        /// Toggle bit.
-        toggle: bool,
-    },
-    /// The master aborts the transfer.
-    Abort,
-    /// A command specifier the server does not know (5, 6, 7).
-    Unknown {
-        /// Index.
-        index: u16,
-        /// Sub-index.
-        sub: u8,
-    },
-}
-
-/// The server's answer.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) enum SdoResponse {
-    /// Download initiated (or done, for expedited).
-    InitiateDownload {
-        /// Index.
-        index: u16,
-        /// Sub-index.
-        sub: u8,
-        /// Complete access.
-        complete: bool,
-    },
-    /// Segment taken.
-    DownloadSegment {
-        /// Toggle bit of the request.
-        toggle: bool,
-    },
-    /// Upload of 1..4 bytes in the response.
-    UploadExpedited {
-        /// Index.
-        index: u16,
-        /// Sub-index.
-        sub: u8,
-        /// Complete access.
-        complete: bool,
-        /// The data.
-        data: Vec<u8>,
-    },
-    /// Normal upload: the complete size, and as much data as fits.
-    UploadNormal {
-        /// Index.
-        index: u16,
-        /// Sub-index.
-        sub: u8,
-        /// Complete access.
-        complete: bool,
-        /// Complete size.
-        size: u32,
-        /// First part.
-        data: Vec<u8>,
-    },
-    /// Upload segment.
-    UploadSegment {
-        /// Toggle bit of the request.
-        toggle: bool,
-        /// No more segments.
-        last: bool,
-        /// Segment data.
-        data: Vec<u8>,
-    },
-    /// Abort transfer.
-    Abort {
-        /// Index.
-        index: u16,
-        /// Sub-index.
-        sub: u8,
-        /// CiA 301 abort code.
-        code: SdoAbort,
-    },
-}
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum Transfer {
@@ -191,24 +78,27 @@ impl SdoServer {
             }
             Transfer::Idle => (0, 0),
         };
-        let fail = |index, sub, code| Some(SdoResponse::Abort { index, sub, code });
-        match req {
-            SdoRequest::Abort => None,
-            SdoRequest::Unknown { index, sub } => fail(index, sub, abort::COMMAND),
-            SdoRequest::InitiateUpload {
+        let fail = |index, sub, code: SdoAbort| {
+            Some(SdoResponse::Abort {
                 index,
                 sub,
-                complete,
+                code: SdoAbortCode(code.0),
+            })
+        };
+        match req {
+            SdoRequest::Abort { .. } => None,
+            SdoRequest::Upload {
+                index,
+                sub,
+                complete_access: complete,
             } => match od.upload(cx, index, sub, complete) {
                 Err(code) => fail(index, sub, code),
-                Ok(data) if data.len() <= 4 && !data.is_empty() => {
-                    Some(SdoResponse::UploadExpedited {
-                        index,
-                        sub,
-                        complete,
-                        data,
-                    })
-                }
+                Ok(data) if data.len() <= 4 && !data.is_empty() => Some(SdoResponse::Upload {
+                    index,
+                    sub,
+                    complete_access: complete,
+                    data: SdoData::Expedited { sized: true, data },
+                }),
                 Ok(data) => {
                     let first = data.len().min(normal_room(mailbox));
                     let size = data.len() as u32;
@@ -222,12 +112,11 @@ impl SdoServer {
                             toggle: false,
                         };
                     }
-                    Some(SdoResponse::UploadNormal {
+                    Some(SdoResponse::Upload {
                         index,
                         sub,
-                        complete,
-                        size,
-                        data: part,
+                        complete_access: complete,
+                        data: SdoData::Normal { size, data: part },
                     })
                 }
             },
@@ -263,24 +152,28 @@ impl SdoServer {
                     data: part,
                 })
             }
-            SdoRequest::InitiateDownload {
+            SdoRequest::Download {
                 index,
                 sub,
-                complete,
-                expedited,
-                size,
+                complete_access: complete,
                 data,
             } => {
+                let (expedited, size, data) = match data {
+                    SdoData::Expedited { sized, data } => {
+                        (true, sized.then_some(data.len() as u32), data)
+                    }
+                    SdoData::Normal { size, data } => (false, Some(size), data),
+                };
                 if expedited {
                     let data = match size {
                         Some(n) => data.get(..n as usize).unwrap_or(&data).to_vec(),
                         None => self.unspecified(od, cx, index, sub, complete, data),
                     };
                     return match od.download(cx, index, sub, complete, &data) {
-                        Ok(()) => Some(SdoResponse::InitiateDownload {
+                        Ok(()) => Some(SdoResponse::Download {
                             index,
                             sub,
-                            complete,
+                            complete_access: complete,
                         }),
                         Err(code) => fail(index, sub, code),
                     };
@@ -293,10 +186,10 @@ impl SdoServer {
                 data.truncate(size as usize);
                 if data.len() as u32 == size {
                     return match od.download(cx, index, sub, complete, &data) {
-                        Ok(()) => Some(SdoResponse::InitiateDownload {
+                        Ok(()) => Some(SdoResponse::Download {
                             index,
                             sub,
-                            complete,
+                            complete_access: complete,
                         }),
                         Err(code) => fail(index, sub, code),
                     };
@@ -309,10 +202,10 @@ impl SdoServer {
                     data,
                     toggle: false,
                 };
-                Some(SdoResponse::InitiateDownload {
+                Some(SdoResponse::Download {
                     index,
                     sub,
-                    complete,
+                    complete_access: complete,
                 })
             }
             SdoRequest::DownloadSegment { toggle, last, data } => {
@@ -358,6 +251,17 @@ impl SdoServer {
 
     /// An expedited download without size: the object's own size of the four bytes (CiA 301
     /// §7.2.4.3.3 "size not indicated"), found by reading it; all four when unreadable.
+    /// A request with a command specifier the server does not know (5, 6, 7): ends any
+    /// transfer and aborts with 05040001h.
+    pub(crate) fn unknown(&mut self, index: u16, sub: u8) -> SdoResponse {
+        self.transfer = Transfer::Idle;
+        SdoResponse::Abort {
+            index,
+            sub,
+            code: SdoAbortCode(abort::COMMAND.0),
+        }
+    }
+
     fn unspecified(
         &self,
         od: &Dictionary,

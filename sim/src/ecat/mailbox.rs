@@ -13,36 +13,15 @@
 
 use std::collections::VecDeque;
 
+use proto::ecat::coe::{CoeHeader, CoeService, SdoRequest};
+use proto::ecat::mailbox::{
+    Mailbox as MailboxView, MailboxError, MailboxErrorCode, MailboxRepr, MailboxType,
+};
+use proto::ecat::Error;
 use proto::nord::nmt::EcState;
 
 use super::coe::SdoServer;
 use super::od::{Context, Dictionary};
-use super::wire::{self, MailboxHeader, MAILBOX_HEADER};
-
-/// Mailbox types (ETG.1000.6 table 29).
-pub(crate) mod kind {
-    /// Error reply.
-    pub(crate) const ERROR: u8 = 0;
-    /// CAN application protocol over EtherCAT.
-    pub(crate) const COE: u8 = 3;
-}
-
-/// Mailbox error details (ETG.1000.6 table 30).
-pub(crate) mod error {
-    /// The protocol is not supported.
-    pub(crate) const UNSUPPORTED_PROTOCOL: u16 = 0x0002;
-    /// The service of the protocol is not supported.
-    pub(crate) const SERVICE_NOT_SUPPORTED: u16 = 0x0004;
-    /// The data is too short for the protocol's header.
-    pub(crate) const SIZE_TOO_SHORT: u16 = 0x0006;
-    /// The length does not fit the mailbox.
-    pub(crate) const INVALID_SIZE: u16 = 0x0008;
-}
-
-/// CoE services (ETG.1000.6 table 33).
-mod service {
-    pub(super) const SDO_REQUEST: u8 = 2;
-}
 
 /// Replies kept while the send mailbox is full; older ones are dropped beyond this.
 const QUEUE_MAX: usize = 16;
@@ -70,13 +49,15 @@ impl Mailbox {
     }
 
     /// Queues a message of `kind` with the next counter.
-    pub(crate) fn send(&mut self, kind: u8, body: &[u8]) {
-        self.counter = self.counter % 7 + 1;
+    pub(crate) fn send(&mut self, kind: MailboxType, body: Vec<u8>) {
+        self.counter = proto::ecat::mailbox::next_counter(self.counter);
         if self.queue.len() >= QUEUE_MAX {
             self.queue.pop_front();
         }
-        self.queue
-            .push_back(MailboxHeader::message(kind, self.counter, body));
+        // A body is at most a mailbox long (far below the 16-bit length field).
+        if let Ok(m) = MailboxRepr::new(kind, self.counter, body).emit() {
+            self.queue.push_back(m);
+        }
     }
 
     /// The next message for the send mailbox.
@@ -89,9 +70,9 @@ impl Mailbox {
         self.queue.push_front(m);
     }
 
-    fn fail(&mut self, detail: u16) {
+    fn fail(&mut self, detail: MailboxErrorCode) {
         self.errors += 1;
-        self.send(kind::ERROR, &wire::mailbox_error(detail));
+        self.send(MailboxType::ERR, MailboxError::new(detail).emit().to_vec());
     }
 
     /// One message the master completed in the receive mailbox (`buf`, the whole buffer);
@@ -104,31 +85,37 @@ impl Mailbox {
         od: &Dictionary,
         cx: &mut Context<'_>,
     ) {
-        let Some(h) = MailboxHeader::parse(buf) else {
-            return self.fail(error::SIZE_TOO_SHORT);
-        };
-        if h.length > buf.len() - MAILBOX_HEADER {
-            return self.fail(error::INVALID_SIZE);
+        let m = MailboxView::new_unchecked(buf);
+        match m.check_len() {
+            Ok(()) => {}
+            Err(Error::Truncated { .. }) => return self.fail(MailboxErrorCode::SIZE_TOO_SHORT),
+            Err(_) => return self.fail(MailboxErrorCode::INVALID_SIZE),
         }
-        if h.counter != 0 && self.last_counter == Some(h.counter) {
+        let counter = m.counter();
+        if counter != 0 && self.last_counter == Some(counter) {
             return;
         }
-        self.last_counter = Some(h.counter);
-        let body = &buf[MAILBOX_HEADER..MAILBOX_HEADER + h.length];
-        if h.kind != kind::COE || state == EcState::Bootstrap {
-            return self.fail(error::UNSUPPORTED_PROTOCOL);
+        self.last_counter = Some(counter);
+        if m.kind() != MailboxType::COE || state == EcState::Bootstrap {
+            return self.fail(MailboxErrorCode::UNSUPPORTED_PROTOCOL);
         }
-        let Some(service) = wire::coe_service(body) else {
-            return self.fail(error::SIZE_TOO_SHORT);
+        let Ok((coe, sdo)) = CoeHeader::split(m.data()) else {
+            return self.fail(MailboxErrorCode::SIZE_TOO_SHORT);
         };
-        if service != service::SDO_REQUEST {
-            return self.fail(error::SERVICE_NOT_SUPPORTED);
+        if coe.service != CoeService::SDO_REQUEST {
+            return self.fail(MailboxErrorCode::SERVICE_NOT_SUPPORTED);
         }
-        let Some(req) = wire::sdo_request(&body[2..]) else {
-            return self.fail(error::SIZE_TOO_SHORT);
+        let resp = match SdoRequest::parse_lenient(sdo) {
+            Ok(req) => self.sdo.serve(od, cx, req, room),
+            // A command specifier 5..7: the 8 bytes are there, index and sub-index with them.
+            Err(Error::Unknown { .. }) => Some(
+                self.sdo
+                    .unknown(u16::from_le_bytes([sdo[1], sdo[2]]), sdo[3]),
+            ),
+            Err(_) => return self.fail(MailboxErrorCode::SIZE_TOO_SHORT),
         };
-        if let Some(resp) = self.sdo.serve(od, cx, req, room) {
-            self.send(kind::COE, &wire::sdo_response(&resp));
+        if let Some(body) = resp.and_then(|r| r.emit_coe().ok()) {
+            self.send(MailboxType::COE, body);
         }
     }
 }

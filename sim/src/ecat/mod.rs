@@ -23,7 +23,8 @@ mod slave;
 mod sm;
 #[cfg(test)]
 mod tests;
-mod wire;
 
-pub use slave::{Processed, Slave, SlaveConfig, SlaveError, POLL_PERIOD};
-pub use wire::{DropReason, ETHERTYPE};
+pub use slave::{DropReason, Processed, Slave, SlaveConfig, SlaveError, POLL_PERIOD};
+
+/// EtherType of EtherCAT (ETG.1000.4 §5.3; BU 0620 §2.2.3 figure 3 prints 88ABh, an erratum).
+pub const ETHERTYPE: u16 = proto::eth::ETHERTYPE_ECAT;

@@ -2,6 +2,11 @@
 
 use std::time::Duration;
 
+use proto::ecat::coe::Emergency;
+use proto::ecat::frame::{EcatFrame, FrameType, HEADER_LEN};
+use proto::ecat::mailbox::MailboxType;
+use proto::ecat::{Command, Datagram};
+use proto::eth::{EthernetFrame, ETHERTYPE_ECAT};
 use proto::nord::ecat as def;
 use proto::nord::led::Row;
 use proto::nord::nmt::EcState;
@@ -9,12 +14,11 @@ use proto::nord::{Inverter, ParamNumber};
 
 use super::al::{self, Al, Outcome};
 use super::esc::{reg, Done, Esc, Event, Op};
-use super::mailbox::{kind, Mailbox};
+use super::mailbox::Mailbox;
 use super::od::{Context, Dictionary};
 use super::pdo::{self, ProcessWords};
 use super::sii;
 use super::sm::{SmConfig, SmEvent};
-use super::wire::{self, DropReason, Payload, Span};
 use crate::device::Device;
 use crate::link::Unit;
 
@@ -118,42 +122,54 @@ impl Slave {
 
     /// Processes one whole Ethernet II frame in place at `now`, as an ESC does on the fly.
     pub fn process(&mut self, frame: &mut [u8], now: Duration) -> Processed {
-        let Some(start) = wire::ethercat_offset(frame) else {
+        let Some(start) = ethercat_offset(frame) else {
             return Processed::Passed;
         };
-        let spans = match wire::datagrams(frame, start) {
-            Ok(Payload::Other) => return Processed::Passed,
-            Ok(Payload::Datagrams(s)) => s,
+        let got = frame.len() - start;
+        let mut ecat = EcatFrame::new_unchecked(&mut frame[start..]);
+        let checked = match check(&ecat, got) {
+            Ok(Some(())) => ecat.datagrams_mut(),
+            Ok(None) => return Processed::Passed,
+            Err(e) => Err(e),
+        };
+        let datagrams = match checked {
+            // A frame of type 1 holds at least one datagram (ETG.1000.4 "EtherCAT frame").
+            Ok(d) if d.is_empty() => Err(DropReason::DatagramTruncated {
+                index: 0,
+                need: DATAGRAM_MIN,
+                got: 0,
+            }),
+            other => other,
+        };
+        let datagrams = match datagrams {
+            Ok(d) => d,
             Err(reason) => {
                 self.esc.count_invalid_frame();
                 self.dropped += 1;
                 return Processed::Dropped(reason);
             }
         };
-        // The locally administered bit of the source address (ETG.1000.4 §5.3).
-        frame[6] |= 0x02;
         self.tick(now);
-        for span in spans {
-            self.datagram(frame, span, now);
+        for d in datagrams {
+            self.datagram(d, now);
         }
+        // The locally administered bit of the source address (ETG.1000.4 §5.3).
+        let mut eth = EthernetFrame::new_unchecked(frame);
+        eth.set_src(eth.src().with_locally_administered());
         Processed::Forwarded
     }
 
-    fn datagram(&mut self, frame: &mut [u8], span: Span, now: Duration) {
-        let at = span.at;
-        let cmd = frame[at];
-        let adp = u16::from_le_bytes([frame[at + 2], frame[at + 3]]);
-        let ado = u16::from_le_bytes([frame[at + 4], frame[at + 5]]);
-        let logical =
-            u32::from_le_bytes([frame[at + 2], frame[at + 3], frame[at + 4], frame[at + 5]]);
+    fn datagram(&mut self, mut d: Datagram<&mut [u8]>, now: Duration) {
+        let cmd = d.command();
+        let (adp, ado, logical) = (d.adp(), d.ado(), d.address());
         let station = self.esc.u16(reg::STATION_ADDRESS);
         let alias_on = self.esc.u8(reg::DL_CONTROL + 3) & 0x01 != 0;
         let fixed = adp == station || (alias_on && adp == self.esc.u16(reg::STATION_ALIAS));
         let mut events = Vec::new();
-        let data = &mut frame[span.data()..span.wkc()];
-        let (op, done, next_adp) = match cmd {
+        let data = d.data_mut();
+        let (op, done, next_adp) = match cmd.0 {
             1..=3 => {
-                let op = op_of(cmd - 1);
+                let op = op_of(cmd.0 - Command::APRD.0);
                 let done = if adp == 0 {
                     self.esc.physical(ado, data, op, false, now, &mut events)
                 } else {
@@ -162,7 +178,7 @@ impl Slave {
                 (op, done, Some(adp.wrapping_add(1)))
             }
             4..=6 => {
-                let op = op_of(cmd - 4);
+                let op = op_of(cmd.0 - Command::FPRD.0);
                 let done = if fixed {
                     self.esc.physical(ado, data, op, false, now, &mut events)
                 } else {
@@ -171,12 +187,12 @@ impl Slave {
                 (op, done, None)
             }
             7..=9 => {
-                let op = op_of(cmd - 7);
+                let op = op_of(cmd.0 - Command::BRD.0);
                 let done = self.esc.physical(ado, data, op, true, now, &mut events);
                 (op, done, Some(adp.wrapping_add(1)))
             }
             10..=12 => {
-                let op = op_of(cmd - 10);
+                let op = op_of(cmd.0 - Command::LRD.0);
                 (
                     op,
                     self.esc.logical(logical, data, op, now, &mut events),
@@ -185,16 +201,17 @@ impl Slave {
             }
             13 | 14 => {
                 // ARMW/FRMW: the addressed slave reads, every other one writes.
-                let addressed = if cmd == 13 { adp == 0 } else { fixed };
+                let armw = cmd == Command::ARMW;
+                let addressed = if armw { adp == 0 } else { fixed };
                 let op = if addressed { Op::Read } else { Op::Write };
                 let done = self.esc.physical(ado, data, op, false, now, &mut events);
-                (op, done, (cmd == 13).then(|| adp.wrapping_add(1)))
+                (op, done, armw.then(|| adp.wrapping_add(1)))
             }
             // NOP and unknown commands: not processed, passed on.
             _ => return,
         };
         if let Some(a) = next_adp {
-            frame[at + 2..at + 4].copy_from_slice(&a.to_le_bytes());
+            d.set_adp(a);
         }
         let add = u16::from(done.read)
             + if done.write {
@@ -206,9 +223,7 @@ impl Slave {
             } else {
                 0
             };
-        let w = span.wkc();
-        let wkc = u16::from_le_bytes([frame[w], frame[w + 1]]).wrapping_add(add);
-        frame[w..w + 2].copy_from_slice(&wkc.to_le_bytes());
+        d.add_wkc(add);
         for e in events {
             self.event(e, now);
         }
@@ -397,10 +412,12 @@ impl Slave {
                     .find(|c| i32::from(c.p700) == value)
                     .map_or((0xFF00, 0x81), |c| (c.ds402, 0x11));
                 let v = (value as u16).to_le_bytes();
-                self.mailbox.send(
-                    kind::COE,
-                    &wire::emergency(code, register, [v[0], v[1], n, 0, 0]),
-                );
+                let emergency = Emergency {
+                    code,
+                    register,
+                    data: [v[0], v[1], n, 0, 0],
+                };
+                self.mailbox.send(MailboxType::COE, emergency.emit_coe());
                 self.fill_mailbox();
             }
             self.faults[i] = value;
@@ -496,6 +513,36 @@ impl Slave {
     pub fn mailbox_errors(&self) -> u64 {
         self.mailbox.errors
     }
+}
+
+/// Why a frame was not processed: the EtherCAT codec's error (a lying frame or datagram
+/// length, trailing bytes, a frame too short for its header).
+pub type DropReason = proto::ecat::Error;
+
+/// The smallest datagram: header and working counter.
+const DATAGRAM_MIN: usize = proto::ecat::datagram::HEADER_LEN + proto::ecat::datagram::WKC_LEN;
+
+/// Where the EtherCAT payload of an Ethernet frame starts, if it is one (`None`: another
+/// EtherType, or too short for an Ethernet header; one 802.1Q tag is skipped).
+fn ethercat_offset(frame: &[u8]) -> Option<usize> {
+    let eth = EthernetFrame::new_checked(frame).ok()?;
+    (eth.inner_ethertype() == ETHERTYPE_ECAT).then(|| eth.header_len())
+}
+
+/// The header of an EtherCAT frame: `Ok(None)` for a frame type other than 1 (passed on
+/// unprocessed), an error for a frame shorter than its header or its length field.
+fn check<T: AsRef<[u8]>>(f: &EcatFrame<T>, got: usize) -> Result<Option<()>, DropReason> {
+    if got < HEADER_LEN {
+        return Err(DropReason::Truncated {
+            what: "EtherCAT header",
+            need: HEADER_LEN,
+            got,
+        });
+    }
+    if f.frame_type() != FrameType::DLPDU {
+        return Ok(None);
+    }
+    f.check_len().map(Some)
 }
 
 fn op_of(n: u8) -> Op {

@@ -350,7 +350,7 @@ fn other_frames_pass_and_malformed_ones_are_dropped_and_counted() {
     lying[14..16].copy_from_slice(&(200u16 | 0x1000).to_le_bytes());
     assert!(matches!(
         m.slave.process(&mut lying, ms(2)),
-        Processed::Dropped(DropReason::FrameLength { declared: 200, .. })
+        Processed::Dropped(DropReason::BadLength { value: 200, .. })
     ));
     // Datagram length 100 in a frame of 2 data bytes.
     let mut long = frame(&[dg(2, 0, 0x0010, &[0x05, 0x00])]);
@@ -361,7 +361,7 @@ fn other_frames_pass_and_malformed_ones_are_dropped_and_counted() {
     more[23] |= 0x80;
     assert!(matches!(
         m.slave.process(&mut more, ms(4)),
-        Processed::Dropped(DropReason::DatagramLength { index: 1, .. })
+        Processed::Dropped(DropReason::DatagramTruncated { index: 1, .. })
     ));
     // Truncated after the Ethernet header.
     assert!(!m
