@@ -318,7 +318,7 @@ fn the_alias_answers_once_enabled_in_dl_control() {
     // Alias 0 in the SII; write word 4, its checksum in word 7, and reload.
     let mut config: Vec<u8> = m.slave.sii_image()[..14].to_vec();
     config[8..10].copy_from_slice(&[0x34, 0x12]);
-    let crc = super::sii::crc8(&config);
+    let crc = proto::ecat::sii::crc8(&config);
     for (word, data) in [(4u32, [0x34, 0x12]), (7, [crc, 0])] {
         m.fpwr(0x0504, &word.to_le_bytes()); // word address
         m.fpwr(0x0508, &data); // data
