@@ -14,48 +14,12 @@
 //! "ADO 0x134"): AL control bit 5 asks for the ID; the slave puts it into the AL status code
 //! register and sets AL status bit 5 while no error is shown.
 
+use proto::ecat::al::{AlControl, AlStatus, AlStatusCode};
 use proto::nord::ecat::{self as def, SmRole};
 use proto::nord::led::{self, Pattern, Row};
 use proto::nord::nmt::{ethercat_next, EcState};
 
 use super::sm::SmConfig;
-
-/// AL status codes the slave answers (ETG.1000.6 table 11).
-pub(crate) mod code {
-    /// No error.
-    pub(crate) const NONE: u16 = 0x0000;
-    /// Invalid requested state change.
-    pub(crate) const INVALID_STATE_CHANGE: u16 = 0x0011;
-    /// Unknown requested state.
-    pub(crate) const UNKNOWN_STATE: u16 = 0x0012;
-    /// Invalid mailbox configuration (Bootstrap).
-    pub(crate) const INVALID_MAILBOX_BOOT: u16 = 0x0015;
-    /// Invalid mailbox configuration (Pre-Operational).
-    pub(crate) const INVALID_MAILBOX: u16 = 0x0016;
-    /// SyncManager watchdog.
-    pub(crate) const SM_WATCHDOG: u16 = 0x001B;
-    /// Invalid output configuration.
-    pub(crate) const INVALID_OUTPUTS: u16 = 0x001D;
-    /// Invalid input configuration.
-    pub(crate) const INVALID_INPUTS: u16 = 0x001E;
-}
-
-/// The AL status state code of a state (ETG.1000.6 table 9: 1 Init, 2 Pre-Op, 3 Bootstrap,
-/// 4 Safe-Op, 8 Op).
-pub(crate) fn state_code(s: EcState) -> u8 {
-    match s {
-        EcState::Init => 1,
-        EcState::PreOperational => 2,
-        EcState::Bootstrap => 3,
-        EcState::SafeOperational => 4,
-        EcState::Operational => 8,
-    }
-}
-
-/// The state of an AL control state code.
-pub(crate) fn state_of(code: u8) -> Option<EcState> {
-    EcState::ALL.into_iter().find(|s| state_code(*s) == code)
-}
 
 /// The AL state and its indications.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -65,7 +29,7 @@ pub(crate) struct Al {
     /// Error indication (AL status bit 4).
     pub(crate) error: bool,
     /// AL status code.
-    pub(crate) code: u16,
+    pub(crate) code: AlStatusCode,
     /// The device ID is shown in the AL status code register (AL status bit 5).
     pub(crate) id_loaded: bool,
     /// The slave changed state by itself (for the ERR LED).
@@ -77,7 +41,7 @@ impl Default for Al {
         Al {
             state: EcState::Init,
             error: false,
-            code: code::NONE,
+            code: AlStatusCode::NO_ERROR,
             id_loaded: false,
             unsolicited: false,
         }
@@ -96,9 +60,11 @@ pub(crate) enum Outcome {
 impl Al {
     /// The AL status register value.
     pub(crate) fn status(&self) -> u16 {
-        u16::from(state_code(self.state))
-            | u16::from(self.error) << 4
-            | u16::from(self.id_loaded && !self.error) << 5
+        AlStatus {
+            device_id: self.id_loaded && !self.error,
+            ..AlStatus::new(self.state, self.error)
+        }
+        .to_word()
     }
 
     /// The AL status code register value: the error code, or the device ID when asked for.
@@ -106,11 +72,11 @@ impl Al {
         if self.id_loaded && !self.error {
             id
         } else {
-            self.code
+            self.code.0
         }
     }
 
-    fn refuse(&mut self, code: u16) -> Outcome {
+    fn refuse(&mut self, code: AlStatusCode) -> Outcome {
         self.error = true;
         self.code = code;
         self.unsolicited = false;
@@ -122,31 +88,30 @@ impl Al {
     pub(crate) fn control(
         &mut self,
         control: u16,
-        check: impl FnOnce(EcState) -> Result<(), u16>,
+        check: impl FnOnce(EcState) -> Result<(), AlStatusCode>,
     ) -> Outcome {
-        let requested = (control & 0x0F) as u8;
-        let ack = control & 0x10 != 0;
-        self.id_loaded = control & 0x20 != 0;
+        let control = AlControl::from_word(control);
+        self.id_loaded = control.device_id;
         if self.error {
-            if ack {
+            if control.ack {
                 self.error = false;
-                self.code = code::NONE;
+                self.code = AlStatusCode::NO_ERROR;
                 self.unsolicited = false;
-            } else if requested >= state_code(self.state) {
+            } else if control.state >= self.state.code() {
                 return Outcome::Stayed;
             }
         }
-        let Some(to) = state_of(requested) else {
-            return self.refuse(code::UNKNOWN_STATE);
+        let Some(to) = control.ec_state() else {
+            return self.refuse(AlStatusCode::UNKNOWN_STATE);
         };
         if to == self.state {
             return Outcome::Stayed;
         }
         if ethercat_next(self.state, to).is_err() {
-            return self.refuse(code::INVALID_STATE_CHANGE);
+            return self.refuse(AlStatusCode::INVALID_STATE_CHANGE);
         }
         // Going down needs no configuration.
-        if state_code(to) > state_code(self.state) || to == EcState::Bootstrap {
+        if to.code() > self.state.code() || to == EcState::Bootstrap {
             if let Err(c) = check(to) {
                 return self.refuse(c);
             }
@@ -157,7 +122,7 @@ impl Al {
     }
 
     /// The slave leaves a state by itself (a watchdog), with an error code.
-    pub(crate) fn fall_back(&mut self, to: EcState, code: u16) -> Outcome {
+    pub(crate) fn fall_back(&mut self, to: EcState, code: AlStatusCode) -> Outcome {
         let from = self.state;
         self.state = to;
         self.error = true;
@@ -187,7 +152,7 @@ impl Al {
     pub(crate) fn err_led(&self) -> Row {
         let want = if !self.error {
             Pattern::Off
-        } else if self.code == code::SM_WATCHDOG {
+        } else if self.code == AlStatusCode::SM_WATCHDOG {
             Pattern::DoubleFlashRed
         } else if self.unsolicited {
             Pattern::SingleFlashRed
@@ -209,11 +174,11 @@ pub(crate) const MIN_MAILBOX: usize = 16;
 /// Whether SyncManagers 0 and 1 are set up as mailboxes the slave can work with: activated,
 /// mailbox mode in the right direction, within the process RAM, no larger than the SII's
 /// (ETG.1000.6 §6.4.2; 0015h for Bootstrap, 0016h otherwise).
-pub(crate) fn check_mailbox(mem: &[u8], boot: bool) -> Result<(), u16> {
+pub(crate) fn check_mailbox(mem: &[u8], boot: bool) -> Result<(), AlStatusCode> {
     let fail = if boot {
-        code::INVALID_MAILBOX_BOOT
+        AlStatusCode::INVALID_MAILBOX_BOOT
     } else {
-        code::INVALID_MAILBOX
+        AlStatusCode::INVALID_MAILBOX_PREOP
     };
     let out = SmConfig::read(mem, 0);
     let inn = SmConfig::read(mem, 1);
@@ -235,14 +200,14 @@ pub(crate) fn check_mailbox(mem: &[u8], boot: bool) -> Result<(), u16> {
 /// Whether SyncManagers 2 and 3 are set up for the process data of `inverters` inverters:
 /// 3-buffer mode in the right direction, 12 bytes per inverter, their three buffers within the
 /// process RAM and clear of the mailboxes (0016h…: outputs 001Dh, inputs 001Eh).
-pub(crate) fn check_process_data(mem: &[u8], inverters: u8) -> Result<(), u16> {
+pub(crate) fn check_process_data(mem: &[u8], inverters: u8) -> Result<(), AlStatusCode> {
     let sms = def::sync_managers(inverters);
     let mbx: Vec<SmConfig> = (0..2).map(|n| SmConfig::read(mem, n)).collect();
     for want in &sms[2..] {
         let sm = SmConfig::read(mem, usize::from(want.index));
         let fail = match want.role {
-            SmRole::Outputs => code::INVALID_OUTPUTS,
-            _ => code::INVALID_INPUTS,
+            SmRole::Outputs => AlStatusCode::INVALID_OUTPUT_CONFIG,
+            _ => AlStatusCode::INVALID_INPUT_CONFIG,
         };
         let end = sm.start + 3 * sm.len;
         let clear = mbx

@@ -2,6 +2,7 @@
 
 use std::time::Duration;
 
+use proto::ecat::al::AlStatusCode;
 use proto::ecat::coe::Emergency;
 use proto::ecat::frame::{EcatFrame, FrameType, HEADER_LEN};
 use proto::ecat::mailbox::MailboxType;
@@ -368,7 +369,7 @@ impl Slave {
                     self.esc.set_u8(reg::WD_SM_COUNTER, c.saturating_add(1));
                     if let Outcome::Changed(from, to) = self
                         .al
-                        .fall_back(EcState::SafeOperational, al::code::SM_WATCHDOG)
+                        .fall_back(EcState::SafeOperational, AlStatusCode::SM_WATCHDOG)
                     {
                         self.enter(from, to, now);
                     }
