@@ -10,3 +10,4 @@ pub mod ecat;
 pub mod enip;
 pub mod eth;
 pub mod nord;
+mod wire;

@@ -45,36 +45,12 @@ pub enum WireError {
     },
 }
 
-/// Reads fields front to back, checking every length.
-#[derive(Debug, Clone)]
-pub(crate) struct Reader<'a> {
-    buf: &'a [u8],
-    pos: usize,
-}
+/// The shared length-checked reader, reporting [`WireError`]s.
+pub(crate) type Reader<'a> = crate::wire::Reader<'a, WireError>;
+
+crate::wire::read_error!(WireError);
 
 impl<'a> Reader<'a> {
-    pub(crate) fn new(buf: &'a [u8]) -> Self {
-        Reader { buf, pos: 0 }
-    }
-
-    /// Bytes not yet read.
-    pub(crate) fn remaining(&self) -> usize {
-        self.buf.len() - self.pos
-    }
-
-    pub(crate) fn bytes(&mut self, n: usize, what: &'static str) -> Result<&'a [u8], WireError> {
-        if self.remaining() < n {
-            return Err(WireError::Truncated {
-                what,
-                need: n,
-                got: self.remaining(),
-            });
-        }
-        let s = &self.buf[self.pos..self.pos + n];
-        self.pos += n;
-        Ok(s)
-    }
-
     /// `n` bytes announced by the length field `what`; too few is a [`WireError::Length`]
     /// naming that field, since the field, not the data, is what lies.
     pub(crate) fn sized(&mut self, n: usize, what: &'static str) -> Result<&'a [u8], WireError> {
@@ -84,34 +60,6 @@ impl<'a> Reader<'a> {
             declared: n,
             actual,
         })
-    }
-
-    pub(crate) fn rest(&mut self) -> &'a [u8] {
-        let s = &self.buf[self.pos..];
-        self.pos = self.buf.len();
-        s
-    }
-
-    pub(crate) fn u8(&mut self, what: &'static str) -> Result<u8, WireError> {
-        Ok(self.bytes(1, what)?[0])
-    }
-
-    pub(crate) fn u16(&mut self, what: &'static str) -> Result<u16, WireError> {
-        let b = self.bytes(2, what)?;
-        Ok(u16::from_le_bytes([b[0], b[1]]))
-    }
-
-    pub(crate) fn u32(&mut self, what: &'static str) -> Result<u32, WireError> {
-        let b = self.bytes(4, what)?;
-        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    }
-
-    /// Fails if bytes are left.
-    pub(crate) fn finish(&self, what: &'static str) -> Result<(), WireError> {
-        match self.remaining() {
-            0 => Ok(()),
-            extra => Err(WireError::Trailing { what, extra }),
-        }
     }
 }
 
