@@ -21,34 +21,37 @@ pub(crate) const FMMU_COUNT: usize = 8;
 /// SyncManagers the ESC has (register 0005h).
 pub(crate) const SM_COUNT: usize = 8;
 
-/// Register addresses the simulator gives meaning to (ETG.1000.4 table 31 ff.).
+/// Register addresses the simulator gives meaning to (ETG.1000.4 table 31 ff.), from
+/// `proto::ecat::register` as memory offsets.
 pub(crate) mod reg {
-    pub(crate) const TYPE: usize = 0x0000;
-    pub(crate) const FMMUS: usize = 0x0004;
-    pub(crate) const SMS: usize = 0x0005;
-    pub(crate) const RAM_SIZE: usize = 0x0006;
-    pub(crate) const PORTS: usize = 0x0007;
-    pub(crate) const FEATURES: usize = 0x0008;
-    pub(crate) const STATION_ADDRESS: usize = 0x0010;
-    pub(crate) const STATION_ALIAS: usize = 0x0012;
-    pub(crate) const DL_CONTROL: usize = 0x0100;
-    pub(crate) const DL_STATUS: usize = 0x0110;
-    pub(crate) const AL_CONTROL: usize = 0x0120;
-    pub(crate) const AL_STATUS: usize = 0x0130;
-    pub(crate) const AL_STATUS_CODE: usize = 0x0134;
-    pub(crate) const PDI_CONTROL: usize = 0x0140;
-    pub(crate) const PDI_CONFIG: usize = 0x0150;
-    pub(crate) const RX_ERRORS: usize = 0x0300;
-    pub(crate) const WD_DIVIDER: usize = 0x0400;
-    pub(crate) const WD_PDI: usize = 0x0410;
-    pub(crate) const WD_SM: usize = 0x0420;
-    pub(crate) const WD_SM_STATUS: usize = 0x0440;
-    pub(crate) const WD_SM_COUNTER: usize = 0x0442;
-    pub(crate) const EEPROM_CONTROL: usize = 0x0502;
-    pub(crate) const EEPROM_ADDRESS: usize = 0x0504;
-    pub(crate) const EEPROM_DATA: usize = 0x0508;
-    pub(crate) const FMMU0: usize = 0x0600;
-    pub(crate) const SM0: usize = 0x0800;
+    use proto::ecat::register as r;
+
+    pub(crate) const TYPE: usize = r::TYPE as usize;
+    pub(crate) const FMMUS: usize = r::FMMUS_SUPPORTED as usize;
+    pub(crate) const SMS: usize = r::SMS_SUPPORTED as usize;
+    pub(crate) const RAM_SIZE: usize = r::RAM_SIZE as usize;
+    pub(crate) const PORTS: usize = r::PORT_DESCRIPTOR as usize;
+    pub(crate) const FEATURES: usize = r::FEATURES as usize;
+    pub(crate) const STATION_ADDRESS: usize = r::STATION_ADDRESS as usize;
+    pub(crate) const STATION_ALIAS: usize = r::STATION_ALIAS as usize;
+    pub(crate) const DL_CONTROL: usize = r::DL_CONTROL as usize;
+    pub(crate) const DL_STATUS: usize = r::DL_STATUS as usize;
+    pub(crate) const AL_CONTROL: usize = r::AL_CONTROL as usize;
+    pub(crate) const AL_STATUS: usize = r::AL_STATUS as usize;
+    pub(crate) const AL_STATUS_CODE: usize = r::AL_STATUS_CODE as usize;
+    pub(crate) const PDI_CONTROL: usize = r::PDI_CONTROL as usize;
+    pub(crate) const PDI_CONFIG: usize = r::PDI_CONFIG as usize;
+    pub(crate) const RX_ERRORS: usize = r::RX_ERROR_COUNTER as usize;
+    pub(crate) const WD_DIVIDER: usize = r::WATCHDOG_DIVIDER as usize;
+    pub(crate) const WD_PDI: usize = r::WATCHDOG_TIME_PDI as usize;
+    pub(crate) const WD_SM: usize = r::WATCHDOG_TIME_SM as usize;
+    pub(crate) const WD_SM_STATUS: usize = r::WATCHDOG_STATUS_SM as usize;
+    pub(crate) const WD_SM_COUNTER: usize = r::WATCHDOG_COUNTER_SM as usize;
+    pub(crate) const EEPROM_CONTROL: usize = r::SII_CONTROL as usize;
+    pub(crate) const EEPROM_ADDRESS: usize = r::SII_ADDRESS as usize;
+    pub(crate) const EEPROM_DATA: usize = r::SII_DATA as usize;
+    pub(crate) const FMMU0: usize = r::FMMU_BASE as usize;
+    pub(crate) const SM0: usize = r::SM_BASE as usize;
 }
 
 /// Which way a datagram accesses memory.

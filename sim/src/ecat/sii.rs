@@ -13,6 +13,7 @@
 //! error bit 13 ("missing acknowledge / invalid command"). Commands complete at once, so the
 //! busy bit (15) never shows.
 
+use proto::ecat::register::SiiControl;
 use proto::ecat::sii::{
     Category, FmmuUsage, General, MailboxConfig, SiiHeader, SiiPdo, SiiPdoEntry, SiiRepr, SiiSm,
     SmType,
@@ -149,43 +150,45 @@ pub(crate) fn load(esc: &mut Esc, image: &[u16]) {
         esc.set_u16(reg::PDI_CONFIG, h.pdi_config);
         esc.set_u16(reg::STATION_ALIAS, h.station_alias);
     }
-    let failed = if header.is_some() { 0 } else { 0x0800 };
-    let status = esc.u16(reg::EEPROM_CONTROL) & !0x0800 | failed;
-    // Bit 6: 8-byte reads.
-    esc.set_u16(reg::EEPROM_CONTROL, status | 0x0040);
+    let failed = if header.is_some() {
+        0
+    } else {
+        SiiControl::CHECKSUM_ERROR
+    };
+    let status = esc.u16(reg::EEPROM_CONTROL) & !SiiControl::CHECKSUM_ERROR | failed;
+    esc.set_u16(reg::EEPROM_CONTROL, status | SiiControl::READ_8_BYTES);
 }
 
 /// Executes the command the master wrote to 0502h.
 pub(crate) fn command(esc: &mut Esc, image: &mut [u16]) {
-    let control = esc.u16(reg::EEPROM_CONTROL);
-    let cmd = (control >> 8) & 0x07;
-    let write_enable = control & 1 != 0;
+    let control = SiiControl(esc.u16(reg::EEPROM_CONTROL));
+    let write_enable = control.has(SiiControl::WRITE_ENABLE);
     // Keep the 8-byte and checksum bits; clear command, errors, write enable.
-    let mut status = control & 0x0840;
+    let mut status = control.0 & (SiiControl::READ_8_BYTES | SiiControl::CHECKSUM_ERROR);
     let addr = u32::from_le_bytes(
         esc.bytes(reg::EEPROM_ADDRESS, 4)
             .try_into()
             .unwrap_or([0xFF; 4]),
     ) as usize;
-    match cmd {
-        0 => {}
-        1 if addr < image.len() => {
+    match control.cmd() {
+        SiiControl::CMD_IDLE => {}
+        SiiControl::CMD_READ if addr < image.len() => {
             let data: Vec<u8> = (0..4)
                 .flat_map(|i| image.get(addr + i).copied().unwrap_or(0xFFFF).to_le_bytes())
                 .collect();
             esc.put(reg::EEPROM_DATA, &data);
         }
-        2 if !write_enable => status |= 0x4000,
-        2 if addr < image.len() => {
+        SiiControl::CMD_WRITE if !write_enable => status |= SiiControl::WRITE_ENABLE_ERROR,
+        SiiControl::CMD_WRITE if addr < image.len() => {
             let d = esc.bytes(reg::EEPROM_DATA, 2);
             image[addr] = u16::from_le_bytes([d[0], d[1]]);
         }
-        4 => {
+        SiiControl::CMD_RELOAD => {
             esc.set_u16(reg::EEPROM_CONTROL, status);
             load(esc, image);
             return;
         }
-        _ => status |= 0x2000,
+        _ => status |= SiiControl::ACK_ERROR,
     }
     esc.set_u16(reg::EEPROM_CONTROL, status);
 }

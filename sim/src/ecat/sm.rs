@@ -12,9 +12,11 @@
 //! deactivated it (0807h bit 0) and its length is not 0. The application deactivates all of
 //! them in Init and activates them as it accepts their configuration (ETG.1000.6 §6.4.2).
 
+use proto::ecat::register::{sm_activate, sm_control, SmRepr, SM_BASE};
+
 /// The register block of SyncManager `n`.
 pub(crate) fn register(n: usize) -> usize {
-    0x0800 + 8 * n
+    usize::from(SM_BASE) + 8 * n
 }
 
 /// A SyncManager's configuration as the master wrote it.
@@ -35,13 +37,16 @@ pub(crate) struct SmConfig {
 impl SmConfig {
     /// Reads SyncManager `n`'s registers.
     pub(crate) fn read(mem: &[u8], n: usize) -> SmConfig {
-        let r = &mem[register(n)..register(n) + 8];
+        let sm = mem
+            .get(register(n)..register(n) + 8)
+            .and_then(|r| SmRepr::parse(r).ok())
+            .unwrap_or_default();
         SmConfig {
-            start: usize::from(u16::from_le_bytes([r[0], r[1]])),
-            len: usize::from(u16::from_le_bytes([r[2], r[3]])),
-            control: r[4],
-            enabled: r[6] & 1 != 0,
-            deactivated: r[7] & 1 != 0,
+            start: usize::from(sm.start),
+            len: usize::from(sm.length),
+            control: sm.control,
+            enabled: sm.activate & sm_activate::ENABLE != 0,
+            deactivated: sm.pdi_control & sm_activate::PDI_DEACTIVATE != 0,
         }
     }
 
@@ -52,12 +57,12 @@ impl SmConfig {
 
     /// Mailbox mode (control bits 0–1 = 10b).
     pub(crate) fn mailbox(&self) -> bool {
-        self.control & 0x03 == 0x02
+        self.control & sm_control::MODE_MASK == sm_control::MODE_MAILBOX
     }
 
     /// Written by the master (control bits 2–3 = 01b).
     pub(crate) fn master_writes(&self) -> bool {
-        self.control & 0x0C == 0x04
+        self.control & sm_control::DIRECTION_MASK == sm_control::DIRECTION_WRITE
     }
 
     fn overlaps(&self, start: usize, len: usize) -> bool {
