@@ -10,6 +10,8 @@
 
 use std::time::Duration;
 
+use proto::ecat::register::{fmmu_type, FmmuRepr};
+
 use super::sm::{SmAccess, SmEvent, SyncManagers};
 
 /// First address after the process RAM.
@@ -314,14 +316,21 @@ impl Esc {
         let mut done = Done::default();
         for f in 0..FMMU_COUNT {
             let b = reg::FMMU0 + 16 * f;
-            let r = &self.mem[b..b + 16];
-            if r[12] & 1 == 0 {
+            let Some(fmmu) = self
+                .mem
+                .get(b..b + 16)
+                .and_then(|r| FmmuRepr::parse(r).ok())
+            else {
+                continue;
+            };
+            if fmmu.activate & 1 == 0 {
                 continue;
             }
-            let log = u32::from_le_bytes([r[0], r[1], r[2], r[3]]);
-            let len = u32::from(u16::from_le_bytes([r[4], r[5]]));
-            let phys = usize::from(u16::from_le_bytes([r[8], r[9]]));
-            let (can_read, can_write) = (r[11] & 1 != 0, r[11] & 2 != 0);
+            let log = fmmu.logical_start;
+            let len = u32::from(fmmu.length);
+            let phys = usize::from(fmmu.physical_start);
+            let can_read = fmmu.kind & fmmu_type::READ != 0;
+            let can_write = fmmu.kind & fmmu_type::WRITE != 0;
             let lo = log.max(address);
             let hi = (log.saturating_add(len)).min(address.saturating_add(data.len() as u32));
             if lo >= hi {

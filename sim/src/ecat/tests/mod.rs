@@ -539,7 +539,7 @@ fn no_byte_sequence_panics() {
     m.preop_again();
     for len in 0..24u8 {
         for ty in 0..16u8 {
-            let mut msg = vec![len, 0, 0, 0, 0, ty | 0x10 * (len % 7 + 1)];
+            let mut msg = vec![len, 0, 0, 0, 0, ty | (0x10 * (len % 7 + 1))];
             msg.extend((0..len).map(|b| b.wrapping_mul(37)));
             m.mbx_write(&msg);
             m.mbx_read();
