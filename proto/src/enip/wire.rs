@@ -95,23 +95,16 @@ mod tests {
     use super::*;
 
     #[test]
-    fn short_reads_name_the_field() {
+    fn a_lying_length_field_is_named() {
+        // A length field announcing 4 bytes where 3 are left.
         let mut r = Reader::new(&[1, 2, 3]);
-        assert_eq!(r.u16("a").unwrap(), 0x0201);
-        assert_eq!(
-            r.u32("session handle"),
-            Err(WireError::Truncated {
-                what: "session handle",
-                need: 4,
-                got: 1
-            })
-        );
-        assert_eq!(
-            r.finish("x"),
-            Err(WireError::Trailing {
-                what: "x",
-                extra: 1
-            })
-        );
+        let lie = WireError::Length {
+            what: "item length",
+            declared: 4,
+            actual: 3,
+        };
+        assert_eq!(r.sized(4, "item length"), Err(lie));
+        assert_eq!(r.sized(3, "item length"), Ok(&[1u8, 2, 3][..]));
+        assert!(len16("x", 65_536).is_err());
     }
 }
