@@ -5,7 +5,8 @@
 //!   (0008h); a CoE message too short for its header or its SDO, "size too short" (0006h).
 //! - Types other than CoE (the only protocol of BU 0620 §2.2.7; SII word 1Ch) get "unsupported
 //!   protocol" (0002h), as does CoE in Bootstrap; CoE services other than SDO requests get
-//!   "service not supported" (0004h).
+//!   "service not supported" (0004h), a service number CoE does not define (0, 9…15)
+//!   "invalid header" (0005h).
 //! - A message with the same non-zero counter as the one before is the master's retry of a
 //!   message already served: it is dropped (ETG.1000.6 §5.5.1 "Cnt").
 //! - The slave numbers its own messages 1..7 and keeps the last one for the repeat request
@@ -102,6 +103,10 @@ impl Mailbox {
         let Ok((coe, sdo)) = CoeHeader::split(m.data()) else {
             return self.fail(MailboxErrorCode::SIZE_TOO_SHORT);
         };
+        if coe.service.name().is_none() {
+            // A service number CoE does not define (0, 9…15): the header itself is wrong.
+            return self.fail(MailboxErrorCode::INVALID_HEADER);
+        }
         if coe.service != CoeService::SDO_REQUEST {
             return self.fail(MailboxErrorCode::SERVICE_NOT_SUPPORTED);
         }

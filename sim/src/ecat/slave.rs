@@ -32,7 +32,8 @@ pub const POLL_PERIOD: Duration = Duration::from_millis(10);
 pub enum Processed {
     /// An EtherCAT frame, processed in place: send it on (back to the master).
     Forwarded,
-    /// Not an EtherCAT command frame (another EtherType or frame type): passed unchanged.
+    /// Not an EtherCAT command frame (another EtherType or frame type): passed on
+    /// unprocessed, with only the source address marked as every frame leaving port 0 is.
     Passed,
     /// A malformed EtherCAT frame: not processed, counted in the invalid frame counter
     /// (0300h), and not sent on (an ESC destroys it).
@@ -124,13 +125,13 @@ impl Slave {
     /// Processes one whole Ethernet II frame in place at `now`, as an ESC does on the fly.
     pub fn process(&mut self, frame: &mut [u8], now: Duration) -> Processed {
         let Some(start) = ethercat_offset(frame) else {
-            return Processed::Passed;
+            return passed(frame);
         };
         let got = frame.len() - start;
         let mut ecat = EcatFrame::new_unchecked(&mut frame[start..]);
         let checked = match check(&ecat, got) {
             Ok(Some(())) => ecat.datagrams_mut(),
-            Ok(None) => return Processed::Passed,
+            Ok(None) => return passed(frame),
             Err(e) => Err(e),
         };
         let datagrams = match checked {
@@ -154,9 +155,7 @@ impl Slave {
         for d in datagrams {
             self.datagram(d, now);
         }
-        // The locally administered bit of the source address (ETG.1000.4 §5.3).
-        let mut eth = EthernetFrame::new_unchecked(frame);
-        eth.set_src(eth.src().with_locally_administered());
+        mark_source(frame);
         Processed::Forwarded
     }
 
@@ -532,6 +531,22 @@ fn ethercat_offset(frame: &[u8]) -> Option<usize> {
 
 /// The header of an EtherCAT frame: `Ok(None)` for a frame type other than 1 (passed on
 /// unprocessed), an error for a frame shorter than its header or its length field.
+/// Sets the locally administered bit of the source address, as an ESC does to every frame it
+/// sends out of port 0, processed or not (ETG.1000.4 §5.3): a master tells the frames that
+/// went round the segment from its own.
+fn mark_source(frame: &mut [u8]) {
+    if frame.len() >= 12 {
+        let mut eth = EthernetFrame::new_unchecked(frame);
+        eth.set_src(eth.src().with_locally_administered());
+    }
+}
+
+/// A frame passed on unprocessed: source marked, nothing else touched.
+fn passed(frame: &mut [u8]) -> Processed {
+    mark_source(frame);
+    Processed::Passed
+}
+
 fn check<T: AsRef<[u8]>>(f: &EcatFrame<T>, got: usize) -> Result<Option<()>, DropReason> {
     if got < HEADER_LEN {
         return Err(DropReason::Truncated {
