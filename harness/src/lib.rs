@@ -5,10 +5,10 @@ mod bus;
 pub mod cli;
 mod cli_tools;
 mod ecat;
-/// `harness serve ecat` in a thread of the caller (EtherCAT end-to-end tests and benches).
-pub use ecat::serve as ecat_serve;
 /// What the EtherCAT speed bench (`harness/benches/ecat/`) needs of the library.
 pub use ecat::bench_support as ecat_bench;
+/// `harness serve ecat` in a thread of the caller (EtherCAT end-to-end tests and benches).
+pub use ecat::serve as ecat_serve;
 mod enip;
 /// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the
 /// simulator served as an adapter, the harness scanner reading a parameter.
