@@ -14,24 +14,13 @@ use serde_json::Value;
 
 #[allow(dead_code)] // what the EtherNet/IP tests share
 mod common;
-use common::netns::{require_or_skip, require_root_or_skip, Netns};
+use common::netns::{require_root_or_skip, Netns};
+use common::peer::interop_python;
 
 /// The interop venv's python with pysoem (`.ci/interop-setup`), or the test skips (fails under
 /// CI).
 fn python(why: &str) -> Option<PathBuf> {
-    let venv = std::env::var("INTEROP_VENV").unwrap_or_else(|_| "/tmp/nord-interop-venv".into());
-    let p = PathBuf::from(venv).join("bin/python");
-    let have = p.exists()
-        && std::process::Command::new(&p)
-            .args(["-c", "import pysoem"])
-            .status()
-            .is_ok_and(|s| s.success());
-    require_or_skip(
-        have,
-        "the interop venv with pysoem (bash .ci/interop-setup)",
-        why,
-    )
-    .then_some(p)
+    interop_python(&["pysoem"], why)
 }
 
 /// Runs `tests/interop/pysoem_master.py` on the namespace's end of the pair; one JSON object

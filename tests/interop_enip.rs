@@ -24,12 +24,11 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 mod common;
+use common::peer::{interop_python, is_root, require_or_skip, require_tshark};
 use common::{serve, wait_listening, Server};
 
-fn python() -> Option<PathBuf> {
-    let venv = std::env::var("INTEROP_VENV").unwrap_or_else(|_| "/tmp/nord-interop-venv".into());
-    let p = PathBuf::from(venv).join("bin/python");
-    p.exists().then_some(p)
+fn python(why: &str) -> Option<PathBuf> {
+    interop_python(&["pycomm3", "cpppo"], why)
 }
 
 /// Runs a client script; one JSON object per operation.
@@ -56,8 +55,7 @@ fn client(py: &PathBuf, script: &str, target: &[&str], ops: &[&str]) -> Vec<Valu
 
 #[test]
 fn pycomm3_and_cpppo_read_and_write_parameters_of_the_served_simulator() {
-    let Some(py) = python() else {
-        eprintln!("SKIP: no interop venv (run `bash .ci/interop-setup`; CI does)");
+    let Some(py) = python("pycomm3 and cpppo against harness serve enip") else {
         return;
     };
     let _server = serve("127.0.0.3:44818", "tu3-eip", 600);
@@ -487,22 +485,6 @@ fn assert_flagged_few(path: &Path, judged: &Judged) {
     );
 }
 
-fn have_tshark() -> bool {
-    Command::new("tshark").arg("--version").output().is_ok()
-}
-
-/// Whether this process runs as root (capturing on `lo` needs it).
-fn is_root() -> bool {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find_map(|l| l.strip_prefix("Uid:"))
-                .and_then(|ids| ids.split_whitespace().nth(1).map(|euid| euid == "0"))
-        })
-        .unwrap_or(false)
-}
-
 /// A fresh scratch folder.
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("harness-interop-{}-{name}", std::process::id()));
@@ -594,8 +576,7 @@ const EMBEDDED_PROFILES: [&str; 2] = ["tu4-eip@enip", "sk550p@enip"];
 
 #[test]
 fn embedded_run_pcap_dissects_cleanly_and_reproducibly() {
-    if !have_tshark() {
-        eprintln!("SKIP: tshark is not on PATH (run `bash .ci/interop-setup`; CI does)");
+    if !require_tshark("tshark on the pcapng of an embedded run") {
         return;
     }
     let dir = scratch("embedded-pcap");
@@ -770,12 +751,8 @@ fn wire_labels<'a>(
 
 #[test]
 fn network_run_pcap_matches_a_wire_capture_and_both_dissect_cleanly() {
-    if !have_tshark() {
-        eprintln!("SKIP: tshark is not on PATH (run `bash .ci/interop-setup`; CI does)");
-        return;
-    }
-    if !is_root() {
-        eprintln!("SKIP: capturing on lo needs root (CI runs as root)");
+    let why = "a run's pcapng beside tshark's capture on lo";
+    if !require_tshark(why) || !require_or_skip(is_root(), "root to capture on lo", why) {
         return;
     }
     let dir = scratch("network-pcap");
@@ -865,8 +842,7 @@ fn network_run_pcap_matches_a_wire_capture_and_both_dissect_cleanly() {
 
 #[test]
 fn generic_suite_against_cpppo_server_reports_deviations_as_failures() {
-    let Some(py) = python() else {
-        eprintln!("SKIP: no interop venv (run `bash .ci/interop-setup`; CI does)");
+    let Some(py) = python("the cip suites against cpppo's server") else {
         return;
     };
     let listen = "127.0.0.8:44818";

@@ -22,7 +22,8 @@ use serde_json::Value;
 
 #[allow(dead_code)] // what the EtherNet/IP tests share
 mod common;
-use common::netns::{require_or_skip, require_root_or_skip, Netns};
+use common::netns::{require_root_or_skip, Netns};
+use common::peer::require_tshark;
 
 /// A tshark capture on an interface of the namespace, stopped (SIGINT, so it finishes its
 /// file) when dropped.
@@ -154,12 +155,7 @@ fn every_ethercat_suite_passes_against_the_served_slave_over_a_veth_pair() {
     if !require_root_or_skip(why) {
         return;
     }
-    let have_tshark = Command::new("tshark")
-        .arg("-v")
-        .stdout(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    if !require_or_skip(have_tshark, "tshark (bash .ci/interop-setup)", why) {
+    if !require_tshark(why) {
         return;
     }
     let dir = std::env::temp_dir().join(format!("harness-network-ecat-{}", std::process::id()));

@@ -6,6 +6,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 pub(crate) mod netns;
+pub(crate) mod peer;
 
 /// A child process, killed when dropped (a served simulator, a third-party server).
 pub(crate) struct Server(pub(crate) Child);

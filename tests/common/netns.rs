@@ -15,49 +15,19 @@ use std::sync::atomic::{AtomicU32, Ordering};
 /// Every namespace made here is named `PREFIX<pid>-<n>-<tag>`.
 const PREFIX: &str = "nord-test-";
 
-/// Whether this run is CI's (the `CI` environment variable set and not empty): there a test
-/// that cannot run fails instead of skipping, so a CI run never passes by skipping.
-pub(crate) fn in_ci() -> bool {
-    std::env::var_os("CI").is_some_and(|v| !v.is_empty())
-}
-
-/// Skips (`false`, after printing why) or fails the test (`CI` set) that needs something this
-/// machine lacks; `true` when `have` holds.
-pub(crate) fn require_or_skip(have: bool, what: &str, why: &str) -> bool {
-    if have {
-        return true;
-    }
-    assert!(!in_ci(), "{why}: needs {what}, and CI must not skip it");
-    eprintln!("skipped: {why}: needs {what}");
-    false
-}
+pub(crate) use super::peer::require_or_skip;
+use super::peer::{is_root, runs};
 
 /// Whether the test can make network namespaces: root, and `ip` (iproute2) on the `PATH`.
-/// On a developer's machine without them it prints "skipped: needs root for network
-/// namespaces" with `why` (what the test would have checked) and returns `false`; when `CI`
-/// is set it fails the test instead.
+/// Without them it skips on a developer's machine, saying why, and fails under `CI`
+/// ([`super::peer`]).
 pub(crate) fn require_root_or_skip(why: &str) -> bool {
-    require_or_skip(
-        effective_uid() == Some(0),
-        "root for network namespaces",
-        why,
-    ) && require_or_skip(
-        Command::new("ip")
-            .arg("-V")
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success()),
-        "`ip` (iproute2: apt-get install iproute2) for network namespaces",
-        why,
-    )
-}
-
-/// The effective user id, from `/proc/self/status` (`Uid: real effective saved fs`).
-fn effective_uid() -> Option<u32> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("Uid:"))?;
-    line.split_whitespace().nth(2)?.parse().ok()
+    require_or_skip(is_root(), "root for network namespaces", why)
+        && require_or_skip(
+            runs("ip", "-V"),
+            "`ip` (iproute2: apt-get install iproute2) for network namespaces",
+            why,
+        )
 }
 
 /// Runs `ip ARGS…`; panics with its message when it fails.
