@@ -25,20 +25,9 @@ sys.dont_write_bytecode = True  # keep tests/interop free of __pycache__
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import interop_common as ic  # noqa: E402
 
-try:
-    import cpppo
-    from cpppo.server.enip import client as enip_client
-    from cpppo.server.enip.get_attribute import attribute_operations
-except ImportError as _e:  # pragma: no cover
-    sys.stderr.write(f"cpppo is not importable ({_e}); run .ci/interop-setup and use "
-                     f"${{INTEROP_VENV:-/tmp/nord-interop-venv}}/bin/python\n")
-    sys.exit(3)
-
-try:
-    from importlib.metadata import version as _version
-    CLIENT = f"cpppo {_version('cpppo')}"
-except Exception:  # pragma: no cover
-    CLIENT = "cpppo"
+cpppo, CLIENT = ic.import_peer("cpppo", "server.enip.client", "server.enip.get_attribute")
+from cpppo.server.enip import client as enip_client  # noqa: E402
+from cpppo.server.enip.get_attribute import attribute_operations  # noqa: E402
 
 SERVICE_FOR = {"get": 0x0E, "set": 0x10, "identity-object": 0x01}
 

@@ -1,6 +1,8 @@
-"""Shared CLI, output and decoding helpers for the third-party EtherNet/IP client wrappers.
+"""Shared CLI, output and decoding helpers for the third-party EtherNet/IP client wrappers, and
+the import of every peer library (`import_peer`).
 
-Used by pycomm3_client.py and cpppo_client.py (same CLI, same JSON lines). Standard library only,
+Used by pycomm3_client.py and cpppo_client.py (same CLI, same JSON lines), and by the pysoem
+scripts for `import_peer`. Standard library only,
 so it imports without the interop venv; the client libraries are imported by the scripts.
 """
 
@@ -33,6 +35,27 @@ operations (any number, run in order, one JSON line each):
 Numbers are decimal or 0x-hex. CLASS/INSTANCE/ATTRIBUTE may be 0 (NORD: instance 0 = parameter set 1).
 A leading HOST:PORT token is accepted instead of --host/--port.
 """
+
+
+def import_peer(name: str, *submodules: str):
+    """Imports the third-party peer `name` (and `name.submodule`s) from the interop venv, or
+    exits with status 3 saying how to get it; returns the module and "name version" for the
+    output. Every peer script imports its library so."""
+    import importlib
+    try:
+        module = importlib.import_module(name)
+        for sub in submodules:
+            importlib.import_module(f"{name}.{sub}")
+    except ImportError as e:  # pragma: no cover
+        sys.stderr.write(f"{name} is not importable ({e}); run .ci/interop-setup and use "
+                         f"${{INTEROP_VENV:-/tmp/nord-interop-venv}}/bin/python\n")
+        sys.exit(3)
+    try:
+        from importlib.metadata import version
+        label = f"{name} {version(name)}"
+    except Exception:  # pragma: no cover
+        label = name
+    return module, label
 
 
 class UsageError(Exception):

@@ -46,18 +46,10 @@ import time
 
 sys.dont_write_bytecode = True  # keep tests/interop free of __pycache__
 
-try:
-    import pysoem
-except ImportError as _e:  # pragma: no cover
-    sys.stderr.write(f"pysoem is not importable ({_e}); run .ci/interop-setup and use "
-                     f"${{INTEROP_VENV:-/tmp/nord-interop-venv}}/bin/python\n")
-    sys.exit(3)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import interop_common as ic  # noqa: E402
 
-try:
-    from importlib.metadata import version as _version
-    MASTER = f"pysoem {_version('pysoem')}"
-except Exception:  # pragma: no cover
-    MASTER = "pysoem"
+pysoem, MASTER = ic.import_peer("pysoem")
 
 STATES = {
     "init": pysoem.INIT_STATE,
