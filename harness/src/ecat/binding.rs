@@ -888,7 +888,11 @@ impl<S: DutSegment> DutSegment for super::master::Faulty<S> {
 mod tests {
     use super::super::master::{Fault, Faulty};
     use super::*;
+    use crate::binding::embedded::EmbeddedFactory;
     use crate::outcome::Verdict;
+    use crate::profile::Profile;
+    use crate::runner::{run, RunOptions};
+    use crate::suite::load_text_for_tests;
     use crate::suite::Run;
     use proto::nord::ParamNumber;
     use sim::device::{Device, DeviceConfig};
@@ -968,5 +972,58 @@ mod tests {
             let bound = b.master.config().mailbox_timeout * 2 + b.master.config().al_timeout;
             assert!(took <= bound, "{fault:?}: {took:?}");
         }
+    }
+    /// Opens nothing: a case of a bus's own steps under a profile of another bus.
+    struct NoOpen;
+
+    impl crate::runner::DutFactory for NoOpen {
+        fn describe(&self) -> String {
+            "a DUT that must not be opened".into()
+        }
+        fn open(
+            &mut self,
+            profile: &Profile,
+            _: u32,
+        ) -> Result<Box<dyn Binding>, crate::binding::OpenError> {
+            panic!("opened a DUT for {}", profile.name())
+        }
+    }
+
+    #[test]
+    fn a_bus_step_under_another_bus_is_not_applicable_without_opening_the_dut() {
+        let loaded = load_text_for_tests(
+            r#"
+doc: BU 0620
+edition: "2020-03 en"
+cases:
+  - id: al-state
+    title: t
+    ref: { section: "2.2.5", page: 18 }
+    steps:
+      - ecat: { state: PREOP }
+"#,
+        );
+        let ecat = Profile::on_bus(Product::Sk550p, "ecat");
+        let opts = RunOptions {
+            profiles: vec![
+                Profile::builtin(Product::Sk550p),
+                Profile::on_bus(Product::Sk550p, "enip"),
+            ],
+            filter: None,
+            retries: 25,
+            tap: None,
+        };
+        let r = run(&loaded, &opts, &mut NoOpen);
+        for c in &r.cases {
+            assert_eq!(c.verdict, Verdict::NotApplicable, "{}", c.profile);
+            assert!(c.message.contains("needs `ecat`"), "{}", c.message);
+        }
+        // Under its own bus it does run.
+        let opts = RunOptions {
+            profiles: vec![ecat],
+            ..opts
+        };
+        let r = run(&loaded, &opts, &mut EmbeddedFactory::default());
+        assert_eq!(r.cases[0].verdict, Verdict::Pass, "{}", r.cases[0].message);
     }
 }
