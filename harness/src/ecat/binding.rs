@@ -398,11 +398,7 @@ impl<S: DutSegment> EcatBinding<S> {
                     .master
                     .request_state(st, control)
                     .map_err(|e| step_error(&e))?;
-                let fields = json!({
-                    "state": state_name(s.state_bits()),
-                    "error": s.error(),
-                    "code": s.code.0,
-                });
+                let fields = al_fields(s.state_bits(), s.error(), s.code.0);
                 if s.error() {
                     let r = Refusal::Al(super::master::AlRefused {
                         requested: *state,
@@ -506,11 +502,7 @@ impl<S: DutSegment> EcatBinding<S> {
                 if was {
                     m.start_cycling();
                 }
-                json!({
-                    "state": state_name(s.state_bits()),
-                    "error": s.error(),
-                    "code": s.code.0,
-                })
+                al_fields(s.state_bits(), s.error(), s.code.0)
             }
             EcatStep::Identify => match m.identify(st) {
                 Ok(id) => json!({ "id": id }),
@@ -540,14 +532,13 @@ impl<S: DutSegment> EcatBinding<S> {
 
     fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, StepError> {
         let (slave, now) = self.simulated()?;
-        let (run, err) = (slave.run_led(), slave.err_led());
-        let al = json!({
-            "state": state_name((slave.al_status() & 0x0F) as u8),
-            "code": slave.al_status_code(),
-        });
         if what == "al" {
-            return Ok(al);
+            return Ok(json!({
+                "state": state_name((slave.al_status() & 0x0F) as u8),
+                "code": slave.al_status_code(),
+            }));
         }
+        let (run, err) = (slave.run_led(), slave.err_led());
         let mut v = observe_device(slave.device_mut(), what, inverter, now)
             .map_err(StepError::Refused)?
             .ok_or_else(|| {
@@ -795,14 +786,16 @@ fn refused_or(e: MasterError) -> Result<Observation, StepError> {
     };
     let fields = match r {
         Refusal::SdoAbort { code, .. } => json!({ "abort": code.0 }),
-        Refusal::Al(a) => json!({
-            "state": state_name(a.state),
-            "error": true,
-            "code": a.code.0,
-        }),
+        Refusal::Al(a) => al_fields(a.state, true, a.code.0),
         Refusal::Mailbox(code) => json!({ "mailbox_error": code.0 }),
     };
     Ok(Observation::refused(fields, r.to_outcome()))
+}
+
+/// AL status as the fields suites match: the state's name, the error indication, the AL
+/// status code.
+fn al_fields(state: u8, error: bool, code: u16) -> Value {
+    json!({ "state": state_name(state), "error": error, "code": code })
 }
 
 /// Bytes as `data` (hex) and, up to 8 bytes, `value` (little-endian, as EtherCAT carries it).

@@ -127,19 +127,38 @@ impl EmbeddedSegment {
             if w > now {
                 self.clock.advance(w - now);
             }
-            let now = self.clock.now();
-            // A timer that asks to run again at once is run again a microsecond later, so
-            // this loop always ends.
-            self.wake = self
-                .slave
-                .poll(now)
-                .map(|n| n.max(now + Duration::from_micros(1)));
+            self.run_timers();
         }
         let now = self.clock.now();
         if t > now {
             self.clock.advance(t - now);
         }
     }
+
+    /// Runs the slave's timers now and notes when it wants them run next. A timer that asks to
+    /// run again at once is run again a microsecond later, so waiting always ends.
+    fn run_timers(&mut self) {
+        let now = self.clock.now();
+        self.wake = self
+            .slave
+            .poll(now)
+            .map(|n| n.max(now + Duration::from_micros(1)));
+    }
+}
+
+/// The first frame of `queue` that fits `buf`, copied into it (longer ones are skipped, as
+/// [`Segment::recv`] says).
+fn take_queued(queue: &mut VecDeque<Vec<u8>>, buf: &mut [u8]) -> Option<Arrival> {
+    while let Some(f) = queue.pop_front() {
+        if f.len() <= buf.len() {
+            buf[..f.len()].copy_from_slice(&f);
+            return Some(Arrival {
+                len: f.len(),
+                stamp: None,
+            });
+        }
+    }
+    None
 }
 
 impl Segment for EmbeddedSegment {
@@ -155,9 +174,7 @@ impl Segment for EmbeddedSegment {
             self.returned.push_back(f);
         }
         // Processing may have started timers (a state change, the SM watchdog).
-        let now = self.clock.now();
-        let next = self.slave.poll(now);
-        self.wake = next.map(|n| n.max(now + Duration::from_micros(1)));
+        self.run_timers();
         self.advance_to(t + EMBEDDED_ROUND_TRIP / 2);
         Ok(())
     }
@@ -167,14 +184,8 @@ impl Segment for EmbeddedSegment {
         buf: &mut [u8],
         deadline: Duration,
     ) -> Result<Option<Arrival>, SegmentError> {
-        while let Some(f) = self.returned.pop_front() {
-            if f.len() <= buf.len() {
-                buf[..f.len()].copy_from_slice(&f);
-                return Ok(Some(Arrival {
-                    len: f.len(),
-                    stamp: None,
-                }));
-            }
+        if let Some(a) = take_queued(&mut self.returned, buf) {
+            return Ok(Some(a));
         }
         self.advance_to(deadline);
         Ok(None)
@@ -357,16 +368,10 @@ impl<S: Segment> Segment for Faulty<S> {
         buf: &mut [u8],
         deadline: Duration,
     ) -> Result<Option<Arrival>, SegmentError> {
-        while let Some(f) = self.back.pop_front() {
-            if f.len() <= buf.len() {
-                buf[..f.len()].copy_from_slice(&f);
-                return Ok(Some(Arrival {
-                    len: f.len(),
-                    stamp: None,
-                }));
-            }
+        match take_queued(&mut self.back, buf) {
+            Some(a) => Ok(Some(a)),
+            None => self.inner.recv(buf, deadline),
         }
-        self.inner.recv(buf, deadline)
     }
 
     fn wait_until(&mut self, until: Duration) {
