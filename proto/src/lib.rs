@@ -8,6 +8,7 @@
 
 pub mod ecat;
 pub mod enip;
+pub mod epl;
 pub mod eth;
 pub mod nord;
 mod wire;
