@@ -12,5 +12,6 @@ pub mod drive;
 pub mod ecat;
 pub mod enip;
 pub mod link;
+mod objects;
 pub mod pkw_server;
 pub mod store;

@@ -10,7 +10,8 @@
 use proto::ecat::coe::{SdoAbortCode, SdoData, SdoRequest, SdoResponse};
 use proto::nord::errors::SdoAbort;
 
-use super::od::{abort, Context, Dictionary};
+use super::od::{Context, Dictionary};
+use crate::objects::abort;
 
 /// Largest normal/segmented download the server takes (bytes): more is "out of memory"
 /// (05040005h). The largest object, a complete access to an array of 64 words per set, is

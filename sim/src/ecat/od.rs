@@ -17,43 +17,13 @@ use proto::nord::params::{Access, ParamDef};
 use proto::nord::ParamNumber;
 
 use super::pdo::ProcessWords;
+use crate::objects::{
+    abort, abort_of, check_len, decode_number, encode_number, read_sub, write_sub,
+};
 use crate::device::Device;
 use crate::link::Unit;
-use crate::store::{AccessError, Persist};
+use crate::store::Persist;
 use proto::nord::errors::SdoAbort;
-
-/// The CiA 301 abort codes the slave answers (CiA 301 table 22, ETG.1000.6 §5.6.2.7; BU 0620
-/// §2.2.7.2 lists them, with two printed differently: see `proto::nord::ecat`).
-pub(crate) mod abort {
-    use proto::nord::errors::SdoAbort;
-    /// Toggle bit not alternated.
-    pub(crate) const TOGGLE: SdoAbort = SdoAbort(0x0503_0000);
-    /// Client/server command specifier not valid or unknown.
-    pub(crate) const COMMAND: SdoAbort = SdoAbort(0x0504_0001);
-    /// Out of memory.
-    pub(crate) const NO_MEMORY: SdoAbort = SdoAbort(0x0504_0005);
-    /// Unsupported access to an object (complete access where it cannot be).
-    pub(crate) const UNSUPPORTED_ACCESS: SdoAbort = SdoAbort(0x0601_0000);
-    /// Attempt to write a read-only object (BU 0620 prints 06020002h).
-    pub(crate) const READ_ONLY: SdoAbort = SdoAbort(0x0601_0002);
-    /// Object does not exist in the object dictionary.
-    pub(crate) const NO_OBJECT: SdoAbort = SdoAbort(0x0602_0000);
-    /// Data type does not match, length of service parameter too high.
-    pub(crate) const TOO_LONG: SdoAbort = SdoAbort(0x0607_0012);
-    /// Data type does not match, length of service parameter too low.
-    pub(crate) const TOO_SHORT: SdoAbort = SdoAbort(0x0607_0013);
-    /// Sub-index does not exist.
-    pub(crate) const NO_SUBINDEX: SdoAbort = SdoAbort(0x0609_0011);
-    /// Value range of parameter exceeded (written value not allowed).
-    pub(crate) const VALUE_RANGE: SdoAbort = SdoAbort(0x0609_0030);
-    /// Value of parameter written too high.
-    pub(crate) const VALUE_TOO_HIGH: SdoAbort = SdoAbort(0x0609_0031);
-    /// Value of parameter written too low.
-    pub(crate) const VALUE_TOO_LOW: SdoAbort = SdoAbort(0x0609_0032);
-    /// BU 0620 §2.2.7.2: "no communication between the bus interface and the frequency
-    /// inverter": the addressed FI is not on the system bus.
-    pub(crate) const NO_INVERTER: SdoAbort = SdoAbort(0x0800_0020);
-}
 
 /// The parameter that holds the Hot Connect "Second Address" under EtherCAT (BU 0620 §4.2.1
 /// P850, 0…4096, adopted at POWER ON).
@@ -85,47 +55,6 @@ enum Target<'o> {
 pub(crate) struct Dictionary {
     objects: Vec<Object>,
     inverters: u8,
-}
-
-/// The one mapping of a parameter store's refusal to a CiA 301 abort code. `value` is the
-/// value a write tried (for "too large" versus "too small").
-pub(crate) fn abort_of(e: AccessError, value: i32, def: Option<&ParamDef>) -> SdoAbort {
-    match e {
-        AccessError::NoSuchParameter => abort::NO_OBJECT,
-        AccessError::ReadOnly => abort::READ_ONLY,
-        AccessError::OutOfRange => match def {
-            Some(d) if value > d.max => abort::VALUE_TOO_HIGH,
-            Some(d) if value < d.min => abort::VALUE_TOO_LOW,
-            _ => abort::VALUE_RANGE,
-        },
-        AccessError::OnlyResettable => abort::VALUE_RANGE,
-        AccessError::BadSubIndex | AccessError::NotAnArray => abort::NO_SUBINDEX,
-    }
-}
-
-/// Little-endian bytes of `value` as `ty`.
-fn encode_number(value: i64, ty: DataType) -> Vec<u8> {
-    value.to_le_bytes()[..ty.bytes().min(8)].to_vec()
-}
-
-/// The value of a data-type-sized download, sign-extended for the signed types; the data
-/// length is checked first (too long 06070012h, too short 06070013h).
-fn decode_number(data: &[u8], ty: DataType) -> Result<i32, SdoAbort> {
-    check_len(data.len(), ty.bytes())?;
-    Ok(match ty {
-        DataType::U8 => i32::from(data[0]),
-        DataType::U16 => i32::from(u16::from_le_bytes([data[0], data[1]])),
-        DataType::I16 => i32::from(i16::from_le_bytes([data[0], data[1]])),
-        _ => i32::from_le_bytes([data[0], data[1], data[2], data[3]]),
-    })
-}
-
-fn check_len(got: usize, want: usize) -> Result<(), SdoAbort> {
-    match got.cmp(&want) {
-        std::cmp::Ordering::Greater => Err(abort::TOO_LONG),
-        std::cmp::Ordering::Less => Err(abort::TOO_SHORT),
-        std::cmp::Ordering::Equal => Ok(()),
-    }
 }
 
 impl Dictionary {
@@ -183,17 +112,7 @@ impl Dictionary {
             },
             Target::Parameter { unit, number, def } => {
                 let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
-                let ty = parameter_data_type(def);
-                let read = |s: u8| -> Result<Vec<u8>, SdoAbort> {
-                    match parameter_subindex(s, def.set_dependent, def.array) {
-                        None => Err(abort::NO_SUBINDEX),
-                        Some(ParamSub::Count(n)) => Ok(vec![n]),
-                        Some(ParamSub::Value(set, element)) => store
-                            .read(number, set, element)
-                            .map(|v| encode_number(i64::from(v), ty))
-                            .map_err(|e| abort_of(e, 0, Some(def))),
-                    }
-                };
+                let read = |s: u8| read_sub(store, number, def, s);
                 if !complete {
                     return read(sub);
                 }
@@ -278,18 +197,7 @@ impl Dictionary {
                     }
                     return Ok(());
                 }
-                let (set, element) = match parameter_subindex(sub, def.set_dependent, def.array) {
-                    None => return Err(abort::NO_SUBINDEX),
-                    Some(ParamSub::Count(_)) => return Err(abort::READ_ONLY),
-                    Some(ParamSub::Value(s, e)) => (s, e),
-                };
-                if def.access == Access::ReadOnly {
-                    return Err(abort::READ_ONLY);
-                }
-                let v = decode_number(data, ty)?;
-                store
-                    .write(number, set, element, v, Persist::Eeprom)
-                    .map_err(|e| abort_of(e, v, Some(def)))
+                write_sub(store, number, def, sub, data)
             }
         }
     }
