@@ -181,7 +181,7 @@ fn object(w: &mut W, o: &Object) -> std::io::Result<()> {
 /// `<Info><DefaultData>` of a constant entry: its value little-endian as hex, as ESI writes it.
 fn default_data(w: &mut W, e: &def::Entry) -> std::io::Result<()> {
     let data: Option<Vec<u8>> = match &e.value {
-        Value::Number(n) => Some(n.to_le_bytes()[..e.data_type.bytes().min(4)].to_vec()),
+        Value::Number(n) => Some(n.to_le_bytes()[..e.data_type.bytes().min(8)].to_vec()),
         Value::Text(s) => Some(s.as_bytes().to_vec()),
         Value::Output { .. } | Value::Input { .. } => None,
     };

@@ -13,6 +13,7 @@ pub mod addr;
 pub mod control;
 pub mod ecat;
 pub mod eip;
+pub mod epl;
 pub mod errors;
 pub mod led;
 pub mod nmt;

@@ -17,11 +17,11 @@ use proto::nord::params::{Access, ParamDef};
 use proto::nord::ParamNumber;
 
 use super::pdo::ProcessWords;
+use crate::device::Device;
+use crate::link::Unit;
 use crate::objects::{
     abort, abort_of, check_len, decode_number, encode_number, read_sub, write_sub,
 };
-use crate::device::Device;
-use crate::link::Unit;
 use crate::store::Persist;
 use proto::nord::errors::SdoAbort;
 
@@ -210,7 +210,7 @@ fn encode_entry(value: &Value, ty: DataType, words: &ProcessWords) -> Vec<u8> {
         table[fi][usize::from(w).min(5)]
     };
     match value {
-        Value::Number(n) => encode_number(i64::from(*n), ty),
+        Value::Number(n) => n.to_le_bytes()[..ty.bytes().min(8)].to_vec(),
         Value::Text(s) => s.as_bytes().to_vec(),
         Value::Output { inverter, word: w } => {
             encode_number(i64::from(word(&words.outputs, *inverter, *w)), ty)

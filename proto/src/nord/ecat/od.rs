@@ -20,6 +20,8 @@ pub enum DataType {
     I16,
     /// INTEGER32 (`DINT`).
     I32,
+    /// UNSIGNED64 (`ULINT`; POWERLINK PDO mapping entries).
+    U64,
     /// VISIBLE_STRING of the given length (`STRING(n)`).
     String(u16),
 }
@@ -33,6 +35,7 @@ impl DataType {
             DataType::U8 => 0x0005,
             DataType::U16 => 0x0006,
             DataType::U32 => 0x0007,
+            DataType::U64 => 0x001B,
             DataType::String(_) => 0x0009,
         }
     }
@@ -43,6 +46,7 @@ impl DataType {
             DataType::U8 => 8,
             DataType::U16 | DataType::I16 => 16,
             DataType::U32 | DataType::I32 => 32,
+            DataType::U64 => 64,
             DataType::String(n) => n.saturating_mul(8),
         }
     }
@@ -60,6 +64,7 @@ impl DataType {
             DataType::U32 => "UDINT".into(),
             DataType::I16 => "INT".into(),
             DataType::I32 => "DINT".into(),
+            DataType::U64 => "ULINT".into(),
             DataType::String(n) => format!("STRING({n})"),
         }
     }
@@ -111,7 +116,7 @@ pub enum PdoMapping {
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
 pub enum Value {
     /// A constant number of the entry's type.
-    Number(u32),
+    Number(u64),
     /// A constant string.
     Text(&'static str),
     /// Word `word` (0 = control word, 1..5 = setpoints) of FI `inverter`'s outputs, as last
@@ -168,7 +173,7 @@ impl Object {
     }
 }
 
-fn entry(sub: u8, name: impl Into<String>, data_type: DataType, value: Value) -> Entry {
+pub(crate) fn entry(sub: u8, name: impl Into<String>, data_type: DataType, value: Value) -> Entry {
     Entry {
         sub,
         name: name.into(),
@@ -179,7 +184,7 @@ fn entry(sub: u8, name: impl Into<String>, data_type: DataType, value: Value) ->
     }
 }
 
-fn var(index: u16, name: &str, data_type: DataType, value: Value) -> Object {
+pub(crate) fn var(index: u16, name: &str, data_type: DataType, value: Value) -> Object {
     Object {
         index,
         name: name.into(),
@@ -189,13 +194,13 @@ fn var(index: u16, name: &str, data_type: DataType, value: Value) -> Object {
 }
 
 /// An ARRAY or RECORD whose sub-index 0 counts `entries`.
-fn compound(index: u16, name: String, code: ObjectCode, entries: Vec<Entry>) -> Object {
+pub(crate) fn compound(index: u16, name: String, code: ObjectCode, entries: Vec<Entry>) -> Object {
     let count = entries.iter().map(|e| e.sub).max().unwrap_or(0);
     let mut all = vec![entry(
         0,
         "Largest sub-index",
         DataType::U8,
-        Value::Number(u32::from(count)),
+        Value::Number(u64::from(count)),
     )];
     all.extend(entries);
     Object {
@@ -347,7 +352,7 @@ pub fn tx_pdos(inverters: u8) -> Vec<Pdo> {
 /// The object dictionary of §2.2.7.1 for a device with `inverters` inverters, sorted by index
 /// (the NORD parameter objects 2000h–5FFFh are not listed: see [`parameter_object`]).
 pub fn object_dictionary(inverters: u8) -> Vec<Object> {
-    let u32v = |v: u32| Value::Number(v);
+    let u32v = |v: u32| Value::Number(u64::from(v));
     let text = |s: &'static str| (DataType::String(s.len() as u16), Value::Text(s));
     let (t, v) = text(DEVICE_NAME);
     let mut od = vec![
