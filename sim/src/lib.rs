@@ -11,6 +11,7 @@ pub mod device;
 pub mod drive;
 pub mod ecat;
 pub mod enip;
+pub mod epl;
 pub mod link;
 mod objects;
 pub mod pkw_server;

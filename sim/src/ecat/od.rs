@@ -221,7 +221,7 @@ fn encode_entry(value: &Value, ty: DataType, words: &ProcessWords) -> Vec<u8> {
     }
 }
 
-fn upload_standard(
+pub(crate) fn upload_standard(
     o: &Object,
     words: &ProcessWords,
     sub: u8,

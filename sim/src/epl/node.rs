@@ -1,0 +1,584 @@
+//! The controlled node: NMT state machine, PReq/PRes, SoA services, NMT commands, SDO over
+//! ASnd and UDP, error history — around one [`Device`].
+
+use std::collections::VecDeque;
+use std::net::{Ipv4Addr, SocketAddr};
+use std::time::Duration;
+
+use proto::epl::asnd::{ErrorEntry, Flags, IdentResponse, NmtCommandFrame, StatusResponse};
+use proto::epl::frame::{Asnd, Body, Pres};
+use proto::epl::sdo::SdoFrame;
+use proto::epl::{
+    EplRepr, NmtState, RequestedService, ServiceId, BROADCAST_NODE_ID, MN_NODE_ID, MULTICAST_ASND,
+    MULTICAST_PRES,
+};
+use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
+use proto::nord::epl::{self as def, MappedWord, Slot};
+use proto::nord::led::{self, Row};
+use proto::nord::{ArrayElement, Inverter, ParamNumber, Product, Protocol};
+
+use super::od::{Context, Dictionary, NodeVars, HISTORY_LEN};
+use super::sdo::{Peer, Server};
+use crate::device::Device;
+use crate::ecat::pdo::{self, ProcessWords};
+use crate::link::Unit;
+
+/// How often the node wants [`Node::poll`] (timers, drive model).
+pub const POLL_PERIOD: Duration = Duration::from_millis(10);
+
+/// How long the node goes without a SoC in a cycling state before it counts the MN as lost:
+/// ten cycles, at least 100 ms. DS 301 counts lost SoCs against a threshold (DLL_CNLossSoC_REC,
+/// 1C0Bh) the manuals do not give; ten cycles keeps a served node on a loaded host from
+/// seeing losses that are only scheduling jitter.
+fn loss_of_soc(cycle_us: u32) -> Duration {
+    Duration::from_micros(u64::from(cycle_us) * 10).max(Duration::from_millis(100))
+}
+
+/// How the node is set up beyond its device.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NodeConfig {
+    /// The node id (SK 550P P850, modules P160 / DIP switches; 1..239 for a CN).
+    pub node_id: u8,
+    /// The node's MAC address.
+    pub mac: MacAddr,
+}
+
+impl NodeConfig {
+    /// Node `node_id` with the NORD MAC address F0-5F-5A-00-00-`node_id` (BU 0620 §4.4.2
+    /// P878: manufacturer id "F0.5F.5A", then the free address area).
+    pub fn new(node_id: u8) -> NodeConfig {
+        NodeConfig {
+            node_id,
+            mac: MacAddr([0xF0, 0x5F, 0x5A, 0x00, 0x00, node_id]),
+        }
+    }
+}
+
+/// A device that cannot be a controlled node.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum NodeError {
+    /// The product has no POWERLINK interface.
+    #[error("{0} has no POWERLINK interface")]
+    NoPowerlink(&'static str),
+    /// Not a controlled node's id (BU 0620 §2.4.3.1: 1…239).
+    #[error("node id {0} is not a controlled node's (1…239, BU 0620 §2.4.3.1)")]
+    NodeId(u8),
+}
+
+/// A POWERLINK controlled node (sans-IO).
+#[derive(Debug)]
+pub struct Node {
+    device: Device,
+    product: Product,
+    mac: MacAddr,
+    vars: NodeVars,
+    od: Dictionary,
+    sdo: Server,
+    words: ProcessWords,
+    rx_map: Vec<MappedWord>,
+    tx_map: Vec<MappedWord>,
+    /// When the state was entered.
+    since: Duration,
+    last_soc: Option<Duration>,
+    /// LED "BE": a POWERLINK error (the MN lost) until the cycle runs again.
+    error: bool,
+    /// ASnd payloads waiting for an invitation (SDO answers to the MN).
+    queued: VecDeque<Vec<u8>>,
+    /// EN: toggled with every new error entry (DS 301 §6.5.2 exception signalling).
+    en: bool,
+    faults: [i32; 8],
+    dropped: u64,
+    gateway: Ipv4Addr,
+}
+
+impl Node {
+    /// The controlled node of `device`, in NOT_ACTIVE from time zero.
+    pub fn new(mut device: Device, config: NodeConfig) -> Result<Node, NodeError> {
+        let product = device.config().product;
+        if !product.protocols().contains(&Protocol::Powerlink) {
+            return Err(NodeError::NoPowerlink(product.name()));
+        }
+        if !(1..=239).contains(&config.node_id) {
+            return Err(NodeError::NodeId(config.node_id));
+        }
+        let gateway = Node::read_gateway(&mut device, product);
+        let mut node = Node {
+            gateway,
+            device,
+            product,
+            mac: config.mac,
+            vars: NodeVars {
+                node_id: config.node_id,
+                state: NmtState::NOT_ACTIVE,
+                cycle_us: def::DEFAULT_CYCLE_US,
+                basic_ethernet_us: def::BASIC_ETHERNET_TIMEOUT_US,
+                error_register: 0,
+                history: Vec::new(),
+            },
+            od: Dictionary::new(product),
+            sdo: Server::default(),
+            words: ProcessWords::default(),
+            rx_map: def::process_map(product, true),
+            tx_map: def::process_map(product, false),
+            since: Duration::ZERO,
+            last_soc: None,
+            error: false,
+            queued: VecDeque::new(),
+            en: false,
+            faults: [0; 8],
+            dropped: 0,
+        };
+        node.show_identity();
+        node.show_state();
+        Ok(node)
+    }
+
+    /// The NMT state.
+    pub fn state(&self) -> NmtState {
+        self.vars.state
+    }
+
+    /// The node id.
+    pub fn node_id(&self) -> u8 {
+        self.vars.node_id
+    }
+
+    /// The node's MAC address.
+    pub fn mac(&self) -> MacAddr {
+        self.mac
+    }
+
+    /// Frames that were not POWERLINK the node could parse (ignored, as DS 301's DLL does).
+    pub fn dropped(&self) -> u64 {
+        self.dropped
+    }
+
+    /// The simulated device.
+    pub fn device_mut(&mut self) -> &mut Device {
+        &mut self.device
+    }
+
+    /// LED A "BS" (BU 0620 §5.5.2.3: the NMT state) and LED B "BE" (red: a POWERLINK error;
+    /// BU 2200 §6.2: in Pre-Operational 1/2, Ready To Operate and Basic Ethernet, the MN has
+    /// failed).
+    pub fn leds(&self) -> (Row, Row) {
+        let bs = match self.vars.state {
+            NmtState::PRE_OPERATIONAL_1 => 1,
+            NmtState::PRE_OPERATIONAL_2 => 2,
+            NmtState::READY_TO_OPERATE => 3,
+            NmtState::OPERATIONAL => 4,
+            NmtState::BASIC_ETHERNET => 5,
+            NmtState::STOPPED => 6,
+            _ => 0,
+        };
+        let be = usize::from(self.error);
+        (led::POWERLINK_BS[bs], led::POWERLINK_BE[be])
+    }
+
+    /// Handles one whole Ethernet frame received at `now`; returns the frames to send.
+    pub fn receive(&mut self, frame: &[u8], now: Duration) -> Vec<Vec<u8>> {
+        self.tick(now);
+        let Ok(eth) = EthernetFrame::new_checked(frame) else {
+            self.dropped += 1;
+            return Vec::new();
+        };
+        if eth.inner_ethertype() != ETHERTYPE_POWERLINK {
+            return Vec::new();
+        }
+        let Ok(repr) = EplRepr::parse_bytes(eth.inner_payload()) else {
+            self.dropped += 1;
+            return Vec::new();
+        };
+        let from_mn = repr.src == MN_NODE_ID;
+        let me = self.vars.node_id;
+        match self.vars.state {
+            NmtState::BASIC_ETHERNET => {
+                self.enter(NmtState::PRE_OPERATIONAL_1, now);
+                return Vec::new();
+            }
+            NmtState::NOT_ACTIVE if from_mn && matches!(repr.body, Body::Soc(_) | Body::Soa(_)) => {
+                self.enter(NmtState::PRE_OPERATIONAL_1, now);
+                return Vec::new();
+            }
+            NmtState::NOT_ACTIVE => return Vec::new(),
+            _ => {}
+        }
+        if !from_mn {
+            return Vec::new();
+        }
+        let mut out = Vec::new();
+        match repr.body {
+            Body::Soc(_) => {
+                self.last_soc = Some(now);
+                if self.vars.state == NmtState::PRE_OPERATIONAL_1 {
+                    self.error = false;
+                    self.enter(NmtState::PRE_OPERATIONAL_2, now);
+                }
+            }
+            Body::Preq(p) if repr.dst == me => {
+                if matches!(
+                    self.vars.state,
+                    NmtState::PRE_OPERATIONAL_2
+                        | NmtState::READY_TO_OPERATE
+                        | NmtState::OPERATIONAL
+                ) {
+                    self.outputs(&p.payload, p.rd, now);
+                    out.push(self.pres());
+                }
+            }
+            Body::Soa(s) if s.target == me => match s.service {
+                RequestedService::IDENT_REQUEST => out.push(self.asnd(
+                    ServiceId::IDENT_RESPONSE,
+                    self.ident().emit().unwrap_or_default(),
+                )),
+                RequestedService::STATUS_REQUEST => {
+                    out.push(self.asnd(ServiceId::STATUS_RESPONSE, self.status().emit()))
+                }
+                RequestedService::UNSPECIFIED_INVITE => {
+                    if let Some(payload) = self.queued.pop_front() {
+                        out.push(self.asnd(ServiceId::SDO, payload));
+                    }
+                }
+                _ => {}
+            },
+            Body::Asnd(a) if repr.dst == me || repr.dst == BROADCAST_NODE_ID => {
+                self.asnd_in(a, repr.dst == me, now);
+            }
+            _ => {}
+        }
+        out
+    }
+
+    /// Handles an SDO datagram from `from` on UDP port 3819; returns the datagrams to answer.
+    /// UDP is the only way in while the node is in Basic Ethernet (BU 0620 §2.4.4).
+    pub fn udp(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Vec<u8>> {
+        self.tick(now);
+        let Ok(frame) = SdoFrame::strip_udp(datagram).and_then(SdoFrame::parse) else {
+            self.dropped += 1;
+            return Vec::new();
+        };
+        self.sdo_frames(Peer::Udp(from), &frame)
+            .into_iter()
+            .filter_map(|f| f.emit_udp().ok())
+            .collect()
+    }
+
+    /// Runs the timers due at `now`.
+    pub fn poll(&mut self, now: Duration) {
+        self.tick(now);
+    }
+
+    fn asnd_in(&mut self, a: Asnd, to_me: bool, now: Duration) {
+        match a.service {
+            ServiceId::NMT_COMMAND => {
+                let Ok(c) = NmtCommandFrame::parse(&a.payload) else {
+                    return;
+                };
+                // NMT commands reach a node from PRE_OPERATIONAL_1 on (DS 301 §7.1.4.1).
+                if self.vars.state == NmtState::NOT_ACTIVE {
+                    return;
+                }
+                if let Some(next) = c.command.next_state(self.vars.state) {
+                    self.enter(next, now);
+                }
+            }
+            ServiceId::SDO if to_me => {
+                let Ok(frame) = SdoFrame::parse(&a.payload) else {
+                    self.dropped += 1;
+                    return;
+                };
+                for f in self.sdo_frames(Peer::Asnd(MN_NODE_ID), &frame) {
+                    if let Ok(b) = f.emit() {
+                        self.queued.push_back(b);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn sdo_frames(&mut self, peer: Peer, frame: &SdoFrame) -> Vec<SdoFrame> {
+        let mut cx = Context {
+            device: &mut self.device,
+            words: &self.words,
+            vars: &mut self.vars,
+        };
+        self.sdo.handle(peer, frame, &self.od, &mut cx)
+    }
+
+    /// Enters `to`: resets pass through to NOT_ACTIVE (DS 301 NMT_GT2…GT8: the node
+    /// re-initialises and then watches for POWERLINK frames again).
+    fn enter(&mut self, to: NmtState, now: Duration) {
+        let from = self.vars.state;
+        let to = match to {
+            NmtState::RESET_APPLICATION
+            | NmtState::RESET_COMMUNICATION
+            | NmtState::RESET_CONFIGURATION
+            | NmtState::INITIALISING => {
+                self.sdo.reset();
+                self.queued.clear();
+                self.last_soc = None;
+                NmtState::NOT_ACTIVE
+            }
+            s => s,
+        };
+        if from == NmtState::OPERATIONAL && to != NmtState::OPERATIONAL {
+            // The inverters get no valid control word from now on (as in Safe Operational
+            // under EtherCAT): they keep their state.
+            pdo::cycle(&mut self.device, &mut self.words, None, false, now);
+        }
+        self.vars.state = to;
+        self.since = now;
+        self.show_state();
+    }
+
+    /// Timers: the Basic Ethernet timeout, the loss of the MN, the drive model, new errors.
+    fn tick(&mut self, now: Duration) {
+        let state = self.vars.state;
+        if state == NmtState::NOT_ACTIVE
+            && now.saturating_sub(self.since)
+                >= Duration::from_micros(u64::from(self.vars.basic_ethernet_us))
+        {
+            self.enter(NmtState::BASIC_ETHERNET, now);
+        }
+        let cycling = matches!(
+            state,
+            NmtState::PRE_OPERATIONAL_2 | NmtState::READY_TO_OPERATE | NmtState::OPERATIONAL
+        );
+        let last = self.last_soc.unwrap_or(self.since);
+        if cycling && now.saturating_sub(last) > loss_of_soc(self.vars.cycle_us) {
+            // Loss of SoC: the MN has failed (BU 0620 §2.4.4: "If the red LED BE illuminates
+            // in this state, the Managing Node has failed"); the node falls back to
+            // PRE_OPERATIONAL_1 (DS 301 NMT_CT11). Inverters whose monitoring is on raise
+            // E10.2 as under EtherCAT's watchdog (BU 0620 §5.3).
+            self.error = true;
+            if state == NmtState::OPERATIONAL {
+                pdo::watchdog_expired(&mut self.device);
+            }
+            self.enter(NmtState::PRE_OPERATIONAL_1, now);
+        }
+        if self.vars.state != NmtState::OPERATIONAL {
+            self.device.tick(now);
+        }
+        self.errors(now);
+    }
+
+    /// PReq data: drives the inverters in OPERATIONAL when the MN marks it valid (RD); in
+    /// PRE_OPERATIONAL_2 and READY_TO_OPERATE the data are not evaluated (§2.4.4).
+    fn outputs(&mut self, payload: &[u8], rd: bool, now: Duration) {
+        let evaluate = self.vars.state == NmtState::OPERATIONAL
+            && rd
+            && payload.len() >= 2 * self.rx_map.len();
+        if !evaluate {
+            pdo::cycle(&mut self.device, &mut self.words, None, false, now);
+            return;
+        }
+        let mut image = vec![0u8; 8 * 12];
+        for (m, w) in self.rx_map.iter().zip(payload.chunks_exact(2)) {
+            if let Slot::Inverter { fi, word } = m.slot {
+                let at = usize::from(fi - 1) * 12 + usize::from(word) * 2;
+                image[at..at + 2].copy_from_slice(w);
+            }
+        }
+        pdo::cycle(&mut self.device, &mut self.words, Some(&image), true, now);
+        self.device.set_fieldbus_timeout(false);
+    }
+
+    fn pres(&self) -> Vec<u8> {
+        let payload: Vec<u8> = self
+            .tx_map
+            .iter()
+            .flat_map(|m| {
+                let w = match m.slot {
+                    Slot::Inverter { fi, word } => {
+                        self.words.inputs[usize::from(fi - 1)][usize::from(word)]
+                    }
+                    // BU 2200 §6.3.7: bit 15 "valid flag", the inputs (none set) below.
+                    Slot::Io => 0x8000,
+                };
+                w.to_le_bytes()
+            })
+            .collect();
+        let repr = EplRepr {
+            dst: BROADCAST_NODE_ID,
+            src: self.vars.node_id,
+            body: Body::Pres(Pres {
+                state: self.vars.state,
+                en: self.en,
+                rd: self.vars.state == NmtState::OPERATIONAL,
+                rs: self.queued.len().min(7) as u8,
+                pr: if self.queued.is_empty() { 0 } else { 3 },
+                pdo_version: 0x20,
+                payload,
+                ..Pres::default()
+            }),
+        };
+        self.frame(MULTICAST_PRES, &repr)
+    }
+
+    fn asnd(&self, service: ServiceId, payload: Vec<u8>) -> Vec<u8> {
+        let repr = EplRepr {
+            dst: MN_NODE_ID,
+            src: self.vars.node_id,
+            body: Body::Asnd(Asnd { service, payload }),
+        };
+        self.frame(MULTICAST_ASND, &repr)
+    }
+
+    fn frame(&self, dst: MacAddr, repr: &EplRepr) -> Vec<u8> {
+        let eth = EthernetRepr {
+            dst,
+            src: self.mac,
+            ethertype: ETHERTYPE_POWERLINK,
+        };
+        eth.emit(&repr.emit().unwrap_or_default())
+    }
+
+    fn flags(&self) -> Flags {
+        Flags {
+            en: self.en,
+            ec: false,
+            pr: 0,
+            rs: self.queued.len().min(7) as u8,
+        }
+    }
+
+    /// The IdentResponse: identity of `proto::nord::epl`, the node's addresses.
+    pub fn ident(&self) -> IdentResponse {
+        let n = self.vars.node_id;
+        let bytes = |outputs| 2 * def::process_map(self.product, outputs).len() as u16;
+        IdentResponse {
+            flags: self.flags(),
+            state: self.vars.state,
+            epl_version: def::EPL_VERSION,
+            feature_flags: def::FEATURE_FLAGS,
+            mtu: def::ASYNC_MTU,
+            poll_in_size: bytes(true),
+            poll_out_size: bytes(false),
+            response_time: def::RESPONSE_TIME_NS,
+            device_type: def::DEVICE_TYPE,
+            vendor_id: def::VENDOR_ID,
+            product_code: def::product_code(self.product),
+            revision: def::revision(self.product),
+            serial: 0,
+            vendor_ext1: 0,
+            dates: [0; 4],
+            ip: def::ip_address(n),
+            subnet: def::SUBNET,
+            gateway: self.gateway,
+            hostname: def::default_hostname(n),
+            vendor_ext2: [0; 48],
+        }
+    }
+
+    /// The gateway read in at power-on (BU 0620 §3.7.3 P852, BU 2200 §5.2.5 P164: "restart
+    /// … so that the parameter settings are read in").
+    fn read_gateway(device: &mut Device, product: Product) -> Ipv4Addr {
+        let number = if product == Product::Sk550p { 852 } else { 164 };
+        let mut b = [0u8; 4];
+        if let (Ok(n), Ok(s)) = (ParamNumber::new(number), device.store(Unit::Interface)) {
+            for (e, byte) in (1..).zip(b.iter_mut()) {
+                let Ok(el) = ArrayElement::new(e) else {
+                    continue;
+                };
+                *byte = s.read(n, None, Some(el)).unwrap_or(0) as u8;
+            }
+        }
+        Ipv4Addr::from(b)
+    }
+
+    /// The StatusResponse: state, error register and the error history.
+    pub fn status(&self) -> StatusResponse {
+        StatusResponse {
+            flags: self.flags(),
+            state: self.vars.state,
+            error_register: self.vars.error_register,
+            specific: [0; 6],
+            entries: self.vars.history.clone(),
+        }
+    }
+
+    /// An error entry for each inverter error that appeared (P700 [-01] from 0 to a value):
+    /// the code of BU 0620 §5.4.1.2's allocation table (1000h with error index 1 where the
+    /// table has none), the FI id and the P700 value in ASCII as additional information
+    /// (§5.4.1.2 "FI-ID (ASCII)", "FI Error Code (ASCII)").
+    fn errors(&mut self, now: Duration) {
+        let (Ok(p700), Ok(first)) = (ParamNumber::new(700), ArrayElement::new(1)) else {
+            return;
+        };
+        for n in 1..=self.device.config().inverters.min(8) {
+            let Ok(fi) = Inverter::new(i64::from(n)) else {
+                continue;
+            };
+            let value = self
+                .device
+                .store(Unit::Inverter(fi))
+                .ok()
+                .and_then(|s| s.read(p700, None, Some(first)).ok())
+                .unwrap_or(0);
+            let i = usize::from(n - 1);
+            if value != self.faults[i] && value != 0 {
+                let (code, register) = proto::nord::errors::powerlink_error(value as u16)
+                    .map_or((0x1000, 1), |e| (e.code, e.register));
+                let text = format!("{}{:>7}", n, format!("{}.{}", value / 10, value % 10));
+                let mut info = [0u8; 8];
+                info.copy_from_slice(&text.as_bytes()[..8]);
+                self.vars.history.insert(
+                    0,
+                    ErrorEntry {
+                        entry_type: ErrorEntry::MODE_HISTORY | 0x0001,
+                        code,
+                        time: now.as_micros() as u64,
+                        info: u64::from_le_bytes(info),
+                    },
+                );
+                self.vars.history.truncate(HISTORY_LEN);
+                self.vars.error_register |= register;
+                self.en = !self.en;
+            }
+            if value == 0 && self.faults[i] != 0 && self.faults.iter().all(|&f| f == 0) {
+                self.vars.error_register = 0;
+            }
+            self.faults[i] = value;
+        }
+    }
+
+    /// The interface's information parameters that say who the node is: SK 550P P870 = 4
+    /// "Powerlink", P875 IP address, P876 subnet mask, P878 MAC address (BU 0620 §4.3, §4.4.2);
+    /// modules P185 IP address, P181 MAC address (BU 2200 §7.1.4).
+    fn show_identity(&mut self) {
+        let ip = def::ip_address(self.vars.node_id).octets();
+        let mac = self.mac.0;
+        let product = self.product;
+        let Ok(s) = self.device.store(Unit::Interface) else {
+            return;
+        };
+        let (ip_p, mac_p) = match product {
+            Product::Sk550p => {
+                s.set_info(870, 1, 4);
+                for (e, b) in (1..).zip(def::SUBNET.octets()) {
+                    s.set_info(876, e, i32::from(b));
+                }
+                (875, 878)
+            }
+            _ => (185, 181),
+        };
+        for (e, b) in (1..).zip(ip) {
+            s.set_info(ip_p, e, i32::from(b));
+        }
+        for (e, b) in (1..).zip(mac) {
+            s.set_info(mac_p, e, i32::from(b));
+        }
+    }
+
+    /// P182 "NMT State" of the modules (BU 2200 §7.1.4: the state code).
+    fn show_state(&mut self) {
+        if self.product == Product::Sk550p {
+            return;
+        }
+        let code = self.vars.state.0;
+        if let Ok(s) = self.device.store(Unit::Interface) {
+            s.set_info(182, 1, i32::from(code));
+        }
+    }
+}
