@@ -10,6 +10,7 @@ pub use ecat::bench_support as ecat_bench;
 /// `harness serve ecat` in a thread of the caller (EtherCAT end-to-end tests and benches).
 pub use ecat::serve as ecat_serve;
 mod enip;
+mod epl;
 /// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the
 /// simulator served as an adapter, the harness scanner reading a parameter.
 pub use enip::bench_support as enip_bench;

@@ -379,7 +379,7 @@ impl Device {
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
                 let mut pzd = unit.process(control, setpoints, now);
                 pzd.resize(ppo.pzd.len(), 0);
-                self.show_process_data(i, ppo_type, &ppo.pzd, &pzd);
+                self.show_process_data(i, Some(ppo_type), &ppo.pzd, &pzd);
                 (pkw, pzd)
             }
         };
@@ -417,35 +417,43 @@ impl Device {
         }
     }
 
-    /// The modules' process-data display parameters, for the inverter a PPO frame addressed:
+    /// The process-data display parameters for one inverter's words, whichever bus carried
+    /// them (`ppo` for a PPO frame):
+    /// - SK 550P (BU 0620 §4.3): P873 "Process data bus In" / P874 "Process data bus Out"
+    ///   elements 6·(FI−1)+1..+6.
     /// - SK TU3-PNT (BU 0590 §5.1.3–§5.1.4, p. 36–37): P176 [-02] control word, [-03]/[-04]
     ///   setpoints 1/2; P177 [-02] status word, [-03]/[-04] actual values 1/2; P180 [-03] (slot
     ///   3, the FI) the module id of the PPO type (3 = PPO3 … 7 = PPO2).
     /// - SK TU3/TU4/CU4-POL (BU 2200 §7.1.3, p. 55): P176/P177 [-02 + 6(n-1)] control/status
     ///   word of FI n and the next five elements its setpoints/actual values 1..5.
-    fn show_process_data(
+    pub fn show_process_data(
         &mut self,
         inverter: Inverter,
-        ppo: PpoType,
+        ppo: Option<PpoType>,
         sent: &[u16],
         answer: &[u16],
     ) {
-        let (first, words) = match self.config.product {
+        let n = inverter.get() - 1;
+        let (params, first, words) = match self.config.product {
             Product::Tu3Pnt => {
-                if let Some(code) = ppo.display_code(self.config.product) {
+                if let Some(code) = ppo.and_then(|p| p.display_code(self.config.product)) {
                     self.interface.store.set_info(180, 3, i32::from(code));
                 }
-                (2, 3)
+                ((176, 177), 2, 3)
             }
-            Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => {
-                (2 + 6 * (inverter.get() - 1), 6)
-            }
+            Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => ((176, 177), 2 + 6 * n, 6),
+            Product::Sk550p => ((873, 874), 1 + 6 * n, 6),
             _ => return,
         };
         let store = &mut self.interface.store;
         for (e, (i, o)) in (first..).zip(sent.iter().zip(answer)).take(words) {
-            store.set_info(176, e, i32::from(*i as i16));
-            store.set_info(177, e, i32::from(*o as i16));
+            // The modules show signed values (P176/P177 −32768…32767), the SK 550P hex words.
+            let (i, o) = match params.0 {
+                176 => (i32::from(*i as i16), i32::from(*o as i16)),
+                _ => (i32::from(*i), i32::from(*o)),
+            };
+            store.set_info(params.0, e, i);
+            store.set_info(params.1, e, o);
         }
     }
 

@@ -48,7 +48,7 @@ pub enum LinkError {
 
 impl LinkError {
     /// An I/O error of `op` on `iface`; a permission error is [`LinkError::NeedsRoot`].
-    pub(super) fn io(op: &'static str, iface: &str, source: io::Error) -> LinkError {
+    pub(crate) fn io(op: &'static str, iface: &str, source: io::Error) -> LinkError {
         let iface = iface.to_string();
         match source.kind() {
             io::ErrorKind::PermissionDenied => LinkError::NeedsRoot { iface, source },

@@ -182,9 +182,11 @@ fn tu3_sub(n: u8, k: u8) -> u8 {
 }
 
 /// The words of the PReq (`outputs`) or PRes payload of a product, in order (BU 0620 §2.4.5:
-/// 8 FIs, 96 bytes, 5000h+FI−1 / 5010h+FI−1 sub-indices 1..6; BU 2200 §6.3.5: SK TU3-POL 12
-/// bytes, FU1 — control/status word 5000h/5001h sub FU, values 5002h/5003h; SK TU4-POL/CU4-POL
-/// 50 bytes: the I/O word 5005h.0/5001h.0, then FU1..4 with values at 5·(FU−1) + k).
+/// 8 FIs, 96 bytes, 5000h+FI−1 / 5010h+FI−1 sub-indices 1..6; BU 2200 §6.3.5: SK TU3-POL
+/// "12 Byte" per FU — its table restarts the word count at every FU — for FU 1..4, the FUs its
+/// device-id table (§6.4) reaches (the mapping table also lists FU5..8's addresses), control/
+/// status word 5000h/5001h sub FU, values 5002h/5003h; SK TU4-POL/CU4-POL 50 bytes: the I/O
+/// word 5005h.0/5001h.0, then FU1..4 with values at 5·(FU−1) + k).
 pub fn process_map(product: Product, outputs: bool) -> Vec<MappedWord> {
     let (word0, values) = if outputs {
         (0x5000, 0x5002)
@@ -199,8 +201,10 @@ pub fn process_map(product: Product, outputs: bool) -> Vec<MappedWord> {
     let mut map = Vec::new();
     match product {
         Product::Tu3Pol => {
-            map.push(w(word0, 1, 1, 0));
-            map.extend((1..=5).map(|k| w(values, tu3_sub(1, k), 1, k)));
+            for n in 1..=product.max_inverters() {
+                map.push(w(word0, n, n, 0));
+                map.extend((1..=5).map(|k| w(values, tu3_sub(n, k), n, k)));
+            }
         }
         Product::Tu4Pol | Product::Cu4Pol => {
             map.push(MappedWord {
@@ -412,8 +416,12 @@ mod tests {
         let sk_in = process_map(Product::Sk550p, false);
         assert_eq!((sk_in[47].index, sk_in[47].sub), (0x5017, 6));
         let tu3 = process_map(Product::Tu3Pol, true);
-        let subs: Vec<u8> = tu3.iter().map(|m| m.sub).collect();
-        assert_eq!(subs, [1, 0x01, 0x05, 0x09, 0x0D, 0x11]);
+        let subs: Vec<u8> = tu3[..12].iter().map(|m| m.sub).collect();
+        assert_eq!(
+            subs,
+            [1, 0x01, 0x05, 0x09, 0x0D, 0x11, 2, 0x02, 0x06, 0x0A, 0x0E, 0x12]
+        );
+        assert_eq!(tu3.len(), 24);
         assert_eq!((tu3_sub(3, 4), tu3_sub(8, 5)), (0x0F, 0x28)); // errata 5502.Fh, 5002.29h
         let tu4 = process_map(Product::Tu4Pol, false);
         assert_eq!(tu4.len(), 25); // 50 bytes

@@ -57,7 +57,7 @@ fn inverters(n: u8) -> impl Iterator<Item = (usize, Inverter)> {
 
 /// One process data cycle at `now`: `outputs` (the SM2 image) drives the inverters when
 /// `evaluate` (Operational), otherwise they get an invalid control word; the inputs are
-/// refreshed. Also shows the words in P873/P874 (BU 0620 §4.3: 6 elements per FI).
+/// refreshed. Also shows the words in P873/P874 (BU 0620 §4.3: 6 elements per FI; the modules' P176/P177, BU 2200 §7.1.3).
 pub(crate) fn cycle(
     device: &mut Device,
     words: &mut ProcessWords,
@@ -97,15 +97,11 @@ pub(crate) fn cycle(
     }
 }
 
-/// P873 "Process data bus In" / P874 "Process data bus Out" elements 6·(FI−1)+1..+6 (§4.3).
+/// The words of FI `i + 1` in the interface's display parameters (P873/P874 on the SK 550P,
+/// P176/P177 on the POWERLINK modules: [`Device::show_process_data`]).
 fn show(device: &mut Device, i: usize, words: &ProcessWords) {
-    let Ok(store) = device.store(crate::link::Unit::Interface) else {
-        return;
-    };
-    for w in 0..WORDS {
-        let element = (i * WORDS + w + 1) as u8;
-        store.set_info(873, element, i32::from(words.outputs[i][w]));
-        store.set_info(874, element, i32::from(words.inputs[i][w]));
+    if let Ok(fi) = Inverter::new(i as i64 + 1) {
+        device.show_process_data(fi, None, &words.outputs[i], &words.inputs[i]);
     }
 }
 

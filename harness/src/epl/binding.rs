@@ -1,0 +1,691 @@
+//! The POWERLINK binding: the harness as managing node of one NORD controlled node (BU 0620
+//! §2.4, BU 2200), in-process against the simulated node or on a network interface.
+//!
+//! Opening a DUT boots the node to PRE_OPERATIONAL_2 as an MN does (IdentRequest in the
+//! reduced cycle, then the isochronous cycle) and reads its IdentResponse. `read`/`write` are
+//! SDO transfers (over ASnd, or UDP with `--sdo udp`) of the parameter objects at device id +
+//! parameter number (BU 0620 §2.4.6: 2000h + 600h·(FI−1); BU 2200 §6.4: the module at 2000h,
+//! FU n at 2000h + 800h·n); `process`/`wait` run the cycle in OPERATIONAL with the control
+//! word and setpoints of each inverter in the PReq and its status word and actual values in
+//! the PRes, where the product's process map puts them. The `epl:` steps go to the MN as
+//! written. A refusal is the node's SDO abort code.
+//!
+//! On a device on the network every SDO write goes through the shared [`Ledger`]; when the
+//! case ends the binding stops the drives it ran, writes back what the case changed and
+//! leaves the node in PRE_OPERATIONAL_2.
+
+use std::fmt;
+use std::time::Duration;
+
+use proto::epl::sdo::Command;
+use proto::epl::NmtState;
+use proto::nord::ecat::{parameter_data_type, DataType};
+use proto::nord::epl::{self as def, ParamOwner, Slot};
+use proto::nord::errors::SdoAbort;
+use proto::nord::params::{self, Owner};
+use proto::nord::{addr, Inverter, ParamAddress, Product, Protocol};
+use serde_json::{json, Value};
+
+use super::mn::link::Link;
+use super::mn::{describe, Manager, MnError, Via};
+use super::step::EplStep;
+use crate::binding::channel::{compact, cycles_left_out};
+use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::settle::{Drives, SETTLE_CYCLES};
+use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
+use crate::ledger::{self, Account, Ledger, Problem};
+use crate::outcome::{Exchange, Refusal};
+use crate::profile::Capability;
+use crate::runner::{cycles_for, hex};
+use crate::suite::{Action, OrderSpec, Run, Target};
+
+/// What the embedded node offers: every general capability but the PKW channel (POWERLINK
+/// reaches parameters as SDO objects), and the `epl:` steps.
+pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 8] = [
+    Capability::ParameterAccess,
+    Capability::ProcessData,
+    Capability::FaultInjection,
+    Capability::Observe,
+    Capability::PowerOn,
+    Capability::FactoryState,
+    Capability::Readdressing,
+    Capability::Bus("epl"),
+];
+
+/// What a node on the network offers: one persistent device.
+pub(crate) const NETWORK_CAPABILITIES: [Capability; 3] = [
+    Capability::ParameterAccess,
+    Capability::ProcessData,
+    Capability::Bus("epl"),
+];
+
+/// An SDO object the case wrote, the ledger's key.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Object {
+    index: u16,
+    sub: u8,
+}
+
+impl fmt::Display for Object {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "object {:04X}h/{:02X}h", self.index, self.sub)
+    }
+}
+
+/// The harness as MN of one controlled node.
+pub(crate) struct EplBinding<L> {
+    mn: Manager<L>,
+    product: Product,
+    what: String,
+    capabilities: &'static [Capability],
+    ledger: Option<Ledger<Object>>,
+    pending: Vec<Exchange>,
+    commanded: Vec<Inverter>,
+    via: Via,
+}
+
+/// The refusal of an SDO abort code, with the manual's words for it.
+fn abort(code: u32) -> Observation {
+    let text = match SdoAbort(code).describe(Protocol::Powerlink) {
+        Some(t) => format!("{code:08X}h {t}"),
+        None => format!("{code:08X}h"),
+    };
+    Observation::refused(
+        json!({ "abort": code }),
+        Refusal {
+            kind: "SDO abort code",
+            code,
+            text,
+        },
+    )
+}
+
+fn step_error(e: MnError) -> StepError {
+    match e {
+        MnError::Link(l) => StepError::Link(l.to_string()),
+        e @ MnError::NoReply { .. } => StepError::Link(e.to_string()),
+        e @ MnError::Malformed { .. } => StepError::Garbage(e.to_string()),
+        e @ MnError::State { .. } => StepError::Refused(e.to_string()),
+        MnError::Abort(code) => StepError::Refused(format!("SDO abort {code:08X}h")),
+    }
+}
+
+fn refused_or(e: MnError) -> Result<Observation, StepError> {
+    match e {
+        MnError::Abort(code) => Ok(abort(code)),
+        other => Err(step_error(other)),
+    }
+}
+
+/// Why the node could not be opened.
+pub(crate) fn open_error(e: MnError) -> OpenError {
+    match e {
+        MnError::Link(_) | MnError::NoReply { .. } => OpenError::Unreachable(e.to_string()),
+        _ => OpenError::BringUp(e.to_string()),
+    }
+}
+
+impl<L: Link> EplBinding<L> {
+    /// Boots the node behind `mn` to PRE_OPERATIONAL_2 and reads who it is; `persistent` for
+    /// a device on the network.
+    pub(crate) fn open(
+        mut mn: Manager<L>,
+        product: Product,
+        what: String,
+        persistent: bool,
+    ) -> Result<EplBinding<L>, OpenError> {
+        let via = mn.config().via;
+        mn.set_recording(false);
+        mn.boot(NmtState::PRE_OPERATIONAL_2).map_err(open_error)?;
+        let id = mn.ident().map_err(open_error)?;
+        if id.vendor_id != def::VENDOR_ID {
+            return Err(OpenError::BringUp(format!(
+                "node {} has vendor id {:08X}h, not NORD's {:08X}h",
+                mn.config().node,
+                id.vendor_id,
+                def::VENDOR_ID
+            )));
+        }
+        let what = format!(
+            "{what}: node {} \"{}\" (vendor {:08X}h, product {:08X}h, revision {:08X}h, IP {})",
+            mn.config().node,
+            id.hostname,
+            id.vendor_id,
+            id.product_code,
+            id.revision,
+            id.ip
+        );
+        mn.take_exchanges();
+        mn.set_recording(true);
+        let outputs = 2 * def::process_map(product, true).len();
+        mn.set_outputs(vec![0; outputs], false);
+        Ok(EplBinding {
+            mn,
+            product,
+            what,
+            capabilities: if persistent {
+                &NETWORK_CAPABILITIES
+            } else {
+                &EMBEDDED_CAPABILITIES
+            },
+            ledger: persistent.then(Ledger::default),
+            pending: Vec::new(),
+            commanded: Vec::new(),
+            via,
+        })
+    }
+
+    /// The SDO object of a `read`/`write` step and the parameter's definition. A
+    /// set-dependent parameter without a set is set 1, an array without an element element 1
+    /// (sub-index 0 of those is their count, BU 0620 §2.4.6).
+    fn object(
+        &self,
+        o: &OrderSpec,
+    ) -> Result<(Object, Option<&'static params::ParamDef>), StepError> {
+        let suite = |e: String| StepError::Suite(e);
+        let (owner, def) = match o.target {
+            Target::Interface => (
+                ParamOwner::Interface,
+                params::lookup(self.product, Owner::Interface, o.number),
+            ),
+            Target::Inverter(i) => {
+                let inv = params::lookup(self.product, Owner::Inverter, o.number);
+                let iface = (i.get() == 1 && self.product == Product::Sk550p)
+                    .then(|| params::lookup(self.product, Owner::Interface, o.number))
+                    .flatten();
+                (ParamOwner::Inverter(i), iface.or(inv))
+            }
+        };
+        let set = o.set.or_else(|| {
+            def.filter(|d| d.set_dependent)
+                .and_then(|_| proto::nord::ParamSet::new(1).ok())
+        });
+        let element = o.element.or_else(|| {
+            def.filter(|d| d.array.is_some())
+                .and_then(|_| proto::nord::ArrayElement::new(1).ok())
+        });
+        let sub = addr::sdo_subindex(set, element);
+        let index = match owner {
+            // The SK 550P's interface is built into FI 1 (its parameters at 2000h + P); a
+            // module's own parameters are at 2000h + P (BU 2200 §6.4).
+            ParamOwner::Interface => 0x2000 + o.number.get(),
+            ParamOwner::Inverter(i) => {
+                addr::powerlink(
+                    self.product,
+                    ParamAddress {
+                        inverter: i,
+                        number: o.number,
+                        set,
+                        element,
+                    },
+                )
+                .map_err(|e| suite(e.to_string()))?
+                .index
+            }
+        };
+        Ok((Object { index, sub }, def))
+    }
+
+    fn read(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
+        let (obj, def) = self.object(o)?;
+        let data = match self
+            .mn
+            .sdo(self.via, Command::read_by_index(0, obj.index, obj.sub))
+        {
+            Ok(d) => d,
+            Err(e) => return refused_or(e),
+        };
+        let ty = def.map(parameter_data_type);
+        let value = match (data.as_slice(), ty) {
+            ([a, b], Some(DataType::U16)) => i64::from(u16::from_le_bytes([*a, *b])),
+            ([a, b], _) => i64::from(i16::from_le_bytes([*a, *b])),
+            ([a, b, c, d], _) => i64::from(i32::from_le_bytes([*a, *b, *c, *d])),
+            (other, _) => {
+                return Err(StepError::Protocol(format!(
+                    "{obj}: a parameter value of {} bytes (2 or 4 expected)",
+                    other.len()
+                )))
+            }
+        };
+        Ok(json!({ "value": value, "data": hex(&data), "abort": null }).into())
+    }
+
+    fn write(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
+        let (obj, def) = self.object(o)?;
+        let value = o.value.unwrap_or(0);
+        let v = i32::try_from(value)
+            .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
+        let width = def.map_or(2, |d| parameter_data_type(d).bytes());
+        self.download(obj, &v.to_le_bytes()[..width], self.via)
+    }
+
+    /// An SDO write, through the ledger on a persistent device.
+    fn download(&mut self, obj: Object, data: &[u8], via: Via) -> Result<Observation, StepError> {
+        if self.ledger.as_ref().is_some_and(|l| l.wants_original(&obj)) {
+            let before = self
+                .mn
+                .sdo(via, Command::read_by_index(0, obj.index, obj.sub))
+                .map_err(|e| e.to_string());
+            if let Some(l) = self.ledger.as_mut() {
+                l.original(obj, before);
+            }
+        }
+        let r = self
+            .mn
+            .sdo(via, Command::write_by_index(0, obj.index, obj.sub, data));
+        if let Some(l) = self.ledger.as_mut() {
+            let outcome = match &r {
+                Ok(_) => Ok(true),
+                Err(MnError::Abort(_)) => Ok(false),
+                Err(e) => Err(StepError::Link(e.to_string())),
+            };
+            l.wrote(
+                &obj,
+                ledger::may_have_taken_effect(outcome.as_ref().copied()),
+            );
+        }
+        match r {
+            Ok(_) => Ok(json!({ "abort": null }).into()),
+            Err(e) => refused_or(e),
+        }
+    }
+
+    /// The node in OPERATIONAL with the cycle running (booted the MN's way).
+    fn operational(&mut self) -> Result<(), StepError> {
+        if self.mn.node_state() == Some(NmtState::OPERATIONAL) && self.mn.is_cycling() {
+            return Ok(());
+        }
+        self.mn.set_recording(false);
+        let r = self.mn.boot(NmtState::OPERATIONAL);
+        self.mn.set_recording(true);
+        r.map(|_| ()).map_err(|e| match e {
+            MnError::State { .. } => {
+                StepError::Refused(format!("the node did not enter OPERATIONAL: {e}"))
+            }
+            other => step_error(other),
+        })
+    }
+
+    /// Puts FI `fi`'s six words into the PReq payload where the process map has them.
+    fn set_words(&mut self, fi: u8, words: [u16; 6]) {
+        let map = def::process_map(self.product, true);
+        let out = self.mn.outputs_mut();
+        for (i, m) in map.iter().enumerate() {
+            if let Slot::Inverter { fi: f, word } = m.slot {
+                if f == fi {
+                    let w = words[usize::from(word)].to_le_bytes();
+                    if let Some(b) = out.get_mut(2 * i..2 * i + 2) {
+                        b.copy_from_slice(&w);
+                    }
+                }
+            }
+        }
+    }
+
+    /// FI `fi`'s six words from the last PRes.
+    fn words(&self, fi: u8) -> [u16; 6] {
+        let mut w = [0u16; 6];
+        let inputs = self.mn.inputs();
+        for (i, m) in def::process_map(self.product, false).iter().enumerate() {
+            if let Slot::Inverter { fi: f, word } = m.slot {
+                if let (true, Some(b)) = (f == fi, inputs.get(2 * i..2 * i + 2)) {
+                    w[usize::from(word)] = u16::from_le_bytes([b[0], b[1]]);
+                }
+            }
+        }
+        w
+    }
+
+    fn process(
+        &mut self,
+        inverter: Inverter,
+        words: Option<[u16; 6]>,
+        cycles: u32,
+    ) -> Result<Value, StepError> {
+        self.operational()?;
+        let out = self.mn.outputs_mut().clone();
+        self.mn.set_outputs(out, true);
+        if let Some(w) = words {
+            if !self.commanded.contains(&inverter) {
+                self.commanded.push(inverter);
+            }
+            self.set_words(inverter.get(), w);
+        }
+        // The PRes of a cycle carries what the node had before that cycle's PReq: one more
+        // cycle brings the inverter's answer to the last of them.
+        self.cycles(u64::from(cycles) + 1).map_err(step_error)?;
+        let i = self.words(inverter.get());
+        Ok(crate::binding::process_fields(i[0], &i[1..]))
+    }
+
+    /// Runs `n` cycles; the transcript keeps the first two and the last.
+    fn cycles(&mut self, n: u64) -> Result<(), MnError> {
+        const HEAD: u64 = 2;
+        self.mn.run_cycles(n.min(HEAD))?;
+        let middle = n.saturating_sub(HEAD + 1);
+        if middle > 0 {
+            self.pending.extend(self.mn.take_exchanges());
+            self.mn.set_recording(false);
+            let r = self.mn.run_cycles(middle);
+            self.mn.set_recording(true);
+            r?;
+            self.pending.push(cycles_left_out(middle));
+        }
+        if n > HEAD {
+            self.mn.run_cycles(1)?;
+        }
+        Ok(())
+    }
+
+    /// An `epl:` step, as written.
+    fn epl_step(&mut self, step: &EplStep) -> Result<Observation, StepError> {
+        let fields = match step {
+            EplStep::Nmt(c) => {
+                let state = self.mn.nmt(*c).map_err(step_error)?;
+                if state == NmtState::NOT_ACTIVE {
+                    self.mn.drop_connections();
+                }
+                self.state_fields(state)
+            }
+            EplStep::State(s) => {
+                let state = self.mn.boot(*s).map_err(step_error)?;
+                self.state_fields(state)
+            }
+            EplStep::Ident => {
+                let i = self.mn.ident().map_err(step_error)?;
+                json!({
+                    "state": i.state.to_string(),
+                    "vendor": i.vendor_id,
+                    "product": i.product_code,
+                    "revision": i.revision,
+                    "serial": i.serial,
+                    "device_type": i.device_type,
+                    "epl_version": i.epl_version,
+                    "feature_flags": i.feature_flags,
+                    "mtu": i.mtu,
+                    "poll_in": i.poll_in_size,
+                    "poll_out": i.poll_out_size,
+                    "ip": i.ip.to_string(),
+                    "subnet": i.subnet.to_string(),
+                    "gateway": i.gateway.to_string(),
+                    "hostname": i.hostname,
+                })
+            }
+            EplStep::Status => {
+                let s = self.mn.status().map_err(step_error)?;
+                let entries: Vec<Value> = s
+                    .entries
+                    .iter()
+                    .map(|e| {
+                        json!({
+                            "type": e.entry_type,
+                            "code": e.code,
+                            "info": hex(&e.info.to_le_bytes()),
+                            "text": String::from_utf8_lossy(&e.info.to_le_bytes()).trim().to_string(),
+                        })
+                    })
+                    .collect();
+                json!({
+                    "state": s.state.to_string(),
+                    "error_register": s.error_register,
+                    "errors": entries.len(),
+                    "entry": entries.first().cloned().unwrap_or(Value::Null),
+                    "entries": entries,
+                    "en": s.flags.en,
+                })
+            }
+            EplStep::Upload { index, sub, via } => {
+                let via = via.unwrap_or(self.via);
+                match self.mn.sdo(via, Command::read_by_index(0, *index, *sub)) {
+                    Ok(d) => {
+                        let mut f = json!({ "data": hex(&d), "size": d.len(), "abort": null });
+                        if let Some(v) = number(&d) {
+                            f["value"] = json!(v);
+                        }
+                        if !d.is_empty() && d.iter().all(|b| b.is_ascii_graphic() || *b == b' ') {
+                            f["text"] = json!(String::from_utf8_lossy(&d));
+                        }
+                        f
+                    }
+                    Err(e) => return refused_or(e),
+                }
+            }
+            EplStep::Download {
+                index,
+                sub,
+                data,
+                via,
+            } => {
+                let obj = Object {
+                    index: *index,
+                    sub: *sub,
+                };
+                return self.download(obj, data, via.unwrap_or(self.via));
+            }
+            EplStep::Frame(bytes) => {
+                let got = self.mn.raw_exchange(bytes).map_err(step_error)?;
+                let state = self.mn.node_state();
+                let mut f = json!({
+                    "answered": !got.is_empty(),
+                    "reply": got.first().map(|r| hex(&r.bytes)),
+                    "state": state.map(|s| s.to_string()),
+                });
+                if let Some(r) = got.first().and_then(|r| r.repr.as_ref()) {
+                    f["type"] = json!(r.message_type().name());
+                    f["decoded"] = json!(describe(r));
+                }
+                f
+            }
+            EplStep::Sdo { bytes, via } => {
+                let answers = self
+                    .mn
+                    .sdo_raw(via.unwrap_or(self.via), bytes)
+                    .map_err(step_error)?;
+                let mut f = json!({
+                    "answered": !answers.is_empty(),
+                    "reply": answers.first().map(|a| hex(a)),
+                    "abort": null,
+                });
+                if let Some(a) = answers.first() {
+                    if let Ok(sf) = proto::epl::sdo::SdoFrame::parse(a) {
+                        f["rcon"] = json!(format!("{:?}", sf.seq.rcon));
+                        if let Some(code) = sf.command.as_ref().and_then(|c| c.abort_code()) {
+                            f["abort"] = json!(code);
+                            return Ok(Observation::refused(
+                                f,
+                                abort(code).refusal.unwrap_or(Refusal {
+                                    kind: "SDO abort code",
+                                    code,
+                                    text: String::new(),
+                                }),
+                            ));
+                        }
+                    }
+                }
+                f
+            }
+            EplStep::Silence(d) => {
+                self.mn.silence(*d);
+                let state = self.mn.status().map(|s| s.state).map_err(step_error)?;
+                self.state_fields(state)
+            }
+            EplStep::Cycles(n) => {
+                self.cycles(*n).map_err(step_error)?;
+                let state = self.mn.node_state();
+                json!({ "state": state.map(|s| s.to_string()) })
+            }
+        };
+        Ok(fields.into())
+    }
+
+    fn state_fields(&self, state: NmtState) -> Value {
+        json!({ "state": state.to_string(), "code": state.0 })
+    }
+
+    /// `inject`/`observe` reach into the simulated node.
+    fn simulated(&mut self) -> Result<(&mut sim::epl::Node, Duration), StepError> {
+        self.mn
+            .link_mut()
+            .node()
+            .ok_or_else(|| StepError::Refused("only the embedded node can be looked into".into()))
+    }
+
+    fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, StepError> {
+        let (node, now) = self.simulated()?;
+        if what == "nmt" {
+            return Ok(json!({ "state": node.state().to_string(), "code": node.state().0 }));
+        }
+        let (bs, be) = node.leds();
+        let mut v = observe_device(node.device_mut(), what, inverter, now)
+            .map_err(StepError::Refused)?
+            .ok_or_else(|| {
+                StepError::Refused(format!("cannot observe `{what}` ({OBSERVABLE}, nmt)"))
+            })?;
+        if what == "leds" {
+            v["bs"] = json!(bs);
+            v["be"] = json!(be);
+        }
+        Ok(v)
+    }
+
+    /// A persistent device's cleanup: the drives the case ran back in "Switch-on block", the
+    /// case's writes put back, the node in PRE_OPERATIONAL_2.
+    fn restore(&mut self) -> Result<(), String> {
+        let Some(ledger) = self.ledger.take() else {
+            return Ok(());
+        };
+        let mut account = Account::default();
+        if !self.commanded.is_empty() && account.attempt(|| "settling the drives".into()) {
+            account.note(self.settle());
+        }
+        let via = self.via;
+        ledger.restore(&mut account, |obj, before| {
+            self.mn
+                .sdo(via, Command::write_by_index(0, obj.index, obj.sub, before))
+                .map(|_| ())
+                .map_err(|e| Problem::step(format!("setting back {obj}"), step_error(e)))
+        });
+        if account.attempt(|| "back to PRE_OPERATIONAL_2".into()) {
+            let r = self.mn.boot(NmtState::PRE_OPERATIONAL_2);
+            account.note(
+                r.map(|_| ())
+                    .map_err(|e| Problem::step("back to PRE_OPERATIONAL_2", step_error(e))),
+            );
+        }
+        self.ledger = Some(Ledger::default());
+        self.commanded.clear();
+        account.into_result()
+    }
+
+    /// Cycles the drives back to "Switch-on block".
+    fn settle(&mut self) -> Result<(), Problem> {
+        let what = |e: MnError| Problem::step("settling the drives", step_error(e));
+        self.mn.boot(NmtState::OPERATIONAL).map_err(what)?;
+        let inverters = self.product.max_inverters();
+        let mut drives = Drives::new(inverters, &self.commanded);
+        self.pending.extend(self.mn.take_exchanges());
+        let from = self.pending.len();
+        let mut outcome = Err(drives.stuck(self.mn.config().cycle * SETTLE_CYCLES));
+        for n in 0..SETTLE_CYCLES {
+            for (fi, control) in drives.controls(n) {
+                let mut words = [0; 6];
+                words[0] = control;
+                self.set_words(fi.get(), words);
+            }
+            self.mn.run_cycles(1).map_err(what)?;
+            for fi in drives.inverters() {
+                let status = self.words(fi.get())[0];
+                drives.observe(fi, status);
+            }
+            if drives.done() {
+                outcome = Ok(());
+                break;
+            }
+        }
+        self.pending.extend(self.mn.take_exchanges());
+        compact(&mut self.pending, from);
+        outcome
+    }
+}
+
+/// A little-endian number of 1, 2 or 4 bytes.
+fn number(d: &[u8]) -> Option<i64> {
+    Some(match d {
+        [a] => i64::from(*a),
+        [a, b] => i64::from(u16::from_le_bytes([*a, *b])),
+        [a, b, c, e] => i64::from(u32::from_le_bytes([*a, *b, *c, *e])),
+        _ => return None,
+    })
+}
+
+impl<L: Link> Binding for EplBinding<L> {
+    fn describe(&self) -> String {
+        self.what.clone()
+    }
+
+    fn capabilities(&self) -> &[Capability] {
+        self.capabilities
+    }
+
+    fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+        let fields = match action {
+            Action::Compute { .. } => {
+                return Err(StepError::Suite("compute is not a DUT step".into()))
+            }
+            Action::Read(o) => return self.read(o),
+            Action::Write(o) => return self.write(o),
+            Action::Pkw { .. } => {
+                return Err(StepError::NotApplicable(
+                    "POWERLINK has no PKW parameter channel: parameters are SDO objects \
+                     (BU 0620 §2.4.6, BU 2200 §6.4)"
+                        .into(),
+                ))
+            }
+            Action::Process {
+                inverter,
+                control,
+                setpoints,
+                run,
+            } => {
+                let mut words = [0; 6];
+                words[0] = *control;
+                for (w, s) in words[1..].iter_mut().zip(setpoints) {
+                    *w = *s;
+                }
+                let cycles = match run {
+                    Run::Cycles(n) => *n,
+                    Run::For(d) => cycles_for(*d, self.mn.config().cycle),
+                };
+                self.process(*inverter, Some(words), cycles)?
+            }
+            Action::Wait(d) => {
+                let fi = Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?;
+                let cycles = cycles_for(*d, self.mn.config().cycle);
+                self.process(fi, None, cycles)?
+            }
+            Action::Inject { inverter, error } => {
+                let (node, _) = self.simulated()?;
+                node.device_mut()
+                    .inject_fault(*inverter, error)
+                    .map_err(StepError::Refused)?;
+                json!({})
+            }
+            Action::Observe { what, inverter } => self.observe(what, *inverter)?,
+            Action::Bus(step) => {
+                let step = crate::bus::own_step::<EplStep>(step.as_ref(), "POWERLINK")?;
+                return self.epl_step(step);
+            }
+        };
+        Ok(fields.into())
+    }
+
+    fn take_exchanges(&mut self) -> Vec<Exchange> {
+        let mut v = std::mem::take(&mut self.pending);
+        v.extend(self.mn.take_exchanges());
+        v
+    }
+
+    fn finish(&mut self) -> Result<(), CleanupError> {
+        self.restore().map_err(CleanupError)
+    }
+}

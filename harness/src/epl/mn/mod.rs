@@ -1,0 +1,906 @@
+//! The managing node (sans policy): the POWERLINK cycle — SoC, PReq/PRes with the one
+//! controlled node, SoA and the asynchronous frame — the NMT boot of the node, and an SDO
+//! client over ASnd and over UDP (EPSG DS 301 §4.2.4 cycle, §7.1.4 NMT, §6.3 SDO; BU 0620
+//! §2.4.3 "A transfer cycle starts with the message type SoC. After this, each CN is queried
+//! with a PReq by the MN, to which the CN responds with a PRes. … the asynchronous phase
+//! starts with the transfer of the SoA package.").
+//!
+//! Everything it sends and receives is recorded as transcript exchanges, decoded.
+
+mod describe;
+pub(crate) mod link;
+
+use std::collections::VecDeque;
+use std::time::Duration;
+
+use proto::epl::asnd::{IdentResponse, NmtCommandFrame, StatusResponse};
+use proto::epl::frame::{Asnd, Body, Preq, Soa, Soc};
+use proto::epl::sdo::{Command, Con, SdoFrame, Segmentation, Seq, SEQ_MODULO};
+use proto::epl::{
+    EplRepr, NmtCommand, NmtState, RequestedService, ServiceId, BROADCAST_NODE_ID, MN_NODE_ID,
+    MULTICAST_ASND, MULTICAST_SOA, MULTICAST_SOC,
+};
+use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
+
+pub(crate) use describe::describe;
+use link::Link;
+
+use crate::net::LinkError;
+use crate::outcome::Exchange;
+use crate::runner::hex;
+
+/// How the MN carries SDO.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Via {
+    /// ASnd frames in the asynchronous phase.
+    Asnd,
+    /// UDP/IP datagrams to port 3819.
+    Udp,
+}
+
+impl Via {
+    pub(crate) fn parse(s: &str) -> Result<Via, String> {
+        match s {
+            "asnd" => Ok(Via::Asnd),
+            "udp" => Ok(Via::Udp),
+            other => Err(format!("SDO over `{other}`: asnd or udp")),
+        }
+    }
+}
+
+/// How the MN runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct MnConfig {
+    /// The controlled node's id.
+    pub(crate) node: u8,
+    /// The cycle time (P858: 400…2000 µs, factory 1000 µs).
+    pub(crate) cycle: Duration,
+    /// How long a PRes or an asked-for ASnd may take after its request.
+    pub(crate) reply: Duration,
+    /// Cycles an SDO request may take to be answered.
+    pub(crate) sdo_cycles: u32,
+    /// Default SDO transport.
+    pub(crate) via: Via,
+}
+
+impl Default for MnConfig {
+    fn default() -> MnConfig {
+        MnConfig {
+            node: 1,
+            cycle: Duration::from_millis(1),
+            reply: Duration::from_micros(500),
+            sdo_cycles: 200,
+            via: Via::Asnd,
+        }
+    }
+}
+
+/// Why the MN could not do what it was asked.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum MnError {
+    /// The link failed.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// The node did not answer in time.
+    #[error("no reply from node {node} to {what} within {waited:?}")]
+    NoReply {
+        /// The node.
+        node: u8,
+        /// The request.
+        what: String,
+        /// How long the MN waited.
+        waited: Duration,
+    },
+    /// The node answered with frames that break POWERLINK.
+    #[error("node {node} sent a malformed answer to {what}: {why}")]
+    Malformed {
+        /// The node.
+        node: u8,
+        /// The request.
+        what: String,
+        /// What was wrong.
+        why: String,
+    },
+    /// The node refused an SDO transfer.
+    #[error("SDO abort {0:08X}h")]
+    Abort(u32),
+    /// The node did not reach the NMT state asked for.
+    #[error("node {node} is in {state} after {what}, not {wanted}")]
+    State {
+        /// The node.
+        node: u8,
+        /// Its state.
+        state: NmtState,
+        /// The state asked for.
+        wanted: NmtState,
+        /// How.
+        what: String,
+    },
+}
+
+/// Whether the MN runs the isochronous phase (SoC, PReq) or only SoA (DS 301 "reduced
+/// POWERLINK cycle" of NMT_MS_PRE_OPERATIONAL_1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    Reduced,
+    Isochronous,
+}
+
+/// One SDO connection's sequence numbers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+struct Connection {
+    sent: u8,
+    received: u8,
+}
+
+/// A frame the node sent, as the MN got it.
+#[derive(Debug, Clone)]
+pub(crate) struct Received {
+    /// The POWERLINK frame.
+    pub(crate) repr: Option<EplRepr>,
+    /// Its bytes after the Ethernet header.
+    pub(crate) bytes: Vec<u8>,
+    /// The kernel's receive stamp, on a network link.
+    pub(crate) stamp: Option<Duration>,
+}
+
+/// The managing node of one controlled node.
+pub(crate) struct Manager<L> {
+    link: L,
+    config: MnConfig,
+    mac: MacAddr,
+    /// The node's MAC address, learnt from its frames (PReq is unicast).
+    node_mac: MacAddr,
+    phase: Phase,
+    /// The MN's NMT state as its SoA shows it.
+    mn_state: NmtState,
+    /// PReq payload and its RD flag.
+    outputs: Vec<u8>,
+    ready: bool,
+    /// The last PRes.
+    inputs: Vec<u8>,
+    /// The node's state as its last frame showed it.
+    node_state: Option<NmtState>,
+    next_cycle: Duration,
+    exchanges: Vec<Exchange>,
+    recording: bool,
+    /// ASnd frames of the MN for its next asynchronous slots.
+    queued: VecDeque<(ServiceId, Vec<u8>)>,
+    /// ASnd frames of the node not yet taken.
+    asnd: VecDeque<Received>,
+    /// PRes arrival stamps of the cycles run with [`Manager::record_stamps`] on.
+    stamps: Option<Vec<Option<Duration>>>,
+    missed: u64,
+    asnd_link: Option<Connection>,
+    udp_link: Option<Connection>,
+    transaction: u8,
+}
+
+fn next(n: u8) -> u8 {
+    (n + 1) % SEQ_MODULO
+}
+
+impl<L: Link> Manager<L> {
+    pub(crate) fn new(link: L, config: MnConfig, mac: MacAddr) -> Manager<L> {
+        let now = link.now();
+        Manager {
+            link,
+            config,
+            mac,
+            node_mac: MacAddr([0xF0, 0x5F, 0x5A, 0, 0, config.node]),
+            phase: Phase::Reduced,
+            mn_state: NmtState::PRE_OPERATIONAL_1,
+            outputs: Vec::new(),
+            ready: false,
+            inputs: Vec::new(),
+            node_state: None,
+            next_cycle: now,
+            exchanges: Vec::new(),
+            recording: true,
+            queued: VecDeque::new(),
+            asnd: VecDeque::new(),
+            stamps: None,
+            missed: 0,
+            asnd_link: None,
+            udp_link: None,
+            transaction: 0,
+        }
+    }
+
+    pub(crate) fn config(&self) -> &MnConfig {
+        &self.config
+    }
+
+    pub(crate) fn set_cycle(&mut self, cycle: Duration) {
+        self.config.cycle = cycle;
+    }
+
+    pub(crate) fn link_mut(&mut self) -> &mut L {
+        &mut self.link
+    }
+
+    pub(crate) fn now(&self) -> Duration {
+        self.link.now()
+    }
+
+    /// The node's NMT state as its last frame showed it.
+    pub(crate) fn node_state(&self) -> Option<NmtState> {
+        self.node_state
+    }
+
+    /// PRes frames that did not come within the reply time.
+    pub(crate) fn missed(&self) -> u64 {
+        self.missed
+    }
+
+    pub(crate) fn set_recording(&mut self, on: bool) {
+        self.recording = on;
+    }
+
+    pub(crate) fn take_exchanges(&mut self) -> Vec<Exchange> {
+        std::mem::take(&mut self.exchanges)
+    }
+
+    /// Starts or stops collecting the kernel stamps of PRes arrivals (bench).
+    pub(crate) fn record_stamps(&mut self, on: bool) -> Vec<Option<Duration>> {
+        let old = self.stamps.take().unwrap_or_default();
+        if on {
+            self.stamps = Some(Vec::new());
+        }
+        old
+    }
+
+    /// The PReq payload: `len` bytes, all zero until set.
+    pub(crate) fn set_outputs(&mut self, payload: Vec<u8>, ready: bool) {
+        self.outputs = payload;
+        self.ready = ready;
+    }
+
+    pub(crate) fn outputs_mut(&mut self) -> &mut Vec<u8> {
+        &mut self.outputs
+    }
+
+    pub(crate) fn inputs(&self) -> &[u8] {
+        &self.inputs
+    }
+
+    fn record(&mut self, sent: &[u8], got: Option<&Received>) {
+        if !self.recording {
+            return;
+        }
+        let sent_repr = EplRepr::parse_bytes(sent).ok();
+        self.exchanges.push(Exchange {
+            sent_hex: hex(sent),
+            sent: sent_repr
+                .as_ref()
+                .map_or_else(|| "malformed POWERLINK frame".into(), describe),
+            received_hex: got.map_or_else(String::new, |g| hex(&g.bytes)),
+            received: got.map_or_else(String::new, |g| {
+                g.repr
+                    .as_ref()
+                    .map_or_else(|| "malformed POWERLINK frame".into(), describe)
+            }),
+        });
+    }
+
+    /// Sends a POWERLINK frame (bytes from the message type on) to the Ethernet address its
+    /// type uses.
+    pub(crate) fn send_raw(&mut self, bytes: &[u8]) -> Result<(), MnError> {
+        let dst = match bytes.first().map(|b| b & 0x7F) {
+            Some(0x03) => self.node_mac,
+            Some(0x05) => MULTICAST_SOA,
+            Some(0x06) => MULTICAST_ASND,
+            _ => MULTICAST_SOC,
+        };
+        let frame = EthernetRepr {
+            dst,
+            src: self.mac,
+            ethertype: ETHERTYPE_POWERLINK,
+        }
+        .emit(bytes);
+        self.link.send(&frame)?;
+        Ok(())
+    }
+
+    fn send(&mut self, repr: &EplRepr) -> Result<Vec<u8>, MnError> {
+        let bytes = repr.emit().map_err(|e| MnError::Malformed {
+            node: self.config.node,
+            what: "a frame of the MN".into(),
+            why: e.to_string(),
+        })?;
+        self.send_raw(&bytes)?;
+        Ok(bytes)
+    }
+
+    /// The next frame of the node until `deadline`; frames of others are skipped.
+    pub(crate) fn receive(&mut self, deadline: Duration) -> Result<Option<Received>, MnError> {
+        loop {
+            let Some((frame, stamp)) = self.link.recv(deadline)? else {
+                return Ok(None);
+            };
+            let Ok(eth) = EthernetFrame::new_checked(&frame[..]) else {
+                continue;
+            };
+            if eth.src() == self.mac {
+                continue;
+            }
+            let bytes = eth.inner_payload().to_vec();
+            let repr = EplRepr::parse_bytes(&bytes).ok();
+            match &repr {
+                Some(r) if r.src != self.config.node => continue,
+                Some(r) => {
+                    self.node_mac = eth.src();
+                    match &r.body {
+                        Body::Pres(p) => self.node_state = Some(p.state),
+                        Body::Asnd(a) => {
+                            if let Some(s) = asnd_state(a) {
+                                self.node_state = Some(s);
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                None if bytes.get(2) != Some(&self.config.node) => continue,
+                None => {}
+            }
+            return Ok(Some(Received { repr, bytes, stamp }));
+        }
+    }
+
+    /// One cycle: SoC and PReq/PRes in the isochronous phase, then SoA asking `service` of
+    /// `target` (or the MN's own slot when it has a frame queued). Returns the asynchronous
+    /// frame the node sent, if any.
+    pub(crate) fn cycle(&mut self, service: RequestedService) -> Result<Option<Received>, MnError> {
+        let start = self.next_cycle.max(self.link.now());
+        self.link.wait_until(start);
+        self.next_cycle = start + self.config.cycle;
+        let node = self.config.node;
+        if self.phase == Phase::Isochronous {
+            self.send(&EplRepr {
+                dst: BROADCAST_NODE_ID,
+                src: MN_NODE_ID,
+                body: Body::Soc(Soc {
+                    net_time: 0,
+                    relative_time: start.as_micros() as u64,
+                    ..Soc::default()
+                }),
+            })?;
+            let sent = self.send(&EplRepr {
+                dst: node,
+                src: MN_NODE_ID,
+                body: Body::Preq(Preq {
+                    rd: self.ready,
+                    pdo_version: 0x20,
+                    payload: self.outputs.clone(),
+                    ..Preq::default()
+                }),
+            })?;
+            let deadline = self.link.now() + self.config.reply;
+            let pres = self.wait_for(deadline, |r| matches!(r.body, Body::Pres(_)))?;
+            match &pres {
+                Some(p) => {
+                    if let Some(EplRepr {
+                        body: Body::Pres(body),
+                        ..
+                    }) = &p.repr
+                    {
+                        self.inputs = body.payload.clone();
+                    }
+                    if let Some(s) = self.stamps.as_mut() {
+                        s.push(p.stamp);
+                    }
+                }
+                None => {
+                    self.missed += 1;
+                    if let Some(s) = self.stamps.as_mut() {
+                        s.push(None);
+                    }
+                }
+            }
+            self.record(&sent, pres.as_ref());
+        }
+        if let Some((service_id, payload)) = self.queued.pop_front() {
+            let soa = self.soa(RequestedService::UNSPECIFIED_INVITE, MN_NODE_ID)?;
+            self.record(&soa, None);
+            let sent = self.send(&EplRepr {
+                dst: node,
+                src: MN_NODE_ID,
+                body: Body::Asnd(Asnd {
+                    service: service_id,
+                    payload,
+                }),
+            })?;
+            self.record(&sent, None);
+            return Ok(None);
+        }
+        let sent = self.soa(service, node)?;
+        let expects = service != RequestedService::NO_SERVICE;
+        let answer = if expects {
+            let deadline = self.link.now() + self.config.reply;
+            self.wait_for(deadline, |r| matches!(r.body, Body::Asnd(_)))?
+        } else {
+            None
+        };
+        if expects {
+            self.record(&sent, answer.as_ref());
+        }
+        Ok(answer)
+    }
+
+    fn soa(&mut self, service: RequestedService, target: u8) -> Result<Vec<u8>, MnError> {
+        self.send(&EplRepr {
+            dst: BROADCAST_NODE_ID,
+            src: MN_NODE_ID,
+            body: Body::Soa(Soa {
+                state: self.mn_state,
+                service,
+                target,
+                epl_version: 0x20,
+                ..Soa::default()
+            }),
+        })
+    }
+
+    /// Waits for a frame of the node that `want` accepts; others are kept (ASnd) or dropped.
+    fn wait_for(
+        &mut self,
+        deadline: Duration,
+        want: impl Fn(&EplRepr) -> bool,
+    ) -> Result<Option<Received>, MnError> {
+        while let Some(r) = self.receive(deadline)? {
+            match &r.repr {
+                Some(repr) if want(repr) => return Ok(Some(r)),
+                Some(EplRepr {
+                    body: Body::Asnd(_),
+                    ..
+                }) => self.asnd.push_back(r),
+                // A frame of the node that is not POWERLINK at all: the caller decides.
+                None => return Ok(Some(r)),
+                _ => {}
+            }
+        }
+        Ok(None)
+    }
+
+    /// Runs `n` cycles with no asynchronous request.
+    pub(crate) fn run_cycles(&mut self, n: u64) -> Result<(), MnError> {
+        for _ in 0..n {
+            self.cycle(RequestedService::NO_SERVICE)?;
+        }
+        Ok(())
+    }
+
+    /// Lets `d` pass without sending anything (the MN "fails").
+    pub(crate) fn silence(&mut self, d: Duration) {
+        let until = self.link.now() + d;
+        self.link.wait_until(until);
+        self.next_cycle = until;
+    }
+
+    /// Asks the node for `service` once per cycle until it answers with an ASnd of `id`.
+    fn ask(
+        &mut self,
+        service: RequestedService,
+        id: ServiceId,
+        cycles: u32,
+    ) -> Result<Vec<u8>, MnError> {
+        for _ in 0..cycles {
+            if let Some(r) = self.cycle(service)? {
+                match r.repr {
+                    Some(EplRepr {
+                        body: Body::Asnd(a),
+                        ..
+                    }) if a.service == id => return Ok(a.payload),
+                    Some(_) => {}
+                    None => {
+                        return Err(MnError::Malformed {
+                            node: self.config.node,
+                            what: format!("SoA {}", service),
+                            why: format!("not a POWERLINK frame: {}", hex(&r.bytes)),
+                        })
+                    }
+                }
+            }
+        }
+        Err(MnError::NoReply {
+            node: self.config.node,
+            what: format!("SoA {service}"),
+            waited: self.config.cycle * cycles,
+        })
+    }
+
+    /// The node's IdentResponse.
+    pub(crate) fn ident(&mut self) -> Result<IdentResponse, MnError> {
+        let p = self.ask(
+            RequestedService::IDENT_REQUEST,
+            ServiceId::IDENT_RESPONSE,
+            5,
+        )?;
+        let id = IdentResponse::parse(&p).map_err(|e| self.malformed("IdentRequest", e))?;
+        self.node_state = Some(id.state);
+        Ok(id)
+    }
+
+    /// The node's StatusResponse.
+    pub(crate) fn status(&mut self) -> Result<StatusResponse, MnError> {
+        let p = self.ask(
+            RequestedService::STATUS_REQUEST,
+            ServiceId::STATUS_RESPONSE,
+            5,
+        )?;
+        let s = StatusResponse::parse(&p).map_err(|e| self.malformed("StatusRequest", e))?;
+        self.node_state = Some(s.state);
+        Ok(s)
+    }
+
+    fn malformed(&self, what: &str, e: proto::epl::Error) -> MnError {
+        MnError::Malformed {
+            node: self.config.node,
+            what: what.into(),
+            why: e.to_string(),
+        }
+    }
+
+    /// Sends an NMT command in the MN's asynchronous slot, then runs cycles until the node's
+    /// state settles (a StatusResponse says it).
+    pub(crate) fn nmt(&mut self, command: NmtCommand) -> Result<NmtState, MnError> {
+        let payload = NmtCommandFrame {
+            command,
+            data: Vec::new(),
+        }
+        .emit();
+        self.queued.push_back((ServiceId::NMT_COMMAND, payload));
+        self.cycle(RequestedService::NO_SERVICE)?;
+        // The MN follows its node (DS 301: the MN enters RTO/OP with its nodes).
+        match command {
+            NmtCommand::ENABLE_READY_TO_OPERATE => self.mn_state = NmtState::READY_TO_OPERATE,
+            NmtCommand::START_NODE => self.mn_state = NmtState::OPERATIONAL,
+            _ => {}
+        }
+        self.status().map(|s| s.state)
+    }
+
+    /// Boots the node to `target` the way an MN does (DS 301 §7.1.4.2): SoA alone with
+    /// IdentRequests until it answers (it is then in PRE_OPERATIONAL_1), the isochronous
+    /// cycle (its SoC takes it to PRE_OPERATIONAL_2), EnableReadyToOperate, StartNode.
+    pub(crate) fn boot(&mut self, target: NmtState) -> Result<NmtState, MnError> {
+        let mut state = self.status().map(|s| s.state).ok();
+        if state.is_none() || state == Some(NmtState::NOT_ACTIVE) {
+            self.phase = Phase::Reduced;
+            self.mn_state = NmtState::PRE_OPERATIONAL_1;
+            state = Some(self.ident()?.state);
+        }
+        let rank = |s: NmtState| match s {
+            NmtState::PRE_OPERATIONAL_1 => 1,
+            NmtState::PRE_OPERATIONAL_2 => 2,
+            NmtState::READY_TO_OPERATE => 3,
+            NmtState::OPERATIONAL => 4,
+            _ => 0,
+        };
+        let mut state = state.unwrap_or(NmtState::NOT_ACTIVE);
+        if state == NmtState::STOPPED && target != NmtState::STOPPED {
+            state = self.nmt(NmtCommand::ENTER_PRE_OPERATIONAL_2)?;
+        }
+        if matches!(state, NmtState::BASIC_ETHERNET) {
+            self.cycle(RequestedService::NO_SERVICE)?;
+            state = self.status()?.state;
+        }
+        if rank(target) >= 2 && rank(state) <= 1 {
+            self.phase = Phase::Isochronous;
+            self.mn_state = NmtState::PRE_OPERATIONAL_2;
+            self.run_cycles(2)?;
+            state = self.status()?.state;
+        }
+        if rank(target) >= 3 && rank(state) == 2 {
+            state = self.nmt(NmtCommand::ENABLE_READY_TO_OPERATE)?;
+        }
+        if rank(target) >= 4 && rank(state) == 3 {
+            state = self.nmt(NmtCommand::START_NODE)?;
+        }
+        if rank(target) < rank(state) && rank(target) >= 2 {
+            state = self.nmt(NmtCommand::ENTER_PRE_OPERATIONAL_2)?;
+        }
+        if target == NmtState::STOPPED && state != NmtState::STOPPED {
+            state = self.nmt(NmtCommand::STOP_NODE)?;
+        }
+        if state != target {
+            return Err(MnError::State {
+                node: self.config.node,
+                state,
+                wanted: target,
+                what: "the boot-up".into(),
+            });
+        }
+        Ok(state)
+    }
+
+    /// Whether the isochronous phase runs.
+    pub(crate) fn is_cycling(&self) -> bool {
+        self.phase == Phase::Isochronous
+    }
+
+    /// Starts the isochronous phase (SoC, PReq) from the next cycle.
+    pub(crate) fn start_cycling(&mut self) {
+        self.phase = Phase::Isochronous;
+    }
+
+    /// Sends raw SDO bytes (sequence and command layers) to the node over `via` and collects
+    /// what it answers within the SDO time; the connection's numbering is the caller's.
+    pub(crate) fn sdo_raw(&mut self, via: Via, bytes: &[u8]) -> Result<Vec<Vec<u8>>, MnError> {
+        match via {
+            Via::Udp => {
+                let mut d = proto::epl::sdo::UDP_PREFIX.to_vec();
+                d.extend(bytes);
+                self.udp_exchange(&d, false)
+            }
+            Via::Asnd => {
+                self.queued.push_back((ServiceId::SDO, bytes.to_vec()));
+                self.cycle(RequestedService::NO_SERVICE)?;
+                let mut out = Vec::new();
+                for _ in 0..4 {
+                    if let Some(r) = self.cycle(RequestedService::UNSPECIFIED_INVITE)? {
+                        if let Some(EplRepr {
+                            body: Body::Asnd(a),
+                            ..
+                        }) = r.repr
+                        {
+                            if a.service == ServiceId::SDO {
+                                out.push(a.payload);
+                            }
+                        }
+                    }
+                }
+                Ok(out)
+            }
+        }
+    }
+
+    fn udp_exchange(&mut self, datagram: &[u8], first_only: bool) -> Result<Vec<Vec<u8>>, MnError> {
+        self.link.send_udp(datagram)?;
+        let wait = self.config.cycle * self.config.sdo_cycles.min(50);
+        let deadline = self.link.now() + wait;
+        let mut out = Vec::new();
+        while let Some(d) = self.link.recv_udp(if out.is_empty() {
+            deadline
+        } else {
+            self.link.now() + self.config.reply
+        })? {
+            let got = Received {
+                repr: None,
+                bytes: d.clone(),
+                stamp: None,
+            };
+            if self.recording {
+                self.exchanges.push(Exchange {
+                    sent_hex: hex(datagram),
+                    sent: describe::udp(datagram),
+                    received_hex: hex(&got.bytes),
+                    received: describe::udp(&got.bytes),
+                });
+            }
+            out.push(
+                d.get(proto::epl::sdo::UDP_PREFIX.len()..)
+                    .unwrap_or_default()
+                    .to_vec(),
+            );
+            if first_only {
+                break;
+            }
+        }
+        if out.is_empty() && self.recording {
+            self.exchanges.push(Exchange {
+                sent_hex: hex(datagram),
+                sent: describe::udp(datagram),
+                received_hex: String::new(),
+                received: String::new(),
+            });
+        }
+        Ok(out)
+    }
+
+    /// One SDO command over `via`, the connection opened first if need be; the answer's
+    /// data (segments joined) or the node's abort.
+    pub(crate) fn sdo(&mut self, via: Via, mut command: Command) -> Result<Vec<u8>, MnError> {
+        let what = || format!("SDO {:?}", command.command);
+        self.transaction = (self.transaction + 1) % 16;
+        command.transaction = self.transaction;
+        let mut conn = match self.connection(via) {
+            Some(c) => c,
+            None => self.open(via)?,
+        };
+        conn.sent = next(conn.sent);
+        let frame = SdoFrame {
+            seq: Seq {
+                rsnr: conn.received,
+                rcon: Con::Valid,
+                ssnr: conn.sent,
+                scon: Con::Valid,
+            },
+            command: Some(command.clone()),
+        };
+        let bytes = frame
+            .emit()
+            .map_err(|e| self.malformed("an SDO request", e))?;
+        let answers = self.exchange(via, &bytes, &what())?;
+        let mut data = Vec::new();
+        let mut done = false;
+        for a in &answers {
+            let f = SdoFrame::parse(a).map_err(|e| self.malformed("an SDO request", e))?;
+            conn.received = f.seq.ssnr;
+            let Some(c) = f.command else { continue };
+            if let Some(code) = c.abort_code() {
+                self.set_connection(
+                    via,
+                    if f.seq.rcon == Con::ErrorOrAckRequest {
+                        None
+                    } else {
+                        Some(conn)
+                    },
+                );
+                return Err(MnError::Abort(code));
+            }
+            if c.transaction != command.transaction || !c.response {
+                continue;
+            }
+            data.extend(&c.payload);
+            if matches!(
+                c.segmentation,
+                Segmentation::Expedited | Segmentation::Complete
+            ) {
+                done = true;
+                break;
+            }
+        }
+        self.set_connection(via, Some(conn));
+        if !done {
+            return Err(MnError::NoReply {
+                node: self.config.node,
+                what: what(),
+                waited: self.config.cycle * self.config.sdo_cycles,
+            });
+        }
+        Ok(data)
+    }
+
+    fn connection(&self, via: Via) -> Option<Connection> {
+        match via {
+            Via::Asnd => self.asnd_link,
+            Via::Udp => self.udp_link,
+        }
+    }
+
+    fn set_connection(&mut self, via: Via, c: Option<Connection>) {
+        match via {
+            Via::Asnd => self.asnd_link = c,
+            Via::Udp => self.udp_link = c,
+        }
+    }
+
+    /// Forgets the SDO connections (the node was reset).
+    pub(crate) fn drop_connections(&mut self) {
+        self.asnd_link = None;
+        self.udp_link = None;
+    }
+
+    /// Opens an SDO connection: SendCon "initialisation", the node answers the same.
+    fn open(&mut self, via: Via) -> Result<Connection, MnError> {
+        let frame = SdoFrame {
+            seq: Seq {
+                rsnr: 0,
+                rcon: Con::None,
+                ssnr: 0,
+                scon: Con::Init,
+            },
+            command: None,
+        };
+        let bytes = frame
+            .emit()
+            .map_err(|e| self.malformed("an SDO connection", e))?;
+        let answers = self.exchange(via, &bytes, "SDO initialisation")?;
+        for a in answers {
+            let f = SdoFrame::parse(&a).map_err(|e| self.malformed("an SDO initialisation", e))?;
+            if f.seq.rcon == Con::Init {
+                let c = Connection {
+                    sent: 0,
+                    received: f.seq.ssnr,
+                };
+                self.set_connection(via, Some(c));
+                return Ok(c);
+            }
+        }
+        Err(MnError::NoReply {
+            node: self.config.node,
+            what: "SDO initialisation".into(),
+            waited: self.config.cycle * self.config.sdo_cycles,
+        })
+    }
+
+    /// Sends SDO bytes and gathers the node's SDO frames: over ASnd, invited cycle after
+    /// cycle until one answers (then the further segments); over UDP, the datagrams.
+    fn exchange(&mut self, via: Via, bytes: &[u8], what: &str) -> Result<Vec<Vec<u8>>, MnError> {
+        if via == Via::Udp {
+            let mut d = proto::epl::sdo::UDP_PREFIX.to_vec();
+            d.extend(bytes);
+            let out = self.udp_exchange(&d, false)?;
+            if out.is_empty() {
+                return Err(MnError::NoReply {
+                    node: self.config.node,
+                    what: what.into(),
+                    waited: self.config.cycle * self.config.sdo_cycles.min(50),
+                });
+            }
+            return Ok(out);
+        }
+        self.queued.push_back((ServiceId::SDO, bytes.to_vec()));
+        self.cycle(RequestedService::NO_SERVICE)?;
+        let mut out = Vec::new();
+        for _ in 0..self.config.sdo_cycles {
+            let Some(r) = self.cycle(RequestedService::UNSPECIFIED_INVITE)? else {
+                if out.is_empty() {
+                    continue;
+                }
+                break;
+            };
+            match r.repr {
+                Some(EplRepr {
+                    body: Body::Asnd(a),
+                    ..
+                }) if a.service == ServiceId::SDO => {
+                    let more = SdoFrame::parse(&a.payload)
+                        .ok()
+                        .and_then(|f| f.command)
+                        .is_some_and(|c| {
+                            matches!(
+                                c.segmentation,
+                                Segmentation::Initiate | Segmentation::Segment
+                            ) && c.abort_code().is_none()
+                        });
+                    out.push(a.payload);
+                    if !more {
+                        return Ok(out);
+                    }
+                }
+                Some(_) => {}
+                None => {
+                    return Err(MnError::Malformed {
+                        node: self.config.node,
+                        what: what.into(),
+                        why: format!("not a POWERLINK frame: {}", hex(&r.bytes)),
+                    })
+                }
+            }
+        }
+        if out.is_empty() {
+            return Err(MnError::NoReply {
+                node: self.config.node,
+                what: what.into(),
+                waited: self.config.cycle * self.config.sdo_cycles,
+            });
+        }
+        Ok(out)
+    }
+
+    /// Sends a raw POWERLINK frame and gathers what the node sends within one cycle.
+    pub(crate) fn raw_exchange(&mut self, bytes: &[u8]) -> Result<Vec<Received>, MnError> {
+        self.send_raw(bytes)?;
+        let deadline = self.link.now() + self.config.reply.max(self.config.cycle);
+        let mut got = Vec::new();
+        while let Some(r) = self.receive(deadline)? {
+            got.push(r);
+        }
+        if self.recording {
+            self.record(bytes, got.first());
+        }
+        Ok(got)
+    }
+}
+
+/// The NMT state an ASnd of the node carries (IdentResponse, StatusResponse).
+fn asnd_state(a: &Asnd) -> Option<NmtState> {
+    match a.service {
+        ServiceId::IDENT_RESPONSE | ServiceId::STATUS_RESPONSE => {
+            a.payload.get(2).map(|&s| NmtState(s))
+        }
+        _ => None,
+    }
+}

@@ -1,0 +1,122 @@
+//! POWERLINK: the managing-node binding (SDO over ASnd or UDP, the cycle, NMT), `harness
+//! serve epl`, the XDD writer and the `epl:` steps — for the SK 550P (BU 0620 §2.4) and the
+//! modules SK TU3-POL, SK TU4-POL, SK CU4-POL (BU 2200).
+
+mod binding;
+pub(crate) mod mn;
+mod step;
+
+use std::net::SocketAddr;
+use std::time::Duration;
+
+use binding::EplBinding;
+use mn::link::{EmbeddedLink, NetLink};
+use mn::{Manager, MnConfig};
+use proto::eth::MacAddr;
+use proto::nord::epl as def;
+use proto::nord::{Product, Protocol};
+use sim::device::Device;
+use sim::epl::{Node, NodeConfig};
+
+use crate::binding::embedded::device_config;
+use crate::binding::{Binding, OpenError};
+use crate::bus::{Bus, Embedded, Network};
+use crate::net::LinkError;
+use crate::profile::Profile;
+use crate::runner::DutFactory;
+
+/// The registry entry.
+pub(crate) const BUS: Bus = Bus {
+    name: "epl",
+    title: "POWERLINK",
+    profiles,
+    parse_step: step::parse,
+    embedded,
+    network,
+    serve: serve_command,
+    descriptions: &[],
+};
+
+fn serve_command(_args: &[String]) -> Result<i32, String> {
+    Err("`harness serve epl` is being written".into())
+}
+
+fn profiles() -> Vec<Profile> {
+    Product::ALL
+        .into_iter()
+        .filter(|p| p.protocols().contains(&Protocol::Powerlink))
+        .map(|p| Profile::on_bus(p, "epl"))
+        .collect()
+}
+
+/// The MN's own Ethernet address in-process (locally administered).
+const EMBEDDED_MN_MAC: MacAddr = MacAddr([0x02, 0x00, 0x00, 0x00, 0x00, 0xF0]);
+
+/// The simulated node of the profile's product (node 1) behind the MN.
+fn embedded(profile: &Profile, _context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
+    let product = profile.nord().map_err(OpenError::Profile)?;
+    let device = Device::new(device_config(profile)?);
+    let node =
+        Node::new(device, NodeConfig::new(1)).map_err(|e| OpenError::Profile(e.to_string()))?;
+    let mn = Manager::new(
+        EmbeddedLink::new(node),
+        MnConfig::default(),
+        EMBEDDED_MN_MAC,
+    );
+    let b = EplBinding::open(mn, product, "embedded POWERLINK node".into(), false)?;
+    Ok(Box::new(b))
+}
+
+/// `--dut epl://IFACE[/NODE]`: the node behind that interface (node 1 unless given).
+fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
+    let (iface, node) = match n.target.split_once('/') {
+        Some((i, id)) => (
+            i.to_string(),
+            id.parse::<u8>()
+                .ok()
+                .filter(|v| (1..=239).contains(v))
+                .ok_or_else(|| {
+                    OpenError::Profile(format!(
+                        "`epl://{}`: node id `{id}` is not 1…239 (BU 0620 §2.4.3.1)",
+                        n.target
+                    ))
+                })?,
+        ),
+        None => (n.target.clone(), 1),
+    };
+    Ok(Box::new(NetworkFactory {
+        iface,
+        node,
+        timeout: n.timeout,
+    }))
+}
+
+struct NetworkFactory {
+    iface: String,
+    node: u8,
+    timeout: Duration,
+}
+
+impl DutFactory for NetworkFactory {
+    fn describe(&self) -> String {
+        format!("POWERLINK node {} on {}", self.node, self.iface)
+    }
+
+    fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+        let product = profile.nord().map_err(OpenError::Profile)?;
+        let peer = SocketAddr::from((def::ip_address(self.node), proto::epl::SDO_UDP_PORT));
+        let link = NetLink::open(&self.iface, peer).map_err(|e| match e {
+            LinkError::NeedsRoot { .. } => OpenError::NotPermitted(e.to_string()),
+            other => OpenError::Unreachable(other.to_string()),
+        })?;
+        let mac = MacAddr(link.mac());
+        let config = MnConfig {
+            node: self.node,
+            sdo_cycles: (self.timeout.as_millis() as u32).clamp(50, 5000),
+            ..MnConfig::default()
+        };
+        let mn = Manager::new(link, config, mac);
+        let what = format!("POWERLINK on {}", self.iface);
+        Ok(Box::new(EplBinding::open(mn, product, what, true)?))
+    }
+}
