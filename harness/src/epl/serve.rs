@@ -1,0 +1,767 @@
+//! `harness serve epl`: the simulated POWERLINK controlled node on a network interface.
+//!
+//! The node (`sim::epl::Node`, sans-IO) is reached two ways, as the manuals' devices are
+//! (BU 0620 §2.4.1 "asynchronous data transfer (SDO over ASND or UDP/IP)"):
+//! - raw Ethernet frames of EtherType 88ABh ([`crate::net::RawLink`], which opens the interface
+//!   promiscuous: the node's frames come to its own MAC address F0-5F-5A-00-00-N, BU 0620 §4.4.2
+//!   P878, and to the POWERLINK multicast addresses 01-11-1E-00-00-01…04, DS 301 §4.6.1.1.2,
+//!   neither of which is the interface's);
+//! - UDP datagrams to port 3819 (DS 301 C_SDO_EPL_PORT) on the interface's IPv4 address; the MN
+//!   addresses the node at 192.168.100.N (BU 0620 §3.7.3, BU 2200 §5.2.5), so that is the
+//!   address to give the interface. Without an IPv4 address only raw Ethernet is served, and a
+//!   line on stderr says so.
+//!
+//! One thread owns the raw link: each frame goes to [`Node::receive`] and what it returns is sent
+//! at once (a PRes within the PReq's cycle), and [`Node::poll`] runs at least every
+//! [`POLL_PERIOD`] (the Basic Ethernet timeout, the loss of the SoC, the drive model). A second
+//! thread owns the UDP socket and passes datagrams to [`Node::udp`]: the raw link cannot be
+//! waited on together with another socket, and a UDP request must not wait for the next frame.
+//! The node is shared under a mutex, and the time handed to it (since start) is read with the
+//! lock held, so it never goes backwards.
+
+use std::net::{IpAddr, Ipv4Addr, SocketAddr, UdpSocket};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::{self, JoinHandle};
+use std::time::{Duration, Instant};
+
+use proto::epl::{NmtState, SDO_UDP_PORT};
+use proto::eth::ETHERTYPE_POWERLINK;
+use proto::nord::epl as def;
+use proto::nord::Protocol;
+use sim::epl::{Node, NodeConfig, NodeError, POLL_PERIOD};
+
+pub use crate::net::LinkError;
+use crate::net::{RawLink, MAX_FRAME};
+
+/// How long the raw thread polls the socket after a frame before it sleeps: the next frame of
+/// a cycle (SoA after PReq) is taken without a thread wake-up.
+const FRAME_POLL: Duration = Duration::from_micros(50);
+
+/// The longest either thread sleeps without looking at its stop flag.
+const STOP_CHECK: Duration = Duration::from_millis(20);
+
+/// What `harness serve epl` serves.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ServeOptions {
+    /// The network interface (`--iface`), e.g. one end of a veth pair.
+    pub iface: String,
+    /// The product profile (`--profile`, default `sk550p`).
+    pub profile: String,
+    /// The node id (`--node-id`, default 1; a controlled node's is 1…239, BU 0620 §2.4.3.1).
+    pub node_id: u8,
+    /// Inverters behind the interface (`--inverters`; default the product's maximum).
+    pub inverters: Option<u8>,
+}
+
+impl ServeOptions {
+    /// `iface` with the defaults: SK 550P, node 1, the product's maximum of inverters.
+    pub fn new(iface: &str) -> ServeOptions {
+        ServeOptions {
+            iface: iface.into(),
+            profile: "sk550p".into(),
+            node_id: 1,
+            inverters: None,
+        }
+    }
+}
+
+/// Why the node cannot be served, or stopped serving.
+#[derive(Debug, thiserror::Error)]
+pub enum ServeError {
+    /// The profile is unknown or its product has no POWERLINK interface.
+    #[error("{0}")]
+    Profile(String),
+    /// The node id is not a controlled node's, or the product has no POWERLINK.
+    #[error(transparent)]
+    Node(#[from] NodeError),
+    /// The raw Ethernet link failed (no such interface, no root, I/O).
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// The UDP socket for SDO over UDP/IP could not be bound or failed.
+    #[error("UDP {addr} (SDO over UDP/IP): {source}")]
+    Udp {
+        /// The address it was bound (or to be bound) to.
+        addr: SocketAddr,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// A serving thread panicked (a bug).
+    #[error("the POWERLINK node's thread panicked: {0}")]
+    Panicked(String),
+}
+
+/// What a served node did, as counted by its threads.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// POWERLINK frames received (every frame of EtherType 88ABh on the interface).
+    pub frames_in: u64,
+    /// Frames the node sent (PRes, ASnd).
+    pub frames_out: u64,
+    /// Datagrams received on UDP port 3819.
+    pub datagrams_in: u64,
+    /// Datagrams the node answered with.
+    pub datagrams_out: u64,
+    /// Frames skipped because they were longer than a standard Ethernet frame.
+    pub oversized: u64,
+}
+
+/// The counters the threads update.
+#[derive(Debug, Default)]
+struct Counters {
+    frames_in: AtomicU64,
+    frames_out: AtomicU64,
+    datagrams_in: AtomicU64,
+    datagrams_out: AtomicU64,
+    oversized: AtomicU64,
+}
+
+impl Counters {
+    fn snapshot(&self) -> Stats {
+        let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
+        Stats {
+            frames_in: get(&self.frames_in),
+            frames_out: get(&self.frames_out),
+            datagrams_in: get(&self.datagrams_in),
+            datagrams_out: get(&self.datagrams_out),
+            oversized: get(&self.oversized),
+        }
+    }
+}
+
+fn bump(c: &AtomicU64) {
+    c.fetch_add(1, Ordering::Relaxed);
+}
+
+type Worker = JoinHandle<Result<(), ServeError>>;
+
+/// A node served in threads by [`start`]; dropping it stops them.
+#[derive(Debug)]
+pub struct Served {
+    iface: String,
+    mac: [u8; 6],
+    udp: Option<SocketAddr>,
+    node: Arc<Mutex<Node>>,
+    counters: Arc<Counters>,
+    stop: Arc<AtomicBool>,
+    threads: Vec<Worker>,
+}
+
+impl Served {
+    /// The interface it serves on.
+    pub fn iface(&self) -> &str {
+        &self.iface
+    }
+
+    /// The node's own Ethernet address, the source of what it sends (F0-5F-5A-00-00-N, not the
+    /// interface's).
+    pub fn mac(&self) -> [u8; 6] {
+        self.mac
+    }
+
+    /// Where SDO over UDP/IP is served (`None`: the interface had no IPv4 address).
+    pub fn udp_addr(&self) -> Option<SocketAddr> {
+        self.udp
+    }
+
+    /// The node's NMT state now.
+    pub fn state(&self) -> NmtState {
+        match self.node.lock() {
+            Ok(n) => n.state(),
+            Err(p) => p.into_inner().state(),
+        }
+    }
+
+    /// What the threads counted so far.
+    pub fn stats(&self) -> Stats {
+        self.counters.snapshot()
+    }
+
+    /// Whether the threads still serve (they end on a link or socket error).
+    pub fn is_running(&self) -> bool {
+        !self.threads.is_empty() && self.threads.iter().all(|t| !t.is_finished())
+    }
+
+    /// Stops the threads (within [`STOP_CHECK`]) and returns what they counted, or why they had
+    /// stopped before.
+    pub fn stop(mut self) -> Result<Stats, ServeError> {
+        self.join()
+    }
+
+    fn join(&mut self) -> Result<Stats, ServeError> {
+        self.stop.store(true, Ordering::Relaxed);
+        let mut result = Ok(());
+        for t in self.threads.drain(..) {
+            let r = t.join().unwrap_or_else(|p| {
+                let why = p
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| p.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                Err(ServeError::Panicked(why))
+            });
+            if result.is_ok() {
+                result = r;
+            }
+        }
+        result.map(|()| self.counters.snapshot())
+    }
+}
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.join();
+    }
+}
+
+/// Opens `opts.iface` (raw Ethernet, and UDP 3819 on its IPv4 address if it has one) and
+/// serves the simulated node of `opts.profile` there in threads of this process, until the
+/// returned handle is stopped or dropped.
+pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
+    let config = device_config(opts)?;
+    let node = Node::new(
+        sim::device::Device::new(config),
+        NodeConfig::new(opts.node_id),
+    )?;
+    let mut link = RawLink::open(&opts.iface, Some(ETHERTYPE_POWERLINK))?;
+    link.set_spin(FRAME_POLL);
+    let udp = match ipv4_of(&opts.iface) {
+        Some(ip) => {
+            let addr = SocketAddr::from((ip, SDO_UDP_PORT));
+            let socket =
+                UdpSocket::bind(addr).map_err(|source| ServeError::Udp { addr, source })?;
+            socket
+                .set_read_timeout(Some(STOP_CHECK))
+                .map_err(|source| ServeError::Udp { addr, source })?;
+            Some((addr, socket))
+        }
+        None => None,
+    };
+    let mac = node.mac().0;
+    let node = Arc::new(Mutex::new(node));
+    let counters = Arc::new(Counters::default());
+    let stop = Arc::new(AtomicBool::new(false));
+    let start = Instant::now();
+    let mut served = Served {
+        iface: opts.iface.clone(),
+        mac,
+        udp: udp.as_ref().map(|(a, _)| *a),
+        node: node.clone(),
+        counters: counters.clone(),
+        stop: stop.clone(),
+        threads: Vec::new(),
+    };
+    let spawn = |name: String, f: Box<dyn FnOnce() -> Result<(), ServeError> + Send>| {
+        let stop = stop.clone();
+        thread::Builder::new()
+            .name(name)
+            .spawn(move || {
+                let r = f();
+                // Either thread ending ends both: a node half served is not served.
+                stop.store(true, Ordering::Relaxed);
+                r
+            })
+            .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))
+    };
+    let shared = Shared {
+        node: node.clone(),
+        counters: counters.clone(),
+        stop: stop.clone(),
+        start,
+    };
+    served.threads.push(spawn(
+        format!("epl-node-{}", opts.iface),
+        Box::new(move || run_raw(link, &shared)),
+    )?);
+    if let Some((addr, socket)) = udp {
+        let shared = Shared {
+            node,
+            counters,
+            stop: stop.clone(),
+            start,
+        };
+        served.threads.push(spawn(
+            format!("epl-udp-{}", opts.iface),
+            Box::new(move || run_udp(socket, addr, &shared)),
+        )?);
+    }
+    Ok(served)
+}
+
+/// Serves until `duration` has passed (forever when `None`), after a line on stdout that says
+/// what is served where (and one on stderr when SDO over UDP/IP is not served).
+pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeError> {
+    let served = start(opts)?;
+    let config = device_config(opts)?;
+    let m = served.mac();
+    let expected = def::ip_address(opts.node_id);
+    let udp = match served.udp_addr() {
+        Some(a) => format!(", SDO over UDP on {a}"),
+        None => String::new(),
+    };
+    println!(
+        "serving POWERLINK node {} ({}, {} inverters) on {} (node MAC {:02x}:{:02x}:{:02x}:{:02x}:{:02x}:{:02x}){udp}",
+        opts.node_id,
+        config.product.name(),
+        config.inverters,
+        opts.iface,
+        m[0],
+        m[1],
+        m[2],
+        m[3],
+        m[4],
+        m[5]
+    );
+    match served.udp_addr() {
+        None => eprintln!(
+            "note: {} has no IPv4 address: serving raw Ethernet only (SDO over ASnd); give it \
+             {expected}/24 (BU 0620 §3.7.3) for SDO over UDP/IP",
+            opts.iface
+        ),
+        Some(a) if a.ip() != IpAddr::V4(expected) => eprintln!(
+            "note: node {} is addressed at {expected} (BU 0620 §3.7.3: 192.168.100.<node id>), \
+             but {} has {}: an MN sending SDO over UDP to {expected} will not reach it",
+            opts.node_id,
+            opts.iface,
+            a.ip()
+        ),
+        Some(_) => {}
+    }
+    let end = duration.map(|d| Instant::now() + d);
+    while served.is_running() && end.is_none_or(|e| Instant::now() < e) {
+        let left = end.map_or(STOP_CHECK * 10, |e| {
+            e.saturating_duration_since(Instant::now())
+        });
+        thread::sleep(left.min(STOP_CHECK * 10));
+    }
+    served.stop().map(|_| ())
+}
+
+/// `harness serve epl` arguments.
+#[derive(clap::Parser, Debug)]
+#[command(
+    name = "harness serve epl",
+    about = "Serve the simulator as a POWERLINK controlled node on a network interface (raw Ethernet: root or CAP_NET_RAW; SDO over UDP 3819 on the interface's IPv4 address)"
+)]
+struct ServeArgs {
+    /// The network interface, e.g. one end of a veth pair (give it 192.168.100.<node id>/24
+    /// for SDO over UDP/IP).
+    #[arg(long)]
+    iface: String,
+    /// Product profile (a product with POWERLINK: sk550p, tu3-pol, tu4-pol, cu4-pol).
+    #[arg(long, default_value = "sk550p")]
+    profile: String,
+    /// The node id, 1…239 (BU 0620 §2.4.3.1; 240 is the managing node's).
+    #[arg(long, default_value = "1", value_parser = parse_node_id)]
+    node_id: u8,
+    /// Inverters behind the interface (default: the product's maximum).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
+    inverters: Option<u8>,
+    /// Stop after this many seconds (default: serve until killed).
+    #[arg(long)]
+    seconds: Option<u64>,
+}
+
+/// A controlled node's id: 1…239 (BU 0620 §2.4.3.1, BU 2200 §5.2.4; DS 301 §4.7.4: 0 is
+/// invalid, 240 the MN, 241…255 reserved).
+fn parse_node_id(s: &str) -> Result<u8, String> {
+    let n: u8 = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a node id (a number 1…239)"))?;
+    match n {
+        1..=239 => Ok(n),
+        0 => Err("node id 0 is invalid; a controlled node has 1…239 (BU 0620 §2.4.3.1)".into()),
+        240 => Err(
+            "node id 240 is the managing node's; a controlled node has 1…239 (BU 0620 §2.4.3.1)"
+                .into(),
+        ),
+        _ => Err(format!(
+            "node id {n} is reserved; a controlled node has 1…239 (BU 0620 §2.4.3.1)"
+        )),
+    }
+}
+
+/// `harness serve epl ARGS…`; returns the exit code.
+pub(crate) fn command(args: &[String]) -> Result<i32, String> {
+    let a = match crate::cli::parse_args::<ServeArgs>("harness serve epl", args) {
+        Ok(a) => a,
+        Err(code) => return Ok(code),
+    };
+    let opts = ServeOptions {
+        iface: a.iface,
+        profile: a.profile,
+        node_id: a.node_id,
+        inverters: a.inverters,
+    };
+    serve(&opts, a.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
+    Ok(crate::cli::EXIT_PASS)
+}
+
+/// The simulated device of `opts`: a product with a POWERLINK interface.
+fn device_config(opts: &ServeOptions) -> Result<sim::device::DeviceConfig, ServeError> {
+    let product = crate::profile::Profile::by_name(&opts.profile)
+        .and_then(|p| p.nord())
+        .map_err(ServeError::Profile)?;
+    if !product.protocols().contains(&Protocol::Powerlink) {
+        return Err(ServeError::Profile(format!(
+            "{} has no POWERLINK interface (POWERLINK profiles: sk550p, tu3-pol, tu4-pol, cu4-pol)",
+            product.name()
+        )));
+    }
+    if !(1..=239).contains(&opts.node_id) {
+        return Err(NodeError::NodeId(opts.node_id).into());
+    }
+    let max = product.max_inverters();
+    Ok(sim::device::DeviceConfig {
+        inverters: opts.inverters.unwrap_or(max).clamp(1, max),
+        ..sim::device::DeviceConfig::new(product)
+    })
+}
+
+/// The first IPv4 address of interface `name`, if it has one.
+fn ipv4_of(name: &str) -> Option<Ipv4Addr> {
+    pnet_datalink::interfaces()
+        .into_iter()
+        .find(|i| i.name == name)?
+        .ips
+        .iter()
+        .find_map(|n| match n.ip() {
+            IpAddr::V4(a) => Some(a),
+            IpAddr::V6(_) => None,
+        })
+}
+
+/// What both threads share.
+struct Shared {
+    node: Arc<Mutex<Node>>,
+    counters: Arc<Counters>,
+    stop: Arc<AtomicBool>,
+    start: Instant,
+}
+
+impl Shared {
+    /// The node and the time to hand it (read with the lock held: never backwards).
+    fn node(&self) -> Result<(MutexGuard<'_, Node>, Duration), ServeError> {
+        let guard = self
+            .node
+            .lock()
+            .map_err(|_| ServeError::Panicked("the other serving thread panicked".into()))?;
+        Ok((guard, self.start.elapsed()))
+    }
+
+    fn stopped(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
+    }
+}
+
+/// The raw Ethernet loop: frames in, the node's frames out; its timers between them.
+fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
+    let c = &shared.counters;
+    let mut buf = vec![0u8; MAX_FRAME];
+    let mut next_poll = Duration::ZERO;
+    while !shared.stopped() {
+        if shared.start.elapsed() >= next_poll {
+            let (mut node, now) = shared.node()?;
+            node.poll(now);
+            next_poll = now + POLL_PERIOD;
+        }
+        let wait = next_poll
+            .saturating_sub(shared.start.elapsed())
+            .min(STOP_CHECK);
+        let received = match link.recv(&mut buf, Instant::now() + wait) {
+            Ok(r) => r,
+            Err(e) if link_down(&e) => {
+                // The cable is out: the node sees no frames, its timers still run.
+                thread::sleep(STOP_CHECK.min(POLL_PERIOD));
+                continue;
+            }
+            Err(e) => return Err(e.into()),
+        };
+        c.oversized.store(link.oversized(), Ordering::Relaxed);
+        let Some(r) = received else { continue };
+        bump(&c.frames_in);
+        let out = {
+            let (mut node, now) = shared.node()?;
+            node.receive(&buf[..r.len], now)
+        };
+        for f in out {
+            match link.send(&f) {
+                Ok(()) => bump(&c.frames_out),
+                Err(e) if link_down(&e) => {}
+                Err(e) => return Err(e.into()),
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The UDP loop: SDO datagrams in, the node's answers back to their sender.
+fn run_udp(socket: UdpSocket, addr: SocketAddr, shared: &Shared) -> Result<(), ServeError> {
+    let c = &shared.counters;
+    let mut buf = [0u8; 2048];
+    while !shared.stopped() {
+        let (len, from) = match socket.recv_from(&mut buf) {
+            Ok(r) => r,
+            Err(e) if transient(&e) => continue,
+            Err(source) => return Err(ServeError::Udp { addr, source }),
+        };
+        bump(&c.datagrams_in);
+        let out = {
+            let (mut node, now) = shared.node()?;
+            node.udp(from, &buf[..len], now)
+        };
+        for d in out {
+            match socket.send_to(&d, from) {
+                Ok(_) => bump(&c.datagrams_out),
+                Err(e) if transient(&e) => {}
+                Err(source) => return Err(ServeError::Udp { addr, source }),
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A UDP error that ends one exchange, not the socket: the read timeout, an interrupted call,
+/// a peer gone (ICMP port unreachable), a network not reachable just now.
+fn transient(e: &std::io::Error) -> bool {
+    use std::io::ErrorKind as K;
+    matches!(
+        e.kind(),
+        K::WouldBlock
+            | K::TimedOut
+            | K::Interrupted
+            | K::ConnectionRefused
+            | K::ConnectionReset
+            | K::HostUnreachable
+            | K::NetworkUnreachable
+            | K::NetworkDown
+    )
+}
+
+/// Whether `e` says the interface went down while it still exists (as `ecat::serve` decides).
+fn link_down(e: &LinkError) -> bool {
+    match e {
+        LinkError::Io { source, iface, .. } => {
+            source.raw_os_error() == Some(nix::errno::Errno::ENETDOWN as i32)
+                && crate::net::interface(iface).is_ok()
+        }
+        _ => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::net::veth::Veth;
+    use proto::epl::asnd::IdentResponse;
+    use proto::epl::frame::{Body, Soa, Soc};
+    use proto::epl::sdo::{Command, Con, SdoFrame, Seq};
+    use proto::epl::{EplRepr, RequestedService, ServiceId, MN_NODE_ID, MULTICAST_SOA};
+    use proto::eth::{EthernetFrame, EthernetRepr, MacAddr};
+
+    /// The harness MN's source address in these tests (locally administered).
+    const MN_MAC: MacAddr = MacAddr([0x02, 0, 0, 0, 0, 0xF0]);
+
+    /// A frame from the MN (node 240) to `dst` with `body`.
+    fn frame(dst: u8, body: Body) -> Vec<u8> {
+        let repr = EplRepr {
+            dst,
+            src: MN_NODE_ID,
+            body,
+        };
+        EthernetRepr {
+            dst: MULTICAST_SOA,
+            src: MN_MAC,
+            ethertype: ETHERTYPE_POWERLINK,
+        }
+        .emit(&repr.emit().unwrap())
+    }
+
+    /// SoA asking node `target` for `service` (DS 301 §4.6.1.1.5).
+    fn soa(service: RequestedService, target: u8) -> Vec<u8> {
+        frame(
+            255,
+            Body::Soa(Soa {
+                service,
+                target,
+                epl_version: 0x20,
+                ..Soa::default()
+            }),
+        )
+    }
+
+    /// Sends `f` and waits up to `wait` for the node's IdentResponse.
+    fn ident(mn: &mut RawLink, f: &[u8], wait: Duration) -> Option<(IdentResponse, [u8; 6])> {
+        mn.send(f).unwrap();
+        let mut buf = [0u8; MAX_FRAME];
+        let until = Instant::now() + wait;
+        while let Some(r) = mn.recv(&mut buf, until).unwrap() {
+            let eth = EthernetFrame::new_checked(&buf[..r.len]).unwrap();
+            let Ok(repr) = EplRepr::parse_bytes(eth.inner_payload()) else {
+                continue;
+            };
+            if let Body::Asnd(a) = repr.body {
+                assert_eq!(a.service, ServiceId::IDENT_RESPONSE);
+                let mut src = [0u8; 6];
+                src.copy_from_slice(&buf[6..12]);
+                return Some((IdentResponse::parse(&a.payload).unwrap(), src));
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn node_ids_outside_1_to_239_are_refused_by_name() {
+        assert_eq!(parse_node_id("1"), Ok(1));
+        assert_eq!(parse_node_id("239"), Ok(239));
+        for (arg, says) in [
+            ("0", "invalid"),
+            ("240", "managing node"),
+            ("241", "reserved"),
+            ("255", "reserved"),
+            ("256", "not a node id"),
+            ("x", "not a node id"),
+        ] {
+            let e = parse_node_id(arg).unwrap_err();
+            assert!(e.contains(says), "{arg}: {e}");
+        }
+        let opts = ServeOptions {
+            node_id: 0,
+            ..ServeOptions::new("lo")
+        };
+        match start(&opts) {
+            Err(ServeError::Node(NodeError::NodeId(0))) => {}
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn profiles_without_powerlink_are_refused_before_any_socket() {
+        for (profile, says) in [("tu3-eip", "no POWERLINK"), ("no-such", "unknown profile")] {
+            let opts = ServeOptions {
+                profile: profile.into(),
+                ..ServeOptions::new("no-such-if0")
+            };
+            match start(&opts) {
+                Err(ServeError::Profile(e)) => assert!(e.contains(says), "{e}"),
+                other => panic!("{profile}: {other:?}"),
+            }
+        }
+        for profile in ["sk550p", "tu3-pol", "tu4-pol", "cu4-pol", "tu4-pol@epl"] {
+            let opts = ServeOptions {
+                profile: profile.into(),
+                ..ServeOptions::new("x")
+            };
+            assert!(device_config(&opts).is_ok(), "{profile}");
+        }
+    }
+
+    #[test]
+    fn an_unknown_interface_is_refused_before_any_thread() {
+        match start(&ServeOptions::new("no-such-if0")) {
+            Err(ServeError::Link(LinkError::NoSuchInterface { .. })) => {}
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn the_served_node_answers_an_ident_request_over_a_veth_pair() {
+        let Some(v) = Veth::new("p") else { return };
+        let served = start(&ServeOptions {
+            node_id: 7,
+            ..ServeOptions::new(&v.0)
+        })
+        .expect("serve");
+        assert!(served.is_running());
+        assert_eq!(served.udp_addr(), None, "the veth end has no IPv4 address");
+        assert_eq!(served.state(), NmtState::NOT_ACTIVE);
+        let mut mn = RawLink::open(&v.1, Some(ETHERTYPE_POWERLINK)).unwrap();
+        // An SoA of the MN takes the node from NOT_ACTIVE to PRE_OPERATIONAL_1 (DS 301
+        // §7.1.4.1.1) without an answer; an IdentRequest to another node gets none either.
+        let (none, some) = (Duration::from_millis(200), Duration::from_secs(2));
+        assert!(ident(&mut mn, &soa(RequestedService::NO_SERVICE, 255), none).is_none());
+        assert_eq!(served.state(), NmtState::PRE_OPERATIONAL_1);
+        assert!(ident(&mut mn, &soa(RequestedService::IDENT_REQUEST, 8), none).is_none());
+        let (id, src) =
+            ident(&mut mn, &soa(RequestedService::IDENT_REQUEST, 7), some).expect("ident");
+        assert_eq!(id.vendor_id, def::VENDOR_ID);
+        assert_eq!(
+            id.product_code,
+            def::product_code(proto::nord::Product::Sk550p)
+        );
+        assert_eq!(id.state, NmtState::PRE_OPERATIONAL_1);
+        assert_eq!(id.ip, def::ip_address(7));
+        assert_eq!(src, served.mac(), "sent from the node's own address");
+        assert_eq!(served.mac(), [0xF0, 0x5F, 0x5A, 0, 0, 7]);
+        // A SoC: PRE_OPERATIONAL_2.
+        mn.send(&frame(255, Body::Soc(Soc::default()))).unwrap();
+        let t = Instant::now();
+        while served.state() != NmtState::PRE_OPERATIONAL_2 && t.elapsed().as_secs() < 2 {
+            thread::sleep(Duration::from_millis(5));
+        }
+        assert_eq!(served.state(), NmtState::PRE_OPERATIONAL_2);
+        let stats = served.stop().expect("stops cleanly");
+        // Three SoAs and a SoC in, one IdentResponse out.
+        assert_eq!((stats.frames_in, stats.frames_out), (4, 1), "{stats:?}");
+    }
+
+    #[test]
+    fn sdo_over_udp_on_the_interfaces_address() {
+        let Some(v) = Veth::new("u") else { return };
+        let ok = std::process::Command::new("ip")
+            .args(["addr", "add", "192.168.100.1/24", "dev", &v.0])
+            .status()
+            .map(|s| s.success());
+        assert!(matches!(ok, Ok(true)), "ip addr add: {ok:?}");
+        let served = start(&ServeOptions {
+            profile: "tu4-pol".into(),
+            ..ServeOptions::new(&v.0)
+        })
+        .expect("serve");
+        let addr = served.udp_addr().expect("UDP on the interface's address");
+        assert_eq!(addr, SocketAddr::from((def::ip_address(1), SDO_UDP_PORT)));
+        let client = UdpSocket::bind(("0.0.0.0", 0)).unwrap();
+        client
+            .set_read_timeout(Some(Duration::from_secs(2)))
+            .unwrap();
+        let mut buf = [0u8; 1500];
+        let mut ask = |seq: Seq, command: Option<Command>| {
+            let d = SdoFrame { seq, command }.emit_udp().unwrap();
+            client.send_to(&d, addr).unwrap();
+            let (n, from) = client.recv_from(&mut buf).expect("an answer within 2 s");
+            assert_eq!(from, addr);
+            SdoFrame::parse(SdoFrame::strip_udp(&buf[..n]).unwrap()).unwrap()
+        };
+        let seq = |ssnr, scon| Seq {
+            rsnr: 0,
+            rcon: Con::Valid,
+            ssnr,
+            scon,
+        };
+        // Sequence layer initialisation, then 1018h.1 (vendor id, DS 301 §6.3).
+        let init = ask(seq(1, Con::Init), None);
+        assert_eq!(init.seq.scon, Con::Init);
+        let r = ask(
+            seq(2, Con::Valid),
+            Some(Command::read_by_index(1, 0x1018, 1)),
+        );
+        assert_eq!(r.command.unwrap().payload, def::VENDOR_ID.to_le_bytes());
+        let stats = served.stop().expect("stops cleanly");
+        assert_eq!((stats.datagrams_in, stats.datagrams_out), (2, 2));
+    }
+
+    #[test]
+    fn a_vanished_interface_ends_the_threads_with_an_error() {
+        let Some(v) = Veth::new("q") else { return };
+        let served = start(&ServeOptions::new(&v.0)).expect("serve");
+        drop(v);
+        let t = Instant::now();
+        while served.is_running() && t.elapsed() < Duration::from_secs(2) {
+            thread::sleep(Duration::from_millis(10));
+        }
+        match served.stop() {
+            Err(ServeError::Link(LinkError::Io { .. })) => {}
+            other => panic!("{other:?}"),
+        }
+    }
+}
