@@ -554,9 +554,11 @@ mod tests {
     use super::*;
     use crate::net::veth::Veth;
     use proto::epl::asnd::IdentResponse;
-    use proto::epl::frame::{Body, Soa, Soc};
+    use proto::epl::frame::{Body, Preq, Soa, Soc};
     use proto::epl::sdo::{Command, Con, SdoFrame, Seq};
-    use proto::epl::{EplRepr, RequestedService, ServiceId, MN_NODE_ID, MULTICAST_SOA};
+    use proto::epl::{
+        EplRepr, RequestedService, ServiceId, MN_NODE_ID, MULTICAST_PRES, MULTICAST_SOA,
+    };
     use proto::eth::{EthernetFrame, EthernetRepr, MacAddr};
 
     /// The harness MN's source address in these tests (locally administered).
@@ -700,16 +702,39 @@ mod tests {
             thread::sleep(Duration::from_millis(5));
         }
         assert_eq!(served.state(), NmtState::PRE_OPERATIONAL_2);
+        // A PReq to the node's own (unicast) address, not the interface's: a PRes to the
+        // multicast 01-11-1E-00-00-02 (DS 301 C_DLL_MULTICAST_PRES) with 96 bytes (§2.4.5).
+        let mut preq = frame(7, Body::Preq(Preq::default()));
+        preq[..6].copy_from_slice(&served.mac());
+        mn.send(&preq).unwrap();
+        let mut buf = [0u8; MAX_FRAME];
+        let r = mn
+            .recv(&mut buf, Instant::now() + Duration::from_secs(2))
+            .unwrap()
+            .expect("a PRes");
+        assert_eq!(&buf[..6], &MULTICAST_PRES.0);
+        let eth = EthernetFrame::new_checked(&buf[..r.len]).unwrap();
+        let Body::Pres(p) = EplRepr::parse_bytes(eth.inner_payload()).unwrap().body else {
+            panic!("not a PRes: {:02x?}", &buf[..r.len]);
+        };
+        assert_eq!(
+            (p.state, p.payload.len()),
+            (NmtState::PRE_OPERATIONAL_2, 96)
+        );
         let stats = served.stop().expect("stops cleanly");
-        // Three SoAs and a SoC in, one IdentResponse out.
-        assert_eq!((stats.frames_in, stats.frames_out), (4, 1), "{stats:?}");
+        // Three SoAs, a SoC and a PReq in; an IdentResponse and a PRes out.
+        assert_eq!((stats.frames_in, stats.frames_out), (5, 2), "{stats:?}");
     }
 
     #[test]
     fn sdo_over_udp_on_the_interfaces_address() {
         let Some(v) = Veth::new("u") else { return };
+        // An address of this process's own (the MN would use 192.168.100.1; another test
+        // binding that address and port 3819 at the same time would collide).
+        let pid = std::process::id();
+        let ip = Ipv4Addr::new(10, 229, (pid >> 8) as u8, (pid as u8).clamp(1, 254));
         let ok = std::process::Command::new("ip")
-            .args(["addr", "add", "192.168.100.1/24", "dev", &v.0])
+            .args(["addr", "add", &format!("{ip}/32"), "dev", &v.0])
             .status()
             .map(|s| s.success());
         assert!(matches!(ok, Ok(true)), "ip addr add: {ok:?}");
@@ -719,7 +744,7 @@ mod tests {
         })
         .expect("serve");
         let addr = served.udp_addr().expect("UDP on the interface's address");
-        assert_eq!(addr, SocketAddr::from((def::ip_address(1), SDO_UDP_PORT)));
+        assert_eq!(addr, SocketAddr::from((ip, SDO_UDP_PORT)));
         let client = UdpSocket::bind(("0.0.0.0", 0)).unwrap();
         client
             .set_read_timeout(Some(Duration::from_secs(2)))
