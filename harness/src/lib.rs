@@ -9,6 +9,7 @@ mod ecat;
 pub use ecat::bench_support as ecat_bench;
 /// `harness serve ecat` in a thread of the caller (EtherCAT end-to-end tests and benches).
 pub use ecat::serve as ecat_serve;
+pub use epl::serve as epl_serve;
 mod enip;
 mod epl;
 /// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the

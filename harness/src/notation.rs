@@ -294,7 +294,7 @@ impl Matcher {
             Matcher::Null => actual.is_null(),
             Matcher::OneOf(options) => options.iter().any(|m| m.check_at(path, actual).is_ok()),
             Matcher::Range(lo, hi) => int().is_some_and(|a| (*lo..=*hi).contains(&a)),
-            Matcher::Contains(t) => actual.as_str().is_some_and(|s| s.contains(t.as_str())),
+            Matcher::Contains(t) => actual.as_str().is_some_and(|s| contains(s, t)),
             Matcher::Not(m) => m.check_at(path, actual).is_err(),
             Matcher::Object(fields) => {
                 let Value::Object(map) = actual else {
@@ -386,6 +386,31 @@ impl fmt::Display for Matcher {
     }
 }
 
+/// Whether `text` contains `pattern`. A pattern of hex bytes with `x` nibbles (`"04 FF 01 6D xx
+/// xx 60 00"`) matches hex bytes whatever those nibbles are, spaces aside, at a byte
+/// boundary; any other pattern is plain text.
+fn contains(text: &str, pattern: &str) -> bool {
+    let squeeze = |s: &str| -> Vec<u8> { s.bytes().filter(|b| !b.is_ascii_whitespace()).collect() };
+    let p = squeeze(pattern);
+    let wild = p.iter().any(|b| matches!(b, b'x' | b'X'))
+        && p.len() % 2 == 0
+        && p.iter()
+            .all(|b| b.is_ascii_hexdigit() || matches!(b, b'x' | b'X'));
+    if !wild {
+        return text.contains(pattern);
+    }
+    let t = squeeze(text);
+    if t.len() < p.len() {
+        return false;
+    }
+    (0..=t.len() - p.len()).step_by(2).any(|at| {
+        t[at..at + p.len()]
+            .iter()
+            .zip(&p)
+            .all(|(a, b)| matches!(b, b'x' | b'X') || a.eq_ignore_ascii_case(b))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -425,6 +450,9 @@ mod tests {
     #[case(json!({"range": [10, "14h"]}), json!(21), false)]
     #[case(json!({"mask": "0F00h", "value": "0B00h"}), json!(0x0B31), true)]
     #[case(json!({"contains": "out of range"}), json!("inverter 9 is out of range 1..=8"), true)]
+    #[case(json!({"contains": "04 FF xx 6D"}), json!("00 04 FF 01 6D 00"), true)]
+    #[case(json!({"contains": "04FF xx6D"}), json!("00 04 FF 01 6E 00"), false)]
+    #[case(json!({"contains": "4F Fx"}), json!("04 FF 01"), false)]
     #[case(json!({"not": 0}), json!(0), false)]
     #[case(json!("70 66 xx 00"), json!("70 66 02 00"), true)]
     #[case(json!("70 66 xx 00"), json!("70 67 02 00"), false)]

@@ -137,6 +137,7 @@ impl<L: Link> EplBinding<L> {
         let via = mn.config().via;
         mn.set_recording(false);
         mn.boot(NmtState::PRE_OPERATIONAL_2).map_err(open_error)?;
+        mn.close_sdo().map_err(open_error)?;
         let id = mn.ident().map_err(open_error)?;
         if id.vendor_id != def::VENDOR_ID {
             return Err(OpenError::BringUp(format!(
@@ -285,7 +286,7 @@ impl<L: Link> EplBinding<L> {
             );
         }
         match r {
-            Ok(_) => Ok(json!({ "abort": null }).into()),
+            Ok(_) => Ok(json!({ "abort": null, "ok": true }).into()),
             Err(e) => refused_or(e),
         }
     }
@@ -380,20 +381,22 @@ impl<L: Link> EplBinding<L> {
     /// An `epl:` step, as written.
     fn epl_step(&mut self, step: &EplStep) -> Result<Observation, StepError> {
         let fields = match step {
-            EplStep::Nmt(c) => {
-                let state = self.mn.nmt(*c).map_err(step_error)?;
-                if state == NmtState::NOT_ACTIVE {
-                    self.mn.drop_connections();
-                }
-                self.state_fields(state)
-            }
+            EplStep::Nmt(c) => match self.mn.nmt(*c).map_err(step_error)? {
+                Some(state) => self.state_fields(state),
+                // A reset: the node restarts; the MN asks nothing that would move it on.
+                None => self.seen_fields(),
+            },
             EplStep::State(s) => {
                 let state = self.mn.boot(*s).map_err(step_error)?;
                 self.state_fields(state)
             }
-            EplStep::Ident => {
+            EplStep::Ident(node) => {
+                if let Some(n) = node {
+                    self.mn.set_node(*n);
+                }
                 let i = self.mn.ident().map_err(step_error)?;
                 json!({
+                    "node": self.mn.config().node,
                     "state": i.state.to_string(),
                     "vendor": i.vendor_id,
                     "product": i.product_code,
@@ -438,7 +441,8 @@ impl<L: Link> EplBinding<L> {
                 let via = via.unwrap_or(self.via);
                 match self.mn.sdo(via, Command::read_by_index(0, *index, *sub)) {
                     Ok(d) => {
-                        let mut f = json!({ "data": hex(&d), "size": d.len(), "abort": null });
+                        let mut f =
+                            json!({ "data": hex(&d), "size": d.len(), "abort": null, "ok": true });
                         if let Some(v) = number(&d) {
                             f["value"] = json!(v);
                         }
@@ -506,8 +510,14 @@ impl<L: Link> EplBinding<L> {
             }
             EplStep::Silence(d) => {
                 self.mn.silence(*d);
-                let state = self.mn.status().map(|s| s.state).map_err(step_error)?;
-                self.state_fields(state)
+                if self.mn.link_mut().node().is_some() {
+                    self.seen_fields()
+                } else {
+                    // A node on the network is asked with a SoA alone, which leaves a node
+                    // that lost its MN in PRE_OPERATIONAL_1.
+                    let s = self.mn.peek_status().map_err(step_error)?;
+                    self.state_fields(s.state)
+                }
             }
             EplStep::Cycles(n) => {
                 self.cycles(*n).map_err(step_error)?;
@@ -518,8 +528,23 @@ impl<L: Link> EplBinding<L> {
         Ok(fields.into())
     }
 
-    fn state_fields(&self, state: NmtState) -> Value {
-        json!({ "state": state.to_string(), "code": state.0 })
+    /// A state as the node reported it, with the LEDs where the node can be looked into.
+    fn state_fields(&mut self, state: NmtState) -> Value {
+        let mut f = json!({ "state": state.to_string(), "code": state.0 });
+        if let Some((node, _)) = self.mn.link_mut().node() {
+            let (bs, be) = node.leds();
+            f["leds"] = json!({ "bs": bs, "be": be });
+        }
+        f
+    }
+
+    /// The state without asking the node (an embedded node is looked into; a node on the
+    /// network that has just been reset is asked nothing: any SoA would move it on).
+    fn seen_fields(&mut self) -> Value {
+        match self.mn.link_mut().node().map(|(n, _)| n.state()) {
+            Some(state) => self.state_fields(state),
+            None => json!({ "state": null }),
+        }
     }
 
     /// `inject`/`observe` reach into the simulated node.
@@ -608,12 +633,17 @@ impl<L: Link> EplBinding<L> {
     }
 }
 
-/// A little-endian number of 1, 2 or 4 bytes.
+/// A little-endian number of 1, 2, 4 or 8 bytes (PDO mapping entries are UNSIGNED64).
 fn number(d: &[u8]) -> Option<i64> {
     Some(match d {
         [a] => i64::from(*a),
         [a, b] => i64::from(u16::from_le_bytes([*a, *b])),
         [a, b, c, e] => i64::from(u32::from_le_bytes([*a, *b, *c, *e])),
+        [..] if d.len() == 8 => {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(d);
+            i64::try_from(u64::from_le_bytes(b)).ok()?
+        }
         _ => return None,
     })
 }

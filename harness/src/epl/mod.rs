@@ -4,13 +4,16 @@
 
 mod binding;
 pub(crate) mod mn;
+pub mod serve;
 mod step;
+mod xdd;
 
 use std::net::SocketAddr;
 use std::time::Duration;
 
 use binding::EplBinding;
-use mn::link::{EmbeddedLink, NetLink};
+use mn::link::{EmbeddedLink, Link, NetLink};
+use mn::tap::Tapped;
 use mn::{Manager, MnConfig};
 use proto::eth::MacAddr;
 use proto::nord::epl as def;
@@ -20,7 +23,7 @@ use sim::epl::{Node, NodeConfig};
 
 use crate::binding::embedded::device_config;
 use crate::binding::{Binding, OpenError};
-use crate::bus::{Bus, Embedded, Network};
+use crate::bus::{Bus, Description, Embedded, Network};
 use crate::net::LinkError;
 use crate::profile::Profile;
 use crate::runner::DutFactory;
@@ -33,12 +36,17 @@ pub(crate) const BUS: Bus = Bus {
     parse_step: step::parse,
     embedded,
     network,
-    serve: serve_command,
-    descriptions: &[],
+    serve: serve::command,
+    descriptions: &[Description {
+        format: "xdd",
+        write: describe_xdd,
+    }],
 };
 
-fn serve_command(_args: &[String]) -> Result<i32, String> {
-    Err("`harness serve epl` is being written".into())
+/// `harness describe xdd`: the XDD of a POWERLINK product, from `proto::nord::epl` (the
+/// definition the simulated node runs on).
+fn describe_xdd(profile: &Profile, inverters: u8) -> Result<String, String> {
+    xdd::xdd(profile.nord()?, inverters)
 }
 
 fn profiles() -> Vec<Profile> {
@@ -53,18 +61,34 @@ fn profiles() -> Vec<Profile> {
 const EMBEDDED_MN_MAC: MacAddr = MacAddr([0x02, 0x00, 0x00, 0x00, 0x00, 0xF0]);
 
 /// The simulated node of the profile's product (node 1) behind the MN.
-fn embedded(profile: &Profile, _context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
+fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
     let product = profile.nord().map_err(OpenError::Profile)?;
     let device = Device::new(device_config(profile)?);
     let node =
         Node::new(device, NodeConfig::new(1)).map_err(|e| OpenError::Profile(e.to_string()))?;
-    let mn = Manager::new(
-        EmbeddedLink::new(node),
-        MnConfig::default(),
-        EMBEDDED_MN_MAC,
-    );
-    let b = EplBinding::open(mn, product, "embedded POWERLINK node".into(), false)?;
-    Ok(Box::new(b))
+    let link = EmbeddedLink::new(node);
+    let what = "embedded POWERLINK node".to_string();
+    let config = MnConfig::default();
+    match &context.tap {
+        None => open(link, config, EMBEDDED_MN_MAC, product, what, false),
+        Some(tap) => {
+            let link = Tapped::new(link, tap.clone());
+            open(link, config, EMBEDDED_MN_MAC, product, what, false)
+        }
+    }
+}
+
+/// The MN on `link`, its node booted to PRE_OPERATIONAL_2 behind the binding.
+fn open<L: Link + 'static>(
+    link: L,
+    config: MnConfig,
+    mac: MacAddr,
+    product: Product,
+    what: String,
+    persistent: bool,
+) -> Result<Box<dyn Binding>, OpenError> {
+    let mn = Manager::new(link, config, mac);
+    Ok(Box::new(EplBinding::open(mn, product, what, persistent)?))
 }
 
 /// `--dut epl://IFACE[/NODE]`: the node behind that interface (node 1 unless given).
@@ -88,13 +112,16 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
         iface,
         node,
         timeout: n.timeout,
+        tap: n.tap.clone(),
     }))
 }
 
+/// Opens the link behind an interface for each case (one node for the whole run).
 struct NetworkFactory {
     iface: String,
     node: u8,
     timeout: Duration,
+    tap: Option<crate::pcap::SharedTap>,
 }
 
 impl DutFactory for NetworkFactory {
@@ -115,8 +142,17 @@ impl DutFactory for NetworkFactory {
             sdo_cycles: (self.timeout.as_millis() as u32).clamp(50, 5000),
             ..MnConfig::default()
         };
-        let mn = Manager::new(link, config, mac);
         let what = format!("POWERLINK on {}", self.iface);
-        Ok(Box::new(EplBinding::open(mn, product, what, true)?))
+        match &self.tap {
+            None => open(link, config, mac, product, what, true),
+            Some(tap) => open(
+                Tapped::new(link, tap.clone()),
+                config,
+                mac,
+                product,
+                what,
+                true,
+            ),
+        }
     }
 }

@@ -22,8 +22,9 @@ pub(crate) enum EplStep {
     Nmt(NmtCommand),
     /// The MN boots the node to this state the normal way.
     State(NmtState),
-    /// SoA IdentRequest.
-    Ident,
+    /// SoA IdentRequest, to the node the binding talks to or (after readdressing) to
+    /// another, which the binding talks to from then on.
+    Ident(Option<u8>),
     /// SoA StatusRequest.
     Status,
     /// SDO read.
@@ -75,7 +76,8 @@ impl BusStep for EplStep {
         match self {
             EplStep::Nmt(c) => format!("NMT command {c}"),
             EplStep::State(s) => format!("boot the node to {s}"),
-            EplStep::Ident => "SoA IdentRequest".into(),
+            EplStep::Ident(None) => "SoA IdentRequest".into(),
+            EplStep::Ident(Some(n)) => format!("SoA IdentRequest to node {n}"),
             EplStep::Status => "SoA StatusRequest".into(),
             EplStep::Upload { index, sub, via: v } => {
                 format!("SDO read {index:04X}h/{sub:02X}h{}", via(v))
@@ -168,8 +170,19 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
             "PRE_OPERATIONAL_1, PRE_OPERATIONAL_2, READY_TO_OPERATE, OPERATIONAL, STOPPED",
         )?)
     } else if has("ident") {
-        Fields::new("epl", m, &["ident"])?;
-        EplStep::Ident
+        let f = Fields::new("epl", m, &["ident", "node"])?;
+        let node = match f.int("node")? {
+            None => None,
+            Some(n) => Some(
+                u8::try_from(n)
+                    .ok()
+                    .filter(|n| (1..=239).contains(n))
+                    .ok_or(format!(
+                        "`epl.node`: {n} is not a controlled node's id (1…239)"
+                    ))?,
+            ),
+        };
+        EplStep::Ident(node)
     } else if has("status") {
         Fields::new("epl", m, &["status"])?;
         EplStep::Status

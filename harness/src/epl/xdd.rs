@@ -149,7 +149,7 @@ fn object_list(product: Product, inverters: u8) -> Result<Vec<XObject>, String> 
         .iter()
         .map(from_dictionary)
         .collect();
-    list.extend(node_objects());
+    list.extend(node_objects(product));
     list.extend(parameter_objects(product, inverters));
     list.sort_by_key(|o| o.at);
     if let Some(w) = list.windows(2).find(|w| w[0].at == w[1].at) {
@@ -207,11 +207,11 @@ fn value(e: &Entry) -> Option<String> {
 
 /// The DS 301 objects the node answers from its own state (`sim::epl`'s dictionary): their
 /// types, access and power-on values.
-fn node_objects() -> Vec<XObject> {
+fn node_objects(product: Product) -> Vec<XObject> {
     let u8t = DataType::U8.code();
     let u32t = DataType::U32.code();
     let count = |n: u8| XObject::var(0, "NumberOfEntries", u8t, "ro").default(n.to_string());
-    let (lo, hi) = def::CYCLE_RANGE_US;
+    let (lo, hi) = def::cycle_range_us(product);
     let history = std::iter::once(count(0))
         .chain((1..=ERROR_ENTRIES as u16).map(|s| XObject::var(s, "ErrorEntry_DOM", DOMAIN, "ro")))
         .collect();
@@ -429,7 +429,7 @@ fn write(product: Product, objects: &[XObject]) -> std::io::Result<String> {
                                 Ok(())
                             })?;
                         w.create_element("TransportLayers").write_empty()?;
-                        network_management(w)
+                        network_management(w, product)
                     })
                 })?;
             Ok(())
@@ -498,14 +498,14 @@ fn object(w: &mut W, o: &XObject, element: &str) -> std::io::Result<()> {
     Ok(())
 }
 
-/// `NetworkManagement`: a controlled node (no MN functions) with the cycle range of P858
-/// (BU 0620 §4.2.3, the range the node accepts in 1006h), the services of
+/// `NetworkManagement`: a controlled node (no MN functions) with the cycle range of P858 /
+/// P165 (BU 0620 §4.2.3, BU 2200 §7.1.2: the range the node accepts in 1006h), the services of
 /// [`def::FEATURE_FLAGS`] (isochronous, SDO over UDP/IP and ASnd) and static mapping
 /// (BU 0620 §2.4.1).
-fn network_management(w: &mut W) -> std::io::Result<()> {
+fn network_management(w: &mut W, product: Product) -> std::io::Result<()> {
     let yes = |b: bool| if b { "true" } else { "false" };
     let flag = |bit: u32| yes(def::FEATURE_FLAGS & (1 << bit) != 0);
-    let (lo, hi) = def::CYCLE_RANGE_US;
+    let (lo, hi) = def::cycle_range_us(product);
     let (lo, hi) = (lo.to_string(), hi.to_string());
     let boot = BOOT_TIME_NOT_ACTIVE_US.to_string();
     let errors = ERROR_ENTRIES.to_string();

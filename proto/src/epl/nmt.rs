@@ -93,9 +93,9 @@ open_code! {
     NmtCommand {
         /// NMTStartNode: READY_TO_OPERATE → OPERATIONAL.
         START_NODE = 0x21, "StartNode";
-        /// NMTStopNode: → STOPPED (from PRE_OPERATIONAL_2, READY_TO_OPERATE, OPERATIONAL).
+        /// NMTStopNode: → STOPPED (from PRE_OPERATIONAL_1 up to OPERATIONAL).
         STOP_NODE = 0x22, "StopNode";
-        /// NMTEnterPreOperational2: → PRE_OPERATIONAL_2 (from READY_TO_OPERATE, OPERATIONAL,
+        /// NMTEnterPreOperational2: → PRE_OPERATIONAL_2 (from OPERATIONAL and
         /// STOPPED).
         ENTER_PRE_OPERATIONAL_2 = 0x23, "EnterPreOperational2";
         /// NMTEnableReadyToOperate: PRE_OPERATIONAL_2 → READY_TO_OPERATE.
@@ -135,13 +135,20 @@ open_code! {
 
 impl NmtCommand {
     /// The state an NMT state command leads a CN in `from` to, or `None` when the command
-    /// is not valid there (DS 301 §7.1.4.1 CN state transitions NMT_CT5..NMT_CT10 and the
-    /// reset transitions NMT_GT1..GT4): the CN ignores it and stays.
+    /// is not valid there (DS 301 §7.1.4.1 CN state transitions and the reset transitions
+    /// NMT_GT1..GT4, as openPOWERLINK's CN implements them: StopNode from PRE_OPERATIONAL_1
+    /// up to OPERATIONAL, EnterPreOperational2 from OPERATIONAL and STOPPED only, the resets
+    /// from every CN state): the CN ignores it and stays.
     pub fn next_state(self, from: NmtState) -> Option<NmtState> {
         use NmtState as S;
-        let cycling = matches!(
+        let cn = matches!(
             from,
-            S::PRE_OPERATIONAL_2 | S::READY_TO_OPERATE | S::OPERATIONAL | S::STOPPED
+            S::PRE_OPERATIONAL_1
+                | S::PRE_OPERATIONAL_2
+                | S::READY_TO_OPERATE
+                | S::OPERATIONAL
+                | S::STOPPED
+                | S::BASIC_ETHERNET
         );
         match self {
             NmtCommand::ENABLE_READY_TO_OPERATE if from == S::PRE_OPERATIONAL_2 => {
@@ -151,28 +158,21 @@ impl NmtCommand {
             NmtCommand::STOP_NODE
                 if matches!(
                     from,
-                    S::PRE_OPERATIONAL_2 | S::READY_TO_OPERATE | S::OPERATIONAL
+                    S::PRE_OPERATIONAL_1
+                        | S::PRE_OPERATIONAL_2
+                        | S::READY_TO_OPERATE
+                        | S::OPERATIONAL
                 ) =>
             {
                 Some(S::STOPPED)
             }
-            NmtCommand::ENTER_PRE_OPERATIONAL_2
-                if matches!(from, S::READY_TO_OPERATE | S::OPERATIONAL | S::STOPPED) =>
-            {
+            NmtCommand::ENTER_PRE_OPERATIONAL_2 if matches!(from, S::OPERATIONAL | S::STOPPED) => {
                 Some(S::PRE_OPERATIONAL_2)
             }
-            NmtCommand::RESET_NODE if cycling || from == S::PRE_OPERATIONAL_1 => {
-                Some(S::RESET_APPLICATION)
-            }
-            NmtCommand::RESET_COMMUNICATION if cycling || from == S::PRE_OPERATIONAL_1 => {
-                Some(S::RESET_COMMUNICATION)
-            }
-            NmtCommand::RESET_CONFIGURATION if cycling || from == S::PRE_OPERATIONAL_1 => {
-                Some(S::RESET_CONFIGURATION)
-            }
-            NmtCommand::SW_RESET if cycling || from == S::PRE_OPERATIONAL_1 => {
-                Some(S::INITIALISING)
-            }
+            NmtCommand::RESET_NODE if cn => Some(S::RESET_APPLICATION),
+            NmtCommand::RESET_COMMUNICATION if cn => Some(S::RESET_COMMUNICATION),
+            NmtCommand::RESET_CONFIGURATION if cn => Some(S::RESET_CONFIGURATION),
+            NmtCommand::SW_RESET if cn => Some(S::INITIALISING),
             _ => None,
         }
     }
@@ -252,7 +252,14 @@ mod tests {
         assert_eq!(C::START_NODE.next_state(S::PRE_OPERATIONAL_2), None);
         assert_eq!(C::START_NODE.next_state(S::PRE_OPERATIONAL_1), None);
         assert_eq!(C::ENABLE_READY_TO_OPERATE.next_state(S::OPERATIONAL), None);
-        assert_eq!(C::STOP_NODE.next_state(S::PRE_OPERATIONAL_1), None);
+        assert_eq!(
+            C::STOP_NODE.next_state(S::PRE_OPERATIONAL_1),
+            Some(S::STOPPED)
+        );
+        assert_eq!(
+            C::ENTER_PRE_OPERATIONAL_2.next_state(S::READY_TO_OPERATE),
+            None
+        );
         assert_eq!(
             C::RESET_NODE.next_state(S::OPERATIONAL),
             Some(S::RESET_APPLICATION)

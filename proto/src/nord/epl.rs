@@ -43,8 +43,15 @@ pub const ASYNC_MTU: u16 = 300;
 pub const RESPONSE_TIME_NS: u32 = 25_000;
 /// The cycle the node expects (P858 factory setting 1000 µs, BU 0620 §4.2.3).
 pub const DEFAULT_CYCLE_US: u32 = 1000;
-/// P858 "POWERLINK cycle" setting range, µs (BU 0620 §4.2.3: 400…2000 µs).
-pub const CYCLE_RANGE_US: (u32, u32) = (400, 2000);
+/// The cycle range the node synchronises to, µs: the SK 550P's P858 "POWERLINK cycle"
+/// 400…2000 µs (BU 0620 §4.2.3), the modules' P165 "POWERLINK Zyklus" 400…4000 µs (BU 2200
+/// §7.1.2).
+pub fn cycle_range_us(product: Product) -> (u32, u32) {
+    match product.family() {
+        Family::Integrated => (400, 2000),
+        Family::Module => (400, 4000),
+    }
+}
 /// NMT_CNBasicEthernetTimeout_U32 default, µs (DS 301; see the module documentation).
 pub const BASIC_ETHERNET_TIMEOUT_US: u32 = 5_000_000;
 /// The first three bytes of the node's IP address (BU 0620 §3.7.3, BU 2200 §5.2.5:
@@ -183,8 +190,8 @@ fn tu3_sub(n: u8, k: u8) -> u8 {
 
 /// The words of the PReq (`outputs`) or PRes payload of a product, in order (BU 0620 §2.4.5:
 /// 8 FIs, 96 bytes, 5000h+FI−1 / 5010h+FI−1 sub-indices 1..6; BU 2200 §6.3.5: SK TU3-POL
-/// "12 Byte" per FU — its table restarts the word count at every FU — for FU 1..4, the FUs its
-/// device-id table (§6.4) reaches (the mapping table also lists FU5..8's addresses), control/
+/// "12 Byte" per FU — its table restarts the word count at every FU — for the FU1..8 it lists
+/// (its device-id table, §6.4, reaches FU 1..4 only: the words of FU5..8 stay 0), control/
 /// status word 5000h/5001h sub FU, values 5002h/5003h; SK TU4-POL/CU4-POL 50 bytes: the I/O
 /// word 5005h.0/5001h.0, then FU1..4 with values at 5·(FU−1) + k).
 pub fn process_map(product: Product, outputs: bool) -> Vec<MappedWord> {
@@ -201,7 +208,7 @@ pub fn process_map(product: Product, outputs: bool) -> Vec<MappedWord> {
     let mut map = Vec::new();
     match product {
         Product::Tu3Pol => {
-            for n in 1..=product.max_inverters() {
+            for n in 1..=8u8 {
                 map.push(w(word0, n, n, 0));
                 map.extend((1..=5).map(|k| w(values, tu3_sub(n, k), n, k)));
             }
@@ -421,7 +428,8 @@ mod tests {
             subs,
             [1, 0x01, 0x05, 0x09, 0x0D, 0x11, 2, 0x02, 0x06, 0x0A, 0x0E, 0x12]
         );
-        assert_eq!(tu3.len(), 24);
+        assert_eq!(tu3.len(), 48);
+        assert_eq!((tu3[29].index, tu3[29].sub), (0x5002, 0x15 + 4 * 4)); // FU5 setpoint 5
         assert_eq!((tu3_sub(3, 4), tu3_sub(8, 5)), (0x0F, 0x28)); // errata 5502.Fh, 5002.29h
         let tu4 = process_map(Product::Tu4Pol, false);
         assert_eq!(tu4.len(), 25); // 50 bytes

@@ -15,6 +15,7 @@ use proto::epl::{
 use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
 use proto::nord::epl::{self as def, MappedWord, Slot};
 use proto::nord::led::{self, Row};
+use proto::nord::nmt::PlState;
 use proto::nord::{ArrayElement, Inverter, ParamNumber, Product, Protocol};
 
 use super::od::{Context, Dictionary, NodeVars, HISTORY_LEN};
@@ -33,6 +34,41 @@ pub const POLL_PERIOD: Duration = Duration::from_millis(10);
 fn loss_of_soc(cycle_us: u32) -> Duration {
     Duration::from_micros(u64::from(cycle_us) * 10).max(Duration::from_millis(100))
 }
+
+/// DS 301 error code E_DLL_LOSS_SOC_TH: the loss of SoC passed its threshold.
+const LOSS_OF_SOC: u16 = 0x8245;
+/// P170 [-01] of the modules when the gateway (P164) is outside 192.168.100.1…240 at
+/// start-up: "5605 Konfig. setzen" (BU 2200 §5.2.5, BU 0620 §3.7.3 "5605 set config.").
+const SET_CONFIG_ERROR: i32 = 5605;
+
+/// The manuals' state of an NMT state, where they have it.
+fn pl_state(s: NmtState) -> Option<PlState> {
+    Some(match s {
+        NmtState::NOT_ACTIVE => PlState::Initialisation,
+        NmtState::PRE_OPERATIONAL_1 => PlState::PreOperational1,
+        NmtState::PRE_OPERATIONAL_2 => PlState::PreOperational2,
+        NmtState::READY_TO_OPERATE => PlState::ReadyToOperate,
+        NmtState::OPERATIONAL => PlState::Operational,
+        NmtState::STOPPED => PlState::Stopped,
+        NmtState::BASIC_ETHERNET => PlState::BasicEthernet,
+        _ => return None,
+    })
+}
+
+/// The parameter that sets the node id: P850 of the SK 550P (under POWERLINK "Node ID", BU 0620
+/// §4.2.3; the catalogue keeps EtherNet/IP's four elements, the node id is the first), P160 of
+/// the modules (BU 2200 §5.2.5).
+fn node_id_parameter(product: Product) -> u16 {
+    if product == Product::Sk550p {
+        850
+    } else {
+        160
+    }
+}
+
+/// The I/O word the modules send: bit 15 "valid flag" (BU 2200 §6.3.7), the digital inputs
+/// (none set) below.
+const IO_VALID: u16 = 0x8000;
 
 /// How the node is set up beyond its device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -89,11 +125,13 @@ pub struct Node {
     faults: [i32; 8],
     dropped: u64,
     gateway: Ipv4Addr,
+    /// Losses of the SoC since power-on (modules: P184 [-01]).
+    losses: i32,
 }
 
 impl Node {
     /// The controlled node of `device`, in NOT_ACTIVE from time zero.
-    pub fn new(mut device: Device, config: NodeConfig) -> Result<Node, NodeError> {
+    pub fn new(device: Device, config: NodeConfig) -> Result<Node, NodeError> {
         let product = device.config().product;
         if !product.protocols().contains(&Protocol::Powerlink) {
             return Err(NodeError::NoPowerlink(product.name()));
@@ -101,9 +139,9 @@ impl Node {
         if !(1..=239).contains(&config.node_id) {
             return Err(NodeError::NodeId(config.node_id));
         }
-        let gateway = Node::read_gateway(&mut device, product);
         let mut node = Node {
-            gateway,
+            gateway: Ipv4Addr::UNSPECIFIED,
+            losses: 0,
             device,
             product,
             mac: config.mac,
@@ -128,7 +166,13 @@ impl Node {
             faults: [0; 8],
             dropped: 0,
         };
-        node.show_identity();
+        // The node id is the addressing parameter's value (SK 550P P850, BU 0620 §3.7.3; the
+        // modules' P160 "Node Id/IP Adresse 4" with the DIP switches off, BU 2200 §5.2.5):
+        // the device starts with the one it was given.
+        if let Ok(s) = node.device.store(Unit::Interface) {
+            s.set_info(node_id_parameter(product), 1, i32::from(config.node_id));
+        }
+        node.start_up();
         node.show_state();
         Ok(node)
     }
@@ -159,8 +203,8 @@ impl Node {
     }
 
     /// LED A "BS" (BU 0620 §5.5.2.3: the NMT state) and LED B "BE" (red: a POWERLINK error;
-    /// BU 2200 §6.2: in Pre-Operational 1/2, Ready To Operate and Basic Ethernet, the MN has
-    /// failed).
+    /// the modules' BE in Pre-Operational 1/2, Ready To Operate and Basic Ethernet: the MN has
+    /// failed, BU 2200 §6.2).
     pub fn leds(&self) -> (Row, Row) {
         let bs = match self.vars.state {
             NmtState::PRE_OPERATIONAL_1 => 1,
@@ -171,13 +215,19 @@ impl Node {
             NmtState::STOPPED => 6,
             _ => 0,
         };
-        let be = usize::from(self.error);
-        (led::POWERLINK_BS[bs], led::POWERLINK_BE[be])
+        let be = match (self.error, self.product) {
+            (false, _) => led::POWERLINK_BE[0],
+            (true, Product::Sk550p) => led::POWERLINK_BE[1],
+            (true, _) => {
+                pl_state(self.vars.state).map_or(led::POWERLINK_BE[1], led::powerlink_module_be_red)
+            }
+        };
+        (led::POWERLINK_BS[bs], be)
     }
 
     /// Handles one whole Ethernet frame received at `now`; returns the frames to send.
     pub fn receive(&mut self, frame: &[u8], now: Duration) -> Vec<Vec<u8>> {
-        self.tick(now);
+        self.timers(now);
         let Ok(eth) = EthernetFrame::new_checked(frame) else {
             self.dropped += 1;
             return Vec::new();
@@ -252,7 +302,7 @@ impl Node {
     /// Handles an SDO datagram from `from` on UDP port 3819; returns the datagrams to answer.
     /// UDP is the only way in while the node is in Basic Ethernet (BU 0620 §2.4.4).
     pub fn udp(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Vec<u8>> {
-        self.tick(now);
+        self.timers(now);
         let Ok(frame) = SdoFrame::strip_udp(datagram).and_then(SdoFrame::parse) else {
             self.dropped += 1;
             return Vec::new();
@@ -263,9 +313,14 @@ impl Node {
             .collect()
     }
 
-    /// Runs the timers due at `now`.
+    /// Runs the timers due at `now`, the drive model outside OPERATIONAL (in OPERATIONAL each
+    /// PReq drives it) and the error history; wanted every [`POLL_PERIOD`].
     pub fn poll(&mut self, now: Duration) {
-        self.tick(now);
+        self.timers(now);
+        if self.vars.state != NmtState::OPERATIONAL {
+            self.device.tick(now);
+        }
+        self.errors(now);
     }
 
     fn asnd_in(&mut self, a: Asnd, to_me: bool, now: Duration) {
@@ -318,6 +373,12 @@ impl Node {
                 self.sdo.reset();
                 self.queued.clear();
                 self.last_soc = None;
+                if to != NmtState::RESET_COMMUNICATION {
+                    // A reset of the application is the restart the manuals ask for after
+                    // changing the addressing parameters ("so that the parameter settings
+                    // are read in", BU 0620 §3.7.3, BU 2200 §5.2.5).
+                    self.start_up();
+                }
                 NmtState::NOT_ACTIVE
             }
             s => s,
@@ -332,13 +393,16 @@ impl Node {
         self.show_state();
     }
 
-    /// Timers: the Basic Ethernet timeout, the loss of the MN, the drive model, new errors.
-    fn tick(&mut self, now: Duration) {
+    /// The NMT timers: the Basic Ethernet timeout, the loss of the MN.
+    fn timers(&mut self, now: Duration) {
         let state = self.vars.state;
         if state == NmtState::NOT_ACTIVE
             && now.saturating_sub(self.since)
                 >= Duration::from_micros(u64::from(self.vars.basic_ethernet_us))
         {
+            // No MN within the time-out: "If the red LED BE illuminates, the Managing Node has
+            // failed" (BU 0620 §2.4.4 Basic Ethernet, BU 2200 §6.2).
+            self.error = true;
             self.enter(NmtState::BASIC_ETHERNET, now);
         }
         let cycling = matches!(
@@ -355,12 +419,10 @@ impl Node {
             if state == NmtState::OPERATIONAL {
                 pdo::watchdog_expired(&mut self.device);
             }
+            self.losses += 1;
+            self.show_error(LOSS_OF_SOC);
             self.enter(NmtState::PRE_OPERATIONAL_1, now);
         }
-        if self.vars.state != NmtState::OPERATIONAL {
-            self.device.tick(now);
-        }
-        self.errors(now);
     }
 
     /// PReq data: drives the inverters in OPERATIONAL when the MN marks it valid (RD); in
@@ -374,14 +436,36 @@ impl Node {
             return;
         }
         let mut image = vec![0u8; 8 * 12];
+        let mut io = None;
         for (m, w) in self.rx_map.iter().zip(payload.chunks_exact(2)) {
-            if let Slot::Inverter { fi, word } = m.slot {
-                let at = usize::from(fi - 1) * 12 + usize::from(word) * 2;
-                image[at..at + 2].copy_from_slice(w);
+            match m.slot {
+                Slot::Inverter { fi, word } => {
+                    let at = usize::from(fi - 1) * 12 + usize::from(word) * 2;
+                    image[at..at + 2].copy_from_slice(w);
+                }
+                Slot::Io => io = Some(u16::from_le_bytes([w[0], w[1]])),
             }
+        }
+        if let Some(word) = io {
+            self.digital_outputs(word);
         }
         pdo::cycle(&mut self.device, &mut self.words, Some(&image), true, now);
         self.device.set_fieldbus_timeout(false);
+    }
+
+    /// The I/O word of an SK TU4-POL / CU4-POL (BU 2200 §6.3.7): valid only with bit 15 set,
+    /// DO1/DO2 in bits 0–1 (SK TU4-POL: P175 "Zustand Relais" shows them); P176 [-01] shows
+    /// the word, P177 [-01] the inputs' word (the module has no inputs set: the valid flag).
+    fn digital_outputs(&mut self, word: u16) {
+        let relays = self.product == Product::Tu4Pol && word & 0x8000 != 0;
+        if let Ok(s) = self.device.store(Unit::Interface) {
+            s.set_info(176, 1, i32::from(word as i16));
+            s.set_info(177, 1, i32::from(IO_VALID as i16));
+            s.set_info(174, 1, 0);
+            if relays {
+                s.set_info(175, 1, i32::from(word & 0x03));
+            }
+        }
     }
 
     fn pres(&self) -> Vec<u8> {
@@ -393,8 +477,7 @@ impl Node {
                     Slot::Inverter { fi, word } => {
                         self.words.inputs[usize::from(fi - 1)][usize::from(word)]
                     }
-                    // BU 2200 §6.3.7: bit 15 "valid flag", the inputs (none set) below.
-                    Slot::Io => 0x8000,
+                    Slot::Io => IO_VALID,
                 };
                 w.to_le_bytes()
             })
@@ -468,6 +551,54 @@ impl Node {
             gateway: self.gateway,
             hostname: def::default_hostname(n),
             vendor_ext2: [0; 48],
+        }
+    }
+
+    /// What the node reads in when it starts: the gateway, checked against the POWERLINK
+    /// range, and the identity it shows in its information parameters.
+    fn start_up(&mut self) {
+        let product = self.product;
+        if let (Ok(n), Ok(s)) = (
+            ParamNumber::new(i64::from(node_id_parameter(product))),
+            self.device.store(Unit::Interface),
+        ) {
+            let id = s
+                .read(
+                    n,
+                    None,
+                    ArrayElement::new(1)
+                        .ok()
+                        .filter(|_| product == Product::Sk550p),
+                )
+                .unwrap_or(0);
+            // A value outside 1…239 is no controlled node's id (§2.4.3.1): the node keeps its own.
+            if let Ok(id @ 1..=239) = u8::try_from(id) {
+                self.vars.node_id = id;
+            }
+        }
+        self.gateway = Node::read_gateway(&mut self.device, self.product);
+        let [a, b, c, d] = self.gateway.octets();
+        let valid = self.gateway == def::MODULE_GATEWAY
+            || self.gateway.is_unspecified()
+            || ([a, b, c] == def::IP_PREFIX && (1..=240).contains(&d));
+        if self.product != Product::Sk550p {
+            if let Ok(s) = self.device.store(Unit::Interface) {
+                s.set_info(170, 1, if valid { 0 } else { SET_CONFIG_ERROR });
+            }
+        }
+        self.show_identity();
+    }
+
+    /// P183 "NMT Error" (modules, BU 2200 §7.1.4): the last DS 301 error code, as the
+    /// parameter shows a 16-bit value; P184 [-01] counts the losses of the SoC.
+    fn show_error(&mut self, code: u16) {
+        if self.product == Product::Sk550p {
+            return;
+        }
+        let losses = self.losses;
+        if let Ok(s) = self.device.store(Unit::Interface) {
+            s.set_info(183, 1, i32::from(code as i16));
+            s.set_info(184, 1, losses);
         }
     }
 
@@ -545,7 +676,7 @@ impl Node {
 
     /// The interface's information parameters that say who the node is: SK 550P P870 = 4
     /// "Powerlink", P875 IP address, P876 subnet mask, P878 MAC address (BU 0620 §4.3, §4.4.2);
-    /// modules P185 IP address, P181 MAC address (BU 2200 §7.1.4).
+    /// modules P185 IP address, P186 subnet mask, P181 MAC address (BU 2200 §7.1.4).
     fn show_identity(&mut self) {
         let ip = def::ip_address(self.vars.node_id).octets();
         let mac = self.mac.0;
@@ -561,7 +692,12 @@ impl Node {
                 }
                 (875, 878)
             }
-            _ => (185, 181),
+            _ => {
+                for (e, b) in (1..).zip(def::SUBNET.octets()) {
+                    s.set_info(186, e, i32::from(b));
+                }
+                (185, 181)
+            }
         };
         for (e, b) in (1..).zip(ip) {
             s.set_info(ip_p, e, i32::from(b));

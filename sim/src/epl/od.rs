@@ -1,7 +1,8 @@
 //! The controlled node's object dictionary: the objects of `proto::nord::epl` (identity,
 //! feature flags, PDO mapping, process data), the objects whose value lives in the node (EPSG
 //! DS 301: 1001h error register, 1003h error history, 1006h cycle length, 1F8Ch NMT state, 1F93h
-//! node id, 1F99h Basic Ethernet timeout) and the NORD parameters at device id + parameter
+//! node id, 1F99h Basic Ethernet timeout, 1F9Ah host name — the default name of BU 0620 §4.2.3
+//! P854, "Powerlink <nnn>-0xED") and the NORD parameters at device id + parameter
 //! number (BU 0620 §2.4.6, BU 2200 §6.4) on the device's parameter stores.
 //!
 //! Refusals are the abort codes of BU 0620 §2.4.7 / BU 2200 §6.4.1 (DS 301's, which are
@@ -64,6 +65,7 @@ const CYCLE_LEN: u16 = 0x1006;
 const NMT_STATE: u16 = 0x1F8C;
 const NODE_ID: u16 = 0x1F93;
 const BASIC_ETHERNET_TIMEOUT: u16 = 0x1F99;
+const HOST_NAME: u16 = 0x1F9A;
 
 impl Dictionary {
     pub(crate) fn new(product: Product) -> Dictionary {
@@ -132,9 +134,16 @@ impl Dictionary {
             (NODE_ID, 1) => return u8v(v.node_id),
             (NODE_ID, 2) => return u8v(0),
             (BASIC_ETHERNET_TIMEOUT, 0) => return u32v(v.basic_ethernet_us),
-            (ERROR_REGISTER | CYCLE_LEN | NMT_STATE | NODE_ID | BASIC_ETHERNET_TIMEOUT, _) => {
-                return Err(abort::NO_SUBINDEX)
-            }
+            (HOST_NAME, 0) => return Ok(def::default_hostname(v.node_id).into_bytes()),
+            (
+                ERROR_REGISTER
+                | CYCLE_LEN
+                | NMT_STATE
+                | NODE_ID
+                | BASIC_ETHERNET_TIMEOUT
+                | HOST_NAME,
+                _,
+            ) => return Err(abort::NO_SUBINDEX),
             _ => {}
         }
         if let Some(o) = self.object(index) {
@@ -164,17 +173,17 @@ impl Dictionary {
             }
         };
         match (index, sub) {
-            // P858 "POWERLINK cycle" 400…2000 µs (BU 0620 §4.2.3) bounds the cycle the node
-            // synchronises to.
+            // P858 / P165 "POWERLINK cycle" (BU 0620 §4.2.3, BU 2200 §7.1.2) bound the cycle
+            // the node synchronises to.
             (CYCLE_LEN, 0) => {
-                cx.vars.cycle_us = ranged(data, def::CYCLE_RANGE_US)?;
+                cx.vars.cycle_us = ranged(data, def::cycle_range_us(self.product))?;
                 return Ok(());
             }
             (BASIC_ETHERNET_TIMEOUT, 0) => {
                 cx.vars.basic_ethernet_us = ranged(data, (0, u32::MAX))?;
                 return Ok(());
             }
-            (ERROR_REGISTER | ERROR_HISTORY | NMT_STATE | NODE_ID, s) => {
+            (ERROR_REGISTER | ERROR_HISTORY | NMT_STATE | NODE_ID | HOST_NAME, s) => {
                 let count = match index {
                     ERROR_HISTORY => cx.vars.history.len() as u8,
                     NODE_ID => 2,

@@ -3,7 +3,9 @@
 //! WriteByIndex, expedited or segmented, on the [`Dictionary`].
 //!
 //! Sequence layer: a client opens with SendCon "initialisation"; the server answers
-//! ReceiveCon and SendCon "initialisation"; frames then carry SendCon "valid" and a send
+//! ReceiveCon and SendCon "initialisation"; the client's confirmation is answered "valid"
+//! both ways (a client may also send its first command at once); frames then carry SendCon
+//! "valid" and a send
 //! sequence number one above the last (mod 64). A repeated number is a retransmission: the
 //! last answer is sent again. Any other number, or a command without a connection, is an
 //! error of the sequence layer: ReceiveCon 3 (retransmission request) and, when the frame
@@ -11,7 +13,8 @@
 //! SendCon "no connection" closes.
 //!
 //! Command layer: unknown or unsupported commands abort with 05040001h "SDO command
-//! invalid/unknown"; a segmented write whose segments do not add up to its DataSize with
+//! invalid/unknown"; a read whose segment is not the 4 bytes of index, sub-index and reserved
+//! byte with 05040002h; a segmented write whose segments do not add up to its DataSize with
 //! 05040002h "Impermissible size of transferred data"; one larger than the node takes with
 //! 05040005h "No memory"; a segment of another transaction than the one in progress with
 //! 05040001h. An abort from the client ends its transfer without an answer.
@@ -107,6 +110,8 @@ impl Server {
                 self.connections.remove(i);
                 return Vec::new();
             }
+            // Closing a connection there is not: nothing to do, nothing to answer.
+            (Con::None, None) if frame.command.is_none() => return Vec::new(),
             (Con::None, None) => return refuse(seq, frame.command.as_ref()),
             (Con::Init, _) => {
                 if let Some(i) = at {
@@ -138,9 +143,23 @@ impl Server {
         let Some(i) = at else { return Vec::new() };
         let c = &mut self.connections[i];
         let Some(command) = &frame.command else {
-            // An acknowledgement (or the confirmation of the initialisation).
+            // The client's confirmation of the initialisation is answered "connection valid"
+            // (DS 301 §6.3.2.2 connection set-up, the fourth frame), as is an acknowledge
+            // request; a plain acknowledgement needs no answer.
+            let answer = c.link == Link::Init || seq.scon == Con::ErrorOrAckRequest;
             c.link = Link::Valid;
-            return Vec::new();
+            if !answer {
+                return Vec::new();
+            }
+            return vec![SdoFrame {
+                seq: Seq {
+                    rsnr: c.received,
+                    rcon: Con::Valid,
+                    ssnr: c.sent,
+                    scon: Con::Valid,
+                },
+                command: None,
+            }];
         };
         if seq.ssnr == c.received && c.link == Link::Valid {
             return c.last.clone();
@@ -223,7 +242,8 @@ fn execute(
     }
     match (request.command, request.segmentation) {
         (CommandId::READ_BY_INDEX, Segmentation::Expedited) => {
-            let Ok((index, sub, _)) = request.by_index() else {
+            // A read carries index, sub-index and a reserved byte, nothing more.
+            let Ok((index, sub, [])) = request.by_index() else {
                 return vec![abort_of(request, protocol::SIZE)];
             };
             match od.upload(cx, index, sub) {

@@ -9,6 +9,7 @@
 
 mod describe;
 pub(crate) mod link;
+pub(crate) mod tap;
 
 use std::collections::VecDeque;
 use std::time::Duration;
@@ -209,6 +210,16 @@ impl<L: Link> Manager<L> {
 
     pub(crate) fn config(&self) -> &MnConfig {
         &self.config
+    }
+
+    /// Talks to node `node` from now on (the node was given a new id); its SDO connections
+    /// start anew.
+    pub(crate) fn set_node(&mut self, node: u8) {
+        if node != self.config.node {
+            self.config.node = node;
+            self.node_state = None;
+            self.drop_connections();
+        }
     }
 
     pub(crate) fn set_cycle(&mut self, cycle: Duration) {
@@ -470,7 +481,8 @@ impl<L: Link> Manager<L> {
         Ok(())
     }
 
-    /// Lets `d` pass without sending anything (the MN "fails").
+    /// Lets `d` pass without sending anything (the MN "fails", the cable is cut); the next
+    /// cycle resumes as before, as an MN whose link comes back does.
     pub(crate) fn silence(&mut self, d: Duration) {
         let until = self.link.now() + d;
         self.link.wait_until(until);
@@ -521,6 +533,38 @@ impl<L: Link> Manager<L> {
         Ok(id)
     }
 
+    /// The node's StatusResponse to a SoA sent on its own, outside the cycle: no SoC or PReq
+    /// goes out, so a node in PRE_OPERATIONAL_1 (after the loss of its MN) stays there.
+    pub(crate) fn peek_status(&mut self) -> Result<StatusResponse, MnError> {
+        let node = self.config.node;
+        let sent = self.soa(RequestedService::STATUS_REQUEST, node)?;
+        let deadline = self.link.now() + self.config.reply.max(self.config.cycle);
+        let got = self.wait_for(
+            deadline,
+            |r| matches!(&r.body, Body::Asnd(a) if a.service == ServiceId::STATUS_RESPONSE),
+        )?;
+        self.record(&sent, got.as_ref());
+        let Some(Received {
+            repr:
+                Some(EplRepr {
+                    body: Body::Asnd(a),
+                    ..
+                }),
+            ..
+        }) = got
+        else {
+            return Err(MnError::NoReply {
+                node,
+                what: "SoA StatusRequest".into(),
+                waited: self.config.reply.max(self.config.cycle),
+            });
+        };
+        let s =
+            StatusResponse::parse(&a.payload).map_err(|e| self.malformed("StatusRequest", e))?;
+        self.node_state = Some(s.state);
+        Ok(s)
+    }
+
     /// The node's StatusResponse.
     pub(crate) fn status(&mut self) -> Result<StatusResponse, MnError> {
         let p = self.ask(
@@ -541,9 +585,11 @@ impl<L: Link> Manager<L> {
         }
     }
 
-    /// Sends an NMT command in the MN's asynchronous slot, then runs cycles until the node's
-    /// state settles (a StatusResponse says it).
-    pub(crate) fn nmt(&mut self, command: NmtCommand) -> Result<NmtState, MnError> {
+    /// Sends an NMT command in the MN's asynchronous slot, then asks the node's state (a
+    /// StatusResponse). After a reset command the node starts over in NOT_ACTIVE, where any
+    /// SoA or SoC moves it on: the MN asks nothing (`None`); its cycle, when it runs again,
+    /// takes the node back through PRE_OPERATIONAL_1 and 2, with new SDO connections.
+    pub(crate) fn nmt(&mut self, command: NmtCommand) -> Result<Option<NmtState>, MnError> {
         let payload = NmtCommandFrame {
             command,
             data: Vec::new(),
@@ -551,13 +597,29 @@ impl<L: Link> Manager<L> {
         .emit();
         self.queued.push_back((ServiceId::NMT_COMMAND, payload));
         self.cycle(RequestedService::NO_SERVICE)?;
+        if matches!(
+            command,
+            NmtCommand::RESET_NODE
+                | NmtCommand::RESET_COMMUNICATION
+                | NmtCommand::RESET_CONFIGURATION
+                | NmtCommand::SW_RESET
+        ) {
+            self.node_state = None;
+            self.drop_connections();
+            return Ok(None);
+        }
         // The MN follows its node (DS 301: the MN enters RTO/OP with its nodes).
         match command {
             NmtCommand::ENABLE_READY_TO_OPERATE => self.mn_state = NmtState::READY_TO_OPERATE,
             NmtCommand::START_NODE => self.mn_state = NmtState::OPERATIONAL,
             _ => {}
         }
-        self.status().map(|s| s.state)
+        self.status().map(|s| Some(s.state))
+    }
+
+    /// An NMT state command the boot needs to succeed.
+    fn nmt_to(&mut self, command: NmtCommand) -> Result<NmtState, MnError> {
+        Ok(self.nmt(command)?.unwrap_or(NmtState::NOT_ACTIVE))
     }
 
     /// Boots the node to `target` the way an MN does (DS 301 §7.1.4.2): SoA alone with
@@ -578,30 +640,42 @@ impl<L: Link> Manager<L> {
             _ => 0,
         };
         let mut state = state.unwrap_or(NmtState::NOT_ACTIVE);
-        if state == NmtState::STOPPED && target != NmtState::STOPPED {
-            state = self.nmt(NmtCommand::ENTER_PRE_OPERATIONAL_2)?;
-        }
         if matches!(state, NmtState::BASIC_ETHERNET) {
             self.cycle(RequestedService::NO_SERVICE)?;
             state = self.status()?.state;
         }
-        if rank(target) >= 2 && rank(state) <= 1 {
-            self.phase = Phase::Isochronous;
-            self.mn_state = NmtState::PRE_OPERATIONAL_2;
-            self.run_cycles(2)?;
-            state = self.status()?.state;
+        // Down to PRE_OPERATIONAL_2 the ways the CN takes (EnterPreOperational2 from
+        // OPERATIONAL and STOPPED; READY_TO_OPERATE by way of STOPPED).
+        if rank(target) >= 2 && rank(target) < rank(state)
+            || state == NmtState::STOPPED && target != NmtState::STOPPED
+        {
+            if state == NmtState::READY_TO_OPERATE {
+                self.nmt_to(NmtCommand::STOP_NODE)?;
+            }
+            state = self.nmt_to(NmtCommand::ENTER_PRE_OPERATIONAL_2)?;
+        }
+        if rank(target) >= 2 || target == NmtState::STOPPED {
+            // From PRE_OPERATIONAL_2 on the node needs the isochronous cycle (it takes a lost
+            // SoC for a failed MN): the MN runs it, whatever state it found the node in.
+            if self.phase != Phase::Isochronous {
+                self.phase = Phase::Isochronous;
+                if rank(self.mn_state) < 2 {
+                    self.mn_state = NmtState::PRE_OPERATIONAL_2;
+                }
+            }
+            if rank(state) <= 1 {
+                self.run_cycles(2)?;
+                state = self.status()?.state;
+            }
         }
         if rank(target) >= 3 && rank(state) == 2 {
-            state = self.nmt(NmtCommand::ENABLE_READY_TO_OPERATE)?;
+            state = self.nmt_to(NmtCommand::ENABLE_READY_TO_OPERATE)?;
         }
         if rank(target) >= 4 && rank(state) == 3 {
-            state = self.nmt(NmtCommand::START_NODE)?;
-        }
-        if rank(target) < rank(state) && rank(target) >= 2 {
-            state = self.nmt(NmtCommand::ENTER_PRE_OPERATIONAL_2)?;
+            state = self.nmt_to(NmtCommand::START_NODE)?;
         }
         if target == NmtState::STOPPED && state != NmtState::STOPPED {
-            state = self.nmt(NmtCommand::STOP_NODE)?;
+            state = self.nmt_to(NmtCommand::STOP_NODE)?;
         }
         if state != target {
             return Err(MnError::State {
@@ -774,6 +848,23 @@ impl<L: Link> Manager<L> {
             Via::Asnd => self.asnd_link = c,
             Via::Udp => self.udp_link = c,
         }
+    }
+
+    /// Closes whatever SDO connection of this MN the node still holds (a device on the
+    /// network keeps them from case to case), over ASnd and UDP: SendCon "no connection".
+    pub(crate) fn close_sdo(&mut self) -> Result<(), MnError> {
+        let close = SdoFrame::default();
+        let bytes = close
+            .emit()
+            .map_err(|e| self.malformed("an SDO close", e))?;
+        self.queued.push_back((ServiceId::SDO, bytes));
+        self.cycle(RequestedService::NO_SERVICE)?;
+        let d = close
+            .emit_udp()
+            .map_err(|e| self.malformed("an SDO close", e))?;
+        self.link.send_udp(&d)?;
+        self.drop_connections();
+        Ok(())
     }
 
     /// Forgets the SDO connections (the node was reset).

@@ -1,0 +1,80 @@
+//! `--pcap` for POWERLINK: the Ethernet frames of a run as they went over the link, both
+//! ways, stamped on the run's time line. (SDO over UDP is not in this capture; a capture on
+//! the wire has it.)
+
+use std::time::Duration;
+
+use super::link::Link;
+use crate::net::LinkError;
+use crate::pcap::SharedTap;
+use sim::epl::Node;
+
+/// What the interface description names as the source of these frames.
+const SOURCE: &str =
+    "POWERLINK frames of a harness run (managing and controlled node, as on the wire)";
+
+/// A link whose frames also go to the run's capture.
+#[derive(Debug)]
+pub(crate) struct Tapped<L> {
+    inner: L,
+    tap: SharedTap,
+    base: Duration,
+}
+
+impl<L: Link> Tapped<L> {
+    /// `inner`, recorded into `tap` from now on.
+    pub(crate) fn new(inner: L, tap: SharedTap) -> Tapped<L> {
+        let base = {
+            let mut t = tap.borrow_mut();
+            t.capture.source(SOURCE);
+            t.last + Duration::from_millis(1)
+        };
+        let base = base.saturating_sub(inner.now());
+        Tapped { inner, tap, base }
+    }
+
+    fn record(&self, frame: &[u8]) {
+        let at = self.base + self.inner.now();
+        let mut t = self.tap.borrow_mut();
+        t.last = t.last.max(at);
+        t.capture.frame(frame, at);
+    }
+}
+
+impl<L: Link> Link for Tapped<L> {
+    fn now(&self) -> Duration {
+        self.inner.now()
+    }
+
+    fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+        self.record(frame);
+        self.inner.send(frame)
+    }
+
+    fn recv(
+        &mut self,
+        deadline: Duration,
+    ) -> Result<Option<(Vec<u8>, Option<Duration>)>, LinkError> {
+        let r = self.inner.recv(deadline)?;
+        if let Some((f, _)) = &r {
+            self.record(f);
+        }
+        Ok(r)
+    }
+
+    fn send_udp(&mut self, datagram: &[u8]) -> Result<(), LinkError> {
+        self.inner.send_udp(datagram)
+    }
+
+    fn recv_udp(&mut self, deadline: Duration) -> Result<Option<Vec<u8>>, LinkError> {
+        self.inner.recv_udp(deadline)
+    }
+
+    fn wait_until(&mut self, until: Duration) {
+        self.inner.wait_until(until)
+    }
+
+    fn node(&mut self) -> Option<(&mut Node, Duration)> {
+        self.inner.node()
+    }
+}
