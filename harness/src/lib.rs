@@ -9,6 +9,7 @@ mod ecat;
 pub use ecat::bench_support as ecat_bench;
 /// `harness serve ecat` in a thread of the caller (EtherCAT end-to-end tests and benches).
 pub use ecat::serve as ecat_serve;
+pub use epl::bench_support as epl_bench;
 pub use epl::serve as epl_serve;
 mod enip;
 mod epl;

@@ -105,8 +105,8 @@ impl Capture {
         self.with_state(|f: &mut Framing, cap| f.tcp_close(cap, from, to, at));
     }
 
-    /// A UDP datagram. A payload longer than an IPv4 datagram can carry (65507 bytes) is
-    /// truncated to that length.
+    /// A UDP datagram of EtherNet/IP. A payload longer than an IPv4 datagram can carry
+    /// (65507 bytes) is truncated to that length.
     pub(crate) fn udp(
         &mut self,
         from: SocketAddrV4,
@@ -114,7 +114,19 @@ impl Capture {
         payload: &[u8],
         at: Duration,
     ) {
-        self.with_state(|f: &mut Framing, cap| f.udp(cap, from, to, payload, at));
+        self.udp_of(SOURCE, from, to, payload, at);
+    }
+
+    /// A UDP datagram of the traffic `source` names (another bus's: POWERLINK's SDO over UDP).
+    pub(crate) fn udp_of(
+        &mut self,
+        source: &'static str,
+        from: SocketAddrV4,
+        to: SocketAddrV4,
+        payload: &[u8],
+        at: Duration,
+    ) {
+        self.with_state(|f: &mut Framing, cap| f.udp(cap, source, from, to, payload, at));
     }
 }
 
@@ -211,6 +223,7 @@ impl Framing {
     fn udp(
         &mut self,
         cap: &mut Capture,
+        source: &'static str,
         from: SocketAddrV4,
         to: SocketAddrV4,
         payload: &[u8],
@@ -230,7 +243,7 @@ impl Framing {
             checksum = 0xFFFF;
         }
         segment[6..8].copy_from_slice(&checksum.to_be_bytes());
-        self.push_ipv4(cap, from, to, PROTO_UDP, false, &segment, at);
+        self.push_ipv4(cap, source, from, to, PROTO_UDP, false, &segment, at);
     }
 
     /// The open connection between `a` and `b` in either direction, opened with `a` as client
@@ -285,7 +298,7 @@ impl Framing {
         segment.extend_from_slice(payload);
         let checksum = transport_checksum(from, to, PROTO_TCP, &segment);
         segment[16..18].copy_from_slice(&checksum.to_be_bytes());
-        self.push_ipv4(cap, from, to, PROTO_TCP, true, &segment, at);
+        self.push_ipv4(cap, SOURCE, from, to, PROTO_TCP, true, &segment, at);
     }
 
     /// Wraps a transport segment in IPv4 and Ethernet II and captures the frame.
@@ -293,6 +306,7 @@ impl Framing {
     fn push_ipv4(
         &mut self,
         cap: &mut Capture,
+        source: &'static str,
         from: SocketAddrV4,
         to: SocketAddrV4,
         protocol: u8,
@@ -323,7 +337,7 @@ impl Framing {
 
         frame.extend_from_slice(&ip);
         frame.extend_from_slice(segment);
-        cap.source(SOURCE);
+        cap.source(source);
         cap.push(frame, at);
     }
 }

@@ -59,6 +59,11 @@ pub(crate) const NETWORK_CAPABILITIES: [Capability; 3] = [
     Capability::Bus("epl"),
 ];
 
+/// How long the interface may go on showing cyclic process data after the drives stopped.
+const QUIET_TIME: Duration = Duration::from_secs(2);
+/// The "cyclic communication" bit of P872 / P173 [-01].
+const CYCLIC: u8 = 1 << 1;
+
 /// An SDO object the case wrote, the ledger's key.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Object {
@@ -510,7 +515,9 @@ impl<L: Link> EplBinding<L> {
             }
             EplStep::Silence(d) => {
                 self.mn.silence(*d);
-                if self.mn.link_mut().node().is_some() {
+                if self.mn.link_mut().node().is_some() || self.mn.node_state().is_none() {
+                    // Embedded: looked into. On the network after a reset: asked nothing (a
+                    // SoA would end the Basic Ethernet the silence may have led to).
                     self.seen_fields()
                 } else {
                     // A node on the network is asked with a SoA alone, which leaves a node
@@ -580,7 +587,8 @@ impl<L: Link> EplBinding<L> {
             return Ok(());
         };
         let mut account = Account::default();
-        if !self.commanded.is_empty() && account.attempt(|| "settling the drives".into()) {
+        let drove = !self.commanded.is_empty();
+        if drove && account.attempt(|| "settling the drives".into()) {
             account.note(self.settle());
         }
         let via = self.via;
@@ -597,9 +605,41 @@ impl<L: Link> EplBinding<L> {
                     .map_err(|e| Problem::step("back to PRE_OPERATIONAL_2", step_error(e))),
             );
         }
+        if drove && account.attempt(|| "waiting for the end of cyclic communication".into()) {
+            account.note(self.quiet());
+        }
         self.ledger = Some(Ledger::default());
         self.commanded.clear();
         account.into_result()
+    }
+
+    /// Waits until the interface no longer shows cyclic process data (SK 550P P872 bit 1,
+    /// BU 0620 §4.3; the modules' P173 [-01] bit 1, BU 2200 §7.1.3), as the case found it.
+    fn quiet(&mut self) -> Result<(), Problem> {
+        let (number, sub) = if self.product == Product::Sk550p {
+            (872, 0)
+        } else {
+            (173, 1)
+        };
+        let index = 0x2000 + number;
+        let deadline = self.mn.now() + QUIET_TIME;
+        loop {
+            let v = self
+                .mn
+                .sdo(self.via, Command::read_by_index(0, index, sub))
+                .map_err(|e| Problem::step(format!("reading P{number}"), step_error(e)))?;
+            if v.first().copied().unwrap_or(0) & CYCLIC == 0 {
+                return Ok(());
+            }
+            if self.mn.now() >= deadline {
+                return Err(Problem::other(format!(
+                    "P{number} still shows cyclic process data {QUIET_TIME:?} after the drives stopped"
+                )));
+            }
+            self.mn
+                .run_cycles(10)
+                .map_err(|e| Problem::step("waiting", step_error(e)))?;
+        }
     }
 
     /// Cycles the drives back to "Switch-on block".

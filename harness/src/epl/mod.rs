@@ -2,6 +2,7 @@
 //! serve epl`, the XDD writer and the `epl:` steps — for the SK 550P (BU 0620 §2.4) and the
 //! modules SK TU3-POL, SK TU4-POL, SK CU4-POL (BU 2200).
 
+pub mod bench_support;
 mod binding;
 pub(crate) mod mn;
 pub mod serve;
@@ -91,27 +92,48 @@ fn open<L: Link + 'static>(
     Ok(Box::new(EplBinding::open(mn, product, what, persistent)?))
 }
 
-/// `--dut epl://IFACE[/NODE]`: the node behind that interface (node 1 unless given).
+/// `--dut epl://IFACE[/NODE][?sdo=udp|asnd&cycle=TIME]`: the node behind that interface (node 1
+/// unless given), SDO over ASnd unless `sdo=udp`, the cycle 1 ms unless given (P858: 400 µs to
+/// 2 ms). The bus's own options ride in the URL, so the command line names no bus.
 fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
-    let (iface, node) = match n.target.split_once('/') {
+    let url = |why: String| OpenError::Profile(format!("`epl://{}`: {why}", n.target));
+    let (path, query) = n.target.split_once('?').unwrap_or((&n.target, ""));
+    let (iface, node) = match path.split_once('/') {
         Some((i, id)) => (
             i.to_string(),
             id.parse::<u8>()
                 .ok()
                 .filter(|v| (1..=239).contains(v))
-                .ok_or_else(|| {
-                    OpenError::Profile(format!(
-                        "`epl://{}`: node id `{id}` is not 1…239 (BU 0620 §2.4.3.1)",
-                        n.target
-                    ))
-                })?,
+                .ok_or_else(|| url(format!("node id `{id}` is not 1…239 (BU 0620 §2.4.3.1)")))?,
         ),
-        None => (n.target.clone(), 1),
+        None => (path.to_string(), 1),
     };
+    let mut config = MnConfig {
+        node,
+        sdo_cycles: (n.timeout.as_millis() as u32).clamp(50, 5000),
+        ..MnConfig::default()
+    };
+    for pair in query.split('&').filter(|p| !p.is_empty()) {
+        match pair.split_once('=') {
+            Some(("sdo", v)) => config.via = mn::Via::parse(v).map_err(url)?,
+            Some(("cycle", v)) => {
+                let d = crate::suite::parse_duration(v).map_err(url)?;
+                if !(Duration::from_micros(100)..=Duration::from_millis(100)).contains(&d) {
+                    return Err(url(format!("cycle {v}: give 100µs…100ms")));
+                }
+                config.cycle = d;
+                config.reply = config.reply.min(d / 2);
+            }
+            _ => {
+                return Err(url(format!(
+                    "`{pair}`: options are sdo=udp|asnd and cycle=TIME"
+                )))
+            }
+        }
+    }
     Ok(Box::new(NetworkFactory {
         iface,
-        node,
-        timeout: n.timeout,
+        config,
         tap: n.tap.clone(),
     }))
 }
@@ -119,29 +141,24 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
 /// Opens the link behind an interface for each case (one node for the whole run).
 struct NetworkFactory {
     iface: String,
-    node: u8,
-    timeout: Duration,
+    config: MnConfig,
     tap: Option<crate::pcap::SharedTap>,
 }
 
 impl DutFactory for NetworkFactory {
     fn describe(&self) -> String {
-        format!("POWERLINK node {} on {}", self.node, self.iface)
+        format!("POWERLINK node {} on {}", self.config.node, self.iface)
     }
 
     fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
         let product = profile.nord().map_err(OpenError::Profile)?;
-        let peer = SocketAddr::from((def::ip_address(self.node), proto::epl::SDO_UDP_PORT));
+        let peer = SocketAddr::from((def::ip_address(self.config.node), proto::epl::SDO_UDP_PORT));
         let link = NetLink::open(&self.iface, peer).map_err(|e| match e {
             LinkError::NeedsRoot { .. } => OpenError::NotPermitted(e.to_string()),
             other => OpenError::Unreachable(other.to_string()),
         })?;
         let mac = MacAddr(link.mac());
-        let config = MnConfig {
-            node: self.node,
-            sdo_cycles: (self.timeout.as_millis() as u32).clamp(50, 5000),
-            ..MnConfig::default()
-        };
+        let config = self.config;
         let what = format!("POWERLINK on {}", self.iface);
         match &self.tap {
             None => open(link, config, mac, product, what, true),

@@ -34,6 +34,8 @@ pub(crate) trait Link {
     fn recv_udp(&mut self, deadline: Duration) -> Result<Option<Vec<u8>>, LinkError>;
     /// Lets time pass until `until` (the embedded link runs the node's timers).
     fn wait_until(&mut self, until: Duration);
+    /// The node's SDO address (UDP port 3819) and the MN's, for captures.
+    fn udp_ends(&mut self) -> (SocketAddr, SocketAddr);
     /// The simulated node, when it is in-process.
     fn node(&mut self) -> Option<(&mut Node, Duration)>;
 }
@@ -134,6 +136,14 @@ impl Link for EmbeddedLink {
         self.advance_to(until);
     }
 
+    fn udp_ends(&mut self) -> (SocketAddr, SocketAddr) {
+        let node = proto::nord::epl::ip_address(self.node.node_id());
+        (
+            SocketAddr::from((node, proto::epl::SDO_UDP_PORT)),
+            EMBEDDED_PEER,
+        )
+    }
+
     fn node(&mut self) -> Option<(&mut Node, Duration)> {
         let now = self.clock.now();
         Some((&mut self.node, now))
@@ -166,6 +176,10 @@ impl NetLink {
         raw.set_spin(Duration::from_micros(200));
         let udp = UdpSocket::bind(("0.0.0.0", 0))
             .map_err(|e| LinkError::io("bind a UDP socket", iface, e))?;
+        // Connected, the socket knows its own address (for captures) and takes datagrams of
+        // the node only.
+        udp.connect(peer)
+            .map_err(|e| LinkError::io("reach the node over UDP", iface, e))?;
         Ok(NetLink {
             raw,
             udp,
@@ -249,6 +263,11 @@ impl Link for NetLink {
         if until > now {
             std::thread::sleep(until - now);
         }
+    }
+
+    fn udp_ends(&mut self) -> (SocketAddr, SocketAddr) {
+        let local = self.udp.local_addr().unwrap_or(EMBEDDED_PEER);
+        (self.peer, local)
     }
 
     fn node(&mut self) -> Option<(&mut Node, Duration)> {

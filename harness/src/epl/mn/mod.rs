@@ -177,6 +177,10 @@ pub(crate) struct Manager<L> {
     transaction: u8,
 }
 
+/// How often the MN reads the node's state after an NMT command until it shows the command's
+/// effect.
+const SETTLE_READS: u32 = 5;
+
 fn next(n: u8) -> u8 {
     (n + 1) % SEQ_MODULO
 }
@@ -364,6 +368,10 @@ impl<L: Link> Manager<L> {
     pub(crate) fn cycle(&mut self, service: RequestedService) -> Result<Option<Received>, MnError> {
         let start = self.next_cycle.max(self.link.now());
         self.link.wait_until(start);
+        // A reply that came after its wait ended belongs to an earlier cycle: dropped, so that
+        // it cannot pass for the answer to this one.
+        let now = self.link.now();
+        while self.receive(now)?.is_some() {}
         self.next_cycle = start + self.config.cycle;
         let node = self.config.node;
         if self.phase == Phase::Isochronous {
@@ -595,6 +603,7 @@ impl<L: Link> Manager<L> {
             data: Vec::new(),
         }
         .emit();
+        let before = self.node_state;
         self.queued.push_back((ServiceId::NMT_COMMAND, payload));
         self.cycle(RequestedService::NO_SERVICE)?;
         if matches!(
@@ -614,7 +623,17 @@ impl<L: Link> Manager<L> {
             NmtCommand::START_NODE => self.mn_state = NmtState::OPERATIONAL,
             _ => {}
         }
-        self.status().map(|s| Some(s.state))
+        // The node acts on the command within a few cycles (at once, if it runs as fast as
+        // the simulator): its state is read until it shows the command's effect, a few times.
+        let expected = before.and_then(|b| command.next_state(b));
+        let mut state = self.status()?.state;
+        for _ in 0..SETTLE_READS {
+            if expected.is_none_or(|e| e == state) {
+                break;
+            }
+            state = self.status()?.state;
+        }
+        Ok(Some(state))
     }
 
     /// An NMT state command the boot needs to succeed.

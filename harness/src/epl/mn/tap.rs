@@ -1,7 +1,8 @@
 //! `--pcap` for POWERLINK: the Ethernet frames of a run as they went over the link, both
-//! ways, stamped on the run's time line. (SDO over UDP is not in this capture; a capture on
-//! the wire has it.)
+//! ways, and the SDO datagrams over UDP in synthesized IPv4/UDP frames, stamped on the run's
+//! time line.
 
+use std::net::SocketAddr;
 use std::time::Duration;
 
 use super::link::Link;
@@ -39,6 +40,19 @@ impl<L: Link> Tapped<L> {
         t.last = t.last.max(at);
         t.capture.frame(frame, at);
     }
+
+    /// A datagram from the MN to the node (`to_node`) or back.
+    fn record_udp(&mut self, datagram: &[u8], to_node: bool) {
+        let (node, mn) = self.inner.udp_ends();
+        let (SocketAddr::V4(node), SocketAddr::V4(mn)) = (node, mn) else {
+            return;
+        };
+        let (from, to) = if to_node { (mn, node) } else { (node, mn) };
+        let at = self.base + self.inner.now();
+        let mut t = self.tap.borrow_mut();
+        t.last = t.last.max(at);
+        t.capture.udp_of(SOURCE, from, to, datagram, at);
+    }
 }
 
 impl<L: Link> Link for Tapped<L> {
@@ -63,11 +77,20 @@ impl<L: Link> Link for Tapped<L> {
     }
 
     fn send_udp(&mut self, datagram: &[u8]) -> Result<(), LinkError> {
+        self.record_udp(datagram, true);
         self.inner.send_udp(datagram)
     }
 
     fn recv_udp(&mut self, deadline: Duration) -> Result<Option<Vec<u8>>, LinkError> {
-        self.inner.recv_udp(deadline)
+        let r = self.inner.recv_udp(deadline)?;
+        if let Some(d) = &r {
+            self.record_udp(d, false);
+        }
+        Ok(r)
+    }
+
+    fn udp_ends(&mut self) -> (SocketAddr, SocketAddr) {
+        self.inner.udp_ends()
     }
 
     fn wait_until(&mut self, until: Duration) {

@@ -1,0 +1,325 @@
+//! The harness's POWERLINK suites over the wire: `harness serve epl` on one end of a veth pair
+//! (raw Ethernet and UDP 3819 on 192.168.100.1), `harness run --dut epl://IFACE` as managing
+//! node inside a network namespace on the other (192.168.100.240), for every POWERLINK profile
+//! (`sk550p`, `tu3-pol`, `tu4-pol`, `cu4-pol`): the manual-level cases over SDO and PReq/PRes,
+//! the `epl:` suites and the bad-input cases. Each run must end with no case failed or in
+//! error. tshark, capturing on the wire meanwhile, must dissect the traffic as POWERLINK
+//! (`epl`, SDO over UDP too) with no malformed frame and no expert warning but in steps that
+//! send bytes as written on purpose, and the NMT states it decodes from the node's frames must
+//! only ever move as the CN state machine allows (BU 0620 §2.4.4, DS 301 §7.1.4), through
+//! PRE_OPERATIONAL_1, PRE_OPERATIONAL_2, READY_TO_OPERATE and OPERATIONAL. `--pcap` writes the
+//! run's own capture, whose packet comments name each frame's case and step.
+//!
+//! Needs root (network namespaces, raw sockets) and tshark (`.ci/interop-setup`); without
+//! them the test says so and skips on a developer's machine, and fails when `CI` is set.
+
+use std::collections::{HashMap, HashSet};
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+
+use harness::epl_serve::{start, ServeOptions};
+use serde_json::Value;
+
+#[allow(dead_code)] // what the other network tests share
+mod common;
+use common::netns::{require_root_or_skip, Netns};
+use common::peer::require_tshark;
+
+/// A tshark capture on an interface of the namespace, stopped (SIGINT) when dropped.
+struct Capture(Child);
+
+impl Capture {
+    fn start(ns: &Netns, iface: &str, file: &Path) -> Capture {
+        let mut child = ns
+            .command("tshark")
+            .args(["-i", iface, "-q", "-w"])
+            .arg(file)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("tshark starts");
+        let stderr = child.stderr.take().expect("tshark's stderr");
+        let mut lines = BufReader::new(stderr).lines();
+        loop {
+            let line = lines
+                .next()
+                .expect("tshark announces its capture")
+                .expect("tshark's stderr reads");
+            if line.contains("Capturing on") {
+                break;
+            }
+        }
+        std::thread::spawn(move || lines.for_each(drop));
+        Capture(child)
+    }
+
+    fn stop(mut self) {
+        let _ = Command::new("kill")
+            .args(["-INT", &self.0.id().to_string()])
+            .status();
+        let _ = self.0.wait();
+    }
+}
+
+impl Drop for Capture {
+    fn drop(&mut self) {
+        if matches!(self.0.try_wait(), Ok(None)) {
+            let _ = self.0.kill();
+            let _ = self.0.wait();
+        }
+    }
+}
+
+/// What tshark makes of a capture.
+struct Dissected {
+    /// Frames per protocol stack (`eth:ethertype:epl`, `eth:ethertype:ip:udp:epl`…).
+    stacks: HashMap<String, usize>,
+    /// Frames tshark finds malformed or warns about (expert severity warning or error), with
+    /// their packet comment (the run's label) where the capture has one.
+    flagged: Vec<(usize, Option<String>)>,
+    /// The NMT states the node's frames carry, in order.
+    states: Vec<u8>,
+}
+
+fn dissect(path: &Path) -> Dissected {
+    let out = Command::new("tshark")
+        .arg("-r")
+        .arg(path)
+        .args(["-T", "fields", "-E", "occurrence=a"])
+        .args(["-e", "frame.number", "-e", "frame.protocols"])
+        .args(["-e", "_ws.malformed", "-e", "_ws.expert.severity"])
+        .args([
+            "-e",
+            "epl.src",
+            "-e",
+            "epl.pres.stat",
+            "-e",
+            "epl.asnd.ires.state",
+        ])
+        .args(["-e", "epl.asnd.sres.stat", "-e", "frame.comment"])
+        .output()
+        .expect("tshark runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut d = Dissected {
+        stacks: HashMap::new(),
+        flagged: Vec::new(),
+        states: Vec::new(),
+    };
+    // Expert severities: 0x00400000 note, 0x00600000 warning, 0x00800000 error.
+    const WARNING: u64 = 0x0060_0000;
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let f: Vec<&str> = line.split('\t').collect();
+        let field = |i: usize| f.get(i).copied().unwrap_or("");
+        let number: usize = field(0).parse().expect("a frame number");
+        *d.stacks.entry(field(1).to_string()).or_default() += 1;
+        let warned = field(3)
+            .split(',')
+            .filter_map(|s| s.parse::<u64>().ok())
+            .any(|s| s >= WARNING);
+        if !field(2).is_empty() || warned {
+            let comment = Some(field(8)).filter(|c| !c.is_empty()).map(str::to_string);
+            d.flagged.push((number, comment));
+        }
+        if !field(4).is_empty() && field(4) != "240" {
+            for i in 5..=7 {
+                let s = field(i).split(',').next().unwrap_or("");
+                if let Some(v) = s
+                    .strip_prefix("0x")
+                    .and_then(|h| u8::from_str_radix(h, 16).ok())
+                {
+                    d.states.push(v);
+                }
+            }
+        }
+    }
+    d
+}
+
+/// Whether a label names a step that sends bytes as a suite writes them: an `epl: {frame: …}`
+/// or `{sdo: …}` step. Every other frame is built by the managing node's codecs.
+fn on_purpose(label: &str) -> bool {
+    label.split_once(": ").is_some_and(|(head, step)| {
+        head.contains(" step ")
+            && (step.starts_with("epl frame ") || step.starts_with("epl SDO bytes "))
+    })
+}
+
+/// The moves between NMT states a CN's frames may show (DS 301 §7.1.4; a reset passes
+/// through NOT_ACTIVE, where the node sends nothing, so it shows as a move to PRE_OP_1).
+fn allowed(from: u8, to: u8) -> bool {
+    const PRE1: u8 = 0x1D;
+    const PRE2: u8 = 0x5D;
+    const RTO: u8 = 0x6D;
+    const OP: u8 = 0xFD;
+    const STOPPED: u8 = 0x4D;
+    const BASIC: u8 = 0x1E;
+    matches!(
+        (from, to),
+        (PRE1, PRE2)
+            | (PRE2, RTO)
+            | (RTO, OP)
+            | (OP | STOPPED, PRE2)
+            | (PRE1 | PRE2 | RTO | OP, STOPPED)
+            | (BASIC, PRE1)
+            | (_, PRE1)
+            | (_, BASIC)
+    )
+}
+
+#[test]
+fn every_powerlink_suite_passes_against_the_served_node_over_a_veth_pair() {
+    let why = "the POWERLINK suites against harness serve epl over a veth pair";
+    if !require_root_or_skip(why) || !require_tshark(why) {
+        return;
+    }
+    let suites = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../suites");
+    for product in ["sk550p", "tu3-pol", "tu4-pol", "cu4-pol"] {
+        let dir = std::env::temp_dir().join(format!(
+            "harness-network-epl-{}-{product}",
+            std::process::id()
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let (out, run_pcap, wire_pcap) = (
+            dir.join("out"),
+            dir.join("run.pcapng"),
+            dir.join("wire.pcapng"),
+        );
+        let ns = Netns::new("eplsuites");
+        ns.add_ipv4("192.168.100.1/24", "192.168.100.240/24");
+        let mut options = ServeOptions::new(ns.root_if());
+        options.profile = product.to_string();
+        let served = start(&options).expect("serve epl");
+        let capture = Capture::start(&ns, ns.ns_if(), &wire_pcap);
+        let run = ns
+            .command(env!("CARGO_BIN_EXE_harness"))
+            .args(["run", "--profile", &format!("{product}@epl"), "--suites"])
+            .arg(&suites)
+            .arg("--dut")
+            .arg(format!("epl://{}", ns.ns_if()))
+            .arg("--out")
+            .arg(&out)
+            .arg("--pcap")
+            .arg(&run_pcap)
+            .output()
+            .expect("harness run starts");
+        capture.stop();
+        let stats = served.stop().expect("the node served to the end");
+        let stdout = String::from_utf8_lossy(&run.stdout);
+
+        let report: Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join("run.json")).expect("run.json written"),
+        )
+        .unwrap();
+        let cases = report["cases"].as_array().expect("cases");
+        let bad: Vec<String> = cases
+            .iter()
+            .filter(|c| c["verdict"] == "fail" || c["verdict"] == "error")
+            .map(|c| format!("{} {}: {}", c["id"], c["verdict"], c["message"]))
+            .collect();
+        assert!(bad.is_empty(), "{product}: {}\n{stdout}", bad.join("\n"));
+        assert_eq!(run.status.code(), Some(0), "{product}: {stdout}");
+        let passed = |prefix: &str| {
+            cases
+                .iter()
+                .filter(|c| c["verdict"] == "pass")
+                .filter(|c| c["id"].as_str().is_some_and(|id| id.starts_with(prefix)))
+                .count()
+        };
+        let manual = if product == "sk550p" {
+            "bu0620"
+        } else {
+            "bu2200"
+        };
+        for (prefix, at_least) in [
+            (format!("{manual}/epl-nmt/"), 3),
+            (format!("{manual}/epl-sdo-abort/"), 5),
+            (format!("{manual}/epl-pdo-mapping/"), 3),
+            (format!("{manual}/drive-words/"), 1),
+            ("epl/bad-input/".to_string(), 30),
+        ] {
+            assert!(
+                passed(&prefix) >= at_least,
+                "{product} {prefix}: {} cases passed, {at_least} expected\n{stdout}",
+                passed(&prefix)
+            );
+        }
+        assert!(stats.frames_in > 5_000, "{product}: {stats:?}");
+        assert!(
+            stats.datagrams_in > 0,
+            "{product}: SDO over UDP ran: {stats:?}"
+        );
+
+        // Both captures dissect as POWERLINK; the wire's has SDO over UDP too.
+        let run_d = dissect(&run_pcap);
+        let wire_d = dissect(&wire_pcap);
+        let count = |d: &Dissected, stack: &str| {
+            d.stacks
+                .iter()
+                .filter(|(s, _)| s.contains(stack))
+                .map(|(_, n)| *n)
+                .sum::<usize>()
+        };
+        assert!(
+            count(&run_d, "eth:ethertype:epl") > 1000,
+            "{:?}",
+            run_d.stacks
+        );
+        assert!(
+            count(&wire_d, "eth:ethertype:epl") > 1000,
+            "{:?}",
+            wire_d.stacks
+        );
+        assert!(count(&wire_d, "udp:epl") > 10, "{:?}", wire_d.stacks);
+
+        // Malformed frames and expert warnings only in steps that send bytes as written.
+        let wrong: Vec<String> = run_d
+            .flagged
+            .iter()
+            .filter(|(_, label)| !label.as_deref().is_some_and(on_purpose))
+            .map(|(n, label)| format!("run.pcapng frame {n}: {label:?}"))
+            .collect();
+        assert!(
+            wrong.is_empty(),
+            "{product}: flagged outside the bad-input steps:\n{}",
+            wrong.join("\n")
+        );
+        // The wire's capture has no labels: it may flag no more frames than the run's, which
+        // has every frame and datagram the wire has.
+        assert!(
+            !run_d.flagged.is_empty() && wire_d.flagged.len() <= run_d.flagged.len(),
+            "{product}: the wire shows {} flagged frames, the run's capture {}",
+            wire_d.flagged.len(),
+            run_d.flagged.len()
+        );
+
+        // The node's NMT states, as tshark decodes them from its frames, move only as the CN
+        // state machine allows, and the boot sequence is there.
+        let mut moves = HashSet::new();
+        for w in wire_d.states.windows(2) {
+            if w[0] != w[1] {
+                moves.insert((w[0], w[1]));
+            }
+        }
+        let illegal: Vec<String> = moves
+            .iter()
+            .filter(|(a, b)| !allowed(*a, *b))
+            .map(|(a, b)| format!("{a:02X}h → {b:02X}h"))
+            .collect();
+        assert!(illegal.is_empty(), "{product}: {}", illegal.join(", "));
+        for m in [(0x1D, 0x5D), (0x5D, 0x6D), (0x6D, 0xFD)] {
+            assert!(
+                moves.contains(&m),
+                "{product}: no {:02X}h → {:02X}h in {moves:?}",
+                m.0,
+                m.1
+            );
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
