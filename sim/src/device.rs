@@ -149,6 +149,8 @@ struct InverterUnit {
     drive: Drive,
     /// When the last valid process data (control bit 10) arrived.
     last_process: Option<Duration>,
+    /// The words P740/P741 show, so that an unchanged cycle writes no parameter.
+    shown: Option<([u16; 6], [u16; 6])>,
 }
 
 impl InverterUnit {
@@ -164,15 +166,28 @@ impl InverterUnit {
             .drive
             .cycle(control, setpoints, &StoreView(&self.params.store, set), now);
         // Information parameters mirror the process data and the present error
-        // (BU 0620 §4.5: P740 PZD bus in, P741 PZD bus out, P700 [-01] present error).
-        let store = &mut self.params.store;
-        store.set_info(740, 1, i32::from(control));
-        for (i, w) in setpoints.iter().enumerate() {
-            store.set_info(740, i as u8 + 2, i32::from(*w));
+        // (BU 0620 §4.5: P740 PZD bus in, P741 PZD bus out, P700 [-01] present error), written
+        // when they change (this runs every bus cycle for every inverter).
+        let mut words = ([0u16; 6], [0u16; 6]);
+        words.0[0] = control;
+        words.1[0] = out.status;
+        for (d, w) in words.0[1..].iter_mut().zip(setpoints) {
+            *d = *w;
         }
-        store.set_info(741, 1, i32::from(out.status));
-        for (i, w) in out.actuals.iter().enumerate() {
-            store.set_info(741, i as u8 + 2, i32::from(*w));
+        for (d, w) in words.1[1..].iter_mut().zip(&out.actuals) {
+            *d = *w;
+        }
+        if self.shown != Some(words) || setpoints.len() > 5 || out.actuals.len() > 5 {
+            let store = &mut self.params.store;
+            store.set_info(740, 1, i32::from(control));
+            for (i, w) in setpoints.iter().enumerate() {
+                store.set_info(740, i as u8 + 2, i32::from(*w));
+            }
+            store.set_info(741, 1, i32::from(out.status));
+            for (i, w) in out.actuals.iter().enumerate() {
+                store.set_info(741, i as u8 + 2, i32::from(*w));
+            }
+            self.shown = Some(words);
         }
         self.show_fault();
         let mut pzd = vec![out.status];
@@ -224,6 +239,7 @@ impl Device {
                 params: ParamChannel::new(ParamStore::new(config.product, Target::Inverter(i))),
                 drive: Drive::new(),
                 last_process: None,
+                shown: None,
             })
             .collect();
         let mut interface = ParamChannel::new(ParamStore::new(config.product, Target::Interface));

@@ -174,6 +174,9 @@ impl Node {
         }
         node.start_up();
         node.show_state();
+        // The interface's status parameters from power-on (P872 / P173: module ready, the FIs
+        // online), before the first poll.
+        node.device.tick(Duration::ZERO);
         Ok(node)
     }
 
@@ -317,8 +320,14 @@ impl Node {
     /// PReq drives it) and the error history; wanted every [`POLL_PERIOD`].
     pub fn poll(&mut self, now: Duration) {
         self.timers(now);
-        if self.vars.state != NmtState::OPERATIONAL {
-            self.device.tick(now);
+        match self.vars.state {
+            NmtState::OPERATIONAL => {}
+            // PRes goes out but the PReq data are not evaluated (§2.4.4): the inverters see no
+            // valid control word, their status words and actual values are refreshed here.
+            NmtState::PRE_OPERATIONAL_2 | NmtState::READY_TO_OPERATE => {
+                pdo::cycle(&mut self.device, &mut self.words, None, false, now)
+            }
+            _ => self.device.tick(now),
         }
         self.errors(now);
     }
@@ -425,14 +434,15 @@ impl Node {
         }
     }
 
-    /// PReq data: drives the inverters in OPERATIONAL when the MN marks it valid (RD); in
-    /// PRE_OPERATIONAL_2 and READY_TO_OPERATE the data are not evaluated (§2.4.4).
+    /// PReq data: drives the inverters in OPERATIONAL when the MN marks it valid (RD) and
+    /// carries every mapped word; otherwise (PRE_OPERATIONAL_2, READY_TO_OPERATE: "cyclic data
+    /// are not evaluated", §2.4.4) they are ignored.
     fn outputs(&mut self, payload: &[u8], rd: bool, now: Duration) {
         let evaluate = self.vars.state == NmtState::OPERATIONAL
             && rd
             && payload.len() >= 2 * self.rx_map.len();
         if !evaluate {
-            pdo::cycle(&mut self.device, &mut self.words, None, false, now);
+            // Not evaluated: the PRes carries the inputs [`Node::poll`] refreshes.
             return;
         }
         let mut image = vec![0u8; 8 * 12];
