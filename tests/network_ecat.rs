@@ -11,9 +11,8 @@
 //! them the test says so and skips on a developer's machine, and fails when `CI` is set.
 
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 
 use harness::ecat_serve::{start, ServeOptions};
 use pcap_file::pcapng::blocks::enhanced_packet::EnhancedPacketOption;
@@ -24,61 +23,7 @@ use serde_json::Value;
 mod common;
 use common::netns::{require_root_or_skip, Netns};
 use common::peer::require_tshark;
-
-/// A tshark capture on an interface of the namespace, stopped (SIGINT, so it finishes its
-/// file) when dropped.
-struct Capture(Child);
-
-impl Capture {
-    /// Starts tshark on `iface` inside `ns`, writing `file`; returns once it captures.
-    fn start(ns: &Netns, iface: &str, file: &Path) -> Capture {
-        let mut child = ns
-            .command("tshark")
-            .args(["-i", iface, "-q", "-w"])
-            .arg(file)
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("tshark starts");
-        // tshark says "Capturing on 'IFACE'" once its capture runs.
-        let stderr = child.stderr.take().expect("tshark's stderr");
-        let mut lines = BufReader::new(stderr).lines();
-        loop {
-            let line = lines
-                .next()
-                .expect("tshark announces its capture")
-                .expect("tshark's stderr reads");
-            if line.contains("Capturing on") {
-                break;
-            }
-        }
-        // Keep draining stderr so tshark never blocks on it.
-        std::thread::spawn(move || lines.for_each(drop));
-        Capture(child)
-    }
-
-    /// Stops the capture and waits until tshark has written its file.
-    fn stop(mut self) {
-        interrupt(&self.0);
-        let _ = self.0.wait();
-    }
-}
-
-impl Drop for Capture {
-    fn drop(&mut self) {
-        if matches!(self.0.try_wait(), Ok(None)) {
-            interrupt(&self.0);
-            let _ = self.0.wait();
-        }
-    }
-}
-
-/// SIGINT to a child (`ip netns exec` execs its program, so the pid is tshark's).
-fn interrupt(child: &Child) {
-    let _ = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status();
-}
+use common::tshark::Capture;
 
 /// Every packet of a pcapng file: its bytes and its comment (the harness's label).
 fn packets(path: &Path) -> Vec<(Vec<u8>, Option<String>)> {

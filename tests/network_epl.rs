@@ -14,9 +14,8 @@
 //! them the test says so and skips on a developer's machine, and fails when `CI` is set.
 
 use std::collections::{HashMap, HashSet};
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 
 use harness::epl_serve::{start, ServeOptions};
 use serde_json::Value;
@@ -25,51 +24,7 @@ use serde_json::Value;
 mod common;
 use common::netns::{require_root_or_skip, Netns};
 use common::peer::require_tshark;
-
-/// A tshark capture on an interface of the namespace, stopped (SIGINT) when dropped.
-struct Capture(Child);
-
-impl Capture {
-    fn start(ns: &Netns, iface: &str, file: &Path) -> Capture {
-        let mut child = ns
-            .command("tshark")
-            .args(["-i", iface, "-q", "-w"])
-            .arg(file)
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("tshark starts");
-        let stderr = child.stderr.take().expect("tshark's stderr");
-        let mut lines = BufReader::new(stderr).lines();
-        loop {
-            let line = lines
-                .next()
-                .expect("tshark announces its capture")
-                .expect("tshark's stderr reads");
-            if line.contains("Capturing on") {
-                break;
-            }
-        }
-        std::thread::spawn(move || lines.for_each(drop));
-        Capture(child)
-    }
-
-    fn stop(mut self) {
-        let _ = Command::new("kill")
-            .args(["-INT", &self.0.id().to_string()])
-            .status();
-        let _ = self.0.wait();
-    }
-}
-
-impl Drop for Capture {
-    fn drop(&mut self) {
-        if matches!(self.0.try_wait(), Ok(None)) {
-            let _ = self.0.kill();
-            let _ = self.0.wait();
-        }
-    }
-}
+use common::tshark::Capture;
 
 /// What tshark makes of a capture.
 struct Dissected {

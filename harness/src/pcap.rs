@@ -239,6 +239,37 @@ impl Tap {
 /// The run's tap, shared by the links.
 pub(crate) type SharedTap = std::rc::Rc<std::cell::RefCell<Tap>>;
 
+/// A link's place on the run's capture time line: what it records goes in at the link's own
+/// time (virtual on an embedded link), placed after the last packet so far, under `source`.
+#[derive(Debug)]
+pub(crate) struct Stamper {
+    tap: SharedTap,
+    base: Duration,
+}
+
+impl Stamper {
+    /// Records for a link whose clock reads `now`, naming its traffic `source`.
+    pub(crate) fn new(tap: SharedTap, source: &'static str, now: Duration) -> Stamper {
+        let base = {
+            let mut t = tap.borrow_mut();
+            t.capture.source(source);
+            t.last + Duration::from_millis(1)
+        };
+        Stamper {
+            tap,
+            base: base.saturating_sub(now),
+        }
+    }
+
+    /// Adds packets at the link's time `now` (`add` gets the capture and the time).
+    pub(crate) fn record(&self, now: Duration, add: impl FnOnce(&mut Capture, Duration)) {
+        let at = self.base + now;
+        let mut t = self.tap.borrow_mut();
+        t.last = t.last.max(at);
+        add(&mut t.capture, at);
+    }
+}
+
 /// Reading captures back, for the tests of this module and of the buses' framing.
 #[cfg(test)]
 pub(crate) mod testing {

@@ -33,6 +33,10 @@ const P151: ParamNumber = match ParamNumber::new(151) {
     Ok(p) => p,
     Err(_) => panic!("in range"),
 };
+const P700: ParamNumber = match ParamNumber::new(700) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
 const P899: ParamNumber = match ParamNumber::new(899) {
     Ok(p) => p,
     Err(_) => panic!("in range"),
@@ -524,6 +528,27 @@ impl Device {
     /// Marks the field-bus watchdog (P872/P173 bit 2) as tripped or clear.
     pub fn set_fieldbus_timeout(&mut self, tripped: bool) {
         self.fieldbus_timeout = tripped;
+    }
+
+    /// The inverters whose present error (P700 [-01], tenths: 10.2 → 102) is no longer what
+    /// `seen` holds for them, with the value now, in FI order; `seen` follows. What a bus
+    /// signals errors with (CoE emergencies, the POWERLINK error history) starts from here.
+    pub fn fault_changes(&mut self, seen: &mut [i32; 8]) -> Vec<(Inverter, i32)> {
+        let mut changed = Vec::new();
+        for (i, unit) in self.inverters.iter().enumerate().take(seen.len()) {
+            let value = unit
+                .params
+                .store
+                .read(P700, None, proto::nord::ArrayElement::new(1).ok())
+                .unwrap_or(0);
+            if value != seen[i] {
+                seen[i] = value;
+                if let Ok(fi) = Inverter::new(i as i64 + 1) {
+                    changed.push((fi, value));
+                }
+            }
+        }
+        changed
     }
 
     /// Raises an inverter error, as P700 shows it (`"10.0"`).

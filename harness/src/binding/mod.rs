@@ -9,6 +9,7 @@
 
 pub(crate) mod channel;
 pub(crate) mod embedded;
+pub(crate) mod objects;
 pub(crate) mod settle;
 
 use serde_json::Value;

@@ -16,12 +16,11 @@
 use proto::ecat::al::EcState;
 use proto::ecat::mailbox::{MailboxError, MailboxRepr, MailboxType};
 use proto::ecat::{DatagramRepr, EcatFrameRepr};
-use proto::nord::ecat::{parameter_data_type, DataType, BYTES_PER_INVERTER, VENDOR_ID};
-use proto::nord::params::{self, Owner};
+use proto::nord::ecat::{BYTES_PER_INVERTER, VENDOR_ID};
+use proto::nord::params;
 use proto::nord::{addr, Inverter, ParamAddress, Product};
 use serde_json::{json, Value};
 use sim::ecat::Slave;
-use std::fmt;
 use std::time::Duration;
 
 use super::master::{
@@ -31,13 +30,14 @@ use super::master::{
 use super::step::{state_name, EcatStep};
 use crate::binding::channel::{compact, cycles_left_out};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{Drives, SETTLE_CYCLES};
 use crate::binding::{Binding, CleanupError, Observation, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::Exchange;
 use crate::profile::Capability;
 use crate::runner::{cycles_for, hex};
-use crate::suite::{Action, OrderSpec, Run, Target};
+use crate::suite::{Action, OrderSpec, Run};
 
 /// A segment the binding can run on: the embedded one also hands out the simulated slave,
 /// for `inject` and `observe`.
@@ -59,26 +59,10 @@ impl DutSegment for NetSegment {
     }
 }
 
-/// What the embedded slave offers: every general capability but the PKW parameter channel
-/// (EtherCAT reaches parameters as CoE objects), and the `ecat:` steps.
-pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 8] = [
-    Capability::ParameterAccess,
-    Capability::ProcessData,
-    Capability::FaultInjection,
-    Capability::Observe,
-    Capability::PowerOn,
-    Capability::FactoryState,
-    Capability::Readdressing,
-    Capability::Bus("ecat"),
-];
-
-/// What a device on the network offers: it is one persistent device, which the harness can
-/// neither power-cycle, reset to factory settings nor look into.
-pub(crate) const NETWORK_CAPABILITIES: [Capability; 3] = [
-    Capability::ParameterAccess,
-    Capability::ProcessData,
-    Capability::Bus("ecat"),
-];
+/// What the embedded simulator offers (the parameters are CoE objects) and what a device on
+/// the network offers.
+pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 8] = objects::embedded_capabilities("ecat");
+pub(crate) const NETWORK_CAPABILITIES: [Capability; 3] = objects::network_capabilities("ecat");
 
 /// How long the interface may go on showing cyclic process data after the cycle stopped,
 /// and how often the cleanup looks.
@@ -86,19 +70,6 @@ const QUIET_TIME: Duration = Duration::from_secs(2);
 const QUIET_POLL: Duration = Duration::from_millis(10);
 /// P872 bit 1 "Cyclic PZD communication" (BU 0620 §4.3).
 const CYCLIC: u8 = 1 << 1;
-
-/// A CoE object the case wrote, the ledger's key.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Object {
-    index: u16,
-    sub: u8,
-}
-
-impl fmt::Display for Object {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "object {:04X}h:{:02X}h", self.index, self.sub)
-    }
-}
 
 /// The harness as master of one EtherCAT slave.
 pub(crate) struct EcatBinding<S> {
@@ -158,52 +129,34 @@ impl<S: DutSegment> EcatBinding<S> {
         self.master.slaves()[0].vendor()
     }
 
-    /// The CoE object of a `read`/`write` step, with the parameter's definition if the
-    /// catalogue has it. A set-dependent parameter without a set is set 1 and an array without
-    /// an element is element 1, as the parameter channel reads them (sub-index 0 of such a
-    /// parameter is its number of sub-indices, §2.2.7). The SK 550P's interface parameters
-    /// are those of FI 1 (§2.2.7: one device offset per inverter, none for the interface).
+    /// The CoE object of a `read`/`write` step (§2.2.7: 2000h + 800h·(FI−1) + P; the SK
+    /// 550P's interface parameters are FI 1's) and the parameter's definition.
     fn object(
         &self,
         o: &OrderSpec,
     ) -> Result<(Object, Option<&'static params::ParamDef>), StepError> {
-        let (inverter, def) = match o.target {
-            Target::Interface => (
-                Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?,
-                params::lookup(self.product, Owner::Interface, o.number),
-            ),
-            Target::Inverter(i) => {
-                let inv = params::lookup(self.product, Owner::Inverter, o.number);
-                let iface = (i.get() == 1)
-                    .then(|| params::lookup(self.product, Owner::Interface, o.number))
-                    .flatten();
-                (i, iface.or(inv))
-            }
+        let a = objects::address(self.product, o)?;
+        let Unit::Inverter(inverter) = a.unit else {
+            return Err(StepError::Suite(
+                "the SK 550P has no module parameters".into(),
+            ));
         };
-        let set = o.set.or_else(|| {
-            def.filter(|d| d.set_dependent)
-                .and_then(|_| proto::nord::ParamSet::new(1).ok())
-        });
-        let element = o.element.or_else(|| {
-            def.filter(|d| d.array.is_some())
-                .and_then(|_| proto::nord::ArrayElement::new(1).ok())
-        });
-        let a = addr::coe(
+        let coe = addr::coe(
             self.product,
             ParamAddress {
                 inverter,
                 number: o.number,
-                set,
-                element,
+                set: a.set,
+                element: a.element,
             },
         )
         .map_err(|e| StepError::Suite(e.to_string()))?;
         Ok((
             Object {
-                index: a.index,
-                sub: a.subindex,
+                index: coe.index,
+                sub: coe.subindex,
             },
-            def,
+            a.def,
         ))
     }
 
@@ -216,28 +169,13 @@ impl<S: DutSegment> EcatBinding<S> {
             Ok(d) => d,
             Err(e) => return refused_or(e),
         };
-        let ty = def.map(parameter_data_type);
-        let value = match (data.as_slice(), ty) {
-            ([a, b], Some(DataType::U16)) => i64::from(u16::from_le_bytes([*a, *b])),
-            ([a, b], _) => i64::from(i16::from_le_bytes([*a, *b])),
-            ([a, b, c, d], _) => i64::from(i32::from_le_bytes([*a, *b, *c, *d])),
-            (other, _) => {
-                return Err(StepError::Protocol(format!(
-                    "{obj}: a parameter value of {} bytes (2 or 4 expected)",
-                    other.len()
-                )))
-            }
-        };
+        let value = objects::value_of(obj, &data, def)?;
         Ok(json!({ "value": value, "data": hex(&data), "abort": null }).into())
     }
 
     fn write(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
         let (obj, def) = self.object(o)?;
-        let value = o.value.unwrap_or(0);
-        let v = i32::try_from(value)
-            .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
-        let width = def.map_or(2, |d| parameter_data_type(d).bytes());
-        let data = v.to_le_bytes()[..width].to_vec();
+        let data = objects::bytes_of(o, def)?;
         self.download(obj, &data, false)
     }
 
@@ -887,6 +825,7 @@ mod tests {
     use crate::runner::{run, RunOptions};
     use crate::suite::load_text_for_tests;
     use crate::suite::Run;
+    use crate::suite::Target;
     use proto::nord::ParamNumber;
     use sim::device::{Device, DeviceConfig};
 

@@ -8,38 +8,29 @@ use std::time::Duration;
 
 use super::binding::DutSegment;
 use super::master::{Arrival, Segment, SegmentError};
-use crate::pcap::SharedTap;
+use crate::pcap::{SharedTap, Stamper};
 use sim::ecat::Slave;
 
 /// What the interface description names as the source of these frames.
 const SOURCE: &str = "EtherCAT frames of a harness run (master and slave, as on the wire)";
 
-/// A segment whose traffic also goes to the run's capture, stamped on the run's time line
-/// (the segment's clock, placed after the last packet so far).
+/// A segment whose traffic also goes to the run's capture, stamped on the run's time line.
 #[derive(Debug)]
 pub(crate) struct Tapped<S> {
     inner: S,
-    tap: SharedTap,
-    base: Duration,
+    stamper: Stamper,
 }
 
 impl<S: Segment> Tapped<S> {
     /// `inner`, recorded into `tap` from now on.
     pub(crate) fn new(inner: S, tap: SharedTap) -> Tapped<S> {
-        let base = {
-            let mut t = tap.borrow_mut();
-            t.capture.source(SOURCE);
-            t.last + Duration::from_millis(1)
-        };
-        let base = base.saturating_sub(inner.now());
-        Tapped { inner, tap, base }
+        let stamper = Stamper::new(tap, SOURCE, inner.now());
+        Tapped { inner, stamper }
     }
 
     fn record(&self, frame: &[u8]) {
-        let at = self.base + self.inner.now();
-        let mut t = self.tap.borrow_mut();
-        t.last = t.last.max(at);
-        t.capture.frame(frame, at);
+        self.stamper
+            .record(self.inner.now(), |c, at| c.frame(frame, at));
     }
 }
 

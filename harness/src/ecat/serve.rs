@@ -281,7 +281,7 @@ fn run(mut link: RawLink, mut core: Box<dyn Core>, stop: &AtomicBool) -> Result<
         let deadline = Instant::now() + due.min(STOP_CHECK);
         let received = match link.recv(&mut buf, deadline) {
             Ok(r) => r,
-            Err(e) if link_down(&e) => {
+            Err(e) if e.is_link_down() => {
                 // The cable is out (the link went down): an ESC waits for it to come back.
                 thread::sleep(STOP_CHECK);
                 continue;
@@ -296,23 +296,12 @@ fn run(mut link: RawLink, mut core: Box<dyn Core>, stop: &AtomicBool) -> Result<
         }
         match link.send(frame) {
             Ok(()) => stats.frames += 1,
-            Err(e) if link_down(&e) => stats.dropped += 1,
+            Err(e) if e.is_link_down() => stats.dropped += 1,
             Err(e) => return Err(e.into()),
         }
     }
     stats.oversized = link.oversized();
     Ok(stats)
-}
-
-/// Whether `e` says the interface went down while it still exists.
-fn link_down(e: &LinkError) -> bool {
-    match e {
-        LinkError::Io { source, iface, .. } => {
-            source.raw_os_error() == Some(nix::errno::Errno::ENETDOWN as i32)
-                && crate::net::interface(iface).is_ok()
-        }
-        _ => false,
-    }
 }
 
 #[cfg(test)]

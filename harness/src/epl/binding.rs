@@ -14,15 +14,13 @@
 //! case ends the binding stops the drives it ran, writes back what the case changed and
 //! leaves the node in PRE_OPERATIONAL_2.
 
-use std::fmt;
 use std::time::Duration;
 
 use proto::epl::sdo::Command;
 use proto::epl::NmtState;
-use proto::nord::ecat::{parameter_data_type, DataType};
-use proto::nord::epl::{self as def, ParamOwner, Slot};
+use proto::nord::epl::{self as def, Slot};
 use proto::nord::errors::SdoAbort;
-use proto::nord::params::{self, Owner};
+use proto::nord::params;
 use proto::nord::{addr, Inverter, ParamAddress, Product, Protocol};
 use serde_json::{json, Value};
 
@@ -31,51 +29,24 @@ use super::mn::{describe, Manager, MnError, Via};
 use super::step::EplStep;
 use crate::binding::channel::{compact, cycles_left_out};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{Drives, SETTLE_CYCLES};
 use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Refusal};
 use crate::profile::Capability;
 use crate::runner::{cycles_for, hex};
-use crate::suite::{Action, OrderSpec, Run, Target};
+use crate::suite::{Action, OrderSpec, Run};
 
-/// What the embedded node offers: every general capability but the PKW channel (POWERLINK
-/// reaches parameters as SDO objects), and the `epl:` steps.
-pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 8] = [
-    Capability::ParameterAccess,
-    Capability::ProcessData,
-    Capability::FaultInjection,
-    Capability::Observe,
-    Capability::PowerOn,
-    Capability::FactoryState,
-    Capability::Readdressing,
-    Capability::Bus("epl"),
-];
-
-/// What a node on the network offers: one persistent device.
-pub(crate) const NETWORK_CAPABILITIES: [Capability; 3] = [
-    Capability::ParameterAccess,
-    Capability::ProcessData,
-    Capability::Bus("epl"),
-];
+/// What the embedded simulator offers (the parameters are SDO objects) and what a device on
+/// the network offers.
+pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 8] = objects::embedded_capabilities("epl");
+pub(crate) const NETWORK_CAPABILITIES: [Capability; 3] = objects::network_capabilities("epl");
 
 /// How long the interface may go on showing cyclic process data after the drives stopped.
 const QUIET_TIME: Duration = Duration::from_secs(2);
 /// The "cyclic communication" bit of P872 / P173 [-01].
 const CYCLIC: u8 = 1 << 1;
-
-/// An SDO object the case wrote, the ledger's key.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Object {
-    index: u16,
-    sub: u8,
-}
-
-impl fmt::Display for Object {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "object {:04X}h/{:02X}h", self.index, self.sub)
-    }
-}
 
 /// The harness as MN of one controlled node.
 pub(crate) struct EplBinding<L> {
@@ -181,55 +152,32 @@ impl<L: Link> EplBinding<L> {
         })
     }
 
-    /// The SDO object of a `read`/`write` step and the parameter's definition. A
-    /// set-dependent parameter without a set is set 1, an array without an element element 1
-    /// (sub-index 0 of those is their count, BU 0620 §2.4.6).
+    /// The SDO object of a `read`/`write` step (BU 0620 §2.4.6: device id 2000h + 600h·(FI−1)
+    /// + P, the interface's parameters FI 1's; BU 2200 §6.4: the module at 2000h + P, FU n at
+    /// 2000h + 800h·n + P) and the parameter's definition.
     fn object(
         &self,
         o: &OrderSpec,
     ) -> Result<(Object, Option<&'static params::ParamDef>), StepError> {
-        let suite = |e: String| StepError::Suite(e);
-        let (owner, def) = match o.target {
-            Target::Interface => (
-                ParamOwner::Interface,
-                params::lookup(self.product, Owner::Interface, o.number),
-            ),
-            Target::Inverter(i) => {
-                let inv = params::lookup(self.product, Owner::Inverter, o.number);
-                let iface = (i.get() == 1 && self.product == Product::Sk550p)
-                    .then(|| params::lookup(self.product, Owner::Interface, o.number))
-                    .flatten();
-                (ParamOwner::Inverter(i), iface.or(inv))
-            }
-        };
-        let set = o.set.or_else(|| {
-            def.filter(|d| d.set_dependent)
-                .and_then(|_| proto::nord::ParamSet::new(1).ok())
-        });
-        let element = o.element.or_else(|| {
-            def.filter(|d| d.array.is_some())
-                .and_then(|_| proto::nord::ArrayElement::new(1).ok())
-        });
-        let sub = addr::sdo_subindex(set, element);
-        let index = match owner {
-            // The SK 550P's interface is built into FI 1 (its parameters at 2000h + P); a
-            // module's own parameters are at 2000h + P (BU 2200 §6.4).
-            ParamOwner::Interface => 0x2000 + o.number.get(),
-            ParamOwner::Inverter(i) => {
+        let a = objects::address(self.product, o)?;
+        let index = match a.unit {
+            Unit::Interface => 0x2000 + o.number.get(),
+            Unit::Inverter(inverter) => {
                 addr::powerlink(
                     self.product,
                     ParamAddress {
-                        inverter: i,
+                        inverter,
                         number: o.number,
-                        set,
-                        element,
+                        set: a.set,
+                        element: a.element,
                     },
                 )
-                .map_err(|e| suite(e.to_string()))?
+                .map_err(|e| StepError::Suite(e.to_string()))?
                 .index
             }
         };
-        Ok((Object { index, sub }, def))
+        let sub = addr::sdo_subindex(a.set, a.element);
+        Ok((Object { index, sub }, a.def))
     }
 
     fn read(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
@@ -241,28 +189,14 @@ impl<L: Link> EplBinding<L> {
             Ok(d) => d,
             Err(e) => return refused_or(e),
         };
-        let ty = def.map(parameter_data_type);
-        let value = match (data.as_slice(), ty) {
-            ([a, b], Some(DataType::U16)) => i64::from(u16::from_le_bytes([*a, *b])),
-            ([a, b], _) => i64::from(i16::from_le_bytes([*a, *b])),
-            ([a, b, c, d], _) => i64::from(i32::from_le_bytes([*a, *b, *c, *d])),
-            (other, _) => {
-                return Err(StepError::Protocol(format!(
-                    "{obj}: a parameter value of {} bytes (2 or 4 expected)",
-                    other.len()
-                )))
-            }
-        };
+        let value = objects::value_of(obj, &data, def)?;
         Ok(json!({ "value": value, "data": hex(&data), "abort": null }).into())
     }
 
     fn write(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
         let (obj, def) = self.object(o)?;
-        let value = o.value.unwrap_or(0);
-        let v = i32::try_from(value)
-            .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
-        let width = def.map_or(2, |d| parameter_data_type(d).bytes());
-        self.download(obj, &v.to_le_bytes()[..width], self.via)
+        let data = objects::bytes_of(o, def)?;
+        self.download(obj, &data, self.via)
     }
 
     /// An SDO write, through the ledger on a persistent device.

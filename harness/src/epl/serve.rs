@@ -470,7 +470,7 @@ fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
             .min(STOP_CHECK);
         let received = match link.recv(&mut buf, Instant::now() + wait) {
             Ok(r) => r,
-            Err(e) if link_down(&e) => {
+            Err(e) if e.is_link_down() => {
                 // The cable is out: the node sees no frames, its timers still run.
                 thread::sleep(STOP_CHECK.min(POLL_PERIOD));
                 continue;
@@ -487,7 +487,7 @@ fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
         for f in out {
             match link.send(&f) {
                 Ok(()) => bump(&c.frames_out),
-                Err(e) if link_down(&e) => {}
+                Err(e) if e.is_link_down() => {}
                 Err(e) => return Err(e.into()),
             }
         }
@@ -536,17 +536,6 @@ fn transient(e: &std::io::Error) -> bool {
             | K::NetworkUnreachable
             | K::NetworkDown
     )
-}
-
-/// Whether `e` says the interface went down while it still exists (as `ecat::serve` decides).
-fn link_down(e: &LinkError) -> bool {
-    match e {
-        LinkError::Io { source, iface, .. } => {
-            source.raw_os_error() == Some(nix::errno::Errno::ENETDOWN as i32)
-                && crate::net::interface(iface).is_ok()
-        }
-        _ => false,
-    }
 }
 
 #[cfg(test)]

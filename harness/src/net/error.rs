@@ -55,4 +55,16 @@ impl LinkError {
             _ => LinkError::Io { op, iface, source },
         }
     }
+
+    /// Whether the interface went down while it still exists (ENETDOWN): a served device
+    /// waits for it to come up again rather than ending.
+    pub(crate) fn is_link_down(&self) -> bool {
+        match self {
+            LinkError::Io { source, iface, .. } => {
+                source.raw_os_error() == Some(nix::errno::Errno::ENETDOWN as i32)
+                    && super::interface(iface).is_ok()
+            }
+            _ => false,
+        }
+    }
 }

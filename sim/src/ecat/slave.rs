@@ -11,7 +11,6 @@ use proto::eth::{EthernetFrame, ETHERTYPE_ECAT};
 use proto::nord::ecat as def;
 use proto::nord::led::Row;
 use proto::nord::nmt::EcState;
-use proto::nord::{Inverter, ParamNumber};
 
 use super::al::{self, Al, Outcome};
 use super::esc::{reg, Done, Esc, Event, Op};
@@ -391,36 +390,22 @@ impl Slave {
     /// FF00h (manufacturer specific, error register 81h); bytes 3–4 the P700 value, byte 5
     /// the FI.
     fn emergencies(&mut self) {
-        let (Ok(p700), Ok(first)) = (ParamNumber::new(700), proto::nord::ArrayElement::new(1))
-        else {
-            return;
-        };
-        for n in 1..=self.inverters {
-            let Ok(fi) = Inverter::new(i64::from(n)) else {
+        for (fi, value) in self.device.fault_changes(&mut self.faults) {
+            if value == 0 || self.al.state == EcState::Init {
                 continue;
-            };
-            let value = self
-                .device
-                .store(Unit::Inverter(fi))
-                .ok()
-                .and_then(|s| s.read(p700, None, Some(first)).ok())
-                .unwrap_or(0);
-            let i = usize::from(n - 1);
-            if value != self.faults[i] && value != 0 && self.al.state != EcState::Init {
-                let (code, register) = proto::nord::errors::COMM_ERRORS
-                    .iter()
-                    .find(|c| i32::from(c.p700) == value)
-                    .map_or((0xFF00, 0x81), |c| (c.ds402, 0x11));
-                let v = (value as u16).to_le_bytes();
-                let emergency = Emergency {
-                    code,
-                    register,
-                    data: [v[0], v[1], n, 0, 0],
-                };
-                self.mailbox.send(MailboxType::COE, emergency.emit_coe());
-                self.fill_mailbox();
             }
-            self.faults[i] = value;
+            let (code, register) = proto::nord::errors::COMM_ERRORS
+                .iter()
+                .find(|c| i32::from(c.p700) == value)
+                .map_or((0xFF00, 0x81), |c| (c.ds402, 0x11));
+            let v = (value as u16).to_le_bytes();
+            let emergency = Emergency {
+                code,
+                register,
+                data: [v[0], v[1], fi.get(), 0, 0],
+            };
+            self.mailbox.send(MailboxType::COE, emergency.emit_coe());
+            self.fill_mailbox();
         }
     }
 

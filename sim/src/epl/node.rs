@@ -16,7 +16,7 @@ use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
 use proto::nord::epl::{self as def, MappedWord, Slot};
 use proto::nord::led::{self, Row};
 use proto::nord::nmt::PlState;
-use proto::nord::{ArrayElement, Inverter, ParamNumber, Product, Protocol};
+use proto::nord::{ArrayElement, ParamNumber, Product, Protocol};
 
 use super::od::{Context, Dictionary, NodeVars, HISTORY_LEN};
 use super::sdo::{Peer, Server};
@@ -644,43 +644,34 @@ impl Node {
     /// table has none), the FI id and the P700 value in ASCII as additional information
     /// (§5.4.1.2 "FI-ID (ASCII)", "FI Error Code (ASCII)").
     fn errors(&mut self, now: Duration) {
-        let (Ok(p700), Ok(first)) = (ParamNumber::new(700), ArrayElement::new(1)) else {
-            return;
-        };
-        for n in 1..=self.device.config().inverters.min(8) {
-            let Ok(fi) = Inverter::new(i64::from(n)) else {
+        for (fi, value) in self.device.fault_changes(&mut self.faults) {
+            if value == 0 {
                 continue;
-            };
-            let value = self
-                .device
-                .store(Unit::Inverter(fi))
-                .ok()
-                .and_then(|s| s.read(p700, None, Some(first)).ok())
-                .unwrap_or(0);
-            let i = usize::from(n - 1);
-            if value != self.faults[i] && value != 0 {
-                let (code, register) = proto::nord::errors::powerlink_error(value as u16)
-                    .map_or((0x1000, 1), |e| (e.code, e.register));
-                let text = format!("{}{:>7}", n, format!("{}.{}", value / 10, value % 10));
-                let mut info = [0u8; 8];
-                info.copy_from_slice(&text.as_bytes()[..8]);
-                self.vars.history.insert(
-                    0,
-                    ErrorEntry {
-                        entry_type: ErrorEntry::MODE_HISTORY | 0x0001,
-                        code,
-                        time: now.as_micros() as u64,
-                        info: u64::from_le_bytes(info),
-                    },
-                );
-                self.vars.history.truncate(HISTORY_LEN);
-                self.vars.error_register |= register;
-                self.en = !self.en;
             }
-            if value == 0 && self.faults[i] != 0 && self.faults.iter().all(|&f| f == 0) {
-                self.vars.error_register = 0;
-            }
-            self.faults[i] = value;
+            let (code, register) = proto::nord::errors::powerlink_error(value as u16)
+                .map_or((0x1000, 1), |e| (e.code, e.register));
+            let text = format!(
+                "{}{:>7}",
+                fi.get(),
+                format!("{}.{}", value / 10, value % 10)
+            );
+            let mut info = [0u8; 8];
+            info.copy_from_slice(&text.as_bytes()[..8]);
+            self.vars.history.insert(
+                0,
+                ErrorEntry {
+                    entry_type: ErrorEntry::MODE_HISTORY | 0x0001,
+                    code,
+                    time: now.as_micros() as u64,
+                    info: u64::from_le_bytes(info),
+                },
+            );
+            self.vars.history.truncate(HISTORY_LEN);
+            self.vars.error_register |= register;
+            self.en = !self.en;
+        }
+        if self.faults.iter().all(|&f| f == 0) {
+            self.vars.error_register = 0;
         }
     }
 

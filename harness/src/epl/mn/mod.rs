@@ -712,11 +712,6 @@ impl<L: Link> Manager<L> {
         self.phase == Phase::Isochronous
     }
 
-    /// Starts the isochronous phase (SoC, PReq) from the next cycle.
-    pub(crate) fn start_cycling(&mut self) {
-        self.phase = Phase::Isochronous;
-    }
-
     /// Sends raw SDO bytes (sequence and command layers) to the node over `via` and collects
     /// what it answers within the SDO time; the connection's numbering is the caller's.
     pub(crate) fn sdo_raw(&mut self, via: Via, bytes: &[u8]) -> Result<Vec<Vec<u8>>, MnError> {

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use super::link::Link;
 use crate::net::LinkError;
-use crate::pcap::SharedTap;
+use crate::pcap::{SharedTap, Stamper};
 use sim::epl::Node;
 
 /// What the interface description names as the source of these frames.
@@ -18,27 +18,19 @@ const SOURCE: &str =
 #[derive(Debug)]
 pub(crate) struct Tapped<L> {
     inner: L,
-    tap: SharedTap,
-    base: Duration,
+    stamper: Stamper,
 }
 
 impl<L: Link> Tapped<L> {
     /// `inner`, recorded into `tap` from now on.
     pub(crate) fn new(inner: L, tap: SharedTap) -> Tapped<L> {
-        let base = {
-            let mut t = tap.borrow_mut();
-            t.capture.source(SOURCE);
-            t.last + Duration::from_millis(1)
-        };
-        let base = base.saturating_sub(inner.now());
-        Tapped { inner, tap, base }
+        let stamper = Stamper::new(tap, SOURCE, inner.now());
+        Tapped { inner, stamper }
     }
 
     fn record(&self, frame: &[u8]) {
-        let at = self.base + self.inner.now();
-        let mut t = self.tap.borrow_mut();
-        t.last = t.last.max(at);
-        t.capture.frame(frame, at);
+        self.stamper
+            .record(self.inner.now(), |c, at| c.frame(frame, at));
     }
 
     /// A datagram from the MN to the node (`to_node`) or back.
@@ -48,10 +40,9 @@ impl<L: Link> Tapped<L> {
             return;
         };
         let (from, to) = if to_node { (mn, node) } else { (node, mn) };
-        let at = self.base + self.inner.now();
-        let mut t = self.tap.borrow_mut();
-        t.last = t.last.max(at);
-        t.capture.udp_of(SOURCE, from, to, datagram, at);
+        self.stamper.record(self.inner.now(), |c, at| {
+            c.udp_of(SOURCE, from, to, datagram, at)
+        });
     }
 }
 
