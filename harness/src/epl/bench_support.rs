@@ -201,7 +201,7 @@ pub fn cycles(
         .enumerate()
         .filter_map(|(i, s)| Some((u32::try_from(i).ok()?, (*s)?)))
         .collect();
-    let unstamped = (stamps.len() - arrivals.len()) as u64 - missed.min(stamps.len() as u64);
+    let unstamped = ((stamps.len() - arrivals.len()) as u64).saturating_sub(missed);
     Ok(Cycles {
         cycles: n,
         arrivals,
