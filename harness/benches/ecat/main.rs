@@ -31,6 +31,9 @@ use harness::stats::{jitter, median, percentile, Rate};
 mod common;
 #[path = "../../../tests/common/netns.rs"]
 mod netns;
+#[allow(dead_code)] // the skip-or-fail rule netns.rs uses
+#[path = "../../../tests/common/peer.rs"]
+mod peer;
 
 use common::{met, run_script, Script};
 use netns::Netns;

@@ -693,3 +693,134 @@ impl<L: Link> Binding for EplBinding<L> {
         self.restore().map_err(CleanupError)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::cell::Cell;
+    use std::net::SocketAddr;
+    use std::rc::Rc;
+    use std::time::Duration;
+
+    use proto::eth::MacAddr;
+    use proto::nord::{ParamNumber, Product};
+    use sim::device::{Device, DeviceConfig};
+    use sim::epl::{Node, NodeConfig};
+
+    use super::super::mn::link::{EmbeddedLink, Link};
+    use super::super::mn::{Manager, MnConfig};
+    use super::*;
+    use crate::net::LinkError;
+    use crate::outcome::Verdict;
+    use crate::suite::Target;
+
+    /// How the node behind [`Faulty`] misbehaves.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    enum Fault {
+        None,
+        /// Nothing comes back.
+        Silent,
+        /// Every frame is answered with bytes that are no POWERLINK frame, from node 1.
+        Garbage,
+    }
+
+    /// The embedded node behind a link that can turn silent or send garbage.
+    struct Faulty {
+        inner: EmbeddedLink,
+        fault: Rc<Cell<Fault>>,
+    }
+
+    impl Link for Faulty {
+        fn now(&self) -> Duration {
+            self.inner.now()
+        }
+        fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+            match self.fault.get() {
+                Fault::None => self.inner.send(frame),
+                _ => Ok(()),
+            }
+        }
+        fn recv(
+            &mut self,
+            deadline: Duration,
+        ) -> Result<Option<(Vec<u8>, Option<Duration>)>, LinkError> {
+            match self.fault.get() {
+                Fault::None => self.inner.recv(deadline),
+                Fault::Silent => {
+                    self.inner.wait_until(deadline);
+                    Ok(None)
+                }
+                // Ethernet header from the node, EtherType 88ABh, message type 7Fh.
+                Fault::Garbage => {
+                    let mut f = vec![0xFF; 6];
+                    f.extend([0xF0, 0x5F, 0x5A, 0, 0, 1, 0x88, 0xAB, 0x7F, 0xF0, 0x01]);
+                    f.resize(60, 0xA5);
+                    Ok(Some((f, None)))
+                }
+            }
+        }
+        fn send_udp(&mut self, d: &[u8]) -> Result<(), LinkError> {
+            self.inner.send_udp(d)
+        }
+        fn recv_udp(&mut self, deadline: Duration) -> Result<Option<Vec<u8>>, LinkError> {
+            self.inner.recv_udp(deadline)
+        }
+        fn wait_until(&mut self, until: Duration) {
+            self.inner.wait_until(until)
+        }
+        fn udp_ends(&mut self) -> (SocketAddr, SocketAddr) {
+            self.inner.udp_ends()
+        }
+        fn node(&mut self) -> Option<(&mut Node, Duration)> {
+            self.inner.node()
+        }
+    }
+
+    fn binding(fault: Rc<Cell<Fault>>) -> Result<EplBinding<Faulty>, OpenError> {
+        let device = Device::new(DeviceConfig::new(Product::Sk550p));
+        let node = Node::new(device, NodeConfig::new(1)).unwrap();
+        let link = Faulty {
+            inner: EmbeddedLink::new(node),
+            fault,
+        };
+        let mn = Manager::new(link, MnConfig::default(), MacAddr([2, 0, 0, 0, 0, 0xF0]));
+        EplBinding::open(mn, Product::Sk550p, "test".into(), false)
+    }
+
+    fn read_p102() -> Action {
+        Action::Read(OrderSpec {
+            target: Target::Inverter(Inverter::new(1).unwrap()),
+            number: ParamNumber::new(102).unwrap(),
+            set: None,
+            element: None,
+            ak: None,
+            value: None,
+            eeprom: true,
+            dword: None,
+        })
+    }
+
+    #[test]
+    fn a_silent_or_garbage_sending_node_is_an_error_within_the_time_out() {
+        // Silent from the start: the node cannot be opened, within the MN's few cycles.
+        let fault = Rc::new(Cell::new(Fault::Silent));
+        assert!(matches!(
+            binding(fault),
+            Err(OpenError::Unreachable(e)) if e.contains("no reply")
+        ));
+        // Silent or garbage after a good start: the step ends in an error verdict, on the
+        // virtual clock within the SDO time-out (200 cycles).
+        for (f, verdict) in [
+            (Fault::Silent, Verdict::Error),
+            (Fault::Garbage, Verdict::Error),
+        ] {
+            let fault = Rc::new(Cell::new(Fault::None));
+            let mut b = binding(fault.clone()).unwrap();
+            assert!(b.perform(&read_p102()).is_ok());
+            fault.set(f);
+            let start = b.mn.now();
+            let e = b.perform(&read_p102()).unwrap_err();
+            assert_eq!(e.verdict(), verdict, "{f:?}: {e}");
+            assert!(b.mn.now() - start <= Duration::from_millis(250), "{f:?}");
+        }
+    }
+}

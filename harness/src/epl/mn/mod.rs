@@ -167,7 +167,7 @@ pub(crate) struct Manager<L> {
     recording: bool,
     /// ASnd frames of the MN for its next asynchronous slots.
     queued: VecDeque<(ServiceId, Vec<u8>)>,
-    /// ASnd frames of the node not yet taken.
+    /// SDO frames of the node that came after their wait, for the SDO client.
     asnd: VecDeque<Received>,
     /// PRes arrival stamps of the cycles run with [`Manager::record_stamps`] on.
     stamps: Option<Vec<Option<Duration>>>,
@@ -176,6 +176,12 @@ pub(crate) struct Manager<L> {
     udp_link: Option<Connection>,
     transaction: u8,
 }
+
+/// Frames the MN takes from the link in one wait at most, whatever they are.
+const MAX_SKIPPED: usize = 256;
+
+/// Late SDO frames the MN keeps for the SDO client at most.
+const LATE_KEPT: usize = 16;
 
 /// How often the MN reads the node's state after an NMT command until it shows the command's
 /// effect.
@@ -329,7 +335,8 @@ impl<L: Link> Manager<L> {
 
     /// The next frame of the node until `deadline`; frames of others are skipped.
     pub(crate) fn receive(&mut self, deadline: Duration) -> Result<Option<Received>, MnError> {
-        loop {
+        // A link flooded with frames of no interest must not hold the MN past its cycle.
+        for _ in 0..MAX_SKIPPED {
             let Some((frame, stamp)) = self.link.recv(deadline)? else {
                 return Ok(None);
             };
@@ -360,6 +367,7 @@ impl<L: Link> Manager<L> {
             }
             return Ok(Some(Received { repr, bytes, stamp }));
         }
+        Ok(None)
     }
 
     /// One cycle: SoC and PReq/PRes in the isochronous phase, then SoA asking `service` of
@@ -368,10 +376,16 @@ impl<L: Link> Manager<L> {
     pub(crate) fn cycle(&mut self, service: RequestedService) -> Result<Option<Received>, MnError> {
         let start = self.next_cycle.max(self.link.now());
         self.link.wait_until(start);
-        // A reply that came after its wait ended belongs to an earlier cycle: dropped, so that
-        // it cannot pass for the answer to this one.
+        // A reply that came after its wait ended belongs to an earlier cycle: it cannot pass
+        // for the answer to this one. Late SDO frames are kept for the SDO client, which
+        // knows their transfer by its numbers; the rest is dropped.
         let now = self.link.now();
-        while self.receive(now)?.is_some() {}
+        for _ in 0..MAX_SKIPPED {
+            let Some(r) = self.receive(now)? else { break };
+            if is_sdo(&r) && self.asnd.len() < LATE_KEPT {
+                self.asnd.push_back(r);
+            }
+        }
         self.next_cycle = start + self.config.cycle;
         let node = self.config.node;
         if self.phase == Phase::Isochronous {
@@ -460,7 +474,8 @@ impl<L: Link> Manager<L> {
         })
     }
 
-    /// Waits for a frame of the node that `want` accepts; others are kept (ASnd) or dropped.
+    /// Waits for a frame of the node that `want` accepts; SDO frames are kept for the SDO
+    /// client, others dropped.
     fn wait_for(
         &mut self,
         deadline: Duration,
@@ -469,13 +484,10 @@ impl<L: Link> Manager<L> {
         while let Some(r) = self.receive(deadline)? {
             match &r.repr {
                 Some(repr) if want(repr) => return Ok(Some(r)),
-                Some(EplRepr {
-                    body: Body::Asnd(_),
-                    ..
-                }) => self.asnd.push_back(r),
                 // A frame of the node that is not POWERLINK at all: the caller decides.
                 None => return Ok(Some(r)),
-                _ => {}
+                Some(_) if is_sdo(&r) && self.asnd.len() < LATE_KEPT => self.asnd.push_back(r),
+                Some(_) => {}
             }
         }
         Ok(None)
@@ -743,7 +755,11 @@ impl<L: Link> Manager<L> {
         }
     }
 
-    fn udp_exchange(&mut self, datagram: &[u8], first_only: bool) -> Result<Vec<Vec<u8>>, MnError> {
+    fn udp_exchange(
+        &mut self,
+        datagram: &[u8],
+        until_complete: bool,
+    ) -> Result<Vec<Vec<u8>>, MnError> {
         self.link.send_udp(datagram)?;
         let wait = self.config.cycle * self.config.sdo_cycles.min(50);
         let deadline = self.link.now() + wait;
@@ -766,12 +782,16 @@ impl<L: Link> Manager<L> {
                     received: describe::udp(&got.bytes),
                 });
             }
-            out.push(
-                d.get(proto::epl::sdo::UDP_PREFIX.len()..)
-                    .unwrap_or_default()
-                    .to_vec(),
-            );
-            if first_only {
+            let payload = d
+                .get(proto::epl::sdo::UDP_PREFIX.len()..)
+                .unwrap_or_default()
+                .to_vec();
+            let more = more_follows(&payload);
+            out.push(payload);
+            // A datagram that ends the transfer ends the wait: waiting on for one more would
+            // cost the reply time on every request, rounded up to whole jiffies by SO_RCVTIMEO
+            // (a 500 µs wait takes 8 ms at HZ=250).
+            if until_complete && !more {
                 break;
             }
         }
@@ -809,7 +829,13 @@ impl<L: Link> Manager<L> {
         let bytes = frame
             .emit()
             .map_err(|e| self.malformed("an SDO request", e))?;
-        let answers = self.exchange(via, &bytes, &what())?;
+        let tid = command.transaction;
+        let answers = self.exchange(via, &bytes, &what(), |f| {
+            f.seq.rcon == Con::ErrorOrAckRequest
+                || f.command
+                    .as_ref()
+                    .is_some_and(|c| c.transaction == tid && (c.response || c.abort))
+        })?;
         let mut data = Vec::new();
         let mut done = false;
         for a in &answers {
@@ -901,7 +927,9 @@ impl<L: Link> Manager<L> {
         let bytes = frame
             .emit()
             .map_err(|e| self.malformed("an SDO connection", e))?;
-        let answers = self.exchange(via, &bytes, "SDO initialisation")?;
+        let answers = self.exchange(via, &bytes, "SDO initialisation", |f| {
+            f.seq.rcon == Con::Init
+        })?;
         for a in answers {
             let f = SdoFrame::parse(&a).map_err(|e| self.malformed("an SDO initialisation", e))?;
             if f.seq.rcon == Con::Init {
@@ -922,11 +950,19 @@ impl<L: Link> Manager<L> {
 
     /// Sends SDO bytes and gathers the node's SDO frames: over ASnd, invited cycle after
     /// cycle until one answers (then the further segments); over UDP, the datagrams.
-    fn exchange(&mut self, via: Via, bytes: &[u8], what: &str) -> Result<Vec<Vec<u8>>, MnError> {
+    fn exchange(
+        &mut self,
+        via: Via,
+        bytes: &[u8],
+        what: &str,
+        answers: impl Fn(&SdoFrame) -> bool,
+    ) -> Result<Vec<Vec<u8>>, MnError> {
+        let ours = |b: &[u8]| SdoFrame::parse(b).is_ok_and(|f| answers(&f));
         if via == Via::Udp {
             let mut d = proto::epl::sdo::UDP_PREFIX.to_vec();
             d.extend(bytes);
-            let out = self.udp_exchange(&d, false)?;
+            let mut out = self.udp_exchange(&d, true)?;
+            out.retain(|b| ours(b));
             if out.is_empty() {
                 return Err(MnError::NoReply {
                     node: self.config.node,
@@ -940,7 +976,12 @@ impl<L: Link> Manager<L> {
         self.cycle(RequestedService::NO_SERVICE)?;
         let mut out = Vec::new();
         for _ in 0..self.config.sdo_cycles {
-            let Some(r) = self.cycle(RequestedService::UNSPECIFIED_INVITE)? else {
+            let late = self.asnd.pop_front();
+            let got = match late {
+                Some(r) => Some(r),
+                None => self.cycle(RequestedService::UNSPECIFIED_INVITE)?,
+            };
+            let Some(r) = got else {
                 if out.is_empty() {
                     continue;
                 }
@@ -950,16 +991,12 @@ impl<L: Link> Manager<L> {
                 Some(EplRepr {
                     body: Body::Asnd(a),
                     ..
+                }) if a.service == ServiceId::SDO && !ours(&a.payload) => {}
+                Some(EplRepr {
+                    body: Body::Asnd(a),
+                    ..
                 }) if a.service == ServiceId::SDO => {
-                    let more = SdoFrame::parse(&a.payload)
-                        .ok()
-                        .and_then(|f| f.command)
-                        .is_some_and(|c| {
-                            matches!(
-                                c.segmentation,
-                                Segmentation::Initiate | Segmentation::Segment
-                            ) && c.abort_code().is_none()
-                        });
+                    let more = more_follows(&a.payload);
                     out.push(a.payload);
                     if !more {
                         return Ok(out);
@@ -998,6 +1035,24 @@ impl<L: Link> Manager<L> {
         }
         Ok(got)
     }
+}
+
+/// Whether a frame of the node is an ASnd SDO frame.
+fn is_sdo(r: &Received) -> bool {
+    matches!(&r.repr, Some(EplRepr { body: Body::Asnd(a), .. }) if a.service == ServiceId::SDO)
+}
+
+/// Whether an SDO frame of the node announces more segments of its answer.
+fn more_follows(sdo: &[u8]) -> bool {
+    SdoFrame::parse(sdo)
+        .ok()
+        .and_then(|f| f.command)
+        .is_some_and(|c| {
+            matches!(
+                c.segmentation,
+                Segmentation::Initiate | Segmentation::Segment
+            ) && c.abort_code().is_none()
+        })
 }
 
 /// The NMT state an ASnd of the node carries (IdentResponse, StatusResponse).
