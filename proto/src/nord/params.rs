@@ -294,26 +294,42 @@ impl ParamDef {
 
 /// The parameter `number` of a unit of `product`.
 pub fn lookup(product: Product, owner: Owner, number: ParamNumber) -> Option<&'static ParamDef> {
-    by_number(number.get())
-        .iter()
-        .map(|&i| &CATALOGUE[i])
-        .find(|d| d.owner == owner && d.applies_to(product))
+    let unit = Product::ALL.iter().position(|p| *p == product)? * 2
+        + usize::from(owner == Owner::Inverter);
+    table()[unit].get(usize::from(number.get())).copied().flatten()
 }
 
-/// The catalogue's entries of parameter `number`, in catalogue order: an index built once, as
-/// the simulator looks parameters up on every bus cycle.
-fn by_number(number: u16) -> &'static [usize] {
-    static INDEX: std::sync::OnceLock<Vec<Vec<usize>>> = std::sync::OnceLock::new();
-    let index = INDEX.get_or_init(|| {
-        let mut index = vec![Vec::new(); 1000];
+/// Every unit's parameters by number: for each product (in [`Product::ALL`] order) its
+/// interface's and its inverters' table of P0…P999, built once from the catalogue, as the
+/// simulator looks parameters up on every bus cycle.
+fn table() -> &'static [Vec<Option<&'static ParamDef>>] {
+    static TABLE: std::sync::OnceLock<Vec<Vec<Option<&'static ParamDef>>>> =
+        std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        let mut index: Vec<Vec<usize>> = vec![Vec::new(); 1000];
         for (i, d) in CATALOGUE.iter().enumerate() {
             if let Some(entries) = index.get_mut(usize::from(d.number)) {
                 entries.push(i);
             }
         }
-        index
-    });
-    index.get(usize::from(number)).map_or(&[], Vec::as_slice)
+        let mut units = Vec::new();
+        for product in Product::ALL {
+            for owner in [Owner::Interface, Owner::Inverter] {
+                units.push(
+                    index
+                        .iter()
+                        .map(|entries| {
+                            entries
+                                .iter()
+                                .map(|&i| &CATALOGUE[i])
+                                .find(|d| d.owner == owner && d.applies_to(product))
+                        })
+                        .collect(),
+                );
+            }
+        }
+        units
+    })
 }
 
 #[cfg(test)]
