@@ -296,7 +296,10 @@ impl ParamDef {
 pub fn lookup(product: Product, owner: Owner, number: ParamNumber) -> Option<&'static ParamDef> {
     let unit = Product::ALL.iter().position(|p| *p == product)? * 2
         + usize::from(owner == Owner::Inverter);
-    table()[unit].get(usize::from(number.get())).copied().flatten()
+    table()[unit]
+        .get(usize::from(number.get()))
+        .copied()
+        .flatten()
 }
 
 /// Every unit's parameters by number: for each product (in [`Product::ALL`] order) its
