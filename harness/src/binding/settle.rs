@@ -10,7 +10,9 @@ use proto::nord::control::ControlWord;
 use proto::nord::status::StatusWord;
 use proto::nord::Inverter;
 
+use super::channel::{compact, cycles_left_out};
 use crate::ledger::Problem;
+use crate::outcome::Exchange;
 
 /// "Control data valid" (bit 10) and nothing else: "disable voltage" (bit 1 = 0), the output
 /// off at once, "Switch-on block" (BU 0620 §6.1.2.1).
@@ -87,6 +89,47 @@ impl Settle {
     }
 }
 
+/// What a bus's master or managing node offers for running process data: the cycle with
+/// its transcript, the output words and the status words.
+pub(crate) trait Cycling {
+    /// The bus's error.
+    type Error;
+    /// Runs `n` cycles.
+    fn run_cycles(&mut self, n: u64) -> Result<(), Self::Error>;
+    /// The exchanges recorded since the last call.
+    fn take_exchanges(&mut self) -> Vec<Exchange>;
+    /// Records exchanges from now on, or not.
+    fn set_recording(&mut self, on: bool);
+    /// Sets FI `fi`'s six output words (control word, setpoints 1..5) for the next cycles.
+    fn set_words(&mut self, fi: Inverter, words: [u16; 6]) -> Result<(), Self::Error>;
+    /// FI `fi`'s status word, as the last cycle brought it.
+    fn status_word(&mut self, fi: Inverter) -> Result<u16, Self::Error>;
+}
+
+/// Runs `n` cycles of `c`; the transcript (`pending`, the exchanges taken so far) keeps the
+/// first two and the last, and the cycles between are not even recorded.
+pub(crate) fn run_cycles<C: Cycling>(
+    c: &mut C,
+    pending: &mut Vec<Exchange>,
+    n: u64,
+) -> Result<(), C::Error> {
+    const HEAD: u64 = 2;
+    c.run_cycles(n.min(HEAD))?;
+    let middle = n.saturating_sub(HEAD + 1);
+    if middle > 0 {
+        pending.extend(c.take_exchanges());
+        c.set_recording(false);
+        let r = c.run_cycles(middle);
+        c.set_recording(true);
+        r?;
+        pending.push(cycles_left_out(middle));
+    }
+    if n > HEAD {
+        c.run_cycles(1)?;
+    }
+    Ok(())
+}
+
 /// Every inverter of a device on its way back.
 #[derive(Debug, Clone)]
 pub(crate) struct Drives {
@@ -127,6 +170,40 @@ impl Drives {
     /// Whether every inverter is as the next case expects it.
     pub(crate) fn done(&self) -> bool {
         self.fis.iter().all(|(_, s)| s.done())
+    }
+
+    /// Cycles `c` until every inverter is back ([`Settle`]), [`SETTLE_CYCLES`] of `period` at
+    /// most; the exchanges go to `pending`, compacted. `what` names a bus error as the
+    /// cleanup's problem.
+    pub(crate) fn settle<C: Cycling>(
+        &mut self,
+        c: &mut C,
+        pending: &mut Vec<Exchange>,
+        period: Duration,
+        what: impl Fn(C::Error) -> Problem,
+    ) -> Result<(), Problem> {
+        pending.extend(c.take_exchanges());
+        let from = pending.len();
+        let mut outcome = Err(self.stuck(period * SETTLE_CYCLES));
+        for n in 0..SETTLE_CYCLES {
+            for (fi, control) in self.controls(n) {
+                let mut words = [0; 6];
+                words[0] = control;
+                c.set_words(fi, words).map_err(&what)?;
+            }
+            c.run_cycles(1).map_err(&what)?;
+            for fi in self.inverters() {
+                let status = c.status_word(fi).map_err(&what)?;
+                self.observe(fi, status);
+            }
+            if self.done() {
+                outcome = Ok(());
+                break;
+            }
+        }
+        pending.extend(c.take_exchanges());
+        compact(pending, from);
+        outcome
     }
 
     /// The problem of drives that did not settle within `waited`.

@@ -28,10 +28,9 @@ use super::master::{
     Refusal, Segment,
 };
 use super::step::{state_name, EcatStep};
-use crate::binding::channel::{compact, cycles_left_out};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::objects::{self, Object, Unit};
-use crate::binding::settle::{Drives, SETTLE_CYCLES};
+use crate::binding::settle::{self, Cycling, Drives};
 use crate::binding::{Binding, CleanupError, Observation, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::Exchange;
@@ -523,25 +522,13 @@ impl<S: DutSegment> EcatBinding<S> {
         account.into_result()
     }
 
-    /// Runs `n` cycles; the transcript keeps the first two and the last (as
-    /// [`compact`] shortens a long run), and the cycles between are
-    /// not even recorded.
+    /// Runs `n` cycles, the transcript compacted.
     fn cycles(&mut self, n: u64) -> Result<(), MasterError> {
-        const HEAD: u64 = 2;
-        self.master.run_cycles(n.min(HEAD))?;
-        let middle = n.saturating_sub(HEAD + 1);
-        if middle > 0 {
-            self.pending.extend(self.master.take_exchanges());
-            self.master.set_recording(false);
-            let r = self.master.run_cycles(middle);
-            self.master.set_recording(true);
-            r?;
-            self.pending.push(cycles_left_out(middle));
-        }
-        if n > HEAD {
-            self.master.run_cycles(1)?;
-        }
-        Ok(())
+        let mut c = SlaveCycle {
+            master: &mut self.master,
+            station: self.station,
+        };
+        settle::run_cycles(&mut c, &mut self.pending, n)
     }
 
     /// Cycles the drives back to "Switch-on block".
@@ -549,35 +536,12 @@ impl<S: DutSegment> EcatBinding<S> {
         let what = |e: MasterError| Problem::step("settling the drives", step_error(&e));
         self.enter(EcState::Operational).map_err(what)?;
         let inverters = (self.master.inputs().len() / usize::from(BYTES_PER_INVERTER)) as u8;
-        let mut drives = Drives::new(inverters, &self.commanded);
-        let first = self.master.take_exchanges();
-        self.pending.extend(first);
-        let from = self.pending.len();
-        let mut outcome = Err(drives.stuck(self.master.config().cycle * SETTLE_CYCLES));
-        for n in 0..SETTLE_CYCLES {
-            for (fi, control) in drives.controls(n) {
-                let mut words = [0; 6];
-                words[0] = control;
-                self.master
-                    .set_inverter_outputs(self.station, fi.get(), words)
-                    .map_err(what)?;
-            }
-            self.master.run_cycles(1).map_err(what)?;
-            for fi in drives.inverters() {
-                let status = self
-                    .master
-                    .input_word(self.station, fi.get(), 0)
-                    .map_err(what)?;
-                drives.observe(fi, status);
-            }
-            if drives.done() {
-                outcome = Ok(());
-                break;
-            }
-        }
-        self.pending.extend(self.master.take_exchanges());
-        compact(&mut self.pending, from);
-        outcome
+        let period = self.master.config().cycle;
+        let mut c = SlaveCycle {
+            master: &mut self.master,
+            station: self.station,
+        };
+        Drives::new(inverters, &self.commanded).settle(&mut c, &mut self.pending, period, what)
     }
 
     /// Waits until P872 no longer shows cyclic process data (bit 1).
@@ -683,6 +647,32 @@ impl<S: DutSegment> Binding for EcatBinding<S> {
 
     fn finish(&mut self) -> Result<(), CleanupError> {
         self.restore().map_err(CleanupError)
+    }
+}
+
+/// The master's cycle with one slave's process data, as the shared loops run it.
+struct SlaveCycle<'a, S> {
+    master: &'a mut Master<S>,
+    station: u16,
+}
+
+impl<S: DutSegment> Cycling for SlaveCycle<'_, S> {
+    type Error = MasterError;
+    fn run_cycles(&mut self, n: u64) -> Result<(), MasterError> {
+        self.master.run_cycles(n)
+    }
+    fn take_exchanges(&mut self) -> Vec<Exchange> {
+        self.master.take_exchanges()
+    }
+    fn set_recording(&mut self, on: bool) {
+        self.master.set_recording(on)
+    }
+    fn set_words(&mut self, fi: Inverter, words: [u16; 6]) -> Result<(), MasterError> {
+        self.master
+            .set_inverter_outputs(self.station, fi.get(), words)
+    }
+    fn status_word(&mut self, fi: Inverter) -> Result<u16, MasterError> {
+        self.master.input_word(self.station, fi.get(), 0)
     }
 }
 

@@ -27,10 +27,9 @@ use serde_json::{json, Value};
 use super::mn::link::Link;
 use super::mn::{describe, Manager, MnError, Via};
 use super::step::EplStep;
-use crate::binding::channel::{compact, cycles_left_out};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::objects::{self, Object, Unit};
-use crate::binding::settle::{Drives, SETTLE_CYCLES};
+use crate::binding::settle::{self, Cycling, Drives};
 use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Refusal};
@@ -246,36 +245,6 @@ impl<L: Link> EplBinding<L> {
         })
     }
 
-    /// Puts FI `fi`'s six words into the PReq payload where the process map has them.
-    fn set_words(&mut self, fi: u8, words: [u16; 6]) {
-        let map = def::process_map(self.product, true);
-        let out = self.mn.outputs_mut();
-        for (i, m) in map.iter().enumerate() {
-            if let Slot::Inverter { fi: f, word } = m.slot {
-                if f == fi {
-                    let w = words[usize::from(word)].to_le_bytes();
-                    if let Some(b) = out.get_mut(2 * i..2 * i + 2) {
-                        b.copy_from_slice(&w);
-                    }
-                }
-            }
-        }
-    }
-
-    /// FI `fi`'s six words from the last PRes.
-    fn words(&self, fi: u8) -> [u16; 6] {
-        let mut w = [0u16; 6];
-        let inputs = self.mn.inputs();
-        for (i, m) in def::process_map(self.product, false).iter().enumerate() {
-            if let Slot::Inverter { fi: f, word } = m.slot {
-                if let (true, Some(b)) = (f == fi, inputs.get(2 * i..2 * i + 2)) {
-                    w[usize::from(word)] = u16::from_le_bytes([b[0], b[1]]);
-                }
-            }
-        }
-        w
-    }
-
     fn process(
         &mut self,
         inverter: Inverter,
@@ -289,32 +258,22 @@ impl<L: Link> EplBinding<L> {
             if !self.commanded.contains(&inverter) {
                 self.commanded.push(inverter);
             }
-            self.set_words(inverter.get(), w);
+            set_words(&mut self.mn, self.product, inverter, w);
         }
         // The PRes of a cycle carries what the node had before that cycle's PReq: one more
         // cycle brings the inverter's answer to the last of them.
         self.cycles(u64::from(cycles) + 1).map_err(step_error)?;
-        let i = self.words(inverter.get());
+        let i = inputs_of(&self.mn, self.product, inverter);
         Ok(crate::binding::process_fields(i[0], &i[1..]))
     }
 
-    /// Runs `n` cycles; the transcript keeps the first two and the last.
+    /// Runs `n` cycles, the transcript compacted.
     fn cycles(&mut self, n: u64) -> Result<(), MnError> {
-        const HEAD: u64 = 2;
-        self.mn.run_cycles(n.min(HEAD))?;
-        let middle = n.saturating_sub(HEAD + 1);
-        if middle > 0 {
-            self.pending.extend(self.mn.take_exchanges());
-            self.mn.set_recording(false);
-            let r = self.mn.run_cycles(middle);
-            self.mn.set_recording(true);
-            r?;
-            self.pending.push(cycles_left_out(middle));
-        }
-        if n > HEAD {
-            self.mn.run_cycles(1)?;
-        }
-        Ok(())
+        let mut c = NodeCycle {
+            mn: &mut self.mn,
+            product: self.product,
+        };
+        settle::run_cycles(&mut c, &mut self.pending, n)
     }
 
     /// An `epl:` step, as written.
@@ -580,30 +539,65 @@ impl<L: Link> EplBinding<L> {
     fn settle(&mut self) -> Result<(), Problem> {
         let what = |e: MnError| Problem::step("settling the drives", step_error(e));
         self.mn.boot(NmtState::OPERATIONAL).map_err(what)?;
-        let inverters = self.product.max_inverters();
-        let mut drives = Drives::new(inverters, &self.commanded);
-        self.pending.extend(self.mn.take_exchanges());
-        let from = self.pending.len();
-        let mut outcome = Err(drives.stuck(self.mn.config().cycle * SETTLE_CYCLES));
-        for n in 0..SETTLE_CYCLES {
-            for (fi, control) in drives.controls(n) {
-                let mut words = [0; 6];
-                words[0] = control;
-                self.set_words(fi.get(), words);
-            }
-            self.mn.run_cycles(1).map_err(what)?;
-            for fi in drives.inverters() {
-                let status = self.words(fi.get())[0];
-                drives.observe(fi, status);
-            }
-            if drives.done() {
-                outcome = Ok(());
-                break;
+        let period = self.mn.config().cycle;
+        let mut drives = Drives::new(self.product.max_inverters(), &self.commanded);
+        let mut c = NodeCycle {
+            mn: &mut self.mn,
+            product: self.product,
+        };
+        drives.settle(&mut c, &mut self.pending, period, what)
+    }
+}
+
+/// Puts FI `fi`'s six words into the PReq payload where the product's process map has them.
+fn set_words<L: Link>(mn: &mut Manager<L>, product: Product, fi: Inverter, words: [u16; 6]) {
+    let out = mn.outputs_mut();
+    for (i, m) in def::process_map(product, true).iter().enumerate() {
+        if let Slot::Inverter { fi: f, word } = m.slot {
+            if let (true, Some(b)) = (f == fi.get(), out.get_mut(2 * i..2 * i + 2)) {
+                b.copy_from_slice(&words[usize::from(word)].to_le_bytes());
             }
         }
-        self.pending.extend(self.mn.take_exchanges());
-        compact(&mut self.pending, from);
-        outcome
+    }
+}
+
+/// FI `fi`'s six words from the last PRes.
+fn inputs_of<L: Link>(mn: &Manager<L>, product: Product, fi: Inverter) -> [u16; 6] {
+    let mut w = [0u16; 6];
+    let inputs = mn.inputs();
+    for (i, m) in def::process_map(product, false).iter().enumerate() {
+        if let Slot::Inverter { fi: f, word } = m.slot {
+            if let (true, Some(b)) = (f == fi.get(), inputs.get(2 * i..2 * i + 2)) {
+                w[usize::from(word)] = u16::from_le_bytes([b[0], b[1]]);
+            }
+        }
+    }
+    w
+}
+
+/// The MN's cycle with the node's process data, as the shared loops run it.
+struct NodeCycle<'a, L> {
+    mn: &'a mut Manager<L>,
+    product: Product,
+}
+
+impl<L: Link> Cycling for NodeCycle<'_, L> {
+    type Error = MnError;
+    fn run_cycles(&mut self, n: u64) -> Result<(), MnError> {
+        self.mn.run_cycles(n)
+    }
+    fn take_exchanges(&mut self) -> Vec<Exchange> {
+        self.mn.take_exchanges()
+    }
+    fn set_recording(&mut self, on: bool) {
+        self.mn.set_recording(on)
+    }
+    fn set_words(&mut self, fi: Inverter, w: [u16; 6]) -> Result<(), MnError> {
+        set_words(self.mn, self.product, fi, w);
+        Ok(())
+    }
+    fn status_word(&mut self, fi: Inverter) -> Result<u16, MnError> {
+        Ok(inputs_of(self.mn, self.product, fi)[0])
     }
 }
 
