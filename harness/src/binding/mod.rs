@@ -60,6 +60,40 @@ pub(crate) fn process_fields(status: u16, actuals: &[u16]) -> Value {
     serde_json::json!({ "status": status, "actuals": common, "actuals_4_5": extra })
 }
 
+/// The process-data run a `process` or `wait` step asks of a bus with six words per inverter:
+/// the inverter, its output words (control word, setpoints 1..5; none for `wait`, which runs
+/// FI 1's as they are) and the cycles at `cycle`.
+pub(crate) fn process_run(
+    action: &Action,
+    cycle: Duration,
+) -> Result<(Inverter, Option<[u16; 6]>, u32), StepError> {
+    match action {
+        Action::Process {
+            inverter,
+            control,
+            setpoints,
+            run,
+        } => {
+            let mut words = [0; 6];
+            words[0] = *control;
+            for (w, s) in words[1..].iter_mut().zip(setpoints) {
+                *w = *s;
+            }
+            let cycles = match run {
+                crate::suite::Run::Cycles(n) => *n,
+                crate::suite::Run::For(d) => crate::runner::cycles_for(*d, cycle),
+            };
+            Ok((*inverter, Some(words), cycles))
+        }
+        Action::Wait(d) => Ok((
+            Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?,
+            None,
+            crate::runner::cycles_for(*d, cycle),
+        )),
+        _ => Err(StepError::Suite("not a process-data step".into())),
+    }
+}
+
 /// Why a DUT could not be opened.
 #[derive(Debug, thiserror::Error)]
 pub(crate) enum OpenError {

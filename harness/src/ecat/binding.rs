@@ -31,12 +31,12 @@ use super::step::{state_name, EcatStep};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
-use crate::binding::{Binding, CleanupError, Observation, StepError};
+use crate::binding::{process_run, Binding, CleanupError, Observation, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::Exchange;
 use crate::profile::Capability;
-use crate::runner::{cycles_for, hex};
-use crate::suite::{Action, OrderSpec, Run};
+use crate::runner::hex;
+use crate::suite::{Action, OrderSpec};
 
 /// A segment the binding can run on: the embedded one also hands out the simulated slave,
 /// for `inject` and `observe`.
@@ -600,27 +600,9 @@ impl<S: DutSegment> Binding for EcatBinding<S> {
                         .into(),
                 ))
             }
-            Action::Process {
-                inverter,
-                control,
-                setpoints,
-                run,
-            } => {
-                let mut words = [0; 6];
-                words[0] = *control;
-                for (w, s) in words[1..].iter_mut().zip(setpoints) {
-                    *w = *s;
-                }
-                let cycles = match run {
-                    Run::Cycles(n) => *n,
-                    Run::For(d) => cycles_for(*d, self.master.config().cycle),
-                };
-                self.process(*inverter, Some(words), cycles)?
-            }
-            Action::Wait(d) => {
-                let fi = Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?;
-                let cycles = cycles_for(*d, self.master.config().cycle);
-                self.process(fi, None, cycles)?
+            Action::Process { .. } | Action::Wait(_) => {
+                let (fi, words, cycles) = process_run(action, self.master.config().cycle)?;
+                self.process(fi, words, cycles)?
             }
             Action::Inject { inverter, error } => {
                 let (slave, _) = self.simulated()?;
