@@ -106,7 +106,8 @@ struct RunArgs {
     snapshot_dir: PathBuf,
     /// The DUT: the embedded simulator (default), or a device or another implementation on
     /// the network: `enip://HOST[:PORT]` (EtherNet/IP), `ecat://IFACE` (EtherCAT segment on a
-    /// network interface).
+    /// network interface), `epl://IFACE[/NODE][?sdo=udp|asnd&cycle=TIME]` (POWERLINK node
+    /// behind a network interface, the harness its managing node).
     #[arg(long)]
     dut: Option<String>,
     /// Seconds a network DUT may take to answer one request.
@@ -118,12 +119,42 @@ struct RunArgs {
     /// each with its own address). By default the address the routing table picks.
     #[arg(long, requires = "dut")]
     local: Option<std::net::IpAddr>,
+    /// The DUT's node id on its bus, the same as the URL's `/N` (`--dut epl://IFACE --node-id
+    /// 5`: POWERLINK node 5).
+    #[arg(long, requires = "dut")]
+    node_id: Option<u8>,
+    /// How the DUT's SDO travel, the same as the URL's `?sdo=` (POWERLINK: `asnd`, `udp`).
+    #[arg(long, requires = "dut")]
+    sdo: Option<String>,
     /// Write the run's bus traffic to this file as pcapng (whatever its name; each packet's
     /// comment names the profile, case and step that produced it): the embedded simulator's on
     /// its virtual clock, or what was sent to and received from a `--dut` target, with the real
     /// addresses and times.
     #[arg(long)]
     pcap: Option<PathBuf>,
+}
+
+/// A `--dut` target with `--node-id` and `--sdo` written into it as the URL spells them
+/// (`IFACE/N?sdo=udp`); the bus reads them, or refuses what it does not take.
+fn with_options(target: &str, node_id: Option<u8>, sdo: Option<&str>) -> String {
+    let (path, query) = target.split_once('?').unwrap_or((target, ""));
+    let mut path = path.to_string();
+    if let Some(n) = node_id {
+        path = format!("{}/{n}", path.split('/').next().unwrap_or(&path));
+    }
+    let mut query: Vec<String> = query
+        .split('&')
+        .filter(|q| !q.is_empty() && !(sdo.is_some() && q.starts_with("sdo=")))
+        .map(str::to_string)
+        .collect();
+    if let Some(v) = sdo {
+        query.push(format!("sdo={v}"));
+    }
+    if query.is_empty() {
+        path
+    } else {
+        format!("{path}?{}", query.join("&"))
+    }
 }
 
 #[derive(ClapArgs, Debug)]
@@ -267,7 +298,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
                 return Err(format!("none of the profiles speaks {}", bus.title));
             }
             let mut factory = (bus.network)(&crate::bus::Network {
-                target: target.to_string(),
+                target: with_options(target, a.node_id, a.sdo.as_deref()),
                 local: a.local,
                 timeout: std::time::Duration::from_secs_f64(a.timeout),
                 tap: tap.clone(),
@@ -340,4 +371,26 @@ fn list(a: ListArgs) -> Result<i32, String> {
     } else {
         EXIT_USAGE
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::with_options;
+
+    #[test]
+    fn node_id_and_sdo_go_into_the_target_as_the_url_spells_them() {
+        assert_eq!(with_options("veth0", None, None), "veth0");
+        assert_eq!(
+            with_options("veth0", Some(5), Some("udp")),
+            "veth0/5?sdo=udp"
+        );
+        assert_eq!(
+            with_options("veth0/3?cycle=400us", Some(5), None),
+            "veth0/5?cycle=400us"
+        );
+        assert_eq!(
+            with_options("veth0?sdo=asnd&cycle=1ms", None, Some("udp")),
+            "veth0?cycle=1ms&sdo=udp"
+        );
+    }
 }
