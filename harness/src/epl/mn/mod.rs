@@ -177,6 +177,9 @@ pub(crate) struct Manager<L> {
     transaction: u8,
 }
 
+/// Cycles the MN asks a node for its IdentResponse or StatusResponse before it gives up.
+const ASK_CYCLES: u32 = 20;
+
 /// Frames the MN takes from the link in one wait at most, whatever they are.
 const MAX_SKIPPED: usize = 256;
 
@@ -449,7 +452,9 @@ impl<L: Link> Manager<L> {
         let sent = self.soa(service, node)?;
         let expects = service != RequestedService::NO_SERVICE;
         let answer = if expects {
-            let deadline = self.link.now() + self.config.reply;
+            // The asynchronous phase lasts until the next SoC: the asked node may answer
+            // until then (at least the reply time).
+            let deadline = (self.link.now() + self.config.reply).max(self.next_cycle);
             self.wait_for(deadline, |r| matches!(r.body, Body::Asnd(_)))?
         } else {
             None
@@ -546,7 +551,7 @@ impl<L: Link> Manager<L> {
         let p = self.ask(
             RequestedService::IDENT_REQUEST,
             ServiceId::IDENT_RESPONSE,
-            5,
+            ASK_CYCLES,
         )?;
         let id = IdentResponse::parse(&p).map_err(|e| self.malformed("IdentRequest", e))?;
         self.node_state = Some(id.state);
@@ -590,7 +595,7 @@ impl<L: Link> Manager<L> {
         let p = self.ask(
             RequestedService::STATUS_REQUEST,
             ServiceId::STATUS_RESPONSE,
-            5,
+            ASK_CYCLES,
         )?;
         let s = StatusResponse::parse(&p).map_err(|e| self.malformed("StatusRequest", e))?;
         self.node_state = Some(s.state);
