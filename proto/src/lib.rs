@@ -11,4 +11,5 @@ pub mod enip;
 pub mod epl;
 pub mod eth;
 pub mod nord;
+pub mod pnio;
 mod wire;

@@ -1,5 +1,5 @@
-//! Length-checked little-endian reading shared by the codecs of every bus (EtherCAT and CIP are
-//! little-endian). Each protocol keeps its own error type; it tells the reader how to say
+//! Length-checked reading shared by the codecs of every bus: little-endian (EtherCAT, CIP,
+//! POWERLINK) and big-endian (PROFINET's network order). Each protocol keeps its own error type; it tells the reader how to say
 //! "truncated" and "bytes left over" through [`ReadError`]. Every read names the field it was
 //! reading, so an error says which field of which structure ran short.
 
@@ -82,6 +82,16 @@ impl<'a, E: ReadError> Reader<'a, E> {
         Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     }
 
+    pub(crate) fn u16_be(&mut self, what: &'static str) -> Result<u16, E> {
+        let b = self.bytes(2, what)?;
+        Ok(u16::from_be_bytes([b[0], b[1]]))
+    }
+
+    pub(crate) fn u32_be(&mut self, what: &'static str) -> Result<u32, E> {
+        let b = self.bytes(4, what)?;
+        Ok(u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
     /// Fails if bytes are left.
     pub(crate) fn finish(&self, what: &'static str) -> Result<(), E> {
         match self.remaining() {
@@ -96,7 +106,7 @@ mod tests {
     use super::*;
 
     /// An error that records what the reader said.
-    #[derive(Debug, PartialEq, Eq)]
+    #[derive(Debug, Clone, PartialEq, Eq)]
     enum Said {
         Truncated(&'static str, usize, usize),
         Trailing(&'static str, usize),
@@ -115,6 +125,8 @@ mod tests {
     fn short_reads_name_the_field() {
         // 01 02: a u16 0201h; 03: one byte left.
         let mut r = Reader::<Said>::new(&[1, 2, 3]);
+        assert_eq!(r.clone().u16_be("a"), Ok(0x0102));
+        assert_eq!(r.clone().u32_be("a"), Err(Said::Truncated("a", 4, 3)));
         assert_eq!(r.u16("a"), Ok(0x0201));
         assert_eq!(r.u32("b"), Err(Said::Truncated("b", 4, 1)));
         assert_eq!(r.finish("c"), Err(Said::Trailing("c", 1)));

@@ -1,0 +1,121 @@
+//! The PNIO status (IEC 61158-6-10 "PNIOStatus"): four bytes — ErrorCode, ErrorDecode,
+//! ErrorCode1, ErrorCode2 — in every RPC response, every response block and every alarm
+//! acknowledge. All zero is "OK".
+
+/// A PNIO status as it travels: ErrorCode, ErrorDecode, ErrorCode1, ErrorCode2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct PnioStatus {
+    /// 81h "PNIO" for the CM services, DFh / DEh for record-service errors of IODWrite /
+    /// IODRead, CFh Alarm ack, 00h none.
+    pub code: u8,
+    /// 80h "PNIORW" (record services, ErrorCode1 from the application), 81h "PNIO"
+    /// (ErrorCode1 = the block or service in error).
+    pub decode: u8,
+    /// With PNIORW: the error class (high nibble) and code (low nibble); with PNIO: the block.
+    pub code1: u8,
+    /// With PNIORW: user specific; with PNIO: the field in error.
+    pub code2: u8,
+}
+
+impl PnioStatus {
+    /// No error.
+    pub const OK: PnioStatus = PnioStatus::new(0, 0, 0, 0);
+    /// ErrorCode "PNIO" (81h): the CM services (Connect, Release, Control) and alarms.
+    pub const CODE_PNIO: u8 = 0x81;
+    /// ErrorCode of an IODRead error (DEh "IODReadRes").
+    pub const CODE_READ: u8 = 0xDE;
+    /// ErrorCode of an IODWrite error (DFh "IODWriteRes").
+    pub const CODE_WRITE: u8 = 0xDF;
+    /// ErrorDecode "PNIORW": ErrorCode1 is a record-service error class/code.
+    pub const DECODE_PNIORW: u8 = 0x80;
+    /// ErrorDecode "PNIO": ErrorCode1 names the block or service, ErrorCode2 the field.
+    pub const DECODE_PNIO: u8 = 0x81;
+
+    /// A status from its four bytes.
+    pub const fn new(code: u8, decode: u8, code1: u8, code2: u8) -> PnioStatus {
+        PnioStatus {
+            code,
+            decode,
+            code1,
+            code2,
+        }
+    }
+
+    /// An IODRead (`write == false`) or IODWrite record-service error, PNIORW class/code in
+    /// ErrorCode1 (e.g. B0h "invalid index", B6h "access denied", B8h "invalid parameter").
+    pub const fn record(write: bool, code1: u8) -> PnioStatus {
+        let code = if write { Self::CODE_WRITE } else { Self::CODE_READ };
+        PnioStatus::new(code, Self::DECODE_PNIORW, code1, 0)
+    }
+
+    /// A CM error: ErrorCode1 the block or service in error, ErrorCode2 the field.
+    pub const fn cm(code1: u8, code2: u8) -> PnioStatus {
+        PnioStatus::new(Self::CODE_PNIO, Self::DECODE_PNIO, code1, code2)
+    }
+
+    /// The four bytes, as they travel.
+    pub const fn to_bytes(self) -> [u8; 4] {
+        [self.code, self.decode, self.code1, self.code2]
+    }
+
+    /// From the four bytes as they travel.
+    pub const fn from_bytes(b: [u8; 4]) -> PnioStatus {
+        PnioStatus::new(b[0], b[1], b[2], b[3])
+    }
+
+    /// Whether it is "OK".
+    pub fn is_ok(self) -> bool {
+        self == PnioStatus::OK
+    }
+}
+
+impl std::fmt::Display for PnioStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "PNIO status {:02X} {:02X} {:02X} {:02X}",
+            self.code, self.decode, self.code1, self.code2
+        )
+    }
+}
+
+/// PNIORW ErrorCode1 values (class in the high nibble, code in the low one) that a NORD
+/// device's record services give (IEC 61158-6-10 "ErrorCode1 with ErrorDecode PNIORW").
+pub mod pniorw {
+    /// Class Ah "application", code 0: read error.
+    pub const READ_ERROR: u8 = 0xA0;
+    /// Class Ah, code 1: write error.
+    pub const WRITE_ERROR: u8 = 0xA1;
+    /// Class Bh "access", code 0: invalid index.
+    pub const INVALID_INDEX: u8 = 0xB0;
+    /// Class Bh, code 1: write length error.
+    pub const WRITE_LENGTH: u8 = 0xB1;
+    /// Class Bh, code 2: invalid slot/subslot.
+    pub const INVALID_SLOT: u8 = 0xB2;
+    /// Class Bh, code 6: access denied.
+    pub const ACCESS_DENIED: u8 = 0xB6;
+    /// Class Bh, code 8: invalid parameter.
+    pub const INVALID_PARAMETER: u8 = 0xB8;
+    /// Class Ch "resource", code 2: resource busy.
+    pub const RESOURCE_BUSY: u8 = 0xC2;
+    /// Class Ch, code 3: resource unavailable.
+    pub const RESOURCE_UNAVAILABLE: u8 = 0xC3;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn statuses_travel_as_four_bytes() {
+        // DF 80 B0 00: IODWrite, PNIORW, "invalid index".
+        let s = PnioStatus::record(true, pniorw::INVALID_INDEX);
+        assert_eq!(s.to_bytes(), [0xDF, 0x80, 0xB0, 0x00]);
+        assert_eq!(PnioStatus::from_bytes(s.to_bytes()), s);
+        assert!(!s.is_ok());
+        assert!(PnioStatus::OK.is_ok());
+        assert_eq!(s.to_string(), "PNIO status DF 80 B0 00");
+        // 81 81 3D 06: a CM error, block 3Dh, field 6.
+        assert_eq!(PnioStatus::cm(0x3D, 6).to_bytes(), [0x81, 0x81, 0x3D, 0x06]);
+    }
+}
