@@ -13,8 +13,8 @@ use std::net::SocketAddr;
 use std::time::Duration;
 
 use binding::EplBinding;
-use mn::link::{EmbeddedLink, Link, NetLink};
-use mn::tap::Tapped;
+use crate::net::peer::Tapped;
+use mn::link::{EmbeddedLink, Link, NetLink, EMBEDDED_PEER, SOURCE};
 use mn::{Manager, MnConfig};
 use proto::eth::MacAddr;
 use proto::nord::epl as def;
@@ -67,13 +67,13 @@ fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, O
     let device = Device::new(device_config(profile)?);
     let node =
         Node::new(device, NodeConfig::new(1)).map_err(|e| OpenError::Profile(e.to_string()))?;
-    let link = EmbeddedLink::new(node);
+    let link = EmbeddedLink::new(node, EMBEDDED_PEER);
     let what = "embedded POWERLINK node".to_string();
     let config = MnConfig::default();
     match &context.tap {
         None => open(link, config, EMBEDDED_MN_MAC, product, what, false),
         Some(tap) => {
-            let link = Tapped::new(link, tap.clone());
+            let link = Tapped::new(link, tap.clone(), SOURCE);
             open(link, config, EMBEDDED_MN_MAC, product, what, false)
         }
     }
@@ -153,7 +153,7 @@ impl DutFactory for NetworkFactory {
     fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
         let product = profile.nord().map_err(OpenError::Profile)?;
         let peer = SocketAddr::from((def::ip_address(self.config.node), proto::epl::SDO_UDP_PORT));
-        let link = NetLink::open(&self.iface, peer).map_err(|e| match e {
+        let link = NetLink::open(&self.iface, proto::eth::ETHERTYPE_POWERLINK, peer, 0).map_err(|e| match e {
             LinkError::NeedsRoot { .. } => OpenError::NotPermitted(e.to_string()),
             other => OpenError::Unreachable(other.to_string()),
         })?;
@@ -163,7 +163,7 @@ impl DutFactory for NetworkFactory {
         match &self.tap {
             None => open(link, config, mac, product, what, true),
             Some(tap) => open(
-                Tapped::new(link, tap.clone()),
+                Tapped::new(link, tap.clone(), SOURCE),
                 config,
                 mac,
                 product,

@@ -6,6 +6,7 @@
 mod error;
 mod iface;
 mod link;
+pub(crate) mod peer;
 #[cfg(test)]
 pub(crate) mod veth;
 

@@ -9,7 +9,6 @@
 
 mod describe;
 pub(crate) mod link;
-pub(crate) mod tap;
 
 use std::collections::VecDeque;
 use std::time::Duration;
@@ -172,6 +171,8 @@ pub(crate) struct Manager<L> {
     /// PRes arrival stamps of the cycles run with [`Manager::record_stamps`] on.
     stamps: Option<Vec<Option<Duration>>>,
     missed: u64,
+    /// Whether the last isochronous cycle's PRes came within the reply time.
+    in_time: bool,
     asnd_link: Option<Connection>,
     udp_link: Option<Connection>,
     transaction: u8,
@@ -215,6 +216,7 @@ impl<L: Link> Manager<L> {
             asnd: VecDeque::new(),
             stamps: None,
             missed: 0,
+            in_time: false,
             asnd_link: None,
             udp_link: None,
             transaction: 0,
@@ -255,6 +257,12 @@ impl<L: Link> Manager<L> {
     /// PRes frames that did not come within the reply time.
     pub(crate) fn missed(&self) -> u64 {
         self.missed
+    }
+
+    /// Whether the last isochronous cycle's PRes came within the reply time: if not, the
+    /// inputs are still those of an earlier cycle.
+    pub(crate) fn in_time(&self) -> bool {
+        self.in_time
     }
 
     pub(crate) fn set_recording(&mut self, on: bool) {
@@ -413,6 +421,7 @@ impl<L: Link> Manager<L> {
             })?;
             let deadline = self.link.now() + self.config.reply;
             let pres = self.wait_for(deadline, |r| matches!(r.body, Body::Pres(_)))?;
+            self.in_time = pres.is_some();
             match &pres {
                 Some(p) => {
                     if let Some(EplRepr {
