@@ -86,14 +86,21 @@ pub mod pniorw {
     pub const READ_ERROR: u8 = 0xA0;
     /// Class Ah, code 1: write error.
     pub const WRITE_ERROR: u8 = 0xA1;
+    /// Class Ah, code 9: feature not supported.
+    pub const FEATURE_NOT_SUPPORTED: u8 = 0xA9;
     /// Class Bh "access", code 0: invalid index.
     pub const INVALID_INDEX: u8 = 0xB0;
     /// Class Bh, code 1: write length error.
     pub const WRITE_LENGTH: u8 = 0xB1;
     /// Class Bh, code 2: invalid slot/subslot.
     pub const INVALID_SLOT: u8 = 0xB2;
+    /// Class Bh, code 5: state conflict — PROFIdrive devices answer a read of a parameter
+    /// response that is not ready yet with it, the "Read Response (−)" of BU 0620 §2.5.6.1.
+    pub const STATE_CONFLICT: u8 = 0xB5;
     /// Class Bh, code 6: access denied.
     pub const ACCESS_DENIED: u8 = 0xB6;
+    /// Class Bh, code 7: invalid range.
+    pub const INVALID_RANGE: u8 = 0xB7;
     /// Class Bh, code 8: invalid parameter.
     pub const INVALID_PARAMETER: u8 = 0xB8;
     /// Class Ch "resource", code 2: resource busy.
