@@ -380,21 +380,14 @@ impl Device {
         let ppo_type = PpoType::new(link.ppo_type).map_err(|e| DeviceError::Ppo(e.to_string()))?;
         let ppo =
             PpoRepr::parse(&link.payload, ppo_type).map_err(|e| DeviceError::Ppo(e.to_string()))?;
-        let (product, delay) = (self.config.product, self.config.answer_delay);
+        let pkw = match ppo.pkw {
+            Some(o) => Some(self.parameter_order(link.unit, o)?),
+            None => None,
+        };
         let (pkw, pzd) = match link.unit {
-            Unit::Interface => {
-                let pkw = ppo.pkw.map(|o| {
-                    let answer = self.interface.cycle(o, delay, product, link.unit);
-                    self.adopt_gateway(&o, &answer);
-                    answer
-                });
-                (pkw, vec![0; ppo.pzd.len()])
-            }
+            Unit::Interface => (pkw, vec![0; ppo.pzd.len()]),
             Unit::Inverter(i) => {
                 let unit = self.inverter_mut(i)?;
-                let pkw = ppo
-                    .pkw
-                    .map(|o| unit.params.cycle(o, delay, product, link.unit));
                 let control = ppo.pzd.first().copied().unwrap_or(0);
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
                 let mut pzd = unit.process(control, setpoints, now);
@@ -410,6 +403,24 @@ impl Device {
             payload: answer.emit(ppo_type),
         }
         .emit())
+    }
+
+    /// One cycle of a unit's parameter channel (a PKW order in a PPO, or one write or read
+    /// of a parameter data record): a new order starts processing, the same order again is
+    /// answered once processed (`answer_delay` cycles), "no response" (AK 0) until then.
+    pub fn parameter_order(&mut self, unit: Unit, order: PkwRepr) -> Result<PkwRepr, DeviceError> {
+        let (product, delay) = (self.config.product, self.config.answer_delay);
+        match unit {
+            Unit::Interface => {
+                let answer = self.interface.cycle(order, delay, product, unit);
+                self.adopt_gateway(&order, &answer);
+                Ok(answer)
+            }
+            Unit::Inverter(i) => Ok(self
+                .inverter_mut(i)?
+                .params
+                .cycle(order, delay, product, unit)),
+        }
     }
 
     /// P877 "Present IP gateway" (BU 0620 §4.4.3, p. 88) shows the gateway set in P852 once it

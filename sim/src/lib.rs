@@ -15,4 +15,5 @@ pub mod epl;
 pub mod link;
 mod objects;
 pub mod pkw_server;
+pub mod pnio;
 pub mod store;
