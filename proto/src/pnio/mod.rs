@@ -18,7 +18,9 @@
 //! PROFINET fields are big-endian (network order) except the DCE/RPC header, whose byte order
 //! its data representation field gives.
 
+pub mod block;
 mod error;
+pub mod rpc;
 pub mod status;
 
 pub use error::Error;
