@@ -19,6 +19,7 @@ pub mod led;
 pub mod nmt;
 pub mod params;
 pub mod pkw;
+pub mod pnio;
 pub mod ppo;
 pub mod product;
 pub mod rules;
