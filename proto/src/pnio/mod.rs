@@ -18,12 +18,19 @@
 //! PROFINET fields are big-endian (network order) except the DCE/RPC header, whose byte order
 //! its data representation field gives.
 
+pub mod alarm;
 pub mod block;
+pub mod dcp;
 mod error;
+pub mod frame;
+#[cfg(test)]
+mod no_panic;
 pub mod rpc;
+pub mod rt;
 pub mod status;
 
 pub use error::Error;
+pub use frame::{FrameId, FrameKind, PnRepr};
 pub use status::PnioStatus;
 
 use crate::eth::MacAddr;
