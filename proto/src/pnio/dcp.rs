@@ -880,10 +880,12 @@ impl<T: AsRef<[u8]>> DcpPacket<T> {
     pub fn data_length(&self) -> u16 {
         self.u16_at(field::DATA_LENGTH)
     }
-    /// The DCPDataLength bytes after the header.
+    /// The DCPDataLength bytes after the header (cut at the buffer's end if a setter made
+    /// DCPDataLength too long).
     pub fn data(&self) -> &[u8] {
-        let n = usize::from(self.data_length());
-        &self.buffer.as_ref()[field::DATA..field::DATA + n]
+        let b = self.buffer.as_ref();
+        let end = (field::DATA + usize::from(self.data_length())).min(b.len());
+        &b[field::DATA..end]
     }
 
     /// The blocks, framed: each item is a block or the error that ends the framing.
@@ -923,8 +925,8 @@ impl<T: AsRef<[u8]> + AsMut<[u8]>> DcpPacket<T> {
     pub fn set_xid(&mut self, xid: u32) {
         self.buffer.as_mut()[field::XID..field::XID + 4].copy_from_slice(&xid.to_be_bytes());
     }
-    /// Sets DCPDataLength (the view's checks are not repeated: [`DcpPacket::data`] and
-    /// [`DcpPacket::blocks`] panic-free only while it fits; re-check with `new_checked`).
+    /// Sets DCPDataLength (not checked against the buffer: [`DcpPacket::data`] then stops at
+    /// the buffer's end; `new_checked` on the bytes reports the bad length).
     pub fn set_data_length(&mut self, len: u16) {
         self.buffer.as_mut()[field::DATA_LENGTH..field::DATA_LENGTH + 2]
             .copy_from_slice(&len.to_be_bytes());
@@ -1061,7 +1063,7 @@ impl DcpRepr {
         Ok(b)
     }
 
-    /// The length [`DcpRepr::emit`] writes.
+    /// The length [`DcpRepr::emit`] writes (0 if it fails).
     pub fn buffer_len(&self) -> usize {
         self.emit().map_or(0, |b| b.len())
     }
@@ -1692,6 +1694,9 @@ mod tests {
         p = DcpPacket::new_checked(b).unwrap();
         assert_eq!(p.data(), [0xFF, 0xFF]);
         assert_eq!(format!("{:?}", p.service()), "ServiceId(09h)");
+        p.set_data_length(500);
+        assert_eq!(p.data().len(), 4);
+        assert!(DcpPacket::new_checked(p.into_inner()).is_err());
     }
 
     #[test]
