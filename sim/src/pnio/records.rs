@@ -10,128 +10,146 @@
 //!   reference, order label, axis (0 = the module, 1 = the FI), PNU, IND, PWE — answered in the
 //!   same layout with the response label.
 //!
+//! Which record reaches which unit from which slot is `proto::nord::pnio`'s.
+//!
 //! A new order always starts anew: the unit's parameter channel is cleared first, so the same
 //! telegram written twice is processed twice (a record write is one order, not a repeated PPO).
 
 use proto::nord::pkw::PkwRepr;
-use proto::nord::{Inverter, Product};
+use proto::nord::pnio::{
+    axis_target, busy_status, check_record_len, record_target, PnioError, Record47Repr,
+    RecordTarget,
+};
 use proto::pnio::status::pniorw;
 use proto::pnio::PnioStatus;
 
 use crate::device::Device;
-use crate::link::{Unit, RECORD_FI1, RECORD_INTERFACE};
+use crate::link::Unit;
 
-/// PROFIdrive's parameter access record (BU 0590 §4.2.2.2 "data record 47").
-pub const RECORD_47: u16 = 47;
-/// Bytes of a record 47 order: reference, label, axis, PNU (2), IND (2), PWE (4).
-const RECORD_47_LEN: usize = 11;
+/// An order written and not answered yet.
+#[derive(Debug, Clone, Copy)]
+struct Pending {
+    index: u16,
+    unit: Unit,
+    order: PkwRepr,
+    /// Record 47's order, whose layout the answer keeps.
+    axis: Option<Record47Repr>,
+}
 
 /// The orders written and not yet answered, per record.
 #[derive(Debug, Default, Clone)]
 pub struct Records {
-    /// Record 100..=108 (or 47) → the unit, the order, and record 47's reference byte.
-    pending: Vec<(u16, Unit, PkwRepr, u8)>,
+    pending: Vec<Pending>,
 }
 
 impl Records {
-    /// A Write Request of `data` to record `index`; the error is the PNIO status of the
-    /// IODWrite response.
+    /// A Write Request of `data` to record `index` at `slot`/`subslot`; the error is the PNIO
+    /// status of the IODWrite response.
     pub fn write(
         &mut self,
         device: &mut Device,
+        slot: u16,
+        subslot: u16,
         index: u16,
         data: &[u8],
     ) -> Result<(), PnioStatus> {
-        let deny = |code1| Err(PnioStatus::record(true, code1));
-        let (unit, order, reference) = match index {
-            RECORD_47 if device.config().product == Product::Tu3Pnt => {
-                if data.len() != RECORD_47_LEN {
-                    return deny(pniorw::WRITE_LENGTH);
-                }
-                let unit = match data[2] {
-                    0 => Unit::Interface,
-                    1 => Unit::Inverter(Inverter::new(1).map_err(|_| status(true))?),
-                    _ => return deny(pniorw::INVALID_PARAMETER),
-                };
-                let mut pkw = [0u8; 8];
-                pkw[0] = data[1] << 4 | data[3] & 0x0F;
-                pkw[1..].copy_from_slice(&data[4..]);
-                let order = PkwRepr::parse(&pkw).map_err(|_| status(true))?;
-                (unit, order, data[0])
+        let refuse = |e: PnioError| e.record_status(true);
+        let target = target(device, slot, subslot, index).map_err(refuse)?;
+        check_record_len(index, data.len()).map_err(refuse)?;
+        let (unit, order, axis) = match target {
+            RecordTarget::ByAxis => {
+                let r = Record47Repr::parse(data).map_err(refuse)?;
+                (
+                    unit_of(axis_target(r.axis).map_err(refuse)?),
+                    r.pkw(),
+                    Some(r),
+                )
             }
-            _ => {
-                let unit = unit_of(device, index).ok_or(status_index(true))?;
-                if data.len() != 8 {
-                    return deny(pniorw::WRITE_LENGTH);
-                }
-                let order = PkwRepr::parse(data).map_err(|_| status(true))?;
-                (unit, order, 0)
-            }
+            t => (
+                unit_of(t),
+                PkwRepr::parse(data).map_err(|_| status(true))?,
+                None,
+            ),
         };
         // A new order: the channel is cleared, then the order placed.
         device
             .parameter_order(unit, PkwRepr::default())
             .and_then(|_| device.parameter_order(unit, order))
-            .map_err(|_| status_index(true))?;
-        self.pending.retain(|p| p.0 != index);
-        self.pending.push((index, unit, order, reference));
+            .map_err(|_| PnioStatus::record(true, pniorw::INVALID_INDEX))?;
+        self.pending.retain(|p| p.index != index);
+        self.pending.push(Pending {
+            index,
+            unit,
+            order,
+            axis,
+        });
         Ok(())
     }
 
-    /// A Read Request of record `index`: the answer's bytes, or the PNIO status of a
-    /// negative IODRead response ("Read Response (−)" while the order is processed).
-    pub fn read(&mut self, device: &mut Device, index: u16) -> Result<Vec<u8>, PnioStatus> {
-        if index != RECORD_47 || device.config().product != Product::Tu3Pnt {
-            unit_of(device, index).ok_or(status_index(false))?;
-        }
-        let Some(at) = self.pending.iter().position(|p| p.0 == index) else {
-            // No order written: nothing to answer (yet).
-            return Err(PnioStatus::record(false, pniorw::STATE_CONFLICT));
-        };
-        let (_, unit, order, reference) = self.pending[at];
+    /// A Read Request of record `index` at `slot`/`subslot`: the answer's bytes, or the PNIO
+    /// status of a negative IODRead response ("Read Response (−)" while the order is
+    /// processed, and when no order was written).
+    pub fn read(
+        &mut self,
+        device: &mut Device,
+        slot: u16,
+        subslot: u16,
+        index: u16,
+    ) -> Result<Vec<u8>, PnioStatus> {
+        target(device, slot, subslot, index).map_err(|e| e.record_status(false))?;
+        let at = self
+            .pending
+            .iter()
+            .position(|p| p.index == index)
+            .ok_or(busy_status())?;
+        let p = self.pending[at];
         let answer = device
-            .parameter_order(unit, order)
+            .parameter_order(p.unit, p.order)
             .map_err(|_| status(false))?;
         if answer.ak == 0 {
-            return Err(PnioStatus::record(false, pniorw::STATE_CONFLICT));
+            return Err(busy_status());
         }
         self.pending.remove(at);
-        let mut pkw = [0u8; 8];
-        answer.emit(&mut pkw).map_err(|_| status(false))?;
-        Ok(if index == RECORD_47 {
-            let mut out = vec![reference, pkw[0] >> 4, data_axis(unit), pkw[0] & 0x0F];
-            out.extend_from_slice(&pkw[1..]);
-            out
-        } else {
-            pkw.to_vec()
-        })
+        match p.axis {
+            Some(order) => {
+                let r = Record47Repr {
+                    label: answer.ak,
+                    pnu: answer.pnu,
+                    ind: answer.ind,
+                    pwe: answer.pwe,
+                    ..order
+                };
+                let mut out = vec![0; r.buffer_len()];
+                r.emit(&mut out).map_err(|_| status(false))?;
+                Ok(out)
+            }
+            None => {
+                let mut out = vec![0; 8];
+                answer.emit(&mut out).map_err(|_| status(false))?;
+                Ok(out)
+            }
+        }
     }
 }
 
-/// Record 47's axis byte of a unit.
-fn data_axis(unit: Unit) -> u8 {
-    match unit {
-        Unit::Interface => 0,
-        Unit::Inverter(_) => 1,
+/// The target of a record on this device: the product's rule, and an inverter the device
+/// has (FI 9 of a device with 8, FI 3 of one with 2, are no index of it).
+fn target(device: &Device, slot: u16, subslot: u16, index: u16) -> Result<RecordTarget, PnioError> {
+    let config = device.config();
+    let t = record_target(config.product, slot, subslot, index)?;
+    match t {
+        RecordTarget::Inverter(fi) if fi.get() > config.inverters => {
+            Err(PnioError::UnknownRecord(index))
+        }
+        t => Ok(t),
     }
 }
 
-/// The unit record `index` addresses: 100 the interface, 101…100+n the inverters present.
-fn unit_of(device: &Device, index: u16) -> Option<Unit> {
-    let inverters = u16::from(device.config().inverters);
-    let (interface, fi1) = (u16::from(RECORD_INTERFACE), u16::from(RECORD_FI1));
-    if index == interface {
-        return Some(Unit::Interface);
+fn unit_of(target: RecordTarget) -> Unit {
+    match target {
+        RecordTarget::Inverter(fi) => Unit::Inverter(fi),
+        RecordTarget::Interface | RecordTarget::ByAxis => Unit::Interface,
     }
-    let n = index.checked_sub(fi1)? + 1;
-    (n <= inverters)
-        .then(|| Inverter::new(i64::from(n)).ok().map(Unit::Inverter))
-        .flatten()
-}
-
-/// "Invalid index" for a read or a write.
-fn status_index(write: bool) -> PnioStatus {
-    PnioStatus::record(write, pniorw::INVALID_INDEX)
 }
 
 /// A read or write error of the application (the order could not be handled at all).
@@ -150,6 +168,7 @@ fn status(write: bool) -> PnioStatus {
 mod tests {
     use super::*;
     use crate::device::DeviceConfig;
+    use proto::nord::Product;
 
     fn device(product: Product, answer_delay: u32) -> Device {
         Device::new(DeviceConfig {
@@ -166,17 +185,17 @@ mod tests {
         let mut d = device(Product::Sk550p, 2);
         let mut r = Records::default();
         let order = [0x24, 0x4E, 0x01, 0x00, 0x00, 0x00, 0x00, 0xFA];
-        r.write(&mut d, 101, &order).unwrap();
+        r.write(&mut d, 3, 1, 101, &order).unwrap();
         // Read Response (−) while the order is processed (two cycles here).
         assert_eq!(
-            r.read(&mut d, 101),
+            r.read(&mut d, 3, 1, 101),
             Err(PnioStatus::new(0xDE, 0x80, 0xB5, 0))
         );
-        let answer = r.read(&mut d, 101).unwrap();
+        let answer = r.read(&mut d, 3, 1, 101).unwrap();
         assert_eq!(answer[..4], [0x14, 0x4E, 0x01, 0x00]);
         assert_eq!(u16::from_be_bytes([answer[6], answer[7]]), 250);
         // Answered: a further read has no order.
-        assert!(r.read(&mut d, 101).is_err());
+        assert!(r.read(&mut d, 3, 1, 101).is_err());
     }
 
     /// Each write is one order: reading P102 again after a write reads the new value.
@@ -185,14 +204,14 @@ mod tests {
         let mut d = device(Product::Sk550p, 1);
         let mut r = Records::default();
         let read_p102 = [0x14, 0x4E, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00];
-        r.write(&mut d, 101, &read_p102).unwrap();
-        let first = r.read(&mut d, 101).unwrap();
+        r.write(&mut d, 3, 1, 101, &read_p102).unwrap();
+        let first = r.read(&mut d, 3, 1, 101).unwrap();
         let write = [0x74, 0x4E, 0x00, 0x00, 0x00, 0x00, 0x01, 0x2C];
-        r.write(&mut d, 101, &write).unwrap();
-        let w = r.read(&mut d, 101).unwrap();
+        r.write(&mut d, 3, 1, 101, &write).unwrap();
+        let w = r.read(&mut d, 3, 1, 101).unwrap();
         assert_eq!(w[7], 0x2C, "{w:02X?}");
-        r.write(&mut d, 101, &read_p102).unwrap();
-        let again = r.read(&mut d, 101).unwrap();
+        r.write(&mut d, 3, 1, 101, &read_p102).unwrap();
+        let again = r.read(&mut d, 3, 1, 101).unwrap();
         assert_ne!(first, again);
         assert_eq!(again[6..], [0x01, 0x2C]);
     }
@@ -204,17 +223,31 @@ mod tests {
         let order = [0x16, 0x4E, 0, 0, 0, 0, 0, 0];
         // FI 9 does not exist: record 109 is no index of the device.
         assert_eq!(
-            r.write(&mut d, 109, &order),
+            r.write(&mut d, 3, 1, 109, &order),
             Err(PnioStatus::new(0xDF, 0x80, 0xB0, 0))
         );
         assert_eq!(
-            r.write(&mut d, 101, &order[..7]),
+            r.write(&mut d, 3, 1, 101, &order[..7]),
             Err(PnioStatus::new(0xDF, 0x80, 0xB1, 0))
         );
         // Record 47 is the SK TU3-PNT's only.
         assert_eq!(
-            r.read(&mut d, 47),
+            r.read(&mut d, 3, 1, 47),
             Err(PnioStatus::new(0xDE, 0x80, 0xB0, 0))
+        );
+        // Slot 1 takes no records (BU 0620 figure 16: slots 3…10).
+        assert_eq!(
+            r.write(&mut d, 1, 1, 101, &order),
+            Err(PnioStatus::new(0xDF, 0x80, 0xB2, 0))
+        );
+        // A device with two inverters has no record 103.
+        let mut two = Device::new(DeviceConfig {
+            inverters: 2,
+            ..DeviceConfig::new(Product::Sk550p)
+        });
+        assert_eq!(
+            r.write(&mut two, 5, 1, 103, &order),
+            Err(PnioStatus::new(0xDF, 0x80, 0xB0, 0))
         );
     }
 
@@ -225,15 +258,15 @@ mod tests {
         let mut r = Records::default();
         // ref 5Ah, AK 1, axis 1, PNU 1102 = 044Eh, IND 0, PWE 0.
         let order = [0x5A, 0x01, 0x01, 0x04, 0x4E, 0, 0, 0, 0, 0, 0];
-        r.write(&mut d, 47, &order).unwrap();
-        let answer = r.read(&mut d, 47).unwrap();
+        r.write(&mut d, 3, 1, 47, &order).unwrap();
+        let answer = r.read(&mut d, 3, 1, 47).unwrap();
         assert_eq!(answer[..5], [0x5A, 0x01, 0x01, 0x04, 0x4E]);
         assert_eq!(answer.len(), 11);
         // Axis 2 does not exist.
         let mut bad = order;
         bad[2] = 2;
         assert_eq!(
-            r.write(&mut d, 47, &bad),
+            r.write(&mut d, 3, 1, 47, &bad),
             Err(PnioStatus::new(0xDF, 0x80, 0xB8, 0))
         );
     }
