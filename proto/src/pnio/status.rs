@@ -20,7 +20,7 @@ pub struct PnioStatus {
 impl PnioStatus {
     /// No error.
     pub const OK: PnioStatus = PnioStatus::new(0, 0, 0, 0);
-    /// ErrorCode "PNIO" (81h): the CM services (Connect, Release, Control) and alarms.
+    /// ErrorCode "PNIO" (81h).
     pub const CODE_PNIO: u8 = 0x81;
     /// ErrorCode of an IODRead error (DEh "IODReadRes").
     pub const CODE_READ: u8 = 0xDE;
@@ -48,9 +48,10 @@ impl PnioStatus {
         PnioStatus::new(code, Self::DECODE_PNIORW, code1, 0)
     }
 
-    /// A CM error: ErrorCode1 the block or service in error, ErrorCode2 the field.
-    pub const fn cm(code1: u8, code2: u8) -> PnioStatus {
-        PnioStatus::new(Self::CODE_PNIO, Self::DECODE_PNIO, code1, code2)
+    /// A CM error of `service` (an ErrorCode of [`cm`]): ErrorCode1 the block or protocol
+    /// machine in error, ErrorCode2 the field or reason.
+    pub const fn cm(service: u8, code1: u8, code2: u8) -> PnioStatus {
+        PnioStatus::new(service, Self::DECODE_PNIO, code1, code2)
     }
 
     /// The four bytes, as they travel.
@@ -109,6 +110,46 @@ pub mod pniorw {
     pub const RESOURCE_UNAVAILABLE: u8 = 0xC3;
 }
 
+/// The PNIO status of the context-management services (IEC 61158-6-10 "ErrorCode",
+/// "ErrorCode1 with ErrorDecode PNIO", "ErrorCode2" of CMRPC): a refused Connect, Control or
+/// Release names the service, the block and the field in error.
+pub mod cm {
+    /// ErrorCode of an IODConnectRes.
+    pub const CONNECT: u8 = 0xDB;
+    /// ErrorCode of an IODReleaseRes.
+    pub const RELEASE: u8 = 0xDC;
+    /// ErrorCode of an IODControlRes.
+    pub const CONTROL: u8 = 0xDD;
+    /// ErrorCode1: faulty ARBlockReq (ErrorCode2: the field, BlockType = 0).
+    pub const FAULTY_AR_BLOCK: u8 = 0x01;
+    /// ErrorCode1: faulty IOCRBlockReq.
+    pub const FAULTY_IOCR_BLOCK: u8 = 0x02;
+    /// ErrorCode1: faulty ExpectedSubmoduleBlockReq.
+    pub const FAULTY_EXPECTED_SUBMODULE_BLOCK: u8 = 0x03;
+    /// ErrorCode1: faulty AlarmCRBlockReq.
+    pub const FAULTY_ALARM_CR_BLOCK: u8 = 0x04;
+    /// ErrorCode1: faulty IODControlReq (ControlBlockConnect).
+    pub const FAULTY_CONTROL_BLOCK: u8 = 0x14;
+    /// ErrorCode1: faulty IODReleaseReq (ControlBlockRelease).
+    pub const FAULTY_RELEASE_BLOCK: u8 = 0x15;
+    /// ErrorCode1: the CMRPC protocol machine; ErrorCode2 one of the `CMRPC_*` values.
+    pub const CMRPC: u8 = 0x40;
+    /// CMRPC: ArgsLength invalid.
+    pub const CMRPC_ARGS_LENGTH: u8 = 0;
+    /// CMRPC: unknown blocks.
+    pub const CMRPC_UNKNOWN_BLOCKS: u8 = 1;
+    /// CMRPC: IOCR missing.
+    pub const CMRPC_IOCR_MISSING: u8 = 2;
+    /// CMRPC: wrong AlarmCRBlock count.
+    pub const CMRPC_ALARM_CR_COUNT: u8 = 3;
+    /// CMRPC: out of AR resources (another AR holds the device).
+    pub const CMRPC_OUT_OF_AR: u8 = 4;
+    /// CMRPC: AR UUID unknown.
+    pub const CMRPC_AR_UNKNOWN: u8 = 5;
+    /// CMRPC: state conflict.
+    pub const CMRPC_STATE_CONFLICT: u8 = 6;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -122,7 +163,10 @@ mod tests {
         assert!(!s.is_ok());
         assert!(PnioStatus::OK.is_ok());
         assert_eq!(s.to_string(), "PNIO status DF 80 B0 00");
-        // 81 81 3D 06: a CM error, block 3Dh, field 6.
-        assert_eq!(PnioStatus::cm(0x3D, 6).to_bytes(), [0x81, 0x81, 0x3D, 0x06]);
+        // DB 81 40 04: Connect refused by CMRPC, out of AR resources.
+        assert_eq!(
+            PnioStatus::cm(cm::CONNECT, cm::CMRPC, cm::CMRPC_OUT_OF_AR).to_bytes(),
+            [0xDB, 0x81, 0x40, 0x04]
+        );
     }
 }

@@ -211,7 +211,7 @@ mod tests {
         // Response, little-endian: PNIOStatus 81813D06h (ErrorCode 81h, ErrorDecode 81h,
         // ErrorCode1 3Dh, ErrorCode2 06h) travels as 06 3D 81 81; ArgsLength 0, MaximumCount
         // 16696, Offset 0, ActualCount 0.
-        let res = NdrResponse::answering(&req, PnioStatus::cm(0x3D, 6), vec![]).unwrap();
+        let res = NdrResponse::answering(&req, PnioStatus::cm(0x81, 0x3D, 6), vec![]).unwrap();
         let b = res.emit(Drep::LITTLE_ENDIAN);
         assert_eq!(
             b,
