@@ -322,6 +322,8 @@ def describe_block(b, issues):
     names = BLOCK_FIELDS.get(type(b))
     if names:
         d["fields"] = fields_of(b, names)
+        if "status" in d["fields"]:  # a PNIO status inside a block: big-endian, as hex
+            d["fields"]["status"] = f"{d['fields']['status']:08X}"
     elif type(b) is R.Block:
         body = bytes(b.getfieldval("load") or b"")
         if len(body) + 2 != (b.getfieldval("block_length") or 0):
@@ -335,7 +337,9 @@ def describe_block(b, issues):
                 d["data"] = body.hex()
         except (ValueError, struct.error) as e:
             issues.append(f"block {d['type']}: {e}")
-    if b.payload and bytes(b.payload):
+    # (An IODReadResHeader parsed on its own has the record data after it: read_reply checks
+    # its length.)
+    if b.payload and bytes(b.payload) and not isinstance(b, R.IODReadRes):
         issues.append(f"block {d['type']}: {len(bytes(b.payload))} bytes after it inside its "
                       "own parse")
     return d
@@ -650,10 +654,10 @@ class Controller:
         ok = True
         if hdr:
             st = hdr[0]["fields"]["status"]
-            line["record_status"] = f"{st:08X}"
-            ok = st == 0
+            line["record_status"] = st
+            ok = st == "00000000"
             if not ok and line.get("pnio_status") == "00000000":
-                line["_why"] = f"IODWriteResHeader status {st:08X}"
+                line["_why"] = f"IODWriteResHeader status {st}"
         elif line.get("pnio_status") == "00000000":
             line["_issues"].append("no IODWriteResHeader in the reply")
         return self.finish(line, ok)
@@ -844,8 +848,7 @@ class Controller:
             dcp = D.ProfinetDCP(option=2, sub_option=2, dcp_block_length=len(nb),
                                 name_of_station=nb,
                                 dcp_data_length=4 + len(nb) + (len(nb) & 1), **base)
-            if len(nb) & 1:
-                dcp = dcp / Padding(b"\x00")
+            dcp = odd_pad(dcp, 4 + len(nb))
         frame = Ether(dst=DCP_MULTICAST, src=self.dcp_mac, type=ETHER_TYPE) \
             / ProfinetIO(frameID=0xFEFE) / dcp
         replies = self.dcp_exchange(frame, line, xid, collect=True)
@@ -923,8 +926,7 @@ class Controller:
             fields.update(ip=value[0], netmask=value[1], gateway=value[2])
         dcp = D.ProfinetDCP(dcp_block_length=blen, dcp_data_length=4 + blen + (blen & 1),
                             **fields)
-        if blen & 1:  # a block is padded to an even length; the padding counts in the PDU
-            dcp = dcp / Padding(b"\x00")
+        dcp = odd_pad(dcp, 4 + blen)
         frame = Ether(dst=mac, src=self.dcp_mac, type=ETHER_TYPE) / ProfinetIO(frameID=0xFEFD) \
             / dcp
         replies = self.dcp_exchange(frame, line, xid, collect=False)
@@ -949,6 +951,15 @@ class Controller:
         if not line["ok"]:
             line["error"] = f"BlockError {c.block_error} ({line['message']})"
         return line
+
+
+def odd_pad(dcp, block_bytes):
+    """A DCP block of odd length is followed by a padding byte, counted in DCPDataLength.
+    scapy fills a DCP PDU shorter than 44 bytes with zeros itself (the minimum frame), which
+    then holds that byte; a longer one gets it here."""
+    if block_bytes & 1 and 10 + block_bytes >= D.MIN_PACKET_LENGTH:
+        return dcp / Padding(b"\x00")
+    return dcp
 
 
 # --- command line -----------------------------------------------------------------------------
