@@ -30,7 +30,12 @@ impl fmt::Debug for Description {
 }
 
 /// Every bus, in report order.
-pub(crate) const BUSES: &[&Bus] = &[&crate::enip::BUS, &crate::ecat::BUS, &crate::epl::BUS];
+pub(crate) const BUSES: &[&Bus] = &[
+    &crate::enip::BUS,
+    &crate::ecat::BUS,
+    &crate::epl::BUS,
+    &crate::pnio::BUS,
+];
 
 /// A bus: what the shared code may ask of it.
 pub(crate) struct Bus {

@@ -22,6 +22,7 @@ mod net;
 mod notation;
 pub mod outcome;
 mod pcap;
+mod pnio;
 pub mod poll;
 mod profile;
 mod report;

@@ -64,7 +64,8 @@ fn manager(
     cycle: Duration,
     state: NmtState,
 ) -> Result<Manager<NetLink>, String> {
-    let link = NetLink::open(iface, proto::eth::ETHERTYPE_POWERLINK, node, 0).map_err(|e| e.to_string())?;
+    let link = NetLink::open(iface, proto::eth::ETHERTYPE_POWERLINK, node, 0)
+        .map_err(|e| e.to_string())?;
     let mac = MacAddr(link.mac());
     let config = MnConfig {
         node: NODE,

@@ -12,8 +12,8 @@ mod xdd;
 use std::net::SocketAddr;
 use std::time::Duration;
 
-use binding::EplBinding;
 use crate::net::peer::Tapped;
+use binding::EplBinding;
 use mn::link::{EmbeddedLink, Link, NetLink, EMBEDDED_PEER, SOURCE};
 use mn::{Manager, MnConfig};
 use proto::eth::MacAddr;
@@ -153,10 +153,13 @@ impl DutFactory for NetworkFactory {
     fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
         let product = profile.nord().map_err(OpenError::Profile)?;
         let peer = SocketAddr::from((def::ip_address(self.config.node), proto::epl::SDO_UDP_PORT));
-        let link = NetLink::open(&self.iface, proto::eth::ETHERTYPE_POWERLINK, peer, 0).map_err(|e| match e {
-            LinkError::NeedsRoot { .. } => OpenError::NotPermitted(e.to_string()),
-            other => OpenError::Unreachable(other.to_string()),
-        })?;
+        let link =
+            NetLink::open(&self.iface, proto::eth::ETHERTYPE_POWERLINK, peer, 0).map_err(|e| {
+                match e {
+                    LinkError::NeedsRoot { .. } => OpenError::NotPermitted(e.to_string()),
+                    other => OpenError::Unreachable(other.to_string()),
+                }
+            })?;
         let mac = MacAddr(link.mac());
         let config = self.config;
         let what = format!("POWERLINK on {}", self.iface);

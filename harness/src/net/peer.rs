@@ -162,7 +162,9 @@ impl<D: SimDevice> Link for EmbeddedLink<D> {
         &mut self,
         deadline: Duration,
     ) -> Result<Option<(Vec<u8>, Option<Duration>)>, LinkError> {
-        Ok(self.next(deadline, |l| l.frames.pop_front()).map(|f| (f, None)))
+        Ok(self
+            .next(deadline, |l| l.frames.pop_front())
+            .map(|f| (f, None)))
     }
 
     fn send_udp(&mut self, datagram: &[u8]) -> Result<(), LinkError> {

@@ -12,7 +12,8 @@
 //! - `alarm`: the RTA-PDU of the alarm CR and the alarm notification / acknowledge blocks;
 //! - `rpc`: the connectionless DCE/RPC header (UDP 34964) and the NDR header of PNIO calls;
 //! - `block`: the PNIO-CM blocks (AR, IOCR, Alarm CR, ExpectedSubmodule, ModuleDiff, the
-//!   IODRead/IODWrite headers, IODControl) and the PNIO status.
+//!   IODRead/IODWrite headers, IODControl) and the PNIO status;
+//! - `plan`: the cyclic layout a controller's Connect gives (frame offsets of the IOCRs).
 //!
 //! Every parser returns `Err` on malformed input and never panics ([`Error`] names the field).
 //! PROFINET fields are big-endian (network order) except the DCE/RPC header, whose byte order
@@ -25,6 +26,7 @@ mod error;
 pub mod frame;
 #[cfg(test)]
 mod no_panic;
+pub mod plan;
 pub mod rpc;
 pub mod rt;
 pub mod status;

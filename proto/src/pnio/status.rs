@@ -44,7 +44,11 @@ impl PnioStatus {
     /// An IODRead (`write == false`) or IODWrite record-service error, PNIORW class/code in
     /// ErrorCode1 (e.g. B0h "invalid index", B6h "access denied", B8h "invalid parameter").
     pub const fn record(write: bool, code1: u8) -> PnioStatus {
-        let code = if write { Self::CODE_WRITE } else { Self::CODE_READ };
+        let code = if write {
+            Self::CODE_WRITE
+        } else {
+            Self::CODE_READ
+        };
         PnioStatus::new(code, Self::DECODE_PNIORW, code1, 0)
     }
 

@@ -1,5 +1,283 @@
 //! The PROFINET IO device of the SK 550P (BU 0620 §2.5) and the SK TU3-PNT (BU 0590), sans-IO:
 //! DCP, the context management over RPC, the cyclic RT data, the data records and the alarms
-//! around one [`crate::device::Device`].
+//! around one [`Device`].
+//!
+//! - [`station`]: the name of station and IP suite, and the DCP services on them;
+//! - [`ar`]: the application relation: Connect (the expected modules against the product's
+//!   slots), PrmEnd, ApplicationReady, Release, record read/write;
+//! - [`cyclic`]: the IO CRs' layout, the RT frames both ways, the watchdog;
+//! - [`alarms`]: diagnosis alarms over the alarm CR and their acknowledgement;
+//! - [`records`]: the parameter channel in data records 47 and 100…108.
+//!
+//! The device is driven by what arrives ([`IoDevice::frame`], [`IoDevice::datagram`]) and by
+//! time ([`IoDevice::poll`], every [`POLL_PERIOD`]); it answers with [`Out`]s.
 
+mod alarms;
+mod ar;
+mod cyclic;
 pub mod records;
+mod station;
+#[cfg(test)]
+mod tests;
+
+use std::net::{SocketAddr, SocketAddrV4};
+use std::time::Duration;
+
+use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_PROFINET};
+use proto::nord::led::Row;
+use proto::nord::pnio::{self as def, IpSuite, LedState};
+use proto::nord::{Product, Protocol};
+use proto::pnio::{FrameId, FrameKind, RPC_PORT};
+
+use crate::device::Device;
+use ar::Ar;
+use records::Records;
+use station::Station;
+
+/// How often the device wants [`IoDevice::poll`]: its send clock of 1 ms (SendClockFactor 32,
+/// the cycle the issue asks for), the finest an input CR is sent at.
+pub const POLL_PERIOD: Duration = Duration::from_millis(1);
+
+/// What the device sends.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Out {
+    /// An Ethernet frame, as it goes on the wire.
+    Frame(Vec<u8>),
+    /// A UDP datagram from the device's RPC port to `to`.
+    Datagram {
+        /// Where it goes.
+        to: SocketAddr,
+        /// The RPC PDU.
+        bytes: Vec<u8>,
+    },
+}
+
+/// How the device is set up beyond its [`Device`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct IoConfig {
+    /// The device's MAC address.
+    pub mac: MacAddr,
+    /// Its name of station at power-on (empty: none assigned yet).
+    pub name: String,
+    /// Its IP suite at power-on (`None`: the product's factory suite).
+    pub ip: Option<IpSuite>,
+}
+
+impl IoConfig {
+    /// The factory state: no name, the factory IP suite, a MAC address in the range BU 0590
+    /// §5.1.4 shows for the SK TU3-PNT (00:0E:CF:03:60:00; "PROFINET identification" 00:0E:CF).
+    pub fn new() -> IoConfig {
+        IoConfig {
+            mac: MacAddr([0x00, 0x0E, 0xCF, 0x03, 0x60, 0x00]),
+            name: String::new(),
+            ip: None,
+        }
+    }
+}
+
+impl Default for IoConfig {
+    fn default() -> Self {
+        IoConfig::new()
+    }
+}
+
+/// A device that cannot be a PROFINET IO device.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum IoError {
+    /// The product has no PROFINET interface.
+    #[error("{0} has no PROFINET IO interface")]
+    NoProfinet(&'static str),
+    /// The name given is no valid name of station.
+    #[error("name of station {0:?}: {1}")]
+    Name(String, String),
+}
+
+/// A PROFINET IO device (sans-IO).
+#[derive(Debug)]
+pub struct IoDevice {
+    device: Device,
+    product: Product,
+    mac: MacAddr,
+    station: Station,
+    ar: Option<Ar>,
+    records: Records,
+    /// The last AR ended by its watchdog (the controller was lost) and none came since.
+    lost: bool,
+    /// DCP Signal: the LED flashes until then.
+    signal_until: Option<Duration>,
+    /// The P700 values last seen, for the alarms.
+    faults: [i32; 8],
+    /// The alarm number of each inverter's incoming alarm not yet outgoing (0: none).
+    raised: [u16; 8],
+    /// Frames and datagrams the device could not parse or that were not for it.
+    dropped: u64,
+    /// The activity of the device's own RPC calls (ApplicationReady).
+    calls: u32,
+}
+
+impl IoDevice {
+    /// The IO device of `device`, powered on at time zero.
+    pub fn new(device: Device, config: IoConfig) -> Result<IoDevice, IoError> {
+        let product = device.config().product;
+        if !product.protocols().contains(&Protocol::Profinet) {
+            return Err(IoError::NoProfinet(product.name()));
+        }
+        let ip = match config.ip {
+            Some(ip) => ip,
+            None => def::factory_ip(product).ok_or(IoError::NoProfinet(product.name()))?,
+        };
+        if !config.name.is_empty() {
+            def::check_station_name(&config.name)
+                .map_err(|e| IoError::Name(config.name.clone(), e.to_string()))?;
+        }
+        let mut io = IoDevice {
+            device,
+            product,
+            mac: config.mac,
+            station: Station::new(config.name, ip),
+            ar: None,
+            records: Records::default(),
+            lost: false,
+            signal_until: None,
+            faults: [0; 8],
+            raised: [0; 8],
+            dropped: 0,
+            calls: 0,
+        };
+        io.station.show(&mut io.device, product);
+        io.device.tick(Duration::ZERO);
+        Ok(io)
+    }
+
+    /// The device's MAC address.
+    pub fn mac(&self) -> MacAddr {
+        self.mac
+    }
+
+    /// Its name of station.
+    pub fn name(&self) -> &str {
+        &self.station.name
+    }
+
+    /// Its IP suite in use.
+    pub fn ip(&self) -> IpSuite {
+        self.station.ip
+    }
+
+    /// Its RPC endpoint (UDP 34964 on its IP address).
+    pub fn rpc_addr(&self) -> SocketAddr {
+        SocketAddr::V4(SocketAddrV4::new(self.station.ip.ip, RPC_PORT))
+    }
+
+    /// Whether an application relation is up (ApplicationReady confirmed).
+    pub fn in_data_exchange(&self) -> bool {
+        self.ar.as_ref().is_some_and(Ar::running)
+    }
+
+    /// Frames and datagrams dropped.
+    pub fn dropped(&self) -> u64 {
+        self.dropped
+    }
+
+    /// The simulated device.
+    pub fn device_mut(&mut self) -> &mut Device {
+        &mut self.device
+    }
+
+    /// The two PROFINET LEDs at `now` (SK 550P "BF" and "RUN", SK TU3-PNT "RUN" and "ERR",
+    /// [`def::status_leds`]); a DCP Signal makes RUN flash.
+    pub fn leds(&self, now: Duration) -> [(&'static str, Row); 2] {
+        let state = match &self.ar {
+            Some(ar) if ar.running() => LedState::ArEstablished,
+            _ => LedState::WaitingForAr,
+        };
+        let alarm = self.raised.iter().any(|a| *a != 0);
+        let mut leds = def::status_leds(self.product, state, alarm, self.lost)
+            .unwrap_or([("run", proto::nord::led::PROFINET_RUN[0]); 2]);
+        if self.signal_until.is_some_and(|t| now < t) {
+            if let Some(run) = leds.iter_mut().find(|(n, _)| *n == "run") {
+                run.1 = proto::nord::led::PROFINET_RUN[1];
+            }
+        }
+        leds
+    }
+
+    /// Handles one whole Ethernet frame received at `now`; returns what to send.
+    pub fn frame(&mut self, frame: &[u8], now: Duration) -> Vec<Out> {
+        let mut out = self.timers(now);
+        let Ok(eth) = EthernetFrame::new_checked(frame) else {
+            self.dropped += 1;
+            return out;
+        };
+        if eth.inner_ethertype() != ETHERTYPE_PROFINET {
+            return out;
+        }
+        let dst = eth.dst();
+        if dst != self.mac && !dst.is_multicast() {
+            return out;
+        }
+        let src = eth.src();
+        let payload = eth.inner_payload();
+        let Some(id) = payload
+            .get(..2)
+            .map(|b| FrameId(u16::from_be_bytes([b[0], b[1]])))
+        else {
+            self.dropped += 1;
+            return out;
+        };
+        let answers = match id.kind() {
+            FrameKind::Dcp => self.dcp(src, dst, payload, now),
+            FrameKind::Rt => self.rt(id, payload, now),
+            FrameKind::Alarm { .. } => self.alarm_frame(payload, now),
+            FrameKind::Other => {
+                self.dropped += 1;
+                Vec::new()
+            }
+        };
+        out.extend(answers);
+        out
+    }
+
+    /// Handles one UDP datagram to the RPC port from `from` at `now`; returns what to send.
+    pub fn datagram(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Out> {
+        let mut out = self.timers(now);
+        out.extend(self.rpc(from, datagram));
+        out
+    }
+
+    /// Lets time pass: the input CR's frames, the watchdog, alarms, ApplicationReady retries,
+    /// the drive model.
+    pub fn poll(&mut self, now: Duration) -> Vec<Out> {
+        self.timers(now)
+    }
+
+    /// Everything that runs on time.
+    fn timers(&mut self, now: Duration) -> Vec<Out> {
+        let mut out = Vec::new();
+        self.watchdog(now);
+        self.device.tick(now);
+        if self.ar.as_ref().is_some_and(|ar| ar.gave_up(now)) {
+            // No ApplicationReady confirmation after every retry: the AR is abandoned.
+            self.ar = None;
+        }
+        self.fault_alarms();
+        if let Some(ar) = self.ar.as_mut() {
+            out.extend(ar.due(now));
+        }
+        out.extend(self.alarms_due(now));
+        out.extend(self.send_input(now));
+        out
+    }
+
+    /// An Ethernet frame from the device to `dst`.
+    fn ethernet(&self, dst: MacAddr, payload: Vec<u8>) -> Out {
+        Out::Frame(
+            EthernetRepr {
+                dst,
+                src: self.mac,
+                ethertype: ETHERTYPE_PROFINET,
+            }
+            .emit(&payload),
+        )
+    }
+}

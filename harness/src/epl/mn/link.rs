@@ -33,7 +33,10 @@ impl SimDevice for Node {
     const POLL_PERIOD: Duration = sim::epl::POLL_PERIOD;
 
     fn frame(&mut self, frame: &[u8], now: Duration) -> Vec<Sent> {
-        self.receive(frame, now).into_iter().map(Sent::Frame).collect()
+        self.receive(frame, now)
+            .into_iter()
+            .map(Sent::Frame)
+            .collect()
     }
 
     fn datagram(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Sent> {

@@ -8,6 +8,7 @@ use super::{device_id, profinet, PnioError};
 use crate::nord::ppo::PpoType;
 use crate::nord::product::Product;
 use crate::nord::types::Inverter;
+use crate::pnio::plan::ExpectedSub;
 
 /// Slot of the device access point.
 pub const DAP_SLOT: u16 = 0;
@@ -190,6 +191,43 @@ pub fn slot_display(product: Product, plugged: Option<ModuleKind>) -> Option<u16
             Product::Tu3Pnt => Some(0),
             _ => None,
         },
+    }
+}
+
+/// The DAP's submodules as a controller expects them: the DAP (subslot 1), the interface
+/// (8000h) and the two ports, none with IO data.
+pub fn expected_dap() -> Vec<ExpectedSub> {
+    let dap = |subslot, ident| ExpectedSub {
+        slot: DAP_SLOT,
+        module_ident: DAP_MODULE_IDENT,
+        subslot,
+        ident,
+        input_len: 0,
+        output_len: 0,
+    };
+    let mut subs = vec![
+        dap(DAP_SUBSLOT, DAP_SUBMODULE_IDENT),
+        dap(INTERFACE_SUBSLOT, INTERFACE_SUBMODULE_IDENT),
+    ];
+    subs.extend(
+        PORT_SUBSLOTS
+            .iter()
+            .zip(PORT_SUBMODULE_IDENTS)
+            .map(|(s, i)| dap(*s, i)),
+    );
+    subs
+}
+
+/// A module in `slot` as a controller expects it: its one submodule in subslot 1 with the
+/// module's lengths.
+pub fn expected_module(slot: u16, module: &Module) -> ExpectedSub {
+    ExpectedSub {
+        slot,
+        module_ident: module.ident,
+        subslot: IO_SUBSLOT,
+        ident: module.submodule_ident,
+        input_len: module.input_len as u16,
+        output_len: module.output_len as u16,
     }
 }
 

@@ -1,0 +1,636 @@
+//! The PROFINET IO binding: the harness as IO controller of one NORD device (SK 550P, BU 0620
+//! §2.5; SK TU3-PNT, BU 0590), in-process against the simulated device or on a network
+//! interface.
+//!
+//! Opening a DUT finds the device by DCP (by name, or the only one answering), then connects
+//! with a PPO 2 module in each inverter's slot (PKW and six process words, the widest PPO
+//! both products take), PrmEnd, and the device's ApplicationReady: data exchange at 1 ms.
+//! The manual-level steps run through the shared parameter channel ([`Channel`]) on a
+//! [`Dut`] that carries them the PROFINET way: a PKW order is written to the unit's data
+//! record (BU 0620 §2.5.6.2: 100 the interface, 100 + n FI n) and its answer read back from
+//! it, "Read Response (−)" (DE 80 B5 00) meaning "not yet"; the control word and setpoints
+//! ride in the output CR's frame for the inverter's slot, the status word and actual values
+//! come back in the input CR's. The `pnio:` steps go to the controller as written.
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::time::Duration;
+
+use proto::nord::pkw::PkwRepr;
+use proto::nord::pnio::{self as def, ModuleKind, RecordTarget};
+use proto::nord::ppo::{PpoRepr, PpoType};
+use proto::nord::{Inverter, Product};
+use proto::pnio::alarm::AlarmItem;
+use proto::pnio::dcp::{BlockQualifier, BlockValue, DcpBlock, IpParameter};
+use proto::pnio::plan::ExpectedSub;
+use proto::pnio::rpc::{Opnum, Uuid};
+use proto::pnio::PnioStatus;
+use serde_json::{json, Value};
+use sim::link::{LinkRepr, Unit};
+
+use super::controller::{Connected, Controller, PnioError};
+use super::link::Link;
+use super::step::{Module, PnioStep};
+use crate::binding::channel::{cycles_left_out, Channel};
+use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::{Binding, Dut, DutError, Observation, OpenError, StepError};
+use crate::outcome::{Exchange, Refusal};
+use crate::profile::Capability;
+use crate::runner::hex;
+use crate::suite::Action;
+
+/// What the embedded simulator offers: every general capability and the `pnio:` steps.
+pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 9] = [
+    Capability::ParameterAccess,
+    Capability::ParameterChannel,
+    Capability::ProcessData,
+    Capability::FaultInjection,
+    Capability::Observe,
+    Capability::PowerOn,
+    Capability::FactoryState,
+    Capability::Readdressing,
+    Capability::Bus("pnio"),
+];
+
+/// Bus cycles a parameter order may take to be answered (each cycle one record read).
+const ORDER_CYCLES: u32 = 200;
+
+/// The controller, shared by the binding (for the `pnio:` steps) and the channel's DUT.
+type Shared<L> = Rc<RefCell<Controller<L>>>;
+
+/// The harness as IO controller.
+pub(crate) struct PnioBinding<L> {
+    ctl: Shared<L>,
+    channel: Channel,
+    product: Product,
+    inverters: u8,
+    name: Option<String>,
+    what: String,
+}
+
+/// The refusal of a PNIO status.
+fn refused(status: PnioStatus, mut fields: Value) -> Observation {
+    fields["status"] = json!(status_hex(status));
+    Observation::refused(
+        fields,
+        Refusal {
+            kind: "PNIO status",
+            code: u32::from_be_bytes([status.code, status.decode, status.code1, status.code2]),
+            text: status.to_string(),
+        },
+    )
+}
+
+fn status_hex(s: PnioStatus) -> String {
+    format!(
+        "{:02X}{:02X}{:02X}{:02X}",
+        s.code, s.decode, s.code1, s.code2
+    )
+}
+
+fn step_error(e: PnioError) -> StepError {
+    match e {
+        PnioError::Link(l) => StepError::Link(l.to_string()),
+        e @ (PnioError::NoReply { .. } | PnioError::NotFound(_)) => StepError::Link(e.to_string()),
+        e @ PnioError::Malformed { .. } => StepError::Garbage(e.to_string()),
+        e @ (PnioError::Nca { .. } | PnioError::NotConnected) => StepError::Refused(e.to_string()),
+    }
+}
+
+/// Why the device could not be opened.
+fn open_error(e: PnioError) -> OpenError {
+    match e {
+        PnioError::Link(_) | PnioError::NoReply { .. } | PnioError::NotFound(_) => {
+            OpenError::Unreachable(e.to_string())
+        }
+        _ => OpenError::BringUp(e.to_string()),
+    }
+}
+
+/// The modules of a Connect: the given ones in FI 1, 2… slots, PPO 2 for the rest of the
+/// inverters (an ident number as written, for a wrong module).
+fn expected(
+    product: Product,
+    inverters: u8,
+    modules: &[Module],
+) -> Result<Vec<ExpectedSub>, String> {
+    let mut subs = Vec::new();
+    for n in 1..=inverters.max(modules.len() as u8) {
+        let fi = Inverter::new(i64::from(n)).map_err(|e| e.to_string())?;
+        let slot = def::inverter_slot(product, fi).map_err(|e| e.to_string())?;
+        let module = modules.get(usize::from(n) - 1).copied();
+        let sub = match module {
+            None | Some(Module::Ppo(_)) => {
+                let t = match module {
+                    Some(Module::Ppo(t)) => t,
+                    _ => PpoType::TYPE_2,
+                };
+                let m = def::module(product, ModuleKind::Ppo(t)).ok_or(format!(
+                    "{} has no PPO {} module",
+                    product.name(),
+                    t.0
+                ))?;
+                def::expected_module(slot, &m)
+            }
+            Some(Module::Ident(ident)) => ExpectedSub {
+                slot,
+                module_ident: ident,
+                subslot: def::IO_SUBSLOT,
+                ident,
+                input_len: 4,
+                output_len: 4,
+            },
+        };
+        subs.push(sub);
+    }
+    Ok(subs)
+}
+
+impl<L: Link + 'static> PnioBinding<L> {
+    /// Finds the device (`name`, or the only one), connects and brings the AR to data
+    /// exchange.
+    pub(crate) fn open(
+        mut ctl: Controller<L>,
+        product: Product,
+        inverters: u8,
+        name: Option<String>,
+        what: String,
+        retries: u32,
+    ) -> Result<PnioBinding<L>, OpenError> {
+        ctl.set_recording(false);
+        let station = ctl.locate(name.as_deref()).map_err(open_error)?;
+        if station.vendor_id != def::VENDOR_ID {
+            return Err(OpenError::BringUp(format!(
+                "{:?} has vendor id {:04X}h, not NORD's {:04X}h",
+                station.name,
+                station.vendor_id,
+                def::VENDOR_ID
+            )));
+        }
+        let what = format!(
+            "{what}: {:?} ({}, vendor {:04X}h, device {:04X}h, {})",
+            station.name,
+            station.type_of_station,
+            station.vendor_id,
+            station.device_id,
+            station.mac
+        );
+        let subs = expected(product, inverters, &[]).map_err(OpenError::Profile)?;
+        let c = ctl.connect(&subs).map_err(open_error)?;
+        if !c.ready {
+            return Err(OpenError::BringUp(format!("the AR did not come up: {c:?}")));
+        }
+        ctl.take_exchanges();
+        ctl.take_cycles();
+        ctl.set_recording(true);
+        let ctl = Rc::new(RefCell::new(ctl));
+        let dut = PnioDut {
+            ctl: ctl.clone(),
+            product,
+            pending: None,
+        };
+        Ok(PnioBinding {
+            channel: Channel::new(Box::new(dut), product, retries.max(ORDER_CYCLES)),
+            ctl,
+            product,
+            inverters,
+            name,
+            what,
+        })
+    }
+
+    fn pnio_step(&mut self, step: &PnioStep) -> Result<Observation, StepError> {
+        let mut ctl = self.ctl.borrow_mut();
+        Ok(match step {
+            PnioStep::Identify(name) => {
+                let found = ctl.identify(name.as_deref()).map_err(step_error)?;
+                let stations: Vec<Value> = found
+                    .iter()
+                    .map(|s| {
+                        json!({
+                            "name": s.name,
+                            "mac": s.mac.to_string(),
+                            "ip": s.ip.map(|i| i.ip.to_string()),
+                            "mask": s.ip.map(|i| i.mask.to_string()),
+                            "gateway": s.ip.map(|i| i.gateway.to_string()),
+                            "vendor": s.vendor_id,
+                            "device": s.device_id,
+                            "type": s.type_of_station,
+                        })
+                    })
+                    .collect();
+                let first = stations.first().cloned().unwrap_or(Value::Null);
+                json!({ "count": stations.len(), "stations": stations, "station": first }).into()
+            }
+            PnioStep::SetName { name, permanent } => {
+                let block = DcpBlock::set(
+                    qualifier(*permanent),
+                    BlockValue::NameOfStation(name.clone()),
+                );
+                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+            }
+            PnioStep::SetIp {
+                ip,
+                mask,
+                gateway,
+                permanent,
+            } => {
+                let block = DcpBlock::set(
+                    qualifier(*permanent),
+                    BlockValue::IpParameter(IpParameter {
+                        ip: *ip,
+                        mask: *mask,
+                        gateway: *gateway,
+                    }),
+                );
+                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+            }
+            PnioStep::Signal => {
+                let block = DcpBlock::set(
+                    BlockQualifier::TEMPORARY,
+                    BlockValue::Signal(proto::pnio::dcp::SIGNAL_FLASH_ONCE),
+                );
+                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+            }
+            PnioStep::ResetFactory => {
+                let block =
+                    DcpBlock::set(BlockQualifier::RESET_ALL_DATA, BlockValue::ResetToFactory);
+                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+            }
+            PnioStep::Connect {
+                modules,
+                reduction_ratio,
+            } => {
+                ctl.set_reduction_ratio(*reduction_ratio);
+                let subs =
+                    expected(self.product, self.inverters, modules).map_err(StepError::Suite)?;
+                connect_result(ctl.connect(&subs).map_err(step_error)?)
+            }
+            PnioStep::Release => {
+                let status = ctl.release().map_err(step_error)?;
+                status_result(status, json!({}))
+            }
+            PnioStep::Read {
+                index,
+                slot,
+                subslot,
+            } => {
+                let (slot, subslot) = self.place(*slot, *subslot);
+                let (status, data) = ctl
+                    .read_record(slot, subslot, *index, format!("IODRead record {index}"))
+                    .map_err(step_error)?;
+                status_result(status, json!({ "data": hex(&data), "length": data.len() }))
+            }
+            PnioStep::Write {
+                index,
+                slot,
+                subslot,
+                data,
+            } => {
+                let (slot, subslot) = self.place(*slot, *subslot);
+                let status = ctl
+                    .write_record(
+                        slot,
+                        subslot,
+                        *index,
+                        data,
+                        format!("IODWrite record {index}"),
+                    )
+                    .map_err(step_error)?;
+                status_result(status, json!({}))
+            }
+            PnioStep::Alarm(wait) => match ctl.acknowledge_alarm(*wait).map_err(step_error)? {
+                None => json!({ "alarm": null }).into(),
+                Some(n) => {
+                    let errors: Vec<u16> = n
+                        .items
+                        .iter()
+                        .filter_map(|i| match i {
+                            AlarmItem::ChannelDiagnosis(c) => Some(c.error_type),
+                            AlarmItem::ExtChannelDiagnosis(e) => Some(e.channel.error_type),
+                            _ => None,
+                        })
+                        .collect();
+                    json!({
+                        "alarm": n.alarm_type.0,
+                        "type": n.alarm_type.name(),
+                        "slot": n.slot,
+                        "subslot": n.subslot,
+                        "module": n.module_ident,
+                        "number": errors.first(),
+                        "error": errors.first().and_then(|e| def::alarm_error_number(*e)),
+                    })
+                    .into()
+                }
+            },
+            PnioStep::Silence(d) => {
+                ctl.silence(*d).map_err(step_error)?;
+                json!({}).into()
+            }
+            PnioStep::Cycles(n) => {
+                let d = ctl.cycle() * (*n as u32);
+                ctl.run_for(d).map_err(step_error)?;
+                let status = ctl.input_status().map(|s| s.0);
+                json!({ "connected": ctl.connected(), "data_status": status }).into()
+            }
+            PnioStep::Frame(bytes) => {
+                let answer = ctl.raw_frame(bytes).map_err(step_error)?;
+                json!({ "answered": answer.is_some(), "answer": answer.as_deref().map(hex) }).into()
+            }
+            PnioStep::Rpc {
+                opnum,
+                body,
+                interface,
+            } => {
+                let interface = match interface {
+                    None => Uuid::PNIO_DEVICE_INTERFACE,
+                    Some(text) => text.parse().map_err(|e| StepError::Suite(format!("{e}")))?,
+                };
+                match ctl.call(
+                    Opnum(*opnum),
+                    body.clone(),
+                    interface,
+                    format!("RPC opnum {opnum}"),
+                ) {
+                    Ok(a) => status_result(a.status, json!({ "nca": null })),
+                    Err(PnioError::Nca { packet, status }) => Observation::refused(
+                        json!({ "nca": status.0, "packet": packet }),
+                        Refusal {
+                            kind: "RPC reject",
+                            code: status.0,
+                            text: format!("{packet} {status}"),
+                        },
+                    ),
+                    Err(e) => return Err(step_error(e)),
+                }
+            }
+        })
+    }
+
+    /// The slot and subslot of a record step: as given, else FI 1's module.
+    fn place(&self, slot: Option<u16>, subslot: Option<u16>) -> (u16, u16) {
+        let fi1 = Inverter::new(1)
+            .ok()
+            .and_then(|fi| def::inverter_slot(self.product, fi).ok());
+        (
+            slot.or(fi1).unwrap_or(0),
+            subslot.unwrap_or(def::IO_SUBSLOT),
+        )
+    }
+
+    /// The cyclic traffic of the last step as one transcript line.
+    fn cycles_exchange(&mut self) -> Option<Exchange> {
+        let log = self.ctl.borrow_mut().take_cycles();
+        (log.sent > 0).then(|| Exchange {
+            sent_hex: hex(&log.last_sent),
+            sent: format!("{} output frames (the last shown)", log.sent),
+            received_hex: hex(&log.last_received),
+            received: format!("{} input frames (the last shown)", log.received),
+        })
+    }
+}
+
+fn qualifier(permanent: bool) -> BlockQualifier {
+    if permanent {
+        BlockQualifier::PERMANENT
+    } else {
+        BlockQualifier::TEMPORARY
+    }
+}
+
+fn dcp_result(error: proto::pnio::dcp::BlockError) -> Observation {
+    let fields = json!({ "error": error.0, "meaning": error.name() });
+    if error == proto::pnio::dcp::BlockError::OK {
+        fields.into()
+    } else {
+        Observation::refused(
+            fields,
+            Refusal {
+                kind: "DCP block error",
+                code: u32::from(error.0),
+                text: format!("{:02X}h {}", error.0, error.name().unwrap_or("unknown")),
+            },
+        )
+    }
+}
+
+fn status_result(status: PnioStatus, fields: Value) -> Observation {
+    if status.is_ok() {
+        let mut fields = fields;
+        fields["status"] = json!(status_hex(status));
+        fields.into()
+    } else {
+        refused(status, fields)
+    }
+}
+
+fn connect_result(c: Connected) -> Observation {
+    let diff: Vec<Value> = c
+        .diff
+        .iter()
+        .flat_map(|d| &d.apis)
+        .flat_map(|a| &a.modules)
+        .map(|m| {
+            json!({
+                "slot": m.slot,
+                "ident": m.ident,
+                "state": m.state.name(),
+                "submodules": m.submodules.iter().map(|s| json!({
+                    "subslot": s.subslot,
+                    "ident": s.ident,
+                    "state": s.state.0,
+                })).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    let fields = json!({
+        "diff": diff,
+        "running": c.ready,
+        "prm_end": c.prm_end.map(status_hex),
+    });
+    status_result(c.status, fields)
+}
+
+impl<L: Link + 'static> Binding for PnioBinding<L> {
+    fn describe(&self) -> String {
+        self.what.clone()
+    }
+
+    fn capabilities(&self) -> &[Capability] {
+        &EMBEDDED_CAPABILITIES
+    }
+
+    fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+        match action {
+            Action::Bus(step) => {
+                let step = step
+                    .as_any()
+                    .downcast_ref::<PnioStep>()
+                    .ok_or_else(|| StepError::NotApplicable(format!("a `{}:` step", step.bus())))?;
+                self.pnio_step(step)
+            }
+            other => self.channel.perform(other),
+        }
+    }
+
+    fn take_exchanges(&mut self) -> Vec<Exchange> {
+        // The channel's view is the PPO it meant; the controller's is what went on the wire.
+        self.channel.take_exchanges();
+        let mut ex = self.ctl.borrow_mut().take_exchanges();
+        if ex.len() > 6 {
+            let skipped = ex.len() - 4;
+            let last = ex.split_off(ex.len() - 2);
+            ex.truncate(2);
+            let mut note = cycles_left_out(skipped as u64);
+            note.sent = format!("… {skipped} more record calls like these …");
+            ex.push(note);
+            ex.extend(last);
+        }
+        ex.extend(self.cycles_exchange());
+        let _ = &self.name;
+        ex
+    }
+}
+
+/// The channel's DUT: one bus cycle carries the PKW order in the unit's record and the
+/// process words in the output CR.
+struct PnioDut<L> {
+    ctl: Shared<L>,
+    product: Product,
+    /// The order in the device's record, being answered.
+    pending: Option<(Unit, PkwRepr)>,
+}
+
+impl<L: Link> PnioDut<L> {
+    /// The record of a unit and where it is written (the unit's slot; FI 1's for the
+    /// interface).
+    fn record_of(&self, unit: Unit) -> Option<(u16, u16)> {
+        let (target, fi) = match unit {
+            Unit::Interface => (RecordTarget::Interface, Inverter::new(1).ok()?),
+            Unit::Inverter(fi) => (RecordTarget::Inverter(fi), fi),
+        };
+        Some((
+            def::record_index(target),
+            def::inverter_slot(self.product, fi).ok()?,
+        ))
+    }
+
+    /// The PKW answer of the order, or "no response" (AK 0) while the device is busy.
+    fn order(&mut self, unit: Unit, order: PkwRepr) -> Option<PkwRepr> {
+        let (index, slot) = self.record_of(unit)?;
+        let mut ctl = self.ctl.borrow_mut();
+        if self.pending != Some((unit, order)) {
+            let status = ctl
+                .write_record(
+                    slot,
+                    def::IO_SUBSLOT,
+                    index,
+                    &order.emit_bytes(),
+                    format!("IODWrite record {index}: {}", order.describe_order()),
+                )
+                .ok()?;
+            if !status.is_ok() {
+                return None;
+            }
+            self.pending = Some((unit, order));
+        }
+        let (status, data) = ctl
+            .read_record(
+                slot,
+                def::IO_SUBSLOT,
+                index,
+                format!("IODRead record {index}"),
+            )
+            .ok()?;
+        if status == def::busy_status() {
+            return Some(PkwRepr::default());
+        }
+        if !status.is_ok() {
+            return None;
+        }
+        self.pending = None;
+        PkwRepr::parse(&data).ok()
+    }
+}
+
+impl<L: Link> Dut for PnioDut<L> {
+    fn describe(&self) -> String {
+        format!("PROFINET IO device ({})", self.product.name())
+    }
+
+    fn capabilities(&self) -> &[Capability] {
+        &EMBEDDED_CAPABILITIES
+    }
+
+    fn cycle_time(&self) -> Duration {
+        self.ctl.borrow().cycle()
+    }
+
+    fn cycle(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+        let link = LinkRepr::parse(frame).ok()?;
+        let ppo = PpoType::new(link.ppo_type).ok()?;
+        let sent = PpoRepr::parse(&link.payload, ppo).ok()?;
+        let slot = match link.unit {
+            Unit::Inverter(fi) => Some(def::inverter_slot(self.product, fi).ok()?),
+            Unit::Interface => None,
+        };
+        let words = PpoRepr {
+            pkw: ppo.has_pkw().then(PkwRepr::default),
+            pzd: sent.pzd.clone(),
+        }
+        .emit(ppo);
+        self.ctl
+            .borrow_mut()
+            .provide(slot.map(|s| (s, &words[..])))
+            .ok()?;
+        let pkw = match sent.pkw {
+            Some(o) if o != PkwRepr::default() => Some(self.order(link.unit, o)?),
+            other => other,
+        };
+        let mut ctl = self.ctl.borrow_mut();
+        if !ctl.exchange_cycle().ok()? {
+            return None;
+        }
+        let pzd = match slot {
+            Some(slot) => {
+                let (data, _) = ctl.input(slot)?;
+                PpoRepr::parse(&data, ppo).ok()?.pzd
+            }
+            None => vec![0; ppo.pzd_words()],
+        };
+        Some(
+            LinkRepr {
+                unit: link.unit,
+                ppo_type: link.ppo_type,
+                payload: PpoRepr { pkw, pzd }.emit(ppo),
+            }
+            .emit(),
+        )
+    }
+
+    fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), DutError> {
+        let mut ctl = self.ctl.borrow_mut();
+        let (io, _) = ctl
+            .link_mut()
+            .device()
+            .ok_or_else(|| DutError("a device on the network cannot be made to fault".into()))?;
+        Ok(io.device_mut().inject_fault(inverter, error)?)
+    }
+
+    fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, DutError> {
+        let mut ctl = self.ctl.borrow_mut();
+        let (io, now) = ctl
+            .link_mut()
+            .device()
+            .ok_or_else(|| DutError("a device on the network cannot be looked into".into()))?;
+        let leds = io.leds(now);
+        let mut v = observe_device(io.device_mut(), what, inverter, now)?
+            .ok_or_else(|| DutError(format!("cannot observe `{what}` ({OBSERVABLE})")))?;
+        if what == "leds" {
+            for (name, row) in leds {
+                v[name] = json!(row);
+            }
+        }
+        Ok(v)
+    }
+}

@@ -1,0 +1,1077 @@
+//! The harness as PROFINET IO controller of one device: DCP to find and name it, the context
+//! management calls over RPC (Connect, PrmEnd, the device's ApplicationReady, Release, record
+//! read/write), the cyclic RT exchange and the alarm CR.
+//!
+//! Everything goes through one [`Controller::pump`]: while the controller waits for an RPC
+//! answer, a DCP response or the next cycle, it keeps sending the output CR's frame every
+//! cycle (a device whose watchdog sees no outputs ends the AR), takes the input CR's frames,
+//! acknowledges alarm PDUs at transport level and queues their notifications, and answers
+//! the device's own ApplicationReady call.
+
+use std::collections::VecDeque;
+use std::time::Duration;
+
+use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_PROFINET};
+use proto::nord::pnio::IpSuite;
+use proto::pnio::alarm::{AlarmAck, AlarmNotification, AlarmRepr, RtaBody, RtaPduType};
+use proto::pnio::block::ar_properties;
+use proto::pnio::block::{
+    iocr_properties, AlarmCrBlockReq, AlarmCrType, ArBlockReq, ArType, Block, BlockType,
+    IocrBlockReq, IocrType, IodControl, IodReadReq, IodWriteReq, ModuleDiffBlock, RecordAddress,
+};
+use proto::pnio::dcp::{BlockError, BlockValue, DcpBlock, DcpRepr, ServiceId};
+use proto::pnio::plan::{ExpectedSub, Plan};
+use proto::pnio::rpc::{
+    Drep, NcaStatus, NdrRequest, NdrResponse, Opnum, PacketType, RpcRepr, Uuid,
+};
+use proto::pnio::rt::{DataStatus, Iox, RtRepr};
+use proto::pnio::status::cm;
+use proto::pnio::{FrameId, FrameKind, PnioStatus, MULTICAST_DCP_IDENTIFY};
+
+use super::link::Link;
+use crate::net::LinkError;
+use crate::outcome::Exchange;
+use crate::runner::hex;
+
+/// The controller's alarm reference.
+const ALARM_REF: u16 = 0x0003;
+/// The output CR's frame id the controller proposes (RT class 1/2 range).
+const OUTPUT_FRAME_ID: u16 = 0xC001;
+/// The input CR's frame id the controller proposes; the device may answer another.
+const INPUT_FRAME_ID: u16 = 0xC000;
+/// SendClockFactor 32: a 1 ms send clock.
+const SEND_CLOCK_FACTOR: u16 = 32;
+/// WatchdogFactor: cycles without frames before either side gives the AR up.
+const WATCHDOG_FACTOR: u16 = 3;
+/// ArgsMaximum the controller offers for answers.
+const ARGS_MAXIMUM: u32 = 4096;
+/// The longest a DCP Identify collects answers on a network (the embedded device answers at
+/// once).
+const IDENTIFY_WINDOW: Duration = Duration::from_millis(400);
+
+/// Why a controller request failed.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum PnioError {
+    /// The link broke.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// Nothing answered in time.
+    #[error("no {what} from the device within {waited:?}")]
+    NoReply {
+        what: &'static str,
+        waited: Duration,
+    },
+    /// The answer broke the protocol.
+    #[error("malformed {what}: {error}")]
+    Malformed { what: &'static str, error: String },
+    /// The RPC layer refused the call (reject or fault).
+    #[error("RPC {packet} with status {status}")]
+    Nca {
+        packet: &'static str,
+        status: NcaStatus,
+    },
+    /// No device answered Identify (by that name).
+    #[error("no PROFINET IO device answered Identify{0}")]
+    NotFound(String),
+    /// The call needs an AR and there is none.
+    #[error("no application relation is up (connect first)")]
+    NotConnected,
+}
+
+/// A device as DCP Identify found it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Station {
+    pub(crate) mac: MacAddr,
+    pub(crate) name: String,
+    pub(crate) ip: Option<IpSuite>,
+    pub(crate) vendor_id: u16,
+    pub(crate) device_id: u16,
+    pub(crate) type_of_station: String,
+}
+
+impl Station {
+    fn of(src: MacAddr, res: &DcpRepr) -> Station {
+        let mut s = Station {
+            mac: src,
+            name: String::new(),
+            ip: None,
+            vendor_id: 0,
+            device_id: 0,
+            type_of_station: String::new(),
+        };
+        for b in res.blocks() {
+            match &b.value {
+                BlockValue::NameOfStation(n) => s.name = n.clone(),
+                BlockValue::IpParameter(p) => {
+                    s.ip = Some(IpSuite {
+                        ip: p.ip,
+                        mask: p.mask,
+                        gateway: p.gateway,
+                    })
+                }
+                BlockValue::DeviceId {
+                    vendor_id,
+                    device_id,
+                } => (s.vendor_id, s.device_id) = (*vendor_id, *device_id),
+                BlockValue::DeviceVendor(v) => s.type_of_station = v.clone(),
+                _ => {}
+            }
+        }
+        s
+    }
+}
+
+/// An answered RPC call: its PNIO status and blocks.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Answer {
+    pub(crate) status: PnioStatus,
+    pub(crate) blocks: Vec<Block>,
+}
+
+/// The running application relation.
+#[derive(Debug, Clone)]
+struct Ar {
+    uuid: Uuid,
+    session_key: u16,
+    plan: Plan,
+    input_frame_id: u16,
+    device_alarm_ref: u16,
+    /// The output C_SDU sent every cycle.
+    outputs: Vec<u8>,
+    /// The last input frame.
+    inputs: Option<RtRepr>,
+    /// ApplicationReady came and was answered.
+    ready: bool,
+    /// The next alarm PDU's SendSeqNum, and the last one received.
+    alarm_seq: u16,
+    alarm_received: u16,
+}
+
+/// The cyclic traffic of a step, summed up for its transcript.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct CycleLog {
+    pub(crate) sent: u64,
+    pub(crate) received: u64,
+    pub(crate) last_sent: Vec<u8>,
+    pub(crate) last_received: Vec<u8>,
+}
+
+/// The IO controller over a link.
+pub(crate) struct Controller<L> {
+    link: L,
+    mac: MacAddr,
+    timeout: Duration,
+    /// ReductionRatio of both CRs (the cycle is 1 ms × it).
+    reduction_ratio: u16,
+    station: Option<Station>,
+    ar: Option<Ar>,
+    next_send: Duration,
+    xid: u32,
+    calls: u32,
+    session_key: u16,
+    /// Alarm notifications received and not yet acknowledged.
+    alarms: VecDeque<AlarmNotification>,
+    exchanges: Vec<Exchange>,
+    cycles: CycleLog,
+    recording: bool,
+}
+
+impl<L: Link> Controller<L> {
+    /// A controller with Ethernet address `mac` that waits `timeout` for each answer.
+    pub(crate) fn new(link: L, mac: MacAddr, timeout: Duration) -> Controller<L> {
+        Controller {
+            link,
+            mac,
+            timeout,
+            reduction_ratio: 1,
+            station: None,
+            ar: None,
+            next_send: Duration::ZERO,
+            xid: 0x4E52_0000,
+            calls: 0,
+            session_key: 0,
+            alarms: VecDeque::new(),
+            exchanges: Vec::new(),
+            cycles: CycleLog::default(),
+            recording: true,
+        }
+    }
+
+    /// The link, for the embedded device behind it.
+    pub(crate) fn link_mut(&mut self) -> &mut L {
+        &mut self.link
+    }
+
+    /// The cycle: 1 ms × the reduction ratio.
+    pub(crate) fn cycle(&self) -> Duration {
+        Duration::from_micros(1000 * u64::from(self.reduction_ratio))
+    }
+
+    /// Sets the reduction ratio of the next Connect.
+    pub(crate) fn set_reduction_ratio(&mut self, rr: u16) {
+        self.reduction_ratio = rr.max(1);
+    }
+
+    /// Whether an AR is in data exchange.
+    pub(crate) fn connected(&self) -> bool {
+        self.ar.as_ref().is_some_and(|a| a.ready)
+    }
+
+    /// Turns transcript recording on or off (bring-up is not part of a case).
+    pub(crate) fn set_recording(&mut self, on: bool) {
+        self.recording = on;
+    }
+
+    /// The exchanges since the last call.
+    pub(crate) fn take_exchanges(&mut self) -> Vec<Exchange> {
+        std::mem::take(&mut self.exchanges)
+    }
+
+    /// The cyclic traffic since the last call.
+    pub(crate) fn take_cycles(&mut self) -> CycleLog {
+        std::mem::take(&mut self.cycles)
+    }
+
+    fn record(&mut self, sent_hex: &[u8], sent: String, received_hex: &[u8], received: String) {
+        if self.recording {
+            self.exchanges.push(Exchange {
+                sent_hex: hex(sent_hex),
+                sent,
+                received_hex: hex(received_hex),
+                received,
+            });
+        }
+    }
+
+    fn ethernet(&self, dst: MacAddr, payload: &[u8]) -> Vec<u8> {
+        EthernetRepr {
+            dst,
+            src: self.mac,
+            ethertype: ETHERTYPE_PROFINET,
+        }
+        .emit(payload)
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // The pump
+    // -----------------------------------------------------------------------------------------
+
+    /// Runs the cyclic exchange and takes what comes until `until`, or until `want` takes a
+    /// frame or the RPC answer of `call` arrives — whichever is first.
+    fn pump(
+        &mut self,
+        until: Duration,
+        want: &dyn Fn(&[u8]) -> bool,
+        call: Option<Uuid>,
+    ) -> Result<Option<Got>, PnioError> {
+        loop {
+            let now = self.link.now();
+            if now >= until {
+                // The frame due now goes out with the next step's data.
+                return Ok(None);
+            }
+            if self.ar.is_some() && now >= self.next_send {
+                self.send_outputs()?;
+                let cycle = self.cycle();
+                self.next_send = if now.saturating_sub(self.next_send) > cycle {
+                    now + cycle
+                } else {
+                    self.next_send + cycle
+                };
+            }
+            if let Some(answer) = self.datagrams(call)? {
+                return Ok(Some(Got::Answer(answer)));
+            }
+            let now = self.link.now();
+            if now >= until {
+                return Ok(None);
+            }
+            let mut wake = until;
+            if self.ar.is_some() {
+                wake = wake.min(self.next_send);
+            }
+            if call.is_some() {
+                // Datagrams are looked at between frames: a short wait on the frames.
+                wake = wake.min(now + POLL_SLICE);
+            }
+            let Some((frame, _)) = self.link.recv(wake.max(now))? else {
+                continue;
+            };
+            let Ok(eth) = EthernetFrame::new_checked(&frame[..]) else {
+                continue;
+            };
+            if eth.inner_ethertype() != ETHERTYPE_PROFINET {
+                continue;
+            }
+            let payload = eth.inner_payload();
+            if want(payload) {
+                return Ok(Some(Got::Frame {
+                    src: eth.src(),
+                    payload: payload.to_vec(),
+                }));
+            }
+            let payload = payload.to_vec();
+            self.cyclic_or_alarm(&payload)?;
+        }
+    }
+
+    /// Lets `d` pass with the cycle running.
+    pub(crate) fn run_for(&mut self, d: Duration) -> Result<(), PnioError> {
+        let until = self.link.now() + d;
+        self.pump(until, &|_| false, None).map(|_| ())
+    }
+
+    /// One cycle of the exchange: the next output frame (on the send clock), then the first
+    /// input frame after it, which carries the device's answer to it. `false` when no input
+    /// frame came within three cycles.
+    pub(crate) fn exchange_cycle(&mut self) -> Result<bool, PnioError> {
+        let Some(input_id) = self.ar.as_ref().map(|a| a.input_frame_id) else {
+            return Err(PnioError::NotConnected);
+        };
+        let deadline = self.link.now() + self.cycle() * 3;
+        let sent = self.cycles.sent;
+        while self.cycles.sent == sent && self.link.now() < deadline {
+            let until = (self.next_send + Duration::from_nanos(1)).min(deadline);
+            self.pump(until, &|_| false, None)?;
+        }
+        let is_input = move |p: &[u8]| frame_id(p).is_some_and(|id| id.0 == input_id);
+        match self.pump(deadline, &is_input, None)? {
+            Some(Got::Frame { payload, .. }) => {
+                self.cyclic_or_alarm(&payload)?;
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+
+    /// Input frames and alarms; anything else is dropped.
+    fn cyclic_or_alarm(&mut self, payload: &[u8]) -> Result<(), PnioError> {
+        let Some(id) = frame_id(payload) else {
+            return Ok(());
+        };
+        match id.kind() {
+            FrameKind::Rt => {
+                if let Some(ar) = self.ar.as_mut().filter(|a| a.input_frame_id == id.0) {
+                    let len = usize::from(ar.plan.input.data_length);
+                    if let Ok(rt) = RtRepr::parse(payload, Some(len)) {
+                        ar.inputs = Some(rt);
+                        self.cycles.received += 1;
+                        self.cycles.last_received = payload.to_vec();
+                    }
+                }
+            }
+            FrameKind::Alarm { .. } => self.alarm_pdu(payload)?,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn send_outputs(&mut self) -> Result<(), PnioError> {
+        let (Some(ar), Some(dst)) = (self.ar.as_ref(), self.station.as_ref().map(|s| s.mac)) else {
+            return Ok(());
+        };
+        let now = self.link.now();
+        let rt = RtRepr {
+            frame_id: FrameId(OUTPUT_FRAME_ID),
+            data: ar.outputs.clone(),
+            cycle_counter: (now.as_nanos() / 31_250) as u16,
+            data_status: DataStatus::GOOD,
+            transfer_status: 0,
+        };
+        let bytes = rt.emit();
+        let frame = self.ethernet(dst, &bytes);
+        self.link.send(&frame)?;
+        self.cycles.sent += 1;
+        self.cycles.last_sent = bytes;
+        Ok(())
+    }
+
+    /// Datagrams from the device: the answer to `call` is returned, the device's own calls
+    /// (ApplicationReady) are answered at once, anything else is dropped.
+    fn datagrams(&mut self, call: Option<Uuid>) -> Result<Option<RpcRepr>, PnioError> {
+        let now = self.link.now();
+        while let Some(d) = self.link.recv_udp(now + Duration::from_micros(1))? {
+            let Ok(rpc) = RpcRepr::parse_bytes(&d) else {
+                continue;
+            };
+            if rpc.packet_type == PacketType::REQUEST {
+                self.application_ready(&rpc)?;
+            } else if Some(rpc.activity) == call {
+                return Ok(Some(rpc));
+            }
+        }
+        Ok(None)
+    }
+
+    fn application_ready(&mut self, req: &RpcRepr) -> Result<(), PnioError> {
+        let Ok(ndr) = NdrRequest::parse(&req.body, req.drep) else {
+            return Ok(());
+        };
+        let Ok(blocks) = Block::parse_all(&ndr.data) else {
+            return Ok(());
+        };
+        let Some(Block::Control(c)) = blocks.first() else {
+            return Ok(());
+        };
+        let ours = self.ar.as_ref().is_some_and(|a| a.uuid == c.ar_uuid);
+        let ok = ours && c.block_type == BlockType::APPLICATION_READY_REQ;
+        let status = if ok {
+            PnioStatus::OK
+        } else {
+            PnioStatus::cm(cm::CONTROL, cm::CMRPC, cm::CMRPC_AR_UNKNOWN)
+        };
+        let data = Block::emit_all(&[Block::Control(c.done())]).unwrap_or_default();
+        let Ok(body) = NdrResponse::answering(&ndr, status, data) else {
+            return Ok(());
+        };
+        let bytes = req
+            .reply(PacketType::RESPONSE, body.emit(req.drep))
+            .emit()
+            .map_err(malformed("ApplicationReady answer"))?;
+        self.link.send_udp(&bytes)?;
+        if let Some(ar) = self.ar.as_mut().filter(|_| ok) {
+            ar.ready = true;
+        }
+        self.record(
+            &d_bytes(req),
+            "(the device's call) Control ApplicationReady".into(),
+            &bytes,
+            format!("answered: {status}"),
+        );
+        Ok(())
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // DCP
+    // -----------------------------------------------------------------------------------------
+
+    fn next_xid(&mut self) -> u32 {
+        self.xid = self.xid.wrapping_add(1);
+        self.xid
+    }
+
+    /// DCP Identify (all, or by name): every station that answers within the window.
+    pub(crate) fn identify(&mut self, name: Option<&str>) -> Result<Vec<Station>, PnioError> {
+        let xid = self.next_xid();
+        let req = match name {
+            Some(n) => DcpRepr::identify_name(xid, 1, n),
+            None => DcpRepr::identify_all(xid, 1),
+        };
+        let bytes = emit_dcp(&req)?;
+        let frame = self.ethernet(MULTICAST_DCP_IDENTIFY, &bytes);
+        self.link.send(&frame)?;
+        let deadline = self.link.now() + IDENTIFY_WINDOW.min(self.timeout);
+        let mut stations = Vec::new();
+        let mut first = Vec::new();
+        let is_answer = move |p: &[u8]| {
+            DcpRepr::parse(p).is_ok_and(|r| r.xid == xid && r.service_type.is_response())
+        };
+        while let Some(Got::Frame { src, payload }) = self.pump(deadline, &is_answer, None)? {
+            let res = DcpRepr::parse(&payload).map_err(malformed("DCP Identify response"))?;
+            if first.is_empty() {
+                first = payload;
+            }
+            stations.push(Station::of(src, &res));
+            if name.is_some() {
+                break;
+            }
+        }
+        let text = if stations.is_empty() {
+            "(nothing)".to_string()
+        } else {
+            stations
+                .iter()
+                .map(|s| {
+                    format!(
+                        "{:?} at {} (vendor {:04X}h, device {:04X}h)",
+                        s.name, s.mac, s.vendor_id, s.device_id
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        self.record(&bytes, dcp_text(&req), &first, text);
+        Ok(stations)
+    }
+
+    /// Finds the device (by name, or the only one that answers) and keeps it as the target.
+    pub(crate) fn locate(&mut self, name: Option<&str>) -> Result<Station, PnioError> {
+        let found = self.identify(name)?;
+        let station = match (name, found.len()) {
+            (_, 0) => {
+                return Err(PnioError::NotFound(
+                    name.map_or(String::new(), |n| format!(" by the name {n:?}")),
+                ))
+            }
+            (None, n) if n > 1 => {
+                return Err(PnioError::NotFound(format!(
+                    ": {n} devices answered; name the one to test (pnio://IFACE/NAME)"
+                )))
+            }
+            _ => found[0].clone(),
+        };
+        self.station = Some(station.clone());
+        Ok(station)
+    }
+
+    /// A DCP Get or Set to the device; its response.
+    pub(crate) fn dcp(&mut self, req: DcpRepr) -> Result<DcpRepr, PnioError> {
+        let dst = self.target()?.mac;
+        let xid = self.next_xid();
+        let req = DcpRepr { xid, ..req };
+        let bytes = emit_dcp(&req)?;
+        let frame = self.ethernet(dst, &bytes);
+        self.link.send(&frame)?;
+        let deadline = self.link.now() + self.timeout;
+        let is_answer = move |p: &[u8]| {
+            DcpRepr::parse(p).is_ok_and(|r| r.xid == xid && r.service_type.is_response())
+        };
+        let Some(Got::Frame { payload, .. }) = self.pump(deadline, &is_answer, None)? else {
+            self.record(&bytes, dcp_text(&req), &[], "(nothing)".into());
+            return Err(PnioError::NoReply {
+                what: "DCP response",
+                waited: self.timeout,
+            });
+        };
+        let res = DcpRepr::parse(&payload).map_err(malformed("DCP response"))?;
+        self.record(&bytes, dcp_text(&req), &payload, format!("{:?}", res.data));
+        Ok(res)
+    }
+
+    /// A DCP Set of one block; the device's Control/Response error for it. A name or address
+    /// the device took becomes the controller's view of it.
+    pub(crate) fn dcp_set(&mut self, block: DcpBlock) -> Result<BlockError, PnioError> {
+        let option = block.option();
+        let value = block.value.clone();
+        let res = self.dcp(DcpRepr::set(0, vec![block]))?;
+        let error = res
+            .blocks()
+            .iter()
+            .find_map(|b| match &b.value {
+                BlockValue::Response { option: o, error } if *o == option => Some(*error),
+                _ => None,
+            })
+            .ok_or(PnioError::Malformed {
+                what: "DCP Set response",
+                error: format!("no Control/Response block for option {option:?}"),
+            })?;
+        if let (Some(s), BlockError::OK) = (self.station.as_mut(), error) {
+            match value {
+                BlockValue::NameOfStation(n) => s.name = n,
+                BlockValue::IpParameter(p) => {
+                    s.ip = Some(IpSuite {
+                        ip: p.ip,
+                        mask: p.mask,
+                        gateway: p.gateway,
+                    })
+                }
+                _ => {}
+            }
+        }
+        Ok(error)
+    }
+
+    /// A frame from its frame id on, as given, to the device; the first PROFINET frame that
+    /// is not cyclic or alarm traffic within the timeout.
+    pub(crate) fn raw_frame(&mut self, payload: &[u8]) -> Result<Option<Vec<u8>>, PnioError> {
+        let dst = self.target()?.mac;
+        let frame = self.ethernet(dst, payload);
+        self.link.send(&frame)?;
+        let deadline = self.link.now() + self.timeout.min(IDENTIFY_WINDOW);
+        let is_answer =
+            |p: &[u8]| frame_id(p).is_some_and(|id| matches!(id.kind(), FrameKind::Dcp));
+        let got = match self.pump(deadline, &is_answer, None)? {
+            Some(Got::Frame { payload, .. }) => Some(payload),
+            _ => None,
+        };
+        self.record(
+            payload,
+            "frame as written".into(),
+            got.as_deref().unwrap_or_default(),
+            if got.is_some() {
+                "answer".into()
+            } else {
+                "(nothing)".into()
+            },
+        );
+        Ok(got)
+    }
+
+    fn target(&self) -> Result<&Station, PnioError> {
+        self.station
+            .as_ref()
+            .ok_or_else(|| PnioError::NotFound(" (no device located yet)".into()))
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // RPC
+    // -----------------------------------------------------------------------------------------
+
+    /// One RPC call to the device's PNIO interface (or `interface`), waiting for its answer
+    /// with the cycle running.
+    pub(crate) fn call(
+        &mut self,
+        opnum: Opnum,
+        data: Vec<u8>,
+        interface: Uuid,
+        what: String,
+    ) -> Result<Answer, PnioError> {
+        let station = self.target()?.clone();
+        self.calls += 1;
+        let activity = Uuid::from_fields(0x4E52_4450, 0x0000, 0x1000, {
+            let mut n = [0u8; 8];
+            n[..6].copy_from_slice(&self.mac.0);
+            n[6..].copy_from_slice(&(self.calls as u16).to_be_bytes());
+            n
+        });
+        let body = NdrRequest::new(ARGS_MAXIMUM, data).map_err(malformed("NDR request"))?;
+        let req = RpcRepr::request(
+            Uuid::pnio_object(1, station.device_id, station.vendor_id),
+            interface,
+            activity,
+            self.calls,
+            opnum,
+            body.emit(Drep::LITTLE_ENDIAN),
+        );
+        let bytes = req.emit().map_err(malformed("RPC request"))?;
+        self.link.send_udp(&bytes)?;
+        let deadline = self.link.now() + self.timeout;
+        let Some(Got::Answer(res)) = self.pump(deadline, &|_| false, Some(activity))? else {
+            self.record(&bytes, what, &[], "(nothing)".into());
+            return Err(PnioError::NoReply {
+                what: "RPC answer",
+                waited: self.timeout,
+            });
+        };
+        let res_bytes = res.emit().unwrap_or_default();
+        match res.packet_type {
+            PacketType::RESPONSE => {}
+            PacketType::REJECT | PacketType::FAULT => {
+                let status = res.nca_status().map_err(malformed("RPC reject"))?;
+                let packet = if res.packet_type == PacketType::REJECT {
+                    "reject"
+                } else {
+                    "fault"
+                };
+                self.record(&bytes, what, &res_bytes, format!("RPC {packet}: {status}"));
+                return Err(PnioError::Nca { packet, status });
+            }
+            other => {
+                return Err(PnioError::Malformed {
+                    what: "RPC answer",
+                    error: format!("packet type {other:?}"),
+                })
+            }
+        }
+        let ndr = NdrResponse::parse(&res.body, res.drep).map_err(malformed("NDR response"))?;
+        let blocks = Block::parse_all(&ndr.data).map_err(malformed("blocks of the answer"))?;
+        let text = blocks
+            .iter()
+            .map(|b| format!("{:?}", b.block_type()))
+            .collect::<Vec<_>>()
+            .join(", ");
+        self.record(&bytes, what, &res_bytes, format!("{}: {text}", ndr.status));
+        Ok(Answer {
+            status: ndr.status,
+            blocks,
+        })
+    }
+
+    fn call_blocks(
+        &mut self,
+        opnum: Opnum,
+        blocks: &[Block],
+        what: String,
+    ) -> Result<Answer, PnioError> {
+        let data = Block::emit_all(blocks).map_err(malformed("request blocks"))?;
+        self.call(opnum, data, Uuid::PNIO_DEVICE_INTERFACE, what)
+    }
+
+    /// Connect with the DAP and `modules`, then PrmEnd and the device's ApplicationReady: the
+    /// Connect's answer (with the ModuleDiffBlock if any). A refused Connect leaves no AR.
+    pub(crate) fn connect(&mut self, modules: &[ExpectedSub]) -> Result<Connected, PnioError> {
+        self.ar = None;
+        let mut subs = proto::nord::pnio::expected_dap();
+        subs.extend_from_slice(modules);
+        let plan = Plan::new(&subs).map_err(malformed("expected submodules"))?;
+        self.session_key = self.session_key.wrapping_add(1);
+        self.calls += 1;
+        let uuid = Uuid::from_fields(0x4E52_4152, self.session_key, 0x1000, {
+            let mut n = [0u8; 8];
+            n[..6].copy_from_slice(&self.mac.0);
+            n[6..].copy_from_slice(&(self.calls as u16).to_be_bytes());
+            n
+        });
+        let rr = self.reduction_ratio;
+        let iocr = |iocr_type, layout: &proto::pnio::plan::CrLayout, frame_id| {
+            Block::IocrReq(IocrBlockReq {
+                iocr_type,
+                reference: iocr_type.0,
+                lt: ETHERTYPE_PROFINET,
+                properties: iocr_properties::RT_CLASS_2,
+                data_length: layout.data_length,
+                frame_id,
+                send_clock_factor: SEND_CLOCK_FACTOR,
+                reduction_ratio: rr,
+                phase: 1,
+                frame_send_offset: 0xFFFF_FFFF,
+                watchdog_factor: WATCHDOG_FACTOR,
+                data_hold_factor: WATCHDOG_FACTOR,
+                tag_header: 0xC000,
+                apis: vec![layout.api.clone()],
+                ..IocrBlockReq::default()
+            })
+        };
+        let blocks = vec![
+            Block::ArReq(ArBlockReq {
+                ar_type: ArType::IOC_AR_SINGLE,
+                ar_uuid: uuid,
+                session_key: self.session_key,
+                initiator_mac: self.mac,
+                initiator_object: Uuid::pnio_object(1, 0x0001, proto::nord::pnio::VENDOR_ID),
+                properties: ar_properties::STATE_ACTIVE | ar_properties::PRM_SERVER_CM_INITIATOR,
+                activity_timeout_factor: 100,
+                udp_rt_port: ETHERTYPE_PROFINET,
+                station_name: b"nord-harness".to_vec(),
+            }),
+            iocr(IocrType::INPUT, &plan.input, INPUT_FRAME_ID),
+            iocr(IocrType::OUTPUT, &plan.output, OUTPUT_FRAME_ID),
+            Block::AlarmCrReq(AlarmCrBlockReq {
+                alarm_cr_type: AlarmCrType::ALARM_CR,
+                lt: ETHERTYPE_PROFINET,
+                properties: 0,
+                rta_timeout_factor: 1,
+                rta_retries: 3,
+                local_alarm_reference: ALARM_REF,
+                max_alarm_data_length: 200,
+                tag_header_high: 0xC000,
+                tag_header_low: 0xA000,
+            }),
+            Block::ExpectedSubmoduleReq(plan.expected.clone()),
+        ];
+        let answer = self.call_blocks(Opnum::CONNECT, &blocks, "Connect".into())?;
+        let diff = answer.blocks.iter().find_map(|b| match b {
+            Block::ModuleDiff(d) => Some(d.clone()),
+            _ => None,
+        });
+        if !answer.status.is_ok() {
+            return Ok(Connected {
+                status: answer.status,
+                diff,
+                prm_end: None,
+                ready: false,
+            });
+        }
+        let input_frame_id = answer
+            .blocks
+            .iter()
+            .find_map(|b| match b {
+                Block::IocrRes(r) if r.iocr_type == IocrType::INPUT => Some(r.frame_id),
+                _ => None,
+            })
+            .unwrap_or(INPUT_FRAME_ID);
+        let device_alarm_ref = answer
+            .blocks
+            .iter()
+            .find_map(|b| match b {
+                Block::AlarmCrRes(r) => Some(r.local_alarm_reference),
+                _ => None,
+            })
+            .unwrap_or(0);
+        let mut outputs = vec![0u8; usize::from(plan.output.data_length)];
+        // Every IOPS and IOCS of the controller good.
+        for p in &plan.output.data {
+            outputs[p.offset + p.len] = Iox::GOOD.0;
+        }
+        for p in &plan.output.iocs {
+            outputs[p.offset] = Iox::GOOD.0;
+        }
+        self.ar = Some(Ar {
+            uuid,
+            session_key: self.session_key,
+            plan,
+            input_frame_id,
+            device_alarm_ref,
+            outputs,
+            inputs: None,
+            ready: false,
+            alarm_seq: 0,
+            alarm_received: 0xFFFE,
+        });
+        self.next_send = self.link.now();
+        let prm_end = self.call_blocks(
+            Opnum::CONTROL,
+            &[Block::Control(IodControl::prm_end(uuid, self.session_key))],
+            "Control PrmEnd".into(),
+        )?;
+        // The device calls ApplicationReady; the pump answers it.
+        let deadline = self.link.now() + self.timeout;
+        while !self.connected() && self.link.now() < deadline {
+            let slice = (self.link.now() + self.cycle()).min(deadline);
+            self.pump(slice, &|_| false, None)?;
+        }
+        Ok(Connected {
+            status: answer.status,
+            diff,
+            prm_end: Some(prm_end.status),
+            ready: self.connected(),
+        })
+    }
+
+    /// Release: the AR ends.
+    pub(crate) fn release(&mut self) -> Result<PnioStatus, PnioError> {
+        let ar = self.ar.as_ref().ok_or(PnioError::NotConnected)?;
+        let block = Block::Control(IodControl::release(ar.uuid, ar.session_key));
+        let answer = self.call_blocks(Opnum::RELEASE, &[block], "Release".into())?;
+        if answer.status.is_ok() {
+            self.ar = None;
+        }
+        Ok(answer.status)
+    }
+
+    fn address(&self, slot: u16, subslot: u16, index: u16) -> RecordAddress {
+        RecordAddress {
+            seq_number: self.calls as u16,
+            ar_uuid: self.ar.as_ref().map(|a| a.uuid).unwrap_or_default(),
+            api: 0,
+            slot,
+            subslot,
+            index,
+        }
+    }
+
+    /// IODWrite of a record in the AR: the PNIO status.
+    pub(crate) fn write_record(
+        &mut self,
+        slot: u16,
+        subslot: u16,
+        index: u16,
+        data: &[u8],
+        what: String,
+    ) -> Result<PnioStatus, PnioError> {
+        let block = Block::WriteReq(IodWriteReq {
+            addr: self.address(slot, subslot, index),
+            data: data.to_vec(),
+        });
+        let answer = self.call_blocks(Opnum::WRITE, &[block], what)?;
+        Ok(answer.status)
+    }
+
+    /// IODRead of a record (in the AR, or implicit without one): the PNIO status and data.
+    pub(crate) fn read_record(
+        &mut self,
+        slot: u16,
+        subslot: u16,
+        index: u16,
+        what: String,
+    ) -> Result<(PnioStatus, Vec<u8>), PnioError> {
+        let opnum = if self.ar.is_some() {
+            Opnum::READ
+        } else {
+            Opnum::READ_IMPLICIT
+        };
+        let block = Block::ReadReq(IodReadReq {
+            addr: self.address(slot, subslot, index),
+            record_data_length: 1024,
+            target_ar_uuid: Uuid::default(),
+        });
+        let answer = self.call_blocks(opnum, &[block], what)?;
+        let data = answer
+            .blocks
+            .into_iter()
+            .find_map(|b| match b {
+                Block::ReadRes(r) => Some(r.data),
+                _ => None,
+            })
+            .unwrap_or_default();
+        Ok((answer.status, data))
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Cyclic data
+    // -----------------------------------------------------------------------------------------
+
+    /// Provides `data` as the output data of the module in `slot` (subslot 1), its IOPS good,
+    /// and marks every other module's outputs bad (IOPS "bad by controller"): the device takes
+    /// no data for them, as an inverter gets no telegram in a cycle that addresses another
+    /// (`None`: no module is provided).
+    pub(crate) fn provide(&mut self, slot: Option<(u16, &[u8])>) -> Result<(), PnioError> {
+        let ar = self.ar.as_mut().ok_or(PnioError::NotConnected)?;
+        for p in ar.plan.output.data.iter().filter(|p| p.slot != 0) {
+            let iops = match slot {
+                Some((s, data)) if s == p.slot => {
+                    let n = data.len().min(p.len);
+                    ar.outputs[p.offset..p.offset + n].copy_from_slice(&data[..n]);
+                    Iox::GOOD
+                }
+                _ => Iox::BAD_BY_CONTROLLER,
+            };
+            ar.outputs[p.offset + p.len] = iops.0;
+        }
+        Ok(())
+    }
+
+    /// The input data and IOPS of the submodule in `slot` from the last input frame.
+    pub(crate) fn input(&self, slot: u16) -> Option<(Vec<u8>, Iox)> {
+        let ar = self.ar.as_ref()?;
+        let rt = ar.inputs.as_ref()?;
+        let p = ar.plan.input.data.iter().find(|p| p.slot == slot)?;
+        Some((
+            rt.data.get(p.offset..p.offset + p.len)?.to_vec(),
+            Iox(*rt.data.get(p.offset + p.len)?),
+        ))
+    }
+
+    /// The DataStatus of the last input frame.
+    pub(crate) fn input_status(&self) -> Option<DataStatus> {
+        Some(self.ar.as_ref()?.inputs.as_ref()?.data_status)
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // Alarms
+    // -----------------------------------------------------------------------------------------
+
+    fn alarm_pdu(&mut self, payload: &[u8]) -> Result<(), PnioError> {
+        let Ok(pdu) = AlarmRepr::parse(payload) else {
+            return Ok(());
+        };
+        let (Some(ar), Some(dst)) = (self.ar.as_mut(), self.station.as_ref().map(|s| s.mac)) else {
+            return Ok(());
+        };
+        if pdu.pdu_type != RtaPduType::DATA || pdu.dst_endpoint != ALARM_REF {
+            return Ok(());
+        }
+        let repeated = pdu.send_seq == ar.alarm_received;
+        ar.alarm_received = pdu.send_seq;
+        let ack = AlarmRepr::ack(
+            pdu.frame_id,
+            ar.device_alarm_ref,
+            ALARM_REF,
+            ar.alarm_seq.wrapping_sub(1) & 0x7FFF,
+            pdu.send_seq,
+        );
+        let bytes = ack.emit().map_err(malformed("alarm ACK"))?;
+        let frame = self.ethernet(dst, &bytes);
+        self.link.send(&frame)?;
+        if let (false, RtaBody::Notification(n)) = (repeated, pdu.body) {
+            self.record(&[], "(the device's alarm)".into(), payload, alarm_text(&n));
+            self.alarms.push_back(n);
+        }
+        Ok(())
+    }
+
+    /// Waits up to `wait` for an alarm notification and acknowledges it (AlarmAck, status
+    /// OK); the notification, or `None`.
+    pub(crate) fn acknowledge_alarm(
+        &mut self,
+        wait: Duration,
+    ) -> Result<Option<AlarmNotification>, PnioError> {
+        let deadline = self.link.now() + wait;
+        while self.alarms.is_empty() && self.link.now() < deadline {
+            let slice = (self.link.now() + self.cycle()).min(deadline);
+            self.pump(slice, &|_| false, None)?;
+        }
+        let Some(n) = self.alarms.pop_front() else {
+            return Ok(None);
+        };
+        let (Some(ar), Some(dst)) = (self.ar.as_mut(), self.station.as_ref().map(|s| s.mac)) else {
+            return Err(PnioError::NotConnected);
+        };
+        let seq = ar.alarm_seq;
+        ar.alarm_seq = (ar.alarm_seq + 1) & 0x7FFF;
+        let pdu = AlarmRepr::data(
+            ar.device_alarm_ref,
+            ALARM_REF,
+            seq,
+            ar.alarm_received,
+            RtaBody::Ack(AlarmAck::of(&n, PnioStatus::OK)),
+        );
+        let bytes = pdu.emit().map_err(malformed("AlarmAck"))?;
+        let frame = self.ethernet(dst, &bytes);
+        self.link.send(&frame)?;
+        self.record(
+            &bytes,
+            format!("AlarmAck of {}", alarm_text(&n)),
+            &[],
+            String::new(),
+        );
+        // The device's transport ACK comes with the cycle.
+        self.run_for(self.cycle())?;
+        Ok(Some(n))
+    }
+
+    /// Lets `d` pass without sending anything (the device's watchdog runs out); frames that
+    /// come are taken and dropped.
+    pub(crate) fn silence(&mut self, d: Duration) -> Result<(), PnioError> {
+        let until = self.link.now() + d;
+        let ar = self.ar.take();
+        let r = self.pump(until, &|_| false, None);
+        self.ar = ar;
+        r.map(|_| ())
+    }
+}
+
+/// Something the pump was asked for.
+enum Got {
+    Frame { src: MacAddr, payload: Vec<u8> },
+    Answer(RpcRepr),
+}
+
+/// What a Connect came to.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Connected {
+    /// The Connect's PNIO status.
+    pub(crate) status: PnioStatus,
+    /// The device's ModuleDiffBlock, if it sent one.
+    pub(crate) diff: Option<ModuleDiffBlock>,
+    /// PrmEnd's status, when the Connect was accepted.
+    pub(crate) prm_end: Option<PnioStatus>,
+    /// Whether ApplicationReady came: data exchange.
+    pub(crate) ready: bool,
+}
+
+/// How long the pump waits on frames before it looks at the datagrams again.
+const POLL_SLICE: Duration = Duration::from_micros(200);
+
+fn frame_id(payload: &[u8]) -> Option<FrameId> {
+    payload
+        .get(..2)
+        .map(|b| FrameId(u16::from_be_bytes([b[0], b[1]])))
+}
+
+fn malformed<E: std::fmt::Display>(what: &'static str) -> impl Fn(E) -> PnioError {
+    move |e| PnioError::Malformed {
+        what,
+        error: e.to_string(),
+    }
+}
+
+fn d_bytes(req: &RpcRepr) -> Vec<u8> {
+    req.emit().unwrap_or_default()
+}
+
+fn emit_dcp(req: &DcpRepr) -> Result<Vec<u8>, PnioError> {
+    req.emit().map_err(malformed("DCP request"))
+}
+
+fn dcp_text(req: &DcpRepr) -> String {
+    let what = match req.service {
+        ServiceId::IDENTIFY => "Identify",
+        ServiceId::GET => "Get",
+        ServiceId::SET => "Set",
+        _ => "request",
+    };
+    format!("DCP {what} (xid {:08X}h)", req.xid)
+}
+
+/// An alarm notification in a line.
+pub(crate) fn alarm_text(n: &AlarmNotification) -> String {
+    format!(
+        "{} alarm, slot {} subslot {}, sequence {}: {:?}",
+        n.alarm_type.name().unwrap_or("unknown"),
+        n.slot,
+        n.subslot,
+        n.specifier.sequence(),
+        n.items
+    )
+}

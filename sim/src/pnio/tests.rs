@@ -1,0 +1,552 @@
+//! The IO device driven by hand-made frames and datagrams, as a controller sends them.
+
+use std::net::{Ipv4Addr, SocketAddr};
+use std::time::Duration;
+
+use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_PROFINET};
+use proto::nord::pnio::{self as def, ModuleKind};
+use proto::nord::ppo::PpoType;
+use proto::nord::{Inverter, Product};
+use proto::pnio::alarm::{AlarmAck, AlarmRepr, AlarmType, RtaBody, RtaPduType};
+use proto::pnio::block::{
+    iocr_properties, AlarmCrBlockReq, AlarmCrType, ArBlockReq, ArType, Block, IocrBlockReq,
+    IocrType, IodControl, IodReadReq, IodWriteReq, RecordAddress,
+};
+use proto::pnio::dcp::{BlockValue, DcpOption, DcpRepr};
+use proto::pnio::plan::Plan;
+use proto::pnio::rpc::{NdrRequest, NdrResponse, Opnum, PacketType, RpcRepr, Uuid};
+use proto::pnio::rt::{DataStatus, Iox, RtRepr};
+use proto::pnio::{FrameId, PnioStatus, MULTICAST_DCP_IDENTIFY};
+
+use super::{IoConfig, IoDevice, Out};
+use crate::device::{Device, DeviceConfig};
+use crate::link::Unit;
+
+const PLC_MAC: MacAddr = MacAddr([0x02, 0, 0, 0, 0, 0xC1]);
+const AR_UUID: Uuid = Uuid([0xA1; 16]);
+const PLC_REF: u16 = 0x0003;
+
+fn plc() -> SocketAddr {
+    SocketAddr::from((Ipv4Addr::new(192, 168, 20, 1), 34964))
+}
+
+fn io(product: Product, name: &str) -> IoDevice {
+    let config = IoConfig {
+        name: name.into(),
+        ..IoConfig::new()
+    };
+    IoDevice::new(Device::new(DeviceConfig::new(product)), config).unwrap()
+}
+
+fn eth(dst: MacAddr, payload: &[u8]) -> Vec<u8> {
+    EthernetRepr {
+        dst,
+        src: PLC_MAC,
+        ethertype: ETHERTYPE_PROFINET,
+    }
+    .emit(payload)
+}
+
+/// The PROFINET payloads of the frames among `out`.
+fn frames(out: &[Out]) -> Vec<Vec<u8>> {
+    out.iter()
+        .filter_map(|o| match o {
+            Out::Frame(f) => Some(
+                EthernetFrame::new_checked(f)
+                    .unwrap()
+                    .inner_payload()
+                    .to_vec(),
+            ),
+            Out::Datagram { .. } => None,
+        })
+        .collect()
+}
+
+fn datagrams(out: &[Out]) -> Vec<RpcRepr> {
+    out.iter()
+        .filter_map(|o| match o {
+            Out::Datagram { bytes, .. } => Some(RpcRepr::parse_bytes(bytes).unwrap()),
+            Out::Frame(_) => None,
+        })
+        .collect()
+}
+
+fn call(
+    io: &mut IoDevice,
+    opnum: Opnum,
+    blocks: &[Block],
+    now: Duration,
+) -> (PnioStatus, Vec<Block>, Vec<Out>) {
+    let body = NdrRequest::new(4096, Block::emit_all(blocks).unwrap()).unwrap();
+    let req = RpcRepr::request(
+        def_object(),
+        Uuid::PNIO_DEVICE_INTERFACE,
+        Uuid([opnum.0 as u8; 16]),
+        0,
+        opnum,
+        body.emit(proto::pnio::rpc::Drep::LITTLE_ENDIAN),
+    );
+    let out = io.datagram(plc(), &req.emit().unwrap(), now);
+    let replies = datagrams(&out);
+    let reply = replies
+        .iter()
+        .find(|r| r.packet_type == PacketType::RESPONSE && r.opnum == opnum)
+        .expect("a response");
+    let ndr = NdrResponse::parse(&reply.body, reply.drep).unwrap();
+    (
+        ndr.status,
+        Block::parse_all(&ndr.data).unwrap_or_default(),
+        out,
+    )
+}
+
+fn def_object() -> Uuid {
+    Uuid::pnio_object(0, def::device_id(Product::Sk550p).unwrap(), def::VENDOR_ID)
+}
+
+/// The Connect of the DAP and `modules` (slot, kind), 1 ms cycle, watchdog 3.
+fn connect_blocks(product: Product, modules: &[(u16, ModuleKind)]) -> (Vec<Block>, Plan) {
+    let mut subs = def::expected_dap();
+    for (slot, kind) in modules {
+        subs.push(def::expected_module(
+            *slot,
+            &def::module(product, *kind).unwrap(),
+        ));
+    }
+    let plan = Plan::new(&subs).unwrap();
+    let iocr = |iocr_type, layout: &proto::pnio::plan::CrLayout, frame_id| {
+        Block::IocrReq(IocrBlockReq {
+            iocr_type,
+            reference: iocr_type.0,
+            lt: ETHERTYPE_PROFINET,
+            properties: iocr_properties::RT_CLASS_2,
+            data_length: layout.data_length,
+            frame_id,
+            send_clock_factor: 32,
+            reduction_ratio: 1,
+            phase: 1,
+            frame_send_offset: 0xFFFF_FFFF,
+            watchdog_factor: 3,
+            data_hold_factor: 3,
+            tag_header: 0xC000,
+            apis: vec![layout.api.clone()],
+            ..IocrBlockReq::default()
+        })
+    };
+    let blocks = vec![
+        Block::ArReq(ArBlockReq {
+            ar_type: ArType::IOC_AR_SINGLE,
+            ar_uuid: AR_UUID,
+            session_key: 1,
+            initiator_mac: PLC_MAC,
+            initiator_object: Uuid([0xC0; 16]),
+            properties: 0x11,
+            activity_timeout_factor: 100,
+            udp_rt_port: ETHERTYPE_PROFINET,
+            station_name: b"plc".to_vec(),
+        }),
+        iocr(IocrType::INPUT, &plan.input, 0xC000),
+        iocr(IocrType::OUTPUT, &plan.output, 0xC001),
+        Block::AlarmCrReq(AlarmCrBlockReq {
+            alarm_cr_type: AlarmCrType::ALARM_CR,
+            lt: ETHERTYPE_PROFINET,
+            rta_timeout_factor: 1,
+            rta_retries: 3,
+            local_alarm_reference: PLC_REF,
+            max_alarm_data_length: 200,
+            ..AlarmCrBlockReq::default()
+        }),
+        Block::ExpectedSubmoduleReq(plan.expected.clone()),
+    ];
+    (blocks, plan)
+}
+
+/// Connect, PrmEnd, ApplicationReady confirmed: the AR runs. Returns the plan.
+fn run_ar(io: &mut IoDevice, modules: &[(u16, ModuleKind)]) -> Plan {
+    let product = io.product;
+    let (blocks, plan) = connect_blocks(product, modules);
+    let (status, _, _) = call(io, Opnum::CONNECT, &blocks, Duration::ZERO);
+    assert!(status.is_ok(), "{status:?}");
+    let (status, _, out) = call(
+        io,
+        Opnum::CONTROL,
+        &[Block::Control(IodControl::prm_end(AR_UUID, 1))],
+        Duration::ZERO,
+    );
+    assert!(status.is_ok(), "{status:?}");
+    let ready = datagrams(&out)
+        .into_iter()
+        .find(|r| r.packet_type == PacketType::REQUEST)
+        .expect("ApplicationReady");
+    assert_eq!(ready.interface, Uuid::PNIO_CONTROLLER_INTERFACE);
+    let ndr = NdrRequest::parse(&ready.body, ready.drep).unwrap();
+    let Ok(blocks) = Block::parse_all(&ndr.data) else {
+        panic!()
+    };
+    let Some(Block::Control(c)) = blocks.first() else {
+        panic!()
+    };
+    let answer = NdrResponse::answering(
+        &ndr,
+        PnioStatus::OK,
+        Block::emit_all(&[Block::Control(c.done())]).unwrap(),
+    )
+    .unwrap();
+    let reply = ready.reply(PacketType::RESPONSE, answer.emit(ready.drep));
+    io.datagram(plc(), &reply.emit().unwrap(), Duration::ZERO);
+    assert!(io.in_data_exchange());
+    plan
+}
+
+/// The output frame carrying `ppo` for the module in `slot`.
+fn output(plan: &Plan, slot: u16, ppo: &[u8], cycle: u16) -> Vec<u8> {
+    let mut c_sdu = vec![0u8; usize::from(plan.output.data_length)];
+    for p in &plan.output.data {
+        if p.slot == slot {
+            c_sdu[p.offset..p.offset + ppo.len()].copy_from_slice(ppo);
+        }
+        c_sdu[p.offset + p.len] = Iox::GOOD.0;
+    }
+    for p in &plan.output.iocs {
+        c_sdu[p.offset] = Iox::GOOD.0;
+    }
+    let rt = RtRepr {
+        frame_id: FrameId(0xC001),
+        data: c_sdu,
+        cycle_counter: cycle,
+        data_status: DataStatus::GOOD,
+        transfer_status: 0,
+    };
+    eth(MacAddr([0x00, 0x0E, 0xCF, 0x03, 0x60, 0x00]), &rt.emit())
+}
+
+/// The input data of `slot` in the last input frame among `out`.
+fn input_of(plan: &Plan, out: &[Out], slot: u16) -> Option<(Vec<u8>, Iox)> {
+    let rt = frames(out)
+        .into_iter()
+        .filter_map(|f| RtRepr::parse(&f, Some(usize::from(plan.input.data_length))).ok())
+        .last()?;
+    let p = plan.input.data.iter().find(|p| p.slot == slot)?;
+    Some((
+        rt.data[p.offset..p.offset + p.len].to_vec(),
+        Iox(rt.data[p.offset + p.len]),
+    ))
+}
+
+#[test]
+fn identify_all_answers_with_name_ip_and_ids() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let req = DcpRepr::identify_all(7, 1).emit().unwrap();
+    let out = io.frame(&eth(MULTICAST_DCP_IDENTIFY, &req), Duration::ZERO);
+    let answers = frames(&out);
+    assert_eq!(answers.len(), 1);
+    let res = DcpRepr::parse(&answers[0]).unwrap();
+    assert_eq!(res.xid, 7);
+    let name = res
+        .find(DcpOption::NAME_OF_STATION)
+        .map(|b| b.value.clone());
+    assert_eq!(name, Some(BlockValue::NameOfStation("sk550p-1".into())));
+    assert!(matches!(
+        res.find(DcpOption::DEVICE_ID).map(|b| &b.value),
+        Some(BlockValue::DeviceId { vendor_id, device_id })
+            if *vendor_id == def::VENDOR_ID && Some(*device_id) == def::device_id(Product::Sk550p)
+    ));
+}
+
+#[test]
+fn identify_by_another_name_is_not_answered() {
+    let mut io = io(Product::Tu3Pnt, "tu3");
+    let req = DcpRepr::identify_name(8, 1, "other").emit().unwrap();
+    assert!(frames(&io.frame(&eth(MULTICAST_DCP_IDENTIFY, &req), Duration::ZERO)).is_empty());
+}
+
+/// Connect with FI 1's PPO 3 in slot 3 and a module the SK 550P has no slot 1 for: the AR
+/// comes up, the ModuleDiffBlock names slot 1; P879 [-01] shows the PPO 3 module.
+#[test]
+fn connect_answers_a_module_difference_and_shows_the_ppo() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let ppo3 = ModuleKind::Ppo(PpoType::TYPE_3);
+    let (blocks, _) = connect_blocks(Product::Sk550p, &[(3, ppo3), (1, ppo3)]);
+    let (status, res, _) = call(&mut io, Opnum::CONNECT, &blocks, Duration::ZERO);
+    assert!(status.is_ok());
+    let diff = res.iter().find_map(|b| match b {
+        Block::ModuleDiff(d) => Some(d.clone()),
+        _ => None,
+    });
+    let slots: Vec<u16> = diff.unwrap().apis[0]
+        .modules
+        .iter()
+        .map(|m| m.slot)
+        .collect();
+    assert_eq!(slots, [1]);
+    let shown = io
+        .device_mut()
+        .store(Unit::Interface)
+        .unwrap()
+        .read(
+            proto::nord::ParamNumber::new(879).unwrap(),
+            None,
+            proto::nord::ArrayElement::new(1).ok(),
+        )
+        .unwrap();
+    assert_eq!(
+        Some(shown as u16),
+        def::slot_display(Product::Sk550p, Some(ppo3))
+    );
+}
+
+#[test]
+fn a_second_controller_is_refused_out_of_ar_resources() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let ppo3 = ModuleKind::Ppo(PpoType::TYPE_3);
+    run_ar(&mut io, &[(3, ppo3)]);
+    let (mut blocks, _) = connect_blocks(Product::Sk550p, &[(3, ppo3)]);
+    if let Block::ArReq(a) = &mut blocks[0] {
+        a.ar_uuid = Uuid([0xB2; 16]);
+    }
+    let (status, _, _) = call(&mut io, Opnum::CONNECT, &blocks, Duration::ZERO);
+    assert_eq!(
+        status,
+        PnioStatus::cm(
+            proto::pnio::status::cm::CONNECT,
+            proto::pnio::status::cm::CMRPC,
+            proto::pnio::status::cm::CMRPC_OUT_OF_AR
+        )
+    );
+}
+
+/// The switching example over RT: control word 047Eh then 047Fh with setpoint 4000h bring FI
+/// 1 to "operation enabled", the status word in the input frame follows; the input frames
+/// come every millisecond.
+#[test]
+fn cyclic_data_drives_the_inverter_and_comes_back_every_millisecond() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let plan = run_ar(&mut io, &[(3, ModuleKind::Ppo(PpoType::TYPE_3))]);
+    let mut status = 0;
+    let mut inputs = 0;
+    for ms in 1..=200u64 {
+        let now = Duration::from_millis(ms);
+        let control: u16 = if ms < 100 { 0x047E } else { 0x047F };
+        let ppo = [control.to_be_bytes(), 0x4000u16.to_be_bytes()].concat();
+        let mut out = io.frame(&output(&plan, 3, &ppo, ms as u16), now);
+        out.extend(io.poll(now));
+        if let Some((data, iops)) = input_of(&plan, &out, 3) {
+            inputs += 1;
+            assert_eq!(iops, Iox::GOOD);
+            status = u16::from_be_bytes([data[0], data[1]]);
+        }
+    }
+    assert!(inputs >= 199, "{inputs} input frames in 200 ms");
+    assert_eq!(status & 0x006F, 0x0027, "status word {status:04X}h");
+}
+
+/// No output frame for WatchdogFactor cycles: the AR ends and FI 1, monitoring on (P513
+/// [-04]), raises E10.2 (BU 0620 §5.3).
+#[test]
+fn the_watchdog_ends_the_ar_and_raises_the_documented_error() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let fi1 = Inverter::new(1).unwrap();
+    let store = io.device_mut().store(Unit::Inverter(fi1)).unwrap();
+    store
+        .write(
+            proto::nord::ParamNumber::new(513).unwrap(),
+            None,
+            proto::nord::ArrayElement::new(4).ok(),
+            5,
+            crate::store::Persist::RamOnly,
+        )
+        .unwrap();
+    let plan = run_ar(&mut io, &[(3, ModuleKind::Ppo(PpoType::TYPE_3))]);
+    io.frame(
+        &output(&plan, 3, &[0x04, 0x7E, 0, 0], 1),
+        Duration::from_millis(1),
+    );
+    for ms in 2..20 {
+        io.poll(Duration::from_millis(ms));
+    }
+    assert!(!io.in_data_exchange());
+    let p700 = io
+        .device_mut()
+        .store(Unit::Inverter(fi1))
+        .unwrap()
+        .read(
+            proto::nord::ParamNumber::new(700).unwrap(),
+            None,
+            proto::nord::ArrayElement::new(1).ok(),
+        )
+        .unwrap();
+    assert_eq!(
+        Some(p700 as u16),
+        def::controller_loss_error(Product::Sk550p)
+    );
+}
+
+/// An inverter error raises a diagnosis alarm with P700 + 100h; the device repeats it until
+/// acknowledged, then takes the controller's AlarmAck.
+#[test]
+fn an_inverter_error_raises_a_diagnosis_alarm_that_the_controller_acknowledges() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let plan = run_ar(&mut io, &[(3, ModuleKind::Ppo(PpoType::TYPE_3))]);
+    let fi1 = Inverter::new(1).unwrap();
+    io.device_mut().inject_fault(fi1, "10.3").unwrap();
+    let now = Duration::from_millis(1);
+    // The outputs every millisecond from `from` to `to`, and what came back.
+    let keep = |io: &mut IoDevice, from: u64, to: u64| {
+        let mut out = Vec::new();
+        for ms in from..=to {
+            let now = Duration::from_millis(ms);
+            out.extend(io.frame(&output(&plan, 3, &[0, 0, 0, 0], ms as u16), now));
+            out.extend(io.poll(now));
+        }
+        out
+    };
+    let alarms = |out: &[Out]| {
+        frames(out)
+            .into_iter()
+            .filter(|f| f[..2] == [0xFE, 0x01])
+            .map(|f| AlarmRepr::parse(&f).unwrap())
+            .collect::<Vec<_>>()
+    };
+    let first = alarms(&io.poll(now));
+    assert_eq!(first.len(), 1);
+    let RtaBody::Notification(n) = &first[0].body else {
+        panic!("{first:?}")
+    };
+    assert_eq!(n.alarm_type, AlarmType::DIAGNOSIS);
+    assert_eq!((n.slot, n.subslot), (3, 1));
+    let items = format!("{:?}", n.items);
+    assert!(
+        items.contains(&format!("error_type: {}", def::fi_error_alarm(103))),
+        "{items}"
+    );
+    // Not acknowledged: again after RTATimeoutFactor × 100 ms.
+    let again = alarms(&keep(&mut io, 2, 150));
+    assert_eq!(again.len(), 1);
+    assert_eq!(again[0].send_seq, first[0].send_seq);
+    // Transport ACK, then the AlarmAck as DATA.
+    let seq = first[0].send_seq;
+    let ack = AlarmRepr::ack(FrameId::ALARM_LOW, 1, PLC_REF, 0xFFFF, seq);
+    io.frame(
+        &eth(io.mac(), &ack.emit().unwrap()),
+        Duration::from_millis(151),
+    );
+    let data = AlarmRepr::data(
+        1,
+        PLC_REF,
+        0,
+        seq,
+        RtaBody::Ack(AlarmAck::of(n, PnioStatus::OK)),
+    );
+    let out = io.frame(
+        &eth(io.mac(), &data.emit().unwrap()),
+        Duration::from_millis(152),
+    );
+    let answers = alarms(&out);
+    assert_eq!(answers.len(), 1);
+    assert_eq!(answers[0].pdu_type, RtaPduType::ACK);
+    assert_eq!(answers[0].ack_seq, 0);
+    // Nothing outstanding any more: no repetition.
+    assert!(alarms(&keep(&mut io, 153, 400)).is_empty());
+    assert!(io.in_data_exchange());
+}
+
+/// Records over the AR: the P102 example of BU 0620 §2.5.6.4 written to record 101, then the
+/// answer read; an unknown index gets its PNIO status.
+#[test]
+fn records_carry_the_parameter_channel() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    run_ar(&mut io, &[(3, ModuleKind::Ppo(PpoType::TYPE_3))]);
+    let addr = |index| RecordAddress {
+        seq_number: index,
+        ar_uuid: AR_UUID,
+        api: 0,
+        slot: 3,
+        subslot: 1,
+        index,
+    };
+    // BU 0620 §2.5.6.4: P102 [-02] = 2.5 s, "24 4E 01 00 00 00 00 FA" (AK 2, PNU 102 + 1000).
+    let order = vec![0x24, 0x4E, 0x01, 0x00, 0x00, 0x00, 0x00, 0xFA];
+    let write = Block::WriteReq(IodWriteReq {
+        addr: addr(101),
+        data: order,
+    });
+    let (status, _, _) = call(&mut io, Opnum::WRITE, &[write], Duration::ZERO);
+    assert!(status.is_ok(), "{status:?}");
+    let read = Block::ReadReq(IodReadReq {
+        addr: addr(101),
+        record_data_length: 8,
+        target_ar_uuid: Uuid::default(),
+    });
+    let mut answer = None;
+    for ms in 1..10 {
+        io.poll(Duration::from_millis(ms));
+        let (status, res, _) = call(
+            &mut io,
+            Opnum::READ,
+            &[read.clone()],
+            Duration::from_millis(ms),
+        );
+        if status.is_ok() {
+            answer = res.into_iter().find_map(|b| match b {
+                Block::ReadRes(r) => Some(r.data),
+                _ => None,
+            });
+            break;
+        }
+        assert_eq!(status, def::busy_status());
+    }
+    let answer = answer.expect("an answer");
+    // Response label 1, PNU 1102.
+    assert_eq!(&answer[..2], &[0x14, 0x4E]);
+    let bad = Block::ReadReq(IodReadReq {
+        addr: addr(99),
+        record_data_length: 8,
+        target_ar_uuid: Uuid::default(),
+    });
+    let (status, _, _) = call(&mut io, Opnum::READ, &[bad], Duration::ZERO);
+    assert!(!status.is_ok());
+}
+
+#[test]
+fn release_ends_the_ar_and_a_wrong_session_key_is_refused() {
+    let mut io = io(Product::Tu3Pnt, "tu3");
+    run_ar(&mut io, &[(3, ModuleKind::Ppo(PpoType::TYPE_1))]);
+    let (status, _, _) = call(
+        &mut io,
+        Opnum::RELEASE,
+        &[Block::Control(IodControl::release(AR_UUID, 9))],
+        Duration::ZERO,
+    );
+    assert!(!status.is_ok());
+    assert!(io.in_data_exchange());
+    let (status, _, _) = call(
+        &mut io,
+        Opnum::RELEASE,
+        &[Block::Control(IodControl::release(AR_UUID, 1))],
+        Duration::ZERO,
+    );
+    assert!(status.is_ok());
+    assert!(!io.in_data_exchange());
+}
+
+#[test]
+fn garbage_is_dropped_and_the_device_keeps_answering() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let junk: [&[u8]; 3] = [
+        // DCP Set whose DCPDataLength (FFFFh) runs past the frame.
+        &[0xFE, 0xFD, 0x04, 0x00, 0, 0, 0, 1, 0, 0, 0xFF, 0xFF],
+        // RT and alarm frames without an AR.
+        &[0xC0, 0x01, 1, 2, 3],
+        &[0xFC, 0x01, 0, 1],
+    ];
+    for junk in junk {
+        assert!(frames(&io.frame(&eth(io.mac(), junk), Duration::ZERO)).is_empty());
+    }
+    assert!(io.datagram(plc(), &[4, 0, 0], Duration::ZERO).is_empty());
+    assert!(io.dropped() >= 4);
+    let req = DcpRepr::identify_all(9, 1).emit().unwrap();
+    assert_eq!(
+        frames(&io.frame(&eth(MULTICAST_DCP_IDENTIFY, &req), Duration::ZERO)).len(),
+        1
+    );
+}
