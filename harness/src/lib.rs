@@ -11,6 +11,8 @@ pub use ecat::bench_support as ecat_bench;
 pub use ecat::serve as ecat_serve;
 pub use epl::bench_support as epl_bench;
 pub use epl::serve as epl_serve;
+/// `harness serve pnio` in a thread of the caller (PROFINET end-to-end tests and benches).
+pub use pnio::serve as pnio_serve;
 mod enip;
 mod epl;
 /// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the

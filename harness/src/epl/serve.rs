@@ -19,7 +19,7 @@
 //! The node is shared under a mutex, and the time handed to it (since start) is read with the
 //! lock held, so it never goes backwards.
 
-use std::net::{IpAddr, Ipv4Addr, SocketAddr, UdpSocket};
+use std::net::{IpAddr, SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::{self, JoinHandle};
@@ -32,6 +32,7 @@ use proto::nord::Protocol;
 use sim::epl::{Node, NodeConfig, NodeError, POLL_PERIOD};
 
 pub use crate::net::LinkError;
+use crate::net::udp::{ipv4_of, transient};
 use crate::net::{RawLink, MAX_FRAME};
 
 /// How long the raw thread polls the socket after a frame before it sleeps: the next frame of
@@ -226,7 +227,7 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let mut link = RawLink::open(&opts.iface, Some(ETHERTYPE_POWERLINK))?;
     link.set_spin(FRAME_POLL);
     let udp = match ipv4_of(&opts.iface) {
-        Some(ip) => {
+        Some((ip, _)) => {
             let addr = SocketAddr::from((ip, SDO_UDP_PORT));
             let socket =
                 UdpSocket::bind(addr).map_err(|source| ServeError::Udp { addr, source })?;
@@ -418,19 +419,6 @@ fn device_config(opts: &ServeOptions) -> Result<sim::device::DeviceConfig, Serve
     })
 }
 
-/// The first IPv4 address of interface `name`, if it has one.
-fn ipv4_of(name: &str) -> Option<Ipv4Addr> {
-    pnet_datalink::interfaces()
-        .into_iter()
-        .find(|i| i.name == name)?
-        .ips
-        .iter()
-        .find_map(|n| match n.ip() {
-            IpAddr::V4(a) => Some(a),
-            IpAddr::V6(_) => None,
-        })
-}
-
 /// What both threads share.
 struct Shared {
     node: Arc<Mutex<Node>>,
@@ -519,23 +507,6 @@ fn run_udp(socket: UdpSocket, addr: SocketAddr, shared: &Shared) -> Result<(), S
         }
     }
     Ok(())
-}
-
-/// A UDP error that ends one exchange, not the socket: the read timeout, an interrupted call,
-/// a peer gone (ICMP port unreachable), a network not reachable just now.
-fn transient(e: &std::io::Error) -> bool {
-    use std::io::ErrorKind as K;
-    matches!(
-        e.kind(),
-        K::WouldBlock
-            | K::TimedOut
-            | K::Interrupted
-            | K::ConnectionRefused
-            | K::ConnectionReset
-            | K::HostUnreachable
-            | K::NetworkUnreachable
-            | K::NetworkDown
-    )
 }
 
 #[cfg(test)]

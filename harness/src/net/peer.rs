@@ -60,6 +60,11 @@ pub(crate) trait Link {
     fn wait_until(&mut self, until: Duration);
     /// The device's UDP address and the tester's, for captures.
     fn udp_ends(&mut self) -> (SocketAddr, SocketAddr);
+    /// Sends the datagrams to `peer` from now on (a device whose address the tester learnt on
+    /// the link, as PROFINET's controller does by DCP). The embedded link has one device.
+    fn set_udp_peer(&mut self, _peer: SocketAddr) -> Result<(), LinkError> {
+        Ok(())
+    }
     /// The simulated device and the time, when it is in-process.
     fn device(&mut self) -> Option<(&mut Self::Device, Duration)>;
 }
@@ -193,11 +198,16 @@ impl<D: SimDevice> Link for EmbeddedLink<D> {
     }
 }
 
+/// The shortest wait [`NetLink::recv_udp`] blocks for; shorter ones only look.
+const MIN_UDP_WAIT: Duration = Duration::from_millis(5);
+
 /// A device behind a network interface: raw frames of one EtherType and UDP to `peer`.
 pub(crate) struct NetLink<D> {
     raw: RawLink,
     udp: UdpSocket,
     peer: SocketAddr,
+    /// The UDP port the socket is bound to (0: any).
+    local_port: u16,
     start: Instant,
     buf: Vec<u8>,
     device: std::marker::PhantomData<fn() -> D>,
@@ -233,6 +243,7 @@ impl<D> NetLink<D> {
             raw,
             udp,
             peer,
+            local_port,
             start: Instant::now(),
             buf: vec![0; crate::net::MAX_FRAME],
             device: std::marker::PhantomData,
@@ -283,12 +294,17 @@ impl<D> Link for NetLink<D> {
         let peer = self.peer.to_string();
         loop {
             let left = deadline.saturating_sub(self.now());
-            if left.is_zero() {
-                return Ok(None);
-            }
+            // A receive time-out is counted in the kernel's ticks (4 ms at HZ=250): a wait
+            // shorter than a tick is a look at what is queued, without waiting.
+            let glance = left < MIN_UDP_WAIT;
             self.udp
-                .set_read_timeout(Some(left))
-                .map_err(|e| LinkError::io("set a UDP timeout", &peer, e))?;
+                .set_nonblocking(glance)
+                .map_err(|e| LinkError::io("set a UDP socket's mode", &peer, e))?;
+            if !glance {
+                self.udp
+                    .set_read_timeout(Some(left))
+                    .map_err(|e| LinkError::io("set a UDP timeout", &peer, e))?;
+            }
             match self.udp.recv_from(&mut buf) {
                 Ok((n, from)) if from == self.peer => return Ok(Some(buf[..n].to_vec())),
                 Ok(_) => continue,
@@ -318,6 +334,23 @@ impl<D> Link for NetLink<D> {
             .local_addr()
             .unwrap_or(SocketAddr::from(([0, 0, 0, 0], 0)));
         (self.peer, local)
+    }
+
+    fn set_udp_peer(&mut self, peer: SocketAddr) -> Result<(), LinkError> {
+        if peer == self.peer {
+            return Ok(());
+        }
+        // A connected socket keeps the source address of its first peer's route: a new one
+        // on the same port, the old one closed first.
+        let what = peer.to_string();
+        let io = |e| LinkError::io("reach the device over UDP", &what, e);
+        let spare = UdpSocket::bind(("0.0.0.0", 0)).map_err(io)?;
+        drop(std::mem::replace(&mut self.udp, spare));
+        let udp = UdpSocket::bind(("0.0.0.0", self.local_port)).map_err(io)?;
+        udp.connect(peer).map_err(io)?;
+        self.udp = udp;
+        self.peer = peer;
+        Ok(())
     }
 
     fn device(&mut self) -> Option<(&mut D, Duration)> {
@@ -407,6 +440,10 @@ impl<L: Link> Link for Tapped<L> {
 
     fn udp_ends(&mut self) -> (SocketAddr, SocketAddr) {
         self.inner.udp_ends()
+    }
+
+    fn set_udp_peer(&mut self, peer: SocketAddr) -> Result<(), LinkError> {
+        self.inner.set_udp_peer(peer)
     }
 
     fn wait_until(&mut self, until: Duration) {

@@ -3,8 +3,9 @@
 //! interface.
 //!
 //! Opening a DUT finds the device by DCP (by name, or the only one answering), then connects
-//! with a PPO 2 module in each inverter's slot (PKW and six process words, the widest PPO
-//! both products take), PrmEnd, and the device's ApplicationReady: data exchange at 1 ms.
+//! with a PPO 4 module in each inverter's slot (control/status word and three setpoints/actual
+//! values, no parameter channel: that goes through the records), PrmEnd, and the device's
+//! ApplicationReady: data exchange at 1 ms.
 //! The manual-level steps run through the shared parameter channel ([`Channel`]) on a
 //! [`Dut`] that carries them the PROFINET way: a PKW order is written to the unit's data
 //! record (BU 0620 §2.5.6.2: 100 the interface, 100 + n FI n) and its answer read back from
@@ -24,16 +25,20 @@ use proto::pnio::alarm::AlarmItem;
 use proto::pnio::dcp::{BlockQualifier, BlockValue, DcpBlock, IpParameter};
 use proto::pnio::plan::ExpectedSub;
 use proto::pnio::rpc::{Opnum, Uuid};
+use proto::pnio::status::cm;
 use proto::pnio::PnioStatus;
 use serde_json::{json, Value};
 use sim::link::{LinkRepr, Unit};
 
-use super::controller::{Connected, Controller, PnioError};
+use super::controller::{Connected, Controller, PnioError, Station};
 use super::link::Link;
+use super::restore::{self, Param, Settling};
 use super::step::{Module, PnioStep};
 use crate::binding::channel::{cycles_left_out, Channel};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
-use crate::binding::{Binding, Dut, DutError, Observation, OpenError, StepError};
+use crate::binding::settle::Drives;
+use crate::binding::{Binding, CleanupError, Dut, DutError, Observation, OpenError, StepError};
+use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Refusal};
 use crate::profile::Capability;
 use crate::runner::hex;
@@ -52,6 +57,15 @@ pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 9] = [
     Capability::Bus("pnio"),
 ];
 
+/// What a device on the network offers: one persistent device, which the harness can neither
+/// power-cycle, reset to factory settings nor look into.
+pub(crate) const NETWORK_CAPABILITIES: [Capability; 4] = [
+    Capability::ParameterAccess,
+    Capability::ParameterChannel,
+    Capability::ProcessData,
+    Capability::Bus("pnio"),
+];
+
 /// Bus cycles a parameter order may take to be answered (each cycle one record read).
 const ORDER_CYCLES: u32 = 200;
 
@@ -64,8 +78,18 @@ pub(crate) struct PnioBinding<L> {
     channel: Channel,
     product: Product,
     inverters: u8,
-    name: Option<String>,
     what: String,
+    capabilities: &'static [Capability],
+    /// A device on the network: what the case wrote, the drives it ran, and the device as the
+    /// run found it, to put back when the case ends.
+    persistent: Option<Persistent>,
+}
+
+/// What a case on a persistent device changes.
+struct Persistent {
+    ledger: Ledger<Param>,
+    commanded: Vec<Inverter>,
+    found: Station,
 }
 
 /// The refusal of a PNIO status.
@@ -107,8 +131,56 @@ fn open_error(e: PnioError) -> OpenError {
     }
 }
 
-/// The modules of a Connect: the given ones in FI 1, 2… slots, PPO 2 for the rest of the
-/// inverters (an ident number as written, for a wrong module).
+/// The PPO type of the module connected in `slot`, `None` for none or another module.
+pub(super) fn module_ppo<L: Link>(ctl: &Controller<L>, product: Product, slot: u16) -> Option<PpoType> {
+    match def::module_by_ident(product, ctl.module_ident(slot)?)?.kind {
+        ModuleKind::Ppo(t) => Some(t),
+        ModuleKind::DigIo => None,
+    }
+}
+
+/// A PPO module's output data with the process words `pzd` (control word, setpoints; cut or
+/// filled with zeros to the module's), its parameter channel empty where it has one.
+pub(super) fn module_bytes(t: PpoType, pzd: &[u16]) -> Vec<u8> {
+    let mut pzd = pzd.to_vec();
+    pzd.resize(t.pzd_words(), 0);
+    PpoRepr {
+        pkw: t.has_pkw().then(PkwRepr::default),
+        pzd,
+    }
+    .emit(t)
+}
+
+/// The process words of a PPO module's input data (status word, actual values).
+pub(super) fn module_pzd(t: PpoType, data: &[u8]) -> Option<Vec<u16>> {
+    PpoRepr::parse(data, t).ok().map(|p| p.pzd)
+}
+
+/// The module a Connect puts in an inverter's slot unless told: PPO 4, the control/status word
+/// and three setpoints/actual values without a parameter channel (BU 0620 §2.5.5.1), which
+/// goes through the data records; PPO 2 where a product has no PPO 4.
+fn default_ppo(product: Product) -> PpoType {
+    [PpoType::TYPE_4, PpoType::TYPE_2]
+        .into_iter()
+        .find(|t| def::module(product, ModuleKind::Ppo(*t)).is_some())
+        .unwrap_or(PpoType::TYPE_2)
+}
+
+/// Connect with `subs`; a device still holding the AR of an earlier case (which ended without
+/// releasing it) refuses with "out of AR resources" until its watchdog ends that AR: once
+/// more after it.
+fn up<L: Link>(ctl: &mut Controller<L>, subs: &[ExpectedSub]) -> Result<Connected, PnioError> {
+    let c = ctl.connect(subs)?;
+    let out_of_ar = PnioStatus::cm(cm::CONNECT, cm::CMRPC, cm::CMRPC_OUT_OF_AR);
+    if c.status != out_of_ar {
+        return Ok(c);
+    }
+    ctl.run_for(ctl.watchdog() * 2)?;
+    ctl.connect(subs)
+}
+
+/// The modules of a Connect: the given ones in FI 1, 2… slots, [`default_ppo`] for the rest
+/// of the inverters (an ident number as written, for a wrong module).
 fn expected(
     product: Product,
     inverters: u8,
@@ -123,7 +195,7 @@ fn expected(
             None | Some(Module::Ppo(_)) => {
                 let t = match module {
                     Some(Module::Ppo(t)) => t,
-                    _ => PpoType::TYPE_2,
+                    _ => default_ppo(product),
                 };
                 let m = def::module(product, ModuleKind::Ppo(t)).ok_or(format!(
                     "{} has no PPO {} module",
@@ -155,7 +227,7 @@ impl<L: Link + 'static> PnioBinding<L> {
         inverters: u8,
         name: Option<String>,
         what: String,
-        retries: u32,
+        persistent: bool,
     ) -> Result<PnioBinding<L>, OpenError> {
         ctl.set_recording(false);
         let station = ctl.locate(name.as_deref()).map_err(open_error)?;
@@ -176,7 +248,7 @@ impl<L: Link + 'static> PnioBinding<L> {
             station.mac
         );
         let subs = expected(product, inverters, &[]).map_err(OpenError::Profile)?;
-        let c = ctl.connect(&subs).map_err(open_error)?;
+        let c = up(&mut ctl, &subs).map_err(open_error)?;
         if !c.ready {
             return Err(OpenError::BringUp(format!("the AR did not come up: {c:?}")));
         }
@@ -190,12 +262,21 @@ impl<L: Link + 'static> PnioBinding<L> {
             pending: None,
         };
         Ok(PnioBinding {
-            channel: Channel::new(Box::new(dut), product, retries.max(ORDER_CYCLES)),
+            channel: Channel::new(Box::new(dut), product, ORDER_CYCLES),
+            capabilities: if persistent {
+                &NETWORK_CAPABILITIES
+            } else {
+                &EMBEDDED_CAPABILITIES
+            },
             ctl,
             product,
             inverters,
-            name,
             what,
+            persistent: persistent.then(|| Persistent {
+                ledger: Ledger::default(),
+                commanded: Vec::new(),
+                found: station,
+            }),
         })
     }
 
@@ -367,6 +448,92 @@ impl<L: Link + 'static> PnioBinding<L> {
         })
     }
 
+    /// A parameter write on a persistent device, through the ledger: the value before is read
+    /// first (the first write of it in the case).
+    fn write(&mut self, action: &Action, o: &crate::suite::OrderSpec) -> Result<Observation, StepError> {
+        let key = Param::of(o);
+        let wants = self.persistent.as_ref().is_some_and(|p| p.ledger.wants_original(&key));
+        if wants {
+            let before = self
+                .channel
+                .perform(&Action::Read(key.read()))
+                .map_err(|e| e.to_string())
+                .and_then(|obs| match (obs.refusal, obs.fields["value"].as_i64()) {
+                    (None, Some(v)) => Ok(restore::value_bytes(v)),
+                    (Some(r), _) => Err(r.text),
+                    (None, None) => Err("no value in the answer".into()),
+                });
+            if let Some(p) = self.persistent.as_mut() {
+                p.ledger.original(key, before);
+            }
+        }
+        let r = self.channel.perform(action);
+        if let Some(p) = self.persistent.as_mut() {
+            let outcome = match &r {
+                Ok(obs) => Ok(obs.refusal.is_none()),
+                Err(e) => Err(e),
+            };
+            p.ledger.wrote(&key, ledger::may_have_taken_effect(outcome));
+        }
+        r
+    }
+
+    /// A persistent device's cleanup: a fresh AR, the drives the case ran back in
+    /// "Switch-on block", the case's writes put back, the AR released, the name and address
+    /// the run found set back.
+    fn restore(&mut self) -> Result<(), String> {
+        let Some(p) = self.persistent.take() else {
+            return Ok(());
+        };
+        let mut account = Account::default();
+        let mut ctl = self.ctl.borrow_mut();
+        let link = |what: &'static str| move |e: PnioError| Problem::step(what, step_error(e));
+        if account.attempt(|| "a fresh AR".into()) {
+            let _ = ctl.release();
+            let subs = expected(self.product, self.inverters, &[]).map_err(Problem::other);
+            let r = subs.and_then(|subs| {
+                let c = up(&mut ctl, &subs).map_err(link("connecting again"))?;
+                match c.ready {
+                    true => Ok(()),
+                    false => Err(Problem::other(format!("connecting again: {}", c.status))),
+                }
+            });
+            account.note(r);
+        }
+        if !p.commanded.is_empty() && account.attempt(|| "settling the drives".into()) {
+            let mut drives = Drives::new(self.inverters, &p.commanded);
+            let period = ctl.cycle();
+            let mut pending = Vec::new();
+            let mut c = Settling {
+                ctl: &mut ctl,
+                product: self.product,
+                words: Vec::new(),
+            };
+            account.note(drives.settle(&mut c, &mut pending, period, link("settling the drives")));
+        }
+        drop(ctl);
+        let channel = &mut self.channel;
+        p.ledger.restore(&mut account, |key, before| {
+            let value = restore::value_of(before);
+            match channel.perform(&Action::Write(key.write(value))) {
+                Ok(obs) => match obs.refusal {
+                    None => Ok(()),
+                    Some(r) => Err(Problem::other(format!("setting back {key}: {}", r.text))),
+                },
+                Err(e) => Err(Problem::step(format!("setting back {key}"), e)),
+            }
+        });
+        let mut ctl = self.ctl.borrow_mut();
+        if account.attempt(|| "releasing the AR".into()) {
+            let r = ctl.release().map(|_| ()).map_err(link("releasing the AR"));
+            account.note(r);
+        }
+        if account.attempt(|| "the name and address as found".into()) {
+            account.note(restore::station(&mut ctl, &p.found).map_err(Problem::other));
+        }
+        account.into_result()
+    }
+
     /// The slot and subslot of a record step: as given, else FI 1's module.
     fn place(&self, slot: Option<u16>, subslot: Option<u16>) -> (u16, u16) {
         let fi1 = Inverter::new(1)
@@ -457,7 +624,7 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
     }
 
     fn capabilities(&self) -> &[Capability] {
-        &EMBEDDED_CAPABILITIES
+        self.capabilities
     }
 
     fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
@@ -469,8 +636,20 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
                     .ok_or_else(|| StepError::NotApplicable(format!("a `{}:` step", step.bus())))?;
                 self.pnio_step(step)
             }
-            other => self.channel.perform(other),
+            Action::Write(o) if self.persistent.is_some() => self.write(action, o),
+            other => {
+                if let (Action::Process { inverter, .. }, Some(p)) = (other, self.persistent.as_mut()) {
+                    if !p.commanded.contains(inverter) {
+                        p.commanded.push(*inverter);
+                    }
+                }
+                self.channel.perform(other)
+            }
         }
+    }
+
+    fn finish(&mut self) -> Result<(), CleanupError> {
+        self.restore().map_err(CleanupError)
     }
 
     fn take_exchanges(&mut self) -> Vec<Exchange> {
@@ -487,7 +666,6 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
             ex.extend(last);
         }
         ex.extend(self.cycles_exchange());
-        let _ = &self.name;
         ex
     }
 }
@@ -570,19 +748,22 @@ impl<L: Link> Dut for PnioDut<L> {
         let link = LinkRepr::parse(frame).ok()?;
         let ppo = PpoType::new(link.ppo_type).ok()?;
         let sent = PpoRepr::parse(&link.payload, ppo).ok()?;
-        let slot = match link.unit {
-            Unit::Inverter(fi) => Some(def::inverter_slot(self.product, fi).ok()?),
+        // The inverter's module and what it carries (the channel's PPO has the parameter
+        // channel; the module need not).
+        let module = match link.unit {
+            Unit::Inverter(fi) => {
+                let slot = def::inverter_slot(self.product, fi).ok()?;
+                Some((slot, module_ppo(&self.ctl.borrow(), self.product, slot)?))
+            }
             Unit::Interface => None,
         };
-        let words = PpoRepr {
-            pkw: ppo.has_pkw().then(PkwRepr::default),
-            pzd: sent.pzd.clone(),
-        }
-        .emit(ppo);
-        self.ctl
-            .borrow_mut()
-            .provide(slot.map(|s| (s, &words[..])))
-            .ok()?;
+        let bytes = module.map(|(_, t)| module_bytes(t, &sent.pzd));
+        let provided: Vec<(u16, &[u8])> = module
+            .zip(bytes.as_deref())
+            .map(|((slot, _), b)| (slot, b))
+            .into_iter()
+            .collect();
+        self.ctl.borrow_mut().provide(&provided).ok()?;
         let pkw = match sent.pkw {
             Some(o) if o != PkwRepr::default() => Some(self.order(link.unit, o)?),
             other => other,
@@ -591,13 +772,11 @@ impl<L: Link> Dut for PnioDut<L> {
         if !ctl.exchange_cycle().ok()? {
             return None;
         }
-        let pzd = match slot {
-            Some(slot) => {
-                let (data, _) = ctl.input(slot)?;
-                PpoRepr::parse(&data, ppo).ok()?.pzd
-            }
-            None => vec![0; ppo.pzd_words()],
+        let mut pzd = match module {
+            Some((slot, t)) => module_pzd(t, &ctl.input(slot)?.0)?,
+            None => Vec::new(),
         };
+        pzd.resize(ppo.pzd_words(), 0);
         Some(
             LinkRepr {
                 unit: link.unit,

@@ -9,6 +9,7 @@
 //! the device's own ApplicationReady call.
 
 use std::collections::VecDeque;
+use std::net::SocketAddr;
 use std::time::Duration;
 
 use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_PROFINET};
@@ -41,8 +42,11 @@ const OUTPUT_FRAME_ID: u16 = 0xC001;
 const INPUT_FRAME_ID: u16 = 0xC000;
 /// SendClockFactor 32: a 1 ms send clock.
 const SEND_CLOCK_FACTOR: u16 = 32;
-/// WatchdogFactor: cycles without frames before either side gives the AR up.
-const WATCHDOG_FACTOR: u16 = 3;
+/// WatchdogFactor: cycles without output frames before the device gives the AR up. 100 (100 ms
+/// at 1 ms), not the 3 a PLC with a real-time scheduler uses: the harness is a process on a
+/// shared host, and being descheduled for a few milliseconds is not losing the controller.
+/// The watchdog steps wait longer than this.
+const WATCHDOG_FACTOR: u16 = 100;
 /// ArgsMaximum the controller offers for answers.
 const ARGS_MAXIMUM: u32 = 4096;
 /// The longest a DCP Identify collects answers on a network (the embedded device answers at
@@ -207,9 +211,20 @@ impl<L: Link> Controller<L> {
         Duration::from_micros(1000 * u64::from(self.reduction_ratio))
     }
 
+    /// How long the device waits without output frames before it ends the AR.
+    pub(crate) fn watchdog(&self) -> Duration {
+        self.cycle() * u32::from(WATCHDOG_FACTOR)
+    }
+
     /// Sets the reduction ratio of the next Connect.
     pub(crate) fn set_reduction_ratio(&mut self, rr: u16) {
         self.reduction_ratio = rr.max(1);
+    }
+
+    /// The device found last, with the name and address it has as far as the controller set
+    /// them.
+    pub(crate) fn station(&self) -> Option<&Station> {
+        self.station.as_ref()
     }
 
     /// Whether an AR is in data exchange.
@@ -271,13 +286,7 @@ impl<L: Link> Controller<L> {
                 return Ok(None);
             }
             if self.ar.is_some() && now >= self.next_send {
-                self.send_outputs()?;
-                let cycle = self.cycle();
-                self.next_send = if now.saturating_sub(self.next_send) > cycle {
-                    now + cycle
-                } else {
-                    self.next_send + cycle
-                };
+                self.send_now()?;
             }
             if let Some(answer) = self.datagrams(call)? {
                 return Ok(Some(Got::Answer(answer)));
@@ -294,7 +303,7 @@ impl<L: Link> Controller<L> {
                 // Datagrams are looked at between frames: a short wait on the frames.
                 wake = wake.min(now + POLL_SLICE);
             }
-            let Some((frame, _)) = self.link.recv(wake.max(now))? else {
+            let Some((frame, stamp)) = self.link.recv(wake.max(now))? else {
                 continue;
             };
             let Ok(eth) = EthernetFrame::new_checked(&frame[..]) else {
@@ -308,6 +317,7 @@ impl<L: Link> Controller<L> {
                 return Ok(Some(Got::Frame {
                     src: eth.src(),
                     payload: payload.to_vec(),
+                    stamp,
                 }));
             }
             let payload = payload.to_vec();
@@ -322,26 +332,32 @@ impl<L: Link> Controller<L> {
     }
 
     /// One cycle of the exchange: the next output frame (on the send clock), then the first
-    /// input frame after it, which carries the device's answer to it. `false` when no input
-    /// frame came within three cycles.
+    /// input frame that left the device after that frame reached it, which carries the
+    /// device's answer to it. `false` when none came within three cycles and [`LATE`].
     pub(crate) fn exchange_cycle(&mut self) -> Result<bool, PnioError> {
         let Some(input_id) = self.ar.as_ref().map(|a| a.input_frame_id) else {
             return Err(PnioError::NotConnected);
         };
-        let deadline = self.link.now() + self.cycle() * 3;
-        let sent = self.cycles.sent;
-        while self.cycles.sent == sent && self.link.now() < deadline {
-            let until = (self.next_send + Duration::from_nanos(1)).min(deadline);
-            self.pump(until, &|_| false, None)?;
+        let deadline = self.link.now() + self.cycle() * 3 + LATE;
+        if self.next_send > self.link.now() {
+            self.pump(self.next_send, &|_| false, None)?;
         }
+        self.send_now()?;
+        // When the output left: on the link's clock, and on the real-time clock the kernel
+        // stamps received frames with.
+        let (sent_at, sent_wall) = (self.link.now(), wall_clock());
         let is_input = move |p: &[u8]| frame_id(p).is_some_and(|id| id.0 == input_id);
-        match self.pump(deadline, &is_input, None)? {
-            Some(Got::Frame { payload, .. }) => {
-                self.cyclic_or_alarm(&payload)?;
-                Ok(true)
+        while let Some(Got::Frame { payload, stamp, .. }) = self.pump(deadline, &is_input, None)? {
+            self.cyclic_or_alarm(&payload)?;
+            let fresh = match stamp {
+                Some(at) => at >= sent_wall + FRESH,
+                None => self.link.now() >= sent_at + FRESH,
+            };
+            if fresh {
+                return Ok(true);
             }
-            _ => Ok(false),
         }
+        Ok(false)
     }
 
     /// Input frames and alarms; anything else is dropped.
@@ -363,6 +379,20 @@ impl<L: Link> Controller<L> {
             FrameKind::Alarm { .. } => self.alarm_pdu(payload)?,
             _ => {}
         }
+        Ok(())
+    }
+
+    /// The output frame now, and the next on the send clock (one cycle on; a cycle from now
+    /// when the controller fell behind by more than one).
+    fn send_now(&mut self) -> Result<(), PnioError> {
+        let now = self.link.now();
+        self.send_outputs()?;
+        let cycle = self.cycle();
+        self.next_send = if now.saturating_sub(self.next_send) > cycle {
+            now + cycle
+        } else {
+            self.next_send + cycle
+        };
         Ok(())
     }
 
@@ -466,7 +496,7 @@ impl<L: Link> Controller<L> {
         let is_answer = move |p: &[u8]| {
             DcpRepr::parse(p).is_ok_and(|r| r.xid == xid && r.service_type.is_response())
         };
-        while let Some(Got::Frame { src, payload }) = self.pump(deadline, &is_answer, None)? {
+        while let Some(Got::Frame { src, payload, .. }) = self.pump(deadline, &is_answer, None)? {
             let res = DcpRepr::parse(&payload).map_err(malformed("DCP Identify response"))?;
             if first.is_empty() {
                 first = payload;
@@ -510,6 +540,10 @@ impl<L: Link> Controller<L> {
             }
             _ => found[0].clone(),
         };
+        if let Some(ip) = station.ip.filter(|i| !i.ip.is_unspecified()) {
+            self.link
+                .set_udp_peer(SocketAddr::from((ip.ip, proto::pnio::RPC_PORT)))?;
+        }
         self.station = Some(station.clone());
         Ok(station)
     }
@@ -891,24 +925,34 @@ impl<L: Link> Controller<L> {
     // Cyclic data
     // -----------------------------------------------------------------------------------------
 
-    /// Provides `data` as the output data of the module in `slot` (subslot 1), its IOPS good,
-    /// and marks every other module's outputs bad (IOPS "bad by controller"): the device takes
-    /// no data for them, as an inverter gets no telegram in a cycle that addresses another
-    /// (`None`: no module is provided).
-    pub(crate) fn provide(&mut self, slot: Option<(u16, &[u8])>) -> Result<(), PnioError> {
+    /// Provides `modules` (slot, output data) with their IOPS good and marks every other
+    /// module's outputs bad (IOPS "bad by controller"): the device takes no data for them, as
+    /// an inverter gets no telegram in a cycle that addresses another.
+    pub(crate) fn provide(&mut self, modules: &[(u16, &[u8])]) -> Result<(), PnioError> {
         let ar = self.ar.as_mut().ok_or(PnioError::NotConnected)?;
         for p in ar.plan.output.data.iter().filter(|p| p.slot != 0) {
-            let iops = match slot {
-                Some((s, data)) if s == p.slot => {
+            let iops = match modules.iter().find(|(s, _)| *s == p.slot) {
+                Some((_, data)) => {
                     let n = data.len().min(p.len);
                     ar.outputs[p.offset..p.offset + n].copy_from_slice(&data[..n]);
                     Iox::GOOD
                 }
-                _ => Iox::BAD_BY_CONTROLLER,
+                None => Iox::BAD_BY_CONTROLLER,
             };
             ar.outputs[p.offset + p.len] = iops.0;
         }
         Ok(())
+    }
+
+    /// The ident number of the module the AR expects in `slot`.
+    pub(crate) fn module_ident(&self, slot: u16) -> Option<u32> {
+        let ar = self.ar.as_ref()?;
+        ar.plan
+            .expected
+            .apis
+            .iter()
+            .find(|a| a.slot == slot)
+            .map(|a| a.module_ident)
     }
 
     /// The input data and IOPS of the submodule in `slot` from the last input frame.
@@ -1013,7 +1057,12 @@ impl<L: Link> Controller<L> {
 
 /// Something the pump was asked for.
 enum Got {
-    Frame { src: MacAddr, payload: Vec<u8> },
+    Frame {
+        src: MacAddr,
+        payload: Vec<u8>,
+        /// The kernel's receive stamp (real-time clock), where the link has one.
+        stamp: Option<Duration>,
+    },
     Answer(RpcRepr),
 }
 
@@ -1028,6 +1077,20 @@ pub(crate) struct Connected {
     pub(crate) prm_end: Option<PnioStatus>,
     /// Whether ApplicationReady came: data exchange.
     pub(crate) ready: bool,
+}
+
+/// How long after an output frame an input frame must arrive to carry the device's answer to
+/// it: the frame's way to the device and its handling there.
+const FRESH: Duration = Duration::from_micros(100);
+/// How much later than three cycles an input frame may come on a loaded host before the cycle
+/// counts as unanswered.
+const LATE: Duration = Duration::from_millis(20);
+
+/// The real-time clock as a duration since the Unix epoch (what receive stamps are on).
+fn wall_clock() -> Duration {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap_or_default()
 }
 
 /// How long the pump waits on frames before it looks at the datagrams again.

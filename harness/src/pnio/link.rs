@@ -16,6 +16,9 @@ impl<T: peer::Link<Device = IoDevice>> Link for T {}
 /// The simulated device on a virtual clock.
 pub(crate) type EmbeddedLink = peer::EmbeddedLink<IoDevice>;
 
+/// A device behind a network interface.
+pub(crate) type NetLink = peer::NetLink<IoDevice>;
+
 /// What the capture's interface description names as the source of a run's frames.
 pub(crate) const SOURCE: &str =
     "PROFINET IO frames of a harness run (IO controller and IO device, as on the wire)";

@@ -5,13 +5,16 @@
 mod binding;
 mod controller;
 mod link;
+mod restore;
+pub mod serve;
 mod step;
 
+use std::net::SocketAddr;
 use std::time::Duration;
 
 use binding::PnioBinding;
 use controller::Controller;
-use link::{EmbeddedLink, Link, EMBEDDED_PEER, SOURCE};
+use link::{EmbeddedLink, Link, NetLink, EMBEDDED_PEER, SOURCE};
 use proto::eth::MacAddr;
 use proto::nord::{Product, Protocol};
 use sim::device::Device;
@@ -21,6 +24,7 @@ use crate::binding::embedded::device_config;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Embedded, Network};
 use crate::net::peer::Tapped;
+use crate::net::LinkError;
 use crate::profile::Profile;
 use crate::runner::DutFactory;
 
@@ -32,7 +36,7 @@ pub(crate) const BUS: Bus = Bus {
     parse_step: step::parse,
     embedded,
     network,
-    serve,
+    serve: serve::command,
     descriptions: &[],
 };
 
@@ -62,40 +66,135 @@ fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, O
     let io = IoDevice::new(Device::new(device_config(profile)?), config)
         .map_err(|e| OpenError::Profile(e.to_string()))?;
     let link = EmbeddedLink::new(io, EMBEDDED_PEER);
-    let what = "embedded PROFINET IO device".to_string();
-    let name = Some(EMBEDDED_NAME.to_string());
+    let target = Target {
+        product,
+        inverters: profile.inverters,
+        name: Some(EMBEDDED_NAME.to_string()),
+        what: "embedded PROFINET IO device".to_string(),
+        reduction_ratio: 1,
+        persistent: false,
+    };
     match &context.tap {
-        None => open(link, product, profile.inverters, name, what),
+        None => open(link, EMBEDDED_MAC, EMBEDDED_TIMEOUT, target),
         Some(tap) => open(
             Tapped::new(link, tap.clone(), SOURCE),
-            product,
-            profile.inverters,
-            name,
-            what,
+            EMBEDDED_MAC,
+            EMBEDDED_TIMEOUT,
+            target,
         ),
     }
 }
 
+/// The controller on `link` with Ethernet address `mac`, the device found and connected.
 fn open<L: Link + 'static>(
     link: L,
-    product: Product,
-    inverters: u8,
-    name: Option<String>,
-    what: String,
+    mac: MacAddr,
+    timeout: Duration,
+    target: Target,
 ) -> Result<Box<dyn Binding>, OpenError> {
-    let ctl = Controller::new(link, EMBEDDED_MAC, EMBEDDED_TIMEOUT);
+    let mut ctl = Controller::new(link, mac, timeout);
+    ctl.set_reduction_ratio(target.reduction_ratio);
     Ok(Box::new(PnioBinding::open(
-        ctl, product, inverters, name, what, 0,
+        ctl,
+        target.product,
+        target.inverters,
+        target.name,
+        target.what,
+        target.persistent,
     )?))
 }
 
-fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
-    Err(OpenError::Profile(format!(
-        "`pnio://{}`: the PROFINET controller runs against the embedded device only so far",
-        n.target
-    )))
+/// What a binding is opened on.
+struct Target {
+    product: Product,
+    inverters: u8,
+    /// The name of station to find (`None`: the only device that answers).
+    name: Option<String>,
+    what: String,
+    reduction_ratio: u16,
+    /// A device on the network, which keeps what a case changes.
+    persistent: bool,
 }
 
-fn serve(_args: &[String]) -> Result<i32, String> {
-    Err("`harness serve pnio` is not there yet: the PROFINET device runs embedded only".into())
+/// `--dut pnio://IFACE[/NAME][?rr=N]`: the device behind that interface, found by DCP by its
+/// name of station (or the only one answering), both CRs at reduction ratio N of the 1 ms
+/// send clock (1 unless given).
+fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
+    let url = |why: String| OpenError::Profile(format!("`pnio://{}`: {why}", n.target));
+    let (path, query) = n.target.split_once('?').unwrap_or((&n.target, ""));
+    let (iface, name) = match path.split_once('/') {
+        Some((i, name)) => {
+            proto::nord::pnio::check_station_name(name)
+                .map_err(|e| url(format!("name of station {name:?}: {e}")))?;
+            (i.to_string(), Some(name.to_string()))
+        }
+        None => (path.to_string(), None),
+    };
+    let mut reduction_ratio = 1;
+    for pair in query.split('&').filter(|p| !p.is_empty()) {
+        match pair.split_once('=') {
+            Some(("rr", v)) => {
+                reduction_ratio = v
+                    .parse()
+                    .ok()
+                    .filter(|r| (1..=512).contains(r))
+                    .ok_or_else(|| url(format!("rr={v}: give 1…512")))?
+            }
+            _ => return Err(url(format!("`{pair}`: the option is rr=N"))),
+        }
+    }
+    Ok(Box::new(NetworkFactory {
+        iface,
+        name,
+        reduction_ratio,
+        timeout: n.timeout,
+        tap: n.tap.clone(),
+    }))
+}
+
+/// Opens the link behind an interface for each case (one device for the whole run).
+struct NetworkFactory {
+    iface: String,
+    name: Option<String>,
+    reduction_ratio: u16,
+    timeout: Duration,
+    tap: Option<crate::pcap::SharedTap>,
+}
+
+impl DutFactory for NetworkFactory {
+    fn describe(&self) -> String {
+        match &self.name {
+            Some(n) => format!("PROFINET IO device {n:?} on {}", self.iface),
+            None => format!("PROFINET IO device on {}", self.iface),
+        }
+    }
+
+    fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+        let product = profile.nord().map_err(OpenError::Profile)?;
+        // The device's address comes with DCP Identify; until then the socket points nowhere.
+        let nowhere = SocketAddr::from((std::net::Ipv4Addr::LOCALHOST, proto::pnio::RPC_PORT));
+        let link = NetLink::open(
+            &self.iface,
+            proto::eth::ETHERTYPE_PROFINET,
+            nowhere,
+            proto::pnio::RPC_PORT,
+        )
+        .map_err(|e| match e {
+            LinkError::NeedsRoot { .. } => OpenError::NotPermitted(e.to_string()),
+            other => OpenError::Unreachable(other.to_string()),
+        })?;
+        let mac = MacAddr(link.mac());
+        let target = Target {
+            product,
+            inverters: profile.inverters,
+            name: self.name.clone(),
+            what: format!("PROFINET IO on {}", self.iface),
+            reduction_ratio: self.reduction_ratio,
+            persistent: true,
+        };
+        match &self.tap {
+            None => open(link, mac, self.timeout, target),
+            Some(tap) => open(Tapped::new(link, tap.clone(), SOURCE), mac, self.timeout, target),
+        }
+    }
 }

@@ -113,7 +113,7 @@ type Refusal = PnioStatus;
 
 impl IoDevice {
     /// One RPC datagram from `from`.
-    pub(super) fn rpc(&mut self, from: SocketAddr, datagram: &[u8]) -> Vec<Out> {
+    pub(super) fn rpc(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Out> {
         let Ok(req) = RpcRepr::parse_bytes(datagram) else {
             self.dropped += 1;
             return Vec::new();
@@ -154,7 +154,7 @@ impl IoDevice {
             return Vec::new();
         };
         let mut out = reply(req.reply(PacketType::RESPONSE, body.emit(req.drep)));
-        if let Some(call) = self.appl_ready_call() {
+        if let Some(call) = self.appl_ready_call(now) {
             out.push(call);
         }
         out
@@ -463,17 +463,18 @@ impl IoDevice {
     }
 
     /// The ApplicationReady call, when it is to go out right after PrmEnd's answer.
-    fn appl_ready_call(&mut self) -> Option<Out> {
+    fn appl_ready_call(&mut self, now: Duration) -> Option<Out> {
         let ar = self.ar.as_mut()?;
         let to = ar.controller_rpc;
         match &mut ar.state {
             ArState::ApplReady {
                 request,
                 sent,
-                tries: 0,
+                tries,
                 ..
             } if *sent == Duration::MAX => {
-                *sent = Duration::ZERO;
+                *sent = now;
+                *tries = 1;
                 Some(Out::Datagram {
                     to,
                     bytes: request.clone(),

@@ -241,7 +241,7 @@ impl IoDevice {
     /// Handles one UDP datagram to the RPC port from `from` at `now`; returns what to send.
     pub fn datagram(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Out> {
         let mut out = self.timers(now);
-        out.extend(self.rpc(from, datagram));
+        out.extend(self.rpc(from, datagram, now));
         out
     }
 

@@ -550,3 +550,33 @@ fn garbage_is_dropped_and_the_device_keeps_answering() {
         1
     );
 }
+
+/// ApplicationReady unanswered: repeated every 500 ms, not sooner; after the last try the
+/// device gives the AR up and takes a new Connect.
+#[test]
+fn an_unanswered_application_ready_is_repeated_then_the_ar_is_given_up() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let (blocks, _) = connect_blocks(Product::Sk550p, &[(3, ModuleKind::Ppo(PpoType::TYPE_3))]);
+    let at = Duration::from_secs(7);
+    assert!(call(&mut io, Opnum::CONNECT, &blocks, at).0.is_ok());
+    let prm_end = [Block::Control(IodControl::prm_end(AR_UUID, 1))];
+    let (_, _, out) = call(&mut io, Opnum::CONTROL, &prm_end, at);
+    let calls = |out: &[Out]| {
+        datagrams(out)
+            .iter()
+            .filter(|r| r.packet_type == PacketType::REQUEST)
+            .count()
+    };
+    assert_eq!(calls(&out), 1);
+    let mut repeats = Vec::new();
+    for ms in (10..=3000).step_by(10) {
+        let now = at + Duration::from_millis(ms);
+        if calls(&io.poll(now)) > 0 {
+            repeats.push(ms);
+        }
+    }
+    assert_eq!(repeats, [500, 1000, 1500, 2000]);
+    assert!(!io.in_data_exchange());
+    let later = at + Duration::from_secs(4);
+    assert!(call(&mut io, Opnum::CONNECT, &blocks, later).0.is_ok());
+}

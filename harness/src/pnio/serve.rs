@@ -1,0 +1,447 @@
+//! `harness serve pnio`: the simulated PROFINET IO device on a network interface.
+//!
+//! The device (`sim::pnio::IoDevice`, sans-IO) is reached the two ways a PROFINET device is:
+//! - raw Ethernet frames of EtherType 8892h ([`crate::net::RawLink`]): DCP (to the device's
+//!   MAC address, the interface's, or to the Identify multicast 01-0E-CF-00-00-00), the RT
+//!   frames of its IO CRs and the alarm frames;
+//! - UDP port 34964 on the interface's IPv4 address for the context-management RPC calls
+//!   (Connect, Control, Release, Read, Write). The device takes the interface's address and
+//!   prefix as its IP suite, so what DCP reports is where it answers; an address set later by
+//!   DCP changes what the device reports, not the interface (serve it anew on the new
+//!   address). Without an IPv4 address only DCP and RT are served, and a line on stderr says
+//!   so.
+//!
+//! One thread owns the raw link and the device: each frame goes to [`IoDevice::frame`], and
+//! [`IoDevice::poll`] runs every [`POLL_PERIOD`] (the input CR's frames, the watchdog, alarms,
+//! the drive model). A second thread owns the UDP socket and hands each datagram over through
+//! a channel; the raw thread answers it at its next wake-up (within a poll period) on a clone
+//! of the socket. The device is never shared, so it needs no lock.
+
+use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::sync::Arc;
+use std::thread::{self, JoinHandle};
+use std::time::{Duration, Instant};
+
+use proto::eth::{MacAddr, ETHERTYPE_PROFINET};
+use proto::nord::pnio::IpSuite;
+use proto::nord::Protocol;
+use proto::pnio::RPC_PORT;
+use sim::pnio::{IoConfig, IoDevice, Out, POLL_PERIOD};
+
+use crate::net::udp::{ipv4_of, transient};
+use crate::net::{LinkError, RawLink, MAX_FRAME};
+
+/// How long the raw thread polls the socket after a frame before it sleeps.
+const FRAME_POLL: Duration = Duration::from_micros(50);
+/// The longest the UDP thread waits without looking at its stop flag.
+const STOP_CHECK: Duration = Duration::from_millis(20);
+
+/// What `harness serve pnio` serves.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ServeOptions {
+    /// The network interface (`--iface`), e.g. one end of a veth pair.
+    pub iface: String,
+    /// The product profile (`--profile`, default `sk550p`).
+    pub profile: String,
+    /// The name of station at power-on (`--name`; none: the factory state, no name).
+    pub name: String,
+    /// Inverters behind the interface (`--inverters`; default the product's maximum).
+    pub inverters: Option<u8>,
+}
+
+impl ServeOptions {
+    /// `iface` with the defaults: SK 550P without a name, the product's maximum of inverters.
+    pub fn new(iface: &str) -> ServeOptions {
+        ServeOptions {
+            iface: iface.into(),
+            profile: "sk550p".into(),
+            name: String::new(),
+            inverters: None,
+        }
+    }
+}
+
+/// Why the device cannot be served, or stopped serving.
+#[derive(Debug, thiserror::Error)]
+pub enum ServeError {
+    /// The profile is unknown, its product has no PROFINET, or the name is not valid.
+    #[error("{0}")]
+    Profile(String),
+    /// The raw Ethernet link failed (no such interface, no root, I/O).
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// The UDP socket of the RPC endpoint could not be bound or failed.
+    #[error("UDP {addr} (PNIO-CM RPC): {source}")]
+    Udp {
+        /// The address it was bound (or to be bound) to.
+        addr: SocketAddr,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// A serving thread panicked (a bug).
+    #[error("the PROFINET device's thread panicked: {0}")]
+    Panicked(String),
+}
+
+/// What a served device did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// PROFINET frames received.
+    pub frames_in: u64,
+    /// Frames the device sent.
+    pub frames_out: u64,
+    /// RPC datagrams received.
+    pub datagrams_in: u64,
+    /// Datagrams the device sent.
+    pub datagrams_out: u64,
+}
+
+#[derive(Debug, Default)]
+struct Counters {
+    frames_in: AtomicU64,
+    frames_out: AtomicU64,
+    datagrams_in: AtomicU64,
+    datagrams_out: AtomicU64,
+}
+
+fn bump(c: &AtomicU64) {
+    c.fetch_add(1, Ordering::Relaxed);
+}
+
+type Worker = JoinHandle<Result<(), ServeError>>;
+
+/// A device served in threads by [`start`]; dropping it stops them.
+#[derive(Debug)]
+pub struct Served {
+    mac: MacAddr,
+    udp: Option<SocketAddr>,
+    counters: Arc<Counters>,
+    stop: Arc<AtomicBool>,
+    threads: Vec<Worker>,
+}
+
+impl Served {
+    /// The device's MAC address (the interface's).
+    pub fn mac(&self) -> MacAddr {
+        self.mac
+    }
+
+    /// Where the RPC endpoint is served (`None`: the interface had no IPv4 address).
+    pub fn rpc_addr(&self) -> Option<SocketAddr> {
+        self.udp
+    }
+
+    /// What the threads counted so far.
+    pub fn stats(&self) -> Stats {
+        let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
+        let c = &self.counters;
+        Stats {
+            frames_in: get(&c.frames_in),
+            frames_out: get(&c.frames_out),
+            datagrams_in: get(&c.datagrams_in),
+            datagrams_out: get(&c.datagrams_out),
+        }
+    }
+
+    /// Whether the threads still serve.
+    pub fn is_running(&self) -> bool {
+        !self.threads.is_empty() && self.threads.iter().all(|t| !t.is_finished())
+    }
+
+    /// Stops the threads and returns what they counted, or why they had stopped before.
+    pub fn stop(mut self) -> Result<Stats, ServeError> {
+        self.join()
+    }
+
+    fn join(&mut self) -> Result<Stats, ServeError> {
+        self.stop.store(true, Ordering::Relaxed);
+        let mut result = Ok(());
+        for t in self.threads.drain(..) {
+            let r = t
+                .join()
+                .unwrap_or_else(|_| Err(ServeError::Panicked("a serving thread".into())));
+            if result.is_ok() {
+                result = r;
+            }
+        }
+        result.map(|()| self.stats())
+    }
+}
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.join();
+    }
+}
+
+/// The device of `opts`, its IP suite the interface's when it has one.
+fn device(opts: &ServeOptions, mac: MacAddr, ip: Option<(Ipv4Addr, u8)>) -> Result<IoDevice, ServeError> {
+    let product = crate::profile::Profile::by_name(&opts.profile)
+        .and_then(|p| p.nord())
+        .map_err(ServeError::Profile)?;
+    if !product.protocols().contains(&Protocol::Profinet) {
+        return Err(ServeError::Profile(format!(
+            "{} has no PROFINET IO interface (PROFINET profiles: sk550p, tu3-pnt)",
+            product.name()
+        )));
+    }
+    let max = product.max_inverters();
+    let config = sim::device::DeviceConfig {
+        inverters: opts.inverters.unwrap_or(max).clamp(1, max),
+        ..sim::device::DeviceConfig::new(product)
+    };
+    let ip = ip.map(|(ip, prefix)| IpSuite {
+        ip,
+        mask: Ipv4Addr::from(u32::MAX.checked_shl(32 - u32::from(prefix)).unwrap_or(0)),
+        gateway: Ipv4Addr::UNSPECIFIED,
+    });
+    let io = IoConfig {
+        mac,
+        name: opts.name.clone(),
+        ip,
+    };
+    IoDevice::new(sim::device::Device::new(config), io).map_err(|e| ServeError::Profile(e.to_string()))
+}
+
+/// Opens `opts.iface` and serves the device there in threads of this process, until the
+/// returned handle is stopped or dropped.
+pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
+    let mut link = RawLink::open(&opts.iface, Some(ETHERTYPE_PROFINET))?;
+    link.set_spin(FRAME_POLL);
+    let mac = MacAddr(link.mac().0);
+    let ip = ipv4_of(&opts.iface);
+    let io = device(opts, mac, ip)?;
+    let socket = match ip {
+        Some((ip, _)) => {
+            let addr = SocketAddr::from((ip, RPC_PORT));
+            let udp = |source| ServeError::Udp { addr, source };
+            let socket = UdpSocket::bind(addr).map_err(udp)?;
+            socket.set_read_timeout(Some(STOP_CHECK)).map_err(udp)?;
+            Some((addr, socket))
+        }
+        None => None,
+    };
+    let counters = Arc::new(Counters::default());
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut served = Served {
+        mac,
+        udp: socket.as_ref().map(|(a, _)| *a),
+        counters: counters.clone(),
+        stop: stop.clone(),
+        threads: Vec::new(),
+    };
+    let spawn = |name: String, f: Box<dyn FnOnce() -> Result<(), ServeError> + Send>| {
+        let stop = stop.clone();
+        thread::Builder::new()
+            .name(name)
+            .spawn(move || {
+                let r = f();
+                // Either thread ending ends both: a device half served is not served.
+                stop.store(true, Ordering::Relaxed);
+                r
+            })
+            .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))
+    };
+    let (tx, rx) = mpsc::channel();
+    let (reply, recv) = match socket {
+        Some((addr, socket)) => {
+            let reply = socket
+                .try_clone()
+                .map_err(|source| ServeError::Udp { addr, source })?;
+            (Some((addr, reply)), Some((addr, socket)))
+        }
+        None => (None, None),
+    };
+    let raw = Raw {
+        link,
+        io,
+        reply,
+        datagrams: rx,
+        counters: counters.clone(),
+        stop: stop.clone(),
+        start: Instant::now(),
+    };
+    served.threads.push(spawn(
+        format!("pnio-device-{}", opts.iface),
+        Box::new(move || raw.run()),
+    )?);
+    if let Some((addr, socket)) = recv {
+        let stop = stop.clone();
+        served.threads.push(spawn(
+            format!("pnio-rpc-{}", opts.iface),
+            Box::new(move || run_udp(socket, addr, tx, &counters, &stop)),
+        )?);
+    }
+    Ok(served)
+}
+
+/// The raw thread: the device, its link, and the socket its datagrams go out on.
+struct Raw {
+    link: RawLink,
+    io: IoDevice,
+    reply: Option<(SocketAddr, UdpSocket)>,
+    datagrams: Receiver<(SocketAddr, Vec<u8>)>,
+    counters: Arc<Counters>,
+    stop: Arc<AtomicBool>,
+    start: Instant,
+}
+
+impl Raw {
+    fn run(mut self) -> Result<(), ServeError> {
+        let mut buf = vec![0u8; MAX_FRAME];
+        let mut next_poll = Duration::ZERO;
+        while !self.stop.load(Ordering::Relaxed) {
+            while let Ok((from, d)) = self.datagrams.try_recv() {
+                let out = self.io.datagram(from, &d, self.start.elapsed());
+                self.send(out)?;
+            }
+            let now = self.start.elapsed();
+            if now >= next_poll {
+                let out = self.io.poll(now);
+                self.send(out)?;
+                // On the poll grid: a late wake-up does not shift the next one.
+                next_poll = if now - next_poll > POLL_PERIOD {
+                    now + POLL_PERIOD
+                } else {
+                    next_poll + POLL_PERIOD
+                };
+            }
+            let until = self.start + next_poll;
+            let received = match self.link.recv(&mut buf, until) {
+                Ok(r) => r,
+                Err(e) if e.is_link_down() => {
+                    thread::sleep(POLL_PERIOD);
+                    continue;
+                }
+                Err(e) => return Err(e.into()),
+            };
+            let Some(r) = received else { continue };
+            bump(&self.counters.frames_in);
+            let out = self.io.frame(&buf[..r.len], self.start.elapsed());
+            self.send(out)?;
+        }
+        Ok(())
+    }
+
+    fn send(&mut self, out: Vec<Out>) -> Result<(), ServeError> {
+        for o in out {
+            match o {
+                Out::Frame(f) => match self.link.send(&f) {
+                    Ok(()) => bump(&self.counters.frames_out),
+                    Err(e) if e.is_link_down() => {}
+                    Err(e) => return Err(e.into()),
+                },
+                Out::Datagram { to, bytes } => {
+                    let Some((addr, socket)) = &self.reply else {
+                        continue;
+                    };
+                    match socket.send_to(&bytes, to) {
+                        Ok(_) => bump(&self.counters.datagrams_out),
+                        Err(e) if transient(&e) => {}
+                        Err(source) => return Err(ServeError::Udp { addr: *addr, source }),
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The UDP thread: RPC datagrams in, handed to the raw thread.
+fn run_udp(
+    socket: UdpSocket,
+    addr: SocketAddr,
+    to_device: Sender<(SocketAddr, Vec<u8>)>,
+    counters: &Counters,
+    stop: &AtomicBool,
+) -> Result<(), ServeError> {
+    let mut buf = [0u8; 2048];
+    while !stop.load(Ordering::Relaxed) {
+        let (len, from) = match socket.recv_from(&mut buf) {
+            Ok(r) => r,
+            Err(e) if transient(&e) => continue,
+            Err(source) => return Err(ServeError::Udp { addr, source }),
+        };
+        bump(&counters.datagrams_in);
+        if to_device.send((from, buf[..len].to_vec())).is_err() {
+            // The device's thread ended; so does this one.
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// Serves until `duration` has passed (forever when `None`), after a line on stdout that says
+/// what is served where.
+fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeError> {
+    let served = start(opts)?;
+    let rpc = match served.rpc_addr() {
+        Some(a) => format!(", RPC on {a}"),
+        None => String::new(),
+    };
+    let name = if opts.name.is_empty() {
+        "no name of station".to_string()
+    } else {
+        format!("name of station {:?}", opts.name)
+    };
+    println!(
+        "serving PROFINET IO device {} ({name}) on {} (MAC {}){rpc}",
+        opts.profile,
+        opts.iface,
+        served.mac()
+    );
+    if served.rpc_addr().is_none() {
+        eprintln!(
+            "note: {} has no IPv4 address: serving DCP and RT only; give it an address (the \
+             SK 550P's factory one is 192.168.20.200/24) for Connect and the data records",
+            opts.iface
+        );
+    }
+    let end = duration.map(|d| Instant::now() + d);
+    while served.is_running() && end.is_none_or(|e| Instant::now() < e) {
+        thread::sleep(STOP_CHECK * 10);
+    }
+    served.stop().map(|_| ())
+}
+
+/// `harness serve pnio` arguments.
+#[derive(clap::Parser, Debug)]
+#[command(
+    name = "harness serve pnio",
+    about = "Serve the simulator as a PROFINET IO device on a network interface (raw Ethernet: root or CAP_NET_RAW; RPC on UDP 34964 at the interface's IPv4 address)"
+)]
+struct ServeArgs {
+    /// The network interface, e.g. one end of a veth pair.
+    #[arg(long)]
+    iface: String,
+    /// Product profile (a product with PROFINET IO: sk550p, tu3-pnt).
+    #[arg(long, default_value = "sk550p")]
+    profile: String,
+    /// The name of station at power-on (default: none, as delivered).
+    #[arg(long, default_value = "")]
+    name: String,
+    /// Inverters behind the interface (default: the product's maximum).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
+    inverters: Option<u8>,
+    /// Stop after this many seconds (default: serve until killed).
+    #[arg(long)]
+    seconds: Option<u64>,
+}
+
+/// `harness serve pnio ARGS…`; returns the exit code.
+pub(crate) fn command(args: &[String]) -> Result<i32, String> {
+    let a = match crate::cli::parse_args::<ServeArgs>("harness serve pnio", args) {
+        Ok(a) => a,
+        Err(code) => return Ok(code),
+    };
+    let opts = ServeOptions {
+        iface: a.iface,
+        profile: a.profile,
+        name: a.name,
+        inverters: a.inverters,
+    };
+    serve(&opts, a.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
+    Ok(crate::cli::EXIT_PASS)
+}
