@@ -4,6 +4,7 @@
 
 mod binding;
 mod controller;
+mod gsdml;
 mod link;
 mod step;
 
@@ -19,7 +20,7 @@ use sim::pnio::{IoConfig, IoDevice};
 
 use crate::binding::embedded::device_config;
 use crate::binding::{Binding, OpenError};
-use crate::bus::{Bus, Embedded, Network};
+use crate::bus::{Bus, Description, Embedded, Network};
 use crate::net::peer::Tapped;
 use crate::profile::Profile;
 use crate::runner::DutFactory;
@@ -33,8 +34,17 @@ pub(crate) const BUS: Bus = Bus {
     embedded,
     network,
     serve,
-    descriptions: &[],
+    descriptions: &[Description {
+        format: "gsdml",
+        write: describe_gsdml,
+    }],
 };
+
+/// `harness describe gsdml`: the GSDML of a PROFINET product, from `proto::nord::pnio` (the
+/// definition the simulated IO device runs on).
+fn describe_gsdml(profile: &Profile, inverters: u8) -> Result<String, String> {
+    gsdml::gsdml(profile.nord()?, inverters)
+}
 
 fn profiles() -> Vec<Profile> {
     Product::ALL
