@@ -195,6 +195,7 @@ mod tests {
     #[test]
     fn description_formats_are_found_by_name() {
         assert_eq!(description("eds").unwrap().0.name, "enip");
-        assert!(description("gsdml").unwrap_err().contains("known: eds"));
+        assert_eq!(description("gsdml").unwrap().0.name, "pnio");
+        assert!(description("xyz").unwrap_err().contains("known: eds"));
     }
 }

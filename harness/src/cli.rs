@@ -55,7 +55,8 @@ enum Command {
 #[derive(ClapArgs, Debug)]
 struct DescribeArgs {
     /// What to describe: `eds` (EtherNet/IP electronic data sheet), `esi` (EtherCAT slave
-    /// information).
+    /// information), `xdd` (POWERLINK XML device description), `gsdml` (PROFINET general
+    /// station description).
     what: String,
     /// Product profile, e.g. tu3-eip, sk550p.
     #[arg(long)]

@@ -4,6 +4,7 @@
 
 mod binding;
 mod controller;
+mod gsdml;
 mod link;
 mod restore;
 pub mod serve;
@@ -22,7 +23,7 @@ use sim::pnio::{IoConfig, IoDevice};
 
 use crate::binding::embedded::device_config;
 use crate::binding::{Binding, OpenError};
-use crate::bus::{Bus, Embedded, Network};
+use crate::bus::{Bus, Description, Embedded, Network};
 use crate::net::peer::Tapped;
 use crate::net::LinkError;
 use crate::profile::Profile;
@@ -37,8 +38,17 @@ pub(crate) const BUS: Bus = Bus {
     embedded,
     network,
     serve: serve::command,
-    descriptions: &[],
+    descriptions: &[Description {
+        format: "gsdml",
+        write: describe_gsdml,
+    }],
 };
+
+/// `harness describe gsdml`: the GSDML of a PROFINET product, from `proto::nord::pnio` (the
+/// definition the simulated IO device runs on).
+fn describe_gsdml(profile: &Profile, inverters: u8) -> Result<String, String> {
+    gsdml::gsdml(profile.nord()?, inverters)
+}
 
 fn profiles() -> Vec<Profile> {
     Product::ALL
