@@ -31,8 +31,8 @@ use proto::nord::epl as def;
 use proto::nord::Protocol;
 use sim::epl::{Node, NodeConfig, NodeError, POLL_PERIOD};
 
-pub use crate::net::LinkError;
 use crate::net::udp::{ipv4_of, transient};
+pub use crate::net::LinkError;
 use crate::net::{RawLink, MAX_FRAME};
 
 /// How long the raw thread polls the socket after a frame before it sleeps: the next frame of
@@ -692,7 +692,7 @@ mod tests {
         // An address of this process's own (the MN would use 192.168.100.1; another test
         // binding that address and port 3819 at the same time would collide).
         let pid = std::process::id();
-        let ip = Ipv4Addr::new(10, 229, (pid >> 8) as u8, (pid as u8).clamp(1, 254));
+        let ip = std::net::Ipv4Addr::new(10, 229, (pid >> 8) as u8, (pid as u8).clamp(1, 254));
         let ok = std::process::Command::new("ip")
             .args(["addr", "add", &format!("{ip}/32"), "dev", &v.0])
             .status()

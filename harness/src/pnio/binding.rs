@@ -132,7 +132,11 @@ fn open_error(e: PnioError) -> OpenError {
 }
 
 /// The PPO type of the module connected in `slot`, `None` for none or another module.
-pub(super) fn module_ppo<L: Link>(ctl: &Controller<L>, product: Product, slot: u16) -> Option<PpoType> {
+pub(super) fn module_ppo<L: Link>(
+    ctl: &Controller<L>,
+    product: Product,
+    slot: u16,
+) -> Option<PpoType> {
     match def::module_by_ident(product, ctl.module_ident(slot)?)?.kind {
         ModuleKind::Ppo(t) => Some(t),
         ModuleKind::DigIo => None,
@@ -450,9 +454,16 @@ impl<L: Link + 'static> PnioBinding<L> {
 
     /// A parameter write on a persistent device, through the ledger: the value before is read
     /// first (the first write of it in the case).
-    fn write(&mut self, action: &Action, o: &crate::suite::OrderSpec) -> Result<Observation, StepError> {
+    fn write(
+        &mut self,
+        action: &Action,
+        o: &crate::suite::OrderSpec,
+    ) -> Result<Observation, StepError> {
         let key = Param::of(o);
-        let wants = self.persistent.as_ref().is_some_and(|p| p.ledger.wants_original(&key));
+        let wants = self
+            .persistent
+            .as_ref()
+            .is_some_and(|p| p.ledger.wants_original(&key));
         if wants {
             let before = self
                 .channel
@@ -638,7 +649,9 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
             }
             Action::Write(o) if self.persistent.is_some() => self.write(action, o),
             other => {
-                if let (Action::Process { inverter, .. }, Some(p)) = (other, self.persistent.as_mut()) {
+                if let (Action::Process { inverter, .. }, Some(p)) =
+                    (other, self.persistent.as_mut())
+                {
                     if !p.commanded.contains(inverter) {
                         p.commanded.push(*inverter);
                     }

@@ -71,7 +71,7 @@ fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, O
     let product = profile.nord().map_err(OpenError::Profile)?;
     let config = IoConfig {
         name: EMBEDDED_NAME.into(),
-        ..IoConfig::new()
+        ..IoConfig::new(product)
     };
     let io = IoDevice::new(Device::new(device_config(profile)?), config)
         .map_err(|e| OpenError::Profile(e.to_string()))?;
@@ -204,7 +204,12 @@ impl DutFactory for NetworkFactory {
         };
         match &self.tap {
             None => open(link, mac, self.timeout, target),
-            Some(tap) => open(Tapped::new(link, tap.clone(), SOURCE), mac, self.timeout, target),
+            Some(tap) => open(
+                Tapped::new(link, tap.clone(), SOURCE),
+                mac,
+                self.timeout,
+                target,
+            ),
         }
     }
 }

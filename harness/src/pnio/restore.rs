@@ -97,15 +97,19 @@ pub(super) fn station<L: Link>(ctl: &mut Controller<L>, was: &Station) -> Result
         return Ok(());
     };
     let mut problems = Vec::new();
-    let mut set = |ctl: &mut Controller<L>, what: &str, value: BlockValue| {
-        match ctl.dcp_set(DcpBlock::set(BlockQualifier::PERMANENT, value)) {
-            Ok(BlockError::OK) => {}
-            Ok(e) => problems.push(format!("setting the {what} back: DCP error {:02X}h", e.0)),
-            Err(e) => problems.push(format!("setting the {what} back: {e}")),
-        }
+    let mut set = |ctl: &mut Controller<L>, what: &str, value: BlockValue| match ctl
+        .dcp_set(DcpBlock::set(BlockQualifier::PERMANENT, value))
+    {
+        Ok(BlockError::OK) => {}
+        Ok(e) => problems.push(format!("setting the {what} back: DCP error {:02X}h", e.0)),
+        Err(e) => problems.push(format!("setting the {what} back: {e}")),
     };
     if now.name != was.name {
-        set(ctl, "name of station", BlockValue::NameOfStation(was.name.clone()));
+        set(
+            ctl,
+            "name of station",
+            BlockValue::NameOfStation(was.name.clone()),
+        );
     }
     if let (Some(ip), true) = (was.ip, now.ip != was.ip) {
         let value = BlockValue::IpParameter(IpParameter {

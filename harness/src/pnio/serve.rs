@@ -177,7 +177,11 @@ impl Drop for Served {
 }
 
 /// The device of `opts`, its IP suite the interface's when it has one.
-fn device(opts: &ServeOptions, mac: MacAddr, ip: Option<(Ipv4Addr, u8)>) -> Result<IoDevice, ServeError> {
+fn device(
+    opts: &ServeOptions,
+    mac: MacAddr,
+    ip: Option<(Ipv4Addr, u8)>,
+) -> Result<IoDevice, ServeError> {
     let product = crate::profile::Profile::by_name(&opts.profile)
         .and_then(|p| p.nord())
         .map_err(ServeError::Profile)?;
@@ -202,7 +206,8 @@ fn device(opts: &ServeOptions, mac: MacAddr, ip: Option<(Ipv4Addr, u8)>) -> Resu
         name: opts.name.clone(),
         ip,
     };
-    IoDevice::new(sim::device::Device::new(config), io).map_err(|e| ServeError::Profile(e.to_string()))
+    IoDevice::new(sim::device::Device::new(config), io)
+        .map_err(|e| ServeError::Profile(e.to_string()))
 }
 
 /// Opens `opts.iface` and serves the device there in threads of this process, until the
@@ -340,7 +345,12 @@ impl Raw {
                     match socket.send_to(&bytes, to) {
                         Ok(_) => bump(&self.counters.datagrams_out),
                         Err(e) if transient(&e) => {}
-                        Err(source) => return Err(ServeError::Udp { addr: *addr, source }),
+                        Err(source) => {
+                            return Err(ServeError::Udp {
+                                addr: *addr,
+                                source,
+                            })
+                        }
                     }
                 }
             }

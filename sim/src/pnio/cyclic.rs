@@ -276,7 +276,7 @@ fn controller_lost(device: &mut Device, product: Product) {
         let Ok(fi) = Inverter::new(i64::from(n)) else {
             continue;
         };
-        if device.ethernet_timeout(fi).is_some() && device.raise(fi, fault).is_ok() {
+        if monitored(device, product, fi) && device.raise(fi, fault).is_ok() {
             raised = true;
         }
     }
@@ -284,5 +284,25 @@ fn controller_lost(device: &mut Device, product: Product) {
         if let Ok(store) = device.store(Unit::Interface) {
             store.set_info(170, 1, i32::from(error));
         }
+    }
+}
+
+/// Whether the telegram time-out is set for `fi`: SK 550P its P513 [-04] "Ethernet" (BU 0620
+/// §4.5), behind the SK TU3-PNT the inverter's P513, one value (BU 0590 §5.2.1: −0.1 no error,
+/// 0 off, 0.1…100 s), as [`def::telegram_timeout_parameter`] names them.
+fn monitored(device: &mut Device, product: Product, fi: Inverter) -> bool {
+    match def::telegram_timeout_parameter(product) {
+        Some((_, Some(_))) => device.ethernet_timeout(fi).is_some(),
+        Some((number, None)) => {
+            let Ok(n) = proto::nord::ParamNumber::new(i64::from(number)) else {
+                return false;
+            };
+            device
+                .store(Unit::Inverter(fi))
+                .ok()
+                .and_then(|s| s.read(n, None, None).ok())
+                .is_some_and(|tenths| tenths > 0)
+        }
+        None => false,
     }
 }

@@ -64,20 +64,19 @@ pub struct IoConfig {
 }
 
 impl IoConfig {
-    /// The factory state: no name, the factory IP suite, a MAC address in the range BU 0590
-    /// §5.1.4 shows for the SK TU3-PNT (00:0E:CF:03:60:00; "PROFINET identification" 00:0E:CF).
-    pub fn new() -> IoConfig {
+    /// The factory state of `product`: no name, the factory IP suite, a MAC address with the
+    /// maker's id the manual shows — SK 550P F0:5F:5A (BU 0620 §4.4.3 P878), SK TU3-PNT the
+    /// example of BU 0590 §5.1.4 P181, 00:0E:CF:03:60:00.
+    pub fn new(product: Product) -> IoConfig {
+        let mac = match product {
+            Product::Sk550p => MacAddr([0xF0, 0x5F, 0x5A, 0x00, 0x05, 0x50]),
+            _ => MacAddr([0x00, 0x0E, 0xCF, 0x03, 0x60, 0x00]),
+        };
         IoConfig {
-            mac: MacAddr([0x00, 0x0E, 0xCF, 0x03, 0x60, 0x00]),
+            mac,
             name: String::new(),
             ip: None,
         }
-    }
-}
-
-impl Default for IoConfig {
-    fn default() -> Self {
-        IoConfig::new()
     }
 }
 
@@ -122,6 +121,7 @@ impl IoDevice {
         if !product.protocols().contains(&Protocol::Profinet) {
             return Err(IoError::NoProfinet(product.name()));
         }
+        let factory = config.ip.is_none();
         let ip = match config.ip {
             Some(ip) => ip,
             None => def::factory_ip(product).ok_or(IoError::NoProfinet(product.name()))?,
@@ -144,7 +144,13 @@ impl IoDevice {
             dropped: 0,
             calls: 0,
         };
+        if factory {
+            // The IP parameters hold the factory suite DCP reports (BU 0620 §4.2.4, BU 0590
+            // §5.1.2).
+            io.station.keep(&mut io.device, product);
+        }
         io.station.show(&mut io.device, product);
+        io.show_identity();
         io.device.tick(Duration::ZERO);
         Ok(io)
     }
@@ -267,6 +273,27 @@ impl IoDevice {
         out.extend(self.alarms_due(now));
         out.extend(self.send_input(now));
         out
+    }
+
+    /// What the interface's information parameters say of the bus: SK 550P P870 = 1
+    /// "PROFINET IO" (BU 0620 §4.3) and P878 the MAC address (§4.4.3); SK TU3-PNT P181 the MAC
+    /// address (BU 0590 §5.1.4).
+    fn show_identity(&mut self) {
+        let mac = self.mac.0;
+        let product = self.product;
+        let Ok(store) = self.device.store(crate::link::Unit::Interface) else {
+            return;
+        };
+        let mac_param = match product {
+            Product::Sk550p => {
+                store.set_info(870, 1, i32::from(def::BUS_PROTOCOL_CODE));
+                878
+            }
+            _ => 181,
+        };
+        for (e, b) in (1..).zip(mac) {
+            store.set_info(mac_param, e, i32::from(b));
+        }
     }
 
     /// An Ethernet frame from the device to `dst`.

@@ -78,15 +78,20 @@ impl Station {
 
     /// Keeps the suite in the IP parameters (a permanent Set): SK 550P P850/P851/P852, SK
     /// TU3-PNT P160/P161.
-    fn keep(&self, device: &mut Device, product: Product) {
+    pub(super) fn keep(&self, device: &mut Device, product: Product) {
+        self.write_params(device, product, self.ip);
+    }
+
+    /// Writes `suite` into the IP parameters.
+    fn write_params(&self, device: &mut Device, product: Product, suite: IpSuite) {
         let Some(p) = def::ip_parameters(product) else {
             return;
         };
         let Ok(store) = device.store(Unit::Interface) else {
             return;
         };
-        let mut params = vec![(p.ip, self.ip.ip), (p.mask, self.ip.mask)];
-        params.extend(p.gateway.map(|g| (g, self.ip.gateway)));
+        let mut params = vec![(p.ip, suite.ip), (p.mask, suite.mask)];
+        params.extend(p.gateway.map(|g| (g, suite.gateway)));
         for (number, addr) in params {
             for (e, b) in (1u8..).zip(addr.octets()) {
                 store.set_info(number, e, i32::from(b));
@@ -272,6 +277,16 @@ impl IoDevice {
         self.station.ip = suite;
         if permanent {
             self.station.keep(&mut self.device, self.product);
+        } else if def::controller_ip_zeroes_parameters(self.product) {
+            // "If the IP address is assigned by the IO controller, this parameter is then set
+            // to 0" (BU 0620 §4.2.4); P875–P877 show the suite in use.
+            let zero = IpSuite {
+                ip: Ipv4Addr::UNSPECIFIED,
+                mask: Ipv4Addr::UNSPECIFIED,
+                gateway: Ipv4Addr::UNSPECIFIED,
+            };
+            self.station
+                .write_params(&mut self.device, self.product, zero);
         }
         self.station.show(&mut self.device, self.product);
         BlockError::OK

@@ -25,6 +25,7 @@ use crate::link::Unit;
 const PLC_MAC: MacAddr = MacAddr([0x02, 0, 0, 0, 0, 0xC1]);
 const AR_UUID: Uuid = Uuid([0xA1; 16]);
 const PLC_REF: u16 = 0x0003;
+const DEVICE_MAC: MacAddr = MacAddr([0x02, 0, 0, 0, 0, 0xD1]);
 
 fn plc() -> SocketAddr {
     SocketAddr::from((Ipv4Addr::new(192, 168, 20, 1), 34964))
@@ -33,7 +34,8 @@ fn plc() -> SocketAddr {
 fn io(product: Product, name: &str) -> IoDevice {
     let config = IoConfig {
         name: name.into(),
-        ..IoConfig::new()
+        mac: DEVICE_MAC,
+        ..IoConfig::new(product)
     };
     IoDevice::new(Device::new(DeviceConfig::new(product)), config).unwrap()
 }
@@ -217,7 +219,7 @@ fn output(plan: &Plan, slot: u16, ppo: &[u8], cycle: u16) -> Vec<u8> {
         data_status: DataStatus::GOOD,
         transfer_status: 0,
     };
-    eth(MacAddr([0x00, 0x0E, 0xCF, 0x03, 0x60, 0x00]), &rt.emit())
+    eth(DEVICE_MAC, &rt.emit())
 }
 
 /// The input data of `slot` in the last input frame among `out`.
