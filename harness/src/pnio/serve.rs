@@ -1,9 +1,10 @@
 //! `harness serve pnio`: the simulated PROFINET IO device on a network interface.
 //!
 //! The device (`sim::pnio::IoDevice`, sans-IO) is reached the two ways a PROFINET device is:
-//! - raw Ethernet frames of EtherType 8892h ([`crate::net::RawLink`]): DCP (to the device's
-//!   MAC address, the interface's, or to the Identify multicast 01-0E-CF-00-00-00), the RT
-//!   frames of its IO CRs and the alarm frames;
+//! - raw Ethernet frames of EtherType 8892h ([`crate::net::RawLink`], which opens the
+//!   interface promiscuous): DCP (to the device's MAC address — the product's, with the
+//!   maker's id the manual shows, not the interface's — or to the Identify multicast
+//!   01-0E-CF-00-00-00), the RT frames of its IO CRs and the alarm frames;
 //! - UDP port 34964 on the interface's IPv4 address for the context-management RPC calls
 //!   (Connect, Control, Release, Read, Write). The device takes the interface's address and
 //!   prefix as its IP suite, so what DCP reports is where it answers; an address set later by
@@ -123,7 +124,8 @@ pub struct Served {
 }
 
 impl Served {
-    /// The device's MAC address (the interface's).
+    /// The device's MAC address: the product's (the interface is promiscuous), not the
+    /// interface's.
     pub fn mac(&self) -> MacAddr {
         self.mac
     }
@@ -177,11 +179,7 @@ impl Drop for Served {
 }
 
 /// The device of `opts`, its IP suite the interface's when it has one.
-fn device(
-    opts: &ServeOptions,
-    mac: MacAddr,
-    ip: Option<(Ipv4Addr, u8)>,
-) -> Result<IoDevice, ServeError> {
+fn device(opts: &ServeOptions, ip: Option<(Ipv4Addr, u8)>) -> Result<IoDevice, ServeError> {
     let product = crate::profile::Profile::by_name(&opts.profile)
         .and_then(|p| p.nord())
         .map_err(ServeError::Profile)?;
@@ -202,9 +200,9 @@ fn device(
         gateway: Ipv4Addr::UNSPECIFIED,
     });
     let io = IoConfig {
-        mac,
         name: opts.name.clone(),
         ip,
+        ..IoConfig::new(product)
     };
     IoDevice::new(sim::device::Device::new(config), io)
         .map_err(|e| ServeError::Profile(e.to_string()))
@@ -215,9 +213,9 @@ fn device(
 pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let mut link = RawLink::open(&opts.iface, Some(ETHERTYPE_PROFINET))?;
     link.set_spin(FRAME_POLL);
-    let mac = MacAddr(link.mac().0);
     let ip = ipv4_of(&opts.iface);
-    let io = device(opts, mac, ip)?;
+    let io = device(opts, ip)?;
+    let mac = io.mac();
     let socket = match ip {
         Some((ip, _)) => {
             let addr = SocketAddr::from((ip, RPC_PORT));
