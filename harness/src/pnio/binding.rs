@@ -42,7 +42,7 @@ use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Refusal};
 use crate::profile::Capability;
 use crate::runner::hex;
-use crate::suite::Action;
+use crate::suite::{Action, Run};
 
 /// What the embedded simulator offers: every general capability and the `pnio:` steps.
 pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 9] = [
@@ -545,6 +545,29 @@ impl<L: Link + 'static> PnioBinding<L> {
         account.into_result()
     }
 
+    /// Notes an inverter the case sent control words, for the cleanup of a persistent device.
+    fn note_commanded(&mut self, inverter: Inverter) {
+        if let Some(p) = self.persistent.as_mut() {
+            if !p.commanded.contains(&inverter) {
+                p.commanded.push(inverter);
+            }
+        }
+    }
+
+    /// Repeats the one-cycle `step` until `d` has passed on the link's clock (the virtual one
+    /// in-process): a step "for 1 s" gives the device's drive model a second, however many
+    /// cycles a loaded host manages in it. The last cycle's observation.
+    fn for_time(&mut self, step: &Action, d: Duration) -> Result<Observation, StepError> {
+        let cycle = self.ctl.borrow().cycle();
+        let end = self.ctl.borrow_mut().link_mut().now() + d.saturating_sub(cycle / 2);
+        self.channel.perform(step)?;
+        while self.ctl.borrow_mut().link_mut().now() < end {
+            self.channel.perform(step)?;
+        }
+        // One cycle more, as for a counted step.
+        self.channel.perform(step)
+    }
+
     /// The slot and subslot of a record step: as given, else FI 1's module.
     fn place(&self, slot: Option<u16>, subslot: Option<u16>) -> (u16, u16) {
         let fi1 = Inverter::new(1)
@@ -648,13 +671,46 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
                 self.pnio_step(step)
             }
             Action::Write(o) if self.persistent.is_some() => self.write(action, o),
+            Action::Process {
+                inverter,
+                control,
+                setpoints,
+                run: Run::For(d),
+            } => {
+                self.note_commanded(*inverter);
+                let one = Action::Process {
+                    inverter: *inverter,
+                    control: *control,
+                    setpoints: setpoints.clone(),
+                    run: Run::Cycles(1),
+                };
+                self.for_time(&one, *d)
+            }
+            Action::Process {
+                inverter,
+                control,
+                setpoints,
+                run: Run::Cycles(n),
+            } => {
+                self.note_commanded(*inverter);
+                let step = |n| Action::Process {
+                    inverter: *inverter,
+                    control: *control,
+                    setpoints: setpoints.clone(),
+                    run: Run::Cycles(n),
+                };
+                self.channel.perform(&step(*n))?;
+                // The status comes from one cycle more: a device that took the last output
+                // late (a loaded host) has answered it by then.
+                self.channel.perform(&step(1))
+            }
+            Action::Wait(d) => {
+                let cycle = self.ctl.borrow().cycle();
+                self.for_time(&Action::Wait(cycle), *d)
+            }
             other => {
-                if let (Action::Process { inverter, .. }, Some(p)) =
-                    (other, self.persistent.as_mut())
-                {
-                    if !p.commanded.contains(inverter) {
-                        p.commanded.push(*inverter);
-                    }
+                if let Action::Process { inverter, .. } = other {
+                    self.note_commanded(*inverter);
                 }
                 self.channel.perform(other)
             }

@@ -331,17 +331,19 @@ impl<L: Link> Controller<L> {
         self.pump(until, &|_| false, None).map(|_| ())
     }
 
-    /// One cycle of the exchange: the next output frame (on the send clock), then the first
-    /// input frame that left the device after that frame reached it, which carries the
-    /// device's answer to it. `false` when none came within three cycles and [`LATE`].
+    /// One cycle of the exchange: the output frame now, then the first input frame that left
+    /// the device after that frame reached it, which carries the device's answer to it.
+    /// `false` when none came within three cycles and [`LATE`].
+    ///
+    /// The output goes out at once rather than on the controller's own clock: a run of
+    /// cycles then follows the device's send clock (each output right after the input before
+    /// it), one cycle per input frame, so that a step's cycles take the time they stand for
+    /// on the device's drive model.
     pub(crate) fn exchange_cycle(&mut self) -> Result<bool, PnioError> {
         let Some(input_id) = self.ar.as_ref().map(|a| a.input_frame_id) else {
             return Err(PnioError::NotConnected);
         };
         let deadline = self.link.now() + self.cycle() * 3 + LATE;
-        if self.next_send > self.link.now() {
-            self.pump(self.next_send, &|_| false, None)?;
-        }
         self.send_now()?;
         // When the output left: on the link's clock, and on the real-time clock the kernel
         // stamps received frames with.
@@ -382,13 +384,13 @@ impl<L: Link> Controller<L> {
         Ok(())
     }
 
-    /// The output frame now, and the next on the send clock (one cycle on; a cycle from now
-    /// when the controller fell behind by more than one).
+    /// The output frame now, and the next on the send clock: one cycle after this one, or
+    /// after the one due, whichever is later (a frame sent early restarts the clock).
     fn send_now(&mut self) -> Result<(), PnioError> {
         let now = self.link.now();
         self.send_outputs()?;
         let cycle = self.cycle();
-        self.next_send = if now.saturating_sub(self.next_send) > cycle {
+        self.next_send = if now.saturating_sub(self.next_send) > cycle || now < self.next_send {
             now + cycle
         } else {
             self.next_send + cycle
