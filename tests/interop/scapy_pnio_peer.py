@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """An independent PROFINET IO controller client built from scapy's PROFINET layers.
 
-    python scapy_pnio_peer.py [--ip DEVICE_IP] [--port 34964] [--iface IFACE]
+    python scapy_pnio_peer.py [--ip DEVICE_IP] [--port 34964] [--cm-port 34964] [--iface IFACE]
                               [--vendor-id N] [--device-id N] [--instance N]
                               [--submodule SLOT,SUBSLOT,MODULE_IDENT,SUBMODULE_IDENT,IN,OUT]...
                               [--timeout S] [--deadline S] [--dry-run] [--strict] [-v] OP...
@@ -20,6 +20,15 @@ Operations, run in order, one JSON line each on stdout:
                                 --submodule list; parses ARBlockRes, IOCRBlockRes, AlarmCRBlockRes,
                                 ModuleDiffBlock, ARServerBlock
   prm-end                       Control (opnum 4) with IODControlReq PrmEnd
+  appl-ready                    waits for the device's own ApplicationReady call (Control,
+                                opnum 4, to this controller's UDP --cm-port, bound from the
+                                start of the run when this operation is given), parses it with
+                                scapy (IODControlReq) and answers it with the IODControlRes
+                                scapy derives from it (get_response(), Done set). Without it a
+                                device retries ApplicationReady and then gives the AR up. With
+                                --iface, the device's input CR frames are then watched (scapy's
+                                PNIORealTimeCyclicPDU) until one says DataStatus "run":
+                                "input_run", "input_data_status", "input_frames"
   write INDEX SLOT SUBSLOT HEX  Write (opnum 3): IODWriteReq + the record data HEX
   read INDEX SLOT SUBSLOT [MAX] Read (opnum 2): IODReadReq asking for at most MAX bytes
                                 (default --read-max)
@@ -84,7 +93,7 @@ logging.getLogger("scapy").setLevel(logging.ERROR)
 scapy, LIBRARY = ic.import_peer("scapy", "contrib.pnio", "contrib.pnio_dcp", "contrib.pnio_rpc")
 from scapy.contrib import pnio_dcp as D  # noqa: E402
 from scapy.contrib import pnio_rpc as R  # noqa: E402
-from scapy.contrib.pnio import ProfinetIO  # noqa: E402
+from scapy.contrib.pnio import PNIORealTimeCyclicPDU, ProfinetIO  # noqa: E402
 from scapy.layers.dcerpc import DceRpc4  # noqa: E402
 from scapy.layers.l2 import Ether  # noqa: E402
 from scapy.packet import Padding, Raw  # noqa: E402
@@ -93,6 +102,7 @@ from scapy.utils import hexdump  # noqa: E402
 RPC_PORT = 34964  # 8894h, the PNIO-CM endpoint
 OPNUM = {"connect": 0, "release": 1, "read": 2, "write": 3, "control": 4, "read-implicit": 5}
 DEVICE_INTERFACE = uuid.UUID("dea00001-6c97-11d1-8271-00a02442df7d")
+CONTROLLER_INTERFACE = uuid.UUID("dea00002-6c97-11d1-8271-00a02442df7d")
 # The controller's own object UUID (CMInitiatorObjectUUID): the PNIO form
 # DEA00000-6C97-11D1-8271-<instance><device id><vendor id>, here instance 1, ids 0.
 INITIATOR_OBJECT = uuid.UUID("dea00000-6c97-11d1-8271-000100000000")
@@ -363,6 +373,8 @@ class Controller:
         self.dcp_sock = None
         self.dcp_mac = None
         self.connected = False
+        self.cm_sock = None
+        self.input_frame_id = None
 
     # -- transport ------------------------------------------------------------------------------
     def udp(self):
@@ -631,6 +643,7 @@ class Controller:
         self.finish(line)
         if line["ok"]:
             self.connected = True
+            self.input_frame_id = line["frame_ids"].get("input")
         return line
 
     def record_header(self, cls, index, slot, subslot, length, ar=None):
@@ -730,6 +743,128 @@ class Controller:
         if release and line["ok"]:
             self.connected = False
         return line
+
+    # -- the device's own call: ApplicationReady -------------------------------------------------
+    def cm_open(self):
+        """The controller's RPC endpoint (UDP --cm-port), where the device calls
+        ApplicationReady."""
+        if self.cm_sock is None and not self.a.dry_run:
+            s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            s.bind(("", self.a.cm_port))
+            self.cm_sock = s
+        return self.cm_sock
+
+    def appl_ready(self, line):
+        """Waits for the device's ApplicationReady request, parses it with scapy and answers it
+        with IODControlReq.get_response() (ControlCommand Done) in a DCE/RPC response of the
+        same activity and sequence number."""
+        line.update(ar_uuid=str(self.ar_uuid), cm_port=self.a.cm_port)
+        if self.a.dry_run:
+            req = R.IODControlReq(ARUUID=self.ar_uuid, SessionKey=self.session_key,
+                                  ControlCommand_ApplicationReady=1)
+            res = req.__class__(bytes(req)).get_response()
+            line.update(dry_run=True, request_block=bytes(req)[:2].hex(),
+                        response_hex=bytes(res).hex(), ok=True)
+            return line
+        s = self.cm_open()
+        end = time.monotonic() + self.a.timeout
+        ignored = []
+        while True:
+            left = end - time.monotonic()
+            if left <= 0:
+                if ignored:
+                    line["ignored_datagrams"] = ignored
+                raise Timeout()
+            s.settimeout(left)
+            try:
+                raw, src = s.recvfrom(65535)
+            except socket.timeout:
+                continue
+            try:
+                pkt = DceRpc4(raw)
+            except Exception as e:
+                ignored.append(f"not DCE/RPC ({type(e).__name__}: {e}): {raw.hex()}")
+                continue
+            req = pkt.getlayer(R.PNIOServiceReqPDU)
+            if pkt.ptype != 0 or req is None:
+                ignored.append(f"ptype {pkt.ptype}, no PNIO request PDU: {raw.hex()}")
+                continue
+            break
+        if ignored:
+            line["ignored_datagrams"] = ignored
+        issues = []
+        line.update(request_from=f"{src[0]}:{src[1]}", request_len=len(raw),
+                    rpc_opnum=pkt.opnum, rpc_object=str(pkt.object), rpc_if_id=str(pkt.if_id),
+                    rpc_endian=pkt.endian)
+        if pkt.len != len(bytes(pkt.payload)):
+            issues.append(f"DCE/RPC length {pkt.len} but {len(bytes(pkt.payload))} bytes follow")
+        if req.args_length != len(bytes(pkt.payload)) - 20:
+            issues.append(f"ArgsLength {req.args_length} but "
+                          f"{len(bytes(pkt.payload)) - 20} bytes of NDR data follow")
+        got = [describe_block(b, issues) for b in req.blocks]
+        line["blocks"] = got
+        ctrl = [b for b in req.blocks if isinstance(b, R.IODControlReq)]
+        if not ctrl:
+            issues.append("no IODControlReq in the request")
+            line.update(ok=False, error="parse: " + "; ".join(issues), request_hex=raw.hex())
+            return line
+        c = ctrl[0]
+        line.update(block_type=f"{c.block_type:04X}",
+                    request_ar_uuid=str(c.ARUUID), request_session_key=c.SessionKey,
+                    control_command_application_ready=c.ControlCommand_ApplicationReady)
+        if pkt.opnum != OPNUM["control"]:
+            issues.append(f"opnum {pkt.opnum}, not Control (4)")
+        if pkt.if_id != CONTROLLER_INTERFACE:
+            issues.append(f"interface {pkt.if_id} is not the controller interface")
+        if c.block_type != 0x0112 or c.ControlCommand_ApplicationReady != 1:
+            issues.append(f"block {c.block_type:04X} is no ApplicationReady request")
+        if c.ARUUID != self.ar_uuid or c.SessionKey != self.session_key:
+            issues.append("the request names another AR UUID or session key")
+        res = c.get_response()
+        res.ControlCommand_Done = 1
+        pdu = R.PNIOServiceResPDU(status=0, max_count=req.args_max, blocks=[res])
+        reply = DceRpc4(ptype=2, flags1=0, endian=pkt.endian, object=pkt.object,
+                        if_id=pkt.if_id, act_id=pkt.act_id, server_boot=pkt.server_boot,
+                        if_vers=pkt.if_vers, seqnum=pkt.seqnum, opnum=pkt.opnum) / pdu
+        data = bytes(reply)
+        rt = self.dcp_open() if self.a.iface and self.input_frame_id is not None else None
+        s.sendto(data, src)
+        line.update(response_len=len(data), response_block=f"{res.block_type:04X}")
+        if rt is not None:
+            line.update(self.watch_input(rt))
+        if issues:
+            line.update(parse_issues=issues, ok=False, error="parse: " + "; ".join(issues))
+        else:
+            line["ok"] = True
+        return line
+
+    def watch_input(self, rt):
+        """The device's input CR frames on --iface after ApplicationReady was answered, parsed
+        by scapy (PNIORealTimeCyclicPDU): until one has DataStatus.ProviderState "run" (the
+        device took the answer and exchanges data), --timeout at most."""
+        out = {"input_frame_id": self.input_frame_id, "input_frames": 0,
+               "input_data_status": None, "input_run": False}
+        end = time.monotonic() + self.a.timeout
+        while not out["input_run"]:
+            left = end - time.monotonic()
+            if left <= 0:
+                break
+            rt.settimeout(left)
+            try:
+                raw = rt.recv(65535)
+            except socket.timeout:
+                break
+            if len(raw) < 16 or struct.unpack_from(">H", raw, 14)[0] != self.input_frame_id:
+                continue
+            pdu = Ether(raw).getlayer(PNIORealTimeCyclicPDU)
+            if pdu is None:
+                out["input_parse_error"] = f"scapy found no RT PDU: {raw.hex()}"
+                continue
+            out["input_frames"] += 1
+            out["input_data_status"] = f"{int(pdu.dataStatus):02X}"
+            out["input_run"] = bool(int(pdu.dataStatus) & 0x10)
+        return out
 
     def bench_read(self, line, n, index, slot, subslot, data):
         line.update(index=index, slot=slot, subslot=subslot, reads=n)
@@ -964,7 +1099,7 @@ def odd_pad(dcp, block_bytes):
 
 # --- command line -----------------------------------------------------------------------------
 
-ARITY = {"connect": 0, "prm-end": 0, "write": 4, "read": (3, 4), "read-implicit": (3, 4),
+ARITY = {"connect": 0, "prm-end": 0, "appl-ready": 0, "write": 4, "read": (3, 4), "read-implicit": (3, 4),
          "release": 0, "bench-read": (4, 5), "dcp-identify": (0, 1), "dcp-set-name": 2,
          "dcp-set-ip": 4}
 
@@ -1018,6 +1153,8 @@ def run_op(c, name, args):
             return c.connect(line)
         if name == "prm-end":
             return c.control(line)
+        if name == "appl-ready":
+            return c.appl_ready(line)
         if name == "release":
             return c.control(line, release=True)
         if name == "write":
@@ -1054,6 +1191,9 @@ def main(argv):
     p.add_argument("ops", nargs="*", metavar="OP")
     p.add_argument("--ip", help="the device's IPv4 address (RPC operations)")
     p.add_argument("--port", type=int, default=RPC_PORT, help="RPC port (default 34964)")
+    p.add_argument("--cm-port", type=int, default=RPC_PORT,
+                   help="UDP port of this controller's own RPC endpoint, where the device calls "
+                   "ApplicationReady (appl-ready; default 34964)")
     p.add_argument("--iface", help="network interface for DCP (and for the controller's MAC)")
     p.add_argument("--mac", help="CMInitiatorMacAdd (default: the MAC of the interface towards "
                    "--ip)")
@@ -1155,6 +1295,13 @@ def main(argv):
     c = Controller(a)
     all_ok = True
     expired = False
+    if "appl-ready" in names:
+        # Bound before anything is sent: the device calls ApplicationReady right after it
+        # answers PrmEnd.
+        try:
+            c.cm_open()
+        except OSError as e:
+            sys.stderr.write(f"scapy_pnio_peer.py: UDP {a.cm_port}: {e}\n")
     try:
         for name, op_args in ops:
             start = time.perf_counter()
@@ -1179,7 +1326,7 @@ def main(argv):
             all_ok &= bool(line.get("ok"))
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
-        for s in (c.sock, c.dcp_sock):
+        for s in (c.sock, c.dcp_sock, c.cm_sock):
             if s is not None:
                 s.close()
     return 1 if a.strict and not all_ok else 0
