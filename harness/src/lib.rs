@@ -11,6 +11,9 @@ pub use ecat::bench_support as ecat_bench;
 pub use ecat::serve as ecat_serve;
 pub use epl::bench_support as epl_bench;
 pub use epl::serve as epl_serve;
+/// What the PROFINET speed bench (`harness/benches/pnio/`) needs of the library: the harness
+/// IO controller in data exchange, reading a data record and stamping the input CR's frames.
+pub use pnio::bench_support as pnio_bench;
 /// `harness serve pnio` in a thread of the caller (PROFINET end-to-end tests and benches).
 pub use pnio::serve as pnio_serve;
 mod enip;

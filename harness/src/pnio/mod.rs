@@ -2,6 +2,7 @@
 //! data, records, alarms, Release) and the `pnio:` steps — for the SK 550P (BU 0620 §2.5) and
 //! the SK TU3-PNT (BU 0590).
 
+pub mod bench_support;
 mod binding;
 mod controller;
 mod gsdml;
