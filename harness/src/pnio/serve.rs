@@ -12,16 +12,18 @@
 //!   address). Without an IPv4 address only DCP and RT are served, and a line on stderr says
 //!   so.
 //!
-//! One thread owns the raw link and the device: each frame goes to [`IoDevice::frame`], and
+//! One thread owns the raw link: each frame goes to [`IoDevice::frame`], and
 //! [`IoDevice::poll`] runs every [`POLL_PERIOD`] (the input CR's frames, the watchdog, alarms,
-//! the drive model). A second thread owns the UDP socket and hands each datagram over through
-//! a channel; the raw thread answers it at its next wake-up (within a poll period) on a clone
-//! of the socket. The device is never shared, so it needs no lock.
+//! the drive model); what they send goes out at once (the device's own RPC calls on a clone
+//! of the UDP socket). A second thread owns the UDP socket and answers each call at once with
+//! [`IoDevice::call`], which leaves the timers to the first: the raw link cannot be waited on
+//! together with another socket, and a record read must not wait for the next poll. The
+//! device is shared under a mutex, and the time handed to it is read with the lock held, so
+//! it never goes backwards.
 
 use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::mpsc::{self, Receiver, Sender};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
@@ -247,7 +249,6 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
             })
             .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))
     };
-    let (tx, rx) = mpsc::channel();
     let (reply, recv) = match socket {
         Some((addr, socket)) => {
             let reply = socket
@@ -257,14 +258,16 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         }
         None => (None, None),
     };
+    let device = Shared {
+        io: Arc::new(Mutex::new(io)),
+        start: Instant::now(),
+    };
     let raw = Raw {
         link,
-        io,
+        device: device.clone(),
         reply,
-        datagrams: rx,
         counters: counters.clone(),
         stop: stop.clone(),
-        start: Instant::now(),
     };
     served.threads.push(spawn(
         format!("pnio-device-{}", opts.iface),
@@ -274,21 +277,37 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         let stop = stop.clone();
         served.threads.push(spawn(
             format!("pnio-rpc-{}", opts.iface),
-            Box::new(move || run_udp(socket, addr, tx, &counters, &stop)),
+            Box::new(move || run_udp(socket, addr, &device, &counters, &stop)),
         )?);
     }
     Ok(served)
 }
 
-/// The raw thread: the device, its link, and the socket its datagrams go out on.
+/// The device and its clock, shared by both threads.
+#[derive(Clone)]
+struct Shared {
+    io: Arc<Mutex<IoDevice>>,
+    start: Instant,
+}
+
+impl Shared {
+    /// The device and the time to hand it (read with the lock held: never backwards).
+    fn lock(&self) -> Result<(MutexGuard<'_, IoDevice>, Duration), ServeError> {
+        let guard = self
+            .io
+            .lock()
+            .map_err(|_| ServeError::Panicked("the other serving thread panicked".into()))?;
+        Ok((guard, self.start.elapsed()))
+    }
+}
+
+/// The raw thread: the link, and the socket the device's own calls go out on.
 struct Raw {
     link: RawLink,
-    io: IoDevice,
+    device: Shared,
     reply: Option<(SocketAddr, UdpSocket)>,
-    datagrams: Receiver<(SocketAddr, Vec<u8>)>,
     counters: Arc<Counters>,
     stop: Arc<AtomicBool>,
-    start: Instant,
 }
 
 impl Raw {
@@ -296,13 +315,11 @@ impl Raw {
         let mut buf = vec![0u8; MAX_FRAME];
         let mut next_poll = Duration::ZERO;
         while !self.stop.load(Ordering::Relaxed) {
-            while let Ok((from, d)) = self.datagrams.try_recv() {
-                let out = self.io.datagram(from, &d, self.start.elapsed());
-                self.send(out)?;
-            }
-            let now = self.start.elapsed();
-            if now >= next_poll {
-                let out = self.io.poll(now);
+            if self.device.start.elapsed() >= next_poll {
+                let (out, now) = {
+                    let (mut io, now) = self.device.lock()?;
+                    (io.poll(now), now)
+                };
                 self.send(out)?;
                 // On the poll grid: a late wake-up does not shift the next one.
                 next_poll = if now - next_poll > POLL_PERIOD {
@@ -311,7 +328,7 @@ impl Raw {
                     next_poll + POLL_PERIOD
                 };
             }
-            let until = self.start + next_poll;
+            let until = self.device.start + next_poll;
             let received = match self.link.recv(&mut buf, until) {
                 Ok(r) => r,
                 Err(e) if e.is_link_down() => {
@@ -322,7 +339,10 @@ impl Raw {
             };
             let Some(r) = received else { continue };
             bump(&self.counters.frames_in);
-            let out = self.io.frame(&buf[..r.len], self.start.elapsed());
+            let out = {
+                let (mut io, now) = self.device.lock()?;
+                io.frame(&buf[..r.len], now)
+            };
             self.send(out)?;
         }
         Ok(())
@@ -357,11 +377,11 @@ impl Raw {
     }
 }
 
-/// The UDP thread: RPC datagrams in, handed to the raw thread.
+/// The UDP thread: RPC calls in, the device's answers back to their sender.
 fn run_udp(
     socket: UdpSocket,
     addr: SocketAddr,
-    to_device: Sender<(SocketAddr, Vec<u8>)>,
+    device: &Shared,
     counters: &Counters,
     stop: &AtomicBool,
 ) -> Result<(), ServeError> {
@@ -373,9 +393,19 @@ fn run_udp(
             Err(source) => return Err(ServeError::Udp { addr, source }),
         };
         bump(&counters.datagrams_in);
-        if to_device.send((from, buf[..len].to_vec())).is_err() {
-            // The device's thread ended; so does this one.
-            break;
+        let out = {
+            let (mut io, now) = device.lock()?;
+            io.call(from, &buf[..len], now)
+        };
+        for o in out {
+            let Out::Datagram { to, bytes } = o else {
+                continue;
+            };
+            match socket.send_to(&bytes, to) {
+                Ok(_) => bump(&counters.datagrams_out),
+                Err(e) if transient(&e) => {}
+                Err(source) => return Err(ServeError::Udp { addr, source }),
+            }
         }
     }
     Ok(())

@@ -247,8 +247,15 @@ impl IoDevice {
     /// Handles one UDP datagram to the RPC port from `from` at `now`; returns what to send.
     pub fn datagram(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Out> {
         let mut out = self.timers(now);
-        out.extend(self.rpc(from, datagram, now));
+        out.extend(self.call(from, datagram, now));
         out
+    }
+
+    /// Handles one RPC datagram without running the timers: for a host whose other thread
+    /// polls the device on its clock (and sends the frames that come of it). Only datagrams
+    /// come back.
+    pub fn call(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Out> {
+        self.rpc(from, datagram, now)
     }
 
     /// Lets time pass: the input CR's frames, the watchdog, alarms, ApplicationReady retries,
