@@ -271,16 +271,18 @@ fn controller_lost(device: &mut Device, product: Product) {
         group: code / 10,
         sub: (code % 10) as u8,
     };
-    let mut raised = false;
+    let mut timed_out = false;
     for n in 1..=device.config().inverters {
         let Ok(fi) = Inverter::new(i64::from(n)) else {
             continue;
         };
-        if monitored(device, product, fi) && device.raise(fi, fault).is_ok() {
-            raised = true;
+        if monitored(device, product, fi) {
+            timed_out = true;
+            // An inverter already in fault keeps that fault.
+            let _ = device.raise(fi, fault);
         }
     }
-    if let (true, Some(error)) = (raised, def::timeout_module_error(product)) {
+    if let (true, Some(error)) = (timed_out, def::timeout_module_error(product)) {
         if let Ok(store) = device.store(Unit::Interface) {
             store.set_info(170, 1, i32::from(error));
         }
