@@ -48,6 +48,23 @@ impl Capability {
         Capability::Readdressing,
     ];
 
+    /// The general capabilities and `bus`'s steps: what a bus's embedded simulator offers
+    /// when it answers the parameter channel too.
+    pub(crate) const fn general_and(bus: &'static str) -> [Capability; 9] {
+        let g = Capability::GENERAL;
+        [
+            g[0],
+            g[1],
+            g[2],
+            g[3],
+            g[4],
+            g[5],
+            g[6],
+            g[7],
+            Capability::Bus(bus),
+        ]
+    }
+
     /// Every capability: the general ones and one per bus.
     pub(crate) fn all() -> Vec<Capability> {
         let buses = crate::bus::BUSES.iter().map(|b| Capability::Bus(b.name));

@@ -155,13 +155,7 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
         m[4],
         m[5]
     );
-    let end = duration.map(|d| Instant::now() + d);
-    while served.is_running() && end.is_none_or(|e| Instant::now() < e) {
-        let left = end.map_or(STOP_CHECK * 10, |e| {
-            e.saturating_duration_since(Instant::now())
-        });
-        thread::sleep(left.min(STOP_CHECK * 10));
-    }
+    crate::net::workers::serve_for(duration, STOP_CHECK * 10, || served.is_running());
     served.stop().map(|_| ())
 }
 

@@ -22,7 +22,7 @@
 use std::net::{IpAddr, SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::thread::{self, JoinHandle};
+use std::thread;
 use std::time::{Duration, Instant};
 
 use proto::epl::{NmtState, SDO_UDP_PORT};
@@ -32,6 +32,7 @@ use proto::nord::Protocol;
 use sim::epl::{Node, NodeConfig, NodeError, POLL_PERIOD};
 
 use crate::net::udp::{ipv4_of, transient};
+use crate::net::workers::{serve_for, Workers};
 pub use crate::net::LinkError;
 use crate::net::{RawLink, MAX_FRAME};
 
@@ -134,8 +135,6 @@ fn bump(c: &AtomicU64) {
     c.fetch_add(1, Ordering::Relaxed);
 }
 
-type Worker = JoinHandle<Result<(), ServeError>>;
-
 /// A node served in threads by [`start`]; dropping it stops them.
 #[derive(Debug)]
 pub struct Served {
@@ -144,8 +143,7 @@ pub struct Served {
     udp: Option<SocketAddr>,
     node: Arc<Mutex<Node>>,
     counters: Arc<Counters>,
-    stop: Arc<AtomicBool>,
-    threads: Vec<Worker>,
+    workers: Workers<ServeError>,
 }
 
 impl Served {
@@ -180,7 +178,7 @@ impl Served {
 
     /// Whether the threads still serve (they end on a link or socket error).
     pub fn is_running(&self) -> bool {
-        !self.threads.is_empty() && self.threads.iter().all(|t| !t.is_finished())
+        self.workers.is_running()
     }
 
     /// Stops the threads (within [`STOP_CHECK`]) and returns what they counted, or why they had
@@ -190,22 +188,8 @@ impl Served {
     }
 
     fn join(&mut self) -> Result<Stats, ServeError> {
-        self.stop.store(true, Ordering::Relaxed);
-        let mut result = Ok(());
-        for t in self.threads.drain(..) {
-            let r = t.join().unwrap_or_else(|p| {
-                let why = p
-                    .downcast_ref::<&str>()
-                    .map(|s| s.to_string())
-                    .or_else(|| p.downcast_ref::<String>().cloned())
-                    .unwrap_or_default();
-                Err(ServeError::Panicked(why))
-            });
-            if result.is_ok() {
-                result = r;
-            }
-        }
-        result.map(|()| self.counters.snapshot())
+        self.workers.join(ServeError::Panicked)?;
+        Ok(self.counters.snapshot())
     }
 }
 
@@ -241,7 +225,6 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let mac = node.mac().0;
     let node = Arc::new(Mutex::new(node));
     let counters = Arc::new(Counters::default());
-    let stop = Arc::new(AtomicBool::new(false));
     let start = Instant::now();
     let mut served = Served {
         iface: opts.iface.clone(),
@@ -249,42 +232,35 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         udp: udp.as_ref().map(|(a, _)| *a),
         node: node.clone(),
         counters: counters.clone(),
-        stop: stop.clone(),
-        threads: Vec::new(),
+        workers: Workers::new(),
     };
-    let spawn = |name: String, f: Box<dyn FnOnce() -> Result<(), ServeError> + Send>| {
-        let stop = stop.clone();
-        thread::Builder::new()
-            .name(name)
-            .spawn(move || {
-                let r = f();
-                // Either thread ending ends both: a node half served is not served.
-                stop.store(true, Ordering::Relaxed);
-                r
-            })
-            .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))
-    };
+    let stop = served.workers.stop_flag();
+    let thread = |e: std::io::Error| ServeError::Panicked(format!("cannot start a thread: {e}"));
     let shared = Shared {
         node: node.clone(),
         counters: counters.clone(),
         stop: stop.clone(),
         start,
     };
-    served.threads.push(spawn(
-        format!("epl-node-{}", opts.iface),
-        Box::new(move || run_raw(link, &shared)),
-    )?);
+    served
+        .workers
+        .spawn(format!("epl-node-{}", opts.iface), move || {
+            run_raw(link, &shared)
+        })
+        .map_err(thread)?;
     if let Some((addr, socket)) = udp {
         let shared = Shared {
             node,
             counters,
-            stop: stop.clone(),
+            stop,
             start,
         };
-        served.threads.push(spawn(
-            format!("epl-udp-{}", opts.iface),
-            Box::new(move || run_udp(socket, addr, &shared)),
-        )?);
+        served
+            .workers
+            .spawn(format!("epl-udp-{}", opts.iface), move || {
+                run_udp(socket, addr, &shared)
+            })
+            .map_err(thread)?;
     }
     Ok(served)
 }
@@ -328,13 +304,7 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
         ),
         Some(_) => {}
     }
-    let end = duration.map(|d| Instant::now() + d);
-    while served.is_running() && end.is_none_or(|e| Instant::now() < e) {
-        let left = end.map_or(STOP_CHECK * 10, |e| {
-            e.saturating_duration_since(Instant::now())
-        });
-        thread::sleep(left.min(STOP_CHECK * 10));
-    }
+    serve_for(duration, STOP_CHECK * 10, || served.is_running());
     served.stop().map(|_| ())
 }
 

@@ -10,6 +10,7 @@ pub(crate) mod peer;
 pub(crate) mod udp;
 #[cfg(test)]
 pub(crate) mod veth;
+pub(crate) mod workers;
 
 pub use error::LinkError;
 #[allow(unused_imports)] // the module's API, not all of it used yet

@@ -24,7 +24,7 @@
 use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::thread::{self, JoinHandle};
+use std::thread;
 use std::time::{Duration, Instant};
 
 use proto::eth::{MacAddr, ETHERTYPE_PROFINET};
@@ -34,6 +34,7 @@ use proto::pnio::RPC_PORT;
 use sim::pnio::{IoConfig, IoDevice, Out, POLL_PERIOD};
 
 use crate::net::udp::{ipv4_of, transient};
+use crate::net::workers::{serve_for, Workers};
 use crate::net::{LinkError, RawLink, MAX_FRAME};
 
 /// How long the raw thread polls the socket after a frame before it sleeps.
@@ -113,16 +114,13 @@ fn bump(c: &AtomicU64) {
     c.fetch_add(1, Ordering::Relaxed);
 }
 
-type Worker = JoinHandle<Result<(), ServeError>>;
-
 /// A device served in threads by [`start`]; dropping it stops them.
 #[derive(Debug)]
 pub struct Served {
     mac: MacAddr,
     udp: Option<SocketAddr>,
     counters: Arc<Counters>,
-    stop: Arc<AtomicBool>,
-    threads: Vec<Worker>,
+    workers: Workers<ServeError>,
 }
 
 impl Served {
@@ -151,7 +149,7 @@ impl Served {
 
     /// Whether the threads still serve.
     pub fn is_running(&self) -> bool {
-        !self.threads.is_empty() && self.threads.iter().all(|t| !t.is_finished())
+        self.workers.is_running()
     }
 
     /// Stops the threads and returns what they counted, or why they had stopped before.
@@ -160,17 +158,8 @@ impl Served {
     }
 
     fn join(&mut self) -> Result<Stats, ServeError> {
-        self.stop.store(true, Ordering::Relaxed);
-        let mut result = Ok(());
-        for t in self.threads.drain(..) {
-            let r = t
-                .join()
-                .unwrap_or_else(|_| Err(ServeError::Panicked("a serving thread".into())));
-            if result.is_ok() {
-                result = r;
-            }
-        }
-        result.map(|()| self.stats())
+        self.workers.join(ServeError::Panicked)?;
+        Ok(self.stats())
     }
 }
 
@@ -229,26 +218,14 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         None => None,
     };
     let counters = Arc::new(Counters::default());
-    let stop = Arc::new(AtomicBool::new(false));
     let mut served = Served {
         mac,
         udp: socket.as_ref().map(|(a, _)| *a),
         counters: counters.clone(),
-        stop: stop.clone(),
-        threads: Vec::new(),
+        workers: Workers::new(),
     };
-    let spawn = |name: String, f: Box<dyn FnOnce() -> Result<(), ServeError> + Send>| {
-        let stop = stop.clone();
-        thread::Builder::new()
-            .name(name)
-            .spawn(move || {
-                let r = f();
-                // Either thread ending ends both: a device half served is not served.
-                stop.store(true, Ordering::Relaxed);
-                r
-            })
-            .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))
-    };
+    let stop = served.workers.stop_flag();
+    let thread = |e: std::io::Error| ServeError::Panicked(format!("cannot start a thread: {e}"));
     let (reply, recv) = match socket {
         Some((addr, socket)) => {
             let reply = socket
@@ -269,16 +246,17 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         counters: counters.clone(),
         stop: stop.clone(),
     };
-    served.threads.push(spawn(
-        format!("pnio-device-{}", opts.iface),
-        Box::new(move || raw.run()),
-    )?);
+    served
+        .workers
+        .spawn(format!("pnio-device-{}", opts.iface), move || raw.run())
+        .map_err(thread)?;
     if let Some((addr, socket)) = recv {
-        let stop = stop.clone();
-        served.threads.push(spawn(
-            format!("pnio-rpc-{}", opts.iface),
-            Box::new(move || run_udp(socket, addr, &device, &counters, &stop)),
-        )?);
+        served
+            .workers
+            .spawn(format!("pnio-rpc-{}", opts.iface), move || {
+                run_udp(socket, addr, &device, &counters, &stop)
+            })
+            .map_err(thread)?;
     }
     Ok(served)
 }
@@ -437,10 +415,7 @@ fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeErr
             opts.iface
         );
     }
-    let end = duration.map(|d| Instant::now() + d);
-    while served.is_running() && end.is_none_or(|e| Instant::now() < e) {
-        thread::sleep(STOP_CHECK * 10);
-    }
+    serve_for(duration, STOP_CHECK * 10, || served.is_running());
     served.stop().map(|_| ())
 }
 
