@@ -222,3 +222,110 @@ fn every_profinet_suite_passes_against_the_served_device_over_a_veth_pair() {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// What stands behind the interface instead of a device.
+#[derive(Clone, Copy, Debug)]
+enum Impostor {
+    /// Nothing answers.
+    Silent,
+    /// Every DCP Identify gets a response frame with its Xid whose DCPDataLength runs past the
+    /// frame.
+    Garbage,
+}
+
+/// Answers the Identify requests arriving on `iface` with garbage until `stop`.
+fn garbage_responder(iface: &str, stop: std::sync::Arc<std::sync::atomic::AtomicBool>) {
+    use pnet_datalink::Channel;
+    let interface = pnet_datalink::interfaces()
+        .into_iter()
+        .find(|i| i.name == iface)
+        .expect("the veth end");
+    let config = pnet_datalink::Config {
+        read_timeout: Some(std::time::Duration::from_millis(20)),
+        ..Default::default()
+    };
+    let Ok(Channel::Ethernet(mut tx, mut rx)) = pnet_datalink::channel(&interface, config) else {
+        panic!("a raw socket on {iface}");
+    };
+    while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+        let Ok(frame) = rx.next() else { continue };
+        // EtherType 8892h, frame id FEFEh: an Identify request.
+        if frame.len() < 22 || frame[12..14] != [0x88, 0x92] || frame[14..16] != [0xFE, 0xFE] {
+            continue;
+        }
+        let mut answer = Vec::new();
+        answer.extend_from_slice(&frame[6..12]); // to the requester
+        answer.extend_from_slice(&[0x02, 0, 0, 0, 0, 0x66]);
+        answer.extend_from_slice(&[0x88, 0x92, 0xFE, 0xFF, 0x05, 0x01]);
+        answer.extend_from_slice(&frame[18..22]); // its Xid
+        answer.extend_from_slice(&[0x00, 0x00, 0x05, 0xDC]); // DCPDataLength 1500
+        answer.resize(60, 0xA5);
+        let _ = tx.send_to(&answer, None);
+    }
+}
+
+#[test]
+fn a_silent_or_garbage_sending_device_is_an_error_verdict_within_the_timeout() {
+    let why = "the IO controller against a silent and a garbage-sending veth end";
+    if !require_root_or_skip(why) {
+        return;
+    }
+    for impostor in [Impostor::Silent, Impostor::Garbage] {
+        let ns = Netns::new("pniofake");
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let responder = match impostor {
+            Impostor::Silent => None,
+            Impostor::Garbage => {
+                let (iface, stop) = (ns.root_if().to_string(), stop.clone());
+                Some(std::thread::spawn(move || garbage_responder(&iface, stop)))
+            }
+        };
+        let out_dir =
+            std::env::temp_dir().join(format!("harness-pnio-{impostor:?}-{}", std::process::id()));
+        let start = std::time::Instant::now();
+        let out = ns
+            .command(env!("CARGO_BIN_EXE_harness"))
+            .args(["run", "--profile", "sk550p@pnio", "--timeout", "0.3"])
+            .args(["--filter", "pnio/dcp/identify"])
+            .arg("--dut")
+            .arg(format!("pnio://{}", ns.ns_if()))
+            .arg("--out")
+            .arg(&out_dir)
+            .output()
+            .expect("harness runs");
+        let took = start.elapsed();
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        if let Some(r) = responder {
+            r.join().expect("the responder ends");
+        }
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(out.status.code(), Some(1), "{impostor:?}: {stdout}");
+        let run: Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
+        let cases: Vec<&Value> = run["cases"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|c| c["verdict"] != "not_applicable")
+            .collect();
+        assert!(!cases.is_empty(), "{impostor:?}: {stdout}");
+        let says = match impostor {
+            Impostor::Silent => "no PROFINET IO device answered Identify",
+            Impostor::Garbage => "malformed DCP Identify response",
+        };
+        for c in &cases {
+            assert_eq!(c["verdict"], "error", "{impostor:?}: {c}");
+            assert!(
+                c["message"].as_str().unwrap().contains(says),
+                "{impostor:?}: {c}"
+            );
+        }
+        // Each case is bounded by the 0.3 s timeout (plus process start).
+        assert!(
+            took < std::time::Duration::from_secs(3 + cases.len() as u64),
+            "{impostor:?}: {} cases took {took:?}",
+            cases.len()
+        );
+        let _ = std::fs::remove_dir_all(&out_dir);
+    }
+}

@@ -56,6 +56,9 @@ pub(crate) const NETWORK_CAPABILITIES: [Capability; 4] = [
     Capability::Bus("pnio"),
 ];
 
+/// The `inject` error that makes the simulated device lose an inverter from its system bus.
+const LOST: &str = "lost";
+
 /// Bus cycles a parameter order may take to be answered (each cycle one record read).
 const ORDER_CYCLES: u32 = 200;
 
@@ -90,7 +93,7 @@ fn refused(status: PnioStatus, mut fields: Value) -> Observation {
         Refusal {
             kind: "PNIO status",
             code: u32::from_be_bytes([status.code, status.decode, status.code1, status.code2]),
-            text: status.to_string(),
+            text: status_hex(status),
         },
     )
 }
@@ -852,6 +855,10 @@ impl<L: Link> Dut for PnioDut<L> {
             .link_mut()
             .device()
             .ok_or_else(|| DutError("a device on the network cannot be made to fault".into()))?;
+        // "lost": the inverter drops off the system bus (the device's alarm 1256).
+        if error == LOST {
+            return Ok(io.lose_inverter(inverter)?);
+        }
         Ok(io.device_mut().inject_fault(inverter, error)?)
     }
 

@@ -495,15 +495,24 @@ impl<L: Link> Controller<L> {
         let deadline = self.link.now() + IDENTIFY_WINDOW.min(self.timeout);
         let mut stations = Vec::new();
         let mut first = Vec::new();
+        // Every Identify response frame carrying the request's Xid, parsed or not: a station
+        // that answers with bytes that are no DCP telegram is found out, not taken for none.
         let is_answer = move |p: &[u8]| {
-            DcpRepr::parse(p).is_ok_and(|r| r.xid == xid && r.service_type.is_response())
+            frame_id(p) == Some(FrameId::DCP_IDENTIFY_RES)
+                && p.get(4..8).is_some_and(|x| x == xid.to_be_bytes())
         };
+        let mut broken = None;
         while let Some(Got::Frame { src, payload, .. }) = self.pump(deadline, &is_answer, None)? {
-            let res = DcpRepr::parse(&payload).map_err(malformed("DCP Identify response"))?;
             if first.is_empty() {
-                first = payload;
+                first = payload.clone();
             }
-            stations.push(Station::of(src, &res));
+            match DcpRepr::parse(&payload) {
+                Ok(res) => stations.push(Station::of(src, &res)),
+                Err(e) => {
+                    broken.get_or_insert(format!("{e} (from {src})"));
+                    continue;
+                }
+            }
             if name.is_some() {
                 break;
             }
@@ -523,7 +532,13 @@ impl<L: Link> Controller<L> {
                 .join("; ")
         };
         self.record(&bytes, dcp_text(&req), &first, text);
-        Ok(stations)
+        match (stations.is_empty(), broken) {
+            (true, Some(error)) => Err(PnioError::Malformed {
+                what: "DCP Identify response",
+                error,
+            }),
+            _ => Ok(stations),
+        }
     }
 
     /// Finds the device (by name, or the only one that answers) and keeps it as the target.

@@ -9,6 +9,7 @@ use std::collections::VecDeque;
 use std::time::Duration;
 
 use proto::nord::pnio::{self as def, AlarmSource, ModuleKind};
+use proto::nord::Inverter;
 use proto::pnio::alarm::{
     AlarmItem, AlarmNotification, AlarmRepr, AlarmSpecifier, AlarmType, ChannelDiagnosis,
     ChannelProperties, RtaBody, RtaPduType, CHANNEL_WHOLE_SUBMODULE,
@@ -226,59 +227,79 @@ impl IoDevice {
                 continue;
             }
             self.raised[i] = now;
-            let Some(ar) = self.ar.as_mut().filter(|a| a.running()) else {
-                continue;
-            };
-            let Ok((slot, subslot)) = def::alarm_location(self.product, AlarmSource::Inverter(fi))
-            else {
-                continue;
-            };
-            let Some(sub) = ar
-                .submodules
-                .iter()
-                .find(|s| s.slot == slot && s.subslot == subslot && s.proper)
-            else {
-                continue;
-            };
-            let ident = sub
-                .fi
-                .and_then(|(_, t)| def::module(self.product, ModuleKind::Ppo(t)))
-                .map_or(0, |m| m.ident);
-            let mut notify = |alarm_type, properties, error_type, flags| {
-                ar.alarm.queue.push_back(AlarmNotification {
-                    high: false,
-                    alarm_type,
-                    api: 0,
-                    slot,
-                    subslot,
-                    module_ident: ident,
-                    submodule_ident: ident,
-                    specifier: AlarmSpecifier(flags),
-                    items: vec![AlarmItem::ChannelDiagnosis(ChannelDiagnosis {
-                        channel: CHANNEL_WHOLE_SUBMODULE,
-                        properties,
-                        error_type,
-                    })],
-                });
-            };
             if before != 0 {
-                notify(
-                    AlarmType::DIAGNOSIS_DISAPPEARS,
-                    ChannelProperties::DISAPPEARS,
-                    before,
-                    0,
-                );
+                self.diagnosis(fi, false, before);
             }
             if now != 0 {
-                notify(
-                    AlarmType::DIAGNOSIS,
-                    ChannelProperties::APPEARS,
-                    now,
-                    AlarmSpecifier::CHANNEL_DIAGNOSIS
-                        | AlarmSpecifier::SUBMODULE_DIAGNOSIS
-                        | AlarmSpecifier::AR_DIAGNOSIS,
-                );
+                self.diagnosis(fi, true, now);
             }
         }
+    }
+
+    /// FI `fi` is lost from the system bus: alarm 1256 from its slot (BU 0620 §5.4.2), its
+    /// data no longer exchanged (IOPS bad).
+    pub fn lose_inverter(&mut self, fi: Inverter) -> Result<(), String> {
+        let i = usize::from(fi.get()) - 1;
+        if fi.get() > self.device.config().inverters {
+            return Err(format!("there is no FI {} to lose", fi.get()));
+        }
+        if !self.lost_fis[i] {
+            self.lost_fis[i] = true;
+            self.diagnosis(fi, true, def::lost_inverter_alarm());
+        }
+        Ok(())
+    }
+
+    /// Queues an incoming (`appears`) or outgoing channel diagnosis with ChannelErrorType
+    /// `number` from FI `fi`'s module, when an AR is in data exchange with that module in it.
+    fn diagnosis(&mut self, fi: Inverter, appears: bool, number: u16) {
+        let Some(ar) = self.ar.as_mut().filter(|a| a.running()) else {
+            return;
+        };
+        let Ok((slot, subslot)) = def::alarm_location(self.product, AlarmSource::Inverter(fi))
+        else {
+            return;
+        };
+        let Some(sub) = ar
+            .submodules
+            .iter()
+            .find(|s| s.slot == slot && s.subslot == subslot && s.proper)
+        else {
+            return;
+        };
+        let ident = sub
+            .fi
+            .and_then(|(_, t)| def::module(self.product, ModuleKind::Ppo(t)))
+            .map_or(0, |m| m.ident);
+        let (alarm_type, properties, flags) = if appears {
+            (
+                AlarmType::DIAGNOSIS,
+                ChannelProperties::APPEARS,
+                AlarmSpecifier::CHANNEL_DIAGNOSIS
+                    | AlarmSpecifier::SUBMODULE_DIAGNOSIS
+                    | AlarmSpecifier::AR_DIAGNOSIS,
+            )
+        } else {
+            (
+                AlarmType::DIAGNOSIS_DISAPPEARS,
+                ChannelProperties::DISAPPEARS,
+                0,
+            )
+        };
+        ar.alarm.queue.push_back(AlarmNotification {
+            high: false,
+            alarm_type,
+            api: 0,
+            slot,
+            subslot,
+            module_ident: ident,
+            submodule_ident: ident,
+            specifier: AlarmSpecifier(flags),
+            items: vec![AlarmItem::ChannelDiagnosis(ChannelDiagnosis {
+                channel: CHANNEL_WHOLE_SUBMODULE,
+                properties,
+                error_type: number,
+            })],
+        });
     }
 }

@@ -164,7 +164,7 @@ impl IoDevice {
         for place in &ar.output.data {
             let sub = &ar.submodules[place.sub];
             let iops = Iox(rt.data[place.offset + sub.output_len]);
-            if !iops.is_good() || !sub.proper {
+            if !iops.is_good() || !sub.proper || lost(&self.lost_fis, sub) {
                 continue;
             }
             let bytes = rt.data[place.offset..place.offset + sub.output_len].to_vec();
@@ -211,7 +211,7 @@ impl IoDevice {
             let sub = &ar.submodules[place.sub];
             let data = &ar.image.inputs[place.sub];
             c_sdu[place.offset..place.offset + data.len()].copy_from_slice(data);
-            let iops = if sub.proper {
+            let iops = if sub.proper && !lost(&self.lost_fis, sub) {
                 Iox::GOOD
             } else {
                 Iox::BAD_BY_DEVICE
@@ -299,12 +299,25 @@ fn monitored(device: &mut Device, product: Product, fi: Inverter) -> bool {
             let Ok(n) = proto::nord::ParamNumber::new(i64::from(number)) else {
                 return false;
             };
+            // The catalogue keeps P513 as the SK 550P's array: the one value of BU 0590 is
+            // what a write without an element lands in, [-01].
+            let first = proto::nord::ArrayElement::new(1).ok();
             device
                 .store(Unit::Inverter(fi))
                 .ok()
-                .and_then(|s| s.read(n, None, None).ok())
+                .and_then(|s| {
+                    s.read(n, None, None)
+                        .or_else(|_| s.read(n, None, first))
+                        .ok()
+                })
                 .is_some_and(|tenths| tenths > 0)
         }
         None => false,
     }
+}
+
+/// Whether `sub` is the module of an inverter lost from the system bus.
+fn lost(lost_fis: &[bool; 8], sub: &Submodule) -> bool {
+    sub.fi
+        .is_some_and(|(fi, _)| lost_fis.get(usize::from(fi.get()) - 1) == Some(&true))
 }

@@ -108,6 +108,8 @@ pub struct IoDevice {
     faults: [i32; 8],
     /// The alarm number of each inverter's incoming alarm not yet outgoing (0: none).
     raised: [u16; 8],
+    /// Inverters lost from the system bus ([`IoDevice::lose_inverter`]).
+    lost_fis: [bool; 8],
     /// Frames and datagrams the device could not parse or that were not for it.
     dropped: u64,
     /// The activity of the device's own RPC calls (ApplicationReady).
@@ -141,6 +143,7 @@ impl IoDevice {
             signal_until: None,
             faults: [0; 8],
             raised: [0; 8],
+            lost_fis: [false; 8],
             dropped: 0,
             calls: 0,
         };
@@ -197,7 +200,7 @@ impl IoDevice {
             Some(ar) if ar.running() => LedState::ArEstablished,
             _ => LedState::WaitingForAr,
         };
-        let alarm = self.raised.iter().any(|a| *a != 0);
+        let alarm = self.raised.iter().any(|a| *a != 0) || self.lost_fis.iter().any(|l| *l);
         let mut leds = def::status_leds(self.product, state, alarm, self.lost)
             .unwrap_or([("run", proto::nord::led::PROFINET_RUN[0]); 2]);
         if self.signal_until.is_some_and(|t| now < t) {

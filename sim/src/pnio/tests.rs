@@ -582,3 +582,62 @@ fn an_unanswered_application_ready_is_repeated_then_the_ar_is_given_up() {
     let later = at + Duration::from_secs(4);
     assert!(call(&mut io, Opnum::CONNECT, &blocks, later).0.is_ok());
 }
+
+/// An inverter lost from the system bus: alarm 1256 from its slot (BU 0620 §5.4.2), its
+/// module's IOPS bad from then on.
+#[test]
+fn a_lost_inverter_raises_alarm_1256_and_its_data_goes_bad() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let ppo3 = ModuleKind::Ppo(PpoType::TYPE_3);
+    let plan = run_ar(&mut io, &[(3, ppo3), (4, ppo3)]);
+    io.lose_inverter(Inverter::new(2).unwrap()).unwrap();
+    let out = io.poll(Duration::from_millis(1));
+    let alarm = frames(&out)
+        .into_iter()
+        .filter(|f| f[..2] == [0xFE, 0x01])
+        .map(|f| AlarmRepr::parse(&f).unwrap())
+        .next()
+        .expect("an alarm");
+    let RtaBody::Notification(n) = &alarm.body else {
+        panic!("{alarm:?}")
+    };
+    assert_eq!((n.slot, n.alarm_type), (4, AlarmType::DIAGNOSIS));
+    assert!(
+        format!("{:?}", n.items).contains("error_type: 1256"),
+        "{:?}",
+        n.items
+    );
+    let (_, iops) = input_of(&plan, &out, 4).expect("an input frame");
+    assert_eq!(iops, Iox::BAD_BY_DEVICE);
+    let (_, iops) = input_of(&plan, &out, 3).expect("FI 1 still there");
+    assert_eq!(iops, Iox::GOOD);
+}
+
+/// An IOCR whose DataLength cannot hold its data (or is below the 40-byte minimum) is refused
+/// with the PNIO status naming the IOCRBlockReq and its field 8, DataLength; the device stays
+/// free for a proper Connect.
+#[test]
+fn impossible_iocr_sizes_are_refused_naming_data_length() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let ppo6 = ModuleKind::Ppo(PpoType::TYPE_6);
+    for data_length in [20u16, 40, 1441] {
+        let (mut blocks, _) = connect_blocks(Product::Sk550p, &[(3, ppo6), (4, ppo6), (5, ppo6)]);
+        for b in &mut blocks {
+            if let Block::IocrReq(c) = b {
+                c.data_length = data_length;
+            }
+        }
+        let (status, _, _) = call(&mut io, Opnum::CONNECT, &blocks, Duration::ZERO);
+        assert_eq!(
+            status,
+            PnioStatus::cm(
+                proto::pnio::status::cm::CONNECT,
+                proto::pnio::status::cm::FAULTY_IOCR_BLOCK,
+                8
+            ),
+            "DataLength {data_length}"
+        );
+        assert!(!io.in_data_exchange());
+    }
+    run_ar(&mut io, &[(3, ppo6)]);
+}
