@@ -320,7 +320,9 @@ impl Device {
         .filter(|ms| *ms > 0)
         .map(|ms| Duration::from_millis(ms as u64));
         for unit in self.inverters.iter_mut() {
-            if unit.drive.fault() == Some(E10_3) {
+            // Raised and shown in P700 (a bus watchdog's E10.3 when no cycle runs to take it
+            // into the status machine) counts as much as taken.
+            if unit.drive.fault() == Some(E10_3) || unit.drive.pending_fault() == Some(E10_3) {
                 flags.telegram_timeout = true;
             }
             let Some(last) = unit.last_process else {

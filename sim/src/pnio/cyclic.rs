@@ -261,7 +261,8 @@ impl IoDevice {
 
 /// The controller is gone: the field-bus time-out shows in P872/P173, and every inverter
 /// whose telegram monitoring is on (P513) raises the documented error
-/// ([`def::controller_loss_error`]); the SK TU3-PNT shows its module error too.
+/// ([`def::controller_loss_error`]); on the SK TU3-PNT the bus status then shows the module
+/// error P170 1020 (`Device`'s bus status).
 fn controller_lost(device: &mut Device, product: Product) {
     device.set_fieldbus_timeout(true);
     let Some(code) = def::controller_loss_error(product) else {
@@ -271,20 +272,13 @@ fn controller_lost(device: &mut Device, product: Product) {
         group: code / 10,
         sub: (code % 10) as u8,
     };
-    let mut timed_out = false;
     for n in 1..=device.config().inverters {
         let Ok(fi) = Inverter::new(i64::from(n)) else {
             continue;
         };
         if monitored(device, product, fi) {
-            timed_out = true;
             // An inverter already in fault keeps that fault.
             let _ = device.raise(fi, fault);
-        }
-    }
-    if let (true, Some(error)) = (timed_out, def::timeout_module_error(product)) {
-        if let Ok(store) = device.store(Unit::Interface) {
-            store.set_info(170, 1, i32::from(error));
         }
     }
 }
