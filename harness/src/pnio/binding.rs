@@ -34,7 +34,7 @@ use super::controller::{Connected, Controller, PnioError, Station};
 use super::link::Link;
 use super::restore::{self, Param, Settling};
 use super::step::{Module, PnioStep};
-use crate::binding::channel::{cycles_left_out, Channel};
+use crate::binding::channel::Channel;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::settle::Drives;
 use crate::binding::{Binding, CleanupError, Dut, DutError, Observation, OpenError, StepError};
@@ -722,9 +722,12 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
             let skipped = ex.len() - 4;
             let last = ex.split_off(ex.len() - 2);
             ex.truncate(2);
-            let mut note = cycles_left_out(skipped as u64);
-            note.sent = format!("… {skipped} more record calls like these …");
-            ex.push(note);
+            ex.push(Exchange {
+                sent_hex: String::new(),
+                sent: format!("… {skipped} more record calls like these …"),
+                received_hex: String::new(),
+                received: String::new(),
+            });
             ex.extend(last);
         }
         ex.extend(self.cycles_exchange());

@@ -427,7 +427,7 @@ impl<L: Link> Controller<L> {
                 continue;
             };
             if rpc.packet_type == PacketType::REQUEST {
-                self.application_ready(&rpc)?;
+                self.application_ready(&rpc, &d)?;
             } else if Some(rpc.activity) == call {
                 return Ok(Some(rpc));
             }
@@ -435,7 +435,8 @@ impl<L: Link> Controller<L> {
         Ok(None)
     }
 
-    fn application_ready(&mut self, req: &RpcRepr) -> Result<(), PnioError> {
+    /// The device's ApplicationReady call `req` (as it came: `call`), answered.
+    fn application_ready(&mut self, req: &RpcRepr, call: &[u8]) -> Result<(), PnioError> {
         let Ok(ndr) = NdrRequest::parse(&req.body, req.drep) else {
             return Ok(());
         };
@@ -456,18 +457,18 @@ impl<L: Link> Controller<L> {
         let Ok(body) = NdrResponse::answering(&ndr, status, data) else {
             return Ok(());
         };
-        let bytes = req
+        let answer = req
             .reply(PacketType::RESPONSE, body.emit(req.drep))
             .emit()
             .map_err(malformed("ApplicationReady answer"))?;
-        self.link.send_udp(&bytes)?;
+        self.link.send_udp(&answer)?;
         if let Some(ar) = self.ar.as_mut().filter(|_| ok) {
             ar.ready = true;
         }
         self.record(
-            &d_bytes(req),
+            call,
             "(the device's call) Control ApplicationReady".into(),
-            &bytes,
+            &answer,
             format!("answered: {status}"),
         );
         Ok(())
@@ -669,12 +670,7 @@ impl<L: Link> Controller<L> {
     ) -> Result<Answer, PnioError> {
         let station = self.target()?.clone();
         self.calls += 1;
-        let activity = Uuid::from_fields(0x4E52_4450, 0x0000, 0x1000, {
-            let mut n = [0u8; 8];
-            n[..6].copy_from_slice(&self.mac.0);
-            n[6..].copy_from_slice(&(self.calls as u16).to_be_bytes());
-            n
-        });
+        let activity = Uuid::of_sender(0x4E52_4450, 0, self.mac, self.calls as u16);
         let body = NdrRequest::new(ARGS_MAXIMUM, data).map_err(malformed("NDR request"))?;
         let req = RpcRepr::request(
             Uuid::pnio_object(1, station.device_id, station.vendor_id),
@@ -747,12 +743,7 @@ impl<L: Link> Controller<L> {
         let plan = Plan::new(&subs).map_err(malformed("expected submodules"))?;
         self.session_key = self.session_key.wrapping_add(1);
         self.calls += 1;
-        let uuid = Uuid::from_fields(0x4E52_4152, self.session_key, 0x1000, {
-            let mut n = [0u8; 8];
-            n[..6].copy_from_slice(&self.mac.0);
-            n[6..].copy_from_slice(&(self.calls as u16).to_be_bytes());
-            n
-        });
+        let uuid = Uuid::of_sender(0x4E52_4152, self.session_key, self.mac, self.calls as u16);
         let rr = self.reduction_ratio;
         let iocr = |iocr_type, layout: &proto::pnio::plan::CrLayout, frame_id| {
             Block::IocrReq(IocrBlockReq {
@@ -1124,10 +1115,6 @@ fn malformed<E: std::fmt::Display>(what: &'static str) -> impl Fn(E) -> PnioErro
         what,
         error: e.to_string(),
     }
-}
-
-fn d_bytes(req: &RpcRepr) -> Vec<u8> {
-    req.emit().unwrap_or_default()
 }
 
 fn emit_dcp(req: &DcpRepr) -> Result<Vec<u8>, PnioError> {

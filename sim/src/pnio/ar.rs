@@ -429,12 +429,7 @@ impl IoDevice {
         }
         ar.controller_rpc = SocketAddr::new(from.ip(), RPC_PORT);
         self.calls += 1;
-        let activity = Uuid::from_fields(0x4E4F_5244, 0x0000, 0x1000, {
-            let mut n = [0u8; 8];
-            n[..6].copy_from_slice(&self.mac.0);
-            n[6..].copy_from_slice(&(self.calls as u16).to_be_bytes());
-            n
-        });
+        let activity = Uuid::of_sender(0x4E4F_5244, 0, self.mac, self.calls as u16);
         let body = Block::emit_all(&[Block::Control(IodControl::application_ready(
             ar.uuid,
             ar.session_key,

@@ -293,17 +293,10 @@ fn monitored(device: &mut Device, product: Product, fi: Inverter) -> bool {
             let Ok(n) = proto::nord::ParamNumber::new(i64::from(number)) else {
                 return false;
             };
-            // The catalogue keeps P513 as the SK 550P's array: the one value of BU 0590 is
-            // what a write without an element lands in, [-01].
-            let first = proto::nord::ArrayElement::new(1).ok();
             device
                 .store(Unit::Inverter(fi))
                 .ok()
-                .and_then(|s| {
-                    s.read(n, None, None)
-                        .or_else(|_| s.read(n, None, first))
-                        .ok()
-                })
+                .and_then(|s| s.read(n, None, None).ok())
                 .is_some_and(|tenths| tenths > 0)
         }
         None => false,

@@ -46,6 +46,20 @@ impl Uuid {
     const PNIO_OBJECT_PREFIX: [u8; 10] =
         [0xDE, 0xA0, 0x00, 0x00, 0x6C, 0x97, 0x11, 0xD1, 0x82, 0x71];
 
+    /// A UUID unique to one sender and one of its calls, as a device or controller makes its
+    /// activity and AR UUIDs: `tag` and `mid` in time_low and time_mid, version 1, the
+    /// sender's MAC address and the call's number `n` in the node bytes.
+    pub const fn of_sender(tag: u32, mid: u16, mac: crate::eth::MacAddr, n: u16) -> Uuid {
+        let m = mac.0;
+        let c = n.to_be_bytes();
+        Uuid::from_fields(
+            tag,
+            mid,
+            0x1000,
+            [m[0], m[1], m[2], m[3], m[4], m[5], c[0], c[1]],
+        )
+    }
+
     /// A UUID from its fields: time_low, time_mid, time_hi_and_version and the 8 bytes of
     /// clock_seq and node.
     pub const fn from_fields(time_low: u32, time_mid: u16, time_hi: u16, rest: [u8; 8]) -> Uuid {
