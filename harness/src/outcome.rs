@@ -1,11 +1,13 @@
 //! What a run produces: verdicts, per-case results with transcripts, errata. The runner fills
 //! these; the reports (JUnit, `run.json`, transcripts, summary) only read them.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
+use std::collections::BTreeMap;
 use std::time::Duration;
 
 /// The verdict of one case (or one step).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
     /// The DUT did what the manual says.
@@ -43,7 +45,7 @@ impl Verdict {
 }
 
 /// Where a case's statement stands in the manuals.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ManualRef {
     /// Manual, e.g. `BU 0620`.
     pub doc: String,
@@ -66,7 +68,7 @@ impl ManualRef {
 }
 
 /// A wrong value a manual prints, recorded by a case.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Erratum {
     /// Manual.
     pub doc: String,
@@ -90,10 +92,10 @@ pub struct Erratum {
 /// (response label 7), a CIP general status, an SDO abort code, an AL status code. It is data
 /// about the device — the request reached it and it said no — kept apart from a broken link or
 /// a broken protocol.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Refusal {
     /// The kind of code, as the bus names it (`SDO abort code`).
-    pub kind: &'static str,
+    pub kind: Cow<'static, str>,
     /// The code.
     pub code: u32,
     /// The code as the manual or the standard names it.
@@ -107,7 +109,7 @@ impl std::fmt::Display for Refusal {
 }
 
 /// One request/response pair on the link, for transcripts.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Exchange {
     /// Link frame sent, as hex bytes (`"01 01 70 66 …"`).
     pub sent_hex: String,
@@ -120,7 +122,7 @@ pub struct Exchange {
 }
 
 /// The outcome of one step.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StepResult {
     /// The step as written, one line (`read P102 set 3 FI 5`).
     pub step: String,
@@ -137,8 +139,30 @@ pub struct StepResult {
     pub exchanges: Vec<Exchange>,
 }
 
+/// What a case checks: the device, or only the harness's reference model of the manuals.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CaseKind {
+    /// At least one step reaches the DUT: a verdict about the device.
+    #[default]
+    Device,
+    /// Every step is a reference-model check of the manuals' formulas and tables (`compute`):
+    /// it never touches the DUT, so its pass is no pass of the device; reports count it apart.
+    Model,
+}
+
+impl CaseKind {
+    /// Name as written in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            CaseKind::Device => "device",
+            CaseKind::Model => "model",
+        }
+    }
+}
+
 /// The outcome of one case under one profile.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CaseResult {
     /// Full id: `bu0620/<file>/<case>`.
     pub id: String,
@@ -148,6 +172,9 @@ pub struct CaseResult {
     pub profile: String,
     /// Where the manual says it.
     pub manual: ManualRef,
+    /// Whether the case checks the device or only the reference model.
+    #[serde(default)]
+    pub kind: CaseKind,
     /// Case verdict (the worst step verdict; not applicable without steps run).
     pub verdict: Verdict,
     /// Why, for anything but pass (the failing step's message, or the not-applicable reason).
@@ -155,15 +182,84 @@ pub struct CaseResult {
     /// Step outcomes, in order.
     pub steps: Vec<StepResult>,
     /// Wall time spent.
-    #[serde(serialize_with = "ser_secs")]
+    #[serde(serialize_with = "ser_secs", deserialize_with = "de_secs")]
     pub duration: Duration,
 }
 
+/// A device's identity as the device itself reports it over its bus (EtherNet/IP
+/// ListIdentity, EtherCAT SII and object 1018h, POWERLINK IdentResponse, PROFINET DCP and I&M0,
+/// the NORD information parameters over the parameter channel). Fields the bus does not give
+/// stay empty.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Identity {
+    /// Where the fields come from, e.g. `ListIdentity`.
+    pub source: String,
+    /// The vendor, by id and name where the bus gives both (`0x0001E6 NORD`).
+    pub vendor: Option<String>,
+    /// The product code or device id.
+    pub product_code: Option<String>,
+    /// The product name.
+    pub product_name: Option<String>,
+    /// The firmware (software) revision.
+    pub revision: Option<String>,
+    /// The serial number.
+    pub serial: Option<String>,
+}
+
+impl Identity {
+    /// One line: `NORD SK TU3-PNT, code 0x0003, firmware 1.2, serial 1234 (from I&M0)`.
+    pub fn line(&self) -> String {
+        let mut parts: Vec<String> = Vec::new();
+        let name: Vec<&str> = [&self.vendor, &self.product_name]
+            .into_iter()
+            .flatten()
+            .map(String::as_str)
+            .collect();
+        if !name.is_empty() {
+            parts.push(name.join(" "));
+        }
+        for (label, v) in [
+            ("code", &self.product_code),
+            ("firmware", &self.revision),
+            ("serial", &self.serial),
+        ] {
+            if let Some(v) = v {
+                parts.push(format!("{label} {v}"));
+            }
+        }
+        format!("{} (from {})", parts.join(", "), self.source)
+    }
+}
+
+/// What a run's reports must say about the run itself, so that a report is a record of what
+/// was tested: by which harness and suites, when, how it was called.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RunMeta {
+    /// The harness's version (Cargo package version).
+    pub harness_version: String,
+    /// The git revision the harness was built from (`-dirty` when the tree had changes).
+    pub harness_revision: String,
+    /// The suites' revision: their git commit (`-dirty` when changed), else a content digest.
+    pub suites_revision: String,
+    /// Start time, RFC 3339 UTC.
+    pub started: String,
+    /// The command line, as given.
+    pub command_line: Vec<String>,
+    /// The DUT's identity per profile, as the device reported it (none for a profile whose
+    /// identity could not be read; the run's connection check says why).
+    pub identities: BTreeMap<String, Identity>,
+    /// Whether steps that can make a motor turn were allowed (`--allow-motion`).
+    pub motion_allowed: bool,
+}
+
 /// A whole run: every case under every profile it ran with.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
     /// What was tested: `embedded simulator`, or the DUT's address.
     pub dut: String,
+    /// Who ran what, when, with which harness and suites, against which device identity.
+    #[serde(default)]
+    pub meta: RunMeta,
     /// Profiles run, in order.
     pub profiles: Vec<String>,
     /// All case results.
@@ -173,7 +269,7 @@ pub struct RunResult {
     /// Suite files that failed to load, with the error (file, line, what is wrong).
     pub load_errors: Vec<String>,
     /// Wall time of the run.
-    #[serde(serialize_with = "ser_secs")]
+    #[serde(serialize_with = "ser_secs", deserialize_with = "de_secs")]
     pub duration: Duration,
 }
 
@@ -186,4 +282,9 @@ impl RunResult {
 
 fn ser_secs<S: serde::Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_f64(d.as_secs_f64())
+}
+
+fn de_secs<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Duration, D::Error> {
+    let secs = f64::deserialize(d)?;
+    Duration::try_from_secs_f64(secs).map_err(serde::de::Error::custom)
 }

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use crate::binding::{Binding, Observation, OpenError, StepError};
 use crate::model::{Args, ComputeError, Ctx};
-use crate::outcome::{CaseResult, RunResult, StepResult, Verdict};
+use crate::outcome::{CaseKind, CaseResult, RunMeta, RunResult, StepResult, Verdict};
 use crate::profile::{Capability, Profile};
 use crate::suite::{Action, Case, Loaded, Step};
 
@@ -49,6 +49,7 @@ pub(crate) fn run(loaded: &Loaded, opts: &RunOptions, factory: &mut dyn DutFacto
     }
     RunResult {
         dut: factory.describe(),
+        meta: RunMeta::default(),
         profiles: opts.profiles.iter().map(|p| p.name().to_string()).collect(),
         cases,
         errata: loaded.errata.clone(),
@@ -70,6 +71,11 @@ fn result(
         title: case.title.clone(),
         profile: profile.name().to_string(),
         manual: case.manual.clone(),
+        kind: if needs_dut(case) {
+            CaseKind::Device
+        } else {
+            CaseKind::Model
+        },
         verdict,
         message,
         steps,

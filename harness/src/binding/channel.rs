@@ -361,7 +361,7 @@ fn pkw_result(r: &PkwRepr, mut fields: Value) -> super::Observation {
         Some(e) => super::Observation::refused(
             fields,
             crate::outcome::Refusal {
-                kind: "parameter channel",
+                kind: "parameter channel".into(),
                 code: u32::from(e.0),
                 text: format!("response label 7, error {} ({})", e.0, e.meaning()),
             },

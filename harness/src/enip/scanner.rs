@@ -757,7 +757,7 @@ fn refused(resp: &MrResponse) -> Observation {
             "refused": text,
         }),
         Refusal {
-            kind: "CIP general status",
+            kind: "CIP general status".into(),
             code: u32::from(resp.general),
             text,
         },

@@ -70,7 +70,7 @@ fn abort(code: u32) -> Observation {
     Observation::refused(
         json!({ "abort": code }),
         Refusal {
-            kind: "SDO abort code",
+            kind: "SDO abort code".into(),
             code,
             text,
         },
@@ -407,7 +407,7 @@ impl<L: Link> EplBinding<L> {
                             return Ok(Observation::refused(
                                 f,
                                 abort(code).refusal.unwrap_or(Refusal {
-                                    kind: "SDO abort code",
+                                    kind: "SDO abort code".into(),
                                     code,
                                     text: String::new(),
                                 }),

@@ -91,7 +91,7 @@ fn refused(status: PnioStatus, mut fields: Value) -> Observation {
     Observation::refused(
         fields,
         Refusal {
-            kind: "PNIO status",
+            kind: "PNIO status".into(),
             code: u32::from_be_bytes([status.code, status.decode, status.code1, status.code2]),
             text: status_hex(status),
         },
@@ -434,7 +434,7 @@ impl<L: Link + 'static> PnioBinding<L> {
                     Err(PnioError::Nca { packet, status }) => Observation::refused(
                         json!({ "nca": status.0, "packet": packet }),
                         Refusal {
-                            kind: "RPC reject",
+                            kind: "RPC reject".into(),
                             code: status.0,
                             text: format!("{packet} {status}"),
                         },
@@ -600,7 +600,7 @@ fn dcp_result(error: proto::pnio::dcp::BlockError) -> Observation {
         Observation::refused(
             fields,
             Refusal {
-                kind: "DCP block error",
+                kind: "DCP block error".into(),
                 code: u32::from(error.0),
                 text: format!("{:02X}h {}", error.0, error.name().unwrap_or("unknown")),
             },

@@ -51,6 +51,7 @@ fn case(
         title: format!("title of {id}"),
         profile: profile.into(),
         manual,
+        kind: CaseKind::Device,
         verdict,
         message: message.into(),
         steps,
@@ -69,6 +70,26 @@ pub(super) fn sample_run() -> RunResult {
     };
     RunResult {
         dut: "embedded simulator".into(),
+        meta: RunMeta {
+            harness_version: "0.1.0".into(),
+            harness_revision: "0123456789abcdef0123456789abcdef01234567".into(),
+            suites_revision: "0123456789abcdef0123456789abcdef01234567".into(),
+            started: "2026-11-27T06:00:00Z".into(),
+            command_line: vec!["harness".into(), "run".into()],
+            identities: [(
+                "sk550p".to_string(),
+                Identity {
+                    source: "P743/P707/P780 over the parameter channel".into(),
+                    vendor: Some("NORD".into()),
+                    product_code: None,
+                    product_name: Some("SK 550P".into()),
+                    revision: Some("V1.2 R0".into()),
+                    serial: Some("123456".into()),
+                },
+            )]
+            .into(),
+            motion_allowed: false,
+        },
         profiles: vec!["sk550p".into(), "tu3-eip".into()],
         cases: vec![
             case(

@@ -121,17 +121,17 @@ impl Refusal {
     pub(crate) fn to_outcome(&self) -> outcome::Refusal {
         match self {
             Refusal::Al(a) => outcome::Refusal {
-                kind: "AL status code",
+                kind: "AL status code".into(),
                 code: u32::from(a.code.0),
                 text: a.code.to_string(),
             },
             Refusal::SdoAbort { code, .. } => outcome::Refusal {
-                kind: "SDO abort code",
+                kind: "SDO abort code".into(),
                 code: code.0,
                 text: code.to_string(),
             },
             Refusal::Mailbox(code) => outcome::Refusal {
-                kind: "mailbox error",
+                kind: "mailbox error".into(),
                 code: u32::from(code.0),
                 text: code.to_string(),
             },
