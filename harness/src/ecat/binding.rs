@@ -838,7 +838,7 @@ mod tests {
         o.value = Some(32001);
         let obs = b.perform(&Action::Write(o)).unwrap();
         let r = obs.refusal.expect("refused");
-        assert_eq!((r.kind, r.code), ("SDO abort code", 0x0609_0031));
+        assert_eq!((r.kind.as_ref(), r.code), ("SDO abort code", 0x0609_0031));
         assert_eq!(obs.fields["abort"], 0x0609_0031);
     }
 

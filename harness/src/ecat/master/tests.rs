@@ -150,7 +150,7 @@ fn sdo_refusals_are_abort_codes() {
     let err = m.sdo_upload(STATION, 0x1234, 0, false).unwrap_err();
     assert_eq!(err.kind(), ErrorKind::Refused);
     let r = err.refusal().unwrap().to_outcome();
-    assert_eq!((r.kind, r.code), ("SDO abort code", 0x0602_0000));
+    assert_eq!((r.kind.as_ref(), r.code), ("SDO abort code", 0x0602_0000));
     // The SDO channel still works.
     assert_eq!(
         m.sdo_upload(STATION, 0x1018, 1, false).unwrap(),
