@@ -1,5 +1,6 @@
-//! Hand-built runs for the report tests: one case of every verdict, two profiles, two manuals,
-//! an erratum, and an exchange the DUT never answered.
+//! Hand-built runs for the report tests: one device case of every verdict, a passing
+//! reference-model case, two profiles, two manuals, an erratum, and an exchange the DUT never
+//! answered.
 
 use serde_json::json;
 use std::path::PathBuf;
@@ -59,7 +60,8 @@ fn case(
     }
 }
 
-/// A run with one case of each verdict under `sk550p` and `tu3-eip`.
+/// A run with one device case of each verdict under `sk550p` and `tu3-eip`, then one passing
+/// model case under `sk550p`.
 pub(super) fn sample_run() -> RunResult {
     let bu0620 = |section: &str, page| manual("BU 0620", "2020-03 en", section, page);
     let fail = "status: expected 2865 (0B31h), got 2871 (0B37h)";
@@ -75,7 +77,12 @@ pub(super) fn sample_run() -> RunResult {
             harness_revision: "0123456789abcdef0123456789abcdef01234567".into(),
             suites_revision: "0123456789abcdef0123456789abcdef01234567".into(),
             started: "2026-11-27T06:00:00Z".into(),
-            command_line: vec!["harness".into(), "run".into()],
+            command_line: vec![
+                "harness".into(),
+                "run".into(),
+                "--filter".into(),
+                "a b".into(),
+            ],
             identities: [(
                 "sk550p".to_string(),
                 Identity {
@@ -152,6 +159,17 @@ pub(super) fn sample_run() -> RunResult {
                     vec![],
                 )],
             ),
+            CaseResult {
+                kind: CaseKind::Model,
+                ..case(
+                    "bu0620/drive-scaling/setpoint",
+                    "sk550p",
+                    bu0620("2.6.1", 64),
+                    Verdict::Pass,
+                    "",
+                    vec![step("compute setpoint 50 %", Verdict::Pass, "", vec![])],
+                )
+            },
         ],
         errata: vec![Erratum {
             doc: "BU 0620".into(),

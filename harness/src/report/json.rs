@@ -1,13 +1,16 @@
-//! `run.json`: the run for scripts. Every case's id, profile, verdict, manual reference and
-//! message, counts per verdict (overall and per profile), the manuals' errata and the load
-//! errors. Transcripts stay out (they are files of their own; each case names its file).
+//! `run.json`: the run for scripts. The run's record (`meta`: harness and suites revisions,
+//! start, command line, DUT identity per profile, motion allowed), every case's id, profile,
+//! kind, verdict, manual reference and message, counts per verdict (overall and per profile;
+//! `counts*` for device cases, `counts_model*` for reference-model cases, which never touch the
+//! DUT), the manuals' errata and the load errors. Transcripts stay out (they are files of their
+//! own; each case names its file).
 
 use serde::Serialize;
 use std::collections::BTreeMap;
 
 use super::summary::{profiles, Counts};
 use super::write::transcript_file;
-use crate::outcome::{CaseResult, Erratum, ManualRef, RunResult, Verdict};
+use crate::outcome::{CaseKind, CaseResult, Erratum, ManualRef, RunMeta, RunResult, Verdict};
 
 /// One case in `run.json`.
 #[derive(Debug, Serialize)]
@@ -15,6 +18,7 @@ struct Case<'a> {
     id: &'a str,
     title: &'a str,
     profile: &'a str,
+    kind: CaseKind,
     verdict: Verdict,
     manual: &'a ManualRef,
     message: &'a str,
@@ -30,6 +34,7 @@ impl<'a> From<&'a CaseResult> for Case<'a> {
             id: &c.id,
             title: &c.title,
             profile: &c.profile,
+            kind: c.kind,
             verdict: c.verdict,
             manual: &c.manual,
             message: &c.message,
@@ -43,11 +48,16 @@ impl<'a> From<&'a CaseResult> for Case<'a> {
 #[derive(Debug, Serialize)]
 struct Doc<'a> {
     dut: &'a str,
+    meta: &'a RunMeta,
     profiles: &'a [String],
     /// Seconds.
     duration: f64,
+    /// Device cases.
     counts: Counts,
+    /// Reference-model cases.
+    counts_model: Counts,
     counts_by_profile: BTreeMap<&'a str, Counts>,
+    counts_model_by_profile: BTreeMap<&'a str, Counts>,
     load_errors: &'a [String],
     errata: &'a [Erratum],
     cases: Vec<Case<'a>>,
@@ -55,15 +65,21 @@ struct Doc<'a> {
 
 /// `run.json`, pretty-printed.
 pub(super) fn render(run: &RunResult) -> Result<String, serde_json::Error> {
+    let by_profile = |kind| {
+        profiles(run)
+            .into_iter()
+            .map(|p| (p, Counts::of_kind(run, kind, Some(p))))
+            .collect()
+    };
     let doc = Doc {
         dut: &run.dut,
+        meta: &run.meta,
         profiles: &run.profiles,
         duration: run.duration.as_secs_f64(),
-        counts: Counts::of(&run.cases),
-        counts_by_profile: profiles(run)
-            .into_iter()
-            .map(|p| (p, Counts::of(run.cases.iter().filter(|c| c.profile == p))))
-            .collect(),
+        counts: Counts::of_kind(run, CaseKind::Device, None),
+        counts_model: Counts::of_kind(run, CaseKind::Model, None),
+        counts_by_profile: by_profile(CaseKind::Device),
+        counts_model_by_profile: by_profile(CaseKind::Model),
         load_errors: &run.load_errors,
         errata: &run.errata,
         cases: run.cases.iter().map(Case::from).collect(),
@@ -90,6 +106,7 @@ mod tests {
                 "id": "bu0620/addressing/coe-p102",
                 "title": "title of bu0620/addressing/coe-p102",
                 "profile": "sk550p",
+                "kind": "device",
                 "verdict": "fail",
                 "manual": {"doc": "BU 0620", "edition": "2020-03 en", "section": "2.2.7", "page": 20},
                 "message": "status: expected 2865 (0B31h), got 2871 (0B37h)",
@@ -111,7 +128,25 @@ mod tests {
             v["counts"],
             json!({"pass": 1, "fail": 1, "inconclusive": 1, "error": 1, "not_applicable": 1})
         );
+        assert_eq!(
+            v["counts_model"],
+            json!({"pass": 1, "fail": 0, "inconclusive": 0, "error": 0, "not_applicable": 0})
+        );
         assert_eq!(v["counts_by_profile"]["sk550p"]["pass"], 1);
+        assert_eq!(v["counts_model_by_profile"]["sk550p"]["pass"], 1);
+        assert_eq!(v["counts_model_by_profile"]["tu3-eip"]["pass"], 0);
+        assert_eq!(v["cases"][5]["kind"], "model");
+        assert_eq!(
+            v["meta"]["suites_revision"],
+            "0123456789abcdef0123456789abcdef01234567"
+        );
+        assert_eq!(v["meta"]["started"], "2026-11-27T06:00:00Z");
+        assert_eq!(
+            v["meta"]["command_line"],
+            json!(["harness", "run", "--filter", "a b"])
+        );
+        assert_eq!(v["meta"]["identities"]["sk550p"]["serial"], "123456");
+        assert_eq!(v["meta"]["motion_allowed"], false);
         assert_eq!(v["counts_by_profile"]["tu3-eip"]["error"], 1);
         assert_eq!(v["errata"][0]["printed"], "class 103");
         assert_eq!(v["errata"][0]["correct"], "class 102");

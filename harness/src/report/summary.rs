@@ -1,11 +1,13 @@
-//! The human summary (`summary.md` and the console lines): load errors first, verdict counts per
-//! profile, coverage by manual section, the manuals' errata, and the cases that did not pass.
+//! The human summary (`summary.md` and the console lines): whether motion was allowed, the run's
+//! record, load errors, verdict counts per profile (device and model cases apart), coverage by
+//! manual section, the manuals' errata, and the cases that did not pass.
 
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-use crate::outcome::{CaseResult, RunResult, Verdict};
+use super::record;
+use crate::outcome::{CaseKind, CaseResult, RunResult, Verdict};
 
 /// Cases per verdict, every verdict present (zero included); serializes as `{"pass": n, …}`.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -27,7 +29,16 @@ impl Counts {
         self.0.get(&v).copied().unwrap_or(0)
     }
 
-    fn total(&self) -> usize {
+    /// Counts the verdicts of the cases of one kind and, given one, one profile.
+    pub(super) fn of_kind(run: &RunResult, kind: CaseKind, profile: Option<&str>) -> Self {
+        Counts::of(
+            run.cases
+                .iter()
+                .filter(|c| c.kind == kind && profile.is_none_or(|p| c.profile == p)),
+        )
+    }
+
+    pub(super) fn total(&self) -> usize {
         self.0.values().sum()
     }
 
@@ -55,7 +66,7 @@ pub(super) fn profiles(run: &RunResult) -> Vec<&str> {
 
 /// Sort key for section numbers: numerically per level, so `2.2.7` sorts before `2.10`; a
 /// non-numeric level (`A`) sorts after the numbers, by text.
-fn section_key(s: &str) -> Vec<(u64, &str)> {
+pub(super) fn section_key(s: &str) -> Vec<(u64, &str)> {
     s.split('.')
         .map(|p| p.parse().map_or((u64::MAX, p), |n| (n, "")))
         .collect()
@@ -84,18 +95,22 @@ fn coverage(s: &mut String, run: &RunResult) {
     }
     let _ = writeln!(
         s,
-        "\n## Coverage by manual section\n\n| doc | edition | section | cases | {VERDICT_HEADER}\n|---|---|---|---:|---:|---:|---:|---:|---:|"
+        "\n## Coverage by manual section\n\nDevice cases per verdict; `model` counts the reference-model checks (passed/all).\n\n| doc | edition | section | cases | {VERDICT_HEADER} model |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|"
     );
     for ((doc, edition, _, section), cases) in by {
-        let n = Counts::of(cases);
+        let (model, device): (Vec<&CaseResult>, Vec<&CaseResult>) =
+            cases.into_iter().partition(|c| c.kind == CaseKind::Model);
+        let n = Counts::of(device);
+        let m = Counts::of(model);
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} |",
             cell(doc),
             cell(edition),
             cell(section),
             n.total(),
-            n.cells()
+            n.cells(),
+            model_cell(&m)
         );
     }
 }
@@ -138,6 +153,34 @@ fn errata(s: &mut String, run: &RunResult) {
     }
 }
 
+/// `passed/all` of a section's model cases; empty when it has none.
+fn model_cell(m: &Counts) -> String {
+    if m.total() == 0 {
+        String::new()
+    } else {
+        format!("{}/{}", m.get(Verdict::Pass), m.total())
+    }
+}
+
+/// One verdict table: a row per profile and a total row, for cases of `kind`.
+fn verdict_table(s: &mut String, run: &RunResult, kind: CaseKind) {
+    let _ = writeln!(
+        s,
+        "| profile | {VERDICT_HEADER}\n|---|---:|---:|---:|---:|---:|"
+    );
+    for p in profiles(run) {
+        let n = Counts::of_kind(run, kind, Some(p));
+        if kind == CaseKind::Device || n.total() > 0 {
+            let _ = writeln!(s, "| {} | {} |", cell(p), n.cells());
+        }
+    }
+    let _ = writeln!(
+        s,
+        "| **all** | {} |",
+        Counts::of_kind(run, kind, None).cells()
+    );
+}
+
 /// Cases that did not pass and apply: fail, error, inconclusive.
 fn not_passed(run: &RunResult) -> impl Iterator<Item = &CaseResult> {
     run.cases.iter().filter(|c| {
@@ -150,7 +193,11 @@ fn not_passed(run: &RunResult) -> impl Iterator<Item = &CaseResult> {
 
 /// `summary.md`.
 pub(super) fn markdown(run: &RunResult) -> String {
-    let mut s = String::from("# Run summary\n\n");
+    let mut s = format!("**{}**\n\n# Run summary\n\n", record::motion_line(run));
+    for (label, value) in record::lines(run) {
+        let _ = writeln!(s, "- {label}: {}", value.replace('\n', " "));
+    }
+    s.push('\n');
     if !run.load_errors.is_empty() {
         let _ = writeln!(
             s,
@@ -162,30 +209,28 @@ pub(super) fn markdown(run: &RunResult) -> String {
         }
         s.push('\n');
     }
-    let _ = writeln!(
-        s,
-        "DUT: {}; profiles: {}; {} cases; {:.3} s\n",
-        run.dut,
-        run.profiles.join(", "),
-        run.cases.len(),
-        run.duration.as_secs_f64()
-    );
-    let _ = writeln!(
-        s,
-        "## Verdicts per profile\n\n| profile | {VERDICT_HEADER}\n|---|---:|---:|---:|---:|---:|"
-    );
-    for p in profiles(run) {
-        let n = Counts::of(run.cases.iter().filter(|c| c.profile == p));
-        let _ = writeln!(s, "| {} | {} |", cell(p), n.cells());
+    let _ = writeln!(s, "## Verdicts per profile: device cases\n");
+    verdict_table(&mut s, run, CaseKind::Device);
+    if run.cases.iter().any(|c| c.kind == CaseKind::Model) {
+        let _ = writeln!(
+            s,
+            "\n## {}\n\nThese cases never reach the DUT: their passes are no passes of the device.\n",
+            record::group_title(CaseKind::Model)
+        );
+        verdict_table(&mut s, run, CaseKind::Model);
     }
-    let _ = writeln!(s, "| **all** | {} |", Counts::of(&run.cases).cells());
     let mut bad = not_passed(run).peekable();
     if bad.peek().is_some() {
         let _ = writeln!(s, "\n## Failed, errored and inconclusive cases\n");
         for c in bad {
+            let model = if c.kind == CaseKind::Model {
+                ", model"
+            } else {
+                ""
+            };
             let _ = writeln!(
                 s,
-                "- **{}** [{}] `{}` ({} {}): {}",
+                "- **{}** [{}{model}] `{}` ({} {}): {}",
                 c.verdict.name(),
                 c.profile,
                 c.id,
@@ -222,23 +267,32 @@ pub(crate) fn terminal(run: &RunResult) -> String {
             c.manual.place()
         );
     }
-    let line = |n: &Counts| {
+    // Device counts, each followed by the model cases' count of that verdict when there are any:
+    // `210 pass (+40 model)`, so a model check is never read as a pass of the device.
+    let line = |profile: Option<&str>| {
+        let n = Counts::of_kind(run, CaseKind::Device, profile);
+        let m = Counts::of_kind(run, CaseKind::Model, profile);
         Verdict::ALL
             .iter()
-            .map(|v| format!("{} {}", n.get(*v), v.name().replace('_', " ")))
+            .map(|v| {
+                let name = v.name().replace('_', " ");
+                match m.get(*v) {
+                    0 => format!("{} {name}", n.get(*v)),
+                    k => format!("{} {name} (+{k} model)", n.get(*v)),
+                }
+            })
             .collect::<Vec<_>>()
             .join(", ")
     };
     for p in profiles(run) {
-        let n = Counts::of(run.cases.iter().filter(|c| c.profile == p));
-        let _ = writeln!(s, "  {p:<8} {}", line(&n));
+        let _ = writeln!(s, "  {p:<8} {}", line(Some(p)));
     }
     let _ = writeln!(
         s,
         "{} cases under {} profiles: {}; {} errata recorded; {} suite files did not load",
         run.cases.len(),
         run.profiles.len(),
-        line(&Counts::of(&run.cases)),
+        line(None),
         run.errata.len(),
         run.load_errors.len()
     );
@@ -266,9 +320,16 @@ mod tests {
 
     #[test]
     fn counts_include_every_verdict() {
-        let n = Counts::of(&sample_run().cases);
+        let run = sample_run();
+        let n = Counts::of_kind(&run, CaseKind::Device, None);
         assert_eq!(Verdict::ALL.map(|v| n.get(v)), [1, 1, 1, 1, 1]);
         assert_eq!(n.cells(), "1 | 1 | 1 | 1 | 1");
+        let m = Counts::of_kind(&run, CaseKind::Model, Some("sk550p"));
+        assert_eq!(Verdict::ALL.map(|v| m.get(v)), [1, 0, 0, 0, 0]);
+        assert_eq!(
+            Counts::of_kind(&run, CaseKind::Model, Some("tu3-eip")).total(),
+            0
+        );
     }
 
     #[test]
@@ -278,17 +339,52 @@ mod tests {
         let md = markdown(&run);
         let row = |needle: &str| md.find(needle).unwrap_or_else(|| panic!("{needle}\n{md}"));
         // BU 0620 §2.2.7: one fail (sk550p) and one not applicable (tu3-eip).
-        let r227 = row("| BU 0620 | 2020-03 en | 2.2.7 | 2 | 0 | 1 | 0 | 0 | 1 |");
-        let r2564 = row("| BU 0620 | 2020-03 en | 2.5.6.4 | 1 | 0 | 0 | 0 | 1 | 0 |");
-        let r210 = row("| BU 0620 | 2020-03 en | 2.10 | 1 | 1 | 0 | 0 | 0 | 0 |");
-        let bu2100 = row("| BU 2100 | en | 5.1 | 1 | 0 | 0 | 1 | 0 | 0 |");
-        assert!(r227 < r2564 && r2564 < r210 && r210 < bu2100, "{md}");
+        let r227 = row("| BU 0620 | 2020-03 en | 2.2.7 | 2 | 0 | 1 | 0 | 0 | 1 |  |");
+        let r2564 = row("| BU 0620 | 2020-03 en | 2.5.6.4 | 1 | 0 | 0 | 0 | 1 | 0 |  |");
+        // The model case counts apart: no device case, one model check passed.
+        let r261 = row("| BU 0620 | 2020-03 en | 2.6.1 | 0 | 0 | 0 | 0 | 0 | 0 | 1/1 |");
+        let r210 = row("| BU 0620 | 2020-03 en | 2.10 | 1 | 1 | 0 | 0 | 0 | 0 |  |");
+        let bu2100 = row("| BU 2100 | en | 5.1 | 1 | 0 | 0 | 1 | 0 | 0 |  |");
+        assert!(
+            r227 < r2564 && r2564 < r261 && r261 < r210 && r210 < bu2100,
+            "{md}"
+        );
     }
 
     #[test]
     fn summary_lists_profiles_failures_and_errata() {
         let md = markdown(&sample_run());
-        assert!(md.contains("| sk550p | 1 | 1 | 0 | 0 | 0 |"), "{md}");
+        assert!(md.starts_with("**Motion not allowed (--allow-motion not given): cases that could turn a motor were not run**\n"), "{md}");
+        assert!(
+            md.contains("- identity sk550p: NORD SK 550P, firmware V1.2 R0"),
+            "{md}"
+        );
+        assert!(
+            md.contains("- command line: harness run --filter 'a b'\n"),
+            "{md}"
+        );
+        assert!(md.contains("- suites revision: 0123456789abcdef"), "{md}");
+        // Device rows, then the model group with its own rows: the model pass is not in sk550p's
+        // device passes.
+        let device = md.find("## Verdicts per profile: device cases").unwrap();
+        let model = md
+            .find("## model (reference checks of the manuals' formulas, no DUT)")
+            .unwrap();
+        assert!(device < model, "{md}");
+        assert!(
+            md[device..model].contains("| sk550p | 1 | 1 | 0 | 0 | 0 |"),
+            "{md}"
+        );
+        assert!(
+            md[device..model].contains("| **all** | 1 | 1 | 1 | 1 | 1 |"),
+            "{md}"
+        );
+        let model_part = &md[model..md.find("## Failed").unwrap()];
+        assert!(
+            model_part.contains("| sk550p | 1 | 0 | 0 | 0 | 0 |"),
+            "{md}"
+        );
+        assert!(!model_part.contains("| tu3-eip |"), "{md}");
         assert!(md.contains("| tu3-eip | 0 | 0 | 1 | 1 | 1 |"), "{md}");
         assert!(
             md.contains("| BU 0620 | 2020-03 en | 2.3.5 | 27 | `class 103` → `class 102` | FI 2 is class 102 |"),
@@ -325,11 +421,17 @@ mod tests {
             "{t}"
         );
         assert!(
-            t.contains("  sk550p   1 pass, 1 fail, 0 inconclusive, 0 error, 0 not applicable"),
+            t.contains(
+                "  sk550p   1 pass (+1 model), 1 fail, 0 inconclusive, 0 error, 0 not applicable"
+            ),
             "{t}"
         );
         assert!(
-            t.contains("5 cases under 2 profiles: 1 pass, 1 fail"),
+            t.contains("  tu3-eip  0 pass, 0 fail, 1 inconclusive, 1 error, 1 not applicable"),
+            "{t}"
+        );
+        assert!(
+            t.contains("6 cases under 2 profiles: 1 pass (+1 model), 1 fail"),
             "{t}"
         );
         assert!(t.contains("      rule: "), "{t}");

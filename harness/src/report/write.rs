@@ -1,12 +1,12 @@
 //! Writing the reports into the output folder: file layout, typed errors, stale-file cleanup.
 //!
-//! Layout of `<out>`: `junit.xml`, `run.json`, `summary.md`, and
+//! Layout of `<out>`: `junit.xml`, `run.json`, `summary.md`, `index.html`, and
 //! `transcripts/<profile>/<case id with / as __>.txt`.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use super::{json, junit, summary, transcript};
+use super::{html, json, junit, summary, transcript};
 use crate::outcome::{CaseResult, RunResult, Verdict};
 
 /// A report could not be written or read. Every variant names the file.
@@ -19,14 +19,6 @@ pub(crate) enum ReportError {
         path: PathBuf,
         /// What went wrong.
         source: std::io::Error,
-    },
-    /// The JUnit writer failed.
-    #[error("{path}: cannot write JUnit XML: {source}")]
-    Junit {
-        /// The XML file.
-        path: PathBuf,
-        /// What went wrong.
-        source: junit_report::Error,
     },
     /// `run.json` could not be serialized.
     #[error("{path}: cannot write JSON: {source}")]
@@ -47,6 +39,8 @@ pub(crate) struct Written {
     pub(crate) run_json: PathBuf,
     /// `<out>/summary.md`.
     pub(crate) summary: PathBuf,
+    /// `<out>/index.html`.
+    pub(crate) html: PathBuf,
     /// `<out>/transcripts`.
     pub(crate) transcripts: PathBuf,
     /// How many transcript files (one per case and profile).
@@ -57,10 +51,11 @@ impl fmt::Display for Written {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "reports: {}, {}, {}; {} transcripts in {}",
+            "reports: {}, {}, {}, {}; {} transcripts in {}",
             self.junit.display(),
             self.run_json.display(),
             self.summary.display(),
+            self.html.display(),
             self.transcript_count,
             self.transcripts.display()
         )
@@ -108,7 +103,8 @@ pub(super) fn transcript_file(case: &CaseResult) -> Option<PathBuf> {
         .then(|| Path::new("transcripts").join(case_file(case, "txt")))
 }
 
-/// Writes `junit.xml`, `run.json`, `summary.md` and every case's transcript into `out`, after
+/// Writes `junit.xml`, `run.json`, `summary.md`, `index.html` and every case's transcript into
+/// `out`, after
 /// removing the transcripts folder of an earlier run (so no stale transcript survives).
 pub(crate) fn write_all(run: &RunResult, out: &Path) -> Result<Written, ReportError> {
     let transcripts = out.join("transcripts");
@@ -120,20 +116,18 @@ pub(crate) fn write_all(run: &RunResult, out: &Path) -> Result<Written, ReportEr
         junit: out.join("junit.xml"),
         run_json: out.join("run.json"),
         summary: out.join("summary.md"),
+        html: out.join("index.html"),
         transcripts,
         transcript_count: run.cases.iter().filter_map(transcript_file).count(),
     };
-    let xml = junit::render(run).map_err(|source| ReportError::Junit {
-        path: written.junit.clone(),
-        source,
-    })?;
-    write_file(&written.junit, &xml)?;
+    write_file(&written.junit, junit::render(run).as_bytes())?;
     let doc = json::render(run).map_err(|source| ReportError::Json {
         path: written.run_json.clone(),
         source,
     })?;
     write_file(&written.run_json, doc.as_bytes())?;
     write_file(&written.summary, summary::markdown(run).as_bytes())?;
+    write_file(&written.html, html::render(run).as_bytes())?;
     for case in &run.cases {
         if let Some(file) = transcript_file(case) {
             write_file(&out.join(file), transcript::render(case).as_bytes())?;
@@ -155,11 +149,12 @@ mod tests {
         let run = sample_run();
         let w = write_all(&run, &out).unwrap();
         assert!(!stale.exists(), "stale transcript removed");
-        for f in [&w.junit, &w.run_json, &w.summary] {
+        for f in [&w.junit, &w.run_json, &w.summary, &w.html] {
             assert!(f.is_file(), "{}", f.display());
         }
         // One case did not apply: it has no transcript.
         assert_eq!(w.transcript_count, run.cases.len() - 1);
+        assert_eq!(w.transcript_count, 5);
         let na = run
             .cases
             .iter()
@@ -173,7 +168,7 @@ mod tests {
             text.starts_with("case: bu0620/pkw-telegrams/p102-write\n"),
             "{text}"
         );
-        assert!(w.to_string().contains("4 transcripts"), "{w}");
+        assert!(w.to_string().contains("5 transcripts"), "{w}");
         let _ = std::fs::remove_dir_all(&out);
     }
 

@@ -1,0 +1,148 @@
+//! The run's record, as every report states it: what was tested (DUT, identity per profile),
+//! with what (harness and suites revisions), when and how (start, duration, command line), and
+//! whether motion was allowed. One list of lines, so `summary.md`, `junit.xml` and
+//! `index.html` cannot disagree about the run they describe.
+
+use crate::outcome::{CaseKind, RunResult};
+
+/// The first line of `summary.md` and the top of `index.html`: a reader must see at once
+/// whether cases that could turn a motor ran.
+pub(super) fn motion_line(run: &RunResult) -> &'static str {
+    if run.meta.motion_allowed {
+        "Motion allowed (--allow-motion given): cases that can turn a motor were run"
+    } else {
+        "Motion not allowed (--allow-motion not given): cases that could turn a motor were not run"
+    }
+}
+
+/// `value`, or `unknown` when the run did not record it (a `run.json` from before the record).
+fn or_unknown(value: &str) -> String {
+    if value.is_empty() {
+        "unknown".into()
+    } else {
+        value.to_string()
+    }
+}
+
+/// The record as labelled lines, in the order reports show them: the DUT, its identity per
+/// profile (`identity <profile>`; `not read` for a profile without one), the harness, the
+/// suites, the start, the duration, the command line and the profiles.
+pub(super) fn lines(run: &RunResult) -> Vec<(String, String)> {
+    let m = &run.meta;
+    let mut out = vec![("DUT".to_string(), run.dut.clone())];
+    for p in super::summary::profiles(run) {
+        let identity = m
+            .identities
+            .get(p)
+            .map_or_else(|| "not read".to_string(), |i| i.line());
+        out.push((format!("identity {p}"), identity));
+    }
+    out.extend([
+        (
+            "harness".into(),
+            format!(
+                "{} (revision {})",
+                or_unknown(&m.harness_version),
+                or_unknown(&m.harness_revision)
+            ),
+        ),
+        ("suites revision".into(), or_unknown(&m.suites_revision)),
+        ("started".into(), or_unknown(&m.started)),
+        (
+            "duration".into(),
+            format!("{:.3} s", run.duration.as_secs_f64()),
+        ),
+        ("command line".into(), command_line(&m.command_line)),
+        ("profiles".into(), run.profiles.join(", ")),
+    ]);
+    out
+}
+
+/// The command line as one shell-readable line: an argument with a space or a quote is
+/// single-quoted.
+fn command_line(args: &[String]) -> String {
+    if args.is_empty() {
+        return "unknown".into();
+    }
+    args.iter()
+        .map(|a| {
+            if a.is_empty() || a.contains(|c: char| c.is_whitespace() || "'\"\\$`".contains(c)) {
+                format!("'{}'", a.replace('\'', r"'\''"))
+            } else {
+                a.clone()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// What a kind's group is called in the reports.
+pub(super) fn group_title(kind: CaseKind) -> &'static str {
+    match kind {
+        CaseKind::Device => "device",
+        CaseKind::Model => "model (reference checks of the manuals' formulas, no DUT)",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::fixtures::sample_run;
+
+    #[test]
+    fn record_names_dut_identities_revisions_and_command() {
+        let run = sample_run();
+        let l = lines(&run);
+        let get = |k: &str| {
+            l.iter()
+                .find(|(label, _)| label == k)
+                .map(|(_, v)| v.as_str())
+                .unwrap_or_else(|| panic!("{k}: {l:?}"))
+        };
+        assert_eq!(get("DUT"), "embedded simulator");
+        assert_eq!(
+            get("identity sk550p"),
+            "NORD SK 550P, firmware V1.2 R0, serial 123456 (from P743/P707/P780 over the parameter channel)"
+        );
+        assert_eq!(get("identity tu3-eip"), "not read");
+        assert_eq!(
+            get("harness"),
+            "0.1.0 (revision 0123456789abcdef0123456789abcdef01234567)"
+        );
+        assert_eq!(get("started"), "2026-11-27T06:00:00Z");
+        assert_eq!(get("duration"), "0.015 s");
+        assert_eq!(get("command line"), "harness run --filter 'a b'");
+        assert_eq!(get("profiles"), "sk550p, tu3-eip");
+    }
+
+    #[test]
+    fn missing_record_says_unknown() {
+        let mut run = sample_run();
+        run.meta = Default::default();
+        let l = lines(&run);
+        assert!(
+            l.contains(&("suites revision".into(), "unknown".into())),
+            "{l:?}"
+        );
+        assert!(
+            l.contains(&("command line".into(), "unknown".into())),
+            "{l:?}"
+        );
+    }
+
+    #[test]
+    fn motion_line_follows_the_flag() {
+        let mut run = sample_run();
+        assert!(motion_line(&run).starts_with("Motion not allowed (--allow-motion not given)"));
+        run.meta.motion_allowed = true;
+        assert!(motion_line(&run).starts_with("Motion allowed"));
+    }
+
+    #[test]
+    fn command_line_quotes_what_a_shell_would_split() {
+        assert_eq!(
+            command_line(&["a".into(), "it's x".into(), String::new()]),
+            r"a 'it'\''s x' ''"
+        );
+    }
+}
