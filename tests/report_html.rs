@@ -1,0 +1,218 @@
+//! `index.html` in a real browser: headless Chromium (Debian's package, `.ci/interop-setup`)
+//! loads the report of a run with a failure from its `file://` URL and dumps the DOM after the
+//! page's script ran. Proves that the page loads without console errors, that its self-check
+//! (the numbers shown agree with each other) passed, that the counts shown are the run's
+//! counts, and that the verdict and manual filters, read from the URL fragment, hide what
+//! they should. Skips without Chromium on a developer's machine, fails under CI.
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+mod common;
+use common::peer::{is_root, require_or_skip};
+use common::report_run::report_run;
+
+const VERDICTS: [&str; 5] = ["pass", "fail", "inconclusive", "error", "not_applicable"];
+
+fn chromium() -> Option<&'static str> {
+    ["chromium", "chromium-browser"].into_iter().find(|b| {
+        Command::new(b)
+            .arg("--version")
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+    })
+}
+
+/// The page's DOM after load, and Chromium's log (console messages show as `:CONSOLE` lines).
+fn dump_dom(browser: &str, page: &Path, fragment: &str, profile_dir: &Path) -> (String, String) {
+    let url = format!("file://{}{fragment}", page.display());
+    let mut cmd = Command::new(browser);
+    cmd.args([
+        "--headless",
+        "--disable-gpu",
+        "--enable-logging=stderr",
+        "--v=0",
+    ])
+    .arg(format!("--user-data-dir={}", profile_dir.display()))
+    .args(["--dump-dom", &url])
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped());
+    if is_root() {
+        // Chromium refuses to run as root with its sandbox.
+        cmd.arg("--no-sandbox");
+    }
+    let child = cmd.spawn().expect("chromium starts");
+    let id = child.id();
+    // Bounded: a browser that hangs fails the test instead of the CI run.
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(child.wait_with_output());
+    });
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let o = loop {
+        if let Ok(o) = rx.try_recv() {
+            break o.expect("chromium ran");
+        }
+        if Instant::now() > deadline {
+            let _ = Command::new("kill").arg(id.to_string()).status();
+            panic!("chromium did not finish {url} within 120 s");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(
+        o.status.success(),
+        "chromium: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    (
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// The number in the element with `id`.
+fn number(dom: &str, id: &str) -> u64 {
+    let at = dom
+        .find(&format!("id=\"{id}\""))
+        .unwrap_or_else(|| panic!("no #{id} in the page"));
+    let text = &dom[at..];
+    let text = &text[text.find('>').unwrap() + 1..];
+    text[..text.find('<').unwrap()]
+        .trim()
+        .parse()
+        .unwrap_or_else(|e| panic!("#{id}: {e}"))
+}
+
+/// The opening tags of the listed cases: (verdict, doc, hidden).
+fn case_tags(dom: &str) -> Vec<(String, String, bool)> {
+    dom.split("<article ")
+        .skip(1)
+        .map(|t| {
+            let tag = &t[..t.find('>').unwrap()];
+            let attr = |name: &str| {
+                tag.split(&format!("{name}=\""))
+                    .nth(1)
+                    .and_then(|r| r.split('"').next())
+                    .unwrap_or_default()
+                    .to_string()
+            };
+            (
+                attr("data-verdict"),
+                attr("data-doc"),
+                tag.contains(" hidden"),
+            )
+        })
+        .collect()
+}
+
+fn assert_no_console_messages(log: &str) {
+    let console: Vec<&str> = log
+        .lines()
+        .filter(|l| l.contains(":CONSOLE") || l.contains("Uncaught"))
+        .collect();
+    assert!(console.is_empty(), "console messages: {console:#?}");
+}
+
+#[test]
+fn html_report_loads_counts_and_filters_in_headless_chromium() {
+    let why = "the HTML report in a headless browser";
+    let browser = chromium();
+    if !require_or_skip(
+        browser.is_some(),
+        "chromium (Debian package; bash .ci/interop-setup installs it)",
+        why,
+    ) {
+        return;
+    }
+    let browser = browser.unwrap();
+    let run = report_run("report-html");
+    let page = run.out.join("index.html");
+    let profile_dir = run.out.join("chromium-profile");
+    let json: &Value = &run.json;
+    assert_eq!(json["counts"]["fail"], 1, "the run has a failure: {json}");
+
+    // Unfiltered: no console message, the self-check passed, the counts are the run's.
+    let (dom, log) = dump_dom(browser, &page, "", &profile_dir);
+    assert_no_console_messages(&log);
+    assert!(
+        dom.contains("<output id=\"selfcheck\" data-ok=\"true\">self-check ok</output>"),
+        "self-check: {}",
+        &dom[dom.find("id=\"selfcheck\"").unwrap_or(0)..][..200]
+    );
+    for v in VERDICTS {
+        assert_eq!(
+            number(&dom, &format!("total-device-{v}")),
+            json["counts"][v].as_u64().unwrap(),
+            "device {v}"
+        );
+        assert_eq!(
+            number(&dom, &format!("total-model-{v}")),
+            json["counts_model"][v].as_u64().unwrap(),
+            "model {v}"
+        );
+    }
+    let cases = case_tags(&dom);
+    let listed =
+        |v: &str| json["counts"][v].as_u64().unwrap() + json["counts_model"][v].as_u64().unwrap();
+    assert_eq!(
+        cases.len() as u64,
+        listed("fail") + listed("error") + listed("inconclusive")
+    );
+    assert!(
+        cases.iter().all(|c| !c.2),
+        "nothing hidden without a filter"
+    );
+    assert!(
+        dom.contains("id=\"load-errors\""),
+        "the load error is shown"
+    );
+    assert!(
+        dom.starts_with("<html")
+            || dom.contains("<p id=\"motion\" class=\"motion-no\">Motion not allowed")
+    );
+
+    // Filtered by the URL fragment: only failing cases of BU 0590 stay visible, and the
+    // coverage keeps only sections with a failure.
+    let (dom, log) = dump_dom(
+        browser,
+        &page,
+        "#verdict=fail&manual=BU%200590",
+        &profile_dir,
+    );
+    assert_no_console_messages(&log);
+    assert!(
+        dom.contains("data-ok=\"true\""),
+        "self-check under a filter"
+    );
+    let cases = case_tags(&dom);
+    let visible: Vec<_> = cases.iter().filter(|c| !c.2).collect();
+    assert_eq!(visible.len() as u64, listed("fail"), "{cases:?}");
+    assert!(
+        visible.iter().all(|c| c.0 == "fail" && c.1 == "BU 0590"),
+        "{cases:?}"
+    );
+    assert!(
+        dom.contains(&format!("data-shown=\"{}\"", listed("fail"))),
+        "the count of shown cases"
+    );
+    let coverage = &dom[dom.find("<section id=\"coverage\"").unwrap()..];
+    let rows: Vec<&str> = coverage.split("<tr data-doc=").skip(1).collect();
+    assert!(!rows.is_empty());
+    for row in rows {
+        let tag = &row[..row.find('>').unwrap()];
+        assert_eq!(
+            tag.contains(" hidden"),
+            tag.contains("data-fail=\"0\""),
+            "coverage row {tag}"
+        );
+    }
+
+    // A filter with nothing to show hides every case.
+    let (dom, _) = dump_dom(browser, &page, "#verdict=error", &profile_dir);
+    assert!(case_tags(&dom).iter().all(|c| c.2));
+    let _ = std::fs::remove_dir_all(run.out.parent().unwrap());
+}
