@@ -55,6 +55,10 @@ pub struct ManualRef {
     pub section: String,
     /// Page as printed; a specification cited by section and table alone has none.
     pub page: Option<u32>,
+    /// The requirement in the manual's own words, where the suite quotes it (`ref.quote`);
+    /// reports fall back to the case title, the requirement as the suite states it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quote: Option<String>,
 }
 
 impl ManualRef {
@@ -140,7 +144,9 @@ pub struct StepResult {
 }
 
 /// What a case checks: the device, or only the harness's reference model of the manuals.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default, Serialize, Deserialize,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum CaseKind {
     /// At least one step reaches the DUT: a verdict about the device.

@@ -14,6 +14,7 @@ fn manual(doc: &str, edition: &str, section: &str, page: u32) -> ManualRef {
         edition: edition.into(),
         section: section.into(),
         page: Some(page),
+        quote: None,
     }
 }
 

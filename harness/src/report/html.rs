@@ -149,7 +149,7 @@ fn case_item(s: &mut String, c: &CaseResult) {
         id = text(&c.id),
         ed = text(&m.edition),
         place = text(&m.place()),
-        title = text(&c.title),
+        title = text(&record::requirement(c)),
         msg = text(&c.message),
     );
     if let Some(st) = deciding_step(c) {

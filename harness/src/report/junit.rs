@@ -31,7 +31,7 @@
 use std::fmt::Write;
 
 use super::markup::{attr, text};
-use super::record::group_title;
+use super::record::{self, group_title};
 use super::summary::{profiles, Counts};
 use super::write::transcript_file;
 use crate::outcome::{CaseKind, CaseResult, RunResult, Verdict};
@@ -113,7 +113,7 @@ fn details(c: &CaseResult, dut: &str) -> String {
         m.doc,
         m.edition,
         m.place(),
-        c.title,
+        record::requirement(c),
         c.profile,
         c.kind.name(),
         transcript_file(c).map_or("-".into(), |f| f.to_string_lossy().replace('\\', "/")),
@@ -178,7 +178,7 @@ fn properties(s: &mut String, run: &RunResult, profile: Option<&str>, cases: &[&
     props.extend(
         editions
             .into_iter()
-            .map(|(doc, edition)| (format!("manual {doc}"), edition.to_string())),
+            .map(|(doc, edition)| ("manual".to_string(), format!("{doc} ({edition})"))),
     );
     s.push_str("    <properties>\n");
     for (name, value) in props {
@@ -379,7 +379,8 @@ mod tests {
             r#"<property name="suites.revision" value="0123456789abcdef0123456789abcdef01234567"/>"#,
             r#"<property name="command_line" value="harness run --filter a b"/>"#,
             r#"<property name="motion_allowed" value="false"/>"#,
-            r#"<property name="manual BU 2100" value="en"/>"#,
+            r#"<property name="manual" value="BU 2100 (en)"/>"#,
+            r#"<property name="manual" value="BU 0620 (2020-03 en)"/>"#,
         ] {
             assert!(x.contains(p), "{p}\n{x}");
         }

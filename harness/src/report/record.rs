@@ -3,7 +3,7 @@
 //! whether motion was allowed. One list of lines, so `summary.md`, `junit.xml` and
 //! `index.html` cannot disagree about the run they describe.
 
-use crate::outcome::{CaseKind, RunResult};
+use crate::outcome::{CaseKind, CaseResult, RunResult};
 
 /// The first line of `summary.md` and the top of `index.html`: a reader must see at once
 /// whether cases that could turn a motor ran.
@@ -30,7 +30,15 @@ fn or_unknown(value: &str) -> String {
 pub(super) fn lines(run: &RunResult) -> Vec<(String, String)> {
     let m = &run.meta;
     let mut out = vec![("DUT".to_string(), run.dut.clone())];
-    for p in super::summary::profiles(run) {
+    if m.identities.is_empty() {
+        // One line, not one per profile, when no profile's identity was read (the embedded
+        // simulator's runs; a run whose DUT never answered).
+        out.push(("identity".into(), "not read".into()));
+    }
+    for p in super::summary::profiles(run)
+        .into_iter()
+        .filter(|_| !m.identities.is_empty())
+    {
         let identity = m
             .identities
             .get(p)
@@ -74,6 +82,15 @@ fn command_line(args: &[String]) -> String {
         })
         .collect::<Vec<_>>()
         .join(" ")
+}
+
+/// The requirement a case checks: the manual's words where the suite quotes them, then the
+/// case title (the requirement as the suite states it).
+pub(super) fn requirement(c: &CaseResult) -> String {
+    match &c.manual.quote {
+        Some(q) => format!("“{q}” ({})", c.title),
+        None => c.title.clone(),
+    }
 }
 
 /// What a kind's group is called in the reports.
@@ -136,6 +153,17 @@ mod tests {
         assert!(motion_line(&run).starts_with("Motion not allowed (--allow-motion not given)"));
         run.meta.motion_allowed = true;
         assert!(motion_line(&run).starts_with("Motion allowed"));
+    }
+
+    #[test]
+    fn requirement_quotes_the_manual_when_the_suite_does() {
+        let mut c = sample_run().cases.remove(1);
+        assert_eq!(requirement(&c), "title of bu0620/addressing/coe-p102");
+        c.manual.quote = Some("P102 = 3066h".into());
+        assert_eq!(
+            requirement(&c),
+            "“P102 = 3066h” (title of bu0620/addressing/coe-p102)"
+        );
     }
 
     #[test]

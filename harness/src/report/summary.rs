@@ -284,8 +284,9 @@ pub(crate) fn terminal(run: &RunResult) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     };
+    let width = profiles(run).iter().map(|p| p.len()).max().unwrap_or(0);
     for p in profiles(run) {
-        let _ = writeln!(s, "  {p:<8} {}", line(Some(p)));
+        let _ = writeln!(s, "  {p:<width$} {}", line(Some(p)));
     }
     let _ = writeln!(
         s,
@@ -422,12 +423,12 @@ mod tests {
         );
         assert!(
             t.contains(
-                "  sk550p   1 pass (+1 model), 1 fail, 0 inconclusive, 0 error, 0 not applicable"
+                "  sk550p  1 pass (+1 model), 1 fail, 0 inconclusive, 0 error, 0 not applicable"
             ),
             "{t}"
         );
         assert!(
-            t.contains("  tu3-eip  0 pass, 0 fail, 1 inconclusive, 1 error, 1 not applicable"),
+            t.contains("  tu3-eip 0 pass, 0 fail, 1 inconclusive, 1 error, 1 not applicable"),
             "{t}"
         );
         assert!(

@@ -435,6 +435,7 @@ pub(super) fn case_head(
             .unwrap_or_else(|| file_edition.to_string()),
         section: doc.reference.section.clone(),
         page: doc.reference.page,
+        quote: doc.reference.quote.clone(),
     };
     // A NORD manual is cited by page as printed; a specification (the ODVA CIP volumes) by
     // section and table.

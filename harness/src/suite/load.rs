@@ -214,6 +214,14 @@ cases:
         assert_eq!(l.cases[0].id, "x/t/coe-p102");
         assert_eq!(l.cases[0].manual.edition, "2020-03 en");
         assert_eq!(l.errata[0].printed, "a");
+        assert_eq!(l.cases[0].manual.quote, None);
+    }
+
+    #[test]
+    fn a_quoted_requirement_is_kept_for_the_reports() {
+        let l = load(&GOOD.replace(r#"page: 20 }"#, r#"page: 20, quote: "P102 … 3066h" }"#));
+        assert!(l.errors.is_empty(), "{:?}", l.errors);
+        assert_eq!(l.cases[0].manual.quote.as_deref(), Some("P102 … 3066h"));
     }
 
     #[test]

@@ -47,6 +47,9 @@ pub(super) struct RefDoc {
     pub(super) section: String,
     #[serde(default)]
     pub(super) page: Option<u32>,
+    /// The requirement quoted from the manual, for the reports.
+    #[serde(default)]
+    pub(super) quote: Option<String>,
 }
 
 /// `manual_says:` may be one erratum or a list.
