@@ -7,9 +7,13 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-mod common;
-use common::peer::{require_or_skip, runs};
-use common::report_run::{read, report_run};
+// The two helpers alone, not `common/mod.rs`, whose network helpers these tests do not use.
+#[path = "common/peer.rs"]
+mod peer;
+#[path = "common/report_run.rs"]
+mod report_run;
+use peer::{require_or_skip, runs};
+use report_run::{read, report_run};
 
 fn schema(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
