@@ -35,9 +35,11 @@ fn listed(v: Verdict) -> bool {
 fn count_cells(s: &mut String, n: &Counts, id_prefix: Option<&str>) {
     for v in Verdict::ALL {
         let id = id_prefix.map_or(String::new(), |p| format!(" id=\"{p}-{}\"", v.name()));
+        // `nz` marks a count above zero, which the style colours.
+        let nz = if n.get(v) > 0 { " nz" } else { "" };
         let _ = write!(
             s,
-            "<td class=\"n v-{0}\" data-verdict=\"{0}\"{id}>{1}</td>",
+            "<td class=\"n v-{0}{nz}\" data-verdict=\"{0}\"{id}>{1}</td>",
             v.name(),
             n.get(v)
         );
@@ -328,13 +330,13 @@ mod tests {
         let h = page();
         assert!(
             h.contains(
-                "<td class=\"n v-pass\" data-verdict=\"pass\" id=\"total-device-pass\">1</td>"
+                "<td class=\"n v-pass nz\" data-verdict=\"pass\" id=\"total-device-pass\">1</td>"
             ),
             "{h}"
         );
         assert!(
             h.contains(
-                "<td class=\"n v-pass\" data-verdict=\"pass\" id=\"total-model-pass\">1</td>"
+                "<td class=\"n v-pass nz\" data-verdict=\"pass\" id=\"total-model-pass\">1</td>"
             ),
             "{h}"
         );

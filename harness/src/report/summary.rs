@@ -257,7 +257,16 @@ pub(crate) fn terminal(run: &RunResult) -> String {
         .filter(|c| matches!(c.verdict, Verdict::Fail | Verdict::Error))
     {
         let name = c.verdict.name().to_uppercase();
-        let _ = writeln!(s, "{name:<5} [{}] {}: {}", c.profile, c.id, c.message);
+        let model = if c.kind == CaseKind::Model {
+            ", model"
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            s,
+            "{name:<5} [{}{model}] {}: {}",
+            c.profile, c.id, c.message
+        );
         // The statement the DUT broke, and where it stands.
         let _ = writeln!(
             s,
@@ -438,6 +447,16 @@ mod tests {
         assert!(t.contains("      rule: "), "{t}");
         // Two lines per failed or errored case, one per profile, one total.
         assert!(t.lines().count() <= 8, "{t}");
+        // A failing model check says it is one.
+        let mut run = sample_run();
+        run.cases[5].verdict = Verdict::Fail;
+        run.cases[5].message = "formula".into();
+        let t = terminal(&run);
+        assert!(
+            t.contains("FAIL  [sk550p, model] bu0620/drive-scaling/setpoint: formula"),
+            "{t}"
+        );
+        assert!(t.contains("  sk550p  1 pass, 1 fail (+1 model),"), "{t}");
     }
 
     #[test]
