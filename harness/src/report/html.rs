@@ -14,22 +14,16 @@
 //! counts, the coverage sums to the totals) and writes the outcome into `#selfcheck`, which
 //! `tests/report_html.rs` reads back from a headless browser.
 
-use std::collections::BTreeMap;
 use std::fmt::Write;
 
 use super::markup::text;
 use super::record::{self, group_title};
-use super::summary::{profiles, section_key, Counts};
+use super::summary::{by_section, model_cell, not_passed, profiles, Counts};
 use super::transcript;
 use crate::outcome::{CaseKind, CaseResult, RunResult, StepResult, Verdict};
 
 const CSS: &str = include_str!("html.css");
 const SCRIPT: &str = include_str!("html.js");
-
-/// Cases listed one by one: those that did not pass and apply.
-fn listed(v: Verdict) -> bool {
-    matches!(v, Verdict::Fail | Verdict::Error | Verdict::Inconclusive)
-}
 
 /// `<td>` cells of a count row, each tagged with its verdict.
 fn count_cells(s: &mut String, n: &Counts, id_prefix: Option<&str>) {
@@ -185,7 +179,7 @@ fn case_item(s: &mut String, c: &CaseResult) {
 fn cases(s: &mut String, run: &RunResult) {
     let _ = writeln!(s, "<section id=\"cases\"><h2>Cases that did not pass</h2>");
     let mut any = false;
-    for c in run.cases.iter().filter(|c| listed(c.verdict)) {
+    for c in not_passed(run) {
         case_item(s, c);
         any = true;
     }
@@ -196,24 +190,13 @@ fn cases(s: &mut String, run: &RunResult) {
 }
 
 fn coverage(s: &mut String, run: &RunResult) {
-    type Key<'a> = (&'a str, &'a str, Vec<(u64, &'a str)>, &'a str);
-    let mut by: BTreeMap<Key<'_>, Vec<&CaseResult>> = BTreeMap::new();
-    for c in &run.cases {
-        let m = &c.manual;
-        by.entry((&m.doc, &m.edition, section_key(&m.section), &m.section))
-            .or_default()
-            .push(c);
-    }
     let _ = writeln!(
         s,
         "<section id=\"coverage\"><h2>Coverage by manual and section</h2>\n<p>Device cases per verdict, all profiles; <em>model</em>: reference-model checks passed / run.</p>\n<table><thead><tr><th>doc</th><th>edition</th><th>section</th><th>cases</th>{}<th>model</th></tr></thead><tbody>",
         header_cells()
     );
-    for ((doc, edition, _, section), cases) in by {
-        let all = Counts::of(cases.iter().copied());
-        let (model, device): (Vec<&CaseResult>, Vec<&CaseResult>) =
-            cases.into_iter().partition(|c| c.kind == CaseKind::Model);
-        let (n, m) = (Counts::of(device), Counts::of(model));
+    for ((doc, edition, _, section), cases) in by_section(run) {
+        let (n, m, all) = (cases.device, cases.model, cases.all);
         // The data attributes count every case of the section, so the filter and the
         // self-check see model cases too.
         let data: String = Verdict::ALL
@@ -230,12 +213,7 @@ fn coverage(s: &mut String, run: &RunResult) {
             n.total()
         );
         count_cells(s, &n, None);
-        let model_cell = if m.total() == 0 {
-            String::new()
-        } else {
-            format!("{}/{}", m.get(Verdict::Pass), m.total())
-        };
-        let _ = writeln!(s, "<td class=\"n\">{model_cell}</td></tr>");
+        let _ = writeln!(s, "<td class=\"n\">{}</td></tr>", model_cell(&m));
     }
     s.push_str("</tbody></table></section>\n");
 }

@@ -80,9 +80,22 @@ fn cell(s: &str) -> String {
 /// `## Verdicts per profile`, `## Coverage by manual section` and the header row they share.
 const VERDICT_HEADER: &str = "pass | fail | inconclusive | error | not applicable |";
 
-fn coverage(s: &mut String, run: &RunResult) {
-    type Key<'a> = (&'a str, &'a str, Vec<(u64, &'a str)>, &'a str);
-    let mut by: BTreeMap<Key<'_>, Vec<&CaseResult>> = BTreeMap::new();
+/// One section of one manual's edition: `(doc, edition, sort key, section)`.
+pub(super) type SectionKey<'a> = (&'a str, &'a str, Vec<(u64, &'a str)>, &'a str);
+
+/// A section's verdict counts.
+pub(super) struct SectionCases {
+    /// Device cases.
+    pub(super) device: Counts,
+    /// Reference-model cases.
+    pub(super) model: Counts,
+    /// Device and model cases together.
+    pub(super) all: Counts,
+}
+
+/// The run's cases by manual, edition and section, sections in numeric order.
+pub(super) fn by_section(run: &RunResult) -> BTreeMap<SectionKey<'_>, SectionCases> {
+    let mut by: BTreeMap<SectionKey<'_>, Vec<&CaseResult>> = BTreeMap::new();
     for c in &run.cases {
         let m = &c.manual;
         let key = (
@@ -93,15 +106,28 @@ fn coverage(s: &mut String, run: &RunResult) {
         );
         by.entry(key).or_default().push(c);
     }
+    by.into_iter()
+        .map(|(key, cases)| {
+            let all = Counts::of(cases.iter().copied());
+            let (model, device): (Vec<&CaseResult>, Vec<&CaseResult>) =
+                cases.into_iter().partition(|c| c.kind == CaseKind::Model);
+            let section = SectionCases {
+                device: Counts::of(device),
+                model: Counts::of(model),
+                all,
+            };
+            (key, section)
+        })
+        .collect()
+}
+
+fn coverage(s: &mut String, run: &RunResult) {
     let _ = writeln!(
         s,
         "\n## Coverage by manual section\n\nDevice cases per verdict; `model` counts the reference-model checks (passed/all).\n\n| doc | edition | section | cases | {VERDICT_HEADER} model |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|"
     );
-    for ((doc, edition, _, section), cases) in by {
-        let (model, device): (Vec<&CaseResult>, Vec<&CaseResult>) =
-            cases.into_iter().partition(|c| c.kind == CaseKind::Model);
-        let n = Counts::of(device);
-        let m = Counts::of(model);
+    for ((doc, edition, _, section), cases) in by_section(run) {
+        let (n, m) = (cases.device, cases.model);
         let _ = writeln!(
             s,
             "| {} | {} | {} | {} | {} | {} |",
@@ -154,7 +180,7 @@ fn errata(s: &mut String, run: &RunResult) {
 }
 
 /// `passed/all` of a section's model cases; empty when it has none.
-fn model_cell(m: &Counts) -> String {
+pub(super) fn model_cell(m: &Counts) -> String {
     if m.total() == 0 {
         String::new()
     } else {
@@ -182,7 +208,7 @@ fn verdict_table(s: &mut String, run: &RunResult, kind: CaseKind) {
 }
 
 /// Cases that did not pass and apply: fail, error, inconclusive.
-fn not_passed(run: &RunResult) -> impl Iterator<Item = &CaseResult> {
+pub(super) fn not_passed(run: &RunResult) -> impl Iterator<Item = &CaseResult> {
     run.cases.iter().filter(|c| {
         matches!(
             c.verdict,
