@@ -31,7 +31,7 @@
 use std::fmt::Write;
 
 use super::markup::{attr, text};
-use super::record::{self, group_title};
+use super::record::{self, group_title, or_unknown};
 use super::summary::{profiles, Counts};
 use super::write::transcript_file;
 use crate::outcome::{CaseKind, CaseResult, RunResult, Verdict};
@@ -161,12 +161,12 @@ fn properties(s: &mut String, run: &RunResult, profile: Option<&str>, cases: &[&
         }
     }
     props.extend([
-        ("harness.version".into(), m.harness_version.clone()),
-        ("harness.revision".into(), m.harness_revision.clone()),
-        ("suites.revision".into(), m.suites_revision.clone()),
-        ("started".into(), m.started.clone()),
+        ("harness.version".into(), or_unknown(&m.harness_version)),
+        ("harness.revision".into(), or_unknown(&m.harness_revision)),
+        ("suites.revision".into(), or_unknown(&m.suites_revision)),
+        ("started".into(), or_unknown(&m.started)),
         ("duration".into(), secs(run.duration)),
-        ("command_line".into(), m.command_line.join(" ")),
+        ("command_line".into(), record::command_line(&m.command_line)),
         ("motion_allowed".into(), m.motion_allowed.to_string()),
     ]);
     let mut editions: Vec<(&str, &str)> = cases
@@ -377,7 +377,7 @@ mod tests {
             r#"<property name="profile" value="sk550p"/>"#,
             r#"<property name="dut.identity" value="NORD SK 550P, firmware V1.2 R0, serial 123456 (from P743/P707/P780 over the parameter channel)"/>"#,
             r#"<property name="suites.revision" value="0123456789abcdef0123456789abcdef01234567"/>"#,
-            r#"<property name="command_line" value="harness run --filter a b"/>"#,
+            r#"<property name="command_line" value="harness run --filter &apos;a b&apos;"/>"#,
             r#"<property name="motion_allowed" value="false"/>"#,
             r#"<property name="manual" value="BU 2100 (en)"/>"#,
             r#"<property name="manual" value="BU 0620 (2020-03 en)"/>"#,

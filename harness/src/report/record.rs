@@ -16,7 +16,7 @@ pub(super) fn motion_line(run: &RunResult) -> &'static str {
 }
 
 /// `value`, or `unknown` when the run did not record it (a `run.json` from before the record).
-fn or_unknown(value: &str) -> String {
+pub(super) fn or_unknown(value: &str) -> String {
     if value.is_empty() {
         "unknown".into()
     } else {
@@ -68,7 +68,7 @@ pub(super) fn lines(run: &RunResult) -> Vec<(String, String)> {
 
 /// The command line as one shell-readable line: an argument with a space or a quote is
 /// single-quoted.
-fn command_line(args: &[String]) -> String {
+pub(super) fn command_line(args: &[String]) -> String {
     if args.is_empty() {
         return "unknown".into();
     }
