@@ -91,6 +91,24 @@ fn number(dom: &str, id: &str) -> u64 {
         .unwrap_or_else(|e| panic!("#{id}: {e}"))
 }
 
+/// The counts of `profile`'s row in the totals table `table` (`totals-device`), by verdict.
+fn row_counts(dom: &str, table: &str, profile: &str) -> Vec<(String, u64)> {
+    let t = &dom[dom.find(&format!("id=\"{table}\"")).unwrap()..];
+    let t = &t[..t.find("</table>").unwrap()];
+    let row = &t[t
+        .find(&format!("data-profile=\"{profile}\""))
+        .unwrap_or_else(|| panic!("no {profile} row in {table}"))..];
+    let row = &row[..row.find("</tr>").unwrap()];
+    row.split("data-verdict=\"")
+        .skip(1)
+        .map(|c| {
+            let (v, rest) = c.split_once('"').unwrap();
+            let n = &rest[rest.find('>').unwrap() + 1..rest.find('<').unwrap()];
+            (v.to_string(), n.parse().unwrap())
+        })
+        .collect()
+}
+
 /// The opening tags of the listed cases: (verdict, doc, hidden).
 fn case_tags(dom: &str) -> Vec<(String, String, bool)> {
     dom.split("<article ")
@@ -159,6 +177,18 @@ fn html_report_loads_counts_and_filters_in_headless_chromium() {
             "model {v}"
         );
     }
+    for (table, key) in [
+        ("totals-device", "counts_by_profile"),
+        ("totals-model", "counts_model_by_profile"),
+    ] {
+        for profile in ["tu3-pnt", "sk550p"] {
+            let want: Vec<(String, u64)> = VERDICTS
+                .iter()
+                .map(|v| (v.to_string(), json[key][profile][*v].as_u64().unwrap()))
+                .collect();
+            assert_eq!(row_counts(&dom, table, profile), want, "{table} {profile}");
+        }
+    }
     let cases = case_tags(&dom);
     let listed =
         |v: &str| json["counts"][v].as_u64().unwrap() + json["counts_model"][v].as_u64().unwrap();
@@ -175,8 +205,8 @@ fn html_report_loads_counts_and_filters_in_headless_chromium() {
         "the load error is shown"
     );
     assert!(
-        dom.starts_with("<html")
-            || dom.contains("<p id=\"motion\" class=\"motion-no\">Motion not allowed")
+        dom.contains("<p id=\"motion\" class=\"motion-no\">Motion not allowed"),
+        "the motion line"
     );
 
     // Filtered by the URL fragment: only failing cases of BU 0590 stay visible, and the
