@@ -248,5 +248,23 @@ fn html_report_loads_counts_and_filters_in_headless_chromium() {
     // A filter with nothing to show hides every case.
     let (dom, _) = dump_dom(browser, &page, "#verdict=error", &profile_dir);
     assert!(case_tags(&dom).iter().all(|c| c.2));
+
+    // The self-check can fail: a page whose total disagrees with its rows says so.
+    let html = std::fs::read_to_string(&page).unwrap();
+    let pass = json["counts"]["pass"].as_u64().unwrap();
+    let cell = format!("id=\"total-device-pass\">{pass}<");
+    assert!(html.contains(&cell), "{cell}");
+    let tampered = run.out.join("tampered.html");
+    std::fs::write(
+        &tampered,
+        html.replace(&cell, &format!("id=\"total-device-pass\">{}<", pass + 7)),
+    )
+    .unwrap();
+    let (dom, _) = dump_dom(browser, &tampered, "", &profile_dir);
+    assert!(
+        dom.contains("data-ok=\"false\">self-check failed: device pass: profiles sum to"),
+        "{}",
+        &dom[dom.find("id=\"selfcheck\"").unwrap()..][..300]
+    );
     let _ = std::fs::remove_dir_all(run.out.parent().unwrap());
 }
