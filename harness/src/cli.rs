@@ -263,8 +263,39 @@ fn run(a: RunArgs) -> Result<i32, String> {
             p
         })
         .collect();
+    if a.retries == 0 {
+        return Err("`--retries 0`: a parameter order needs at least one bus cycle".into());
+    }
+    if a.out.is_file() {
+        return Err(format!(
+            "`--out {}` is a file; give the folder the reports go to",
+            a.out.display()
+        ));
+    }
+    if a.dut.is_some() && a.profiles.is_empty() {
+        return Err(
+            "`--dut` needs `--profile`: the product behind the address (e.g. `--profile tu3-eip`, or `cip` for any maker's adapter); every profile against one device would test it as products it is not"
+                .into(),
+        );
+    }
     let dir = suites_dir(a.suites);
     let loaded = suite::load_dir(&dir).map_err(|e| e.to_string())?;
+    let selected = loaded
+        .cases
+        .iter()
+        .filter(|c| a.filter.as_deref().is_none_or(|f| c.id.contains(f)))
+        .count();
+    if selected == 0 && loaded.errors.is_empty() {
+        return Err(match &a.filter {
+            Some(f) => format!(
+                "no case id contains `{f}` ({} cases in {}; `harness list` shows them)",
+                loaded.cases.len(),
+                dir.display()
+            ),
+            None => format!("no case in {}", dir.display()),
+        });
+    }
+    let meta = crate::record::start(&dir, &loaded.digest, false);
     let tap = a.pcap.as_ref().map(|_| crate::pcap::SharedTap::default());
     let opts = RunOptions {
         profiles,
@@ -307,6 +338,10 @@ fn run(a: RunArgs) -> Result<i32, String> {
             .map_err(|e| e.to_string())?;
             runner::run(&loaded, &opts, factory.as_mut())
         }
+    };
+    run.meta = crate::outcome::RunMeta {
+        identities: std::mem::take(&mut run.meta.identities),
+        ..meta
     };
     // Every link is closed by now, its FIN exchange recorded.
     if let (Some(path), Some(tap)) = (&a.pcap, &tap) {

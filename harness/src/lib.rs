@@ -21,6 +21,7 @@ mod epl;
 /// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the
 /// simulator served as an adapter, the harness scanner reading a parameter.
 pub use enip::bench_support as enip_bench;
+mod identity;
 mod ledger;
 mod model;
 mod net;
@@ -30,6 +31,7 @@ mod pcap;
 mod pnio;
 pub mod poll;
 mod profile;
+mod record;
 mod report;
 mod runner;
 pub mod stats;
