@@ -10,12 +10,14 @@ use std::time::{Duration, Instant};
 
 use crate::binding::{Binding, Observation, OpenError, StepError};
 use crate::model::{Args, ComputeError, Ctx};
+use std::cell::RefCell;
 use std::collections::BTreeMap;
 
 use crate::outcome::{
     CaseKind, CaseResult, Identity, ManualRef, RunMeta, RunResult, StepResult, Verdict,
 };
 use crate::profile::{Capability, Profile};
+use crate::progress::Progress;
 use crate::suite::{Action, Case, Loaded, Step};
 
 /// How to run.
@@ -29,6 +31,21 @@ pub(crate) struct RunOptions {
     /// The run's capture (`--pcap`), if any: the runner labels its packets with the profile,
     /// case and step that produce them.
     pub(crate) tap: Option<crate::pcap::SharedTap>,
+    /// Told of every case-run as it starts and ends (the progress bar).
+    pub(crate) progress: RefCell<Box<dyn Progress>>,
+}
+
+impl RunOptions {
+    /// Every case under `profiles`: no filter, 250 retries, no capture, no progress shown.
+    pub(crate) fn new(profiles: Vec<Profile>) -> RunOptions {
+        RunOptions {
+            profiles,
+            filter: None,
+            retries: 250,
+            tap: None,
+            progress: RefCell::new(Box::new(crate::progress::Silent)),
+        }
+    }
 }
 
 /// Opens a DUT for a profile; called once per case so every case starts from a known state.
@@ -50,11 +67,18 @@ pub(crate) fn run(loaded: &Loaded, opts: &RunOptions, factory: &mut dyn DutFacto
     match connection_check(loaded, opts, factory, &selected) {
         Ok(identities) => {
             meta.identities = identities;
+            let total = opts.profiles.len() * loaded.cases.iter().filter(selected).count();
             for profile in &opts.profiles {
                 for case in loaded.cases.iter().filter(selected) {
-                    cases.push(run_case(case, profile, opts, factory));
+                    opts.progress
+                        .borrow_mut()
+                        .start(profile.name(), &case.id, cases.len(), total);
+                    let r = run_case(case, profile, opts, factory);
+                    opts.progress.borrow_mut().end(&r);
+                    cases.push(r);
                 }
             }
+            opts.progress.borrow_mut().finish();
         }
         Err(unreachable) => cases.push(unreachable),
     }
@@ -155,6 +179,12 @@ fn result(
         steps,
         duration: start.elapsed(),
     }
+}
+
+/// Why a case does not apply to a profile, if it does not, as far as is known before a DUT is
+/// opened (`harness list --profile` shows the selection this gives).
+pub(crate) fn not_applicable_before_opening(case: &Case, profile: &Profile) -> Option<String> {
+    not_applicable(case, profile, None)
 }
 
 /// Why a case does not apply to a profile, if it does not.
@@ -571,10 +601,8 @@ cases:
     /// The test suite's run: SK 550P, 25 retries, no capture.
     fn sk550p_options() -> RunOptions {
         RunOptions {
-            profiles: vec![Profile::builtin(Product::Sk550p)],
-            filter: None,
             retries: 25,
-            tap: None,
+            ..RunOptions::new(vec![Profile::builtin(Product::Sk550p)])
         }
     }
 

@@ -951,13 +951,11 @@ cases:
         );
         let ecat = Profile::on_bus(Product::Sk550p, "ecat");
         let opts = RunOptions {
-            profiles: vec![
+            retries: 25,
+            ..RunOptions::new(vec![
                 Profile::builtin(Product::Sk550p),
                 Profile::on_bus(Product::Sk550p, "enip"),
-            ],
-            filter: None,
-            retries: 25,
-            tap: None,
+            ])
         };
         let r = run(&loaded, &opts, &mut NoOpen);
         for c in &r.cases {
