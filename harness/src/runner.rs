@@ -715,6 +715,27 @@ cases:
     }
 
     #[test]
+    fn every_bus_profile_reads_its_bus_identity_service() {
+        let loaded = load_text_for_tests(SUITE);
+        let opts = RunOptions::new(Profile::all());
+        let r = run(&loaded, &opts, &mut EmbeddedFactory::default());
+        for p in Profile::all() {
+            let id = &r.meta.identities[p.name()];
+            eprintln!("{}: {}", p.name(), id.line());
+            if let Some(bus) = p.bus {
+                let source = match bus {
+                    "enip" => "ListIdentity",
+                    "ecat" => "object 1018h (the SII header agrees)",
+                    "epl" => "IdentResponse of node",
+                    _ => "DCP Identify of station",
+                };
+                assert!(id.source.starts_with(source), "{}: {id:?}", p.name());
+                assert!(id.vendor.is_some() && id.product_code.is_some(), "{id:?}");
+            }
+        }
+    }
+
+    #[test]
     fn a_garbage_answer_fails_naming_the_problem() {
         let r = run_with(Some(Fault::Garbage));
         let (v, m) = verdicts(&r)[0];

@@ -628,14 +628,19 @@ fn number(d: &[u8]) -> Option<i64> {
 }
 
 impl<L: Link> Binding for EplBinding<L> {
-    /// The node's IdentResponse (EPSG DS 301 §7.3.3.2.1): vendor, product code, revision,
-    /// serial number and host name, as the node sends them.
+    /// The node's IdentResponse (EPSG DS 301 §7.3.3.2.1): vendor, product code, revision and
+    /// serial number, as the node sends them.
     fn identity(&mut self) -> Option<Result<Identity, StepError>> {
         Some(self.mn.ident().map_err(step_error).map(|i| Identity {
-            source: format!("IdentResponse of node {}", self.mn.config().node),
+            source: format!(
+                "IdentResponse of node {} (host name {:?})",
+                self.mn.config().node,
+                i.hostname
+            ),
             vendor: Some(format!("{:08X}h", i.vendor_id)),
             product_code: Some(format!("{:08X}h", i.product_code)),
-            product_name: Some(i.hostname),
+            // DS 301's identity has no product name; the host name is the node's, not the product's.
+            product_name: None,
             revision: Some(format!("{:08X}h", i.revision)),
             serial: Some(format!("{:08X}h", i.serial)),
         }))
