@@ -53,10 +53,13 @@ fn fake(kind: Target) -> u16 {
 
 #[test]
 fn hung_closing_and_garbage_targets_are_error_verdicts() {
-    for (kind, says) in [
-        (Target::Silent, "no reply to RegisterSession"),
-        (Target::Closing, "link error"),
-        (Target::Garbage, "does not speak the protocol"),
+    // A target that accepts and never answers, or closes at once, fails the run's connection
+    // check: one error naming the cause, and the run stops. One that answers garbage passes it
+    // (it answers) and every case that reaches it is an error.
+    for (kind, says, cases_run) in [
+        (Target::Silent, "no reply to ListIdentity within 0.3 s", 0),
+        (Target::Closing, "link error", 0),
+        (Target::Garbage, "does not speak the protocol", 4),
     ] {
         let port = fake(kind);
         let out_dir =
@@ -82,7 +85,20 @@ fn hung_closing_and_garbage_targets_are_error_verdicts() {
             .iter()
             .filter(|c| c["verdict"] != "not_applicable")
             .collect();
-        assert_eq!(cases.len(), 4, "{stdout}");
+        if cases_run == 0 {
+            assert_eq!(cases.len(), 1, "{stdout}");
+            assert_eq!(cases[0]["id"], "harness/connection-check", "{stdout}");
+            assert!(
+                cases[0]["message"]
+                    .as_str()
+                    .unwrap()
+                    .ends_with("the run stopped before its cases"),
+                "{}",
+                cases[0]
+            );
+        } else {
+            assert_eq!(cases.len(), cases_run, "{stdout}");
+        }
         for c in cases {
             assert_eq!(c["verdict"], "error", "{c}");
             assert!(c["message"].as_str().unwrap().contains(says), "{c}");

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use crate::binding::embedded::EmbeddedFactory;
 use crate::outcome::Verdict;
 use crate::profile::Profile;
+use crate::progress::Verbosity;
 use crate::report::{self, SnapshotMode};
 use crate::runner::{self, RunOptions};
 use crate::suite;
@@ -127,6 +128,12 @@ struct RunArgs {
     /// How the DUT's SDO travel, the same as the URL's `?sdo=` (POWERLINK: `asnd`, `udp`).
     #[arg(long, requires = "dut")]
     sdo: Option<String>,
+    /// Say nothing while running, and only the totals at the end.
+    #[arg(short, long, conflicts_with = "verbose")]
+    quiet: bool,
+    /// A line per case-run with its verdict, on stderr.
+    #[arg(short, long)]
+    verbose: bool,
     /// Write the run's bus traffic to this file as pcapng (whatever its name; each packet's
     /// comment names the profile, case and step that produced it): the embedded simulator's on
     /// its virtual clock, or what was sent to and received from a `--dut` target, with the real
@@ -166,6 +173,13 @@ struct ListArgs {
     /// List the reference model's compute functions instead of cases.
     #[arg(long)]
     functions: bool,
+    /// Only cases whose id contains this text (as `run --filter`).
+    #[arg(long)]
+    filter: Option<String>,
+    /// Only the cases that would run under these profiles (as `run --profile`), each with the
+    /// profiles it would run under; the last line counts the case-runs.
+    #[arg(long = "profile")]
+    profiles: Vec<String>,
 }
 
 /// The suites folder: as given, else `suites/` here, else the one beside the sources.
@@ -263,14 +277,53 @@ fn run(a: RunArgs) -> Result<i32, String> {
             p
         })
         .collect();
+    if a.retries == 0 {
+        return Err("`--retries 0`: a parameter order needs at least one bus cycle".into());
+    }
+    if a.out.is_file() {
+        return Err(format!(
+            "`--out {}` is a file; give the folder the reports go to",
+            a.out.display()
+        ));
+    }
+    if a.dut.is_some() && a.profiles.is_empty() {
+        return Err(
+            "`--dut` needs `--profile`: the product behind the address (e.g. `--profile tu3-eip`, or `cip` for any maker's adapter); every profile against one device would test it as products it is not"
+                .into(),
+        );
+    }
     let dir = suites_dir(a.suites);
     let loaded = suite::load_dir(&dir).map_err(|e| e.to_string())?;
+    let selected = loaded
+        .cases
+        .iter()
+        .filter(|c| a.filter.as_deref().is_none_or(|f| c.id.contains(f)))
+        .count();
+    if selected == 0 && loaded.errors.is_empty() {
+        return Err(match &a.filter {
+            Some(f) => format!(
+                "no case id contains `{f}` ({} cases in {}; `harness list` shows them)",
+                loaded.cases.len(),
+                dir.display()
+            ),
+            None => format!("no case in {}", dir.display()),
+        });
+    }
+    let meta = crate::record::start(&dir, &loaded.digest, false);
+    let verbosity = if a.quiet {
+        Verbosity::Quiet
+    } else if a.verbose {
+        Verbosity::Verbose
+    } else {
+        Verbosity::Normal
+    };
     let tap = a.pcap.as_ref().map(|_| crate::pcap::SharedTap::default());
     let opts = RunOptions {
-        profiles,
         filter: a.filter,
         retries: a.retries,
         tap: tap.clone(),
+        progress: std::cell::RefCell::new(crate::progress::on_stderr(verbosity)),
+        ..RunOptions::new(profiles)
     };
     let mut run = match &a.dut {
         None => {
@@ -308,13 +361,17 @@ fn run(a: RunArgs) -> Result<i32, String> {
             runner::run(&loaded, &opts, factory.as_mut())
         }
     };
+    run.meta = crate::outcome::RunMeta {
+        identities: std::mem::take(&mut run.meta.identities),
+        ..meta
+    };
     // Every link is closed by now, its FIN exchange recorded.
     if let (Some(path), Some(tap)) = (&a.pcap, &tap) {
         let tap = tap.borrow();
         tap.capture
             .write(path)
             .map_err(|e| format!("{}: cannot write pcap: {e}", path.display()))?;
-        println!("pcap: {} packets in {}", tap.capture.len(), path.display());
+        outln!("pcap: {} packets in {}", tap.capture.len(), path.display());
     }
     let mode = if a.accept {
         SnapshotMode::Accept(a.snapshot_dir)
@@ -325,11 +382,17 @@ fn run(a: RunArgs) -> Result<i32, String> {
     };
     let snaps = report::apply_snapshots(&mut run, &mode).map_err(|e| e.to_string())?;
     let written = report::write_all(&run, &a.out).map_err(|e| e.to_string())?;
-    print!("{}", report::terminal(&run));
-    if !matches!(mode, SnapshotMode::Off) {
-        println!("{snaps}");
+    let summary = report::terminal(&run);
+    if verbosity == Verbosity::Quiet {
+        // The totals: the summary's last line.
+        outln!("{}", summary.lines().last().unwrap_or_default());
+    } else {
+        out!("{summary}");
+        if !matches!(mode, SnapshotMode::Off) {
+            outln!("{snaps}");
+        }
+        outln!("{written}");
     }
-    println!("{written}");
     Ok(if !run.load_errors.is_empty() {
         EXIT_USAGE
     } else if run.count(Verdict::Fail) + run.count(Verdict::Error) > 0 {
@@ -342,18 +405,41 @@ fn run(a: RunArgs) -> Result<i32, String> {
 fn list(a: ListArgs) -> Result<i32, String> {
     if a.functions {
         for f in crate::model::registry() {
-            println!("{:<28} {}", f.name, f.doc);
+            outln!("{:<28} {}", f.name, f.doc);
         }
         return Ok(EXIT_PASS);
     }
     let loaded = suite::load_dir(&suites_dir(a.suites)).map_err(|e| e.to_string())?;
-    for c in &loaded.cases {
-        let profiles = c
-            .products
-            .as_ref()
-            .map(|ps| ps.iter().map(|p| p.name()).collect::<Vec<_>>().join(","))
-            .unwrap_or_else(|| "all".into());
-        println!(
+    let chosen: Vec<Profile> = a
+        .profiles
+        .iter()
+        .map(|n| Profile::by_name(n))
+        .collect::<Result<_, _>>()?;
+    let (mut listed, mut case_runs) = (0, 0);
+    for c in loaded
+        .cases
+        .iter()
+        .filter(|c| a.filter.as_deref().is_none_or(|f| c.id.contains(f)))
+    {
+        let profiles = if chosen.is_empty() {
+            c.products
+                .as_ref()
+                .map(|ps| ps.iter().map(|p| p.name()).collect::<Vec<_>>().join(","))
+                .unwrap_or_else(|| "all".into())
+        } else {
+            let under: Vec<&str> = chosen
+                .iter()
+                .filter(|p| runner::not_applicable_before_opening(c, p).is_none())
+                .map(|p| p.name())
+                .collect();
+            if under.is_empty() {
+                continue;
+            }
+            case_runs += under.len();
+            under.join(",")
+        };
+        listed += 1;
+        outln!(
             "{:<64} {} {} {} [{}]  {}",
             c.id,
             c.manual.doc,
@@ -366,7 +452,20 @@ fn list(a: ListArgs) -> Result<i32, String> {
     for e in &loaded.errors {
         eprintln!("{e}");
     }
-    println!("{} cases in {} files", loaded.cases.len(), loaded.files);
+    if chosen.is_empty() {
+        outln!(
+            "{listed} of {} cases in {} files",
+            loaded.cases.len(),
+            loaded.files
+        );
+    } else {
+        outln!(
+            "{listed} of {} cases in {} files; {case_runs} case-runs under {} profiles (a DUT may still find some not applicable)",
+            loaded.cases.len(),
+            loaded.files,
+            chosen.len()
+        );
+    }
     Ok(if loaded.errors.is_empty() {
         EXIT_PASS
     } else {

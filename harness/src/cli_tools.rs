@@ -4,6 +4,7 @@
 //! malformed hex) is a one-line error naming the problem (exit 2).
 
 use clap::{Args, Subcommand};
+use proto::nord::params::{self, Owner};
 use proto::nord::pkw::PkwRepr;
 use proto::nord::{addr, control::ControlWord, status::StatusWord};
 use proto::nord::{ArrayElement, Inverter, ParamAddress, ParamNumber, ParamSet, Product};
@@ -49,7 +50,8 @@ pub(crate) struct DecodeArgs {
 enum DecodeWhat {
     /// A status word, e.g. `0B31h`.
     Status {
-        /// The word: `0B31h`, `2865` or `101100110001b`.
+        /// The word, hex as the manuals print it (`0B31h`, `0x0B31` or `0B31`) or binary
+        /// (`101100110001b`).
         word: String,
     },
     /// A control word, e.g. `047Eh`.
@@ -73,8 +75,41 @@ fn number(what: &str, text: &str) -> Result<i64, String> {
 }
 
 fn word(text: &str) -> Result<u16, String> {
-    let v = number("word", text)?;
-    u16::try_from(v).map_err(|_| format!("word: {v} does not fit 16 bits (0..=FFFFh)"))
+    let v = crate::notation::wire_value(text, 16).map_err(|e| format!("word: {e}"))?;
+    // wire_value keeps it within 16 bits.
+    Ok(v as u16)
+}
+
+/// Refuses an index or a set the catalogued parameter does not have (`--index` on a
+/// parameter that is no array, `--set` on one that does not depend on the set): an address
+/// for them would be one no device answers. A parameter the catalogue does not hold is taken
+/// as given.
+fn check_against_catalogue(product: Product, a: &ParamAddress) -> Result<(), String> {
+    let Some(def) = params::lookup(product, Owner::Inverter, a.number) else {
+        return Ok(());
+    };
+    let name = format!("P{} \"{}\"", def.number, def.name);
+    if let Some(e) = a.element {
+        match def.array {
+            None => {
+                return Err(format!(
+                    "`--index {}`: {name} is not an array parameter",
+                    e.get()
+                ))
+            }
+            Some(n) if e.get() > n => {
+                return Err(format!("`--index {}`: {name} has {n} elements", e.get()))
+            }
+            Some(_) => {}
+        }
+    }
+    if let (Some(set), false) = (a.set, def.set_dependent) {
+        return Err(format!(
+            "`--set {}`: {name} does not depend on the parameter set",
+            set.get()
+        ));
+    }
+    Ok(())
 }
 
 /// Runs `harness addr`.
@@ -96,6 +131,7 @@ pub(crate) fn addr(a: AddrArgs) -> Result<i32, String> {
             })
             .transpose()?,
     };
+    check_against_catalogue(product, &address)?;
     let all = addr::all(product, address).map_err(|e| e.to_string())?;
     print_out(a.json, &all, &all.to_string())
 }
@@ -109,12 +145,12 @@ pub(crate) fn decode(a: DecodeArgs) -> Result<i32, String> {
 /// Prints `value` as JSON with `--json`, else `text` (its own line ends included).
 fn print_out(json: bool, value: &impl serde::Serialize, text: &str) -> Result<i32, String> {
     if json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(value).map_err(|e| e.to_string())?
         );
     } else {
-        print!("{text}");
+        out!("{text}");
     }
     Ok(EXIT_PASS)
 }
@@ -156,8 +192,9 @@ fn pkw_bytes(tokens: &[String]) -> Result<Vec<u8>, String> {
     let raw: Vec<u8> = joined
         .split_whitespace()
         .map(|t| {
-            u8::from_str_radix(t.trim_end_matches(['h', 'H']), 16)
-                .map_err(|_| format!("pkw: `{t}` is not a hex byte"))
+            crate::notation::wire_value(t, 8)
+                .map(|b| b as u8)
+                .map_err(|e| format!("pkw: {e}"))
         })
         .collect::<Result<_, _>>()?;
     if raw.len() > proto::nord::pkw::PKW_LEN {
@@ -242,7 +279,11 @@ mod tests {
     #[test]
     fn bad_pkw_bytes_name_the_problem() {
         let bad = |t: &str| pkw_bytes(&[t.to_string()]).unwrap_err();
-        assert!(bad("70 zz").contains("`zz` is not a hex byte"));
+        assert!(
+            bad("70 zz").contains("`zz` is not a hex value"),
+            "{}",
+            bad("70 zz")
+        );
         assert!(bad("0 1 2 3 4 5 6 7 8").contains("8 bytes, got 9"));
         let what = DecodeWhat::Pkw {
             bytes: vec!["70".into()],

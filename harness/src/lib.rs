@@ -1,5 +1,21 @@
 //! The tester side: suites, bindings, runner, reports and the `harness` CLI.
 
+/// `print!`/`println!` for what the CLI writes to stdout, ignoring a closed stdout: a reader
+/// that stopped reading (`harness list | head`) has what it wanted, and the harness goes on
+/// quietly instead of panicking on the broken pipe.
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stdout().lock(), $($t)*);
+    }};
+}
+macro_rules! outln {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($t)*);
+    }};
+}
+
 mod binding;
 mod bus;
 pub mod cli;
@@ -21,6 +37,7 @@ mod epl;
 /// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the
 /// simulator served as an adapter, the harness scanner reading a parameter.
 pub use enip::bench_support as enip_bench;
+mod identity;
 mod ledger;
 mod model;
 mod net;
@@ -30,6 +47,8 @@ mod pcap;
 mod pnio;
 pub mod poll;
 mod profile;
+mod progress;
+mod record;
 mod report;
 mod runner;
 pub mod stats;
@@ -39,12 +58,7 @@ mod suite;
 /// (the default job, without writing reports). Used by the bench.
 pub fn run_embedded(suites: &std::path::Path) -> Result<outcome::RunResult, String> {
     let loaded = suite::load_dir(suites).map_err(|e| e.to_string())?;
-    let opts = runner::RunOptions {
-        profiles: profile::Profile::all(),
-        filter: None,
-        retries: 250,
-        tap: None,
-    };
+    let opts = runner::RunOptions::new(profile::Profile::all());
     Ok(runner::run(
         &loaded,
         &opts,

@@ -25,6 +25,40 @@ pub(crate) fn int_of(v: &Value) -> Result<i64, String> {
     }
 }
 
+/// A wire value as the manuals print them — status and control words, PKW bytes: hex, with
+/// its mark or without (`0B31h`, `0x0B31` and `0B31` are one value, as `70h`, `0x70` and `70`
+/// are one byte), or binary with its `b` mark, 0/1 digits only and more of them than a hex
+/// value of the width has (`0000101100110001b`, `01110000b`); at most `bits` bits. Words and bytes read alike, so one syntax serves every wire value on the
+/// command line. (Suite fields keep the suites' rule: a bare number is decimal.)
+pub(crate) fn wire_value(text: &str, bits: u32) -> Result<u64, String> {
+    let t = text.trim();
+    // Binary needs more digits than a hex value of the width has (`1B` is a hex byte, `011b`
+    // a binary one), so a `b` that is a hex digit is never taken for the mark.
+    let binary = t.strip_suffix(['b', 'B']).filter(|d| {
+        d.len() > (bits as usize).div_ceil(4) && d.chars().all(|c| c == '0' || c == '1')
+    });
+    let (body, radix) = match binary {
+        Some(d) => (d, 2),
+        None => (
+            t.strip_prefix("0x")
+                .or_else(|| t.strip_prefix("0X"))
+                .or_else(|| t.strip_suffix(['h', 'H']))
+                .unwrap_or(t),
+            16,
+        ),
+    };
+    let v = u64::from_str_radix(body, radix)
+        .ok()
+        .filter(|_| !body.is_empty() && !body.starts_with(['+', '-']))
+        .ok_or_else(|| {
+            format!("`{t}` is not a hex value (0B31h, 0x0B31 or 0B31) or a binary one (1011b)")
+        })?;
+    if bits < 64 && v >> bits != 0 {
+        return Err(format!("`{t}` does not fit {bits} bits"));
+    }
+    Ok(v)
+}
+
 /// A text's reading in the notation.
 #[derive(Debug, Clone, PartialEq)]
 enum Scalar {
@@ -468,6 +502,35 @@ mod tests {
     fn matching(#[case] expect: Value, #[case] actual: Value, #[case] ok: bool) {
         let m = Matcher::parse(&expect).unwrap();
         assert_eq!(m.check(&actual).is_ok(), ok, "{m} vs {actual}");
+    }
+
+    #[rstest]
+    #[case("0B31h", 16, Ok(0x0B31))]
+    #[case("0x0B31", 16, Ok(0x0B31))]
+    #[case("0B31", 16, Ok(0x0B31))]
+    #[case("0000101100110001b", 16, Ok(0x0B31))]
+    #[case("70", 8, Ok(0x70))]
+    #[case("70h", 8, Ok(0x70))]
+    #[case("0x70", 8, Ok(0x70))]
+    #[case("01110000b", 8, Ok(0x70))]
+    #[case("1B", 8, Ok(0x1B))]
+    #[case("10b", 8, Err("`10b` does not fit 8 bits"))]
+    #[case("101b", 8, Ok(5))]
+    #[case("0B31", 8, Err("`0B31` does not fit 8 bits"))]
+    #[case("zz", 8, Err("`zz` is not a hex value"))]
+    #[case("-5", 16, Err("`-5` is not a hex value"))]
+    #[case("h", 16, Err("`h` is not a hex value"))]
+    #[case("0x", 16, Err("`0x` is not a hex value"))]
+    fn wire_values_read_alike_for_words_and_bytes(
+        #[case] text: &str,
+        #[case] bits: u32,
+        #[case] want: Result<u64, &str>,
+    ) {
+        match (wire_value(text, bits), want) {
+            (Ok(v), Ok(w)) => assert_eq!(v, w),
+            (Err(e), Err(w)) => assert!(e.starts_with(w), "{e}"),
+            (got, want) => panic!("{text}: got {got:?}, want {want:?}"),
+        }
     }
 
     #[test]

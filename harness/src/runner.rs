@@ -10,8 +10,14 @@ use std::time::{Duration, Instant};
 
 use crate::binding::{Binding, Observation, OpenError, StepError};
 use crate::model::{Args, ComputeError, Ctx};
-use crate::outcome::{CaseKind, CaseResult, RunMeta, RunResult, StepResult, Verdict};
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+
+use crate::outcome::{
+    CaseKind, CaseResult, Identity, ManualRef, RunMeta, RunResult, StepResult, Verdict,
+};
 use crate::profile::{Capability, Profile};
+use crate::progress::Progress;
 use crate::suite::{Action, Case, Loaded, Step};
 
 /// How to run.
@@ -25,6 +31,21 @@ pub(crate) struct RunOptions {
     /// The run's capture (`--pcap`), if any: the runner labels its packets with the profile,
     /// case and step that produce them.
     pub(crate) tap: Option<crate::pcap::SharedTap>,
+    /// Told of every case-run as it starts and ends (the progress bar).
+    pub(crate) progress: RefCell<Box<dyn Progress>>,
+}
+
+impl RunOptions {
+    /// Every case under `profiles`: no filter, 250 retries, no capture, no progress shown.
+    pub(crate) fn new(profiles: Vec<Profile>) -> RunOptions {
+        RunOptions {
+            profiles,
+            filter: None,
+            retries: 250,
+            tap: None,
+            progress: RefCell::new(Box::new(crate::progress::Silent)),
+        }
+    }
 }
 
 /// Opens a DUT for a profile; called once per case so every case starts from a known state.
@@ -35,27 +56,104 @@ pub(crate) trait DutFactory {
     fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError>;
 }
 
-/// Runs the loaded suites.
+/// Runs the loaded suites: the connection check first (it reads the DUT's identity per
+/// profile), then every selected case under every profile — or, when the DUT cannot be
+/// reached, nothing more: one error says so instead of one per case.
 pub(crate) fn run(loaded: &Loaded, opts: &RunOptions, factory: &mut dyn DutFactory) -> RunResult {
     let start = Instant::now();
+    let selected = |case: &&Case| opts.filter.as_deref().is_none_or(|f| case.id.contains(f));
+    let mut meta = RunMeta::default();
     let mut cases = Vec::new();
-    for profile in &opts.profiles {
-        for case in &loaded.cases {
-            if opts.filter.as_deref().is_some_and(|f| !case.id.contains(f)) {
-                continue;
+    match connection_check(loaded, opts, factory, &selected) {
+        Ok(identities) => {
+            meta.identities = identities;
+            let total = opts.profiles.len() * loaded.cases.iter().filter(selected).count();
+            for profile in &opts.profiles {
+                for case in loaded.cases.iter().filter(selected) {
+                    opts.progress
+                        .borrow_mut()
+                        .start(profile.name(), &case.id, cases.len(), total);
+                    let r = run_case(case, profile, opts, factory);
+                    opts.progress.borrow_mut().end(&r);
+                    cases.push(r);
+                }
             }
-            cases.push(run_case(case, profile, opts, factory));
+            opts.progress.borrow_mut().finish();
         }
+        Err(unreachable) => cases.push(unreachable),
     }
     RunResult {
         dut: factory.describe(),
-        meta: RunMeta::default(),
+        meta,
         profiles: opts.profiles.iter().map(|p| p.name().to_string()).collect(),
         cases,
         errata: loaded.errata.clone(),
         load_errors: loaded.errors.iter().map(|e| e.to_string()).collect(),
         duration: start.elapsed(),
     }
+}
+
+/// Id of the case that stands for a failed connection check in the reports.
+pub(crate) const CONNECTION_CHECK: &str = "harness/connection-check";
+
+/// Opens the DUT once for every profile a selected case needs it under and reads its
+/// identity. A DUT that cannot be reached or does not answer is the `Err`: one error result
+/// naming the profile and the cause, after which the run stops. Other failures (a profile the
+/// DUT does not fit, an identity answer the harness cannot read) leave the identity out and
+/// the cases say the rest.
+fn connection_check(
+    loaded: &Loaded,
+    opts: &RunOptions,
+    factory: &mut dyn DutFactory,
+    selected: &dyn Fn(&&Case) -> bool,
+) -> Result<BTreeMap<String, Identity>, CaseResult> {
+    let start = Instant::now();
+    let mut identities = BTreeMap::new();
+    for profile in &opts.profiles {
+        let needed = loaded
+            .cases
+            .iter()
+            .filter(selected)
+            .any(|c| needs_dut(c) && not_applicable(c, profile, None).is_none());
+        if !needed {
+            continue;
+        }
+        label(opts, || format!("{} connection check", profile.name()));
+        let unreachable = |why: String| CaseResult {
+            id: CONNECTION_CHECK.into(),
+            title: "the DUT can be reached and says who it is".into(),
+            profile: profile.name().to_string(),
+            manual: ManualRef {
+                doc: "harness".into(),
+                edition: env!("CARGO_PKG_VERSION").into(),
+                section: "connection check".into(),
+                page: None,
+            },
+            kind: CaseKind::Device,
+            verdict: Verdict::Error,
+            message: format!("{why}; the run stopped before its cases"),
+            steps: Vec::new(),
+            duration: start.elapsed(),
+        };
+        let mut dut = match factory.open(profile, opts.retries) {
+            Ok(dut) => dut,
+            Err(e @ OpenError::Unreachable(_)) => return Err(unreachable(e.to_string())),
+            Err(_) => continue,
+        };
+        match crate::identity::identify(dut.as_mut(), profile) {
+            Ok(id) => {
+                identities.insert(profile.name().to_string(), id);
+            }
+            Err(e @ (StepError::Link(_) | StepError::Silent { .. })) => {
+                return Err(unreachable(format!("the DUT does not answer: {e}")))
+            }
+            Err(_) => {}
+        }
+        dut.take_exchanges();
+        let _ = dut.finish();
+        dut.take_exchanges();
+    }
+    Ok(identities)
 }
 
 fn result(
@@ -81,6 +179,12 @@ fn result(
         steps,
         duration: start.elapsed(),
     }
+}
+
+/// Why a case does not apply to a profile, if it does not, as far as is known before a DUT is
+/// opened (`harness list --profile` shows the selection this gives).
+pub(crate) fn not_applicable_before_opening(case: &Case, profile: &Profile) -> Option<String> {
+    not_applicable(case, profile, None)
 }
 
 /// Why a case does not apply to a profile, if it does not.
@@ -497,10 +601,8 @@ cases:
     /// The test suite's run: SK 550P, 25 retries, no capture.
     fn sk550p_options() -> RunOptions {
         RunOptions {
-            profiles: vec![Profile::builtin(Product::Sk550p)],
-            filter: None,
             retries: 25,
-            tap: None,
+            ..RunOptions::new(vec![Profile::builtin(Product::Sk550p)])
         }
     }
 
@@ -536,6 +638,100 @@ cases:
         for (v, m) in verdicts(&r) {
             assert_eq!(v, Verdict::Error, "{m}");
             assert!(m.contains("no answer from the DUT within"), "{m}");
+        }
+    }
+
+    /// A DUT nobody can reach.
+    struct Unreachable;
+
+    impl DutFactory for Unreachable {
+        fn describe(&self) -> String {
+            "a DUT behind a pulled cable".into()
+        }
+        fn open(&mut self, _: &Profile, _: u32) -> Result<Box<dyn Binding>, OpenError> {
+            Err(OpenError::Unreachable("connection refused".into()))
+        }
+    }
+
+    #[test]
+    fn an_unreachable_dut_is_one_connection_check_error_and_the_run_stops() {
+        let r = run(
+            &load_text_for_tests(SUITE),
+            &sk550p_options(),
+            &mut Unreachable,
+        );
+        let v = verdicts(&r);
+        assert_eq!(
+            v,
+            [(
+                Verdict::Error,
+                "cannot reach the DUT: connection refused; the run stopped before its cases"
+            )]
+        );
+        assert_eq!(r.cases[0].id, CONNECTION_CHECK);
+    }
+
+    #[test]
+    fn a_silent_dut_with_an_identity_to_read_fails_the_connection_check() {
+        let opts = RunOptions {
+            profiles: vec![Profile::builtin(Product::Tu3Pnt)],
+            ..sk550p_options()
+        };
+        let r = run(
+            &load_text_for_tests(SUITE),
+            &opts,
+            &mut FaultyFactory(Fault::Silent),
+        );
+        assert_eq!(r.cases.len(), 1);
+        assert_eq!(r.cases[0].id, CONNECTION_CHECK);
+        assert!(
+            r.cases[0].message.contains("no answer from the DUT"),
+            "{}",
+            r.cases[0].message
+        );
+    }
+
+    #[test]
+    fn the_identity_of_each_profile_is_recorded() {
+        let opts = RunOptions {
+            profiles: vec![
+                Profile::builtin(Product::Tu3Pnt),
+                Profile::builtin(Product::Sk550p),
+            ],
+            ..sk550p_options()
+        };
+        let r = run(
+            &load_text_for_tests(SUITE),
+            &opts,
+            &mut EmbeddedFactory::default(),
+        );
+        let pnt = &r.meta.identities["tu3-pnt"];
+        assert_eq!(
+            pnt.source,
+            "P171 software version over the parameter channel"
+        );
+        assert!(pnt.revision.is_some(), "{pnt:?}");
+        assert!(r.meta.identities["sk550p"].source.starts_with("none: "));
+    }
+
+    #[test]
+    fn every_bus_profile_reads_its_bus_identity_service() {
+        let loaded = load_text_for_tests(SUITE);
+        let opts = RunOptions::new(Profile::all());
+        let r = run(&loaded, &opts, &mut EmbeddedFactory::default());
+        for p in Profile::all() {
+            let id = &r.meta.identities[p.name()];
+            eprintln!("{}: {}", p.name(), id.line());
+            if let Some(bus) = p.bus {
+                let source = match bus {
+                    "enip" => "ListIdentity",
+                    "ecat" => "object 1018h (the SII header agrees)",
+                    "epl" => "IdentResponse of node",
+                    _ => "DCP Identify of station",
+                };
+                assert!(id.source.starts_with(source), "{}: {id:?}", p.name());
+                assert!(id.vendor.is_some() && id.product_code.is_some(), "{id:?}");
+            }
         }
     }
 

@@ -17,7 +17,7 @@ use std::time::Duration;
 
 pub(crate) use channel::StepError;
 
-use crate::outcome::{Exchange, Refusal};
+use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::suite::Action;
 use proto::nord::Inverter;
@@ -145,6 +145,13 @@ pub(crate) trait Binding {
     /// embedded simulator) has nothing to do.
     fn finish(&mut self) -> Result<(), CleanupError> {
         Ok(())
+    }
+    /// The device's identity as it reports it over the bus (ListIdentity, SII and 1018h,
+    /// IdentResponse, DCP and I&M0), for the run's record and its connection check. `None`
+    /// where the link has no identity service of its own: the runner then asks the NORD
+    /// information parameters (`crate::identity`).
+    fn identity(&mut self) -> Option<Result<Identity, StepError>> {
+        None
     }
 }
 

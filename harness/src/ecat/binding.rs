@@ -33,7 +33,7 @@ use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
 use crate::binding::{process_run, Binding, CleanupError, Observation, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
-use crate::outcome::Exchange;
+use crate::outcome::{Exchange, Identity};
 use crate::profile::Capability;
 use crate::runner::hex;
 use crate::suite::{Action, OrderSpec};
@@ -577,9 +577,51 @@ impl<S: DutSegment> EcatBinding<S> {
     }
 }
 
+impl<S: DutSegment> EcatBinding<S> {
+    /// Object 1018h (identity, ETG.1000.6 / CiA 301): vendor, product code, revision and
+    /// serial as the slave's dictionary gives them; where the SII header (read at the scan)
+    /// disagrees, the source says so.
+    fn identity_object(&mut self) -> Result<Identity, StepError> {
+        let mut subs = [0u32; 4];
+        for (sub, v) in (1u8..).zip(subs.iter_mut()) {
+            let d = self
+                .master
+                .sdo_upload(self.station, 0x1018, sub, false)
+                .map_err(|e| step_error(&e))?;
+            let b: [u8; 4] = d.get(..4).and_then(|b| b.try_into().ok()).ok_or_else(|| {
+                StepError::Protocol(format!("1018h:{sub:02X}h is {} bytes, not 4", d.len()))
+            })?;
+            *v = u32::from_le_bytes(b);
+        }
+        let [vendor, product, revision, serial] = subs;
+        let h = &self.master.slaves()[0].sii.header;
+        let sii = [h.vendor_id, h.product_code, h.revision, h.serial];
+        let source = if sii == subs {
+            "object 1018h (the SII header agrees)".to_string()
+        } else {
+            format!(
+                "object 1018h (the SII header says vendor {:08X}h, product {:08X}h, revision {:08X}h, serial {:08X}h)",
+                sii[0], sii[1], sii[2], sii[3]
+            )
+        };
+        Ok(Identity {
+            source,
+            vendor: Some(format!("{vendor:08X}h")),
+            product_code: Some(format!("{product:08X}h")),
+            product_name: self.master.slaves()[0].name().map(str::to_string),
+            revision: Some(format!("{revision:08X}h")),
+            serial: Some(format!("{serial:08X}h")),
+        })
+    }
+}
+
 impl<S: DutSegment> Binding for EcatBinding<S> {
     fn describe(&self) -> String {
         self.what.clone()
+    }
+
+    fn identity(&mut self) -> Option<Result<Identity, StepError>> {
+        Some(self.identity_object())
     }
 
     fn capabilities(&self) -> &[Capability] {
@@ -909,13 +951,11 @@ cases:
         );
         let ecat = Profile::on_bus(Product::Sk550p, "ecat");
         let opts = RunOptions {
-            profiles: vec![
+            retries: 25,
+            ..RunOptions::new(vec![
                 Profile::builtin(Product::Sk550p),
                 Profile::on_bus(Product::Sk550p, "enip"),
-            ],
-            filter: None,
-            retries: 25,
-            tap: None,
+            ])
         };
         let r = run(&loaded, &opts, &mut NoOpen);
         for c in &r.cases {

@@ -143,7 +143,7 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
     let config = device_config(opts)?;
     let served = start_core(&opts.iface, slave_core(config)?)?;
     let m = served.mac();
-    println!(
+    outln!(
         "serving EtherCAT slave ({}, {} inverters) on {} ({:02x}:{:02x}:{:02x}:{:02x}:{:02x}:{:02x})",
         config.product.name(),
         config.inverters,

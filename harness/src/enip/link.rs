@@ -93,6 +93,11 @@ pub(crate) trait EnipLink {
     fn prepare_io(&mut self) -> Result<(), LinkError> {
         Ok(())
     }
+    /// How long a request waits for its reply on a network link (`--timeout`); `None` for
+    /// the embedded adapter, which answers at once or not at all.
+    fn timeout(&self) -> Option<Duration> {
+        None
+    }
     /// The embedded adapter, for fault injection and observation.
     fn adapter(&mut self) -> Option<(&mut Adapter, Duration)>;
     /// Records the link's traffic into `tap` from now on, stamped with `clock` (the run's real
@@ -570,6 +575,10 @@ fn io_socket(slot: &mut Option<UdpSocket>, local: IpAddr) -> Result<&UdpSocket, 
 impl EnipLink for Network {
     fn describe(&self) -> String {
         format!("EtherNet/IP target at {}", self.target)
+    }
+
+    fn timeout(&self) -> Option<Duration> {
+        Some(self.timeout)
     }
 
     fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, LinkError> {

@@ -62,6 +62,7 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
             n.target
         )));
     }
+    io_port_free(target, n.local).map_err(OpenError::Profile)?;
     Ok(Box::new(scanner::NetworkFactory {
         target,
         local: n.local,
@@ -69,6 +70,43 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
         tap: n.tap.clone(),
         clock: Rc::new(sim::clock::RealClock::new()),
     }))
+}
+
+/// Checks once, before the run, that the scanner can bind UDP 2222 on the address it will
+/// send from (`--local`, else the one the routing table picks toward the target): the target
+/// sends T→O data there. When an adapter on this host already holds it (the scanner and
+/// `harness serve enip` on one address), every I/O case would fail alike; this says why at
+/// once.
+fn io_port_free(
+    target: std::net::SocketAddr,
+    local: Option<std::net::IpAddr>,
+) -> Result<(), String> {
+    use std::net::{SocketAddr, UdpSocket};
+    let local = match local {
+        Some(ip) => ip,
+        None => {
+            let any: SocketAddr = if target.is_ipv4() {
+                ([0, 0, 0, 0], 0).into()
+            } else {
+                (std::net::Ipv6Addr::UNSPECIFIED, 0).into()
+            };
+            let probe =
+                UdpSocket::bind(any).map_err(|e| format!("cannot open a UDP socket: {e}"))?;
+            match probe.connect(target).and_then(|()| probe.local_addr()) {
+                Ok(a) => a.ip(),
+                // No route: the connection check will say the target cannot be reached.
+                Err(_) => return Ok(()),
+            }
+        }
+    };
+    let at = SocketAddr::new(local, proto::enip::io::IO_PORT);
+    match UdpSocket::bind(at) {
+        Ok(_) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::AddrInUse => Err(format!(
+            "UDP {at} is in use (an adapter on the same address, or another run?): the target sends T→O data there; give the scanner an address of its own with `--local`"
+        )),
+        Err(e) => Err(format!("cannot bind UDP {at} for T→O data: {e}")),
+    }
 }
 
 fn describe_eds(profile: &Profile, inverters: u8) -> Result<String, String> {

@@ -32,7 +32,7 @@ use super::step::EnipStep;
 use crate::binding::channel::compact;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
-use crate::outcome::{Exchange, Refusal};
+use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::runner::{cycles_for, hex};
 use crate::suite::{Action, OrderSpec, Target};
@@ -145,6 +145,14 @@ impl Scanner {
         }
     }
 
+    /// A request that got no reply: within the link's timeout on the network.
+    fn no_reply(&self, what: &str) -> StepError {
+        StepError::Link(match self.link.timeout() {
+            Some(t) => format!("no reply to {what} within {} s", t.as_secs_f64()),
+            None => format!("no reply to {what}"),
+        })
+    }
+
     /// One encapsulation message of `client` and its reply, recorded.
     pub(super) fn send(
         &mut self,
@@ -221,7 +229,7 @@ impl Scanner {
         };
         let reply = self
             .send(client, msg, "RegisterSession".into())?
-            .ok_or_else(|| StepError::Link("no reply to RegisterSession".into()))?;
+            .ok_or_else(|| self.no_reply("RegisterSession"))?;
         if reply.status != 0 || reply.session == 0 {
             return Err(StepError::Protocol(format!(
                 "RegisterSession refused: {}",
@@ -271,7 +279,7 @@ impl Scanner {
         };
         let reply = self
             .send(client, msg, what)?
-            .ok_or_else(|| StepError::Link(format!("no reply to {}", Service(service))))?;
+            .ok_or_else(|| self.no_reply(&Service(service).to_string()))?;
         if reply.status != 0 {
             return Err(StepError::Protocol(format!(
                 "SendRRData answered with encapsulation status {}",
@@ -835,9 +843,58 @@ impl Drop for Scanner {
     }
 }
 
+impl Scanner {
+    /// ListIdentity on the scanner's own connection: the identity item of the reply.
+    fn list_identity(&mut self) -> Result<Identity, StepError> {
+        let msg = EncapRepr {
+            command: Command::LIST_IDENTITY.0,
+            context: self.context(),
+            ..EncapRepr::default()
+        };
+        let reply = self
+            .send(1, msg, "ListIdentity".into())?
+            .ok_or_else(|| self.no_reply("ListIdentity"))?;
+        let malformed = |e: proto::enip::WireError| {
+            StepError::Protocol(format!("malformed ListIdentity reply: {e}"))
+        };
+        let cpf = Cpf::parse(&reply.data).map_err(malformed)?;
+        let data = cpf
+            .items
+            .iter()
+            .find_map(|i| match i {
+                Item::Other { type_id, data }
+                    if *type_id == proto::enip::cpf::item_type::LIST_IDENTITY =>
+                {
+                    Some(data)
+                }
+                _ => None,
+            })
+            .ok_or_else(|| {
+                StepError::Protocol("the ListIdentity reply has no identity item (0Ch)".into())
+            })?;
+        let (id, _) =
+            proto::enip::identity::Identity::parse_list_identity_item(data).map_err(malformed)?;
+        Ok(Identity {
+            source: "ListIdentity".into(),
+            vendor: Some(format!("vendor id {}", id.vendor)),
+            product_code: Some(format!(
+                "device type {}, product code {}",
+                id.device_type, id.product_code
+            )),
+            product_name: Some(id.product_name),
+            revision: Some(format!("{}.{:03}", id.revision.0, id.revision.1)),
+            serial: Some(format!("{:08X}h", id.serial)),
+        })
+    }
+}
+
 impl Binding for Scanner {
     fn describe(&self) -> String {
         self.link.describe()
+    }
+
+    fn identity(&mut self) -> Option<Result<Identity, StepError>> {
+        Some(self.list_identity())
     }
 
     fn capabilities(&self) -> &[Capability] {

@@ -157,7 +157,7 @@ pub(crate) fn serve_enip(
     let product = config.product;
     let inverters = config.inverters;
     let served = start_enip(listen, config)?;
-    println!(
+    outln!(
         "serving EtherNet/IP adapter ({}, {inverters} inverters) on {} (TCP, UDP) and {} (class-1 I/O)",
         product.name(),
         served.listen,

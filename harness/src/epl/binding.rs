@@ -32,7 +32,7 @@ use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
 use crate::binding::{process_run, Binding, CleanupError, Observation, OpenError, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
-use crate::outcome::{Exchange, Refusal};
+use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::runner::hex;
 use crate::suite::{Action, OrderSpec};
@@ -628,6 +628,24 @@ fn number(d: &[u8]) -> Option<i64> {
 }
 
 impl<L: Link> Binding for EplBinding<L> {
+    /// The node's IdentResponse (EPSG DS 301 §7.3.3.2.1): vendor, product code, revision and
+    /// serial number, as the node sends them.
+    fn identity(&mut self) -> Option<Result<Identity, StepError>> {
+        Some(self.mn.ident().map_err(step_error).map(|i| Identity {
+            source: format!(
+                "IdentResponse of node {} (host name {:?})",
+                self.mn.config().node,
+                i.hostname
+            ),
+            vendor: Some(format!("{:08X}h", i.vendor_id)),
+            product_code: Some(format!("{:08X}h", i.product_code)),
+            // DS 301's identity has no product name; the host name is the node's, not the product's.
+            product_name: None,
+            revision: Some(format!("{:08X}h", i.revision)),
+            serial: Some(format!("{:08X}h", i.serial)),
+        }))
+    }
+
     fn describe(&self) -> String {
         self.what.clone()
     }

@@ -276,7 +276,7 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
         Some(a) => format!(", SDO over UDP on {a}"),
         None => String::new(),
     };
-    println!(
+    outln!(
         "serving POWERLINK node {} ({}, {} inverters) on {} (node MAC {:02x}:{:02x}:{:02x}:{:02x}:{:02x}:{:02x}){udp}",
         opts.node_id,
         config.product.name(),

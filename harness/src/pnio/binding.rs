@@ -39,7 +39,7 @@ use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::settle::Drives;
 use crate::binding::{Binding, CleanupError, Dut, DutError, Observation, OpenError, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
-use crate::outcome::{Exchange, Refusal};
+use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::runner::hex;
 use crate::suite::{Action, Run};
@@ -646,6 +646,22 @@ fn connect_result(c: Connected) -> Observation {
 }
 
 impl<L: Link + 'static> Binding for PnioBinding<L> {
+    /// The device's DCP Identify answer the binding found it by (DeviceID block: vendor and
+    /// device id; DeviceVendor: the type of station; NameOfStation). I&M0 is not read: the
+    /// device does not offer it (see the README's limits).
+    fn identity(&mut self) -> Option<Result<Identity, StepError>> {
+        let ctl = self.ctl.borrow();
+        let station = ctl.station()?;
+        Some(Ok(Identity {
+            source: format!("DCP Identify of station {:?}", station.name),
+            vendor: Some(format!("vendor id {:04X}h", station.vendor_id)),
+            product_code: Some(format!("device id {:04X}h", station.device_id)),
+            product_name: Some(station.type_of_station.clone()),
+            revision: None,
+            serial: None,
+        }))
+    }
+
     fn describe(&self) -> String {
         self.what.clone()
     }

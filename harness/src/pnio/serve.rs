@@ -402,7 +402,7 @@ fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeErr
     } else {
         format!("name of station {:?}", opts.name)
     };
-    println!(
+    outln!(
         "serving PROFINET IO device {} ({name}) on {} (MAC {}){rpc}",
         opts.profile,
         opts.iface,

@@ -3,6 +3,7 @@
 //! A file that does not load is reported with its path, line and what is wrong, and the run
 //! goes on with the files that did: a broken suite is never skipped silently.
 
+use sha2::{Digest, Sha256};
 use std::collections::HashSet;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -22,6 +23,9 @@ pub(crate) struct Loaded {
     pub(crate) errors: Vec<LoadError>,
     /// Files read.
     pub(crate) files: usize,
+    /// SHA-256 of every file's path (relative to the folder) and text, in load order: the
+    /// suites' content, for the run's record when they are not a clean git checkout.
+    pub(crate) digest: String,
 }
 
 /// A suite problem, placed in its file.
@@ -47,10 +51,11 @@ fn yaml_files(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
         let path = entry?.path();
         if path.is_dir() {
             yaml_files(&path, out)?;
-        } else if matches!(
-            path.extension().and_then(|e| e.to_str()),
-            Some("yaml" | "yml")
-        ) {
+        } else if path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"))
+        {
             out.push(path);
         }
     }
@@ -71,11 +76,17 @@ pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
         ..Loaded::default()
     };
     let mut ids = HashSet::new();
+    let mut digest = Sha256::new();
     for file in files {
         let rel = file.strip_prefix(dir).unwrap_or(&file).with_extension("");
         let prefix = rel.to_string_lossy().replace('\\', "/");
         match std::fs::read_to_string(&file) {
-            Ok(text) => load_text(&file, &prefix, &text, &mut ids, &mut loaded),
+            Ok(text) => {
+                for part in [prefix.as_bytes(), b"\0", text.as_bytes(), b"\0"] {
+                    digest.update(part);
+                }
+                load_text(&file, &prefix, &text, &mut ids, &mut loaded)
+            }
             Err(e) => loaded.errors.push(LoadError {
                 file: file.clone(),
                 line: None,
@@ -83,6 +94,11 @@ pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
             }),
         }
     }
+    loaded.digest = digest
+        .finalize()
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
     Ok(loaded)
 }
 

@@ -1,0 +1,187 @@
+//! The command line at its edges, through the `harness` binary: nonsensical options are usage
+//! errors (exit 2) that say what is wrong, a closed stdout ends the output quietly, one number
+//! syntax reads every wire value, suite files load whatever the case of their extension, and a
+//! UDP port clash with the DUT is diagnosed once before the run.
+
+mod common;
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn harness(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_harness"))
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .args(args)
+        .output()
+        .expect("the harness binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn scratch(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("harness-cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn nonsensical_options_are_usage_errors_that_say_why() {
+    let out = scratch("usage");
+    let file = out.join("a-file");
+    std::fs::write(&file, "not a folder").unwrap();
+    for (args, says) in [
+        (vec!["run", "--retries", "0"], "`--retries 0`"),
+        (
+            vec!["run", "--out", file.to_str().unwrap()],
+            "is a file; give the folder",
+        ),
+        (
+            vec!["run", "--filter", "no-such-case-anywhere"],
+            "no case id contains `no-such-case-anywhere`",
+        ),
+        (
+            vec!["run", "--dut", "enip://127.0.0.1"],
+            "`--dut` needs `--profile`",
+        ),
+        (
+            vec!["addr", "P102", "--index", "2"],
+            "P102 \"Acceleration time\" is not an array parameter",
+        ),
+        (vec!["addr", "P400", "--index", "12"], "has 9 elements"),
+        (
+            vec!["addr", "P465", "--set", "2"],
+            "does not depend on the parameter set",
+        ),
+    ] {
+        let o = harness(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{args:?}: {}", stderr(&o));
+    }
+    // The refused run wrote nothing.
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "not a folder");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn a_closed_stdout_ends_the_listing_quietly() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .arg("list")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Read a little, then close the pipe, as `harness list | head -1` does.
+    let mut first = [0u8; 64];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap();
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    let status = child.wait().unwrap();
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.is_empty(), "{err}");
+    assert_eq!(status.code(), Some(0));
+}
+
+#[test]
+fn words_and_pkw_bytes_read_one_number_syntax() {
+    let status = |w: &str| {
+        let o = harness(&["decode", "status", w, "--json"]);
+        assert_eq!(o.status.code(), Some(0), "{w}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        v["meaning"].as_str().unwrap().to_string()
+    };
+    let want = status("0B31h");
+    for w in ["0x0B31", "0B31", "0000101100110001b"] {
+        assert_eq!(status(w), want, "{w}");
+    }
+    let pkw = |bytes: &[&str]| {
+        let o = harness(&[&["decode", "pkw"], bytes].concat());
+        assert_eq!(o.status.code(), Some(0), "{bytes:?}: {}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let want = pkw(&["70", "66", "02", "00", "00", "00", "03", "E8"]);
+    assert_eq!(
+        pkw(&["70h", "0x66", "02", "00", "00", "00", "03h", "0xE8"]),
+        want
+    );
+    // Refused alike, with the same words.
+    for args in [
+        vec!["decode", "status", "zz"],
+        vec!["decode", "pkw", "70", "zz"],
+    ] {
+        let o = harness(&args);
+        assert_eq!(o.status.code(), Some(2));
+        assert!(
+            stderr(&o).contains("`zz` is not a hex value"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}
+
+#[test]
+fn suite_files_with_upper_case_extensions_load() {
+    let dir = scratch("ext");
+    let suite = |id: &str| {
+        format!(
+            "doc: BU 0620\nedition: \"2020-03 en\"\ncases:\n  - id: {id}\n    title: P102 reads\n    ref: {{ section: \"2.5.6\", page: 51 }}\n    profiles: [sk550p]\n    steps:\n      - read: {{ param: 102 }}\n"
+        )
+    };
+    std::fs::write(dir.join("upper.YAML"), suite("upper")).unwrap();
+    std::fs::write(dir.join("mixed.Yml"), suite("mixed")).unwrap();
+    let out = dir.join("reports");
+    let o = harness(&[
+        "run",
+        "--profile",
+        "sk550p",
+        "--suites",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{stdout}{}", stderr(&o));
+    assert!(
+        stdout.contains("2 cases under 1 profiles: 2 pass"),
+        "{stdout}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Where the served adapter of the clash test listens (other tests take .2–.19).
+const CLASH: &str = "127.0.0.23";
+
+#[test]
+fn a_udp_port_clash_with_the_adapter_is_diagnosed_once_at_start() {
+    let _server = common::serve(&format!("{CLASH}:44818"), "tu3-eip", 60);
+    let out = scratch("clash");
+    let o = harness(&[
+        "run",
+        "--dut",
+        &format!("enip://{CLASH}"),
+        "--local",
+        CLASH,
+        "--profile",
+        "tu3-eip",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains(&format!("UDP {CLASH}:2222 is in use")) && err.contains("--local"),
+        "{err}"
+    );
+    assert!(!out.join("run.json").exists(), "no run took place");
+    let _ = std::fs::remove_dir_all(&out);
+}
