@@ -128,6 +128,7 @@ fn connection_check(
                 edition: env!("CARGO_PKG_VERSION").into(),
                 section: "connection check".into(),
                 page: None,
+                quote: None,
             },
             kind: CaseKind::Device,
             verdict: Verdict::Error,
