@@ -130,7 +130,7 @@ fn cli_bad_input_is_one_line_naming_the_problem() {
         ),
         (
             vec!["decode", "pkw", "70", "66", "zz"],
-            "`zz` is not a hex byte",
+            "`zz` is not a hex value",
         ),
         (vec!["decode", "status", "12345h"], "does not fit 16 bits"),
         (vec!["run", "--profile", "sk999"], "unknown profile `sk999`"),

@@ -728,10 +728,11 @@ cases:
                     "enip" => "ListIdentity",
                     "ecat" => "object 1018h (the SII header agrees)",
                     "epl" => "IdentResponse of node",
-                    _ => "DCP Identify of station",
+                    _ => "DCP Identify of station \"nord-device\" and I&M0",
                 };
                 assert!(id.source.starts_with(source), "{}: {id:?}", p.name());
                 assert!(id.vendor.is_some() && id.product_code.is_some(), "{id:?}");
+                assert!(id.revision.is_some() && id.serial.is_some(), "{id:?}");
             }
         }
     }

@@ -646,20 +646,40 @@ fn connect_result(c: Connected) -> Observation {
 }
 
 impl<L: Link + 'static> Binding for PnioBinding<L> {
-    /// The device's DCP Identify answer the binding found it by (DeviceID block: vendor and
-    /// device id; DeviceVendor: the type of station; NameOfStation). I&M0 is not read: the
-    /// device does not offer it (see the README's limits).
+    /// The device's identity: the DCP Identify answer the binding found it by (DeviceID
+    /// block: vendor and device id; NameOfStation) and its I&M0 record (order id, serial
+    /// number, software revision; BU 0620 §2.5.3 lists I&M among every conformance class's
+    /// functions). A device that refuses I&M0 keeps the DCP fields, and the source says so.
     fn identity(&mut self) -> Option<Result<Identity, StepError>> {
-        let ctl = self.ctl.borrow();
-        let station = ctl.station()?;
-        Some(Ok(Identity {
+        let mut ctl = self.ctl.borrow_mut();
+        let station = ctl.station()?.clone();
+        let mut id = Identity {
             source: format!("DCP Identify of station {:?}", station.name),
             vendor: Some(format!("vendor id {:04X}h", station.vendor_id)),
             product_code: Some(format!("device id {:04X}h", station.device_id)),
             product_name: Some(station.type_of_station.clone()),
             revision: None,
             serial: None,
-        }))
+        };
+        let read = ctl.read_record(0, 1, proto::pnio::im0::INDEX, "read I&M0".into());
+        ctl.take_exchanges();
+        match read {
+            Ok((status, data)) if status.is_ok() => match proto::pnio::im0::Im0Repr::parse(&data) {
+                Ok(im) => {
+                    id.source += " and I&M0";
+                    id.product_code = Some(format!(
+                        "device id {:04X}h, order id {:?}",
+                        station.device_id, im.order_id
+                    ));
+                    id.revision = Some(im.software_revision.to_string());
+                    id.serial = Some(im.serial);
+                }
+                Err(e) => return Some(Err(StepError::Protocol(format!("malformed I&M0: {e}")))),
+            },
+            Ok((status, _)) => id.source += &format!(" (I&M0 refused: {})", status_hex(status)),
+            Err(e) => return Some(Err(step_error(e))),
+        }
+        Some(Ok(id))
     }
 
     fn describe(&self) -> String {

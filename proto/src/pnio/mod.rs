@@ -13,6 +13,7 @@
 //! - `rpc`: the connectionless DCE/RPC header (UDP 34964) and the NDR header of PNIO calls;
 //! - `block`: the PNIO-CM blocks (AR, IOCR, Alarm CR, ExpectedSubmodule, ModuleDiff, the
 //!   IODRead/IODWrite headers, IODControl) and the PNIO status;
+//! - `im0`: the I&M0 identification record;
 //! - `plan`: the cyclic layout a controller's Connect gives (frame offsets of the IOCRs).
 //!
 //! Every parser returns `Err` on malformed input and never panics ([`Error`] names the field).
@@ -24,6 +25,7 @@ pub mod block;
 pub mod dcp;
 mod error;
 pub mod frame;
+pub mod im0;
 #[cfg(test)]
 mod no_panic;
 pub mod plan;

@@ -550,10 +550,13 @@ impl IoDevice {
                 data,
             })
         };
-        match self
-            .records
-            .read(&mut self.device, a.slot, a.subslot, a.index)
-        {
+        let data = if a.index == proto::pnio::im0::INDEX {
+            super::im0::read(self.product, self.mac, a.slot, a.subslot)
+        } else {
+            self.records
+                .read(&mut self.device, a.slot, a.subslot, a.index)
+        };
+        match data {
             Ok(data) => Ok(vec![answer(data)]),
             Err(status) => Err((status, vec![answer(Vec::new())])),
         }

@@ -15,6 +15,7 @@
 mod alarms;
 mod ar;
 mod cyclic;
+mod im0;
 pub mod records;
 mod station;
 #[cfg(test)]
