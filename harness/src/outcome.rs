@@ -249,6 +249,9 @@ pub struct RunMeta {
     pub suites_revision: String,
     /// Start time, RFC 3339 UTC.
     pub started: String,
+    /// The machine the harness ran on (its host name).
+    #[serde(default)]
+    pub host: String,
     /// The command line, as given.
     pub command_line: Vec<String>,
     /// The DUT's identity per profile, as the device reported it (none for a profile whose

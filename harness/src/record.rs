@@ -16,6 +16,9 @@ pub(crate) fn start(dir: &Path, digest: &str, motion_allowed: bool) -> RunMeta {
         harness_revision: HARNESS_REVISION.into(),
         suites_revision: suites_revision(dir, digest),
         started: humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string(),
+        host: std::fs::read_to_string("/proc/sys/kernel/hostname")
+            .map(|h| h.trim().to_string())
+            .unwrap_or_default(),
         command_line: std::env::args().collect(),
         identities: Default::default(),
         motion_allowed,

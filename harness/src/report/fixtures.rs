@@ -78,6 +78,7 @@ pub(super) fn sample_run() -> RunResult {
             harness_revision: "0123456789abcdef0123456789abcdef01234567".into(),
             suites_revision: "0123456789abcdef0123456789abcdef01234567".into(),
             started: "2026-11-27T06:00:00Z".into(),
+            host: "qa-bench-1".into(),
             command_line: vec![
                 "harness".into(),
                 "run".into(),

@@ -207,7 +207,7 @@ struct SuiteHead<'a> {
 fn open_suite(s: &mut String, run: &RunResult, h: &SuiteHead<'_>) {
     let _ = writeln!(
         s,
-        "  <testsuite id=\"{}\" name=\"{}\" package=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"{}\" skipped=\"{}\" time=\"{}\" timestamp=\"{}\" hostname=\"localhost\">",
+        "  <testsuite id=\"{}\" name=\"{}\" package=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"{}\" skipped=\"{}\" time=\"{}\" timestamp=\"{}\" hostname=\"{}\">",
         h.id,
         attr(h.name),
         attr(h.package),
@@ -217,7 +217,18 @@ fn open_suite(s: &mut String, run: &RunResult, h: &SuiteHead<'_>) {
         h.skipped,
         h.time,
         timestamp(&run.meta.started),
+        attr(&hostname(&run.meta.host)),
     );
+}
+
+/// The host the run was on; `localhost` for a run that did not record it (Ant requires a
+/// name there).
+fn hostname(host: &str) -> String {
+    if host.is_empty() {
+        "localhost".into()
+    } else {
+        host.to_string()
+    }
 }
 
 fn close_suite(s: &mut String, out: &str) {
@@ -351,7 +362,7 @@ mod tests {
             "{x}"
         );
         assert!(
-            x.contains(r#"<testsuite id="0" name="sk550p" package="sk550p" tests="2" failures="1" errors="0" skipped="0" time="0.006" timestamp="2026-11-27T06:00:00" hostname="localhost">"#),
+            x.contains(r#"<testsuite id="0" name="sk550p" package="sk550p" tests="2" failures="1" errors="0" skipped="0" time="0.006" timestamp="2026-11-27T06:00:00" hostname="qa-bench-1">"#),
             "{x}"
         );
         // The model case is in a suite of its own, never among sk550p's device passes.

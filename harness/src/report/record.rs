@@ -56,6 +56,7 @@ pub(super) fn lines(run: &RunResult) -> Vec<(String, String)> {
         ),
         ("suites revision".into(), or_unknown(&m.suites_revision)),
         ("started".into(), or_unknown(&m.started)),
+        ("host".into(), or_unknown(&m.host)),
         (
             "duration".into(),
             format!("{:.3} s", run.duration.as_secs_f64()),
