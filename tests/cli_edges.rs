@@ -157,8 +157,8 @@ fn suite_files_with_upper_case_extensions_load() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Where the served adapter of the clash test listens (other tests take .2–.19).
-const CLASH: &str = "127.0.0.23";
+/// Where the served adapter of the clash test listens (other tests take .2–.24).
+const CLASH: &str = "127.0.0.31";
 
 #[test]
 fn a_udp_port_clash_with_the_adapter_is_diagnosed_once_at_start() {
