@@ -213,7 +213,8 @@ pub struct Identity {
 }
 
 impl Identity {
-    /// One line: `NORD SK TU3-PNT, code 0x0003, firmware 1.2, serial 1234 (from I&M0)`.
+    /// One line: `NORD SK TU3-PNT, code 0x0003, firmware 1.2, serial 1234 (from I&M0)`; the
+    /// source alone when the DUT gave no field (`none: …`).
     pub fn line(&self) -> String {
         let mut parts: Vec<String> = Vec::new();
         let name: Vec<&str> = [&self.vendor, &self.product_name]
@@ -232,6 +233,9 @@ impl Identity {
             if let Some(v) = v {
                 parts.push(format!("{label} {v}"));
             }
+        }
+        if parts.is_empty() {
+            return self.source.clone();
         }
         format!("{} (from {})", parts.join(", "), self.source)
     }
