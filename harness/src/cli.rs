@@ -1,5 +1,5 @@
 //! The `harness` command line: `run` (the default), `list`, `addr`, `decode`, `serve`,
-//! `describe`. What is a bus's own (`serve <bus>`, `describe <format>`, `--dut <bus>://…`) is
+//! `describe`, and `diff`/`merge` over report folders (`crate::cli_reports`). What is a bus's own (`serve <bus>`, `describe <format>`, `--dut <bus>://…`) is
 //! found through the bus registry (`crate::bus`).
 //!
 //! Exit codes: 0 every case passed (or did not apply), 1 a case failed or ended in error,
@@ -51,6 +51,11 @@ enum Command {
     /// Print a device description file, e.g. `harness describe eds --profile tu3-eip` or
     /// `harness describe esi --profile sk550p`.
     Describe(DescribeArgs),
+    /// Compare two runs (report folders or run.json files), e.g. two firmware releases: verdict
+    /// and transcript changes, new and vanished cases; exit 1 when a case regressed.
+    Diff(crate::cli_reports::DiffArgs),
+    /// Join the report folders of `run --shard K/N` runs into one unsharded run's reports.
+    Merge(crate::cli_reports::MergeArgs),
 }
 
 #[derive(ClapArgs, Debug)]
@@ -140,6 +145,10 @@ struct RunArgs {
     /// addresses and times.
     #[arg(long)]
     pcap: Option<PathBuf>,
+    /// Run only share K of N of the case-runs (round robin over the unsharded order), for
+    /// parallel CI; `harness merge` joins the N report folders.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<crate::shard::Shard>,
 }
 
 /// A `--dut` target with `--node-id` and `--sdo` written into it as the URL spells them
@@ -220,6 +229,8 @@ pub fn main() -> i32 {
         Command::Decode(a) => crate::cli_tools::decode(a),
         Command::Serve(a) => serve(a),
         Command::Describe(a) => describe(a),
+        Command::Diff(a) => crate::cli_reports::diff(a),
+        Command::Merge(a) => crate::cli_reports::merge(a),
     };
     match outcome {
         Ok(code) => code,
@@ -330,7 +341,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
             let mut factory = EmbeddedFactory {
                 context: crate::bus::Embedded { tap: tap.clone() },
             };
-            runner::run(&loaded, &opts, &mut factory)
+            runner::run_shard(&loaded, &opts, a.shard, &mut factory)
         }
         Some(url) => {
             let (bus, target) = crate::bus::by_url(url)?;
@@ -358,11 +369,12 @@ fn run(a: RunArgs) -> Result<i32, String> {
                 tap: tap.clone(),
             })
             .map_err(|e| e.to_string())?;
-            runner::run(&loaded, &opts, factory.as_mut())
+            runner::run_shard(&loaded, &opts, a.shard, factory.as_mut())
         }
     };
     run.meta = crate::outcome::RunMeta {
         identities: std::mem::take(&mut run.meta.identities),
+        shard: run.meta.shard,
         ..meta
     };
     // Every link is closed by now, its FIN exchange recorded.
@@ -393,13 +405,19 @@ fn run(a: RunArgs) -> Result<i32, String> {
         }
         outln!("{written}");
     }
-    Ok(if !run.load_errors.is_empty() {
+    Ok(verdict_exit(&run))
+}
+
+/// A run's exit code: usage error when a suite file did not load, fail when a case failed or
+/// ended in error, else pass (a merge of shards exits as the unsharded run would).
+pub(crate) fn verdict_exit(run: &crate::outcome::RunResult) -> i32 {
+    if !run.load_errors.is_empty() {
         EXIT_USAGE
     } else if run.count(Verdict::Fail) + run.count(Verdict::Error) > 0 {
         EXIT_FAIL
     } else {
         EXIT_PASS
-    })
+    }
 }
 
 fn list(a: ListArgs) -> Result<i32, String> {

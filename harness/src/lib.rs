@@ -19,6 +19,7 @@ macro_rules! outln {
 mod binding;
 mod bus;
 pub mod cli;
+mod cli_reports;
 mod cli_tools;
 mod ecat;
 /// What the EtherCAT speed bench (`harness/benches/ecat/`) needs of the library.
@@ -51,6 +52,7 @@ mod progress;
 mod record;
 mod report;
 mod runner;
+pub mod shard;
 pub mod stats;
 mod suite;
 

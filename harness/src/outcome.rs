@@ -190,6 +190,14 @@ pub struct CaseResult {
     /// Wall time spent.
     #[serde(serialize_with = "ser_secs", deserialize_with = "de_secs")]
     pub duration: Duration,
+    /// Position of this case-run in the unsharded run's order (profile-major, cases as
+    /// loaded), so `harness merge` can restore that order from shards.
+    #[serde(default)]
+    pub seq: usize,
+    /// The transcript text of a case read back from a report folder, whose steps are not in
+    /// `run.json`: the reports render it in place of the steps (see `report::read`).
+    #[serde(skip)]
+    pub transcript: Option<String>,
 }
 
 /// A device's identity as the device itself reports it over its bus (EtherNet/IP
@@ -263,6 +271,9 @@ pub struct RunMeta {
     pub identities: BTreeMap<String, Identity>,
     /// Whether steps that can make a motor turn were allowed (`--allow-motion`).
     pub motion_allowed: bool,
+    /// The share of the case-runs this run made (`--shard K/N`); none for a whole run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<crate::shard::Shard>,
 }
 
 /// A whole run: every case under every profile it ran with.

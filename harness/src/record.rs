@@ -22,6 +22,8 @@ pub(crate) fn start(dir: &Path, digest: &str, motion_allowed: bool) -> RunMeta {
         command_line: std::env::args().collect(),
         identities: Default::default(),
         motion_allowed,
+        // The runner records its share of a sharded run.
+        shard: None,
     }
 }
 

@@ -18,6 +18,7 @@ use crate::outcome::{
 };
 use crate::profile::{Capability, Profile};
 use crate::progress::Progress;
+use crate::shard::Shard;
 use crate::suite::{Action, Case, Loaded, Step};
 
 /// How to run.
@@ -60,29 +61,54 @@ pub(crate) trait DutFactory {
 /// profile), then every selected case under every profile — or, when the DUT cannot be
 /// reached, nothing more: one error says so instead of one per case.
 pub(crate) fn run(loaded: &Loaded, opts: &RunOptions, factory: &mut dyn DutFactory) -> RunResult {
+    run_shard(loaded, opts, None, factory)
+}
+
+/// Runs `shard`'s share of the case-runs (all of them without one), each numbered with its
+/// position in the unsharded order (see [`crate::shard`]).
+pub(crate) fn run_shard(
+    loaded: &Loaded,
+    opts: &RunOptions,
+    shard: Option<Shard>,
+    factory: &mut dyn DutFactory,
+) -> RunResult {
     let start = Instant::now();
     let selected = |case: &&Case| opts.filter.as_deref().is_none_or(|f| case.id.contains(f));
     let mut meta = RunMeta::default();
     let mut cases = Vec::new();
+    let mut seq = 0;
     match connection_check(loaded, opts, factory, &selected) {
         Ok(identities) => {
             meta.identities = identities;
-            let total = opts.profiles.len() * loaded.cases.iter().filter(selected).count();
+            let all = opts.profiles.len() * loaded.cases.iter().filter(selected).count();
+            let total = (0..all)
+                .filter(|&i| shard.is_none_or(|s| s.selects(i)))
+                .count();
             for profile in &opts.profiles {
                 for case in loaded.cases.iter().filter(selected) {
-                    opts.progress
-                        .borrow_mut()
-                        .start(profile.name(), &case.id, cases.len(), total);
-                    let r = run_case(case, profile, opts, factory);
-                    opts.progress.borrow_mut().end(&r);
-                    cases.push(r);
+                    if shard.is_none_or(|s| s.selects(seq)) {
+                        opts.progress
+                            .borrow_mut()
+                            .start(profile.name(), &case.id, cases.len(), total);
+                        let r = CaseResult {
+                            seq,
+                            ..run_case(case, profile, opts, factory)
+                        };
+                        opts.progress.borrow_mut().end(&r);
+                        cases.push(r);
+                    }
+                    seq += 1;
                 }
             }
             opts.progress.borrow_mut().finish();
         }
-        Err(unreachable) => cases.push(unreachable),
+        // Every shard stops at the check, with the one case-run the whole run has.
+        Err(unreachable) => {
+            cases.push(unreachable);
+            seq = 1;
+        }
     }
-    RunResult {
+    let mut run = RunResult {
         dut: factory.describe(),
         meta,
         profiles: opts.profiles.iter().map(|p| p.name().to_string()).collect(),
@@ -90,7 +116,9 @@ pub(crate) fn run(loaded: &Loaded, opts: &RunOptions, factory: &mut dyn DutFacto
         errata: loaded.errata.clone(),
         load_errors: loaded.errors.iter().map(|e| e.to_string()).collect(),
         duration: start.elapsed(),
-    }
+    };
+    run.meta.shard = shard.map(|s| Shard { of: seq, ..s });
+    run
 }
 
 /// Id of the case that stands for a failed connection check in the reports.
@@ -135,6 +163,8 @@ fn connection_check(
             message: format!("{why}; the run stopped before its cases"),
             steps: Vec::new(),
             duration: start.elapsed(),
+            seq: 0,
+            transcript: None,
         };
         let mut dut = match factory.open(profile, opts.retries) {
             Ok(dut) => dut,
@@ -179,6 +209,8 @@ fn result(
         message,
         steps,
         duration: start.elapsed(),
+        seq: 0,
+        transcript: None,
     }
 }
 

@@ -58,6 +58,8 @@ fn case(
         message: message.into(),
         steps,
         duration: Duration::from_millis(3),
+        seq: 0,
+        transcript: None,
     }
 }
 
@@ -71,7 +73,7 @@ pub(super) fn sample_run() -> RunResult {
         received: String::new(),
         ..p102_write()
     };
-    RunResult {
+    let mut run = RunResult {
         dut: "embedded simulator".into(),
         meta: RunMeta {
             harness_version: "0.1.0".into(),
@@ -98,6 +100,7 @@ pub(super) fn sample_run() -> RunResult {
             )]
             .into(),
             motion_allowed: false,
+            shard: None,
         },
         profiles: vec!["sk550p".into(), "tu3-eip".into()],
         cases: vec![
@@ -185,7 +188,11 @@ pub(super) fn sample_run() -> RunResult {
         }],
         load_errors: vec![],
         duration: Duration::from_millis(15),
+    };
+    for (seq, c) in run.cases.iter_mut().enumerate() {
+        c.seq = seq;
     }
+    run
 }
 
 /// A fresh, empty folder for one test.

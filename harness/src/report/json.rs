@@ -26,6 +26,8 @@ struct Case<'a> {
     duration: f64,
     /// The transcript, relative to the output folder (none for a case that did not apply).
     transcript: Option<String>,
+    /// Position in the unsharded run's order (`harness merge` restores it).
+    seq: usize,
 }
 
 impl<'a> From<&'a CaseResult> for Case<'a> {
@@ -40,6 +42,7 @@ impl<'a> From<&'a CaseResult> for Case<'a> {
             message: &c.message,
             duration: c.duration.as_secs_f64(),
             transcript: transcript_file(c).map(|f| f.to_string_lossy().replace('\\', "/")),
+            seq: c.seq,
         }
     }
 }
@@ -112,6 +115,7 @@ mod tests {
                 "message": "status: expected 2865 (0B31h), got 2871 (0B37h)",
                 "duration": 0.003,
                 "transcript": "transcripts/sk550p/bu0620__addressing__coe-p102.txt",
+                "seq": 1,
             })
         );
         assert_eq!(v["cases"][2]["verdict"], "not_applicable");

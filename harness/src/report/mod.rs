@@ -2,20 +2,29 @@
 //!
 //! `junit.xml`, `run.json`, `summary.md`, `index.html` and one transcript per case are written by
 //! [`write_all`]; snapshots of the transcripts are compared or stored by [`apply_snapshots`];
-//! [`terminal`] is the short console summary.
+//! [`terminal`] is the short console summary. A report folder reads back with [`read`], for
+//! [`compare_runs`] (`harness diff`) and [`merge`] (`harness merge` of `--shard` runs).
 
+mod diff;
+mod diff_view;
 #[cfg(test)]
 mod fixtures;
 mod html;
 mod json;
 mod junit;
 mod markup;
+mod merge;
+mod read;
 mod record;
 mod snapshot;
 mod summary;
 mod transcript;
 mod write;
 
+pub(crate) use diff::compare_runs;
+pub(crate) use diff_view::{text as diff_text, write_diff};
+pub(crate) use merge::merge;
+pub(crate) use read::{read, run_json};
 pub(crate) use snapshot::{apply_snapshots, SnapshotMode};
 pub(crate) use summary::terminal;
 pub(crate) use write::write_all;

@@ -3,11 +3,14 @@
 //! firmware release is compared with the previous one (DESIGN.md "Verdicts and reports").
 //!
 //! Files: `<dir>/<profile>/<case id with / as __>.snap`, the same naming as the transcripts.
-//! Both sides pass through [`redact`] before they are stored or compared.
+//! Both sides pass through [`redact`] before they are stored or compared, and are compared by
+//! the same function as `harness diff` compares two runs' transcripts
+//! ([`compare_transcripts`]).
 
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use super::diff::compare_transcripts;
 use super::transcript;
 use super::write::{case_file, io, write_file, ReportError};
 use crate::outcome::{RunResult, Verdict};
@@ -64,24 +67,6 @@ pub(crate) fn redact(text: &str) -> String {
     text.to_string()
 }
 
-/// The first line where `want` and `got` differ: (1-based line, expected, got); `(end)` stands
-/// for a missing line.
-fn first_difference(want: &str, got: &str) -> Option<(usize, String, String)> {
-    let (mut w, mut g) = (want.lines(), got.lines());
-    let mut n = 0;
-    loop {
-        n += 1;
-        match (w.next(), g.next()) {
-            (None, None) => return None,
-            (a, b) if a != b => {
-                let show = |l: Option<&str>| l.unwrap_or("(end)").to_string();
-                return Some((n, show(a), show(b)));
-            }
-            _ => {}
-        }
-    }
-}
-
 fn compare(
     run: &mut RunResult,
     dir: &Path,
@@ -91,23 +76,23 @@ fn compare(
         let path = dir.join(case_file(c, "snap"));
         let name = format!("{} {}", c.profile, c.id);
         let stored = match std::fs::read_to_string(&path) {
-            Ok(s) => redact(&s),
+            Ok(s) => s,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
                 report.new.push(name);
                 continue;
             }
             Err(e) => return Err(io(&path)(e)),
         };
-        let Some((line, want, got)) = first_difference(&stored, &redact(&transcript::render(c)))
-        else {
+        let Some(diff) = compare_transcripts(&stored, &transcript::render(c)) else {
             report.same += 1;
             continue;
         };
+        let (place, line, want, got) = diff.first();
         report.changed.push(name);
         if c.verdict == Verdict::Pass {
             c.verdict = Verdict::Fail;
             c.message = format!(
-                "transcript differs from snapshot {}: first difference at line {line}: expected `{want}`, got `{got}`",
+                "transcript differs from snapshot {}: first difference at line {line} ({place}): expected `{want}`, got `{got}`",
                 path.display()
             );
         }
@@ -140,21 +125,6 @@ pub(crate) fn apply_snapshots(
 mod tests {
     use super::*;
     use crate::report::fixtures::{sample_run, temp_dir};
-    use rstest::rstest;
-
-    #[rstest]
-    #[case("a\nb\n", "a\nb\n", None)]
-    #[case("a\nb\n", "a\nc\n", Some((2, "b", "c")))]
-    #[case("a\n", "a\nb\n", Some((2, "(end)", "b")))]
-    #[case("a\nb\n", "a\n", Some((2, "b", "(end)")))]
-    fn first_difference_names_the_line(
-        #[case] want: &str,
-        #[case] got: &str,
-        #[case] diff: Option<(usize, &str, &str)>,
-    ) {
-        let diff = diff.map(|(n, a, b)| (n, a.to_string(), b.to_string()));
-        assert_eq!(first_difference(want, got), diff);
-    }
 
     #[test]
     fn accept_then_compare_then_detect_a_change() {
@@ -185,7 +155,7 @@ mod tests {
         );
         assert_eq!(run.cases[0].verdict, Verdict::Fail);
         let want = format!(
-            "transcript differs from snapshot {}: first difference at line 12: expected `  <- 65 02 14 4E 01 00 00 00 00 FA`, got `  <- 65 02 14 4E 01 00 00 00 00 FB`",
+            "transcript differs from snapshot {}: first difference at line 12 (step 1: pkw FI 2: 24 4E 01 00 00 00 00 FA): expected `  <- 65 02 14 4E 01 00 00 00 00 FA`, got `  <- 65 02 14 4E 01 00 00 00 00 FB`",
             dir.join("sk550p/bu0620__pkw-telegrams__p102-write.snap").display()
         );
         assert_eq!(run.cases[0].message, want);

@@ -35,8 +35,12 @@ fn exchange(s: &mut String, x: &Exchange) {
     }
 }
 
-/// The transcript text of one case.
+/// The transcript text of one case: rendered from its steps, or, for a case read back from a
+/// report folder (`run.json` holds no steps), the text its transcript file held.
 pub(crate) fn render(c: &CaseResult) -> String {
+    if let (true, Some(text)) = (c.steps.is_empty(), &c.transcript) {
+        return text.clone();
+    }
     let mut s = String::new();
     let m = &c.manual;
     let _ = writeln!(s, "case: {}\ntitle: {}", c.id, c.title);
@@ -109,6 +113,16 @@ mod tests {
             na.contains("verdict: not_applicable\nmessage: the statement is about sk550p"),
             "{na}"
         );
+    }
+
+    #[test]
+    fn a_case_read_back_renders_its_stored_text() {
+        let mut c = sample_run().cases.remove(1);
+        let text = render(&c);
+        c.transcript = Some("stored\n".into());
+        assert_eq!(render(&c), text, "steps win over a stored text");
+        c.steps.clear();
+        assert_eq!(render(&c), "stored\n");
     }
 
     #[test]

@@ -1,0 +1,86 @@
+//! Commands over finished report folders: `harness diff OLD NEW` (what changed between two
+//! runs, e.g. two firmware releases) and `harness merge` (the shards of a `--shard K/N` run
+//! joined into the unsharded run's reports).
+
+use clap::Args;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::cli::{verdict_exit, EXIT_FAIL, EXIT_PASS};
+use crate::report;
+
+#[derive(Args, Debug)]
+pub(crate) struct DiffArgs {
+    /// The old run: a report folder, or its `run.json` with the transcripts beside it.
+    old: PathBuf,
+    /// The new run, the same way.
+    new: PathBuf,
+    /// Also write `diff.md` and `diff.html` (one self-contained file) into this folder.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Prints (and writes) the comparison; exit 1 when a case regressed (passed in OLD, fails,
+/// errs or is inconclusive in NEW), 0 otherwise.
+pub(crate) fn diff(a: DiffArgs) -> Result<i32, String> {
+    let old = report::read(&a.old).map_err(|e| e.to_string())?;
+    let new = report::read(&a.new).map_err(|e| e.to_string())?;
+    let d = report::compare_runs(
+        &a.old.display().to_string(),
+        &old,
+        &a.new.display().to_string(),
+        &new,
+    );
+    let mut out = std::io::stdout().lock();
+    // A closed pipe (`| head`) ends the output, not the program.
+    let _ = out.write_all(report::diff_text(&d).as_bytes());
+    if let Some(dir) = &a.out {
+        let [md, html] = report::write_diff(&d, dir).map_err(|e| e.to_string())?;
+        let _ = writeln!(out, "\ndiff: {}, {}", md.display(), html.display());
+    }
+    Ok(if d.regressions().next().is_some() {
+        EXIT_FAIL
+    } else {
+        EXIT_PASS
+    })
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct MergeArgs {
+    /// The shards' report folders (or their `run.json` files), one per `--shard K/N`.
+    #[arg(required = true)]
+    shards: Vec<PathBuf>,
+    /// Report folder for the merged run (not one of the shards').
+    #[arg(long, default_value = "reports")]
+    out: PathBuf,
+}
+
+/// The folder a report lives in, for telling two spellings of one folder apart.
+fn folder(given: &Path) -> PathBuf {
+    let json = report::run_json(given);
+    let dir = json.parent().unwrap_or(Path::new("."));
+    std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf())
+}
+
+/// Reads every shard, merges them and writes the reports as `harness run` does; the exit code
+/// is the unsharded run's.
+pub(crate) fn merge(a: MergeArgs) -> Result<i32, String> {
+    let out = folder(&a.out.join("run.json"));
+    let mut shards = Vec::with_capacity(a.shards.len());
+    for s in &a.shards {
+        if folder(s) == out {
+            return Err(format!(
+                "`--out {}` is one of the shards' folders: merge into another",
+                a.out.display()
+            ));
+        }
+        let run = report::read(s).map_err(|e| e.to_string())?;
+        shards.push((s.display().to_string(), run));
+    }
+    let run = report::merge(shards).map_err(|e| e.to_string())?;
+    let written = report::write_all(&run, &a.out).map_err(|e| e.to_string())?;
+    let mut stdout = std::io::stdout().lock();
+    let _ = write!(stdout, "{}", report::terminal(&run));
+    let _ = writeln!(stdout, "{written}");
+    Ok(verdict_exit(&run))
+}
