@@ -338,6 +338,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
     };
     let mut run = match &a.dut {
         None => {
+            crate::binding::embedded::sim_firmware()?;
             let mut factory = EmbeddedFactory {
                 context: crate::bus::Embedded { tap: tap.clone() },
             };

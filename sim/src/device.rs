@@ -61,6 +61,19 @@ fn ethernet_timeout(store: &ParamStore) -> Option<Duration> {
         .map(|t| Duration::from_millis(100 * t))
 }
 
+/// Which firmware release the simulator behaves as.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Firmware {
+    /// The release the suites are written against.
+    #[default]
+    Release,
+    /// A made-up next release with one documented change, so that comparing the runs of two
+    /// releases (`harness diff`) can be shown and tested on the simulator: the SK 550P's
+    /// "Addressing Mode" P856 leaves the factory as 2 (DHCP) instead of 1 (BOOTP, BU 0620
+    /// §4.2.2), the kind of changed default a release note lists.
+    Next,
+}
+
 /// How to build a device.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DeviceConfig {
@@ -70,6 +83,8 @@ pub struct DeviceConfig {
     pub inverters: u8,
     /// Bus cycles a parameter order takes before its answer appears (at least 1).
     pub answer_delay: u32,
+    /// The firmware release simulated.
+    pub firmware: Firmware,
 }
 
 impl DeviceConfig {
@@ -79,6 +94,7 @@ impl DeviceConfig {
             product,
             inverters: product.max_inverters(),
             answer_delay: 1,
+            firmware: Firmware::Release,
         }
     }
 }
@@ -272,6 +288,9 @@ impl Device {
             for (e, b) in (1..).zip(id) {
                 interface.store.set_info(number, e, b);
             }
+        }
+        if config.firmware == Firmware::Next {
+            interface.store.set_info(856, 1, 2);
         }
         Device {
             config: DeviceConfig {
@@ -712,6 +731,17 @@ mod tests {
         store
             .read(ParamNumber::new(number).unwrap(), None, element)
             .unwrap()
+    }
+
+    #[test]
+    fn the_next_firmware_leaves_the_factory_with_dhcp_addressing() {
+        let mut release = Device::new(DeviceConfig::new(Product::Sk550p));
+        assert_eq!(read_interface(&mut release, 856, 1), 1, "BOOTP");
+        let mut next = Device::new(DeviceConfig {
+            firmware: Firmware::Next,
+            ..DeviceConfig::new(Product::Sk550p)
+        });
+        assert_eq!(read_interface(&mut next, 856, 1), 2, "DHCP");
     }
 
     #[test]

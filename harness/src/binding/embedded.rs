@@ -3,7 +3,7 @@
 
 use serde_json::{json, Value};
 use sim::clock::{Clock, VirtualClock};
-use sim::device::{Device, DeviceConfig};
+use sim::device::{Device, DeviceConfig, Firmware};
 use sim::link::{mem_pair, MemEnd};
 use std::time::Duration;
 
@@ -39,7 +39,10 @@ pub(crate) struct EmbeddedFactory {
 
 impl DutFactory for EmbeddedFactory {
     fn describe(&self) -> String {
-        "embedded simulator".into()
+        match sim_firmware() {
+            Ok(Firmware::Next) => "embedded simulator (firmware next)".into(),
+            _ => "embedded simulator".into(),
+        }
     }
 
     fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
@@ -57,10 +60,38 @@ impl DutFactory for EmbeddedFactory {
     }
 }
 
-/// The simulated device of a profile: its product with the profile's inverters.
+/// The environment variable that picks the embedded simulator's firmware release: unset or
+/// `release`, or `next` ([`Firmware::Next`]: one documented change), to compare the runs of
+/// two releases with `harness diff` on the simulator. A variable rather than an option: it is
+/// a demonstration and test aid, never offered for a real DUT.
+pub(crate) const FIRMWARE_VAR: &str = "NORD_SIM_FIRMWARE";
+
+/// The release a [`FIRMWARE_VAR`] value names.
+fn firmware_named(value: Option<&str>) -> Result<Firmware, String> {
+    match value {
+        None | Some("" | "release") => Ok(Firmware::Release),
+        Some("next") => Ok(Firmware::Next),
+        Some(other) => Err(format!(
+            "{FIRMWARE_VAR}=`{other}`: give `release` or `next`"
+        )),
+    }
+}
+
+/// The firmware release the environment asks the embedded simulator for.
+pub(crate) fn sim_firmware() -> Result<Firmware, String> {
+    match std::env::var(FIRMWARE_VAR) {
+        Ok(v) => firmware_named(Some(&v)),
+        Err(std::env::VarError::NotPresent) => firmware_named(None),
+        Err(e) => Err(format!("{FIRMWARE_VAR}: {e}")),
+    }
+}
+
+/// The simulated device of a profile: its product with the profile's inverters, as the
+/// firmware release [`FIRMWARE_VAR`] names.
 pub(crate) fn device_config(profile: &Profile) -> Result<DeviceConfig, OpenError> {
     Ok(DeviceConfig {
         inverters: profile.inverters,
+        firmware: sim_firmware().map_err(OpenError::Profile)?,
         ..DeviceConfig::new(profile.nord().map_err(OpenError::Profile)?)
     })
 }
@@ -157,6 +188,18 @@ pub(crate) fn observe_device(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_firmware_variable_names_a_release_or_is_refused() {
+        assert_eq!(firmware_named(None), Ok(Firmware::Release));
+        assert_eq!(firmware_named(Some("")), Ok(Firmware::Release));
+        assert_eq!(firmware_named(Some("release")), Ok(Firmware::Release));
+        assert_eq!(firmware_named(Some("next")), Ok(Firmware::Next));
+        assert_eq!(
+            firmware_named(Some("v2")),
+            Err("NORD_SIM_FIRMWARE=`v2`: give `release` or `next`".into())
+        );
+    }
 
     #[test]
     fn the_ppo_link_offers_every_general_capability() {

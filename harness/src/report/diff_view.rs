@@ -26,7 +26,12 @@ fn header_rows(d: &RunDiff) -> Vec<(String, String, String)> {
         both("report", &|s| s.source.clone()),
         both("DUT", &|s| s.dut.clone()),
         both("harness", &|s| {
-            format!("{} ({})", s.meta.harness_version, s.meta.harness_revision)
+            let m = &s.meta;
+            if m.harness_version.is_empty() {
+                String::new()
+            } else {
+                format!("{} ({})", m.harness_version, m.harness_revision)
+            }
         }),
         both("suites", &|s| s.meta.suites_revision.clone()),
         both("started", &|s| s.meta.started.clone()),
@@ -59,6 +64,8 @@ fn header_rows(d: &RunDiff) -> Vec<(String, String, String)> {
             .collect::<Vec<_>>()
             .join(", ")
     }));
+    // A report from a harness that did not record a field leaves it out.
+    rows.retain(|(_, old, new)| !(old.is_empty() && new.is_empty()));
     rows
 }
 
