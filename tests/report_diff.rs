@@ -54,10 +54,8 @@ impl Drop for Dir {
 
 /// A fresh folder for one test (the tests run side by side).
 fn scratch(test: &str) -> Dir {
-    let dir = std::env::temp_dir().join(format!(
-        "harness-report-diff-{test}-{}",
-        std::process::id()
-    ));
+    let dir =
+        std::env::temp_dir().join(format!("harness-report-diff-{test}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     Dir(dir)

@@ -1,0 +1,233 @@
+//! `harness run --shard K/N` and `harness merge`, end to end through the binary: a real suite
+//! subset run whole and as three shards; the merged reports equal the whole run's file by file,
+//! byte for byte, once what differs between any two runs is masked.
+
+use regex::Regex;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The selection: every BU 0620 case under the SK 550P (a few hundred case-runs, most of them
+/// not applicable, so every shard gets both kinds).
+const SELECTION: [&str; 4] = ["--profile", "sk550p", "--filter", "bu0620"];
+
+struct Dir(PathBuf);
+
+impl Drop for Dir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A fresh folder for one test (the tests run side by side).
+fn scratch(test: &str) -> Dir {
+    let dir = std::env::temp_dir().join(format!(
+        "harness-report-shard-{test}-{}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    Dir(dir)
+}
+
+fn harness(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_harness"))
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .args(args)
+        .env_remove("NORD_SIM_FIRMWARE")
+        .output()
+        .expect("the harness binary runs")
+}
+
+fn show(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// `harness run` of the selection into `out`, with `extra` arguments; returns the exit code.
+fn run(out: &Path, extra: &[&str]) -> i32 {
+    let mut args = vec!["run", "--out", s(out)];
+    args.extend(SELECTION);
+    args.extend(extra);
+    let o = harness(&args);
+    o.status.code().unwrap_or_else(|| panic!("{}", show(&o)))
+}
+
+/// Every file below `dir`, by relative path.
+fn files(dir: &Path) -> BTreeMap<String, String> {
+    fn walk(base: &Path, dir: &Path, into: &mut BTreeMap<String, String>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(base, &p, into);
+            } else {
+                let rel = p.strip_prefix(base).unwrap().to_string_lossy().into_owned();
+                into.insert(rel, std::fs::read_to_string(&p).unwrap());
+            }
+        }
+    }
+    let mut all = BTreeMap::new();
+    walk(dir, dir, &mut all);
+    all
+}
+
+/// What legitimately differs between two runs of the same selection, masked:
+/// - the report folder's own path (`--out` on the command line);
+/// - the command line in `run.json` (the merge's is the first shard's without `--shard`);
+/// - start times: every RFC 3339 timestamp (`started`, JUnit's `timestamp`);
+/// - durations: `run.json`'s `"duration"` fields, JUnit's `time` attributes, the summary's
+///   `0.223 s`.
+fn masked(text: &str, folder: &Path) -> String {
+    let masks = [
+        (
+            r#""command_line": \[[^\]]*\]"#,
+            r#""command_line": <command line>"#,
+        ),
+        (
+            r"\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}(\.\d+)?(Z|[+-]\d{2}:\d{2})?",
+            "<time>",
+        ),
+        (r#""duration": [-+.\deE]+"#, r#""duration": <duration>"#),
+        (r#" time="[^"]*""#, r#" time="<duration>""#),
+        (r"\b\d+\.\d+ s\b", "<duration> s"),
+    ];
+    let mut text = text.replace(s(folder), "<out>");
+    for (pattern, by) in masks {
+        text = Regex::new(pattern)
+            .unwrap()
+            .replace_all(&text, by)
+            .into_owned();
+    }
+    text
+}
+
+/// The first line where two texts differ, for a readable failure.
+fn first_difference(a: &str, b: &str) -> Option<(usize, String, String)> {
+    let (mut x, mut y) = (a.lines(), b.lines());
+    for n in 1.. {
+        match (x.next(), y.next()) {
+            (None, None) => return None,
+            (l, r) if l != r => {
+                let show = |l: Option<&str>| l.unwrap_or("(end)").to_string();
+                return Some((n, show(l), show(r)));
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+#[test]
+fn three_shards_merge_into_the_unsharded_reports() {
+    let dir = scratch("merge");
+    let whole = dir.0.join("whole");
+    let code = run(&whole, &[]);
+    let shards: Vec<PathBuf> = (1..=3).map(|k| dir.0.join(format!("shard{k}"))).collect();
+    let mut counts = Vec::new();
+    for (k, shard) in (1..).zip(&shards) {
+        let spec = format!("{k}/3");
+        assert_eq!(run(shard, &["--shard", &spec]), code, "shard {spec}");
+        let run_json = std::fs::read_to_string(shard.join("run.json")).unwrap();
+        let seqs: Vec<usize> = serde_json::from_str::<serde_json::Value>(&run_json).unwrap()
+            ["cases"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["seq"].as_u64().unwrap() as usize)
+            .collect();
+        assert!(
+            seqs.iter().all(|q| q % 3 == k - 1),
+            "shard {spec} runs case-runs i with i mod 3 = {}: {seqs:?}",
+            k - 1
+        );
+        counts.push(seqs.len());
+    }
+    let merged = dir.0.join("merged");
+    let mut args = vec!["merge", "--out", s(&merged)];
+    args.extend(shards.iter().map(|p| s(p)));
+    let o = harness(&args);
+    assert_eq!(
+        o.status.code(),
+        Some(code),
+        "merge exits as the whole run: {}",
+        show(&o)
+    );
+
+    let (want, got) = (files(&whole), files(&merged));
+    assert_eq!(
+        want.keys().collect::<Vec<_>>(),
+        got.keys().collect::<Vec<_>>(),
+        "the same files"
+    );
+    assert!(want.contains_key("run.json") && want.contains_key("junit.xml"));
+    assert!(
+        want.keys()
+            .filter(|k| k.starts_with("transcripts/"))
+            .count()
+            > 50
+    );
+    let total: usize = counts.iter().sum();
+    assert!(counts.iter().all(|&n| n >= total / 3), "{counts:?}");
+    for (name, text) in &want {
+        let (w, g) = (masked(text, &whole), masked(&got[name], &merged));
+        assert_eq!(
+            first_difference(&w, &g),
+            None,
+            "{name} differs after masking"
+        );
+        assert_eq!(w, g, "{name}: byte for byte");
+    }
+}
+
+#[test]
+fn merge_refuses_an_incomplete_or_doubled_set_and_shard_values_are_checked() {
+    let dir = scratch("refuse");
+    let shards: Vec<PathBuf> = (1..=3).map(|k| dir.0.join(format!("shard{k}"))).collect();
+    for (k, shard) in (1..).zip(&shards) {
+        run(shard, &["--shard", &format!("{k}/3")]);
+    }
+    let out = dir.0.join("merged");
+    let o = harness(&["merge", "--out", s(&out), s(&shards[0]), s(&shards[1])]);
+    assert_eq!(o.status.code(), Some(2), "{}", show(&o));
+    assert!(show(&o).contains("incomplete"), "{}", show(&o));
+    assert!(!out.join("run.json").exists(), "nothing written");
+
+    let o = harness(&[
+        "merge",
+        "--out",
+        s(&out),
+        s(&shards[0]),
+        s(&shards[1]),
+        s(&shards[2]),
+        s(&shards[2]),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(show(&o).contains("is in"), "{}", show(&o));
+
+    let o = harness(&[
+        "merge",
+        "--out",
+        s(&shards[0]),
+        s(&shards[0]),
+        s(&shards[1]),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        show(&o).contains("is one of the shards' folders"),
+        "{}",
+        show(&o)
+    );
+
+    for bad in ["0/3", "4/3", "1/0", "3"] {
+        let o = harness(&["run", "--out", s(&out), "--shard", bad]);
+        assert_eq!(o.status.code(), Some(2), "--shard {bad}: {}", show(&o));
+        assert!(show(&o).contains("1 ≤ K ≤ N"), "{}", show(&o));
+    }
+}
