@@ -894,4 +894,35 @@ cases:
             c.message
         );
     }
+
+    #[test]
+    fn a_shard_runs_its_round_robin_share_numbered_in_the_unsharded_order() {
+        let loaded = load_text_for_tests(SUITE);
+        let opts = RunOptions {
+            profiles: vec![
+                Profile::builtin(Product::Sk550p),
+                Profile::builtin(Product::Tu3Eip),
+            ],
+            filter: Some("a".into()),
+            ..sk550p_options()
+        };
+        let whole = run(&loaded, &opts, &mut EmbeddedFactory::default());
+        let names = |r: &RunResult| -> Vec<(usize, String, String)> {
+            r.cases
+                .iter()
+                .map(|c| (c.seq, c.profile.clone(), c.id.clone()))
+                .collect()
+        };
+        // `read` and `setup-fails` under both profiles, profile-major.
+        assert_eq!(
+            names(&whole).iter().map(|n| n.0).collect::<Vec<_>>(),
+            [0, 1, 2, 3]
+        );
+        assert_eq!(whole.meta.shard, None);
+        let shard: Shard = "2/3".parse().unwrap();
+        let part = run_shard(&loaded, &opts, Some(shard), &mut EmbeddedFactory::default());
+        assert_eq!(names(&part), [names(&whole)[1].clone()]);
+        assert_eq!(part.cases[0].verdict, whole.cases[1].verdict);
+        assert_eq!(part.meta.shard, Some(Shard { of: 4, ..shard }));
+    }
 }
