@@ -79,12 +79,13 @@ fn files(dir: &Path) -> BTreeMap<String, String> {
 }
 
 /// What legitimately differs between two runs of the same selection, masked:
-/// - the report folder's own path (`--out` on the command line);
+/// - the report folders' paths (`--out` on the command line: the merge's command line is the
+///   first shard's);
 /// - the command line in `run.json` (the merge's is the first shard's without `--shard`);
 /// - start times: every RFC 3339 timestamp (`started`, JUnit's `timestamp`);
 /// - durations: `run.json`'s `"duration"` fields, JUnit's `time` attributes, the summary's
 ///   `0.223 s`.
-fn masked(text: &str, folder: &Path) -> String {
+fn masked(text: &str, folders: &[&Path]) -> String {
     let masks = [
         (
             r#""command_line": \[[^\]]*\]"#,
@@ -98,7 +99,10 @@ fn masked(text: &str, folder: &Path) -> String {
         (r#" time="[^"]*""#, r#" time="<duration>""#),
         (r"\b\d+\.\d+ s\b", "<duration> s"),
     ];
-    let mut text = text.replace(s(folder), "<out>");
+    let mut text = text.to_string();
+    for folder in folders {
+        text = text.replace(s(folder), "<out>");
+    }
     for (pattern, by) in masks {
         text = Regex::new(pattern)
             .unwrap()
@@ -176,7 +180,12 @@ fn three_shards_merge_into_the_unsharded_reports() {
     let total: usize = counts.iter().sum();
     assert!(counts.iter().all(|&n| n >= total / 3), "{counts:?}");
     for (name, text) in &want {
-        let (w, g) = (masked(text, &whole), masked(&got[name], &merged));
+        let folders: Vec<&Path> = [&whole, &merged]
+            .into_iter()
+            .chain(&shards)
+            .map(PathBuf::as_path)
+            .collect();
+        let (w, g) = (masked(text, &folders), masked(&got[name], &folders));
         assert_eq!(
             first_difference(&w, &g),
             None,
@@ -209,7 +218,12 @@ fn merge_refuses_an_incomplete_or_doubled_set_and_shard_values_are_checked() {
         s(&shards[2]),
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(show(&o).contains("is in"), "{}", show(&o));
+    assert!(show(&o).contains("given twice"), "{}", show(&o));
+    assert!(
+        show(&o).contains(s(&shards[2])),
+        "names the folder: {}",
+        show(&o)
+    );
 
     let o = harness(&[
         "merge",

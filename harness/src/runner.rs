@@ -87,9 +87,12 @@ pub(crate) fn run_shard(
             for profile in &opts.profiles {
                 for case in loaded.cases.iter().filter(selected) {
                     if shard.is_none_or(|s| s.selects(seq)) {
-                        opts.progress
-                            .borrow_mut()
-                            .start(profile.name(), &case.id, cases.len(), total);
+                        opts.progress.borrow_mut().start(
+                            profile.name(),
+                            &case.id,
+                            cases.len(),
+                            total,
+                        );
                         let r = CaseResult {
                             seq,
                             ..run_case(case, profile, opts, factory)

@@ -6,9 +6,8 @@
 //! the cases in `seq` order; its start is the earliest shard's, its duration the longest
 //! shard's (the shards run side by side), its command line the first shard's without `--shard`.
 
-use std::collections::BTreeSet;
-
-use crate::outcome::RunResult;
+use crate::outcome::{CaseResult, RunResult};
+use crate::runner::CONNECTION_CHECK;
 use crate::shard::Shard;
 
 /// Shards that are not one run cut in pieces.
@@ -31,18 +30,9 @@ pub(crate) enum MergeError {
         /// The other's.
         b: String,
     },
-    /// A case-run position shows up twice.
-    #[error("case-run {seq} ({case}) is in {first} and in {other}")]
-    Twice {
-        /// The position.
-        seq: usize,
-        /// `<profile> <id>`.
-        case: String,
-        /// Where it was first seen.
-        first: String,
-        /// Where it showed up again.
-        other: String,
-    },
+    /// A shard or a case-run is given twice.
+    #[error("given twice: {0}")]
+    Twice(String),
     /// Shards or case-runs are missing.
     #[error("incomplete: {0}")]
     Missing(String),
@@ -62,76 +52,102 @@ fn unsharded(command_line: &[String]) -> Vec<String> {
     out
 }
 
+/// The second run is a shard of the same run as the first: same DUT (and identity), harness,
+/// suites, profiles and motion setting.
+fn same_run(first: &str, a: &RunResult, other: &str, b: &RunResult) -> Result<(), MergeError> {
+    let mismatch = |what, x: String, y: String| MergeError::Mismatch {
+        what,
+        first: first.to_string(),
+        other: other.to_string(),
+        a: x,
+        b: y,
+    };
+    let (m, r) = (&a.meta, &b.meta);
+    for (what, x, y) in [
+        ("DUT", &a.dut, &b.dut),
+        ("harness version", &m.harness_version, &r.harness_version),
+        ("harness revision", &m.harness_revision, &r.harness_revision),
+        ("suites revision", &m.suites_revision, &r.suites_revision),
+    ] {
+        if x != y {
+            return Err(mismatch(what, x.clone(), y.clone()));
+        }
+    }
+    if a.profiles != b.profiles {
+        return Err(mismatch(
+            "profiles",
+            a.profiles.join(","),
+            b.profiles.join(","),
+        ));
+    }
+    if m.identities != r.identities {
+        let show = |i: &std::collections::BTreeMap<String, crate::outcome::Identity>| {
+            i.iter()
+                .map(|(p, id)| format!("{p}: {}", id.line()))
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        return Err(mismatch(
+            "DUT identity",
+            show(&m.identities),
+            show(&r.identities),
+        ));
+    }
+    if m.motion_allowed != r.motion_allowed {
+        return Err(mismatch(
+            "--allow-motion",
+            m.motion_allowed.to_string(),
+            r.motion_allowed.to_string(),
+        ));
+    }
+    if a.errata != b.errata || a.load_errors != b.load_errors {
+        return Err(mismatch(
+            "suites loaded (errata, load errors)",
+            format!(
+                "{} errata, {} load errors",
+                a.errata.len(),
+                a.load_errors.len()
+            ),
+            format!(
+                "{} errata, {} load errors",
+                b.errata.len(),
+                b.load_errors.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Joins shards (each with the folder it was read from, for errors) into one run.
 pub(crate) fn merge(shards: Vec<(String, RunResult)>) -> Result<RunResult, MergeError> {
     let mut shards = shards.into_iter();
-    let (first_src, mut merged) = shards.next().ok_or(MergeError::Empty)?;
-    let mut seen: Vec<(usize, String)> = merged
-        .cases
-        .iter()
-        .map(|c| (c.seq, first_src.clone()))
+    let (first, mut merged) = shards.next().ok_or(MergeError::Empty)?;
+    let mut parts = vec![(first.clone(), merged.meta.shard)];
+    let mut cases: Vec<(String, CaseResult)> = std::mem::take(&mut merged.cases)
+        .into_iter()
+        .map(|c| (first.clone(), c))
         .collect();
-    let mut parts: Vec<Option<Shard>> = vec![merged.meta.shard];
     for (src, run) in shards {
-        let mismatch = |what, a: String, b: String| MergeError::Mismatch {
-            what,
-            first: first_src.clone(),
-            other: src.clone(),
-            a,
-            b,
-        };
-        let (m, r) = (&merged.meta, &run.meta);
-        for (what, a, b) in [
-            ("DUT", &merged.dut, &run.dut),
-            ("harness version", &m.harness_version, &r.harness_version),
-            ("harness revision", &m.harness_revision, &r.harness_revision),
-            ("suites revision", &m.suites_revision, &r.suites_revision),
-        ] {
-            if a != b {
-                return Err(mismatch(what, a.clone(), b.clone()));
-            }
-        }
-        let shown = |v: &dyn std::fmt::Debug| format!("{v:?}");
-        if merged.profiles != run.profiles {
-            return Err(mismatch(
-                "profiles",
-                merged.profiles.join(","),
-                run.profiles.join(","),
-            ));
-        }
-        if m.identities != r.identities {
-            return Err(mismatch(
-                "DUT identity",
-                shown(&m.identities),
-                shown(&r.identities),
-            ));
-        }
-        if m.motion_allowed != r.motion_allowed {
-            return Err(mismatch(
-                "--allow-motion",
-                m.motion_allowed.to_string(),
-                r.motion_allowed.to_string(),
-            ));
-        }
-        if merged.errata != run.errata || merged.load_errors != run.load_errors {
-            return Err(mismatch(
-                "suites loaded (errata or load errors)",
-                format!("{} errata", merged.errata.len()),
-                format!("{} errata", run.errata.len()),
-            ));
-        }
-        parts.push(r.shard);
-        seen.extend(run.cases.iter().map(|c| (c.seq, src.clone())));
-        if r.started < merged.meta.started {
-            merged.meta.started.clone_from(&r.started);
+        same_run(&first, &merged, &src, &run)?;
+        parts.push((src.clone(), run.meta.shard));
+        if run.meta.started < merged.meta.started {
+            merged.meta.started.clone_from(&run.meta.started);
         }
         merged.duration = merged.duration.max(run.duration);
-        merged.cases.extend(run.cases);
+        cases.extend(run.cases.into_iter().map(|c| (src.clone(), c)));
     }
     check_parts(&parts)?;
-    let total = parts.iter().flatten().map(|s| s.of).next();
-    check_seqs(&merged, &mut seen, total)?;
-    merged.cases.sort_by_key(|c| c.seq);
+    cases.sort_by_key(|(_, c)| c.seq);
+    // A DUT that cannot be reached stops every shard at the same connection check, the one
+    // case-run the whole run has.
+    cases.dedup_by(|(_, later), (_, kept)| {
+        later.id == CONNECTION_CHECK
+            && (later.seq, &later.id, &later.profile, &later.message)
+                == (kept.seq, &kept.id, &kept.profile, &kept.message)
+    });
+    let total = parts.iter().find_map(|(_, s)| s.map(|s| s.of));
+    check_seqs(&cases, total)?;
+    merged.cases = cases.into_iter().map(|(_, c)| c).collect();
     merged.meta.shard = None;
     merged.meta.command_line = unsharded(&merged.meta.command_line);
     Ok(merged)
@@ -139,37 +155,35 @@ pub(crate) fn merge(shards: Vec<(String, RunResult)>) -> Result<RunResult, Merge
 
 /// Every shard recorded (reports from before sharding record none), of one N and one total,
 /// 1..=N each once.
-fn check_parts(parts: &[Option<Shard>]) -> Result<(), MergeError> {
-    let known: Vec<Shard> = parts.iter().flatten().copied().collect();
-    if known.is_empty() {
+fn check_parts(parts: &[(String, Option<Shard>)]) -> Result<(), MergeError> {
+    let known: Vec<(&String, Shard)> = parts
+        .iter()
+        .filter_map(|(src, s)| s.map(|s| (src, s)))
+        .collect();
+    let Some(&(first_src, first)) = known.first() else {
         return Ok(());
-    }
+    };
     if known.len() != parts.len() {
         return Err(MergeError::Missing(
             "some folders are shards (--shard) and some are not".into(),
         ));
     }
-    let n = known[0].count;
-    if let Some(s) = known.iter().find(|s| s.count != n || s.of != known[0].of) {
-        return Err(MergeError::Missing(format!(
-            "shard {s} of {} case-runs does not belong with shard {} of {}",
-            s.of, known[0], known[0].of
-        )));
+    for &(src, s) in &known {
+        if s.count != first.count || s.of != first.of {
+            return Err(MergeError::Missing(format!(
+                "{src} is shard {s} of {} case-runs, {first_src} shard {first} of {}: not one run",
+                s.of, first.of
+            )));
+        }
     }
-    let have: BTreeSet<usize> = known.iter().map(|s| s.index).collect();
-    if have.len() != known.len() {
-        return Err(MergeError::Missing(format!(
-            "a shard is given twice ({})",
-            known
-                .iter()
-                .map(Shard::to_string)
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
+    for (n, &(src, s)) in known.iter().enumerate() {
+        if let Some((other, _)) = known[..n].iter().find(|(_, t)| t.index == s.index) {
+            return Err(MergeError::Twice(format!("shard {s}: {other} and {src}")));
+        }
     }
-    let absent: Vec<String> = (1..=n)
-        .filter(|k| !have.contains(k))
-        .map(|k| format!("{k}/{n}"))
+    let absent: Vec<String> = (1..=first.count)
+        .filter(|k| !known.iter().any(|(_, s)| s.index == *k))
+        .map(|k| format!("{k}/{}", first.count))
         .collect();
     if !absent.is_empty() {
         return Err(MergeError::Missing(format!(
@@ -181,42 +195,33 @@ fn check_parts(parts: &[Option<Shard>]) -> Result<(), MergeError> {
 }
 
 /// Every case-run position 0..total exactly once (total: as the shards recorded it, else one
-/// past the highest position).
-fn check_seqs(
-    merged: &RunResult,
-    seen: &mut [(usize, String)],
-    total: Option<usize>,
-) -> Result<(), MergeError> {
-    let mut order: Vec<usize> = (0..seen.len()).collect();
-    order.sort_by_key(|&i| seen[i].0);
-    for w in order.windows(2) {
-        let (a, b) = (&seen[w[0]], &seen[w[1]]);
-        if a.0 == b.0 {
-            let c = merged
-                .cases
-                .iter()
-                .find(|c| c.seq == a.0)
-                .map(|c| format!("{} {}", c.profile, c.id))
-                .unwrap_or_default();
-            return Err(MergeError::Twice {
-                seq: a.0,
-                case: c,
-                first: a.1.clone(),
-                other: b.1.clone(),
-            });
+/// past the highest position); `cases` sorted by position.
+fn check_seqs(cases: &[(String, CaseResult)], total: Option<usize>) -> Result<(), MergeError> {
+    for w in cases.windows(2) {
+        let ((a_src, a), (b_src, b)) = (&w[0], &w[1]);
+        if a.seq == b.seq {
+            return Err(MergeError::Twice(format!(
+                "case-run {} ({} {}): {a_src} and {b_src}",
+                a.seq, a.profile, a.id
+            )));
         }
     }
-    let total = total.unwrap_or_else(|| seen.iter().map(|s| s.0 + 1).max().unwrap_or(0));
-    let present: BTreeSet<usize> = seen.iter().map(|s| s.0).collect();
-    let absent: Vec<usize> = (0..total).filter(|i| !present.contains(i)).collect();
-    if !absent.is_empty() || present.len() != total {
+    let total = total.unwrap_or_else(|| cases.last().map_or(0, |(_, c)| c.seq + 1));
+    let mut present = cases.iter().map(|(_, c)| c.seq).peekable();
+    let mut absent = Vec::new();
+    for i in 0..total {
+        if present.next_if_eq(&i).is_none() {
+            absent.push(i);
+        }
+    }
+    if !absent.is_empty() || present.next().is_some() {
         let mut shown: Vec<String> = absent.iter().take(5).map(usize::to_string).collect();
         if absent.len() > 5 {
             shown.push("…".into());
         }
         return Err(MergeError::Missing(format!(
             "{} of {total} case-runs present (missing positions: {})",
-            present.len(),
+            cases.len(),
             shown.join(", ")
         )));
     }
@@ -226,7 +231,7 @@ fn check_seqs(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::outcome::RunMeta;
+    use crate::outcome::{RunMeta, Verdict};
     use crate::report::fixtures::sample_run;
     use std::time::Duration;
 
@@ -243,12 +248,9 @@ mod tests {
                 let mut run = whole.clone();
                 run.cases.retain(|c| shard.selects(c.seq));
                 run.meta.shard = Some(shard);
-                run.meta.command_line = vec![
-                    "harness".into(),
-                    "run".into(),
-                    "--shard".into(),
-                    shard.to_string(),
-                ];
+                run.meta
+                    .command_line
+                    .extend(["--shard".to_string(), shard.to_string()]);
                 run.meta.started = format!("2026-11-27T06:00:0{k}Z");
                 run.duration = Duration::from_millis(10 * k as u64);
                 (format!("shard{k}"), run)
@@ -263,7 +265,10 @@ mod tests {
         let merged = merge(parts).unwrap();
         let whole = sample_run();
         assert_eq!(merged.cases, whole.cases, "cases in unsharded order");
-        assert_eq!(merged.meta.command_line, ["harness", "run"]);
+        assert_eq!(
+            merged.meta.command_line, whole.meta.command_line,
+            "no --shard"
+        );
         assert_eq!(merged.meta.started, "2026-11-27T06:00:01Z", "earliest");
         assert_eq!(merged.meta.shard, None);
         assert_eq!(merged.duration, Duration::from_millis(30), "longest shard");
@@ -281,6 +286,19 @@ mod tests {
     }
 
     #[test]
+    fn the_shard_option_leaves_the_command_line_in_either_spelling() {
+        let line = |args: &[&str]| args.iter().map(|a| a.to_string()).collect::<Vec<_>>();
+        assert_eq!(
+            unsharded(&line(&["harness", "run", "--shard", "2/3", "-q"])),
+            line(&["harness", "run", "-q"])
+        );
+        assert_eq!(
+            unsharded(&line(&["harness", "--shard=1/2", "run"])),
+            line(&["harness", "run"])
+        );
+    }
+
+    #[test]
     fn a_missing_or_doubled_shard_is_refused() {
         let mut parts = shards(3);
         parts.remove(1);
@@ -290,8 +308,14 @@ mod tests {
         );
         let mut parts = shards(3);
         parts.push(parts[0].clone());
-        let err = merge(parts).unwrap_err();
-        assert!(err.to_string().contains("a shard is given twice"), "{err}");
+        assert_eq!(
+            merge(parts).unwrap_err().to_string(),
+            "given twice: shard 1/3: shard1 and shard1"
+        );
+        let mut parts = shards(3);
+        parts[2].1.meta.shard = parts[2].1.meta.shard.map(|s| Shard { of: 99, ..s });
+        let err = merge(parts).unwrap_err().to_string();
+        assert!(err.contains("shard3 is shard 3/3 of 99 case-runs"), "{err}");
     }
 
     #[test]
@@ -305,33 +329,51 @@ mod tests {
         doubled[1].1.cases.push(extra);
         assert_eq!(
             merge(doubled).unwrap_err().to_string(),
-            "case-run 0 (sk550p bu0620/pkw-telegrams/p102-write) is in shard1 and in shard2"
+            "given twice: case-run 0 (sk550p bu0620/pkw-telegrams/p102-write): shard1 and shard2"
         );
+        let n = sample_run().cases.len();
         parts[1].1.cases.remove(0);
-        let err = merge(parts).unwrap_err();
         assert_eq!(
-            err.to_string(),
-            "incomplete: 4 of 5 case-runs present (missing positions: 1)"
+            merge(parts).unwrap_err().to_string(),
+            format!(
+                "incomplete: {} of {n} case-runs present (missing positions: 1)",
+                n - 1
+            )
         );
     }
 
     #[test]
+    fn every_shard_stopped_at_the_connection_check_is_one_case_run() {
+        let mut parts = shards(2);
+        for (k, (_, r)) in parts.iter_mut().enumerate() {
+            let mut check = sample_run().cases.remove(0);
+            check.id = CONNECTION_CHECK.into();
+            check.verdict = Verdict::Error;
+            check.message = "no reply within 2 s; the run stopped before its cases".into();
+            check.duration = Duration::from_millis(k as u64);
+            r.cases = vec![check];
+            r.meta.shard = r.meta.shard.map(|s| Shard { of: 1, ..s });
+        }
+        let merged = merge(parts).unwrap();
+        assert_eq!(merged.cases.len(), 1);
+        assert_eq!(merged.cases[0].id, CONNECTION_CHECK);
+    }
+
+    #[test]
     fn shards_of_different_runs_are_refused() {
-        for (what, change) in [
-            (
-                "DUT",
-                &(|r: &mut RunResult| r.dut = "enip://10.0.0.2".into()) as &dyn Fn(&mut RunResult),
-            ),
-            ("suites revision", &|r: &mut RunResult| {
+        type Change = fn(&mut RunResult);
+        let changes: [(&str, Change); 5] = [
+            ("DUT", |r| r.dut = "enip://10.0.0.2".into()),
+            ("suites revision", |r| {
                 r.meta.suites_revision = "feed".into()
             }),
-            ("harness revision", &|r: &mut RunResult| {
+            ("harness revision", |r| {
                 r.meta.harness_revision = "beef".into()
             }),
-            ("profiles", &|r: &mut RunResult| {
-                r.profiles.pop().map(drop).unwrap_or(())
-            }),
-        ] {
+            ("profiles", |r| r.profiles.truncate(1)),
+            ("DUT identity", |r| r.meta.identities.clear()),
+        ];
+        for (what, change) in changes {
             let mut parts = shards(2);
             change(&mut parts[1].1);
             let err = merge(parts).unwrap_err();
