@@ -83,8 +83,8 @@ fn files(dir: &Path) -> BTreeMap<String, String> {
 ///   first shard's);
 /// - the command line in `run.json` (the merge's is the first shard's without `--shard`);
 /// - start times: every RFC 3339 timestamp (`started`, JUnit's `timestamp`);
-/// - durations: `run.json`'s `"duration"` fields, JUnit's `time` attributes, the summary's
-///   `0.223 s`.
+/// - durations: `run.json`'s `"duration"` fields, JUnit's `time` attributes and `duration`
+///   property, the summary's `0.223 s`.
 fn masked(text: &str, folders: &[&Path]) -> String {
     let masks = [
         (
@@ -97,6 +97,10 @@ fn masked(text: &str, folders: &[&Path]) -> String {
         ),
         (r#""duration": [-+.\deE]+"#, r#""duration": <duration>"#),
         (r#" time="[^"]*""#, r#" time="<duration>""#),
+        (
+            r#"name="duration" value="[^"]*""#,
+            r#"name="duration" value="<duration>""#,
+        ),
         (r"\b\d+\.\d+ s\b", "<duration> s"),
     ];
     let mut text = text.to_string();
