@@ -67,10 +67,12 @@ pub enum Firmware {
     /// The release the suites are written against.
     #[default]
     Release,
-    /// A made-up next release with one documented change, so that comparing the runs of two
-    /// releases (`harness diff`) can be shown and tested on the simulator: the SK 550P's
-    /// "Addressing Mode" P856 leaves the factory as 2 (DHCP) instead of 1 (BOOTP, BU 0620
-    /// §4.2.2), the kind of changed default a release note lists.
+    /// A made-up next release, so that comparing the runs of two releases (`harness diff`) can
+    /// be shown and tested on the simulator. It says so where the product has a software
+    /// version (the modules' P171 [-02] revision is 1, BU 0590 §5.1.3, BU 2200 §7.1.3) and
+    /// behaves differently in one documented way: the SK 550P's "Addressing Mode" P856 leaves
+    /// the factory as 2 (DHCP) instead of 1 (BOOTP, BU 0620 §4.2.2), the kind of changed
+    /// default a release note lists.
     Next,
 }
 
@@ -290,6 +292,7 @@ impl Device {
             }
         }
         if config.firmware == Firmware::Next {
+            interface.store.set_info(171, 2, 1);
             interface.store.set_info(856, 1, 2);
         }
         Device {
@@ -742,6 +745,14 @@ mod tests {
             ..DeviceConfig::new(Product::Sk550p)
         });
         assert_eq!(read_interface(&mut next, 856, 1), 2, "DHCP");
+        let module = |firmware| {
+            let mut d = Device::new(DeviceConfig {
+                firmware,
+                ..DeviceConfig::new(Product::Tu3Pnt)
+            });
+            read_interface(&mut d, 171, 2)
+        };
+        assert_eq!((module(Firmware::Release), module(Firmware::Next)), (0, 1));
     }
 
     #[test]
