@@ -7,6 +7,7 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use super::diff::{CaseChange, Hunk, LoneCase, Numbered, Row, RunDiff, RunSide};
+use super::markup::text as esc;
 use super::write::{write_file, ReportError};
 use crate::outcome::Verdict;
 
@@ -35,6 +36,7 @@ fn header_rows(d: &RunDiff) -> Vec<(String, String, String)> {
         }),
         both("suites", &|s| s.meta.suites_revision.clone()),
         both("started", &|s| s.meta.started.clone()),
+        both("host", &|s| s.meta.host.clone()),
         both("command line", &|s| s.meta.command_line.join(" ")),
     ];
     let mut profiles: Vec<&String> = d
@@ -270,22 +272,6 @@ pub(crate) fn markdown(d: &RunDiff) -> String {
         }
     }
     s
-}
-
-/// Text for HTML: `& < > " '` escaped.
-fn esc(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for ch in s.chars() {
-        match ch {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
 }
 
 const STYLE: &str = "body{font-family:sans-serif;margin:1.5em}table{border-collapse:collapse;margin:.5em 0}\

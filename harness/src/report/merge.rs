@@ -4,7 +4,8 @@
 //! The shards must be one run cut in N: the same harness, suites, DUT, profiles and selection,
 //! every shard 1..N once, and every case-run position (`seq`) exactly once. The merged run takes
 //! the cases in `seq` order; its start is the earliest shard's, its duration the longest
-//! shard's (the shards run side by side), its command line the first shard's without `--shard`.
+//! shard's (the shards run side by side), its command line the first shard's without `--shard`,
+//! its host the shards' hosts (one name when they ran on one machine).
 
 use crate::outcome::{CaseResult, RunResult};
 use crate::runner::CONNECTION_CHECK;
@@ -134,6 +135,9 @@ pub(crate) fn merge(shards: Vec<(String, RunResult)>) -> Result<RunResult, Merge
             merged.meta.started.clone_from(&run.meta.started);
         }
         merged.duration = merged.duration.max(run.duration);
+        if !merged.meta.host.split(", ").any(|h| h == run.meta.host) {
+            merged.meta.host = format!("{}, {}", merged.meta.host, run.meta.host);
+        }
         cases.extend(run.cases.into_iter().map(|c| (src.clone(), c)));
     }
     check_parts(&parts)?;
@@ -262,7 +266,13 @@ mod tests {
     fn shards_merge_into_the_unsharded_run() {
         let mut parts = shards(3);
         parts.reverse();
-        let merged = merge(parts).unwrap();
+        let merged = merge(parts.clone()).unwrap();
+        parts[1].1.meta.host = "ci-2".into();
+        assert_eq!(
+            merge(parts).unwrap().meta.host,
+            format!("{}, ci-2", sample_run().meta.host),
+            "shards on several machines"
+        );
         let whole = sample_run();
         assert_eq!(merged.cases, whole.cases, "cases in unsharded order");
         assert_eq!(
