@@ -8,8 +8,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// Cases both suite versions have: the factory value (flips with the firmware) and the range
-/// (passes either way, its exchange changes).
+/// Cases both suite versions have: the factory value (flips with the firmware), the range
+/// (passes either way, its exchange changes) and, under the SK TU3-PNT whose software version
+/// the run's record reads, a case the firmware does not touch.
 const COMMON: &str = r#"
 doc: BU 0620
 edition: "2020-03 en"
@@ -21,6 +22,13 @@ cases:
     steps:
       - read: { param: 856, target: interface }
         expect: { value: 1 }
+  - id: p171-special-version
+    title: "P171 [-03] special version: 0 = standard"
+    ref: { section: "5.1.3", page: 35 }
+    profiles: [tu3-pnt]
+    steps:
+      - read: { param: 171, element: 3, target: interface }
+        expect: { value: 0 }
   - id: p856-a-mode
     title: "P856 holds an addressing mode, 0…2"
     ref: { section: "4.2.2", page: 79 }
@@ -105,6 +113,8 @@ fn two_runs(dir: &Path) -> (PathBuf, PathBuf) {
                 s(suites),
                 "--profile",
                 "sk550p",
+                "--profile",
+                "tu3-pnt",
                 "--out",
                 s(out),
             ],
@@ -132,13 +142,18 @@ fn a_firmware_change_flips_known_cases_and_the_diff_says_so() {
     let (stdout, stderr) = text(&o);
     assert_eq!(o.status.code(), Some(1), "a regression: {stdout}{stderr}");
 
-    // Header: both runs, the firmware named in the DUT.
+    // Header: both runs, the firmware named in the DUT and in the identity the device reports.
     assert!(
         stdout.contains("DUT: embedded simulator  →  embedded simulator (firmware next)\n"),
         "{stdout}"
     );
     assert!(
-        stdout.contains("verdict changes: 1 (regressions: 1), transcript changes: 2, new: 1, vanished: 1, unchanged: 0"),
+        stdout.contains("identity tu3-pnt: firmware 0.0 R0 (from P171 software version over the parameter channel)  →  firmware 0.0 R1 (from P171 software version over the parameter channel)\n"),
+        "{stdout}"
+    );
+    // Unchanged: the P171 case under tu3-pnt, each profile's not-applicable cases.
+    assert!(
+        stdout.contains("verdict changes: 1 (regressions: 1), transcript changes: 2, new: 2, vanished: 2, unchanged: 4"),
         "{stdout}"
     );
     // The flipped case, old → new, with both messages.
@@ -218,7 +233,7 @@ fn no_change_exits_0_and_an_unreadable_run_is_a_usage_error_naming_the_file() {
     let (stdout, stderr) = text(&o);
     assert_eq!(o.status.code(), Some(0), "{stdout}{stderr}");
     assert!(
-        stdout.contains("verdict changes: 0 (regressions: 0), transcript changes: 0, new: 0, vanished: 0, unchanged: 3"),
+        stdout.contains("verdict changes: 0 (regressions: 0), transcript changes: 0, new: 0, vanished: 0, unchanged: 8"),
         "{stdout}"
     );
 
@@ -268,7 +283,7 @@ fn snapshots_report_the_same_change_the_same_way() {
     let (stdout, _) = text(&o);
     assert_eq!(o.status.code(), Some(1), "{stdout}");
     assert!(
-        stdout.contains("snapshots: 0 stored, 0 unchanged, 2 changed, 0 new"),
+        stdout.contains("snapshots: 0 stored, 1 unchanged, 2 changed, 0 new"),
         "{stdout}"
     );
     // The case that still passes on its own fails on its changed transcript, which names the
