@@ -37,8 +37,13 @@ pub(crate) struct Numbered {
 /// One row of a side-by-side difference.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) enum Row {
-    /// A line both sides have, shown for context.
-    Same(Numbered),
+    /// A line both sides have, shown for context, with its number on each side.
+    Same {
+        /// The line in the old transcript.
+        old: Numbered,
+        /// The same line in the new one.
+        new: Numbered,
+    },
     /// A line only one side has, or a line changed: old and new, each absent when that side has
     /// fewer lines in this block.
     Changed {
@@ -198,9 +203,12 @@ pub(crate) fn compare_transcripts(old: &str, new: &str) -> Option<TranscriptDiff
         };
         for op in &ops[from..=to] {
             match *op {
-                Op::Same(i, _) => {
+                Op::Same(i, j) => {
                     flush(&mut rows, &mut olds, &mut news);
-                    rows.push(Row::Same(line(&a, i)));
+                    rows.push(Row::Same {
+                        old: line(&a, i),
+                        new: line(&b, j),
+                    });
                 }
                 Op::Old(i) => olds.push(line(&a, i)),
                 Op::New(j) => news.push(line(&b, j)),
@@ -420,11 +428,15 @@ mod tests {
     use super::*;
     use crate::report::fixtures::sample_run;
 
-    fn same(at: usize, text: &str) -> Row {
-        Row::Same(Numbered {
+    fn same(old: usize, new: usize, text: &str) -> Row {
+        let n = |at| Numbered {
             at,
             text: text.into(),
-        })
+        };
+        Row::Same {
+            old: n(old),
+            new: n(new),
+        }
     }
 
     fn changed(old: Option<(usize, &str)>, new: Option<(usize, &str)>) -> Row {
@@ -453,12 +465,12 @@ mod tests {
             vec![Hunk {
                 place: "step 1: read P102".into(),
                 rows: vec![
-                    same(5, "  -> 01"),
-                    same(6, "     AK 1"),
+                    same(5, 5, "  -> 01"),
+                    same(6, 6, "     AK 1"),
                     changed(Some((7, "  <- 02")), Some((7, "  <- 03"))),
                     changed(Some((8, "     PWE 250")), Some((8, "     PWE 251"))),
-                    same(9, ""),
-                    same(10, "step 2: y"),
+                    same(9, 9, ""),
+                    same(10, 10, "step 2: y"),
                 ],
             }]
         );
@@ -486,11 +498,11 @@ mod tests {
         assert_eq!(
             d.hunks[0].rows,
             vec![
-                same(1, "l1"),
-                same(2, "l2"),
+                same(1, 1, "l1"),
+                same(2, 2, "l2"),
                 changed(None, Some((3, "extra"))),
-                same(3, "l3"),
-                same(4, "l4"),
+                same(3, 4, "l3"),
+                same(4, 5, "l4"),
             ]
         );
         // l15 changed and l20 gone, four unchanged lines apart: one hunk, from l13 to the end.

@@ -128,7 +128,7 @@ pub(crate) fn text(d: &RunDiff) -> String {
             let _ = writeln!(s, "    @ {}", h.place);
             for r in &h.rows {
                 match r {
-                    Row::Same(l) => {
+                    Row::Same { old: l, .. } => {
                         let _ = writeln!(s, "      {:>4} {}", l.at, l.text);
                     }
                     Row::Changed { old, new } => {
@@ -236,7 +236,7 @@ pub(crate) fn markdown(d: &RunDiff) -> String {
             );
             for r in &h.rows {
                 let (old, new) = match r {
-                    Row::Same(l) => (Some(l), Some(l)),
+                    Row::Same { old, new } => (Some(old), Some(new)),
                     Row::Changed { old, new } => (old.as_ref(), new.as_ref()),
                 };
                 let (mut o, mut n) = (md_code(old), md_code(new));
@@ -339,7 +339,7 @@ pub(crate) fn html(d: &RunDiff) -> String {
             );
             for r in &h.rows {
                 let (class, old, new) = match r {
-                    Row::Same(l) => ("same", Some(l), Some(l)),
+                    Row::Same { old, new } => ("same", Some(old), Some(new)),
                     Row::Changed { old, new } => ("changed", old.as_ref(), new.as_ref()),
                 };
                 let cell = |l: Option<&Numbered>, side: &str| match l {
@@ -464,6 +464,10 @@ mod tests {
         assert!(
             h.contains("<tr class=\"changed\"><td class=\"n\">12</td><td class=\"code old\">  &lt;- 65 02 14 4E 01 00 00 00 00 FA</td><td class=\"n\">13</td><td class=\"code new\">  &lt;- 65 02 14 4E 01 00 00 00 00 FB</td></tr>"),
             "{h}"
+        );
+        assert!(
+            h.contains("<tr class=\"same\"><td class=\"n\">11</td><td class=\"code old\">     AK 2, PNU 1102 = P102, IND 0100h, PWE 250</td><td class=\"n\">12</td>"),
+            "context lines carry each side's number (the new run has a message line more): {h}"
         );
         assert!(
             !h.contains("src=") && !h.contains("href="),
