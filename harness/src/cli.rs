@@ -1,6 +1,7 @@
 //! The `harness` command line: `run` (the default), `list`, `addr`, `decode`, `serve`,
-//! `describe`, and `diff`/`merge` over report folders (`crate::cli_reports`). What is a bus's own (`serve <bus>`, `describe <format>`, `--dut <bus>://…`) is
-//! found through the bus registry (`crate::bus`).
+//! `describe`, and `diff`/`merge` over report folders (`crate::cli_reports`). What is a bus's
+//! own (`serve <bus>`, `describe <format>`, `--dut <bus>://…`) is found through the bus
+//! registry (`crate::bus`).
 //!
 //! Exit codes: 0 every case passed (or did not apply), 1 a case failed or ended in error,
 //! 2 usage or configuration error (bad arguments, a suite file that does not load).
