@@ -8,8 +8,43 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// The selection: every BU 0620 case under the SK 550P (a few hundred case-runs, most of them
-/// not applicable, so every shard gets both kinds).
+/// not applicable, so every shard gets both kinds), from a copy of `suites/bu0620` with
+/// [`FAILING`] added.
 const SELECTION: [&str; 4] = ["--profile", "sk550p", "--filter", "bu0620"];
+
+/// Cases the simulator fails, so that the reports' failure details (the deciding step, what
+/// was observed, the device's refusal) must survive the merge too.
+const FAILING: &str = r#"
+doc: BU 0620
+edition: "2020-03 en"
+cases:
+  - id: p856-wrong-factory-value
+    title: "P856 leaves the factory as 2 (it is 1: this case fails on purpose)"
+    ref: { section: "4.2.2", page: 79 }
+    profiles: [sk550p]
+    steps:
+      - read: { param: 856, target: interface }
+        expect: { value: 2 }
+  - id: p856-out-of-range-accepted
+    title: "P856 takes 5 (it is refused: this case fails on purpose)"
+    ref: { section: "4.2.2", page: 79 }
+    profiles: [sk550p]
+    steps:
+      - write: { param: 856, target: interface, value: 5 }
+"#;
+
+/// `suites/bu0620` and the failing cases in `dir/suites`.
+fn suites(dir: &Path) -> PathBuf {
+    let from = Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites/bu0620");
+    let to = dir.join("suites/bu0620");
+    std::fs::create_dir_all(&to).unwrap();
+    for e in std::fs::read_dir(&from).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, to.join(p.file_name().unwrap())).unwrap();
+    }
+    std::fs::write(to.join("zz-failing.yaml"), FAILING).unwrap();
+    dir.join("suites")
+}
 
 struct Dir(PathBuf);
 
@@ -51,9 +86,10 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// `harness run` of the selection into `out`, with `extra` arguments; returns the exit code.
-fn run(out: &Path, extra: &[&str]) -> i32 {
-    let mut args = vec!["run", "--out", s(out)];
+/// `harness run` of the selection in `suites` into `out`, with `extra` arguments; returns the
+/// exit code.
+fn run(suites: &Path, out: &Path, extra: &[&str]) -> i32 {
+    let mut args = vec!["run", "--suites", s(suites), "--out", s(out)];
     args.extend(SELECTION);
     args.extend(extra);
     let o = harness(&args);
@@ -135,13 +171,18 @@ fn first_difference(a: &str, b: &str) -> Option<(usize, String, String)> {
 #[test]
 fn three_shards_merge_into_the_unsharded_reports() {
     let dir = scratch("merge");
+    let suites = suites(&dir.0);
     let whole = dir.0.join("whole");
-    let code = run(&whole, &[]);
+    let code = run(&suites, &whole, &[]);
+    assert_eq!(code, 1, "the failing cases fail");
     let shards: Vec<PathBuf> = (1..=3).map(|k| dir.0.join(format!("shard{k}"))).collect();
     let mut counts = Vec::new();
     for (k, shard) in (1..).zip(&shards) {
         let spec = format!("{k}/3");
-        assert_eq!(run(shard, &["--shard", &spec]), code, "shard {spec}");
+        assert!(
+            [0, 1].contains(&run(&suites, shard, &["--shard", &spec])),
+            "shard {spec}"
+        );
         let run_json = std::fs::read_to_string(shard.join("run.json")).unwrap();
         let seqs: Vec<usize> = serde_json::from_str::<serde_json::Value>(&run_json).unwrap()
             ["cases"]
@@ -175,6 +216,10 @@ fn three_shards_merge_into_the_unsharded_reports() {
         "the same files"
     );
     assert!(want.contains_key("run.json") && want.contains_key("junit.xml"));
+    // What the comparison must cover: the failures' deciding steps and the device's refusal.
+    let html = &want["index.html"];
+    assert!(html.contains("<dt>step observed</dt>"), "{html}");
+    assert!(html.contains("<dt>refusal</dt>"), "{html}");
     assert!(
         want.keys()
             .filter(|k| k.starts_with("transcripts/"))
@@ -202,9 +247,10 @@ fn three_shards_merge_into_the_unsharded_reports() {
 #[test]
 fn merge_refuses_an_incomplete_or_doubled_set_and_shard_values_are_checked() {
     let dir = scratch("refuse");
+    let suites = suites(&dir.0);
     let shards: Vec<PathBuf> = (1..=3).map(|k| dir.0.join(format!("shard{k}"))).collect();
     for (k, shard) in (1..).zip(&shards) {
-        run(shard, &["--shard", &format!("{k}/3")]);
+        run(&suites, shard, &["--shard", &format!("{k}/3")]);
     }
     let out = dir.0.join("merged");
     let o = harness(&["merge", "--out", s(&out), s(&shards[0]), s(&shards[1])]);

@@ -194,10 +194,20 @@ pub struct CaseResult {
     /// loaded), so `harness merge` can restore that order from shards.
     #[serde(default)]
     pub seq: usize,
-    /// The transcript text of a case read back from a report folder, whose steps are not in
-    /// `run.json`: the reports render it in place of the steps (see `report::read`).
+    /// The transcript text of a case read back from a report folder (`run.json` keeps the
+    /// deciding step at most, without exchanges): the reports render it in place of the steps
+    /// (see `report::read`).
     #[serde(skip)]
     pub transcript: Option<String>,
+}
+
+impl CaseResult {
+    /// The step that decided the verdict: the first with the case's verdict (the first step of
+    /// a pass; none without steps). The reports show it as what was observed; `run.json` keeps
+    /// it, so that a run read back from its reports shows the same.
+    pub fn deciding_step(&self) -> Option<&StepResult> {
+        self.steps.iter().find(|st| st.verdict == self.verdict)
+    }
 }
 
 /// A device's identity as the device itself reports it over its bus (EtherNet/IP

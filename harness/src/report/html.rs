@@ -20,7 +20,7 @@ use super::markup::text;
 use super::record::{self, group_title};
 use super::summary::{by_section, model_cell, not_passed, profiles, Counts};
 use super::transcript;
-use crate::outcome::{CaseKind, CaseResult, RunResult, StepResult, Verdict};
+use crate::outcome::{CaseKind, CaseResult, RunResult, Verdict};
 
 const CSS: &str = include_str!("html.css");
 const SCRIPT: &str = include_str!("html.js");
@@ -127,11 +127,6 @@ fn filters(s: &mut String, run: &RunResult) {
     s.push_str("</select></label> <span id=\"shown\"></span></form>\n");
 }
 
-/// The step that decided the verdict: the first with the case's verdict.
-fn deciding_step(c: &CaseResult) -> Option<&StepResult> {
-    c.steps.iter().find(|st| st.verdict == c.verdict)
-}
-
 fn case_item(s: &mut String, c: &CaseResult) {
     let m = &c.manual;
     let _ = writeln!(
@@ -148,7 +143,7 @@ fn case_item(s: &mut String, c: &CaseResult) {
         title = text(&record::requirement(c)),
         msg = text(&c.message),
     );
-    if let Some(st) = deciding_step(c) {
+    if let Some(st) = c.deciding_step() {
         let _ = writeln!(s, "<dt>step</dt><dd><code>{}</code></dd>", text(&st.step));
         if !st.observed.is_null() {
             let _ = writeln!(

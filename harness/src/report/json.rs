@@ -10,7 +10,9 @@ use std::collections::BTreeMap;
 
 use super::summary::{profiles, Counts};
 use super::write::transcript_file;
-use crate::outcome::{CaseKind, CaseResult, Erratum, ManualRef, RunMeta, RunResult, Verdict};
+use crate::outcome::{
+    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, Verdict,
+};
 
 /// One case in `run.json`.
 #[derive(Debug, Serialize)]
@@ -28,6 +30,20 @@ struct Case<'a> {
     transcript: Option<String>,
     /// Position in the unsharded run's order (`harness merge` restores it).
     seq: usize,
+    /// The step that decided the verdict, without its exchanges (the transcript has them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    step: Option<Step<'a>>,
+}
+
+/// A case's deciding step in `run.json`.
+#[derive(Debug, Serialize)]
+struct Step<'a> {
+    step: &'a str,
+    verdict: Verdict,
+    observed: &'a serde_json::Value,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    refusal: Option<&'a Refusal>,
+    message: &'a str,
 }
 
 impl<'a> From<&'a CaseResult> for Case<'a> {
@@ -43,6 +59,13 @@ impl<'a> From<&'a CaseResult> for Case<'a> {
             duration: c.duration.as_secs_f64(),
             transcript: transcript_file(c).map(|f| f.to_string_lossy().replace('\\', "/")),
             seq: c.seq,
+            step: c.deciding_step().map(|st| Step {
+                step: &st.step,
+                verdict: st.verdict,
+                observed: &st.observed,
+                refusal: st.refusal.as_ref(),
+                message: &st.message,
+            }),
         }
     }
 }
@@ -116,6 +139,12 @@ mod tests {
                 "duration": 0.003,
                 "transcript": "transcripts/sk550p/bu0620__addressing__coe-p102.txt",
                 "seq": 1,
+                "step": {
+                    "step": "read P102 set 3 FI 5",
+                    "verdict": "fail",
+                    "observed": {"ak": 1, "pwe": 250},
+                    "message": "status: expected 2865 (0B31h), got 2871 (0B37h)",
+                },
             })
         );
         assert_eq!(v["cases"][2]["verdict"], "not_applicable");

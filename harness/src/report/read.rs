@@ -1,14 +1,17 @@
 //! Reading a report folder back into a [`RunResult`], for `harness diff` and `harness merge`.
 //!
-//! `run.json` holds every case but not its steps; each case's transcript file holds the steps
-//! as text. A case read back carries that text ([`CaseResult::transcript`]), which the reports
-//! render in place of the steps, so a run read back writes the same reports again.
+//! `run.json` holds every case with the step that decided its verdict, without exchanges; each
+//! case's transcript file holds all the steps as text. A case read back carries its deciding
+//! step and that text ([`CaseResult::transcript`]), which the reports render in place of the
+//! steps, so a run read back writes the same reports again.
 
 use serde::Deserialize;
 use std::path::{Component, Path, PathBuf};
 use std::time::Duration;
 
-use crate::outcome::{CaseKind, CaseResult, Erratum, ManualRef, RunMeta, RunResult, Verdict};
+use crate::outcome::{
+    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, StepResult, Verdict,
+};
 
 /// A report folder or `run.json` that cannot be read back. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
@@ -68,6 +71,17 @@ struct Case {
     duration: f64,
     transcript: Option<String>,
     seq: Option<usize>,
+    step: Option<Step>,
+}
+
+/// The deciding step as `run.json` keeps it (without exchanges).
+#[derive(Deserialize)]
+struct Step {
+    step: String,
+    verdict: Verdict,
+    observed: serde_json::Value,
+    refusal: Option<Refusal>,
+    message: String,
 }
 
 fn secs(path: &Path, s: f64) -> Result<Duration, ReadError> {
@@ -129,7 +143,18 @@ pub(crate) fn read(given: &Path) -> Result<RunResult, ReadError> {
             kind: c.kind,
             verdict: c.verdict,
             message: c.message,
-            steps: Vec::new(),
+            steps: c
+                .step
+                .into_iter()
+                .map(|st| StepResult {
+                    step: st.step,
+                    verdict: st.verdict,
+                    observed: st.observed,
+                    refusal: st.refusal,
+                    message: st.message,
+                    exchanges: Vec::new(),
+                })
+                .collect(),
             seq: c.seq.unwrap_or(n),
             transcript,
         });
@@ -154,12 +179,21 @@ mod tests {
     #[test]
     fn a_written_run_reads_back_and_writes_the_same_reports_again() {
         let (first, second) = (temp_dir("read-first"), temp_dir("read-second"));
-        let run = sample_run();
+        let mut run = sample_run();
+        run.cases[1].steps[0].refusal = Some(Refusal {
+            kind: "parameter-channel error".into(),
+            code: 3,
+            text: "wrong subindex".into(),
+        });
         write_all(&run, &first).unwrap();
         let back = read(&first).unwrap();
         assert_eq!(back.cases.len(), run.cases.len());
         for (b, c) in back.cases.iter().zip(&run.cases) {
-            assert!(b.steps.is_empty());
+            let deciding = c.deciding_step().map(|st| StepResult {
+                exchanges: Vec::new(),
+                ..st.clone()
+            });
+            assert_eq!(b.deciding_step(), deciding.as_ref(), "{}", c.id);
             assert_eq!(
                 (&b.id, &b.profile, b.verdict, b.seq),
                 (&c.id, &c.profile, c.verdict, c.seq)
@@ -186,6 +220,7 @@ mod tests {
             "run.json",
             "junit.xml",
             "summary.md",
+            "index.html",
             "transcripts/sk550p/bu0620__addressing__coe-p102.txt",
             "transcripts/tu3-eip/bu0620__pkw-telegrams__silent.txt",
         ] {
