@@ -32,6 +32,7 @@ pub mod poll;
 mod profile;
 mod report;
 mod runner;
+mod safety;
 pub mod stats;
 mod suite;
 
@@ -44,6 +45,7 @@ pub fn run_embedded(suites: &std::path::Path) -> Result<outcome::RunResult, Stri
         filter: None,
         retries: 250,
         tap: None,
+        limits: None,
     };
     Ok(runner::run(
         &loaded,

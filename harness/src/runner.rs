@@ -12,6 +12,7 @@ use crate::binding::{Binding, Observation, OpenError, StepError};
 use crate::model::{Args, ComputeError, Ctx};
 use crate::outcome::{CaseKind, CaseResult, RunMeta, RunResult, StepResult, Verdict};
 use crate::profile::{Capability, Profile};
+use crate::safety::Guard;
 use crate::suite::{Action, Case, Loaded, Step};
 
 /// How to run.
@@ -25,6 +26,9 @@ pub(crate) struct RunOptions {
     /// The run's capture (`--pcap`), if any: the runner labels its packets with the profile,
     /// case and step that produce them.
     pub(crate) tap: Option<crate::pcap::SharedTap>,
+    /// What a DUT on the network allows (`--allow-motion`, `--max-eeprom-writes`); `None`
+    /// for the embedded simulator, which has no motor to turn and no EEPROM to wear.
+    pub(crate) limits: Option<crate::safety::Limits>,
 }
 
 /// Opens a DUT for a profile; called once per case so every case starts from a known state.
@@ -39,17 +43,22 @@ pub(crate) trait DutFactory {
 pub(crate) fn run(loaded: &Loaded, opts: &RunOptions, factory: &mut dyn DutFactory) -> RunResult {
     let start = Instant::now();
     let mut cases = Vec::new();
+    let mut guard = opts.limits.map(Guard::new);
     for profile in &opts.profiles {
         for case in &loaded.cases {
             if opts.filter.as_deref().is_some_and(|f| !case.id.contains(f)) {
                 continue;
             }
-            cases.push(run_case(case, profile, opts, factory));
+            cases.push(run_case(case, profile, opts, &mut guard, factory));
         }
     }
     RunResult {
         dut: factory.describe(),
-        meta: RunMeta::default(),
+        meta: RunMeta {
+            motion_allowed: guard.as_ref().is_none_or(Guard::motion_allowed),
+            eeprom_writes: guard.as_ref().map_or(0, Guard::eeprom_writes),
+            ..RunMeta::default()
+        },
         profiles: opts.profiles.iter().map(|p| p.name().to_string()).collect(),
         cases,
         errata: loaded.errata.clone(),
@@ -145,10 +154,14 @@ fn run_case(
     case: &Case,
     profile: &Profile,
     opts: &RunOptions,
+    guard: &mut Option<Guard>,
     factory: &mut dyn DutFactory,
 ) -> CaseResult {
     let start = Instant::now();
-    if let Some(why) = not_applicable(case, profile, None) {
+    // What a device on the network allows is decided from the whole case before anything is
+    // sent, opening included: no case half-runs.
+    let refused = || guard.as_ref().and_then(|g| g.refuse(case));
+    if let Some(why) = not_applicable(case, profile, None).or_else(refused) {
         return result(
             case,
             profile,
@@ -189,6 +202,9 @@ fn run_case(
         None
     };
     let mut r = run_steps(case, profile, opts, &mut channel, start);
+    if let Some(g) = guard.as_mut() {
+        g.ran(case, r.steps.len());
+    }
     if let Some(dut) = channel.as_mut() {
         finish(&mut r, dut.as_mut(), opts);
     }
@@ -501,6 +517,7 @@ cases:
             filter: None,
             retries: 25,
             tap: None,
+            limits: None,
         }
     }
 

@@ -916,6 +916,7 @@ cases:
             filter: None,
             retries: 25,
             tap: None,
+            limits: None,
         };
         let r = run(&loaded, &opts, &mut NoOpen);
         for c in &r.cases {

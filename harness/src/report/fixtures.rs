@@ -89,6 +89,7 @@ pub(super) fn sample_run() -> RunResult {
             )]
             .into(),
             motion_allowed: false,
+            eeprom_writes: 0,
         },
         profiles: vec!["sk550p".into(), "tu3-eip".into()],
         cases: vec![
