@@ -140,7 +140,9 @@ pub struct StepResult {
 }
 
 /// What a case checks: the device, or only the harness's reference model of the manuals.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default, Serialize, Deserialize,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum CaseKind {
     /// At least one step reaches the DUT: a verdict about the device.

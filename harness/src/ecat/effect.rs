@@ -108,7 +108,9 @@ mod tests {
         // AL control (0120h) = OP.
         assert_eq!(datagram(Command::FPWR, 0x0120, &[8, 0]), Effect::NONE);
         // Into the process memory, or to a logical address: output data.
-        assert!(datagram(Command::FPWR, 0x1100, &[0x7F, 0x04]).motion.is_some());
+        assert!(datagram(Command::FPWR, 0x1100, &[0x7F, 0x04])
+            .motion
+            .is_some());
         assert!(datagram(Command::LWR, 0, &[0x7F, 0x04]).motion.is_some());
         assert_eq!(datagram(Command::LRW, 0, &[0, 0]), Effect::NONE);
         assert_eq!(datagram(Command::LRD, 0, &[0x7F, 0x04]), Effect::NONE);

@@ -6,6 +6,7 @@
 
 use proto::enip::cip::{class, MrRequest, Service};
 use proto::enip::cm::UnconnectedSend;
+use proto::enip::cpf::item_type::{CONNECTED_DATA, UNCONNECTED_DATA};
 use proto::enip::cpf::Item;
 use proto::enip::encap::SendData;
 use proto::enip::epath::EPath;
@@ -20,6 +21,8 @@ const SEND_RR_DATA: u16 = 0x6F;
 const SEND_UNIT_DATA: u16 = 0x70;
 /// Encapsulation header length (CIP Vol 2 §2-3.2).
 const HEADER: usize = 24;
+/// Interface handle and timeout before the item list of SendRRData/SendUnitData.
+const SEND_DATA_HEAD: usize = 6;
 /// Set_Attribute_List (CIP Vol 1 Appendix A).
 const SET_ATTRIBUTE_LIST: u8 = 0x04;
 /// Services that write nothing the device keeps and start nothing: the Get services, the
@@ -68,15 +71,41 @@ fn encapsulation(bytes: &[u8]) -> Effect {
             .iter()
             .map(|item| match item {
                 Item::UnconnectedData(d) => request_bytes(d),
-                // A connected message starts with its sequence count.
-                Item::ConnectedData(d) => request_bytes(d.get(2..).unwrap_or_default()),
+                Item::ConnectedData(d) => connected(d),
                 _ => Effect::NONE,
             })
             .fold(Effect::NONE, Effect::and),
-        // Zero bytes carry no request.
-        Err(_) if data.iter().all(|b| *b == 0) => Effect::NONE,
-        Err(_) => Effect::motion("a SendRRData/SendUnitData the harness cannot decode"),
+        Err(_) => malformed_items(data.get(SEND_DATA_HEAD..).unwrap_or_default()),
     }
+}
+
+/// A connected message starts with its sequence count.
+fn connected(item: &[u8]) -> Effect {
+    request_bytes(item.get(2..).unwrap_or_default())
+}
+
+/// The item list of a SendRRData/SendUnitData that does not parse (a count beyond the items,
+/// a length beyond the data): the items walked as far as the bytes go, and each data item's
+/// request as far as it is there — what a lenient target would take.
+fn malformed_items(list: &[u8]) -> Effect {
+    let word = |at: usize| {
+        list.get(at..at + 2)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]))
+    };
+    let mut effect = Effect::NONE;
+    let mut at = 2;
+    while let (Some(kind), Some(len)) = (word(at), word(at + 2)) {
+        let start = at + 4;
+        let end = (start + usize::from(len)).min(list.len());
+        let item = list.get(start..end).unwrap_or_default();
+        effect = effect.and(match kind {
+            UNCONNECTED_DATA => request_bytes(item),
+            CONNECTED_DATA => connected(item),
+            _ => Effect::NONE,
+        });
+        at = end;
+    }
+    effect
 }
 
 /// A message-router request as bytes.
@@ -218,7 +247,9 @@ mod tests {
     fn requests_inside_unconnected_send_and_raw_encapsulation() {
         // Unconnected_Send to the Connection Manager carrying the P509 write of FI 2.
         let inner = "10 04 20 66 24 00 31 00 FD 01 08 00";
-        let e = mr(&format!("52 02 20 06 24 01 0A 0E 0C 00 {inner} 01 00 01 00"));
+        let e = mr(&format!(
+            "52 02 20 06 24 01 0A 0E 0C 00 {inner} 01 00 01 00"
+        ));
         assert!(e.motion.is_some(), "{e:?}");
         // SendRRData: header, interface handle, timeout, null item, unconnected data item.
         let mut raw = vec![0x6F, 0, 22, 0];
@@ -226,11 +257,20 @@ mod tests {
         raw.extend([0, 0, 0, 0, 0, 0, 2, 0, 0, 0, 0, 0, 0xB2, 0, 10, 0]);
         raw.extend([0x10, 0x03, 0x20, 0x65, 0x24, 0x00, 0x30, 0x66, 0xC8, 0x00]);
         assert_eq!(encapsulation(&raw), Effect::eeprom(1));
-        // The suites' malformed SendRRData carry no request.
+        // The suites' malformed SendRRData: no request, or a read in an item list that lies.
         assert_eq!(
             encapsulation(&[0x6F, 0, 0x18, 0, 0, 0, 0, 0, 0, 0]),
             Effect::NONE
         );
+        let mut lying = raw[..24].to_vec();
+        lying.extend([0, 0, 0, 0, 0, 0, 3, 0, 0, 0, 0, 0, 0xB2, 0, 40, 0]);
+        lying.extend([0x0E, 0x03, 0x20, 0x01, 0x24, 0x01, 0x30, 0x01]);
+        assert_eq!(encapsulation(&lying), Effect::NONE);
+        // The same list carrying a write still counts.
+        let n = lying.len();
+        lying[n - 8] = 0x10;
+        lying.extend([0xC8, 0x00]);
+        assert_eq!(encapsulation(&lying), Effect::eeprom(1));
         // Other commands (RegisterSession) carry none either.
         assert_eq!(encapsulation(&[0x65, 0, 4, 0]), Effect::NONE);
     }

@@ -98,8 +98,7 @@ fn sdo(bytes: &[u8]) -> Effect {
             safety::sdo_download(index, data)
         }
         (true, Segmentation::Segment | Segmentation::Complete, _) => {
-            safety::output_data("an SDO write segment", &command.payload)
-                .and(Effect::eeprom(1))
+            safety::output_data("an SDO write segment", &command.payload).and(Effect::eeprom(1))
         }
         (_, _, _) if command.command == CommandId::FILE_WRITE => Effect::eeprom(1),
         _ => Effect::motion(format!(
@@ -125,7 +124,9 @@ mod tests {
     #[test]
     fn the_suites_sdo_writes_decode() {
         // WriteByIndex 2066h sub 1 = 1000: P102 of FI 1 on an SK TU3-POL (BU 2200).
-        let e = sdo(&bytes("02 06 00 00  00 01 00 01 0600 0000  6620 01 00 E803"));
+        let e = sdo(&bytes(
+            "02 06 00 00  00 01 00 01 0600 0000  6620 01 00 E803",
+        ));
         assert_eq!(e, Effect::eeprom(1));
         // A ReadByIndex, and a truncated one.
         assert_eq!(

@@ -71,10 +71,7 @@ fn record(index: u16, data: &[u8]) -> Effect {
 
 /// An order to the interface's own parameters: the same writes, none of them an inverter's.
 fn interface(e: Effect) -> Effect {
-    Effect {
-        motion: None,
-        ..e
-    }
+    Effect { motion: None, ..e }
 }
 
 /// A PROFINET frame from its frame id on.
@@ -106,7 +103,10 @@ mod tests {
         assert!(e.motion.is_some());
         assert_eq!(e.eeprom_writes, 1);
         // Record 100: the interface's P509 is not the inverter's.
-        assert_eq!(record(100, &[0x25, 0xE5, 0, 0, 0, 0, 0, 8]), Effect::eeprom(1));
+        assert_eq!(
+            record(100, &[0x25, 0xE5, 0, 0, 0, 0, 0, 8]),
+            Effect::eeprom(1)
+        );
         // BU 0590 §4.2.4.3's example: record 47, label 2, axis 1, P105 = 60.0 Hz.
         let r47 = [5, 2, 1, 0x04, 0x51, 0, 0, 0, 0, 0x02, 0x58];
         assert_eq!(record(RECORD_AXIS, &r47), Effect::eeprom(1));
