@@ -1,6 +1,6 @@
 //! What a step can do to a real device beyond what it tests: make a motor turn, or wear the
 //! device's EEPROM. A drive on the network (`--dut`) may have a motor attached, and its
-//! EEPROM allows "100,000 cycles" of writing (BU 0620 §2.5.6 p. 51, BU 0590 §4.2.5); the
+//! EEPROM allows "100,000 cycles" of writing (BU 0620 §2.5.6 p. 51, BU 0590 §4.2.4); the
 //! embedded simulator has neither, so this only governs runs against a DUT.
 //!
 //! The classification is conservative: where the bytes do not tell, a step counts as able to

@@ -148,7 +148,7 @@ fn request(service: u8, path: &EPath, data: &[u8]) -> Effect {
             ),
             (Some(c @ 100..=108), Some(attribute)) => parameter(c, attribute),
             // Any other attribute set may be kept (the interface's own parameters P15x/P16x
-            // "can be set and saved", BU 2100 §6.3).
+            // "can be set and saved", BU 2100 §7.1).
             _ => Effect::eeprom(1),
         },
         Service::SET_ATTRIBUTES_ALL | Service(SET_ATTRIBUTE_LIST) => match class {
