@@ -578,6 +578,68 @@ cases:
         );
     }
 
+    /// The embedded simulator, counting the DUTs opened.
+    struct Counting(usize);
+
+    impl DutFactory for Counting {
+        fn describe(&self) -> String {
+            "counting simulator".into()
+        }
+        fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+            self.0 += 1;
+            EmbeddedFactory::default().open(profile, retries)
+        }
+    }
+
+    #[test]
+    fn without_allow_motion_a_motion_case_is_not_applicable_before_the_dut_is_opened() {
+        let loaded = load_text_for_tests(
+            r#"
+doc: BU 0620
+edition: "2020-03 en"
+cases:
+  - id: enables
+    title: enables operation
+    ref: { section: "6.1.3", page: 114 }
+    steps:
+      - read: { param: 102 }
+      - process: { control: "047Fh", setpoints: ["2000h"], for: 40ms }
+  - id: writes
+    title: writes P102
+    ref: { section: "2.5.6", page: 51 }
+    steps:
+      - write: { param: 102, value: 100 }
+"#,
+        );
+        let opts = RunOptions {
+            limits: Some(crate::safety::Limits {
+                allow_motion: false,
+                max_eeprom_writes: 20,
+            }),
+            ..sk550p_options()
+        };
+        let mut factory = Counting(0);
+        let r = run(&loaded, &opts, &mut factory);
+        let c = &r.cases[0];
+        assert_eq!(c.verdict, Verdict::NotApplicable);
+        assert!(
+            c.message
+                .starts_with("motion not allowed (--allow-motion): control word 047Fh"),
+            "{}",
+            c.message
+        );
+        assert!(c.steps.is_empty());
+        // Only the other case opened the DUT; its write and the restore are counted.
+        assert_eq!(factory.0, 1);
+        assert_eq!(r.cases[1].verdict, Verdict::Pass, "{}", r.cases[1].message);
+        assert!(!r.meta.motion_allowed);
+        assert_eq!(r.meta.eeprom_writes, 2);
+        // The embedded simulator runs both, and says motion was allowed.
+        let r = run(&loaded, &sk550p_options(), &mut Counting(0));
+        assert_eq!(r.cases[0].verdict, Verdict::Pass, "{}", r.cases[0].message);
+        assert!(r.meta.motion_allowed);
+    }
+
     /// The embedded simulator behind a binding whose cleanup does what the test says.
     struct Restoring {
         inner: Box<dyn Binding>,
