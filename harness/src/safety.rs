@@ -118,7 +118,7 @@ pub(crate) fn output_data(what: &str, data: &[u8]) -> Effect {
         Effect::NONE
     } else {
         Effect::motion(format!(
-            "{what} writes output process data not all zero, which the harness does not decode word by word"
+            "{what} may carry output process data (bytes not all zero, any word of which may be a control word or a setpoint)"
         ))
     }
 }

@@ -3,9 +3,10 @@
 //! §2.2.7); a write into the ESC's process memory (from 1000h on, where the sync managers'
 //! output and mailbox buffers lie) or to a logical address writes output data, or a mailbox,
 //! which the harness cannot tell apart; a write to the ESC registers below 1000h (AL control,
-//! sync manager and FMMU set-up) is neither. A mailbox message is decoded down to its SDO.
+//! sync manager and FMMU set-up) is neither. A mailbox message is decoded down to its SDO, or
+//! its RxPDO, or its file write.
 
-use proto::ecat::coe::{SdoData, SdoRequest};
+use proto::ecat::coe::{CoeHeader, CoeService, SdoData, SdoRequest};
 use proto::ecat::datagram::Command;
 use proto::ecat::frame::EcatFrameRepr;
 use proto::ecat::mailbox::{MailboxRepr, MailboxType};
@@ -66,35 +67,67 @@ fn datagram(command: Command, ado: u16, data: &[u8]) -> Effect {
     }
 }
 
-/// A mailbox message as written.
+/// A mailbox message as written. A header that lies about its length is read as far as the
+/// bytes go: a slave that refuses it acts on nothing, one that does not is what the case tests.
 fn mailbox(bytes: &[u8]) -> Effect {
-    let Ok(m) = MailboxRepr::parse_bytes(bytes) else {
-        // A slave that refuses the header acts on nothing; one that does not is what the case
-        // tests, so its CoE data count as if it took them.
-        return coe(bytes.get(6..).unwrap_or_default());
+    let (kind, data) = match MailboxRepr::parse_bytes(bytes) {
+        Ok(m) => (m.kind, m.data),
+        Err(_) => match bytes.get(5) {
+            Some(b) => (MailboxType(b & 0x0F), bytes[6..].to_vec()),
+            None => return Effect::NONE,
+        },
     };
-    match m.kind {
-        MailboxType::COE => coe(&m.data),
-        // A file download may replace the firmware: a write of the device's memory.
-        MailboxType::FOE => Effect::eeprom(1),
+    match kind {
+        MailboxType::COE => coe(&data),
+        MailboxType::FOE => foe(&data),
         _ => Effect::NONE,
     }
 }
 
-/// CoE data: an SDO download is a write of its object.
+/// CoE data: an SDO request may download an object; an RxPDO carries output data; the other
+/// services (emergency, SDO response, TxPDO, SDO information) write nothing.
 fn coe(data: &[u8]) -> Effect {
-    match SdoRequest::parse_coe(data) {
+    let Ok((header, rest)) = CoeHeader::split(data) else {
+        return Effect::NONE;
+    };
+    match header.service {
+        CoeService::SDO_REQUEST => sdo_request(rest),
+        CoeService::RXPDO => safety::output_data("an RxPDO over the mailbox", rest),
+        _ => Effect::NONE,
+    }
+}
+
+/// An SDO request, decoded as leniently as a tolerant slave does. One that does not decode is
+/// a download if its command specifier says so (0 segment, 1 initiate, 6 block download:
+/// CiA 301 §7.2.4.3).
+fn sdo_request(b: &[u8]) -> Effect {
+    match SdoRequest::parse_lenient(b) {
         Ok(SdoRequest::Download {
             index,
             data: SdoData::Expedited { data, .. } | SdoData::Normal { data, .. },
             ..
         }) => safety::sdo_download(index, &data),
+        // The initiate that named the object counted the write; its segments may carry
+        // output data.
         Ok(SdoRequest::DownloadSegment { data, .. }) => {
             safety::output_data("an SDO download segment", &data)
-                .and(Effect::eeprom(u32::from(data.iter().any(|b| *b != 0))))
         }
         Ok(_) => Effect::NONE,
-        Err(_) => safety::output_data("CoE data the harness cannot decode", data),
+        Err(_) => match b.split_first() {
+            Some((c, rest)) if matches!(c >> 5, 0 | 1 | 6) => {
+                safety::output_data("an SDO download the harness cannot decode", rest)
+            }
+            _ => Effect::NONE,
+        },
+    }
+}
+
+/// FoE data (ETG.1000.6 §5.8: opcode 1 read request, 2 write request, 3 data): a file written
+/// to the slave may replace its firmware, a write of its memory.
+fn foe(data: &[u8]) -> Effect {
+    match data.first() {
+        Some(2 | 3) => Effect::eeprom(1),
+        _ => Effect::NONE,
     }
 }
 
@@ -131,5 +164,21 @@ mod tests {
         let e = mailbox(&m);
         assert!(e.motion.unwrap().contains("P509"));
         assert_eq!(e.eeprom_writes, 1);
+        // The suites' malformed mailboxes: an FoE read request whose header lies about its
+        // length, a CoE header alone, an SDO upload cut short.
+        let hex = |t: &str| -> Vec<u8> {
+            let t: String = t.split_whitespace().collect();
+            (0..t.len())
+                .step_by(2)
+                .map(|i| u8::from_str_radix(&t[i..i + 2], 16).unwrap())
+                .collect()
+        };
+        for m in [
+            "0A00 0000 00 04 01 00 00000000 4E4F",
+            "0200 0000 00 03 0020",
+            "0600 0000 00 03 0020 40 1810 01",
+        ] {
+            assert_eq!(mailbox(&hex(m)), Effect::NONE, "{m}");
+        }
     }
 }
