@@ -51,6 +51,7 @@ mod progress;
 mod record;
 mod report;
 mod runner;
+mod safety;
 pub mod stats;
 mod suite;
 

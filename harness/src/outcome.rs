@@ -263,6 +263,14 @@ pub struct RunMeta {
     pub identities: BTreeMap<String, Identity>,
     /// Whether steps that can make a motor turn were allowed (`--allow-motion`).
     pub motion_allowed: bool,
+    /// The EEPROM writes the run's cases made on a DUT on the network, each counted with the
+    /// cleanup's restore of it (`--max-eeprom-writes` caps them).
+    #[serde(default)]
+    pub eeprom_writes: u32,
+    /// Their cap (`--max-eeprom-writes`) on a DUT on the network; none for the embedded
+    /// simulator, which has no motor to turn and no EEPROM to wear (no limit applies).
+    #[serde(default)]
+    pub eeprom_cap: Option<u32>,
 }
 
 /// A whole run: every case under every profile it ran with.
