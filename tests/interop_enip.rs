@@ -770,6 +770,10 @@ fn network_run_pcap_matches_a_wire_capture_and_both_dissect_cleanly() {
             "127.0.0.17",
             "--profile",
             profile,
+            // The served simulator has no motor to turn and no EEPROM to wear.
+            "--allow-motion",
+            "--max-eeprom-writes",
+            "10000",
         ],
         &run_file,
         &dir.join("reports"),

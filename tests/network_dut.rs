@@ -177,6 +177,8 @@ fn network_runs_leave_the_device_as_each_case_found_it() {
             .args(["run", "--profile", profile])
             .arg("--dut")
             .arg(format!("enip://{SERVED}"))
+            // The served simulator has no motor to turn and no EEPROM to wear.
+            .args(["--allow-motion", "--max-eeprom-writes", "10000"])
             // Its own UDP 2222 for T→O data, whatever else runs on this host.
             .args(["--local", "127.0.0.19"])
             .arg("--out")

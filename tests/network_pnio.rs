@@ -126,6 +126,8 @@ fn every_profinet_suite_passes_against_the_served_device_over_a_veth_pair() {
             .arg(&suites)
             .arg("--dut")
             .arg(format!("pnio://{}/{NAME}", ns.ns_if()))
+            // The served simulator has no motor to turn and no EEPROM to wear.
+            .args(["--allow-motion", "--max-eeprom-writes", "10000"])
             .arg("--out")
             .arg(&out)
             .arg("--pcap")

@@ -205,7 +205,8 @@ fn html_report_loads_counts_and_filters_in_headless_chromium() {
         "the load error is shown"
     );
     assert!(
-        dom.contains("<p id=\"motion\" class=\"motion-no\">Motion not allowed"),
+        // The embedded simulator: no limits apply, and the line says so.
+        dom.contains("<p id=\"motion\" class=\"motion-yes\">No motor, no EEPROM"),
         "the motion line"
     );
 

@@ -94,6 +94,9 @@ pub(crate) trait BusStep: fmt::Debug + Send + Sync {
     fn bus(&self) -> &'static str;
     /// One line for reports.
     fn describe(&self) -> String;
+    /// What it can do to a real device: make a motor turn, write the EEPROM
+    /// ([`crate::safety`]), judged from its bytes alone, conservatively.
+    fn effect(&self) -> crate::safety::Effect;
     /// Lets the bus's own binding recover its step type.
     fn as_any(&self) -> &dyn Any;
 }

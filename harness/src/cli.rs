@@ -150,6 +150,20 @@ struct RunArgs {
     /// parallel CI; `harness merge` joins the N report folders.
     #[arg(long, value_name = "K/N")]
     shard: Option<crate::shard::Shard>,
+    /// Against a `--dut`, also run the cases that can make a motor turn: a control word that
+    /// enables operation, a setpoint, a fault acknowledgement, a parameter write that can start
+    /// the drive (P420…P425, P470, P480, P506, P509, P510), output data the harness cannot
+    /// decode. Without it those cases are not applicable, decided before any of their steps
+    /// is sent. The embedded simulator has no motor: it runs them all.
+    #[arg(long)]
+    allow_motion: bool,
+    /// Against a `--dut`, the EEPROM writes a run may make, each parameter write counted with
+    /// the cleanup's restore of it; a case that would exceed the cap is not applicable. The
+    /// manuals allow 100,000 writing cycles (BU 0620 §2.5.6): at the default, a run every
+    /// night for ten years stays below. RAM-only orders (`eeprom: false`) do not count. The
+    /// embedded simulator has no EEPROM to wear: it is not capped.
+    #[arg(long, default_value_t = 20)]
+    max_eeprom_writes: u32,
 }
 
 /// A `--dut` target with `--node-id` and `--sdo` written into it as the URL spells them
@@ -222,6 +236,7 @@ pub fn main() -> i32 {
         out: "reports".into(),
         retries: 250,
         snapshot_dir: "vectors/snapshots".into(),
+        max_eeprom_writes: 20,
         ..RunArgs::default()
     })) {
         Command::Run(a) => run(a),
@@ -321,7 +336,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
             None => format!("no case in {}", dir.display()),
         });
     }
-    let meta = crate::record::start(&dir, &loaded.digest, false);
+    let meta = crate::record::start(&dir, &loaded.digest);
     let verbosity = if a.quiet {
         Verbosity::Quiet
     } else if a.verbose {
@@ -335,6 +350,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
         retries: a.retries,
         tap: tap.clone(),
         progress: std::cell::RefCell::new(crate::progress::on_stderr(verbosity)),
+        limits: None,
         ..RunOptions::new(profiles)
     };
     let mut run = match &a.dut {
@@ -360,7 +376,14 @@ fn run(a: RunArgs) -> Result<i32, String> {
                     profiles.push(p);
                 }
             }
-            let opts = RunOptions { profiles, ..opts };
+            let opts = RunOptions {
+                profiles,
+                limits: Some(crate::safety::Limits {
+                    allow_motion: a.allow_motion,
+                    max_eeprom_writes: a.max_eeprom_writes,
+                }),
+                ..opts
+            };
             if opts.profiles.is_empty() {
                 return Err(format!("none of the profiles speaks {}", bus.title));
             }
@@ -374,9 +397,14 @@ fn run(a: RunArgs) -> Result<i32, String> {
             runner::run_shard(&loaded, &opts, a.shard, factory.as_mut())
         }
     };
+    // The record of the start, with what the runner found.
+    let found = std::mem::take(&mut run.meta);
     run.meta = crate::outcome::RunMeta {
-        identities: std::mem::take(&mut run.meta.identities),
-        shard: run.meta.shard,
+        identities: found.identities,
+        motion_allowed: found.motion_allowed,
+        eeprom_writes: found.eeprom_writes,
+        eeprom_cap: found.eeprom_cap,
+        shard: found.shard,
         ..meta
     };
     // Every link is closed by now, its FIN exchange recorded.

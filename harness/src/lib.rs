@@ -52,6 +52,7 @@ mod progress;
 mod record;
 mod report;
 mod runner;
+mod safety;
 pub mod shard;
 pub mod stats;
 mod suite;

@@ -284,6 +284,14 @@ pub struct RunMeta {
     /// The share of the case-runs this run made (`--shard K/N`); none for a whole run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<crate::shard::Shard>,
+    /// The EEPROM writes the run's cases made on a DUT on the network, each counted with the
+    /// cleanup's restore of it (`--max-eeprom-writes` caps them).
+    #[serde(default)]
+    pub eeprom_writes: u32,
+    /// Their cap (`--max-eeprom-writes`) on a DUT on the network; none for the embedded
+    /// simulator, which has no motor to turn and no EEPROM to wear (no limit applies).
+    #[serde(default)]
+    pub eeprom_cap: Option<u32>,
 }
 
 /// A whole run: every case under every profile it ran with.

@@ -9,8 +9,9 @@ use crate::outcome::RunMeta;
 /// The harness's git revision, recorded when it was built (see `build.rs`).
 pub(crate) const HARNESS_REVISION: &str = env!("HARNESS_GIT_REVISION");
 
-/// The record of a run starting now, of the suites in `dir` whose content hashes to `digest`.
-pub(crate) fn start(dir: &Path, digest: &str, motion_allowed: bool) -> RunMeta {
+/// The record of a run starting now, of the suites in `dir` whose content hashes to `digest`;
+/// what the run finds (the DUT's identities, the limits it kept) the runner adds.
+pub(crate) fn start(dir: &Path, digest: &str) -> RunMeta {
     RunMeta {
         harness_version: env!("CARGO_PKG_VERSION").into(),
         harness_revision: HARNESS_REVISION.into(),
@@ -20,10 +21,7 @@ pub(crate) fn start(dir: &Path, digest: &str, motion_allowed: bool) -> RunMeta {
             .map(|h| h.trim().to_string())
             .unwrap_or_default(),
         command_line: std::env::args().collect(),
-        identities: Default::default(),
-        motion_allowed,
-        // The runner records its share of a sharded run.
-        shard: None,
+        ..RunMeta::default()
     }
 }
 

@@ -18,6 +18,7 @@ use crate::outcome::{
 };
 use crate::profile::{Capability, Profile};
 use crate::progress::Progress;
+use crate::safety::Guard;
 use crate::shard::Shard;
 use crate::suite::{Action, Case, Loaded, Step};
 
@@ -34,10 +35,14 @@ pub(crate) struct RunOptions {
     pub(crate) tap: Option<crate::pcap::SharedTap>,
     /// Told of every case-run as it starts and ends (the progress bar).
     pub(crate) progress: RefCell<Box<dyn Progress>>,
+    /// What a DUT on the network allows (`--allow-motion`, `--max-eeprom-writes`); `None`
+    /// for the embedded simulator, which has no motor to turn and no EEPROM to wear.
+    pub(crate) limits: Option<crate::safety::Limits>,
 }
 
 impl RunOptions {
-    /// Every case under `profiles`: no filter, 250 retries, no capture, no progress shown.
+    /// Every case under `profiles`: no filter, 250 retries, no capture, no progress shown,
+    /// no limits (the embedded simulator's run).
     pub(crate) fn new(profiles: Vec<Profile>) -> RunOptions {
         RunOptions {
             profiles,
@@ -45,6 +50,7 @@ impl RunOptions {
             retries: 250,
             tap: None,
             progress: RefCell::new(Box::new(crate::progress::Silent)),
+            limits: None,
         }
     }
 }
@@ -77,6 +83,7 @@ pub(crate) fn run_shard(
     let mut meta = RunMeta::default();
     let mut cases = Vec::new();
     let mut seq = 0;
+    let mut guard = opts.limits.map(Guard::new);
     match connection_check(loaded, opts, factory, &selected) {
         Ok(identities) => {
             meta.identities = identities;
@@ -95,7 +102,7 @@ pub(crate) fn run_shard(
                         );
                         let r = CaseResult {
                             seq,
-                            ..run_case(case, profile, opts, factory)
+                            ..run_case(case, profile, opts, &mut guard, factory)
                         };
                         opts.progress.borrow_mut().end(&r);
                         cases.push(r);
@@ -113,7 +120,12 @@ pub(crate) fn run_shard(
     }
     let mut run = RunResult {
         dut: factory.describe(),
-        meta,
+        meta: RunMeta {
+            motion_allowed: guard.as_ref().is_none_or(Guard::motion_allowed),
+            eeprom_writes: guard.as_ref().map_or(0, Guard::eeprom_writes),
+            eeprom_cap: opts.limits.map(|l| l.max_eeprom_writes),
+            ..meta
+        },
         profiles: opts.profiles.iter().map(|p| p.name().to_string()).collect(),
         cases,
         errata: loaded.errata.clone(),
@@ -285,10 +297,14 @@ fn run_case(
     case: &Case,
     profile: &Profile,
     opts: &RunOptions,
+    guard: &mut Option<Guard>,
     factory: &mut dyn DutFactory,
 ) -> CaseResult {
     let start = Instant::now();
-    if let Some(why) = not_applicable(case, profile, None) {
+    // What a device on the network allows is decided from the whole case before anything is
+    // sent, opening included: no case half-runs.
+    let refused = || guard.as_ref().and_then(|g| g.refuse(case));
+    if let Some(why) = not_applicable(case, profile, None).or_else(refused) {
         return result(
             case,
             profile,
@@ -329,6 +345,9 @@ fn run_case(
         None
     };
     let mut r = run_steps(case, profile, opts, &mut channel, start);
+    if let Some(g) = guard.as_mut() {
+        g.ran(case, r.steps.len());
+    }
     if let Some(dut) = channel.as_mut() {
         finish(&mut r, dut.as_mut(), opts);
     }
@@ -792,6 +811,69 @@ cases:
             m.contains("did not answer the order within 25 bus cycles"),
             "{m}"
         );
+    }
+
+    /// The embedded simulator, counting the DUTs opened.
+    struct Counting(usize);
+
+    impl DutFactory for Counting {
+        fn describe(&self) -> String {
+            "counting simulator".into()
+        }
+        fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+            self.0 += 1;
+            EmbeddedFactory::default().open(profile, retries)
+        }
+    }
+
+    #[test]
+    fn without_allow_motion_a_motion_case_is_not_applicable_before_the_dut_is_opened() {
+        let loaded = load_text_for_tests(
+            r#"
+doc: BU 0620
+edition: "2020-03 en"
+cases:
+  - id: enables
+    title: enables operation
+    ref: { section: "6.1.3", page: 114 }
+    steps:
+      - read: { param: 102 }
+      - process: { control: "047Fh", setpoints: ["2000h"], for: 40ms }
+  - id: writes
+    title: writes P102
+    ref: { section: "2.5.6", page: 51 }
+    steps:
+      - write: { param: 102, value: 100 }
+"#,
+        );
+        let opts = RunOptions {
+            limits: Some(crate::safety::Limits {
+                allow_motion: false,
+                max_eeprom_writes: 20,
+            }),
+            ..sk550p_options()
+        };
+        let mut factory = Counting(0);
+        let r = run(&loaded, &opts, &mut factory);
+        let c = &r.cases[0];
+        assert_eq!(c.verdict, Verdict::NotApplicable);
+        assert!(
+            c.message
+                .starts_with("motion not allowed (--allow-motion): control word 047Fh"),
+            "{}",
+            c.message
+        );
+        assert!(c.steps.is_empty());
+        // The connection check and the other case opened the DUT, the motion case never; the
+        // write and its restore are counted.
+        assert_eq!(factory.0, 2);
+        assert_eq!(r.cases[1].verdict, Verdict::Pass, "{}", r.cases[1].message);
+        assert!(!r.meta.motion_allowed);
+        assert_eq!(r.meta.eeprom_writes, 2);
+        // The embedded simulator runs both, and says motion was allowed.
+        let r = run(&loaded, &sk550p_options(), &mut Counting(0));
+        assert_eq!(r.cases[0].verdict, Verdict::Pass, "{}", r.cases[0].message);
+        assert!(r.meta.motion_allowed);
     }
 
     /// The embedded simulator behind a binding whose cleanup does what the test says.

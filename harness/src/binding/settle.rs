@@ -309,4 +309,11 @@ mod tests {
         assert_eq!(ACKNOWLEDGE, 0x0480);
         assert_eq!(FAULT, 0x0008);
     }
+
+    #[test]
+    fn the_way_back_never_sends_a_word_that_can_turn_a_motor() {
+        // The cleanup runs against a DUT without `--allow-motion` too.
+        assert_eq!(crate::safety::control_word(DISABLE), None);
+        assert_eq!(crate::safety::control_word(ACKNOWLEDGE), None);
+    }
 }

@@ -3,6 +3,7 @@
 
 pub mod bench_support;
 mod binding;
+mod effect;
 mod esi;
 pub(crate) mod master;
 mod pcap;

@@ -121,6 +121,10 @@ impl BusStep for EcatStep {
         "ecat"
     }
 
+    fn effect(&self) -> crate::safety::Effect {
+        super::effect::of(self)
+    }
+
     fn describe(&self) -> String {
         match self {
             EcatStep::State { state, ack } => format!(

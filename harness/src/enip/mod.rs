@@ -5,6 +5,7 @@
 pub mod bench_support;
 mod cleanup;
 mod eds;
+mod effect;
 mod link;
 mod pcap;
 mod scanner;

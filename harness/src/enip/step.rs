@@ -51,6 +51,10 @@ impl BusStep for EnipStep {
         describe(self)
     }
 
+    fn effect(&self) -> crate::safety::Effect {
+        super::effect::of(self)
+    }
+
     fn as_any(&self) -> &dyn Any {
         self
     }

@@ -4,6 +4,7 @@
 
 pub mod bench_support;
 mod binding;
+mod effect;
 pub(crate) mod mn;
 pub mod serve;
 mod step;

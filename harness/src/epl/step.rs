@@ -67,6 +67,10 @@ impl BusStep for EplStep {
         "epl"
     }
 
+    fn effect(&self) -> crate::safety::Effect {
+        super::effect::of(self)
+    }
+
     fn describe(&self) -> String {
         let via = |v: &Option<Via>| match v {
             Some(Via::Udp) => " over UDP",

@@ -5,6 +5,7 @@
 pub mod bench_support;
 mod binding;
 mod controller;
+mod effect;
 mod gsdml;
 mod link;
 mod restore;

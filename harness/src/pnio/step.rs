@@ -87,6 +87,10 @@ impl BusStep for PnioStep {
         "pnio"
     }
 
+    fn effect(&self) -> crate::safety::Effect {
+        super::effect::of(self)
+    }
+
     fn describe(&self) -> String {
         let keep = |p: &bool| if *p { "permanent" } else { "temporary" };
         let at = |slot: &Option<u16>, subslot: &Option<u16>| match (slot, subslot) {

@@ -101,6 +101,8 @@ pub(super) fn sample_run() -> RunResult {
             .into(),
             motion_allowed: false,
             shard: None,
+            eeprom_writes: 4,
+            eeprom_cap: Some(20),
         },
         profiles: vec!["sk550p".into(), "tu3-eip".into()],
         cases: vec![

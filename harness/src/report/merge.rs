@@ -5,7 +5,10 @@
 //! every shard 1..N once, and every case-run position (`seq`) exactly once. The merged run takes
 //! the cases in `seq` order; its start is the earliest shard's, its duration the longest
 //! shard's (the shards run side by side), its command line the first shard's without `--shard`,
-//! its host the shards' hosts (one name when they ran on one machine).
+//! its host the shards' hosts (one name when they ran on one machine), its EEPROM writes the
+//! shards' sum. Each shard keeps `--max-eeprom-writes` on its own: against a device, N shards
+//! may write up to N times the cap, and where the cap decided a case, the merge can differ from
+//! an unsharded run.
 
 use crate::outcome::{CaseResult, RunResult};
 use crate::runner::CONNECTION_CHECK;
@@ -94,6 +97,14 @@ fn same_run(first: &str, a: &RunResult, other: &str, b: &RunResult) -> Result<()
             show(&r.identities),
         ));
     }
+    if m.eeprom_cap != r.eeprom_cap {
+        let show = |c: Option<u32>| c.map_or("none".to_string(), |c| c.to_string());
+        return Err(mismatch(
+            "--max-eeprom-writes",
+            show(m.eeprom_cap),
+            show(r.eeprom_cap),
+        ));
+    }
     if m.motion_allowed != r.motion_allowed {
         return Err(mismatch(
             "--allow-motion",
@@ -135,6 +146,7 @@ pub(crate) fn merge(shards: Vec<(String, RunResult)>) -> Result<RunResult, Merge
             merged.meta.started.clone_from(&run.meta.started);
         }
         merged.duration = merged.duration.max(run.duration);
+        merged.meta.eeprom_writes += run.meta.eeprom_writes;
         if !merged.meta.host.split(", ").any(|h| h == run.meta.host) {
             merged.meta.host = format!("{}, {}", merged.meta.host, run.meta.host);
         }
@@ -283,11 +295,17 @@ mod tests {
         assert_eq!(merged.meta.shard, None);
         assert_eq!(merged.duration, Duration::from_millis(30), "longest shard");
         assert_eq!(
+            merged.meta.eeprom_writes,
+            3 * whole.meta.eeprom_writes,
+            "each shard's writes"
+        );
+        assert_eq!(
             merged,
             RunResult {
                 duration: merged.duration,
                 meta: RunMeta {
                     started: merged.meta.started.clone(),
+                    eeprom_writes: merged.meta.eeprom_writes,
                     ..whole.meta.clone()
                 },
                 ..whole
@@ -372,7 +390,7 @@ mod tests {
     #[test]
     fn shards_of_different_runs_are_refused() {
         type Change = fn(&mut RunResult);
-        let changes: [(&str, Change); 5] = [
+        let changes: [(&str, Change); 6] = [
             ("DUT", |r| r.dut = "enip://10.0.0.2".into()),
             ("suites revision", |r| {
                 r.meta.suites_revision = "feed".into()
@@ -382,6 +400,7 @@ mod tests {
             }),
             ("profiles", |r| r.profiles.truncate(1)),
             ("DUT identity", |r| r.meta.identities.clear()),
+            ("--max-eeprom-writes", |r| r.meta.eeprom_cap = Some(1)),
         ];
         for (what, change) in changes {
             let mut parts = shards(2);

@@ -8,10 +8,10 @@ use crate::outcome::{CaseKind, CaseResult, RunResult};
 /// The first line of `summary.md` and the top of `index.html`: a reader must see at once
 /// whether cases that could turn a motor ran.
 pub(super) fn motion_line(run: &RunResult) -> &'static str {
-    if run.meta.motion_allowed {
-        "Motion allowed (--allow-motion given): cases that can turn a motor were run"
-    } else {
-        "Motion not allowed (--allow-motion not given): cases that could turn a motor were not run"
+    match (run.meta.eeprom_cap, run.meta.motion_allowed) {
+        (None, _) => "No motor, no EEPROM: the embedded simulator ran every case (--allow-motion and --max-eeprom-writes govern runs against a --dut)",
+        (Some(_), true) => "Motion allowed (--allow-motion given): cases that can turn a motor were run",
+        (Some(_), false) => "Motion not allowed (--allow-motion not given): cases that could turn a motor were not run",
     }
 }
 
@@ -55,6 +55,13 @@ pub(super) fn lines(run: &RunResult) -> Vec<(String, String)> {
             ),
         ),
         ("suites revision".into(), or_unknown(&m.suites_revision)),
+        (
+            "EEPROM writes".into(),
+            match m.eeprom_cap {
+                Some(cap) => format!("{} (at most {cap}: --max-eeprom-writes)", m.eeprom_writes),
+                None => "not counted (the embedded simulator has no EEPROM to wear)".into(),
+            },
+        ),
         ("started".into(), or_unknown(&m.started)),
         ("host".into(), or_unknown(&m.host)),
         (
@@ -154,6 +161,9 @@ mod tests {
         assert!(motion_line(&run).starts_with("Motion not allowed (--allow-motion not given)"));
         run.meta.motion_allowed = true;
         assert!(motion_line(&run).starts_with("Motion allowed"));
+        // No limits: the embedded simulator's run, which has no motor.
+        run.meta.eeprom_cap = None;
+        assert!(motion_line(&run).starts_with("No motor, no EEPROM"));
     }
 
     #[test]
