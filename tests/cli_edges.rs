@@ -3,6 +3,7 @@
 //! syntax reads every wire value, suite files load whatever the case of their extension, and a
 //! UDP port clash with the DUT is diagnosed once before the run.
 
+#[allow(dead_code)] // what the other network tests share
 mod common;
 
 use std::io::Read;

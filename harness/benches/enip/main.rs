@@ -10,7 +10,13 @@
 //! - the same for pycomm3 (a subprocess in the interop venv) and the ratio of the two;
 //! - the simulator's Get_Attribute_Single throughput with 8 concurrent harness scanners;
 //! - the arrival jitter of a class-1 Exclusive Owner connection (SK 550P assemblies 100/101,
-//!   96 bytes each way) at RPI 1 ms: p50, p99 and maximum of |interval − RPI|, frames lost.
+//!   96 bytes each way) at RPI 1 ms: p50, p99 and maximum of |interval − RPI|, frames lost;
+//! - a good client's request latency (p50, p99) and rate with 8,000 idle TCP connections open
+//!   to the adapter, next to the same without them, and the process's thread count both ways
+//!   (the adapter serves every TCP client from one event loop: no thread per connection).
+//!
+//! `cargo bench -p harness --bench enip -- WORD…` runs only the figures named: `round-trips`,
+//! `concurrent`, `io`, `idle`.
 //!
 //! The scanner, the minimal client and the served adapter poll their sockets for a few tens
 //! of µs before sleeping (`harness::poll`); pycomm3 gets the same adapter.
@@ -35,6 +41,7 @@ use sim::device::DeviceConfig;
 mod client;
 #[path = "../common/mod.rs"]
 mod common;
+mod idle;
 mod io;
 
 use client::Client;
@@ -95,11 +102,16 @@ struct Settings {
     python: Option<PathBuf>,
     /// `tests/interop/pycomm3_bench.py`.
     script: PathBuf,
+    /// Idle TCP connections of the idle-clients figure.
+    idle: usize,
+    /// The figures to run (all when empty).
+    only: Vec<String>,
 }
 
 impl Settings {
     /// The figures: 3 rounds of 20,000 round trips or 2 s per client figure, 8 clients
-    /// × 5,000, 10 s of I/O at RPI 1 ms; Python from `${INTEROP_VENV:-/tmp/nord-interop-venv}`.
+    /// × 5,000, 10 s of I/O at RPI 1 ms, 8,000 idle connections; Python from
+    /// `${INTEROP_VENV:-/tmp/nord-interop-venv}`; the figures named on the command line.
     fn new(script: PathBuf) -> Settings {
         Settings {
             listen: SocketAddr::new(IpAddr::V4(Ipv4Addr::new(127, 0, 0, 5)), 44818),
@@ -112,7 +124,17 @@ impl Settings {
             record: Duration::from_secs(10),
             python: common::interop_python(),
             script,
+            idle: 8_000,
+            only: std::env::args()
+                .skip(1)
+                .filter(|a| !a.starts_with('-'))
+                .collect(),
         }
+    }
+
+    /// Whether figure `key` runs.
+    fn runs(&self, key: &str) -> bool {
+        self.only.is_empty() || self.only.iter().any(|o| o == key)
     }
 }
 
@@ -127,8 +149,44 @@ fn run(s: &Settings) -> Result<(), String> {
         served.io
     );
 
-    // The single-client figures in interleaved rounds, so that a burst of load elsewhere on
-    // the machine falls on every client alike; each figure is the median of its rounds.
+    if s.runs("round-trips") {
+        single_client(s);
+    }
+    if s.runs("concurrent") {
+        concurrent_clients(s);
+    }
+    if s.runs("io") {
+        io(s);
+    }
+    if s.runs("idle") {
+        idle_clients(s)?;
+    }
+    Ok(())
+}
+
+/// A good client's latency without and with `s.idle` idle TCP connections open.
+fn idle_clients(s: &Settings) -> Result<(), String> {
+    let what = format!(
+        "good client (bench's minimal client), {} idle TCP connections open",
+        s.idle
+    );
+    match idle::idle_clients(s, &param_path()?) {
+        Ok(f) => println!(
+            "{what}: {}; without them: {}; threads of the serving process: {} with, {} without (opened in {:.1} s)",
+            f.with.show(),
+            f.without.show(),
+            f.threads_with,
+            f.threads_without,
+            f.opening.as_secs_f64()
+        ),
+        Err(e) => println!("{what}: failed ({e})"),
+    }
+    Ok(())
+}
+
+/// The single-client figures in interleaved rounds, so that a burst of load elsewhere on the
+/// machine falls on every client alike; each figure is the median of its rounds.
+fn single_client(s: &Settings) {
     let mut scanner = Vec::new();
     let mut minimal = Vec::new();
     let mut pycomm3 = Vec::new();
@@ -183,7 +241,10 @@ fn run(s: &Settings) -> Result<(), String> {
         }
         println!();
     }
+}
 
+/// The simulator's throughput with concurrent harness scanners.
+fn concurrent_clients(s: &Settings) {
     match scanner_round_trips(s, s.clients, s.per_client) {
         Ok(r) => println!(
             "simulator, {} concurrent harness scanners: {} (target >= {TARGET_THROUGHPUT:.0}/s: {})",
@@ -196,7 +257,10 @@ fn run(s: &Settings) -> Result<(), String> {
             s.clients
         ),
     }
+}
 
+/// The jitter of a class-1 connection's T→O frames.
+fn io(s: &Settings) {
     let what = format!(
         "I/O, 96-byte Exclusive Owner at RPI {} µs for {} s",
         s.rpi.as_micros(),
@@ -217,7 +281,6 @@ fn run(s: &Settings) -> Result<(), String> {
         ),
         Err(e) => println!("{what}: failed ({e})"),
     }
-    Ok(())
 }
 
 /// Round trips of `clients` harness scanners at once, each reading P102 of FI 1 on its own

@@ -24,10 +24,11 @@ pub struct ServedAdapter {
 }
 
 /// Serves a simulated device on `listen` (an IPv4 address; class-1 I/O on UDP 2222 of the
-/// same IP) as `harness serve enip` does, in threads of this process that serve until it
-/// ends. An error says which socket could not be bound.
+/// same IP) as `harness serve enip` does with its default limits, in threads of this process
+/// that serve until it ends (the process's soft limit of open files raised to its hard
+/// limit). An error says which socket could not be bound.
 pub fn serve(listen: SocketAddr, config: DeviceConfig) -> Result<ServedAdapter, String> {
-    let served = super::serve::start_enip(listen, config)?;
+    let served = super::serve::start_enip(listen, config, Default::default())?;
     Ok(ServedAdapter {
         listen: served.listen,
         io: served.io,

@@ -10,6 +10,9 @@ mod link;
 mod pcap;
 mod scanner;
 pub(crate) mod serve;
+mod serve_tcp;
+#[cfg(test)]
+mod serve_tests;
 mod step;
 
 pub(crate) use scanner::{ForwardOpenSpec, Scanner};

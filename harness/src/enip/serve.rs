@@ -1,29 +1,36 @@
 //! `harness serve enip`: the simulator as a real EtherNet/IP adapter on the network.
 //!
 //! TCP and UDP on the listen address (44818 by default) carry encapsulation messages, UDP 2222
-//! on the same IP carries class-1 I/O. One thread per TCP client, one for UDP 44818 and two for
+//! on the same IP carries class-1 I/O. One event-loop thread for all TCP clients
+//! ([`super::serve_tcp`]: inactivity timeout, connection limit), one for UDP 44818 and two for
 //! class-1 I/O (receiving O→T, producing T→O on the adapter's schedule) share the sans-IO
-//! [`Adapter`] behind a mutex; time is the real clock since start. A client whose
-//! message stays incomplete for [`STALL`] is disconnected, so a hung peer holds nothing.
+//! [`Adapter`] behind a mutex; time is the real clock since start. A client whose message
+//! stays incomplete for [`STALL`] is disconnected, so a hung peer holds nothing.
 
-use std::net::{IpAddr, SocketAddr, TcpListener, TcpStream, UdpSocket};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::net::{IpAddr, SocketAddr, TcpListener, UdpSocket};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::thread::{self, Thread};
 use std::time::{Duration, Instant};
 
+use nix::sys::resource::{getrlimit, setrlimit, Resource};
 use proto::enip::io::IO_PORT;
 use sim::device::{Device, DeviceConfig};
-use sim::enip::{Adapter, Framer};
-
-use crate::poll::PollingStream;
+use sim::enip::{Adapter, MAX_SESSIONS};
 
 /// How long a partial message may wait for its rest.
 pub(crate) const STALL: Duration = Duration::from_secs(10);
 
-/// How long a client's thread polls for its next request before it sleeps: a client that
-/// sends request after request is served without a thread wake-up (see [`PollingStream`]).
-const REQUEST_POLL: Duration = Duration::from_micros(50);
+/// TCP clients served at once unless `--max-connections` says otherwise: far above the
+/// session limit, as a connection without a session costs a socket and no thread.
+pub(crate) const MAX_CONNECTIONS: usize = 10_000;
+
+/// File descriptors kept free of TCP clients: the listener's, the UDP sockets', those of
+/// clients being refused, and the process's own.
+const FD_RESERVE: usize = 128;
+
+/// Connections not yet accepted that the kernel queues for the listener (`listen` backlog),
+/// so that a burst of clients is not dropped and retried a second later.
+const BACKLOG: i32 = 1024;
 
 /// How long before a T→O frame is due the I/O producer stops sleeping and watches the clock.
 /// A sleeping thread wakes up late when its processor was idle, by a few hundred µs on a
@@ -36,7 +43,7 @@ const IO_SPIN: Duration = Duration::from_micros(300);
 const IO_IDLE: Duration = Duration::from_millis(50);
 
 /// A running adapter.
-struct Shared {
+pub(super) struct Shared {
     adapter: Mutex<Adapter>,
     start: Instant,
     /// The I/O producer thread, to wake when something becomes due earlier.
@@ -44,12 +51,38 @@ struct Shared {
 }
 
 impl Shared {
-    fn now(&self) -> Duration {
+    /// The adapter's clock: the real time since it started.
+    pub(super) fn now(&self) -> Duration {
         self.start.elapsed()
     }
 
-    fn lock(&self) -> std::sync::MutexGuard<'_, Adapter> {
+    pub(super) fn lock(&self) -> std::sync::MutexGuard<'_, Adapter> {
         self.adapter.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Wakes the I/O producer to look at the adapter's next due time again.
+    pub(super) fn wake_producer(&self) {
+        if let Some(p) = self.producer.get() {
+            p.unpark();
+        }
+    }
+}
+
+/// How many clients a served adapter takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Limits {
+    /// Encapsulation sessions; RegisterSession beyond is refused ("insufficient memory").
+    pub(crate) sessions: usize,
+    /// TCP clients; those beyond are answered "insufficient memory" and closed.
+    pub(crate) connections: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Limits {
+        Limits {
+            sessions: MAX_SESSIONS,
+            connections: MAX_CONNECTIONS,
+        }
     }
 }
 
@@ -60,21 +93,33 @@ pub(crate) struct Served {
     pub(crate) listen: SocketAddr,
     /// Class-1 I/O (UDP 2222 on the same IP).
     pub(crate) io: SocketAddr,
+    /// TCP clients served at once (`--max-connections`, less where the open-files limit
+    /// leaves no room for so many).
+    pub(crate) connections: usize,
 }
 
 /// Binds the sockets and starts the adapter's threads, then returns; they serve until the
-/// process ends.
-pub(crate) fn start_enip(listen: SocketAddr, config: DeviceConfig) -> Result<Served, String> {
+/// process ends. The process's soft limit of open files is raised to its hard limit first,
+/// and the TCP clients served at once are as many as `limits` says and that limit leaves room
+/// for.
+pub(crate) fn start_enip(
+    listen: SocketAddr,
+    config: DeviceConfig,
+    limits: Limits,
+) -> Result<Served, String> {
     let SocketAddr::V4(v4) = listen else {
         return Err("EtherNet/IP needs an IPv4 listen address".into());
     };
-    let tcp =
-        TcpListener::bind(listen).map_err(|e| format!("cannot listen on TCP {listen}: {e}"))?;
+    let connections = limits
+        .connections
+        .min(open_files_limit().saturating_sub(FD_RESERVE));
+    let tcp = listener(listen).map_err(|e| format!("cannot listen on TCP {listen}: {e}"))?;
     let udp = UdpSocket::bind(listen).map_err(|e| format!("cannot bind UDP {listen}: {e}"))?;
     let io_addr = SocketAddr::new(listen.ip(), IO_PORT);
     let io = UdpSocket::bind(io_addr).map_err(|e| format!("cannot bind UDP {io_addr}: {e}"))?;
+    let adapter = Adapter::new(Device::new(config), v4).with_max_sessions(limits.sessions);
     let shared = Arc::new(Shared {
-        adapter: Mutex::new(Adapter::new(Device::new(config), v4)),
+        adapter: Mutex::new(adapter),
         start: Instant::now(),
         producer: OnceLock::new(),
     });
@@ -88,10 +133,7 @@ pub(crate) fn start_enip(listen: SocketAddr, config: DeviceConfig) -> Result<Ser
         let s = shared.clone();
         thread::spawn(move || io_receive(io, s));
     }
-    {
-        let s = shared.clone();
-        thread::spawn(move || accept(tcp, s));
-    }
+    super::serve_tcp::start(tcp, shared.clone(), connections)?;
     {
         let s = shared.clone();
         thread::spawn(move || discovery(udp, s));
@@ -99,7 +141,35 @@ pub(crate) fn start_enip(listen: SocketAddr, config: DeviceConfig) -> Result<Ser
     Ok(Served {
         listen,
         io: io_addr,
+        connections,
     })
+}
+
+/// A TCP listener on `addr` with a [`BACKLOG`] of its own (the standard library's is 128).
+fn listener(addr: SocketAddr) -> std::io::Result<TcpListener> {
+    let s = socket2::Socket::new(
+        socket2::Domain::for_address(addr),
+        socket2::Type::STREAM,
+        Some(socket2::Protocol::TCP),
+    )?;
+    s.set_reuse_address(true)?;
+    s.bind(&addr.into())?;
+    s.listen(BACKLOG)?;
+    Ok(s.into())
+}
+
+/// The process's soft limit of open files after raising it to the hard limit (as far as the
+/// system lets it: a refusal leaves the soft limit as it was).
+fn open_files_limit() -> usize {
+    let Ok((soft, hard)) = getrlimit(Resource::RLIMIT_NOFILE) else {
+        return usize::MAX;
+    };
+    let now = if hard > soft && setrlimit(Resource::RLIMIT_NOFILE, hard, hard).is_ok() {
+        hard
+    } else {
+        soft
+    };
+    usize::try_from(now).unwrap_or(usize::MAX)
 }
 
 /// `harness serve enip` arguments.
@@ -121,6 +191,23 @@ struct ServeArgs {
     /// Stop after this many seconds (default: serve until killed).
     #[arg(long)]
     seconds: Option<u64>,
+    /// Encapsulation sessions at once; RegisterSession beyond is refused with encapsulation
+    /// status 0002h "insufficient memory".
+    #[arg(long, default_value_t = MAX_SESSIONS, value_parser = at_least_one)]
+    max_sessions: usize,
+    /// TCP connections served at once; those beyond are answered 0002h "insufficient
+    /// memory" and closed.
+    #[arg(long, default_value_t = MAX_CONNECTIONS, value_parser = at_least_one)]
+    max_connections: usize,
+}
+
+/// A limit of 1 or more.
+fn at_least_one(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("must be 1 or more".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
 }
 
 /// `harness serve enip ARGS…`; returns the exit code.
@@ -140,9 +227,14 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
             .min(product.max_inverters()),
         ..DeviceConfig::new(product)
     };
+    let limits = Limits {
+        sessions: a.max_sessions,
+        connections: a.max_connections,
+    };
     serve_enip(
         parse_addr(&a.listen)?,
         config,
+        limits,
         a.seconds.map(Duration::from_secs),
     )?;
     Ok(crate::cli::EXIT_PASS)
@@ -152,16 +244,19 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
 pub(crate) fn serve_enip(
     listen: SocketAddr,
     config: DeviceConfig,
+    limits: Limits,
     duration: Option<Duration>,
 ) -> Result<(), String> {
     let product = config.product;
     let inverters = config.inverters;
-    let served = start_enip(listen, config)?;
+    let served = start_enip(listen, config, limits)?;
     outln!(
-        "serving EtherNet/IP adapter ({}, {inverters} inverters) on {} (TCP, UDP) and {} (class-1 I/O)",
+        "serving EtherNet/IP adapter ({}, {inverters} inverters) on {} (TCP, UDP) and {} (class-1 I/O); at most {} sessions, {} TCP connections",
         product.name(),
         served.listen,
-        served.io
+        served.io,
+        limits.sessions,
+        served.connections
     );
     match duration {
         Some(d) => thread::sleep(d),
@@ -170,81 +265,6 @@ pub(crate) fn serve_enip(
         },
     }
     Ok(())
-}
-
-fn accept(listener: TcpListener, shared: Arc<Shared>) {
-    let ids = AtomicU64::new(1);
-    for stream in listener.incoming().flatten() {
-        let id = ids.fetch_add(1, Ordering::Relaxed);
-        let s = shared.clone();
-        thread::spawn(move || client(stream, id, s));
-    }
-}
-
-fn client(stream: TcpStream, id: u64, shared: Arc<Shared>) {
-    let Ok(peer) = stream.peer_addr() else { return };
-    let _ = stream.set_nodelay(true);
-    let Ok(mut stream) = PollingStream::new(stream, REQUEST_POLL) else {
-        return;
-    };
-    let mut framer = Framer::new();
-    let mut buf = [0u8; 8192];
-    let mut pending_since: Option<Instant> = None;
-    loop {
-        let wait = if pending_since.is_some() {
-            Duration::from_millis(500)
-        } else {
-            Duration::from_secs(60)
-        };
-        let n = match stream.read(&mut buf, wait) {
-            Ok(0) => break,
-            Ok(n) => n,
-            Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {
-                if pending_since.is_some_and(|t| t.elapsed() > STALL) {
-                    break;
-                }
-                continue;
-            }
-            Err(_) => break,
-        };
-        let messages = match framer.push(&buf[..n]) {
-            Ok(m) => m,
-            Err(_) => break,
-        };
-        let mut close = false;
-        for m in messages {
-            let (r, sooner) = {
-                let mut a = shared.lock();
-                let before = a.next_due();
-                let r = a.handle_tcp(id, peer, &m, shared.now());
-                let after = a.next_due();
-                (r, after.is_some_and(|t| before.is_none_or(|b| t < b)))
-            };
-            if sooner {
-                if let Some(p) = shared.producer.get() {
-                    p.unpark();
-                }
-            }
-            if let Some(reply) = r.reply {
-                if stream.write_all(&reply, STALL).is_err() {
-                    close = true;
-                }
-            }
-            close |= r.close;
-            if close {
-                break;
-            }
-        }
-        if close {
-            break;
-        }
-        pending_since = match (framer.pending(), pending_since) {
-            (0, _) => None,
-            (_, Some(t)) => Some(t),
-            (_, None) => Some(Instant::now()),
-        };
-    }
-    shared.lock().client_closed(id);
 }
 
 fn discovery(udp: UdpSocket, shared: Arc<Shared>) {

@@ -106,6 +106,11 @@ impl Table {
             .retain(|c| !(c.kind == Kind::Explicit && c.client == client));
     }
 
+    /// Whether a connection opened by `client` is open.
+    pub(super) fn any_of(&self, client: ClientId) -> bool {
+        self.conns.iter().any(|c| c.client == client)
+    }
+
     /// A class-3 message on O→T id `id` from `client`: its T→O id, watchdog refreshed.
     pub(super) fn explicit(&mut self, id: u32, client: ClientId, now: Duration) -> Option<u32> {
         let c = self

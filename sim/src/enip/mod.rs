@@ -33,9 +33,16 @@ pub use framer::{Framer, Oversize};
 /// A TCP client of the adapter, as the driver numbers them.
 pub type ClientId = u64;
 
-/// Sessions the adapter holds at once; RegisterSession beyond is refused with "insufficient
-/// memory" (encapsulation status 0002h).
+/// Sessions the adapter holds at once unless told otherwise ([`Adapter::with_max_sessions`]);
+/// RegisterSession beyond is refused with "insufficient memory" (encapsulation status 0002h),
+/// as devices refuse a session they have no room for.
 pub const MAX_SESSIONS: usize = 64;
+
+/// The Encapsulation Inactivity Timeout at power-on, seconds (TCP/IP Interface object
+/// attribute 13: default 120, 0 disables, at most [`MAX_INACTIVITY_TIMEOUT`]).
+pub const DEFAULT_INACTIVITY_TIMEOUT: u16 = 120;
+/// The largest Encapsulation Inactivity Timeout attribute 13 takes, seconds.
+pub const MAX_INACTIVITY_TIMEOUT: u16 = 3600;
 
 /// What to do after a TCP message.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -54,6 +61,10 @@ pub struct Adapter {
     address: SocketAddrV4,
     sessions: HashMap<u32, ClientId>,
     next_session: u32,
+    max_sessions: usize,
+    /// TCP/IP Interface attribute 13, seconds; kept across an Identity reset as a device
+    /// keeps it in non-volatile memory.
+    inactivity_timeout: u16,
     conns: connections::Table,
     /// Frames that could not be understood, per kind (for diagnostics and tests).
     dropped: u64,
@@ -84,11 +95,34 @@ impl Adapter {
             address,
             sessions: HashMap::new(),
             next_session: 0x1000,
+            max_sessions: MAX_SESSIONS,
+            inactivity_timeout: DEFAULT_INACTIVITY_TIMEOUT,
             conns: connections::Table::default(),
             dropped: 0,
         };
         objects::power_on(&mut a);
         a
+    }
+
+    /// The same adapter holding at most `max` sessions at once.
+    pub fn with_max_sessions(mut self, max: usize) -> Adapter {
+        self.max_sessions = max;
+        self
+    }
+
+    /// The Encapsulation Inactivity Timeout (TCP/IP Interface attribute 13), `None` when
+    /// disabled. The driver enforces it, as only it sees the TCP connections: one without
+    /// encapsulation traffic for this long, and without CIP connections open through it
+    /// ([`Adapter::holds_connections`]), is closed.
+    pub fn inactivity_timeout(&self) -> Option<Duration> {
+        (self.inactivity_timeout != 0)
+            .then(|| Duration::from_secs(u64::from(self.inactivity_timeout)))
+    }
+
+    /// Whether CIP connections opened by TCP client `client` (class 1 or class 3) are open:
+    /// such a TCP connection outlives the inactivity timeout.
+    pub fn holds_connections(&self, client: ClientId) -> bool {
+        self.conns.any_of(client)
     }
 
     /// The product simulated.
@@ -244,7 +278,7 @@ impl Adapter {
         if req.session != 0 || self.sessions.values().any(|c| *c == client) {
             return Err(EncapStatus::INCORRECT_DATA);
         }
-        if self.sessions.len() >= MAX_SESSIONS {
+        if self.sessions.len() >= self.max_sessions {
             return Err(EncapStatus::INSUFFICIENT_MEMORY);
         }
         let handle = self.next_session;
@@ -373,6 +407,22 @@ impl Adapter {
     pub fn connection_counts(&self) -> (usize, usize, usize) {
         self.conns.counts()
     }
+}
+
+/// What an adapter with no room for another TCP client answers to the client's first message
+/// before it closes the connection: "insufficient memory" (encapsulation status 0002h), the
+/// status of a RegisterSession it cannot grant, to every command that is answered. `None` for
+/// a NOP (never answered) and for bytes that are no message.
+pub fn no_room_reply(msg: &[u8]) -> Option<Vec<u8>> {
+    let req = EncapRepr::parse(msg).ok()?;
+    let data = match Command(req.command) {
+        Command::NOP => return None,
+        Command::REGISTER_SESSION => RegisterSession::V1.emit(),
+        _ => Vec::new(),
+    };
+    req.reply(EncapStatus::INSUFFICIENT_MEMORY, data)
+        .emit()
+        .ok()
 }
 
 /// An error reply for a request that could not be parsed.

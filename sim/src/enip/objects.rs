@@ -293,6 +293,11 @@ fn tcp_ip(a: &mut Adapter, req: &MrRequest) -> MrResponse {
         return MrResponse::error(req.service, GS::PATH_DESTINATION_UNKNOWN);
     }
     let p = ip_params(a.product());
+    let inactivity_timeout = a.inactivity_timeout;
+    if Service(req.service) == Service::SET_ATTRIBUTE_SINGLE && req.path.attribute_id() == Some(13)
+    {
+        return set_inactivity_timeout(a, req);
+    }
     let Ok(store) = a.device.store(Unit::Interface) else {
         return MrResponse::error(req.service, GS::DEVICE_STATE_CONFLICT);
     };
@@ -316,6 +321,8 @@ fn tcp_ip(a: &mut Adapter, req: &MrRequest) -> MrResponse {
                     v
                 }
                 6 => vec![0, 0],
+                // Encapsulation Inactivity Timeout, seconds.
+                13 => inactivity_timeout.to_le_bytes().to_vec(),
                 _ => return None,
             })
         }),
@@ -346,6 +353,21 @@ fn tcp_ip(a: &mut Adapter, req: &MrRequest) -> MrResponse {
         },
         _ => MrResponse::error(req.service, GS::SERVICE_NOT_SUPPORTED),
     }
+}
+
+/// Set_Attribute_Single of TCP/IP attribute 13, a UINT of 0 (disabled) to 3600 seconds;
+/// beyond is "invalid attribute value" (09h), as OpENer answers.
+fn set_inactivity_timeout(a: &mut Adapter, req: &MrRequest) -> MrResponse {
+    let value = match req.data[..] {
+        [lo, hi] => u16::from_le_bytes([lo, hi]),
+        [] | [_] => return MrResponse::error(req.service, GS::NOT_ENOUGH_DATA),
+        _ => return MrResponse::error(req.service, GS::TOO_MUCH_DATA),
+    };
+    if value > super::MAX_INACTIVITY_TIMEOUT {
+        return MrResponse::error(req.service, GS::INVALID_ATTRIBUTE_VALUE);
+    }
+    a.inactivity_timeout = value;
+    MrResponse::ok(req.service, Vec::new())
 }
 
 /// Ethernet Link object (F6h), instance 1.

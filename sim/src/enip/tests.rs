@@ -23,7 +23,9 @@ use proto::nord::addr::{self, cip_instance};
 use proto::nord::{eip, led, ArrayElement, Inverter, ParamAddress, ParamNumber, ParamSet, Product};
 use rstest::rstest;
 
-use super::{Adapter, ClientId, IoError, TcpReply, MAX_SESSIONS};
+use super::{
+    no_room_reply, Adapter, ClientId, IoError, TcpReply, DEFAULT_INACTIVITY_TIMEOUT, MAX_SESSIONS,
+};
 use crate::device::{Device, DeviceConfig};
 
 /// Where the adapter says it is (ListIdentity); deliberately not the P160/P850 factory address.
@@ -904,6 +906,123 @@ fn a_class_3_connection_carries_explicit_messages_until_the_client_goes() {
     assert_eq!(b.a.connection_counts(), (1, 0, 0));
     let r = b.tcp(Command::SEND_UNIT_DATA, data.emit().unwrap());
     assert_eq!(EncapStatus(r.status), EncapStatus::INVALID_SESSION);
+}
+
+#[test]
+fn a_lowered_session_limit_refuses_the_next_with_insufficient_memory() {
+    let mut a = adapter(Product::Tu3Eip).with_max_sessions(2);
+    assert_eq!(register(&mut a, 1).status, 0);
+    assert_eq!(register(&mut a, 2).status, 0);
+    let r = register(&mut a, 3);
+    assert_eq!(EncapStatus(r.status), EncapStatus::INSUFFICIENT_MEMORY);
+    assert_eq!(r.session, 0, "no handle with the refusal");
+    a.client_closed(1);
+    assert_eq!(register(&mut a, 3).status, 0, "room again once one went");
+}
+
+#[test]
+fn a_client_without_room_is_told_insufficient_memory() {
+    let msg = encap(Command::REGISTER_SESSION, 0, RegisterSession::V1.emit());
+    let r = EncapRepr::parse(&no_room_reply(&msg).unwrap()).unwrap();
+    assert_eq!(Command(r.command), Command::REGISTER_SESSION);
+    assert_eq!(EncapStatus(r.status), EncapStatus::INSUFFICIENT_MEMORY);
+    assert_eq!((r.session, r.context), (0, CONTEXT));
+    assert_eq!(r.data, RegisterSession::V1.emit());
+    let r = no_room_reply(&encap(Command::LIST_IDENTITY, 0, Vec::new())).unwrap();
+    let r = EncapRepr::parse(&r).unwrap();
+    assert_eq!(EncapStatus(r.status), EncapStatus::INSUFFICIENT_MEMORY);
+    assert!(r.data.is_empty());
+    assert_eq!(no_room_reply(&encap(Command::NOP, 0, Vec::new())), None);
+    assert_eq!(no_room_reply(&msg[..10]), None);
+}
+
+#[test]
+fn class_3_connections_beyond_the_limit_are_refused_with_0113h() {
+    let mut b = Bench::new(Product::Tu3Eip);
+    for serial in 1..=super::connections::MAX_EXPLICIT as u16 {
+        b.open_ok(&explicit_open(serial));
+    }
+    let one_more = explicit_open(100);
+    // CIP general status 01h, extended 0113h "connection manager cannot support any more
+    // connections".
+    assert_refused(&b.open(&one_more), &[ext::OUT_OF_CONNECTIONS], &one_more);
+    assert_eq!(ext::OUT_OF_CONNECTIONS, 0x0113);
+    assert_eq!(b.close(1).status(), GS::SUCCESS);
+    b.open_ok(&one_more);
+}
+
+// --- TCP/IP Interface attribute 13: Encapsulation Inactivity Timeout --------------------------
+
+fn inactivity_timeout(b: &mut Bench) -> u16 {
+    let r = b.get(class::TCP_IP, 1, 13);
+    assert_eq!(r.status(), GS::SUCCESS, "{r:?}");
+    u16::from_le_bytes(r.data[..].try_into().expect("a UINT"))
+}
+
+#[test]
+fn the_inactivity_timeout_is_120_s_and_settable_from_0_to_3600() {
+    let mut b = Bench::new(Product::Tu3Eip);
+    assert_eq!(inactivity_timeout(&mut b), DEFAULT_INACTIVITY_TIMEOUT);
+    assert_eq!(DEFAULT_INACTIVITY_TIMEOUT, 120);
+    assert_eq!(b.a.inactivity_timeout(), Some(Duration::from_secs(120)));
+    for value in [1u16, 3600] {
+        let r = b.set(class::TCP_IP, 1, 13, &value.to_le_bytes());
+        assert_eq!(
+            r,
+            MrResponse::ok(Service::SET_ATTRIBUTE_SINGLE.0, Vec::new())
+        );
+        assert_eq!(inactivity_timeout(&mut b), value);
+        assert_eq!(
+            b.a.inactivity_timeout(),
+            Some(Duration::from_secs(u64::from(value)))
+        );
+    }
+    assert_eq!(b.set(class::TCP_IP, 1, 13, &[0, 0]).status(), GS::SUCCESS);
+    assert_eq!(b.a.inactivity_timeout(), None, "0 disables it");
+    assert_eq!(inactivity_timeout(&mut b), 0);
+}
+
+#[rstest]
+#[case::above_3600(&[0x11, 0x0E], GS::INVALID_ATTRIBUTE_VALUE)]
+#[case::maximum_uint(&[0xFF, 0xFF], GS::INVALID_ATTRIBUTE_VALUE)]
+#[case::one_byte(&[1], GS::NOT_ENOUGH_DATA)]
+#[case::empty(&[], GS::NOT_ENOUGH_DATA)]
+#[case::udint(&[1, 0, 0, 0], GS::TOO_MUCH_DATA)]
+fn inactivity_timeout_refusals_leave_it_unchanged(#[case] data: &[u8], #[case] status: GS) {
+    let mut b = Bench::new(Product::Tu3Eip);
+    assert_eq!(b.set(class::TCP_IP, 1, 13, data).status(), status);
+    assert_eq!(inactivity_timeout(&mut b), DEFAULT_INACTIVITY_TIMEOUT);
+}
+
+#[test]
+fn the_inactivity_timeout_survives_an_identity_reset() {
+    let mut b = Bench::new(Product::Tu3Eip);
+    b.set(class::TCP_IP, 1, 13, &[5, 0]);
+    let r = b.call(
+        Service::RESET,
+        EPath::object(class::IDENTITY, 1),
+        Vec::new(),
+    );
+    assert_eq!(r.status(), GS::SUCCESS);
+    assert_eq!(inactivity_timeout(&mut b), 5);
+}
+
+#[test]
+fn a_client_holds_connections_while_its_class_1_or_class_3_connections_are_open() {
+    let mut b = Bench::new(Product::Tu3Eip);
+    assert!(!b.a.holds_connections(CLIENT));
+    b.open_ok(&explicit_open(1));
+    assert!(b.a.holds_connections(CLIENT));
+    assert!(
+        !b.a.holds_connections(CLIENT + 1),
+        "only the client that opened it"
+    );
+    assert_eq!(b.close(1).status(), GS::SUCCESS);
+    assert!(!b.a.holds_connections(CLIENT));
+    b.open_ok(&tu3_owner(2));
+    assert!(b.a.holds_connections(CLIENT));
+    assert_eq!(b.close(2).status(), GS::SUCCESS);
+    assert!(!b.a.holds_connections(CLIENT));
 }
 
 #[test]
