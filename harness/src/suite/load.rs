@@ -70,6 +70,9 @@ pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
         line: None,
         message: format!("cannot read the suites folder: {e}"),
     })?;
+    // The statement inventories are no suites (`suite::inventory` reads them).
+    let inventories = dir.join(super::inventory::DIR);
+    files.retain(|f| !f.starts_with(&inventories));
     files.sort();
     let mut loaded = Loaded {
         files: files.len(),

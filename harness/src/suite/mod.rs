@@ -2,6 +2,7 @@
 
 mod case;
 pub(crate) mod fields;
+pub(crate) mod inventory;
 mod load;
 mod schema;
 

@@ -1,0 +1,437 @@
+//! The statement inventories: `suites/inventory/<manual>.yaml`, one per manual file, listing
+//! every testable statement of the manual section by section, each with the ids of the cases
+//! that assert it, or `untestable:` with the reason, or `pending:` with the bus whose binding
+//! is not there yet (an entry with none of them is testable and not asserted yet: the gap).
+//!
+//! [`coverage`] counts them per manual and section (`harness coverage`, the run's summary and
+//! HTML report); [`check`] keeps an inventory honest against the loaded suites: every case id
+//! it names exists, every case citing an inventoried manual is named by a statement, and the
+//! asserted statements of a manual do not fall below the floor checked in beside them
+//! (`floors.yaml`), so the count can only grow.
+
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+use super::load::{LoadError, Loaded};
+
+/// The folder below the suites that holds the inventories (the suite loader skips it).
+pub(crate) const DIR: &str = "inventory";
+
+/// The floors file in [`DIR`]: per manual (`"<doc> <edition>"`), the fewest asserted
+/// statements allowed.
+const FLOORS: &str = "floors.yaml";
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileDoc {
+    doc: String,
+    edition: String,
+    statements: Vec<StatementDoc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StatementDoc {
+    section: String,
+    #[serde(default)]
+    page: Option<u32>,
+    says: String,
+    #[serde(default)]
+    cases: Vec<String>,
+    #[serde(default)]
+    untestable: Option<String>,
+    #[serde(default)]
+    pending: Option<String>,
+}
+
+/// Where a statement stands.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) enum Status {
+    /// These cases assert it.
+    Asserted(Vec<String>),
+    /// No case can: the reason (hardware only, needs a PLC tool).
+    Untestable(String),
+    /// Its bus's binding is not there yet.
+    Pending(String),
+    /// Testable, and no case asserts it yet.
+    Open,
+}
+
+/// One testable statement of a manual.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Statement {
+    pub(crate) section: String,
+    pub(crate) page: Option<u32>,
+    pub(crate) says: String,
+    pub(crate) status: Status,
+}
+
+/// One manual's inventory.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Inventory {
+    pub(crate) file: PathBuf,
+    pub(crate) doc: String,
+    pub(crate) edition: String,
+    pub(crate) statements: Vec<Statement>,
+}
+
+impl Inventory {
+    /// `BU 0620 2020-03 en`: the manual as the floors and messages name it.
+    pub(crate) fn manual(&self) -> String {
+        format!("{} {}", self.doc, self.edition)
+    }
+}
+
+/// The statements of one section, counted.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SectionCoverage {
+    /// Manual.
+    pub doc: String,
+    /// Edition.
+    pub edition: String,
+    /// Section.
+    pub section: String,
+    /// Statements listed.
+    pub statements: usize,
+    /// Asserted by a case.
+    pub asserted: usize,
+    /// Waiting for a bus binding.
+    pub pending: usize,
+    /// Not testable here.
+    pub untestable: usize,
+}
+
+impl SectionCoverage {
+    /// Testable statements (neither pending nor untestable) not asserted yet.
+    pub fn open(&self) -> usize {
+        self.statements - self.asserted - self.pending - self.untestable
+    }
+
+    /// Asserted of the testable ones, in per cent (100 when none is testable here).
+    pub fn percent(&self) -> f64 {
+        let testable = self.asserted + self.open();
+        if testable == 0 {
+            100.0
+        } else {
+            100.0 * self.asserted as f64 / testable as f64
+        }
+    }
+}
+
+fn error(file: &Path, line: Option<u64>, message: String) -> LoadError {
+    LoadError {
+        file: file.to_path_buf(),
+        line,
+        message,
+    }
+}
+
+fn parse<T: for<'de> Deserialize<'de>>(file: &Path, text: &str) -> Result<T, LoadError> {
+    serde_saphyr::from_str(text).map_err(|e| {
+        let line = e.location().map(|l| l.line());
+        let first = e.to_string();
+        error(
+            file,
+            line,
+            first.lines().next().unwrap_or("invalid YAML").to_string(),
+        )
+    })
+}
+
+/// Reads one inventory; a statement with more than one status is an error naming it.
+pub(crate) fn parse_inventory(file: &Path, text: &str) -> Result<Inventory, LoadError> {
+    let doc: FileDoc = parse(file, text)?;
+    let mut statements = Vec::with_capacity(doc.statements.len());
+    for s in doc.statements {
+        let status = match (s.cases.is_empty(), s.untestable, s.pending) {
+            (false, None, None) => Status::Asserted(s.cases),
+            (true, Some(why), None) => Status::Untestable(why),
+            (true, None, Some(bus)) => Status::Pending(bus),
+            (true, None, None) => Status::Open,
+            _ => {
+                return Err(error(
+                    file,
+                    None,
+                    format!(
+                        "§{} \"{}\": give one of `cases`, `untestable`, `pending`",
+                        s.section, s.says
+                    ),
+                ))
+            }
+        };
+        statements.push(Statement {
+            section: s.section,
+            page: s.page,
+            says: s.says,
+            status,
+        });
+    }
+    Ok(Inventory {
+        file: file.to_path_buf(),
+        doc: doc.doc,
+        edition: doc.edition,
+        statements,
+    })
+}
+
+/// Every inventory in `<suites>/inventory/` (none when the folder is missing), by file name.
+pub(crate) fn load(suites: &Path) -> Result<Vec<Inventory>, LoadError> {
+    let dir = suites.join(DIR);
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return Ok(Vec::new());
+    };
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("yaml"))
+                && p.file_name().is_some_and(|n| n != FLOORS)
+        })
+        .collect();
+    files.sort();
+    files
+        .iter()
+        .map(|f| {
+            let text = std::fs::read_to_string(f).map_err(|e| error(f, None, e.to_string()))?;
+            parse_inventory(f, &text)
+        })
+        .collect()
+}
+
+/// The floors: manual → fewest asserted statements.
+pub(crate) fn floors(suites: &Path) -> Result<BTreeMap<String, usize>, LoadError> {
+    let file = suites.join(DIR).join(FLOORS);
+    match std::fs::read_to_string(&file) {
+        Ok(text) => parse(&file, &text),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(BTreeMap::new()),
+        Err(e) => Err(error(&file, None, e.to_string())),
+    }
+}
+
+/// Sort key for section numbers: numerically per level.
+fn section_key(s: &str) -> Vec<(u64, &str)> {
+    s.split('.')
+        .map(|p| p.parse().map_or((u64::MAX, p), |n| (n, "")))
+        .collect()
+}
+
+/// The statements counted per manual and section, in manual then section order.
+pub(crate) fn coverage(inventories: &[Inventory]) -> Vec<SectionCoverage> {
+    let mut out: Vec<SectionCoverage> = Vec::new();
+    for inv in inventories {
+        let mut by: BTreeMap<(Vec<(u64, &str)>, &str), SectionCoverage> = BTreeMap::new();
+        for s in &inv.statements {
+            let c = by
+                .entry((section_key(&s.section), s.section.as_str()))
+                .or_insert_with(|| SectionCoverage {
+                    doc: inv.doc.clone(),
+                    edition: inv.edition.clone(),
+                    section: s.section.clone(),
+                    ..SectionCoverage::default()
+                });
+            c.statements += 1;
+            match s.status {
+                Status::Asserted(_) => c.asserted += 1,
+                Status::Pending(_) => c.pending += 1,
+                Status::Untestable(_) => c.untestable += 1,
+                Status::Open => {}
+            }
+        }
+        out.extend(by.into_values());
+    }
+    out
+}
+
+/// What keeps the inventories honest, as messages (none: all is well): case ids that do not
+/// exist, cases of an inventoried manual no statement names, a manual whose asserted
+/// statements fell below its floor, a floor for a manual without an inventory.
+pub(crate) fn check(
+    inventories: &[Inventory],
+    loaded: &Loaded,
+    floors: &BTreeMap<String, usize>,
+) -> Vec<String> {
+    let ids: BTreeSet<&str> = loaded.cases.iter().map(|c| c.id.as_str()).collect();
+    let mut problems = Vec::new();
+    for inv in inventories {
+        let mut named = BTreeSet::new();
+        let mut asserted = 0;
+        for s in &inv.statements {
+            if let Status::Asserted(cases) = &s.status {
+                asserted += 1;
+                for id in cases {
+                    if !ids.contains(id.as_str()) {
+                        problems.push(format!(
+                            "{}: §{} names case `{id}`, which no suite has",
+                            inv.file.display(),
+                            s.section
+                        ));
+                    }
+                    named.insert(id.as_str());
+                }
+            }
+        }
+        for c in loaded
+            .cases
+            .iter()
+            .filter(|c| c.manual.doc == inv.doc && c.manual.edition == inv.edition)
+        {
+            if !named.contains(c.id.as_str()) {
+                problems.push(format!(
+                    "{}: case `{}` cites {} §{} and no statement names it",
+                    inv.file.display(),
+                    c.id,
+                    inv.doc,
+                    c.manual.section
+                ));
+            }
+        }
+        match floors.get(&inv.manual()) {
+            Some(floor) if asserted < *floor => problems.push(format!(
+                "{}: {asserted} asserted statements, fewer than the floor of {floor} (floors.yaml): the count may only grow",
+                inv.manual()
+            )),
+            None => problems.push(format!(
+                "{}: no floor in {DIR}/{FLOORS}",
+                inv.manual()
+            )),
+            Some(_) => {}
+        }
+    }
+    for manual in floors.keys() {
+        if !inventories.iter().any(|i| &i.manual() == manual) {
+            problems.push(format!("{DIR}/{FLOORS}: `{manual}` has no inventory"));
+        }
+    }
+    problems
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::suite::load_text_for_tests;
+
+    const INVENTORY: &str = r#"
+doc: BU 0620
+edition: "2020-03 en"
+statements:
+  - section: "2.5.6"
+    page: 51
+    says: P102 reads
+    cases: [test/read]
+  - section: "2.5.6"
+    says: the LED is green
+    untestable: "hardware: a colour"
+  - section: "4.2.5"
+    says: the system bus runs at 250 kBaud
+    pending: can
+  - section: "6.1.3"
+    says: 047Eh makes the drive ready
+"#;
+
+    const SUITE: &str = r#"
+doc: BU 0620
+edition: "2020-03 en"
+cases:
+  - id: read
+    title: read P102
+    ref: { section: "2.5.6", page: 51 }
+    steps:
+      - read: { param: 102 }
+  - id: process
+    title: process data
+    ref: { section: "6.1.3", page: 114 }
+    steps:
+      - process: { control: "047Eh", for: 40ms }
+"#;
+
+    fn inventory() -> Inventory {
+        parse_inventory(Path::new("bu0620.yaml"), INVENTORY).unwrap()
+    }
+
+    #[test]
+    fn statements_are_counted_per_section() {
+        let c = coverage(&[inventory()]);
+        let sections: Vec<(&str, usize, usize, usize, usize, usize)> = c
+            .iter()
+            .map(|s| {
+                (
+                    s.section.as_str(),
+                    s.statements,
+                    s.asserted,
+                    s.pending,
+                    s.untestable,
+                    s.open(),
+                )
+            })
+            .collect();
+        assert_eq!(
+            sections,
+            [
+                ("2.5.6", 2, 1, 0, 1, 0),
+                ("4.2.5", 1, 0, 1, 0, 0),
+                ("6.1.3", 1, 0, 0, 0, 1)
+            ]
+        );
+        assert_eq!(c[0].percent(), 100.0);
+        assert_eq!(c[2].percent(), 0.0);
+    }
+
+    #[test]
+    fn the_check_names_unknown_ids_unnamed_cases_and_a_fallen_floor() {
+        let loaded = load_text_for_tests(SUITE);
+        let floors: BTreeMap<String, usize> = [("BU 0620 2020-03 en".to_string(), 2)].into();
+        let problems = check(&[inventory()], &loaded, &floors);
+        // `process` cites BU 0620 and no statement names it (the 6.1.3 one is open); 1 asserted
+        // is below the floor of 2.
+        assert_eq!(problems.len(), 2, "{problems:?}");
+        assert!(
+            problems[0]
+                .contains("case `test/process` cites BU 0620 §6.1.3 and no statement names it"),
+            "{problems:?}"
+        );
+        assert!(
+            problems[1].contains("fewer than the floor of 2"),
+            "{problems:?}"
+        );
+        let wrong = parse_inventory(
+            Path::new("x.yaml"),
+            &INVENTORY.replace("cases: [test/read]", "cases: [nope]"),
+        )
+        .unwrap();
+        let problems = check(&[wrong], &loaded, &BTreeMap::new());
+        assert!(
+            problems
+                .iter()
+                .any(|p| p.contains("names case `nope`, which no suite has")),
+            "{problems:?}"
+        );
+        assert!(
+            problems.iter().any(|p| p.contains("no floor")),
+            "{problems:?}"
+        );
+    }
+
+    #[test]
+    fn a_statement_has_one_status_at_most() {
+        let two = INVENTORY.replace(
+            "    cases: [test/read]",
+            "    cases: [test/read]\n    untestable: \"and this\"",
+        );
+        let e = parse_inventory(Path::new("x.yaml"), &two).unwrap_err();
+        assert!(e.message.contains("give one of"), "{e}");
+        let unknown = INVENTORY.replace("says: P102 reads", "says: P102 reads\n    said: x");
+        let e = parse_inventory(Path::new("x.yaml"), &unknown).unwrap_err();
+        assert!(e.line.is_some(), "{e}");
+    }
+
+    #[test]
+    fn the_checked_in_inventories_are_honest() {
+        let suites = Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites");
+        let loaded = crate::suite::load_dir(&suites).unwrap();
+        let inventories = load(&suites).unwrap();
+        assert!(inventories.len() >= 5, "{}", inventories.len());
+        let problems = check(&inventories, &loaded, &floors(&suites).unwrap());
+        assert!(problems.is_empty(), "{}", problems.join("\n"));
+    }
+}
