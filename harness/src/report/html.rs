@@ -265,6 +265,7 @@ pub(super) fn render(run: &RunResult) -> String {
     filters(&mut s, run);
     cases(&mut s, run);
     coverage(&mut s, run);
+    super::statements::html(&mut s, &run.statements);
     errata(&mut s, run);
     let _ = write!(s, "<script>{SCRIPT}</script>\n</body></html>\n");
     s

@@ -267,6 +267,7 @@ pub(super) fn markdown(run: &RunResult) -> String {
         }
     }
     coverage(&mut s, run);
+    super::statements::markdown(&mut s, &run.statements);
     errata(&mut s, run);
     s
 }
