@@ -90,6 +90,9 @@ pub struct Erratum {
     pub correct: String,
     /// Why.
     pub why: String,
+    /// Ambiguous rather than wrong: the case accepts every reading the text allows.
+    #[serde(default)]
+    pub ambiguous: bool,
 }
 
 /// A device's refusal of a request, in its bus's own terms: a parameter-channel error number

@@ -187,6 +187,7 @@ pub(super) fn sample_run() -> RunResult {
             printed: "class 103".into(),
             correct: "class 102".into(),
             why: "FI 2 is class 102".into(),
+            ambiguous: false,
         }],
         statements: vec![
             StatementCoverage {

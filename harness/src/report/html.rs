@@ -232,7 +232,11 @@ fn errata(s: &mut String, run: &RunResult) {
             e.page.map_or(String::new(), |p| p.to_string()),
             text(&e.printed),
             text(&e.correct),
-            text(&e.why),
+            if e.ambiguous {
+                format!("<strong>ambiguous:</strong> {}", text(&e.why))
+            } else {
+                text(&e.why)
+            },
             text(&e.case),
         );
     }
