@@ -186,3 +186,53 @@ fn a_udp_port_clash_with_the_adapter_is_diagnosed_once_at_start() {
     assert!(!out.join("run.json").exists(), "no run took place");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn coverage_counts_the_inventories_and_names_what_keeps_them_dishonest() {
+    let o = harness(&["coverage"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{stdout}{}", stderr(&o));
+    for manual in [
+        "BU 0620  2020-03 en",
+        "BU 2100  en",
+        "BU 0590  2012-03 en",
+        "BU 2200  2019 de",
+    ] {
+        assert!(
+            stdout
+                .lines()
+                .any(|l| l.starts_with(manual) && l.contains(" all ")),
+            "{manual}: {stdout}"
+        );
+    }
+    // A suite folder whose inventory names a case no suite has, and misses the one there is.
+    let dir = scratch("coverage");
+    std::fs::create_dir_all(dir.join("inventory")).unwrap();
+    std::fs::write(
+        dir.join("p102.yaml"),
+        "doc: BU 0620\nedition: \"2020-03 en\"\ncases:\n  - id: read\n    title: P102 reads\n    ref: { section: \"2.5.6\", page: 51 }\n    steps:\n      - read: { param: 102 }\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("inventory/bu0620.yaml"),
+        "doc: BU 0620\nedition: \"2020-03 en\"\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/gone]\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("inventory/floors.yaml"),
+        "\"BU 0620 2020-03 en\": 1\n",
+    )
+    .unwrap();
+    let o = harness(&["coverage", "--suites", dir.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("names case `p102/gone`, which no suite has"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("case `p102/read` cites BU 0620 §2.5.6 and no statement names it"),
+        "{stdout}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -57,6 +57,9 @@ enum Command {
     Diff(crate::cli_reports::DiffArgs),
     /// Join the report folders of `run --shard K/N` runs into one unsharded run's reports.
     Merge(crate::cli_reports::MergeArgs),
+    /// The manuals' statements per section and how many the cases assert (the inventories in
+    /// `suites/inventory/`), and the check that keeps them honest.
+    Coverage(crate::cli_reports::CoverageArgs),
 }
 
 #[derive(ClapArgs, Debug)]
@@ -207,7 +210,7 @@ struct ListArgs {
 }
 
 /// The suites folder: as given, else `suites/` here, else the one beside the sources.
-fn suites_dir(given: Option<PathBuf>) -> PathBuf {
+pub(crate) fn suites_dir(given: Option<PathBuf>) -> PathBuf {
     given.unwrap_or_else(|| {
         let here = PathBuf::from("suites");
         if here.is_dir() {
@@ -247,6 +250,7 @@ pub fn main() -> i32 {
         Command::Describe(a) => describe(a),
         Command::Diff(a) => crate::cli_reports::diff(a),
         Command::Merge(a) => crate::cli_reports::merge(a),
+        Command::Coverage(a) => crate::cli_reports::coverage(a),
     };
     match outcome {
         Ok(code) => code,
@@ -407,6 +411,12 @@ fn run(a: RunArgs) -> Result<i32, String> {
         shard: found.shard,
         ..meta
     };
+    // What the manuals state and the suites assert (an inventory that does not load is a
+    // load error, as a suite file's is).
+    match crate::suite::inventory::load(&dir) {
+        Ok(inventories) => run.statements = crate::suite::inventory::coverage(&inventories),
+        Err(e) => run.load_errors.push(e.to_string()),
+    }
     // Every link is closed by now, its FIN exchange recorded.
     if let (Some(path), Some(tap)) = (&a.pcap, &tap) {
         let tap = tap.borrow();

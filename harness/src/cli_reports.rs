@@ -1,6 +1,7 @@
 //! Commands over finished report folders: `harness diff OLD NEW` (what changed between two
 //! runs, e.g. two firmware releases) and `harness merge` (the shards of a `--shard K/N` run
-//! joined into the unsharded run's reports).
+//! joined into the unsharded run's reports); and over the suites' statement inventories:
+//! `harness coverage`.
 
 use clap::Args;
 use std::io::Write;
@@ -83,4 +84,43 @@ pub(crate) fn merge(a: MergeArgs) -> Result<i32, String> {
     let _ = write!(stdout, "{}", report::terminal(&run));
     let _ = writeln!(stdout, "{written}");
     Ok(verdict_exit(&run))
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct CoverageArgs {
+    /// Suites folder (its `inventory/` holds the statement inventories).
+    #[arg(long)]
+    suites: Option<PathBuf>,
+}
+
+/// Prints the statements per manual and section (statements, asserted, pending, untestable,
+/// open, asserted of the testable), then what keeps the inventories honest: a case id that no
+/// suite has, a case of an inventoried manual that no statement names, an asserted count below
+/// its floor. Exit 1 when any of those, 2 when an inventory or suite does not load.
+pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
+    use crate::suite::inventory;
+    let dir = crate::cli::suites_dir(a.suites);
+    let loaded = crate::suite::load_dir(&dir).map_err(|e| e.to_string())?;
+    if let Some(e) = loaded.errors.first() {
+        return Err(e.to_string());
+    }
+    let inventories = inventory::load(&dir).map_err(|e| e.to_string())?;
+    if inventories.is_empty() {
+        return Err(format!(
+            "no statement inventory in {}",
+            dir.join(inventory::DIR).display()
+        ));
+    }
+    let floors = inventory::floors(&dir).map_err(|e| e.to_string())?;
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(report::statements_table(&inventory::coverage(&inventories)).as_bytes());
+    let problems = inventory::check(&inventories, &loaded, &floors);
+    for p in &problems {
+        let _ = writeln!(out, "PROBLEM {p}");
+    }
+    Ok(if problems.is_empty() {
+        EXIT_PASS
+    } else {
+        EXIT_FAIL
+    })
 }

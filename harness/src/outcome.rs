@@ -90,6 +90,9 @@ pub struct Erratum {
     pub correct: String,
     /// Why.
     pub why: String,
+    /// Ambiguous rather than wrong: the case accepts every reading the text allows.
+    #[serde(default)]
+    pub ambiguous: bool,
 }
 
 /// A device's refusal of a request, in its bus's own terms: a parameter-channel error number
@@ -294,6 +297,52 @@ pub struct RunMeta {
     pub eeprom_cap: Option<u32>,
 }
 
+/// The statements of one manual section in the inventories (`suites/inventory/`), counted:
+/// how much of what the manual says the suites assert.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct StatementCoverage {
+    /// Manual.
+    pub doc: String,
+    /// Edition.
+    pub edition: String,
+    /// Section.
+    pub section: String,
+    /// Statements listed.
+    pub statements: usize,
+    /// Asserted by a case.
+    pub asserted: usize,
+    /// Waiting for a bus binding.
+    pub pending: usize,
+    /// Not testable here.
+    pub untestable: usize,
+}
+
+impl StatementCoverage {
+    /// Testable statements (neither pending nor untestable) not asserted yet.
+    pub fn open(&self) -> usize {
+        self.statements
+            .saturating_sub(self.asserted + self.pending + self.untestable)
+    }
+
+    /// Asserted of the testable ones, in per cent (100 when none is testable here).
+    pub fn percent(&self) -> f64 {
+        let testable = self.asserted + self.open();
+        if testable == 0 {
+            100.0
+        } else {
+            100.0 * self.asserted as f64 / testable as f64
+        }
+    }
+
+    /// Adds another section's counts (a manual's total).
+    pub fn add(&mut self, other: &StatementCoverage) {
+        self.statements += other.statements;
+        self.asserted += other.asserted;
+        self.pending += other.pending;
+        self.untestable += other.untestable;
+    }
+}
+
 /// A whole run: every case under every profile it ran with.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
@@ -308,6 +357,10 @@ pub struct RunResult {
     pub cases: Vec<CaseResult>,
     /// Every erratum the loaded suites record (once each, not per profile).
     pub errata: Vec<Erratum>,
+    /// The manuals' statements per section as the inventories count them (none without
+    /// inventories).
+    #[serde(default)]
+    pub statements: Vec<StatementCoverage>,
     /// Suite files that failed to load, with the error (file, line, what is wrong).
     pub load_errors: Vec<String>,
     /// Wall time of the run.

@@ -129,6 +129,7 @@ pub(crate) fn run_shard(
         profiles: opts.profiles.iter().map(|p| p.name().to_string()).collect(),
         cases,
         errata: loaded.errata.clone(),
+        statements: Vec::new(),
         load_errors: loaded.errors.iter().map(|e| e.to_string()).collect(),
         duration: start.elapsed(),
     };

@@ -187,7 +187,28 @@ pub(super) fn sample_run() -> RunResult {
             printed: "class 103".into(),
             correct: "class 102".into(),
             why: "FI 2 is class 102".into(),
+            ambiguous: false,
         }],
+        statements: vec![
+            StatementCoverage {
+                doc: "BU 0620".into(),
+                edition: "2020-03 en".into(),
+                section: "2.2.7".into(),
+                statements: 4,
+                asserted: 2,
+                pending: 1,
+                untestable: 0,
+            },
+            StatementCoverage {
+                doc: "BU 0620".into(),
+                edition: "2020-03 en".into(),
+                section: "2.5.6.4".into(),
+                statements: 3,
+                asserted: 3,
+                pending: 0,
+                untestable: 0,
+            },
+        ],
         load_errors: vec![],
         duration: Duration::from_millis(15),
     };

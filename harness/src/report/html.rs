@@ -232,7 +232,11 @@ fn errata(s: &mut String, run: &RunResult) {
             e.page.map_or(String::new(), |p| p.to_string()),
             text(&e.printed),
             text(&e.correct),
-            text(&e.why),
+            if e.ambiguous {
+                format!("<strong>ambiguous:</strong> {}", text(&e.why))
+            } else {
+                text(&e.why)
+            },
             text(&e.case),
         );
     }
@@ -265,6 +269,7 @@ pub(super) fn render(run: &RunResult) -> String {
     filters(&mut s, run);
     cases(&mut s, run);
     coverage(&mut s, run);
+    super::statements::html(&mut s, &run.statements);
     errata(&mut s, run);
     let _ = write!(s, "<script>{SCRIPT}</script>\n</body></html>\n");
     s

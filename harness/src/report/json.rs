@@ -11,7 +11,8 @@ use std::collections::BTreeMap;
 use super::summary::{profiles, Counts};
 use super::write::transcript_file;
 use crate::outcome::{
-    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, Verdict,
+    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, StatementCoverage,
+    Verdict,
 };
 
 /// One case in `run.json`.
@@ -86,6 +87,8 @@ struct Doc<'a> {
     counts_model_by_profile: BTreeMap<&'a str, Counts>,
     load_errors: &'a [String],
     errata: &'a [Erratum],
+    /// The manuals' statements per section, as the inventories count them.
+    statements: &'a [StatementCoverage],
     cases: Vec<Case<'a>>,
 }
 
@@ -108,6 +111,7 @@ pub(super) fn render(run: &RunResult) -> Result<String, serde_json::Error> {
         counts_model_by_profile: by_profile(CaseKind::Model),
         load_errors: &run.load_errors,
         errata: &run.errata,
+        statements: &run.statements,
         cases: run.cases.iter().map(Case::from).collect(),
     };
     serde_json::to_string_pretty(&doc)

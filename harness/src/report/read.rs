@@ -10,7 +10,8 @@ use std::path::{Component, Path, PathBuf};
 use std::time::Duration;
 
 use crate::outcome::{
-    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, StepResult, Verdict,
+    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, StatementCoverage,
+    StepResult, Verdict,
 };
 
 /// A report folder or `run.json` that cannot be read back. Every variant names the file.
@@ -55,6 +56,8 @@ struct Doc {
     duration: f64,
     load_errors: Vec<String>,
     errata: Vec<Erratum>,
+    #[serde(default)]
+    statements: Vec<StatementCoverage>,
     cases: Vec<Case>,
 }
 
@@ -165,6 +168,7 @@ pub(crate) fn read(given: &Path) -> Result<RunResult, ReadError> {
         profiles: doc.profiles,
         cases,
         errata: doc.errata,
+        statements: doc.statements,
         load_errors: doc.load_errors,
         duration: secs(&path, doc.duration)?,
     })

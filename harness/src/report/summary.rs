@@ -173,7 +173,11 @@ fn errata(s: &mut String, run: &RunResult) {
             e.page.map_or(String::new(), |p| p.to_string()),
             cell(&e.printed),
             cell(&e.correct),
-            cell(&e.why),
+            if e.ambiguous {
+                format!("**ambiguous:** {}", cell(&e.why))
+            } else {
+                cell(&e.why)
+            },
             cell(&e.case)
         );
     }
@@ -267,6 +271,7 @@ pub(super) fn markdown(run: &RunResult) -> String {
         }
     }
     coverage(&mut s, run);
+    super::statements::markdown(&mut s, &run.statements);
     errata(&mut s, run);
     s
 }

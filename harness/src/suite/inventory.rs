@@ -9,11 +9,12 @@
 //! asserted statements of a manual do not fall below the floor checked in beside them
 //! (`floors.yaml`), so the count can only grow.
 
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use super::load::{LoadError, Loaded};
+use crate::outcome::StatementCoverage;
 
 /// The folder below the suites that holds the inventories (the suite loader skips it).
 pub(crate) const DIR: &str = "inventory";
@@ -80,42 +81,6 @@ impl Inventory {
     /// `BU 0620 2020-03 en`: the manual as the floors and messages name it.
     pub(crate) fn manual(&self) -> String {
         format!("{} {}", self.doc, self.edition)
-    }
-}
-
-/// The statements of one section, counted.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct SectionCoverage {
-    /// Manual.
-    pub doc: String,
-    /// Edition.
-    pub edition: String,
-    /// Section.
-    pub section: String,
-    /// Statements listed.
-    pub statements: usize,
-    /// Asserted by a case.
-    pub asserted: usize,
-    /// Waiting for a bus binding.
-    pub pending: usize,
-    /// Not testable here.
-    pub untestable: usize,
-}
-
-impl SectionCoverage {
-    /// Testable statements (neither pending nor untestable) not asserted yet.
-    pub fn open(&self) -> usize {
-        self.statements - self.asserted - self.pending - self.untestable
-    }
-
-    /// Asserted of the testable ones, in per cent (100 when none is testable here).
-    pub fn percent(&self) -> f64 {
-        let testable = self.asserted + self.open();
-        if testable == 0 {
-            100.0
-        } else {
-            100.0 * self.asserted as f64 / testable as f64
-        }
     }
 }
 
@@ -217,18 +182,18 @@ fn section_key(s: &str) -> Vec<(u64, &str)> {
 }
 
 /// The statements counted per manual and section, in manual then section order.
-pub(crate) fn coverage(inventories: &[Inventory]) -> Vec<SectionCoverage> {
-    let mut out: Vec<SectionCoverage> = Vec::new();
+pub(crate) fn coverage(inventories: &[Inventory]) -> Vec<StatementCoverage> {
+    let mut out: Vec<StatementCoverage> = Vec::new();
     for inv in inventories {
-        let mut by: BTreeMap<(Vec<(u64, &str)>, &str), SectionCoverage> = BTreeMap::new();
+        let mut by: BTreeMap<(Vec<(u64, &str)>, &str), StatementCoverage> = BTreeMap::new();
         for s in &inv.statements {
             let c = by
                 .entry((section_key(&s.section), s.section.as_str()))
-                .or_insert_with(|| SectionCoverage {
+                .or_insert_with(|| StatementCoverage {
                     doc: inv.doc.clone(),
                     edition: inv.edition.clone(),
                     section: s.section.clone(),
-                    ..SectionCoverage::default()
+                    ..StatementCoverage::default()
                 });
             c.statements += 1;
             match s.status {

@@ -189,6 +189,7 @@ pub(crate) fn load_text(
                 printed: e.printed,
                 correct: e.correct,
                 why: e.why,
+                ambiguous: e.ambiguous,
             });
         }
         loaded.errata.extend(case.errata.iter().cloned());

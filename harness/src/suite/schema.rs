@@ -79,6 +79,10 @@ pub(super) struct ErratumDoc {
     pub(super) printed: String,
     pub(super) correct: String,
     pub(super) why: String,
+    /// The manual is ambiguous rather than wrong: the case accepts every reading its text
+    /// allows, and `why` says which.
+    #[serde(default)]
+    pub(super) ambiguous: bool,
 }
 
 /// A step as written: exactly one action key, checked in `case.rs`. A key that is no
