@@ -185,6 +185,22 @@ pub(crate) fn observe_device(
     }))
 }
 
+/// The identity the embedded simulator of `product` reports over `bus`, as a connection check
+/// reads it (for each bus's own identity test).
+#[cfg(test)]
+pub(crate) fn identity_over(
+    product: proto::nord::Product,
+    bus: &'static str,
+) -> crate::outcome::Identity {
+    let profile = Profile::on_bus(product, bus);
+    let mut dut = EmbeddedFactory::default()
+        .open(&profile, 25)
+        .expect("the embedded simulator opens");
+    dut.identity()
+        .expect("the bus has an identity service")
+        .expect("the simulator answers it")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

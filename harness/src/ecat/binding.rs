@@ -843,6 +843,13 @@ mod tests {
     use proto::nord::ParamNumber;
     use sim::device::{Device, DeviceConfig};
 
+    #[test]
+    fn the_identity_is_object_1018h_checked_against_the_sii() {
+        let id = crate::binding::embedded::identity_over(Product::Sk550p, "ecat");
+        assert_eq!(id.source, "object 1018h (the SII header agrees)");
+        assert_eq!(id.vendor.as_deref(), Some("00000538h"));
+    }
+
     fn binding() -> EcatBinding<Faulty<EmbeddedSegment>> {
         let device = Device::new(DeviceConfig::new(Product::Sk550p));
         let segment = Faulty::new(EmbeddedSegment::new(Slave::new(device).unwrap()));

@@ -116,3 +116,15 @@ fn io_port_free(
 fn describe_eds(profile: &Profile, inverters: u8) -> Result<String, String> {
     eds::eds(profile.nord()?, inverters)
 }
+
+#[cfg(test)]
+mod identity_tests {
+    use proto::nord::Product;
+
+    #[test]
+    fn the_identity_comes_from_the_bus_service() {
+        let id = crate::binding::embedded::identity_over(Product::Tu3Eip, "enip");
+        assert_eq!(id.source, "ListIdentity");
+        assert_eq!(id.product_name.as_deref(), Some("SK TU3-EIP"));
+    }
+}

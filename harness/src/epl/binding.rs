@@ -711,6 +711,13 @@ mod tests {
     use sim::device::{Device, DeviceConfig};
     use sim::epl::{Node, NodeConfig};
 
+    #[test]
+    fn the_identity_is_the_ident_response() {
+        let id = crate::binding::embedded::identity_over(Product::Tu3Pol, "epl");
+        assert!(id.source.starts_with("IdentResponse of node 1"), "{id:?}");
+        assert_eq!(id.product_code.as_deref(), Some("00002203h"));
+    }
+
     use super::super::mn::link::{EmbeddedLink, EMBEDDED_PEER};
     use super::super::mn::{Manager, MnConfig};
     use super::*;

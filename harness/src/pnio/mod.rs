@@ -215,3 +215,18 @@ impl DutFactory for NetworkFactory {
         }
     }
 }
+
+#[cfg(test)]
+mod identity_tests {
+    use proto::nord::Product;
+
+    #[test]
+    fn the_identity_comes_from_the_bus_service() {
+        let id = crate::binding::embedded::identity_over(Product::Tu3Pnt, "pnio");
+        assert_eq!(
+            id.source,
+            "DCP Identify of station \"nord-device\" and I&M0"
+        );
+        assert_eq!(id.serial.as_deref(), Some("000ECF036000"));
+    }
+}
