@@ -23,6 +23,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
+#[allow(dead_code)] // what the other network tests share
 mod common;
 use common::peer::{interop_python, is_root, require_or_skip, require_tshark};
 use common::{serve, wait_listening, Server};
@@ -888,18 +889,7 @@ fn generic_suite_against_cpppo_server_reports_deviations_as_failures() {
 
     let run: Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
-    let verdict = |id: &str| -> (String, String) {
-        let c = run["cases"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|c| c["id"] == id)
-            .unwrap_or_else(|| panic!("no case {id}"));
-        (
-            c["verdict"].as_str().unwrap().to_string(),
-            c["message"].as_str().unwrap_or_default().to_string(),
-        )
-    };
+    let verdict = |id: &str| common::case_verdict(&run, id);
     // A misbehaving peer is judged, never an error of the harness.
     assert_eq!(run["counts"]["error"], 0, "{stdout}");
     // What cpppo does as CIP says.

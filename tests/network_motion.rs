@@ -19,7 +19,7 @@ use serde_json::Value;
 
 #[allow(dead_code)] // what the other network tests share
 mod common;
-use common::serve;
+use common::{case_verdict, serve};
 
 /// Where the served simulator listens, and the harness's own address (other tests take
 /// 127.0.0.2, .3, .6, .8, .9, .12, .14, .17–.19).
@@ -271,20 +271,6 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// The verdict and message of case `id`.
-fn verdict<'a>(run: &'a Value, id: &str) -> (&'a str, &'a str) {
-    let c = run["cases"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|c| c["id"] == id)
-        .unwrap_or_else(|| panic!("no case {id}"));
-    (
-        c["verdict"].as_str().unwrap(),
-        c["message"].as_str().unwrap(),
-    )
-}
-
 const SWITCHING: &str = "bu0620/drive-switching/switching-example";
 
 /// Takes about a minute of real time: with `--allow-motion` the drive examples run for
@@ -305,7 +291,7 @@ fn no_enabling_control_word_leaves_the_harness_without_allow_motion() {
     // The decoding saw what carries control words and parameters.
     assert!(found.io_frames > 100, "{found:?}");
     assert!(found.sets > 3, "{found:?}");
-    let (v, why) = verdict(&run, SWITCHING);
+    let (v, why) = case_verdict(&run, SWITCHING);
     assert_eq!(v, "not_applicable");
     assert!(
         why.starts_with("motion not allowed (--allow-motion): control word 047Fh"),
@@ -328,7 +314,11 @@ fn no_enabling_control_word_leaves_the_harness_without_allow_motion() {
     // With the flag the same run sends enabling words, and the decoding finds them.
     let dir_motion = scratch("allow-motion");
     let (run, pcap, stdout) = self::run(&dir_motion, &["--allow-motion"], true);
-    assert_ne!(verdict(&run, SWITCHING).0, "not_applicable", "{stdout}");
+    assert_ne!(
+        case_verdict(&run, SWITCHING).0,
+        "not_applicable",
+        "{stdout}"
+    );
     let found = decode(&pcap);
     assert!(
         found
@@ -350,7 +340,7 @@ fn no_enabling_control_word_leaves_the_harness_without_allow_motion() {
         ],
         false,
     );
-    let (v, why) = verdict(&run, "bu0620/pkw-dut/resolution-99-99-s");
+    let (v, why) = case_verdict(&run, "bu0620/pkw-dut/resolution-99-99-s");
     assert_eq!(v, "not_applicable");
     assert!(
         why.starts_with("EEPROM write cap reached (--max-eeprom-writes 1)"),

@@ -51,3 +51,17 @@ pub(crate) fn wait_listening(listen: &str, within: Duration) {
         std::thread::sleep(Duration::from_millis(50));
     }
 }
+
+/// The verdict and message of case `id` in a `run.json` (the first case-run of that id).
+pub(crate) fn case_verdict<'a>(run: &'a serde_json::Value, id: &str) -> (&'a str, &'a str) {
+    let c = run["cases"]
+        .as_array()
+        .expect("run.json lists cases")
+        .iter()
+        .find(|c| c["id"] == id)
+        .unwrap_or_else(|| panic!("no case {id}"));
+    (
+        c["verdict"].as_str().unwrap_or_default(),
+        c["message"].as_str().unwrap_or_default(),
+    )
+}
