@@ -93,6 +93,62 @@ pub struct Erratum {
     /// Ambiguous rather than wrong: the case accepts every reading the text allows.
     #[serde(default)]
     pub ambiguous: bool,
+    /// Which check of the errata pass found it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub check: Option<ErratumCheck>,
+    /// The clause of the standard the correct value comes from (`CiA 301 4.2.0 §7.2.4.3.17`);
+    /// always there for [`ErratumCheck::Standard`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub standard: Option<String>,
+}
+
+impl Erratum {
+    /// `why`, marked when the manual is ambiguous rather than wrong.
+    pub fn reason(&self) -> String {
+        if self.ambiguous {
+            format!("ambiguous: {}", self.why)
+        } else {
+            self.why.clone()
+        }
+    }
+
+    /// How it was found, with the standard's clause where there is one: `standard: CiA 301
+    /// 4.2.0 §7.2.4.3.17`.
+    pub fn found_by(&self) -> String {
+        let check = self.check.map_or("unclassified", ErratumCheck::label);
+        match &self.standard {
+            Some(clause) => format!("{check}: {clause}"),
+            None => check.to_string(),
+        }
+    }
+}
+
+/// The four checks of the errata pass: each table and example is held against the manual's
+/// own text, the standard it implements, the other manuals, and its own default.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ErratumCheck {
+    /// An example or value against the manual's own formula, table or rule.
+    OwnText,
+    /// A value against the standard the manual implements (CiA 301, ETG.1000, EPSG DS 301,
+    /// CIP, PROFINET, IEEE); the erratum names the clause.
+    Standard,
+    /// One manual or edition against another that describes the same thing.
+    OtherManual,
+    /// A range against the default it should contain.
+    RangeDefault,
+}
+
+impl ErratumCheck {
+    /// The word the suites use for it.
+    pub fn label(self) -> &'static str {
+        match self {
+            ErratumCheck::OwnText => "own-text",
+            ErratumCheck::Standard => "standard",
+            ErratumCheck::OtherManual => "other-manual",
+            ErratumCheck::RangeDefault => "range-default",
+        }
+    }
 }
 
 /// A device's refusal of a request, in its bus's own terms: a parameter-channel error number

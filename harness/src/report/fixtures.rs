@@ -188,6 +188,8 @@ pub(super) fn sample_run() -> RunResult {
             correct: "class 102".into(),
             why: "FI 2 is class 102".into(),
             ambiguous: false,
+            check: Some(ErratumCheck::OwnText),
+            standard: None,
         }],
         statements: vec![
             StatementCoverage {

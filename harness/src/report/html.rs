@@ -221,22 +221,19 @@ fn errata(s: &mut String, run: &RunResult) {
         s.push_str("<p>None recorded.</p></section>\n");
         return;
     }
-    s.push_str("<table><thead><tr><th>doc</th><th>edition</th><th>section</th><th>page</th><th>printed</th><th>correct</th><th>why</th><th>case</th></tr></thead><tbody>\n");
+    s.push_str("<table><thead><tr><th>doc</th><th>edition</th><th>section</th><th>page</th><th>printed</th><th>correct</th><th>why</th><th>found by</th><th>case</th></tr></thead><tbody>\n");
     for e in &run.errata {
         let _ = writeln!(
             s,
-            "<tr data-doc=\"{0}\"><td>{0}</td><td>{1}</td><td>{2}</td><td>{3}</td><td><code>{4}</code></td><td><code>{5}</code></td><td>{6}</td><td><code>{7}</code></td></tr>",
+            "<tr data-doc=\"{0}\"><td>{0}</td><td>{1}</td><td>{2}</td><td>{3}</td><td><code>{4}</code></td><td><code>{5}</code></td><td>{6}</td><td>{7}</td><td><code>{8}</code></td></tr>",
             text(&e.doc),
             text(&e.edition),
             text(&e.section),
             e.page.map_or(String::new(), |p| p.to_string()),
             text(&e.printed),
             text(&e.correct),
-            if e.ambiguous {
-                format!("<strong>ambiguous:</strong> {}", text(&e.why))
-            } else {
-                text(&e.why)
-            },
+            text(&e.reason()),
+            text(&e.found_by()),
             text(&e.case),
         );
     }

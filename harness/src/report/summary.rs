@@ -161,23 +161,20 @@ fn errata(s: &mut String, run: &RunResult) {
     });
     let _ = writeln!(
         s,
-        "| doc | edition | section | page | printed → correct | why | case |\n|---|---|---|---:|---|---|---|"
+        "| doc | edition | section | page | printed → correct | why | found by | case |\n|---|---|---|---:|---|---|---|---|"
     );
     for e in list {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | `{}` → `{}` | {} | {} |",
+            "| {} | {} | {} | {} | `{}` → `{}` | {} | {} | {} |",
             cell(&e.doc),
             cell(&e.edition),
             cell(&e.section),
             e.page.map_or(String::new(), |p| p.to_string()),
             cell(&e.printed),
             cell(&e.correct),
-            if e.ambiguous {
-                format!("**ambiguous:** {}", cell(&e.why))
-            } else {
-                cell(&e.why)
-            },
+            cell(&e.reason()),
+            cell(&e.found_by()),
             cell(&e.case)
         );
     }

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use super::case::{case_head, step, Case};
 use super::schema::FileDoc;
-use crate::outcome::Erratum;
+use crate::outcome::{Erratum, ErratumCheck};
 
 /// What a suites folder held.
 #[derive(Debug, Default)]
@@ -180,6 +180,16 @@ pub(crate) fn load_text(
             continue;
         }
         for e in case_doc.manual_says.into_vec() {
+            if e.check == Some(ErratumCheck::Standard) && e.standard.is_none() {
+                loaded.errors.push(err(
+                    line,
+                    format!(
+                        "case `{}`: an erratum found against a standard names its clause (`standard:`)",
+                        case_doc.id
+                    ),
+                ));
+                ok = false;
+            }
             case.errata.push(Erratum {
                 doc: case.manual.doc.clone(),
                 edition: case.manual.edition.clone(),
@@ -190,7 +200,12 @@ pub(crate) fn load_text(
                 correct: e.correct,
                 why: e.why,
                 ambiguous: e.ambiguous,
+                check: e.check,
+                standard: e.standard,
             });
+        }
+        if !ok {
+            continue;
         }
         loaded.errata.extend(case.errata.iter().cloned());
         loaded.cases.push(case);
@@ -235,6 +250,28 @@ cases:
         assert_eq!(l.cases[0].manual.edition, "2020-03 en");
         assert_eq!(l.errata[0].printed, "a");
         assert_eq!(l.cases[0].manual.quote, None);
+    }
+
+    #[test]
+    fn an_erratum_found_against_a_standard_names_its_clause() {
+        let bare = load(&GOOD.replace(r#"why: "c" }"#, r#"why: "c", check: standard }"#));
+        assert!(bare.cases.is_empty());
+        assert!(
+            bare.errors[0].message.contains("names its clause"),
+            "{:?}",
+            bare.errors
+        );
+        let named = load(&GOOD.replace(
+            r#"why: "c" }"#,
+            r#"why: "c", check: standard, standard: "CiA 301 4.2.0 §7.2.4.3.17" }"#,
+        ));
+        assert!(named.errors.is_empty(), "{:?}", named.errors);
+        assert_eq!(
+            named.errata[0].found_by(),
+            "standard: CiA 301 4.2.0 §7.2.4.3.17"
+        );
+        let unknown = load(&GOOD.replace(r#"why: "c" }"#, r#"why: "c", check: hunch }"#));
+        assert!(unknown.cases.is_empty(), "an unknown check is refused");
     }
 
     #[test]

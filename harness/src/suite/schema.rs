@@ -3,6 +3,7 @@
 //! Values that use the manuals' notation stay JSON values here; `case.rs` reads them and
 //! reports what is wrong with the step's line.
 
+use crate::outcome::ErratumCheck;
 use serde::Deserialize;
 use serde_json::{Map, Value};
 use serde_saphyr::Spanned;
@@ -83,6 +84,12 @@ pub(super) struct ErratumDoc {
     /// allows, and `why` says which.
     #[serde(default)]
     pub(super) ambiguous: bool,
+    /// Which check of the errata pass found it.
+    #[serde(default)]
+    pub(super) check: Option<ErratumCheck>,
+    /// The standard's clause; required when `check: standard`.
+    #[serde(default)]
+    pub(super) standard: Option<String>,
 }
 
 /// A step as written: exactly one action key, checked in `case.rs`. A key that is no
