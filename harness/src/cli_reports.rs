@@ -94,7 +94,8 @@ pub(crate) struct CoverageArgs {
 }
 
 /// Prints the statements per manual and section (statements, asserted, pending, untestable,
-/// open, asserted of the testable), then what keeps the inventories honest: a case id that no
+/// open, asserted of the testable), the errata per manual by the check that found them, then
+/// what keeps the inventories honest: a case id that no
 /// suite has, a case of an inventoried manual that no statement names, an asserted count below
 /// its floor. Exit 1 when any of those, 2 when an inventory or suite does not load.
 pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
@@ -114,6 +115,8 @@ pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
     let floors = inventory::floors(&dir).map_err(|e| e.to_string())?;
     let mut out = std::io::stdout().lock();
     let _ = out.write_all(report::statements_table(&inventory::coverage(&inventories)).as_bytes());
+    let _ = writeln!(out);
+    let _ = out.write_all(report::errata_table(&loaded.errata).as_bytes());
     let problems = inventory::check(&inventories, &loaded, &floors);
     for p in &problems {
         let _ = writeln!(out, "PROBLEM {p}");
