@@ -277,3 +277,27 @@ fn coverage_gates_on_a_share_per_section_and_counts_errata_by_check() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn each_bus_served_shows_its_own_options() {
+    for (bus, option) in [
+        ("enip", "--max-sessions"),
+        ("ecat", "--iface"),
+        ("epl", "--node-id"),
+        ("pnio", "--name"),
+    ] {
+        let o = harness(&["serve", bus, "--help"]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(o.status.code(), Some(0), "{bus}: {}", stderr(&o));
+        assert!(
+            stdout.contains(&format!("Usage: harness serve {bus}")) && stdout.contains(option),
+            "{bus}: {stdout}"
+        );
+    }
+    let o = harness(&["serve", "can"]);
+    assert!(
+        stderr(&o).contains("cannot serve `can` (buses: enip, ecat, epl, pnio)"),
+        "{}",
+        stderr(&o)
+    );
+}
