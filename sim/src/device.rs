@@ -438,6 +438,7 @@ impl Device {
             Unit::Interface => {
                 let answer = self.interface.cycle(order, delay, product, unit);
                 self.adopt_gateway(&order, &answer);
+                self.adopt_address_and_mask(&order, &answer);
                 Ok(answer)
             }
             Unit::Inverter(i) => Ok(self
@@ -469,6 +470,68 @@ impl Device {
             if let Ok(v) = store.read(n, None, element) {
                 store.set_info(877, e, v);
             }
+        }
+    }
+
+    /// Under PROFINET IO (P870 = 1) P850 IP address and P851 sub-net mask are saved when
+    /// element [-04] is entered, and P875 / P876 then show them (BU 0620 §3.8.1 p. 72, §4.2.4
+    /// P850/P851 p. 82: "only saved after a value is entered in the array element [-04]"). An
+    /// address that does not conform with the mask in P851 corrects the mask; a mask that
+    /// does not conform with the address in P850 is not saved (P851 returns to the saved
+    /// mask). "Conforms": [`proto::nord::pnio::mask_conforms`] (contiguous, no shorter
+    /// than the address's class mask, the reading BU 0590's P161 example gives).
+    fn adopt_address_and_mask(&mut self, order: &PkwRepr, answer: &PkwRepr) {
+        use proto::nord::pnio::{corrected_mask, mask_conforms, BUS_PROTOCOL_CODE};
+        use std::net::Ipv4Addr;
+        let label = proto::nord::pkw::OrderLabel(order.ak);
+        let written = label.is_array()
+            && label != proto::nord::pkw::OrderLabel::REQUEST_ARRAY_VALUE
+            && answer.ak != 0
+            && answer.ak != proto::nord::pkw::ResponseLabel::CANNOT_EXECUTE.0;
+        let param = match order.pnu {
+            850 | 1850 => 850,
+            851 | 1851 => 851,
+            _ => return,
+        };
+        let store = &mut self.interface.store;
+        let profinet = ParamNumber::new(870)
+            .ok()
+            .and_then(|n| store.read(n, None, None).ok())
+            == Some(i32::from(BUS_PROTOCOL_CODE));
+        if !(self.config.product == Product::Sk550p
+            && profinet
+            && written
+            && proto::nord::pkw::Ind(order.ind).subindex() == 3)
+        {
+            return;
+        }
+        let read4 = |store: &ParamStore, number: i64| -> Option<Ipv4Addr> {
+            let n = ParamNumber::new(number).ok()?;
+            let mut b = [0u8; 4];
+            for (e, slot) in (1..=4i64).zip(b.iter_mut()) {
+                let element = proto::nord::ArrayElement::new(e).ok();
+                *slot = u8::try_from(store.read(n, None, element).ok()?).ok()?;
+            }
+            Some(Ipv4Addr::from(b))
+        };
+        let write4 = |store: &mut ParamStore, numbers: &[u16], value: Ipv4Addr| {
+            for &number in numbers {
+                for (e, b) in (1..=4u8).zip(value.octets()) {
+                    store.set_info(number, e, i32::from(b));
+                }
+            }
+        };
+        let (Some(ip), Some(mask)) = (read4(store, 850), read4(store, 851)) else {
+            return;
+        };
+        if param == 850 {
+            write4(store, &[875], ip);
+            let mask = corrected_mask(ip, mask);
+            write4(store, &[851, 876], mask);
+        } else if mask_conforms(ip, mask) {
+            write4(store, &[876], mask);
+        } else if let Some(saved) = read4(store, 876) {
+            write4(store, &[851], saved);
         }
     }
 
@@ -770,6 +833,47 @@ mod tests {
         interface_order(&mut d, write(3, 1), 10);
         assert_eq!(read_interface(&mut d, 877, 1), 192);
         assert_eq!(read_interface(&mut d, 877, 4), 1);
+    }
+
+    #[test]
+    fn p875_p876_follow_p850_p851_under_profinet_once_element_4_is_written() {
+        let mut d = Device::new(DeviceConfig::new(Product::Sk550p));
+        d.interface.store.set_info(870, 1, 1);
+        let write = |pnu: u16, sub: u16, value: u32| PkwRepr {
+            ak: 7,
+            pnu,
+            ind: sub << 8,
+            pwe: value,
+            ..Default::default()
+        };
+        let before = read_interface(&mut d, 875, 1);
+        for (sub, v) in [(0, 10), (1, 1), (2, 2)] {
+            interface_order(&mut d, write(1850, sub, v), u64::from(sub) * 10);
+        }
+        assert_eq!(
+            read_interface(&mut d, 875, 1),
+            before,
+            "not saved before [-04]"
+        );
+        interface_order(&mut d, write(1850, 3, 3), 40);
+        assert_eq!(read_interface(&mut d, 875, 1), 10);
+        // 255.0.0.0 conforms with 10.1.2.3 (class A) and is saved with [-04].
+        for (sub, t) in [(1, 50), (2, 60), (3, 70)] {
+            interface_order(&mut d, write(1851, sub, 0), t);
+        }
+        assert_eq!(read_interface(&mut d, 876, 2), 0);
+        // 192.168.20.201 (class C) corrects the mask to 255.255.255.0.
+        for (sub, v, t) in [(0, 192, 80), (1, 168, 90), (2, 20, 100), (3, 201, 110)] {
+            interface_order(&mut d, write(1850, sub, v), t);
+        }
+        assert_eq!(read_interface(&mut d, 851, 3), 255);
+        assert_eq!(read_interface(&mut d, 876, 3), 255);
+        // 255.0.0.0 does not conform with it: not saved.
+        for (sub, t) in [(1, 120), (2, 130), (3, 140)] {
+            interface_order(&mut d, write(1851, sub, 0), t);
+        }
+        assert_eq!(read_interface(&mut d, 851, 2), 255);
+        assert_eq!(read_interface(&mut d, 876, 2), 255);
     }
 
     #[test]

@@ -34,6 +34,22 @@ fn comm_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     Ok(json!({ "p700": e.p700, "text": e.text, "profinet_alarm": errors::profinet_alarm(e.p700) }))
 }
 
+fn ethertype(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    use proto::eth::{ethertype_name, ETHERTYPE_ECAT, ETHERTYPE_POWERLINK, ETHERTYPE_PROFINET};
+    let value = match a.str("protocol")? {
+        "ethercat" => ETHERTYPE_ECAT,
+        "powerlink" => ETHERTYPE_POWERLINK,
+        "profinet" => ETHERTYPE_PROFINET,
+        p => {
+            return Err(ComputeError::BadArg {
+                arg: "protocol".into(),
+                why: format!("`{p}` has no EtherType of its own (ethercat, powerlink, profinet)"),
+            })
+        }
+    };
+    Ok(json!({ "value": value, "name": ethertype_name(value) }))
+}
+
 fn led_table(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let rows = match a.str("led")? {
         "dev" => led::DEV,
@@ -228,6 +244,41 @@ pub(super) const FNS: &[ComputeFn] = &[
         name: "tables.led",
         doc: "An LED table: pattern and meaning per row (BU 0620 §5.5)",
         run: led_table,
+    },
+    ComputeFn {
+        name: "tables.error_group",
+        doc: "DS-301 error group of an error code: 00xxh no error … FF00h specific to device (BU 0620 §5.4.1.2)",
+        run: |_: &Ctx, a: &Args| {
+            let code = u16::try_from(a.int("code")?).map_err(|_| ComputeError::BadArg {
+                arg: "code".into(),
+                why: "an error code is 16 bits".into(),
+            })?;
+            Ok(json!({ "group": errors::error_group(code) }))
+        },
+    },
+    ComputeFn {
+        name: "tables.ethertype",
+        doc: "EtherType of a real-time Ethernet: ethercat 88A4h, powerlink 88ABh, profinet 8892h (BU 0620 §2.2.3, §2.4.3, §2.5.3; IEEE EtherType registry)",
+        run: ethertype,
+    },
+    ComputeFn {
+        name: "tables.can_termination",
+        doc: "Is the CAN termination of the device at `position` of a system-bus line of `count` devices on (both ends only; BU 0620 §3.9 step 1)",
+        run: |_: &Ctx, a: &Args| {
+            let byte = |name: &str| {
+                u8::try_from(a.int(name)?).map_err(|_| ComputeError::BadArg {
+                    arg: name.into(),
+                    why: "a position on the line is 1..255".into(),
+                })
+            };
+            let (position, count) = (byte("position")?, byte("count")?);
+            match rules::can_termination(position, count) {
+                Some(on) => Ok(json!({ "termination": if on { "ON" } else { "OFF" } })),
+                None => Err(ComputeError::Refused(format!(
+                    "position {position} is not on a line of {count} devices"
+                ))),
+            }
+        },
     },
     ComputeFn {
         name: "tables.device_name",
