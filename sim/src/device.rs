@@ -11,7 +11,7 @@
 //! answer follows in a later cycle — which is why the manuals require the master to repeat an
 //! order until its answer arrives (BU 0620 §2.5.6).
 
-use proto::nord::pkw::PkwRepr;
+use proto::nord::pkw::{OrderLabel, PkwRepr, ResponseLabel};
 use proto::nord::ppo::{PpoRepr, PpoType};
 use proto::nord::{led, Inverter, ParamNumber, Product};
 use std::time::Duration;
@@ -54,7 +54,11 @@ const E10_5: FaultCode = FaultCode { group: 10, sub: 5 };
 /// 0 "Off" and -0.1 "No error", which both make the inverter ignore communication errors on
 /// the field bus (BU 0620 §4.5, BU 2100 §8.1 "Parameter P513").
 fn ethernet_timeout(store: &ParamStore) -> Option<Duration> {
-    let tenths = store.read(P513, None, ELEMENT_ETHERNET).ok()?;
+    // SK 550P: [-04] "Ethernet"; behind the SK TU3-PNT one value (BU 0590 §5.2.1).
+    let tenths = store
+        .read(P513, None, ELEMENT_ETHERNET)
+        .or_else(|_| store.read(P513, None, None))
+        .ok()?;
     u64::try_from(tenths)
         .ok()
         .filter(|t| *t > 0)
@@ -152,6 +156,29 @@ impl ParamChannel {
             }
         }
         self.response
+    }
+}
+
+/// P740 / P741 [-08]…[-12] "Parameter data In / Out 1…5" of an SK 5xxE from SK 540E (BU 0590
+/// §5.2.2, p. 42–43): the parameter transfer's order label (AK), parameter number (PNU), index
+/// (IND) and value (PWE 1/2); a unit whose P740/P741 are shorter ignores them.
+fn show_parameter_data(store: &mut ParamStore, order: &PkwRepr, answer: &PkwRepr) {
+    let words = |p: &PkwRepr| {
+        [
+            i32::from(p.ak),
+            i32::from(p.pnu),
+            i32::from(p.ind),
+            (p.pwe >> 16) as i32,
+            (p.pwe & 0xFFFF) as i32,
+        ]
+    };
+    for (e, w) in (8..).zip(words(order)) {
+        store.set_info(740, e, w);
+    }
+    if answer.ak != 0 {
+        for (e, w) in (8..).zip(words(answer)) {
+            store.set_info(741, e, w);
+        }
     }
 }
 
@@ -289,6 +316,13 @@ impl Device {
         if let Some((number, id)) = mac {
             for (e, b) in (1..).zip(id) {
                 interface.store.set_info(number, e, b);
+            }
+        }
+        if config.product == Product::Tu3Pnt {
+            // [-04]…[-06]: the rest of the example address 00:0E:CF:03:60:00 (BU 0590 §5.1.4),
+            // the one the PROFINET station answers DCP with.
+            for (e, b) in (4..).zip([0x03, 0x60, 0x00]) {
+                interface.store.set_info(181, e, b);
             }
         }
         if config.firmware == Firmware::Next {
@@ -438,13 +472,32 @@ impl Device {
             Unit::Interface => {
                 let answer = self.interface.cycle(order, delay, product, unit);
                 self.adopt_gateway(&order, &answer);
+                self.load_factory_settings(&order, &answer);
                 Ok(answer)
             }
-            Unit::Inverter(i) => Ok(self
-                .inverter_mut(i)?
-                .params
-                .cycle(order, delay, product, unit)),
+            Unit::Inverter(i) => {
+                let params = &mut self.inverter_mut(i)?.params;
+                let answer = params.cycle(order, delay, product, unit);
+                show_parameter_data(&mut params.store, &order, &answer);
+                Ok(answer)
+            }
         }
+    }
+
+    /// SK TU3-PNT P152 "Factory setting" (BU 0590 §5.1.1, p. 34): 1 loads the factory settings
+    /// of the module's parameters (data record 100 reaches the module's P150…P199, §4.2.2.1)
+    /// and the parameter "returns automatically to 0".
+    fn load_factory_settings(&mut self, order: &PkwRepr, answer: &PkwRepr) {
+        let positive = answer.ak != 0 && answer.ak != ResponseLabel::CANNOT_EXECUTE.0;
+        if self.config.product != Product::Tu3Pnt
+            || !positive
+            || order.parameter() != 152
+            || order.pwe != 1
+            || OrderLabel(order.ak) == OrderLabel::REQUEST_VALUE
+        {
+            return;
+        }
+        self.interface.store.load_factory_settings();
     }
 
     /// P877 "Present IP gateway" (BU 0620 §4.4.3, p. 88) shows the gateway set in P852 once it

@@ -108,7 +108,11 @@ fn serve(
                 return Err(ErrorNumber::BAD_TYPE);
             }
             let value = order.pwe as i32;
-            let persist = if ak.is_ram_only() {
+            // P560 "Save in EEPROM" = 0: changes stay in RAM (BU 0590 §4.2.4.4, BU 0620 §2.5.6).
+            let p560_ram = ParamNumber::new(560)
+                .ok()
+                .is_some_and(|n| store.read(n, None, None) == Ok(0));
+            let persist = if ak.is_ram_only() || p560_ram {
                 Persist::RamOnly
             } else {
                 Persist::Eeprom
@@ -236,6 +240,23 @@ mod tests {
             let r = handle_order(&mut s, all, &o);
             assert_eq!((r.ak, r.pwe), (7, e), "{o:?}");
         }
+    }
+
+    #[test]
+    fn p560_zero_keeps_writes_in_ram() {
+        // BU 0590 §4.2.4.4: P560 "Save in EEPROM" decides whether changes reach the EEPROM.
+        let mut s = fi(1);
+        let all = supported_orders(Product::Tu3Pnt, true);
+        let write = |pnu, pwe| PkwRepr {
+            ak: 2,
+            pnu,
+            pwe,
+            ..Default::default()
+        };
+        assert_eq!(handle_order(&mut s, all, &write(1560, 0)).ak, 1);
+        assert_eq!(s.eeprom_writes(), 1);
+        assert_eq!(handle_order(&mut s, all, &write(1102, 300)).ak, 1);
+        assert_eq!(s.eeprom_writes(), 1);
     }
 
     #[test]

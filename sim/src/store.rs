@@ -132,7 +132,8 @@ impl ParamStore {
             Access::ResetOnly if value != 0 => return Err(AccessError::OnlyResettable),
             _ => {}
         }
-        if !(def.min..=def.max).contains(&value) {
+        if !(def.min..=def.max).contains(&value) || !params::value_allowed(def, self.product, value)
+        {
             return Err(AccessError::OutOfRange);
         }
         self.values.insert(key, value);
@@ -140,6 +141,20 @@ impl ParamStore {
             self.eeprom_writes += 1;
         }
         Ok(())
+    }
+
+    /// Loads the factory settings of every setting parameter (information parameters keep
+    /// what the device shows).
+    pub fn load_factory_settings(&mut self) {
+        let product = self.product;
+        let owner = self.owner;
+        self.values.retain(|(number, _, _), _| {
+            ParamNumber::new(i64::from(*number))
+                .ok()
+                .and_then(|n| params::lookup(product, owner, n))
+                .is_none_or(|d| d.access == Access::ReadOnly)
+        });
+        self.eeprom_writes += 1;
     }
 
     /// Elements of an array parameter.
@@ -215,6 +230,25 @@ mod tests {
         );
         assert_eq!(s.array_len(n(543)), Ok(5));
         assert_eq!(s.eeprom_writes(), 0);
+    }
+
+    #[test]
+    fn tu3_pnt_device_name_and_factory_settings() {
+        // BU 0590 §5.1.2 P162: ASCII 45…122 and the closing 0; §5.1.1 P152 = 1 loads the
+        // factory settings (P160 back to 192.168.20.200).
+        let mut s = ParamStore::new(Product::Tu3Pnt, Target::Interface);
+        assert_eq!(
+            s.write(n(162), None, None, 44, Persist::Eeprom),
+            Err(AccessError::OutOfRange)
+        );
+        assert_eq!(s.write(n(162), None, None, 45, Persist::Eeprom), Ok(()));
+        assert_eq!(s.write(n(162), None, None, 0, Persist::Eeprom), Ok(()));
+        let e1 = ArrayElement::new(1).ok();
+        s.write(n(160), None, e1, 10, Persist::Eeprom).unwrap();
+        s.set_info(172, 1, 2);
+        s.load_factory_settings();
+        assert_eq!(s.read(n(160), None, e1), Ok(192));
+        assert_eq!(s.read(n(172), None, None), Ok(2));
     }
 
     #[test]
