@@ -13,7 +13,7 @@
 
 use proto::nord::pkw::{OrderLabel, PkwRepr, ResponseLabel};
 use proto::nord::ppo::{PpoRepr, PpoType};
-use proto::nord::{led, Inverter, ParamNumber, Product};
+use proto::nord::{led, ArrayElement, Inverter, ParamNumber, Product};
 use std::time::Duration;
 
 use crate::bus_status::{self, BusFlags};
@@ -248,9 +248,30 @@ impl InverterUnit {
     /// process data.
     fn show_fault(&mut self) {
         let code = self.drive.fault().or(self.drive.pending_fault());
-        self.params
-            .store
-            .set_info(700, 1, code.map_or(0, |f| i32::from(f.p700())));
+        let value = code.map_or(0, |f| i32::from(f.p700()));
+        let store = &mut self.params.store;
+        let before = ParamNumber::new(700)
+            .ok()
+            .and_then(|n| store.read(n, None, ArrayElement::new(1).ok()).ok());
+        store.set_info(700, 1, value);
+        // The error memory P701 "Last error" [-01]…[-05] (BU 0590 §6.2: the error "is
+        // permanently stored in the FI error statistics"; BU 0620 §5: P700 and P701), newest
+        // first, where the unit has it.
+        if value != 0 && before != Some(value) {
+            if let Ok(p701) = ParamNumber::new(701) {
+                let last: Vec<i32> = (1..=4)
+                    .map(|e| {
+                        store
+                            .read(p701, None, ArrayElement::new(e).ok())
+                            .unwrap_or(0)
+                    })
+                    .collect();
+                store.set_info(701, 1, value);
+                for (e, v) in (2..).zip(last) {
+                    store.set_info(701, e, v);
+                }
+            }
+        }
     }
 }
 

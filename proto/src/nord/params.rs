@@ -204,6 +204,7 @@ pub const CATALOGUE: &[ParamDef] = &[
     only(elements(inv(546, "Function bus setpoint", 0, 57, 0, 0, "BU 0590 §5.2.1 (p. 40), SK 540E and above: [-01]..[-05], 0…57, factory [-01] = 1, all others 0"), &[1, 0, 0, 0, 0]), PNT),
     only(ro(array(inv(740, "PZD bus in", 0, 0xFFFF, 0, 0, "BU 0590 §5.2.2 (p. 42), SK 540E and above: [-01] control word, [-02]..[-06] setpoints 1..5, [-07] bus I/O in bits, [-08]..[-12] parameter data in (AK, PNU, IND, PWE 1/2), [-13]..[-23] broadcast and PLC"), 23)), PNT),
     only(ro(array(inv(741, "PZD bus out", 0, 0xFFFF, 0, 0, "BU 0590 §5.2.2 (p. 43), SK 540E and above: [-01] status word, [-02]..[-06] actual values 1..5, [-07] bus I/O out bits, [-08]..[-12] parameter data out, [-13]..[-23] master function and PLC"), 23)), PNT),
+    only(ro(array(inv(701, "Last error", 0, 9999, 0, 1, "BU 0590 §6.2 (p. 44): the error 'is permanently stored in the FI error statistics'; BU 0620 §4.5 / BU 2100 §7.2 name P701 'Last error'; [-01]..[-05] newest first assumed from BU 0500"), 5)), PNT),
     only(ro(inv(745, "Module version", 0, 9999, 0, 1, "BU 0590 §5.2.2 (p. 43): 0.0…999.9, the technology unit's software version")), PNT),
     only(ro(inv(746, "Module status", 0, 0xFFFF, 0, 0, "BU 0590 §5.2.2 (p. 43): 0000…FFFFh, readiness, error and communication of the technology unit")), PNT),
     inv(509, "Control word source", 0, 10, 0, 0, "BU 0620 §4.5: 8 = Ethernet (FI 1), 6 = CANopen (further FIs)"),
