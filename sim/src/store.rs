@@ -79,6 +79,11 @@ impl ParamStore {
         }
     }
 
+    /// The product the unit belongs to.
+    pub fn product(&self) -> Product {
+        self.product
+    }
+
     /// The catalogue entry of a parameter this unit has.
     pub fn def(&self, number: ParamNumber) -> Option<&'static ParamDef> {
         params::lookup(self.product, self.owner, number)
