@@ -294,6 +294,8 @@ pub struct Device {
     interface: ParamChannel,
     inverters: Vec<InverterUnit>,
     fieldbus_timeout: bool,
+    /// Inverters lost from the system bus (bit n: FI n + 1), no longer online.
+    lost: u8,
     /// The flags the bus status parameters show (written again only when they change: the
     /// monitoring runs on every frame).
     shown: Option<BusFlags>,
@@ -358,6 +360,7 @@ impl Device {
             interface,
             inverters,
             fieldbus_timeout: false,
+            lost: 0,
             shown: None,
         }
     }
@@ -387,7 +390,10 @@ impl Device {
     fn monitor(&mut self, now: Duration) {
         let mut flags = BusFlags {
             fieldbus_timeout: self.fieldbus_timeout,
-            online: self.config.inverters,
+            // FI 1..=n online, up to the first one lost.
+            online: (0..self.config.inverters)
+                .find(|n| self.lost & 1 << n != 0)
+                .unwrap_or(self.config.inverters),
             ..BusFlags::default()
         };
         let p151 = match self.config.product.family() {
@@ -632,6 +638,15 @@ impl Device {
             unit.show_fault();
         }
         Ok(())
+    }
+
+    /// FI `inverter` is lost from the system bus: the SK TU3-PNT's bus status no longer shows
+    /// its one FI online (BU 0590 §5.1.3 P173 bits 9–8 "00 FI is offline"). The others' bus
+    /// status counts the FIs online from FI 1 and is left as it was.
+    pub fn lose(&mut self, inverter: Inverter) {
+        if self.config.product == Product::Tu3Pnt {
+            self.lost |= 1 << (inverter.get() - 1);
+        }
     }
 
     /// Marks the field-bus watchdog (P872/P173 bit 2) as tripped or clear.

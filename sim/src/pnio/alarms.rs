@@ -278,6 +278,7 @@ impl IoDevice {
         }
         if !self.lost_fis[i] {
             self.lost_fis[i] = true;
+            self.device.lose(fi);
             self.diagnosis(fi, true, def::lost_inverter_alarm());
         }
         Ok(())
