@@ -11,7 +11,7 @@
 //! answer follows in a later cycle — which is why the manuals require the master to repeat an
 //! order until its answer arrives (BU 0620 §2.5.6).
 
-use proto::nord::pkw::{OrderLabel, PkwRepr, ResponseLabel};
+use proto::nord::pkw::{PkwRepr, ResponseLabel};
 use proto::nord::ppo::{PpoRepr, PpoType};
 use proto::nord::{led, ArrayElement, Inverter, ParamNumber, Product};
 use std::time::Duration;
@@ -520,7 +520,7 @@ impl Device {
             || !positive
             || order.parameter() != 152
             || order.pwe != 1
-            || OrderLabel(order.ak) == OrderLabel::REQUEST_VALUE
+            || !matches!(order.ak, 2 | 3 | 7 | 8 | 11..=14)
         {
             return;
         }
