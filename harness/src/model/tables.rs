@@ -63,10 +63,12 @@ fn led_table(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
         "profinet-run" => led::PROFINET_RUN,
         "profinet-bf" => led::PROFINET_BF,
         "tu3-pnt-err" => led::TU3_PNT_ERR,
+        "tu3-pnt-ds" => led::TU3_PNT_DS,
+        "tu3-pnt-de" => led::TU3_PNT_DE,
         other => {
             return Err(ComputeError::BadArg {
                 arg: "led".into(),
-                why: format!("no LED table `{other}` (dev, bus, ethercat-run, ethercat-err, ethernetip-ms, ethernetip-ns, powerlink-bs, powerlink-be, profinet-run, profinet-bf, tu3-pnt-err)"),
+                why: format!("no LED table `{other}` (dev, bus, ethercat-run, ethercat-err, ethernetip-ms, ethernetip-ns, powerlink-bs, powerlink-be, profinet-run, profinet-bf, tu3-pnt-err, tu3-pnt-ds, tu3-pnt-de)"),
             })
         }
     };
