@@ -303,9 +303,15 @@ impl Node {
     }
 
     /// Handles an SDO datagram from `from` on UDP port 3819; returns the datagrams to answer.
-    /// UDP is the only way in while the node is in Basic Ethernet (BU 0620 §2.4.4).
+    /// UDP is the only way in while the node is in Basic Ethernet (BU 0620 §2.4.4). In
+    /// Initialisation (NOT_ACTIVE) there is "no communication of process data and parameters"
+    /// (§2.4.4): the node only watches for POWERLINK frames, and drops the datagram.
     pub fn udp(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Vec<u8>> {
         self.timers(now);
+        if self.vars.state == NmtState::NOT_ACTIVE {
+            self.dropped += 1;
+            return Vec::new();
+        }
         let Ok(frame) = SdoFrame::strip_udp(datagram).and_then(SdoFrame::parse) else {
             self.dropped += 1;
             return Vec::new();
