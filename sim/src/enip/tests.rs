@@ -1325,3 +1325,29 @@ fn identity_attributes_are_read_only() {
         GS::PATH_DESTINATION_UNKNOWN
     );
 }
+
+#[test]
+fn dlr_object_is_a_ring_node() {
+    // BU 0620 §2.3.1 "Supported functions UCMM, DLR": class 47h, revision 3, instance 1 with
+    // the attributes of a non-supervisor ring node.
+    let mut b = Bench::new(Product::Sk550p);
+    let get = |instance: u32, attribute: u16| MrRequest {
+        service: Service::GET_ATTRIBUTE_SINGLE.0,
+        path: EPath::attribute(class::DLR, instance, attribute),
+        data: Vec::new(),
+    };
+    let r = b.request(&get(0, 1));
+    assert_eq!((r.status(), r.data.clone()), (GS::SUCCESS, vec![3, 0]));
+    assert_eq!(b.request(&get(1, 1)).data, [0], "linear topology");
+    assert_eq!(b.request(&get(1, 2)).data, [0], "normal");
+    assert_eq!(b.request(&get(1, 10)).data, [0; 10], "no active supervisor");
+    assert_eq!(b.request(&get(1, 12)).data, [0x82, 0, 0, 0]);
+    // A supervisor's attribute is not there; the object cannot be written.
+    assert_eq!(b.request(&get(1, 3)).status(), GS::ATTRIBUTE_NOT_SUPPORTED);
+    let set = MrRequest {
+        service: Service::SET_ATTRIBUTE_SINGLE.0,
+        path: EPath::attribute(class::DLR, 1, 1),
+        data: vec![1],
+    };
+    assert_eq!(b.request(&set).status(), GS::SERVICE_NOT_SUPPORTED);
+}
