@@ -1351,3 +1351,30 @@ fn dlr_object_is_a_ring_node() {
     };
     assert_eq!(b.request(&set).status(), GS::SERVICE_NOT_SUPPORTED);
 }
+
+#[test]
+fn p873_p874_show_the_words_of_the_assemblies() {
+    // BU 0620 §4.3: P873 "Process data bus In", P874 "Process data bus Out", 6 words per FI.
+    let mut b = Bench::new(Product::Sk550p);
+    let fo = b.open_ok(&io_open(1, 100, 101, 102, 98));
+    let mut data = outputs(0x047E);
+    data.resize(96, 0);
+    // FI 2: control word 047Eh, setpoint 1 = 1000 (words 7, 8).
+    data[12..14].copy_from_slice(&0x047Eu16.to_le_bytes());
+    data[14..16].copy_from_slice(&1000u16.to_le_bytes());
+    for k in 1..=5u16 {
+        b.now = ms(u64::from(k) * 5);
+        b.io(&io(fo.o_t_id, k, Some(1), data.clone())).unwrap();
+    }
+    let iface = |b: &mut Bench, number: u16, e: u32| word(&b.get(101, e - 1, number));
+    assert_eq!(iface(&mut b, 873, 1) as u16, 0x047E);
+    assert_eq!(iface(&mut b, 873, 7) as u16, 0x047E);
+    assert_eq!(iface(&mut b, 873, 8), 1000);
+    let status = iface(&mut b, 874, 1) as u16;
+    assert_eq!(
+        status & 0x00FF,
+        0x31,
+        "ready for operation after 047Eh: {status:04X}"
+    );
+    assert_eq!(iface(&mut b, 874, 7) as u16 & 0x00FF, 0x31);
+}
