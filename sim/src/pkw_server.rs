@@ -110,11 +110,8 @@ fn serve(
                 return Err(ErrorNumber::BAD_TYPE);
             }
             let value = order.pwe as i32;
-            // P560 "Save in EEPROM" = 0: changes stay in RAM (BU 0590 §4.2.4.4, BU 0620 §2.5.6).
-            let p560_ram = ParamNumber::new(560)
-                .ok()
-                .is_some_and(|n| store.read(n, None, None) == Ok(0));
-            let persist = if ak.is_ram_only() || p560_ram {
+            // P560 "Save in EEPROM" = 0 keeps changes in RAM too: the store decides that.
+            let persist = if ak.is_ram_only() {
                 Persist::RamOnly
             } else {
                 Persist::Eeprom
@@ -260,7 +257,8 @@ mod tests {
 
     #[test]
     fn p560_zero_keeps_writes_in_ram() {
-        // BU 0590 §4.2.4.4: P560 "Save in EEPROM" decides whether changes reach the EEPROM.
+        // BU 0590 §4.2.4.4: P560 "Save in EEPROM" decides whether changes reach the EEPROM
+        // (the store counts P560's own write, then no other while it is 0).
         let mut s = fi(1);
         let all = supported_orders(Product::Tu3Pnt, true);
         let write = |pnu, pwe| PkwRepr {

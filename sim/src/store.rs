@@ -2,13 +2,18 @@
 //! catalogue (`proto::nord::params`), with EEPROM writes counted.
 //!
 //! The EEPROM allows 100,000 write cycles (BU 0620 §2.5.6 "Max. 100,000 permissible writing
-//! cycles"); order labels 11–14 write RAM only, so the store counts only EEPROM writes.
+//! cycles"); order labels 11–14 write RAM only, and so does every write while P560 "Save in
+//! EEPROM" is 0 (§2.5.6: "via the parameter P560 Save in EEPROM"), so the store counts only
+//! EEPROM writes.
 
 use std::collections::BTreeMap;
 
 use proto::nord::params::{self, Access, Owner, ParamDef};
 use proto::nord::pnio::{self, IpSuite};
 use proto::nord::{ArrayElement, Inverter, ParamNumber, ParamSet, Product};
+
+/// P560 "Save in EEPROM" (BU 0620 §2.5.6): 0 keeps parameter changes in RAM only.
+const SAVE_IN_EEPROM: u16 = 560;
 
 /// Where an order goes: the bus interface's own parameters, or an inverter's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -154,7 +159,8 @@ impl ParamStore {
             return Ok(());
         }
         self.values.insert(key, value);
-        if persist == Persist::Eeprom {
+        // P560 itself is always saved, so that the choice outlives a power-off.
+        if persist == Persist::Eeprom && (def.number == SAVE_IN_EEPROM || self.saves_to_eeprom()) {
             self.eeprom_writes += 1;
         }
         Ok(())
@@ -253,6 +259,15 @@ impl ParamStore {
         self.eeprom_writes += 1;
     }
 
+    /// Whether parameter changes reach the EEPROM: P560 "Save in EEPROM" is not 0 (RAM only),
+    /// or the unit has no P560 (the bus interface).
+    fn saves_to_eeprom(&self) -> bool {
+        ParamNumber::new(i64::from(SAVE_IN_EEPROM))
+            .ok()
+            .and_then(|n| self.read(n, None, None).ok())
+            .is_none_or(|v| v != 0)
+    }
+
     /// Elements of an array parameter.
     pub fn array_len(&self, number: ParamNumber) -> Result<u8, AccessError> {
         self.def(number)
@@ -299,6 +314,19 @@ mod tests {
         assert_eq!(s.read(n(102), None, None), Ok(200));
         s.write(n(102), None, None, 300, Persist::RamOnly).unwrap();
         assert_eq!(s.eeprom_writes(), 1);
+    }
+
+    #[test]
+    fn p560_zero_keeps_changes_in_ram() {
+        let mut s = ParamStore::new(Product::Sk550p, fi1());
+        s.write(n(560), None, None, 0, Persist::Eeprom).unwrap();
+        assert_eq!(s.eeprom_writes(), 1, "P560 itself is saved");
+        s.write(n(102), None, None, 300, Persist::Eeprom).unwrap();
+        assert_eq!(s.read(n(102), None, None), Ok(300));
+        assert_eq!(s.eeprom_writes(), 1);
+        s.write(n(560), None, None, 1, Persist::Eeprom).unwrap();
+        s.write(n(102), None, None, 400, Persist::Eeprom).unwrap();
+        assert_eq!(s.eeprom_writes(), 3);
     }
 
     #[test]

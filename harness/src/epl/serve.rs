@@ -661,14 +661,21 @@ mod tests {
         let addr = served.udp_addr().expect("UDP on the interface's address");
         assert_eq!(addr, SocketAddr::from((ip, SDO_UDP_PORT)));
         let client = UdpSocket::bind(("0.0.0.0", 0)).unwrap();
+        // No POWERLINK frame comes: the node answers over UDP once it is in Basic Ethernet,
+        // after 1F99h (5 s); in Initialisation it answers nothing (BU 0620 §2.4.4).
         client
-            .set_read_timeout(Some(Duration::from_secs(2)))
+            .set_read_timeout(Some(Duration::from_secs(1)))
             .unwrap();
         let mut buf = [0u8; 1500];
         let mut ask = |seq: Seq, command: Option<Command>| {
             let d = SdoFrame { seq, command }.emit_udp().unwrap();
-            client.send_to(&d, addr).unwrap();
-            let (n, from) = client.recv_from(&mut buf).expect("an answer within 2 s");
+            // Dropped in Initialisation: asked again every second, for up to 8 s.
+            let (n, from) = (0..8)
+                .find_map(|_| {
+                    client.send_to(&d, addr).unwrap();
+                    client.recv_from(&mut buf).ok()
+                })
+                .expect("an answer once the node is in Basic Ethernet");
             assert_eq!(from, addr);
             SdoFrame::parse(SdoFrame::strip_udp(&buf[..n]).unwrap()).unwrap()
         };
@@ -687,7 +694,9 @@ mod tests {
         );
         assert_eq!(r.command.unwrap().payload, def::VENDOR_ID.to_le_bytes());
         let stats = served.stop().expect("stops cleanly");
-        assert_eq!((stats.datagrams_in, stats.datagrams_out), (2, 2));
+        // The initialisation may have been asked more than once (dropped in Initialisation).
+        assert!(stats.datagrams_in >= 2, "{stats:?}");
+        assert_eq!(stats.datagrams_out, 2);
     }
 
     #[test]

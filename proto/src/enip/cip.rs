@@ -23,6 +23,8 @@ pub mod class {
     pub const TCP_IP: u16 = 0xF5;
     /// Ethernet Link.
     pub const ETHERNET_LINK: u16 = 0xF6;
+    /// Device Level Ring (DLR, CIP Vol 2 chapter 5).
+    pub const DLR: u16 = 0x47;
 }
 
 /// A CIP service code.
