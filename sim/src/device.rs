@@ -33,6 +33,18 @@ const P151: ParamNumber = match ParamNumber::new(151) {
     Ok(p) => p,
     Err(_) => panic!("in range"),
 };
+const P150: ParamNumber = match ParamNumber::new(150) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
+const P152: ParamNumber = match ParamNumber::new(152) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
+const P170: ParamNumber = match ParamNumber::new(170) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
 const P700: ParamNumber = match ParamNumber::new(700) {
     Ok(p) => p,
     Err(_) => panic!("in range"),
@@ -59,6 +71,12 @@ fn ethernet_timeout(store: &ParamStore) -> Option<Duration> {
         .ok()
         .filter(|t| *t > 0)
         .map(|t| Duration::from_millis(100 * t))
+}
+
+/// P513 [-04] = -0.1 "Kein Fehler" (BU 2200 §8.1): the inverter ignores all communication
+/// errors on the field bus and the system bus.
+fn ignores_communication_errors(store: &ParamStore) -> bool {
+    store.read(P513, None, ELEMENT_ETHERNET) == Ok(-1)
 }
 
 /// Which firmware release the simulator behaves as.
@@ -246,6 +264,8 @@ pub struct Device {
     interface: ParamChannel,
     inverters: Vec<InverterUnit>,
     fieldbus_timeout: bool,
+    /// The module's configuration is refused (P173 bit 5, BU 2200 §7.1.3).
+    config_error: bool,
     /// The flags the bus status parameters show (written again only when they change: the
     /// monitoring runs on every frame).
     shown: Option<BusFlags>,
@@ -303,6 +323,7 @@ impl Device {
             interface,
             inverters,
             fieldbus_timeout: false,
+            config_error: false,
             shown: None,
         }
     }
@@ -332,6 +353,7 @@ impl Device {
     fn monitor(&mut self, now: Duration) {
         let mut flags = BusFlags {
             fieldbus_timeout: self.fieldbus_timeout,
+            config_error: self.config_error,
             online: self.config.inverters,
             ..BusFlags::default()
         };
@@ -355,6 +377,10 @@ impl Device {
                 flags.cyclic = true;
             }
             let p513 = ethernet_timeout(&unit.params.store);
+            // P513 = -0.1 "Kein Fehler": the inverter ignores every communication error, the
+            // module's P151 time-out included, and keeps its state (BU 2200 §8.1 "Parameter
+            // P513", BU 2100 §8.1).
+            let p151 = p151.filter(|_| !ignores_communication_errors(&unit.params.store));
             if p513.into_iter().chain(p151).any(|limit| silent > limit) {
                 if unit.drive.fault().is_none() {
                     unit.drive.inject_fault(E10_3);
@@ -369,9 +395,56 @@ impl Device {
             {
                 self.interface.store.set_info(number, element, value);
             }
+            let was = self.shown.is_some_and(|f| f.telegram_timeout);
+            let present = self
+                .interface
+                .store
+                .read(P170, None, proto::nord::ArrayElement::new(1).ok())
+                .unwrap_or(0);
+            for (number, element, value) in
+                bus_status::present_error(self.config.product, was, flags.telegram_timeout, present)
+            {
+                self.interface.store.set_info(number, element, value);
+            }
             self.shown = Some(flags);
         }
+        self.settle_interface();
         self.change_protocol(now);
+    }
+
+    /// What a write to the interface's own parameters sets off at once: P150's outputs, P152's
+    /// factory settings. Runs with the monitoring; endpoints that write parameters themselves
+    /// (SDO) call it after the write.
+    pub(crate) fn settle_interface(&mut self) {
+        self.set_relays();
+        self.factory_setting();
+    }
+
+    /// P152 "Werkseinstellung" of a module (BU 2200 §7.1.1, p. 48): 1 loads the factory
+    /// settings of all the bus interface's parameters; 2 "Basis-Parameter" and 3 "I-Parameter"
+    /// (the individual safety parameters P800…P830, which the simulated modules do not have)
+    /// reset only their own group, which leaves the catalogued parameters as they are. Each
+    /// returns P152 to 0 by itself.
+    fn factory_setting(&mut self) {
+        let Ok(p152 @ 1..) = self.interface.store.read(P152, None, None) else {
+            return;
+        };
+        if p152 == 1 {
+            self.interface.store.load_factory_settings();
+        }
+        self.interface.store.set_info(152, 1, 0);
+    }
+
+    /// P150 "Relais setzen" of the modules that have it (BU 2200 §7.1.1, p. 48; BU 2100
+    /// §7.1.1): 1…4 set the digital outputs whatever the bus says, shown in P175 "Zustand
+    /// Relais" (bit 0 DO1, bit 1 DO2, BU 2200 §7.1.3); 0 "Über Bus" leaves them to the bus.
+    pub(crate) fn set_relays(&mut self) {
+        let Ok(p150) = self.interface.store.read(P150, None, None) else {
+            return;
+        };
+        if let Some(relays) = relays_of(p150) {
+            self.interface.store.set_info(175, 1, relays);
+        }
     }
 
     /// P899 "Changing the bus protocol" (BU 0620 §4.1): a value 1..4 changes the protocol
@@ -560,6 +633,24 @@ impl Device {
         Ok(())
     }
 
+    /// Marks the module's configuration as refused (P173 [-01] bit 5 "Allgemeiner
+    /// Konfigurationsfehler", BU 2200 §7.1.3) or accepted.
+    pub fn set_config_error(&mut self, refused: bool) {
+        self.config_error = refused;
+        // Shown at once: the node reads its configuration in outside the process-data cycle.
+        let flags = BusFlags {
+            config_error: refused,
+            ..self.shown.unwrap_or(BusFlags {
+                online: self.config.inverters,
+                ..BusFlags::default()
+            })
+        };
+        for (number, element, value) in bus_status::status_parameters(self.config.product, flags) {
+            self.interface.store.set_info(number, element, value);
+        }
+        self.shown = Some(flags);
+    }
+
     /// Marks the field-bus watchdog (P872/P173 bit 2) as tripped or clear.
     pub fn set_fieldbus_timeout(&mut self, tripped: bool) {
         self.fieldbus_timeout = tripped;
@@ -635,6 +726,18 @@ impl Device {
                 .store
                 .eeprom_writes(),
         })
+    }
+}
+
+/// P175's bits for a P150 setting (BU 2200 §7.1.1: 1 "Ausgänge aus" both low, 2 DO1 high and DO2
+/// low, 3 DO2 high and DO1 low, 4 both high); `None` for 0 "Über Bus".
+fn relays_of(p150: i32) -> Option<i32> {
+    match p150 {
+        1 => Some(0b00),
+        2 => Some(0b01),
+        3 => Some(0b10),
+        4 => Some(0b11),
+        _ => None,
     }
 }
 
@@ -807,5 +910,12 @@ mod tests {
         assert_eq!(answer[0], 100);
         let ppo = PpoRepr::parse(&answer[2..], PpoType::TYPE_1).unwrap();
         assert_eq!(ppo.pkw.map(|p| (p.ak, p.value())), Some((4, 100)));
+    }
+
+    #[test]
+    fn p150_sets_the_outputs_of_p175() {
+        // BU 2200 §7.1.1 P150 table; 0 leaves the outputs to the bus.
+        let got: Vec<_> = (0..=4).map(relays_of).collect();
+        assert_eq!(got, [None, Some(0), Some(1), Some(2), Some(3)]);
     }
 }

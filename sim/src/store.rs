@@ -162,6 +162,18 @@ impl ParamStore {
         }
     }
 
+    /// Loads the factory settings of every settable parameter (a module's P152 = 1 "Werkseinstell.
+    /// Laden", BU 2200 §7.1.1); display values stay.
+    pub fn load_factory_settings(&mut self) {
+        let (product, owner) = (self.product, self.owner);
+        self.values.retain(|(n, _, _), _| {
+            ParamNumber::new(i64::from(*n))
+                .ok()
+                .and_then(|n| params::lookup(product, owner, n))
+                .is_some_and(|d| d.access == Access::ReadOnly)
+        });
+    }
+
     /// EEPROM writes so far.
     pub fn eeprom_writes(&self) -> u64 {
         self.eeprom_writes

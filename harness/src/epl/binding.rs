@@ -387,6 +387,13 @@ impl<L: Link> EplBinding<L> {
                     f["type"] = json!(r.message_type().name());
                     f["decoded"] = json!(describe(r));
                 }
+                if let Some(e) = got.first().and_then(|r| r.ether) {
+                    // The Ethernet frame around it (BU 2200 §3.3): EtherType, multicast or
+                    // unicast destination, length without the FCS (64 bytes with it).
+                    f["ethertype"] = json!(e.ethertype);
+                    f["multicast"] = json!(e.dst.is_multicast());
+                    f["frame_length"] = json!(e.len);
+                }
                 f
             }
             EplStep::Sdo { bytes, via } => {

@@ -11,10 +11,19 @@ fn sdo_abort(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let protocol = match a.str("protocol")? {
         "ethercat" => Protocol::Ethercat,
         "powerlink" => Protocol::Powerlink,
+        "ds301" => {
+            // The standard's own list (CiA 301 and EPSG DS 301 share the codes), against
+            // which the manuals' printed lists are checked.
+            let code = proto::ecat::coe::SdoAbortCode(a.int("code")? as u32);
+            return Ok(match code.name() {
+                Some(t) => json!({ "listed": true, "text": t }),
+                None => json!({ "listed": false }),
+            });
+        }
         p => {
             return Err(ComputeError::BadArg {
                 arg: "protocol".into(),
-                why: format!("`{p}` has no SDO abort list (ethercat, powerlink)"),
+                why: format!("`{p}` has no SDO abort list (ethercat, powerlink, ds301)"),
             })
         }
     };
@@ -110,11 +119,11 @@ fn ethercat_nmt(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     Ok(json!({ "to": next.name() }))
 }
 
-fn powerlink_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+fn powerlink_error(c: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let p700 = a.int("p700")? as u16;
-    let e = errors::powerlink_error(p700).ok_or_else(|| {
+    let e = errors::powerlink_error_of(c.product, p700).ok_or_else(|| {
         ComputeError::Refused(format!(
-            "P700 {p700} has no POWERLINK error code in BU 0620 §5.4.1.2"
+            "P700 {p700} has no POWERLINK error code in BU 0620 §5.4.1.2 (BU 2200 §8.3.2)"
         ))
     })?;
     Ok(
@@ -144,11 +153,43 @@ fn powerlink_ip(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     Ok(json!({ "ip": show(ip), "mask": show(mask) }))
 }
 
+/// The areas of a POWERLINK object dictionary: EPSG DS 301, "Object Dictionary structure" (as the
+/// OPC UA POWERLINK companion specification OPC 30110 §4.1.4 Table 8 reproduces it). BU 2200
+/// §3.3 prints a shorter list (00A0h…0FFFh reserved, A000h…AFFFh interface profiles).
+const OD_AREAS: &[(u16, u16, &str)] = &[
+    (0x0000, 0x0000, "not used"),
+    (0x0001, 0x009F, "Data Types"),
+    (0x00A0, 0x03FF, "Reserved"),
+    (0x0400, 0x04FF, "POWERLINK Specific Data Types"),
+    (0x0500, 0x0FFF, "Reserved"),
+    (0x1000, 0x1FFF, "Communication Profile Area"),
+    (0x2000, 0x5FFF, "Manufacturer Specific Profile Area"),
+    (0x6000, 0x9FFF, "Standardised Device Profile Area"),
+    (0xA000, 0xBFFF, "Standardised Interface Profile Area"),
+    (0xC000, 0xFFFF, "Reserved"),
+];
+
+fn od_area(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    let index = u16::try_from(a.int("index")?)
+        .map_err(|_| ComputeError::Refused("an object index is 16 bits (0…FFFFh)".into()))?;
+    let (first, last, area) = OD_AREAS
+        .iter()
+        .find(|(f, l, _)| (*f..=*l).contains(&index))
+        .copied()
+        .unwrap_or((0, 0, "not used"));
+    Ok(json!({ "area": area, "first": first, "last": last }))
+}
+
 /// The functions of this theme.
 pub(super) const FNS: &[ComputeFn] = &[
     ComputeFn {
+        name: "tables.od_area",
+        doc: "Area of a POWERLINK object index (EPSG DS 301 object dictionary structure; BU 2200 §3.3)",
+        run: od_area,
+    },
+    ComputeFn {
         name: "tables.sdo_abort",
-        doc: "Is an SDO abort code in the protocol's list, and its text (BU 0620 §2.2.7.2, §2.4.7)",
+        doc: "Is an SDO abort code in the protocol's list, and its text (BU 0620 §2.2.7.2, §2.4.7; ds301: the standard's)",
         run: sdo_abort,
     },
     ComputeFn {
@@ -175,7 +216,7 @@ pub(super) const FNS: &[ComputeFn] = &[
     },
     ComputeFn {
         name: "tables.powerlink_error",
-        doc: "POWERLINK error code and register of a P700 error (BU 0620 §5.4.1.2)",
+        doc: "POWERLINK error code and register of a P700 error (BU 0620 §5.4.1.2; the POWERLINK modules: BU 2200 §8.3.2)",
         run: powerlink_error,
     },
     ComputeFn {
@@ -240,3 +281,19 @@ pub(super) const FNS: &[ComputeFn] = &[
         },
     },
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::OD_AREAS;
+
+    #[test]
+    fn od_areas_cover_every_index_once() {
+        // EPSG DS 301's areas follow each other from 0000h to FFFFh without gap or overlap.
+        let mut next = 0u32;
+        for (first, last, _) in OD_AREAS {
+            assert_eq!(u32::from(*first), next, "gap or overlap at {first:04X}h");
+            next = u32::from(*last) + 1;
+        }
+        assert_eq!(next, 0x1_0000);
+    }
+}

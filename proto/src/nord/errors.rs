@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use super::product::Protocol;
+use super::product::{Product, Protocol};
 
 /// A communication error as P700 [-01] shows it and its DS402 extended code (P700 [-04]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -313,6 +313,32 @@ pub fn powerlink_error(p700: u16) -> Option<&'static PlError> {
         .find(|e| e.p700.iter().any(|(lo, hi)| (*lo..=*hi).contains(&p700)))
 }
 
+/// BU 2200 §8.3.2 (p. 66): four rows of the allocation table that BU 0620 §5.4.1.2 prints without
+/// a P700 number carry one in the POWERLINK modules' manual.
+pub const MODULE_POWERLINK_ERRORS: &[PlError] = &[
+    pl(
+        0x7332,
+        1,
+        &[(252, 252)],
+        "Universal encoder communication error",
+    ),
+    pl(0x7334, 1, &[(254, 254)], "Universal encoder error"),
+    pl(0x8612, 1, &[(142, 142)], "Reference point error"),
+    pl(0x8711, 1, &[(136, 136)], "Acceleration path error"),
+];
+
+/// The POWERLINK error code and register a unit of `product` reports for a P700 error: the
+/// SK TU3/TU4/CU4-POL by BU 2200 §8.3.2 (BU 0620 §5.4.1.2's rows and [`MODULE_POWERLINK_ERRORS`]),
+/// the SK 550P by BU 0620 §5.4.1.2.
+pub fn powerlink_error_of(product: Product, p700: u16) -> Option<&'static PlError> {
+    let module = matches!(product, Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol);
+    MODULE_POWERLINK_ERRORS
+        .iter()
+        .filter(|_| module)
+        .find(|e| e.p700.iter().any(|(lo, hi)| (*lo..=*hi).contains(&p700)))
+        .or_else(|| powerlink_error(p700))
+}
+
 /// DS-301 error group of a code (§5.4.1.2 "Error Groups").
 pub fn error_group(code: u16) -> &'static str {
     if code == 0xFF00 || code >= 0xFF00 {
@@ -371,5 +397,20 @@ mod tests {
         assert_eq!(e.p700, 103);
         assert_eq!(profinet_alarm(e.p700), 359);
         assert_eq!(profinet_alarm(LOST_INVERTER), 1256);
+    }
+
+    #[test]
+    fn the_modules_have_four_more_rows() {
+        // BU 2200 §8.3.2: 25.2 → 7332h, 25.4 → 7334h, 14.2 → 8612h, 13.6 → 8711h, register 1.
+        for (p700, code) in [(252, 0x7332), (254, 0x7334), (142, 0x8612), (136, 0x8711)] {
+            let e = powerlink_error_of(Product::Tu4Pol, p700).unwrap();
+            assert_eq!((e.code, e.register), (code, 1), "P700 {p700}");
+            assert!(powerlink_error_of(Product::Sk550p, p700).is_none());
+        }
+        // The shared rows are the same.
+        assert_eq!(
+            powerlink_error_of(Product::Cu4Pol, 30).unwrap().code,
+            0x2310
+        );
     }
 }

@@ -476,6 +476,8 @@ impl Node {
                 s.set_info(175, 1, i32::from(word & 0x03));
             }
         }
+        // P150 1…4 overrides the bus (BU 2200 §7.1.1).
+        self.device.set_relays();
     }
 
     fn pres(&self) -> Vec<u8> {
@@ -595,6 +597,7 @@ impl Node {
             if let Ok(s) = self.device.store(Unit::Interface) {
                 s.set_info(170, 1, if valid { 0 } else { SET_CONFIG_ERROR });
             }
+            self.device.set_config_error(!valid);
         }
         self.show_identity();
     }
@@ -648,8 +651,9 @@ impl Node {
             if value == 0 {
                 continue;
             }
-            let (code, register) = proto::nord::errors::powerlink_error(value as u16)
-                .map_or((0x1000, 1), |e| (e.code, e.register));
+            let (code, register) =
+                proto::nord::errors::powerlink_error_of(self.product, value as u16)
+                    .map_or((0x1000, 1), |e| (e.code, e.register));
             let text = format!(
                 "{}{:>7}",
                 fi.get(),

@@ -206,6 +206,11 @@ impl Dictionary {
         }
         let (unit, number, d) = self.parameter(cx.device, index)?;
         let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
-        write_sub(store, number, d, sub, data)
+        write_sub(store, number, d, sub, data)?;
+        if unit == Unit::Interface {
+            // P150 / P152 act at once (BU 2200 §7.1.1).
+            cx.device.settle_interface();
+        }
+        Ok(())
     }
 }
