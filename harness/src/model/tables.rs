@@ -180,8 +180,24 @@ fn od_area(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     Ok(json!({ "area": area, "first": first, "last": last }))
 }
 
+/// The POWERLINK device description file of the profile's product (BU 2200 §5.2.1): its name
+/// and, with `index`, whether it describes that object (the inverters' parameters at 2800h + P…).
+fn xdd_file(c: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    let text = crate::epl::xdd::xdd(c.product, 1).map_err(ComputeError::Refused)?;
+    let mut out = json!({ "file": crate::epl::xdd::file_name(c.product) });
+    if let Some(index) = a.opt_int("index")? {
+        out["has_object"] = json!(text.contains(&format!("index=\"{index:04X}\"")));
+    }
+    Ok(out)
+}
+
 /// The functions of this theme.
 pub(super) const FNS: &[ComputeFn] = &[
+    ComputeFn {
+        name: "tables.xdd_file",
+        doc: "POWERLINK device description file of the product: name, and with `index` whether it holds that object (BU 2200 §5.2.1)",
+        run: xdd_file,
+    },
     ComputeFn {
         name: "tables.od_area",
         doc: "Area of a POWERLINK object index (EPSG DS 301 object dictionary structure; BU 2200 §3.3)",

@@ -306,6 +306,11 @@ impl Node {
     /// UDP is the only way in while the node is in Basic Ethernet (BU 0620 §2.4.4).
     pub fn udp(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Vec<u8>> {
         self.timers(now);
+        if self.vars.state == NmtState::NOT_ACTIVE {
+            // Initialisation: "Keine Prozessdaten- und Parameterkommunikation" (BU 2200 §6.2);
+            // the node only watches for POWERLINK frames.
+            return Vec::new();
+        }
         let Ok(frame) = SdoFrame::strip_udp(datagram).and_then(SdoFrame::parse) else {
             self.dropped += 1;
             return Vec::new();

@@ -196,6 +196,8 @@ fn seq(ssnr: u8, scon: Con) -> Seq {
 #[test]
 fn sdo_over_udp_reads_writes_and_refuses() {
     let mut n = node(Product::Sk550p);
+    // Out of Initialisation, where the node does not answer (BU 2200 §6.2).
+    n.receive(&soa(RequestedService::NO_SERVICE), ms(1));
     let init = udp(&mut n, seq(5, Con::Init), None);
     assert_eq!(
         (init.seq.rcon, init.seq.scon, init.seq.rsnr),
@@ -248,4 +250,22 @@ fn sdo_over_udp_reads_writes_and_refuses() {
         Some(Command::read_by_index(6, 0x6000, 0)),
     );
     assert_eq!(r.command.unwrap().abort_code(), Some(0x0602_0000));
+}
+
+#[test]
+fn no_parameter_communication_during_initialisation() {
+    // BU 2200 §6.2 Initialisation: "Keine Prozessdaten- und Parameterkommunikation".
+    let mut n = node(Product::Tu3Pol);
+    assert_eq!(n.state(), NmtState::NOT_ACTIVE);
+    let from: SocketAddr = "192.168.100.240:3819".parse().unwrap();
+    let d = SdoFrame {
+        seq: seq(0, Con::Init),
+        command: None,
+    }
+    .emit_udp()
+    .unwrap();
+    assert!(n.udp(from, &d, ms(10)).is_empty());
+    // Out of it (Pre-Operational 1 after an SoA) the same datagram is answered.
+    n.receive(&soa(RequestedService::NO_SERVICE), ms(11));
+    assert_eq!(n.udp(from, &d, ms(12)).len(), 1);
 }
