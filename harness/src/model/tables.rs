@@ -119,9 +119,20 @@ fn ethercat_nmt(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     Ok(json!({ "to": next.name() }))
 }
 
-fn powerlink_error(c: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+fn powerlink_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let p700 = a.int("p700")? as u16;
-    let e = errors::powerlink_error_of(c.product, p700).ok_or_else(|| {
+    // `manual: "BU 2200"`: the POWERLINK modules' table (§8.3.2); else BU 0620 §5.4.1.2's.
+    let product = match a.opt_str("manual")? {
+        None | Some("BU 0620") => proto::nord::Product::Sk550p,
+        Some("BU 2200") => proto::nord::Product::Tu3Pol,
+        Some(m) => {
+            return Err(bad(
+                "manual",
+                format!("`{m}` has no POWERLINK error table (BU 0620, BU 2200)"),
+            ))
+        }
+    };
+    let e = errors::powerlink_error_of(product, p700).ok_or_else(|| {
         ComputeError::Refused(format!(
             "P700 {p700} has no POWERLINK error code in BU 0620 §5.4.1.2 (BU 2200 §8.3.2)"
         ))
@@ -232,7 +243,7 @@ pub(super) const FNS: &[ComputeFn] = &[
     },
     ComputeFn {
         name: "tables.powerlink_error",
-        doc: "POWERLINK error code and register of a P700 error (BU 0620 §5.4.1.2; the POWERLINK modules: BU 2200 §8.3.2)",
+        doc: "POWERLINK error code and register of a P700 error (BU 0620 §5.4.1.2; `manual: BU 2200`: the modules' §8.3.2)",
         run: powerlink_error,
     },
     ComputeFn {

@@ -315,7 +315,10 @@ pub fn powerlink_error(p700: u16) -> Option<&'static PlError> {
 
 /// BU 2200 §8.3.2 (p. 66): four rows of the allocation table that BU 0620 §5.4.1.2 prints without
 /// a P700 number carry one in the POWERLINK modules' manual.
+/// Its first row "Kein Fehler" is printed as 1000h, register 0; the manual's own error groups
+/// (00xxh "Kein Fehler", 10xxh "Nicht definierter Fehlertyp") and DS 301 give 0000h.
 pub const MODULE_POWERLINK_ERRORS: &[PlError] = &[
+    pl(0x0000, 0, &[(0, 0)], "No error"),
     pl(
         0x7332,
         1,
