@@ -681,9 +681,15 @@ impl<L: Link> Binding for EplBinding<L> {
             }
             Action::Inject { inverter, error } => {
                 let (node, _) = self.simulated()?;
-                node.device_mut()
-                    .inject_fault(*inverter, error)
-                    .map_err(StepError::Refused)?;
+                if error == "lost" {
+                    // The inverter drops off the system bus (as `inject: {error: lost}` over
+                    // PROFINET).
+                    node.lose_inverter(*inverter);
+                } else {
+                    node.device_mut()
+                        .inject_fault(*inverter, error)
+                        .map_err(StepError::Refused)?;
+                }
                 json!({})
             }
             Action::Observe { what, inverter } => self.observe(what, *inverter)?,

@@ -16,7 +16,7 @@ use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
 use proto::nord::epl::{self as def, MappedWord, Slot};
 use proto::nord::led::{self, Row};
 use proto::nord::nmt::PlState;
-use proto::nord::{ArrayElement, ParamNumber, Product, Protocol};
+use proto::nord::{ArrayElement, Inverter, ParamNumber, Product, Protocol};
 
 use super::od::{Context, Dictionary, NodeVars, HISTORY_LEN};
 use super::sdo::{Peer, Server};
@@ -152,6 +152,7 @@ impl Node {
                 basic_ethernet_us: def::BASIC_ETHERNET_TIMEOUT_US,
                 error_register: 0,
                 history: Vec::new(),
+                lost: 0,
             },
             od: Dictionary::new(product),
             sdo: Server::default(),
@@ -198,6 +199,13 @@ impl Node {
     /// Frames that were not POWERLINK the node could parse (ignored, as DS 301's DLL does).
     pub fn dropped(&self) -> u64 {
         self.dropped
+    }
+
+    /// FI `fi` drops off the system bus (switched off, cable cut): its parameter objects answer
+    /// 08000020h from now on (BU 2200 §5.2.4: an interface that cannot reach its inverter
+    /// "kann keine Daten im Gerät speichern und antwortet mit einem Fehler").
+    pub fn lose_inverter(&mut self, fi: Inverter) {
+        self.vars.lost |= 1 << (fi.get() - 1);
     }
 
     /// The simulated device.

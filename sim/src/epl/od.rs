@@ -36,6 +36,18 @@ pub(crate) struct NodeVars {
     pub(crate) error_register: u8,
     /// ERR_History_ADOM, newest first.
     pub(crate) history: Vec<ErrorEntry>,
+    /// Inverters no longer on the system bus (bit n − 1 = FI n): their parameters cannot be
+    /// read or stored (08000020h, BU 2200 §5.2.4 and §6.4.1).
+    pub(crate) lost: u8,
+}
+
+/// 08000020h "keine Verbindung zwischen Busschnittstelle und Frequenzumrichter" for an inverter
+/// that has dropped off the system bus.
+fn reachable(vars: &NodeVars, unit: Unit) -> Result<(), SdoAbort> {
+    match unit {
+        Unit::Inverter(fi) if vars.lost & 1 << (fi.get() - 1) != 0 => Err(abort::NO_INVERTER),
+        _ => Ok(()),
+    }
 }
 
 /// The history keeps this many entries (DS 301 allows 1..254).
@@ -150,6 +162,7 @@ impl Dictionary {
             return upload_standard(o, cx.words, sub, false);
         }
         let (unit, number, d) = self.parameter(cx.device, index)?;
+        reachable(cx.vars, unit)?;
         let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
         read_sub(store, number, d, sub)
     }
@@ -205,6 +218,7 @@ impl Dictionary {
             return Err(abort::READ_ONLY);
         }
         let (unit, number, d) = self.parameter(cx.device, index)?;
+        reachable(cx.vars, unit)?;
         let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
         write_sub(store, number, d, sub, data)?;
         if unit == Unit::Interface {

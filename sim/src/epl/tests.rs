@@ -269,3 +269,25 @@ fn no_parameter_communication_during_initialisation() {
     n.receive(&soa(RequestedService::NO_SERVICE), ms(11));
     assert_eq!(n.udp(from, &d, ms(12)).len(), 1);
 }
+
+#[test]
+fn a_lost_inverter_answers_08000020h() {
+    // BU 2200 §5.2.4 / §6.4.1: no connection between bus interface and FI.
+    let mut n = node(Product::Tu3Pol);
+    n.receive(&soa(RequestedService::NO_SERVICE), ms(1));
+    udp(&mut n, seq(5, Con::Init), None);
+    n.lose_inverter(proto::nord::Inverter::new(2).unwrap());
+    // FI 2's P102 (3066h) cannot be stored; FI 1's (2866h) still can.
+    let w = udp(
+        &mut n,
+        seq(6, Con::Valid),
+        Some(Command::write_by_index(1, 0x3066, 1, &300i16.to_le_bytes())),
+    );
+    assert_eq!(w.command.unwrap().abort_code(), Some(0x0800_0020));
+    let w = udp(
+        &mut n,
+        seq(7, Con::Valid),
+        Some(Command::write_by_index(2, 0x2866, 1, &300i16.to_le_bytes())),
+    );
+    assert_eq!(w.command.unwrap().abort_code(), None);
+}
