@@ -31,6 +31,10 @@ pub(crate) mod abort {
     pub(crate) const READ_ONLY: SdoAbort = SdoAbort(0x0601_0002);
     /// Object does not exist in the object dictionary.
     pub(crate) const NO_OBJECT: SdoAbort = SdoAbort(0x0602_0000);
+    /// Object cannot be mapped to the PDO (a dynamic mapping entry, BU 2200 §6.3.6).
+    pub(crate) const NOT_MAPPABLE: SdoAbort = SdoAbort(0x0604_0041);
+    /// General parameter incompatibility (a dynamic mapping that does not fit together).
+    pub(crate) const PARAMETER_INCOMPATIBLE: SdoAbort = SdoAbort(0x0604_0043);
     /// Data type does not match, length of service parameter too high.
     pub(crate) const TOO_LONG: SdoAbort = SdoAbort(0x0607_0012);
     /// Data type does not match, length of service parameter too low.

@@ -13,11 +13,12 @@ use proto::epl::{
     MULTICAST_PRES,
 };
 use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
-use proto::nord::epl::{self as def, MappedWord, Slot};
+use proto::nord::epl::{self as def, Slot};
 use proto::nord::led::{self, Row};
 use proto::nord::nmt::PlState;
 use proto::nord::{ArrayElement, Inverter, ParamNumber, Product, Protocol};
 
+use super::mapping::PdoMap;
 use super::od::{Context, Dictionary, NodeVars, HISTORY_LEN};
 use super::sdo::{Peer, Server};
 use crate::device::Device;
@@ -111,8 +112,6 @@ pub struct Node {
     od: Dictionary,
     sdo: Server,
     words: ProcessWords,
-    rx_map: Vec<MappedWord>,
-    tx_map: Vec<MappedWord>,
     /// When the state was entered.
     since: Duration,
     last_soc: Option<Duration>,
@@ -152,13 +151,13 @@ impl Node {
                 basic_ethernet_us: def::BASIC_ETHERNET_TIMEOUT_US,
                 error_register: 0,
                 history: Vec::new(),
+                rx_map: PdoMap::fixed(product, true),
+                tx_map: PdoMap::fixed(product, false),
                 lost: 0,
             },
             od: Dictionary::new(product),
             sdo: Server::default(),
             words: ProcessWords::default(),
-            rx_map: def::process_map(product, true),
-            tx_map: def::process_map(product, false),
             since: Duration::ZERO,
             last_soc: None,
             error: false,
@@ -395,6 +394,10 @@ impl Node {
                 self.sdo.reset();
                 self.queued.clear();
                 self.last_soc = None;
+                // The communication profile area (1000h…1FFFh) returns to its power-on values
+                // (DS 301 NMT_GS_RESET_COMMUNICATION): the fixed mapping (BU 2200 §6.3.5).
+                self.vars.rx_map = PdoMap::fixed(self.product, true);
+                self.vars.tx_map = PdoMap::fixed(self.product, false);
                 if to != NmtState::RESET_COMMUNICATION {
                     // A reset of the application is the restart the manuals ask for after
                     // changing the addressing parameters ("so that the parameter settings
@@ -453,14 +456,14 @@ impl Node {
     fn outputs(&mut self, payload: &[u8], rd: bool, now: Duration) {
         let evaluate = self.vars.state == NmtState::OPERATIONAL
             && rd
-            && payload.len() >= 2 * self.rx_map.len();
+            && payload.len() >= 2 * self.vars.rx_map.words.len();
         if !evaluate {
             // Not evaluated: the PRes carries the inputs [`Node::poll`] refreshes.
             return;
         }
         let mut image = vec![0u8; 8 * 12];
         let mut io = None;
-        for (m, w) in self.rx_map.iter().zip(payload.chunks_exact(2)) {
+        for (m, w) in self.vars.rx_map.words.iter().zip(payload.chunks_exact(2)) {
             match m.slot {
                 Slot::Inverter { fi, word } => {
                     let at = usize::from(fi - 1) * 12 + usize::from(word) * 2;
@@ -495,7 +498,9 @@ impl Node {
 
     fn pres(&self) -> Vec<u8> {
         let payload: Vec<u8> = self
+            .vars
             .tx_map
+            .words
             .iter()
             .flat_map(|m| {
                 let w = match m.slot {
@@ -554,7 +559,14 @@ impl Node {
     /// The IdentResponse: identity of `proto::nord::epl`, the node's addresses.
     pub fn ident(&self) -> IdentResponse {
         let n = self.vars.node_id;
-        let bytes = |outputs| 2 * def::process_map(self.product, outputs).len() as u16;
+        let bytes = |outputs: bool| {
+            let map = if outputs {
+                &self.vars.rx_map
+            } else {
+                &self.vars.tx_map
+            };
+            2 * map.words.len() as u16
+        };
         IdentResponse {
             flags: self.flags(),
             state: self.vars.state,

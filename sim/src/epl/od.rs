@@ -15,6 +15,7 @@ use proto::nord::epl::{self as def, ParamOwner};
 use proto::nord::errors::SdoAbort;
 use proto::nord::{ParamNumber, Product};
 
+use super::mapping::PdoMap;
 use crate::device::Device;
 use crate::ecat::od::upload_standard;
 use crate::ecat::pdo::ProcessWords;
@@ -36,10 +37,18 @@ pub(crate) struct NodeVars {
     pub(crate) error_register: u8,
     /// ERR_History_ADOM, newest first.
     pub(crate) history: Vec<ErrorEntry>,
+    /// The PReq mapping (1600h): dynamic on the SK TU3-POL (BU 2200 §6.3.6).
+    pub(crate) rx_map: PdoMap,
+    /// The PRes mapping (1A00h).
+    pub(crate) tx_map: PdoMap,
     /// Inverters no longer on the system bus (bit n − 1 = FI n): their parameters cannot be
     /// read or stored (08000020h, BU 2200 §5.2.4 and §6.4.1).
     pub(crate) lost: u8,
 }
+
+/// PDO_RxMappParam_00h_AU64 (the PReq) and PDO_TxMappParam_00h_AU64 (the PRes).
+const RX_MAPPING: u16 = 0x1600;
+const TX_MAPPING: u16 = 0x1A00;
 
 /// 08000020h "keine Verbindung zwischen Busschnittstelle und Frequenzumrichter" for an inverter
 /// that has dropped off the system bus.
@@ -84,6 +93,17 @@ impl Dictionary {
         Dictionary {
             product,
             objects: def::object_dictionary(product),
+        }
+    }
+
+    /// The mapping object `index` where the product maps dynamically (SK TU3-POL, BU 2200
+    /// §6.3.6); the others' mapping is static.
+    fn dynamic_map<'v>(&self, vars: &'v NodeVars, index: u16) -> Option<&'v PdoMap> {
+        match index {
+            _ if self.product != Product::Tu3Pol => None,
+            RX_MAPPING => Some(&vars.rx_map),
+            TX_MAPPING => Some(&vars.tx_map),
+            _ => None,
         }
     }
 
@@ -158,6 +178,9 @@ impl Dictionary {
             ) => return Err(abort::NO_SUBINDEX),
             _ => {}
         }
+        if let Some(map) = self.dynamic_map(cx.vars, index) {
+            return map.read(sub);
+        }
         if let Some(o) = self.object(index) {
             return upload_standard(o, cx.words, sub, false);
         }
@@ -210,6 +233,15 @@ impl Dictionary {
             }
             (CYCLE_LEN | BASIC_ETHERNET_TIMEOUT, _) => return Err(abort::NO_SUBINDEX),
             _ => {}
+        }
+        if self.dynamic_map(cx.vars, index).is_some() {
+            let outputs = index == RX_MAPPING;
+            let map = if outputs {
+                &mut cx.vars.rx_map
+            } else {
+                &mut cx.vars.tx_map
+            };
+            return map.write(self.product, outputs, sub, data);
         }
         if let Some(o) = self.object(index) {
             // The mapping is static (BU 0620 §2.4.1 "static mapping"), the identity fixed,
