@@ -202,8 +202,35 @@ fn xdd_file(c: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     Ok(out)
 }
 
+/// A module's own error (`p170`, tenths: BU 2200 §8.4, BU 2100 §8.3) or the inverter error a
+/// POWERLINK module causes (`p700`, E010, BU 2200 §8.4).
+fn module_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    if let Some(p170) = a.opt_int("p170")? {
+        let text = u16::try_from(p170).ok().and_then(errors::module_error);
+        return Ok(match text {
+            Some(t) => json!({ "listed": true, "text": t }),
+            None => json!({ "listed": false }),
+        });
+    }
+    let p700 = a.int("p700")?;
+    Ok(
+        match errors::POWERLINK_MODULE_E10
+            .iter()
+            .find(|(v, _)| i64::from(*v) == p700)
+        {
+            Some((_, t)) => json!({ "listed": true, "text": t }),
+            None => json!({ "listed": false }),
+        },
+    )
+}
+
 /// The functions of this theme.
 pub(super) const FNS: &[ComputeFn] = &[
+    ComputeFn {
+        name: "tables.module_error",
+        doc: "A module's P170 error (p170, tenths) or the E010 inverter error a POWERLINK module causes (p700): listed, meaning (BU 2200 §8.4, BU 2100 §8.3)",
+        run: module_error,
+    },
     ComputeFn {
         name: "tables.xdd_file",
         doc: "POWERLINK device description file of the product: name, and with `index` whether it holds that object (BU 2200 §5.2.1)",

@@ -342,6 +342,50 @@ pub fn powerlink_error_of(product: Product, p700: u16) -> Option<&'static PlErro
         .or_else(|| powerlink_error(p700))
 }
 
+/// The bus interface's own errors in P170 of the modules, in tenths (102.0 → 1020), with their
+/// meaning: BU 2200 §8.4 (p. 67), BU 2100 §8.3. Ranges are inclusive. BU 2200 prints "560.1
+/// Allgemeiner Netzwerkfehler" inside its own 560.0…560.9 "Interner Fehler"; BU 2100 prints
+/// 561.0, which the 561.x network group (watchdog, cable, IP address) confirms: 561.0 here.
+pub const MODULE_ERRORS: &[(u16, u16, &str)] = &[
+    (1000, 1000, "EEPROM error"),
+    (1020, 1020, "Bus timeout P151"),
+    (1030, 1030, "System bus off"),
+    (1040, 1040, "Overtemperature bus interface"),
+    (5501, 5501, "DIP switch error"),
+    (5600, 5609, "Internal error"),
+    (5610, 5610, "General network error"),
+    (5611, 5611, "Ethernet watchdog timeout"),
+    (5612, 5612, "Bus cable fault"),
+    (5613, 5613, "IP address error"),
+    (5630, 5630, "Firmware version incompatible"),
+    (5640, 5640, "MAC address error"),
+];
+
+/// The inverter's errors caused by a POWERLINK bus interface (E010, P700 in tenths): BU 2200
+/// §8.4 (p. 67).
+pub const POWERLINK_MODULE_E10: &[(u16, &str)] = &[
+    (100, "Connection error"),
+    (101, "Temperature too high"),
+    (102, "Timeout POWERLINK watchdog"),
+    (103, "Timeout by P151/P513"),
+    (104, "IP address error"),
+    (105, "Internal error"),
+    (106, "Bus cable fault"),
+    (108, "Connection error timeout (SK TU3-POL)"),
+    (
+        109,
+        "Connection error timeout between inverter and bus interface (SK CU4/TU4-POL)",
+    ),
+];
+
+/// The meaning of a module's P170 error (tenths).
+pub fn module_error(p170: u16) -> Option<&'static str> {
+    MODULE_ERRORS
+        .iter()
+        .find(|(lo, hi, _)| (*lo..=*hi).contains(&p170))
+        .map(|(_, _, t)| *t)
+}
+
 /// DS-301 error group of a code (§5.4.1.2 "Error Groups").
 pub fn error_group(code: u16) -> &'static str {
     if code == 0xFF00 || code >= 0xFF00 {
@@ -415,5 +459,15 @@ mod tests {
             powerlink_error_of(Product::Cu4Pol, 30).unwrap().code,
             0x2310
         );
+    }
+
+    #[test]
+    fn module_errors_in_tenths() {
+        // BU 2200 §8.4: 102.0 bus timeout, 561.3 IP address twice; 560.x internal.
+        assert_eq!(module_error(1020), Some("Bus timeout P151"));
+        assert_eq!(module_error(5613), Some("IP address error"));
+        assert_eq!(module_error(5601), Some("Internal error"));
+        assert_eq!(module_error(5610), Some("General network error"));
+        assert_eq!(module_error(5620), None);
     }
 }
