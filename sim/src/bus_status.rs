@@ -9,7 +9,8 @@
 //!   timeout (P151/P513), bits 9–8 FI status (10b = online); P170 [-01] "Present error" 1020
 //!   "Bus Time Out via P151 or P513" (p. 35).
 //! - SK TU3/TU4/CU4-POL: P173 "Baugruppen Zustand" (BU 2200 §7.1.3, p. 54): [-01] bit 0 ready,
-//!   1 cyclic communication, 2 timeout Ethernet bus, 3 timeout P151/P513, bits 8–15 FI 1..4 in
+//!   1 cyclic communication, 2 timeout Ethernet bus, 3 timeout P151/P513, 5 general
+//!   configuration error (the gateway P164 refused, "5605 Konfig. setzen"), bits 8–15 FI 1..4 in
 //!   bit pairs; [-02] FI 1..8 in bit pairs; a pair reads 00 offline, 01 unknown, 10 online,
 //!   11 lost.
 //!
@@ -28,6 +29,8 @@ pub(crate) struct BusFlags {
     pub(crate) cyclic: bool,
     /// The field-bus watchdog (the master's connection) has expired.
     pub(crate) fieldbus_timeout: bool,
+    /// The POWERLINK module's configuration is refused (P173 [-01] bit 5).
+    pub(crate) config_error: bool,
     /// An inverter's telegram monitoring (P513 / P151) has tripped (E10.3).
     pub(crate) telegram_timeout: bool,
     /// Inverters on the system bus: FI 1..=online are online.
@@ -66,12 +69,52 @@ pub(crate) fn status_parameters(
             Some((170, 1, if f.telegram_timeout { 1020 } else { 0 })),
         ],
         Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => [
-            Some((173, 1, low | online_pairs(f.online, 4, 8))),
+            Some((
+                173,
+                1,
+                low | i32::from(f.config_error) << 5 | online_pairs(f.online, 4, 8),
+            )),
             Some((173, 2, online_pairs(f.online, 8, 0))),
         ],
         Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => [Some((173, 1, low)), None],
     };
     words.into_iter().flatten()
+}
+
+/// P170 [-01] "Aktueller Fehler" of a module while its telegram monitoring has tripped: 102.0
+/// "Bus Time-Out P151" ("Durch Timeout-Überwachung Parameter P151/P513"), shown in tenths as
+/// 1020 (BU 2200 §8.4, p. 67; BU 2100 §8.4 "102.0 Bus timeout P151").
+pub(crate) const BUS_TIMEOUT_ERROR: i32 = 1020;
+
+/// P170 of the EtherNet/IP and POWERLINK modules when the timeout monitoring (P151/P513)
+/// changes from `was` to `now`, given the present error `present` ([-01]): the fault shows in
+/// [-01] while it is active; once it is no longer active [-01] clears itself and the fault is
+/// archived in [-02] as the last fault (BU 2200 §8.2 "Fehlermeldung archivieren", BU 2100
+/// §8.2). Another present error (the POWERLINK modules' 5605 "Konfig. setzen") is left as it is.
+/// The SK TU3-PNT shows its P170 through [`status_parameters`] (BU 0590 §5.1.3).
+pub(crate) fn present_error(
+    product: Product,
+    was: bool,
+    now: bool,
+    present: i32,
+) -> impl Iterator<Item = (u16, u8, i32)> {
+    let module = matches!(
+        product,
+        Product::Tu3Eip
+            | Product::Tu4Eip
+            | Product::Cu4Eip
+            | Product::Tu3Pol
+            | Product::Tu4Pol
+            | Product::Cu4Pol
+    );
+    let writes = match (module, was, now) {
+        (true, false, true) if present == 0 => [Some((170, 1, BUS_TIMEOUT_ERROR)), None],
+        (true, true, false) if present == BUS_TIMEOUT_ERROR => {
+            [Some((170, 1, 0)), Some((170, 2, BUS_TIMEOUT_ERROR))]
+        }
+        _ => [None, None],
+    };
+    writes.into_iter().flatten()
 }
 
 #[cfg(test)]
@@ -83,6 +126,7 @@ mod tests {
         BusFlags {
             cyclic,
             fieldbus_timeout: false,
+            config_error: false,
             telegram_timeout: timeout,
             online,
         }
@@ -110,6 +154,20 @@ mod tests {
     }
 
     #[test]
+    fn configuration_error_is_bit_5_of_the_powerlink_modules() {
+        let f = BusFlags {
+            config_error: true,
+            online: 1,
+            ..BusFlags::default()
+        };
+        assert_eq!(
+            status_parameters(Product::Tu4Pol, f).next().unwrap(),
+            (173, 1, 0x0221),
+            "ready, general configuration error, FI 1 online"
+        );
+    }
+
+    #[test]
     fn field_bus_timeout_is_bit_2() {
         let f = BusFlags {
             fieldbus_timeout: true,
@@ -120,6 +178,32 @@ mod tests {
             status_parameters(Product::Tu3Pol, f).next().unwrap(),
             (173, 1, 0x0205),
             "ready, Ethernet bus timeout, FI 1 online"
+        );
+    }
+
+    #[rstest]
+    // BU 2200 §8.4: 102.0 shows as 1020 while the timeout is active …
+    #[case(Product::Tu4Pol, false, true, 0, vec![(170, 1, 1020)])]
+    #[case(Product::Tu3Eip, false, true, 0, vec![(170, 1, 1020)])]
+    // … §8.2: then [-01] clears itself and [-02] archives it.
+    #[case(Product::Cu4Pol, true, false, 1020, vec![(170, 1, 0), (170, 2, 1020)])]
+    // Another present error (5605 Konfig. setzen) stays; nothing while unchanged.
+    #[case(Product::Tu3Pol, false, true, 5605, vec![])]
+    #[case(Product::Tu3Pol, true, false, 5605, vec![])]
+    #[case(Product::Tu4Eip, true, true, 1020, vec![])]
+    // The SK 550P has no P170; the SK TU3-PNT's comes with its status word.
+    #[case(Product::Sk550p, false, true, 0, vec![])]
+    #[case(Product::Tu3Pnt, false, true, 0, vec![])]
+    fn p170_follows_the_timeout(
+        #[case] product: Product,
+        #[case] was: bool,
+        #[case] now: bool,
+        #[case] present: i32,
+        #[case] want: Vec<(u16, u8, i32)>,
+    ) {
+        assert_eq!(
+            present_error(product, was, now, present).collect::<Vec<_>>(),
+            want
         );
     }
 }

@@ -11,7 +11,7 @@
 //! answer follows in a later cycle — which is why the manuals require the master to repeat an
 //! order until its answer arrives (BU 0620 §2.5.6).
 
-use proto::nord::pkw::{PkwRepr, ResponseLabel};
+use proto::nord::pkw::PkwRepr;
 use proto::nord::ppo::{PpoRepr, PpoType};
 use proto::nord::{led, ArrayElement, Inverter, ParamNumber, Product};
 use std::time::Duration;
@@ -30,6 +30,18 @@ const P513: ParamNumber = match ParamNumber::new(513) {
     Err(_) => panic!("in range"),
 };
 const P151: ParamNumber = match ParamNumber::new(151) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
+const P150: ParamNumber = match ParamNumber::new(150) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
+const P152: ParamNumber = match ParamNumber::new(152) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
+const P170: ParamNumber = match ParamNumber::new(170) {
     Ok(p) => p,
     Err(_) => panic!("in range"),
 };
@@ -63,6 +75,12 @@ fn ethernet_timeout(store: &ParamStore) -> Option<Duration> {
         .ok()
         .filter(|t| *t > 0)
         .map(|t| Duration::from_millis(100 * t))
+}
+
+/// P513 [-04] = -0.1 "Kein Fehler" (BU 2200 §8.1): the inverter ignores all communication
+/// errors on the field bus and the system bus.
+fn ignores_communication_errors(store: &ParamStore) -> bool {
+    store.read(P513, None, ELEMENT_ETHERNET) == Ok(-1)
 }
 
 /// Which firmware release the simulator behaves as.
@@ -296,6 +314,8 @@ pub struct Device {
     fieldbus_timeout: bool,
     /// Inverters lost from the system bus (bit n: FI n + 1), no longer online.
     lost: u8,
+    /// The module's configuration is refused (P173 bit 5, BU 2200 §7.1.3).
+    config_error: bool,
     /// The flags the bus status parameters show (written again only when they change: the
     /// monitoring runs on every frame).
     shown: Option<BusFlags>,
@@ -361,6 +381,7 @@ impl Device {
             inverters,
             fieldbus_timeout: false,
             lost: 0,
+            config_error: false,
             shown: None,
         }
     }
@@ -390,10 +411,8 @@ impl Device {
     fn monitor(&mut self, now: Duration) {
         let mut flags = BusFlags {
             fieldbus_timeout: self.fieldbus_timeout,
-            // FI 1..=n online, up to the first one lost.
-            online: (0..self.config.inverters)
-                .find(|n| self.lost & 1 << n != 0)
-                .unwrap_or(self.config.inverters),
+            config_error: self.config_error,
+            online: self.online(),
             ..BusFlags::default()
         };
         let p151 = match self.config.product.family() {
@@ -416,6 +435,10 @@ impl Device {
                 flags.cyclic = true;
             }
             let p513 = ethernet_timeout(&unit.params.store);
+            // P513 = -0.1 "Kein Fehler": the inverter ignores every communication error, the
+            // module's P151 time-out included, and keeps its state (BU 2200 §8.1 "Parameter
+            // P513", BU 2100 §8.1).
+            let p151 = p151.filter(|_| !ignores_communication_errors(&unit.params.store));
             if p513.into_iter().chain(p151).any(|limit| silent > limit) {
                 if unit.drive.fault().is_none() {
                     unit.drive.inject_fault(E10_3);
@@ -430,9 +453,57 @@ impl Device {
             {
                 self.interface.store.set_info(number, element, value);
             }
+            let was = self.shown.is_some_and(|f| f.telegram_timeout);
+            let present = self
+                .interface
+                .store
+                .read(P170, None, proto::nord::ArrayElement::new(1).ok())
+                .unwrap_or(0);
+            for (number, element, value) in
+                bus_status::present_error(self.config.product, was, flags.telegram_timeout, present)
+            {
+                self.interface.store.set_info(number, element, value);
+            }
             self.shown = Some(flags);
         }
+        self.settle_interface();
         self.change_protocol(now);
+    }
+
+    /// What a write to the interface's own parameters sets off at once: P150's outputs, P152's
+    /// factory settings. Runs with the monitoring; endpoints that write parameters themselves
+    /// (SDO) call it after the write.
+    pub(crate) fn settle_interface(&mut self) {
+        self.set_relays();
+        self.factory_setting();
+    }
+
+    /// P152 "Werkseinstellung" of a module (BU 2200 §7.1.1, p. 48; BU 0590 §5.1.1, p. 34: the
+    /// parameter "returns automatically to 0"): 1 loads the factory settings of all the bus
+    /// interface's parameters; 2 "Basis-Parameter" and 3 "I-Parameter"
+    /// (the individual safety parameters P800…P830, which the simulated modules do not have)
+    /// reset only their own group, which leaves the catalogued parameters as they are. Each
+    /// returns P152 to 0 by itself.
+    fn factory_setting(&mut self) {
+        let Ok(p152 @ 1..) = self.interface.store.read(P152, None, None) else {
+            return;
+        };
+        if p152 == 1 {
+            self.interface.store.load_factory_settings();
+        }
+        self.interface.store.set_info(152, 1, 0);
+    }
+
+    /// P150 "Relais setzen" of the modules that have it (BU 2200 §7.1.1, p. 48; BU 2100
+    /// §7.1.1): 1…4 set the digital outputs whatever the bus says, shown in P175 "Zustand
+    /// Relais" (bit 0 DO1, bit 1 DO2, BU 2200 §7.1.3); 0 "Über Bus" leaves them to the bus.
+    pub(crate) fn set_relays(&mut self) {
+        let Ok(p150) = self.interface.store.read(P150, None, None) else {
+            return;
+        };
+        if let Some(relays) = relays_of(p150) {
+            self.interface.store.set_info(175, 1, relays);
+        }
     }
 
     /// P899 "Changing the bus protocol" (BU 0620 §4.1): a value 1..4 changes the protocol
@@ -500,7 +571,6 @@ impl Device {
                 let answer = self.interface.cycle(order, delay, product, unit);
                 self.adopt_gateway(&order, &answer);
                 self.adopt_address_and_mask(&order, &answer);
-                self.load_factory_settings(&order, &answer);
                 Ok(answer)
             }
             Unit::Inverter(i) => {
@@ -510,22 +580,6 @@ impl Device {
                 Ok(answer)
             }
         }
-    }
-
-    /// SK TU3-PNT P152 "Factory setting" (BU 0590 §5.1.1, p. 34): 1 loads the factory settings
-    /// of the module's parameters (data record 100 reaches the module's P150…P199, §4.2.2.1)
-    /// and the parameter "returns automatically to 0".
-    fn load_factory_settings(&mut self, order: &PkwRepr, answer: &PkwRepr) {
-        let positive = answer.ak != 0 && answer.ak != ResponseLabel::CANNOT_EXECUTE.0;
-        if self.config.product != Product::Tu3Pnt
-            || !positive
-            || order.parameter() != 152
-            || order.pwe != 1
-            || !matches!(order.ak, 2 | 3 | 7 | 8 | 11..=14)
-        {
-            return;
-        }
-        self.interface.store.load_factory_settings();
     }
 
     /// P877 "Present IP gateway" (BU 0620 §4.4.3, p. 88) shows the gateway set in P852 once it
@@ -712,6 +766,31 @@ impl Device {
         }
     }
 
+    /// FI 1..=n online, up to the first one lost.
+    fn online(&self) -> u8 {
+        (0..self.config.inverters)
+            .find(|n| self.lost & 1 << n != 0)
+            .unwrap_or(self.config.inverters)
+    }
+
+    /// Marks the module's configuration as refused (P173 [-01] bit 5 "Allgemeiner
+    /// Konfigurationsfehler", BU 2200 §7.1.3) or accepted.
+    pub fn set_config_error(&mut self, refused: bool) {
+        self.config_error = refused;
+        // Shown at once: the node reads its configuration in outside the process-data cycle.
+        let flags = BusFlags {
+            config_error: refused,
+            ..self.shown.unwrap_or(BusFlags {
+                online: self.online(),
+                ..BusFlags::default()
+            })
+        };
+        for (number, element, value) in bus_status::status_parameters(self.config.product, flags) {
+            self.interface.store.set_info(number, element, value);
+        }
+        self.shown = Some(flags);
+    }
+
     /// Marks the field-bus watchdog (P872/P173 bit 2) as tripped or clear.
     pub fn set_fieldbus_timeout(&mut self, tripped: bool) {
         self.fieldbus_timeout = tripped;
@@ -787,6 +866,18 @@ impl Device {
                 .store
                 .eeprom_writes(),
         })
+    }
+}
+
+/// P175's bits for a P150 setting (BU 2200 §7.1.1: 1 "Ausgänge aus" both low, 2 DO1 high and DO2
+/// low, 3 DO2 high and DO1 low, 4 both high); `None` for 0 "Über Bus".
+fn relays_of(p150: i32) -> Option<i32> {
+    match p150 {
+        1 => Some(0b00),
+        2 => Some(0b01),
+        3 => Some(0b10),
+        4 => Some(0b11),
+        _ => None,
     }
 }
 
@@ -1000,5 +1091,12 @@ mod tests {
         assert_eq!(answer[0], 100);
         let ppo = PpoRepr::parse(&answer[2..], PpoType::TYPE_1).unwrap();
         assert_eq!(ppo.pkw.map(|p| (p.ak, p.value())), Some((4, 100)));
+    }
+
+    #[test]
+    fn p150_sets_the_outputs_of_p175() {
+        // BU 2200 §7.1.1 P150 table; 0 leaves the outputs to the bus.
+        let got: Vec<_> = (0..=4).map(relays_of).collect();
+        assert_eq!(got, [None, Some(0), Some(1), Some(2), Some(3)]);
     }
 }

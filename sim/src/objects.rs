@@ -31,6 +31,10 @@ pub(crate) mod abort {
     pub(crate) const READ_ONLY: SdoAbort = SdoAbort(0x0601_0002);
     /// Object does not exist in the object dictionary.
     pub(crate) const NO_OBJECT: SdoAbort = SdoAbort(0x0602_0000);
+    /// Object cannot be mapped to the PDO (a dynamic mapping entry, BU 2200 §6.3.6).
+    pub(crate) const NOT_MAPPABLE: SdoAbort = SdoAbort(0x0604_0041);
+    /// General parameter incompatibility (a dynamic mapping that does not fit together).
+    pub(crate) const PARAMETER_INCOMPATIBLE: SdoAbort = SdoAbort(0x0604_0043);
     /// Data type does not match, length of service parameter too high.
     pub(crate) const TOO_LONG: SdoAbort = SdoAbort(0x0607_0012);
     /// Data type does not match, length of service parameter too low.
@@ -46,6 +50,9 @@ pub(crate) mod abort {
     /// BU 0620 §2.2.7.2: "no communication between the bus interface and the frequency
     /// inverter": the addressed FI is not on the system bus.
     pub(crate) const NO_INVERTER: SdoAbort = SdoAbort(0x0800_0020);
+    /// Data cannot be transferred or stored to the application because of the present device
+    /// state.
+    pub(crate) const DEVICE_STATE: SdoAbort = SdoAbort(0x0800_0022);
 }
 
 /// The one mapping of a parameter store's refusal to a CiA 301 abort code. `value` is the

@@ -387,6 +387,13 @@ impl<L: Link> EplBinding<L> {
                     f["type"] = json!(r.message_type().name());
                     f["decoded"] = json!(describe(r));
                 }
+                if let Some(e) = got.as_ref().and_then(|r| r.ether) {
+                    // The Ethernet frame around it (BU 2200 §3.3): EtherType, multicast or
+                    // unicast destination, length without the FCS (64 bytes with it).
+                    f["ethertype"] = json!(e.ethertype);
+                    f["multicast"] = json!(e.dst.is_multicast());
+                    f["frame_length"] = json!(e.len);
+                }
                 f
             }
             EplStep::Sdo { bytes, via } => {
@@ -674,9 +681,15 @@ impl<L: Link> Binding for EplBinding<L> {
             }
             Action::Inject { inverter, error } => {
                 let (node, _) = self.simulated()?;
-                node.device_mut()
-                    .inject_fault(*inverter, error)
-                    .map_err(StepError::Refused)?;
+                if error == "lost" {
+                    // The inverter drops off the system bus (as `inject: {error: lost}` over
+                    // PROFINET).
+                    node.lose_inverter(*inverter);
+                } else {
+                    node.device_mut()
+                        .inject_fault(*inverter, error)
+                        .map_err(StepError::Refused)?;
+                }
                 json!({})
             }
             Action::Observe { what, inverter } => self.observe(what, *inverter)?,

@@ -8,7 +8,7 @@ mod effect;
 pub(crate) mod mn;
 pub mod serve;
 mod step;
-mod xdd;
+pub(crate) mod xdd;
 
 use std::net::SocketAddr;
 use std::time::Duration;

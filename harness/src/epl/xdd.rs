@@ -74,7 +74,7 @@ pub(crate) fn xdd(product: Product, inverters: u8) -> Result<String, String> {
 }
 
 /// The DS 311 file name (BU 2200 §5.2.1; the SK 550P's assumed).
-fn file_name(product: Product) -> &'static str {
+pub(crate) fn file_name(product: Product) -> &'static str {
     match product {
         Product::Tu3Pol => "0xED_NORD_TU3_POL.xdd",
         Product::Tu4Pol => "0xED_NORD_TU4_POL.xdd",

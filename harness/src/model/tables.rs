@@ -11,10 +11,19 @@ fn sdo_abort(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let protocol = match a.str("protocol")? {
         "ethercat" => Protocol::Ethercat,
         "powerlink" => Protocol::Powerlink,
+        "ds301" => {
+            // The standard's own list (CiA 301 and EPSG DS 301 share the codes), against
+            // which the manuals' printed lists are checked.
+            let code = proto::ecat::coe::SdoAbortCode(a.int("code")? as u32);
+            return Ok(match code.name() {
+                Some(t) => json!({ "listed": true, "text": t }),
+                None => json!({ "listed": false }),
+            });
+        }
         p => {
             return Err(ComputeError::BadArg {
                 arg: "protocol".into(),
-                why: format!("`{p}` has no SDO abort list (ethercat, powerlink)"),
+                why: format!("`{p}` has no SDO abort list (ethercat, powerlink, ds301)"),
             })
         }
     };
@@ -130,9 +139,20 @@ fn ethercat_nmt(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
 
 fn powerlink_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let p700 = a.int("p700")? as u16;
-    let e = errors::powerlink_error(p700).ok_or_else(|| {
+    // `manual: "BU 2200"`: the POWERLINK modules' table (§8.3.2); else BU 0620 §5.4.1.2's.
+    let product = match a.opt_str("manual")? {
+        None | Some("BU 0620") => proto::nord::Product::Sk550p,
+        Some("BU 2200") => proto::nord::Product::Tu3Pol,
+        Some(m) => {
+            return Err(bad(
+                "manual",
+                format!("`{m}` has no POWERLINK error table (BU 0620, BU 2200)"),
+            ))
+        }
+    };
+    let e = errors::powerlink_error_of(product, p700).ok_or_else(|| {
         ComputeError::Refused(format!(
-            "P700 {p700} has no POWERLINK error code in BU 0620 §5.4.1.2"
+            "P700 {p700} has no POWERLINK error code in BU 0620 §5.4.1.2 (BU 2200 §8.3.2)"
         ))
     })?;
     Ok(
@@ -162,11 +182,86 @@ fn powerlink_ip(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     Ok(json!({ "ip": show(ip), "mask": show(mask) }))
 }
 
+/// The areas of a POWERLINK object dictionary: EPSG DS 301, "Object Dictionary structure" (as the
+/// OPC UA POWERLINK companion specification OPC 30110 §4.1.4 Table 8 reproduces it). BU 2200
+/// §3.3 prints a shorter list (00A0h…0FFFh reserved, A000h…AFFFh interface profiles).
+const OD_AREAS: &[(u16, u16, &str)] = &[
+    (0x0000, 0x0000, "not used"),
+    (0x0001, 0x009F, "Data Types"),
+    (0x00A0, 0x03FF, "Reserved"),
+    (0x0400, 0x04FF, "POWERLINK Specific Data Types"),
+    (0x0500, 0x0FFF, "Reserved"),
+    (0x1000, 0x1FFF, "Communication Profile Area"),
+    (0x2000, 0x5FFF, "Manufacturer Specific Profile Area"),
+    (0x6000, 0x9FFF, "Standardised Device Profile Area"),
+    (0xA000, 0xBFFF, "Standardised Interface Profile Area"),
+    (0xC000, 0xFFFF, "Reserved"),
+];
+
+fn od_area(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    let index = u16::try_from(a.int("index")?)
+        .map_err(|_| ComputeError::Refused("an object index is 16 bits (0…FFFFh)".into()))?;
+    let (first, last, area) = OD_AREAS
+        .iter()
+        .find(|(f, l, _)| (*f..=*l).contains(&index))
+        .copied()
+        .unwrap_or((0, 0, "not used"));
+    Ok(json!({ "area": area, "first": first, "last": last }))
+}
+
+/// The POWERLINK device description file of the profile's product (BU 2200 §5.2.1): its name
+/// and, with `index`, whether it describes that object (the inverters' parameters at 2800h + P…).
+fn xdd_file(c: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    let text = crate::epl::xdd::xdd(c.product, 1).map_err(ComputeError::Refused)?;
+    let mut out = json!({ "file": crate::epl::xdd::file_name(c.product) });
+    if let Some(index) = a.opt_int("index")? {
+        out["has_object"] = json!(text.contains(&format!("index=\"{index:04X}\"")));
+    }
+    Ok(out)
+}
+
+/// A module's own error (`p170`, tenths: BU 2200 §8.4, BU 2100 §8.3) or the inverter error a
+/// POWERLINK module causes (`p700`, E010, BU 2200 §8.4).
+fn module_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    if let Some(p170) = a.opt_int("p170")? {
+        let text = u16::try_from(p170).ok().and_then(errors::module_error);
+        return Ok(match text {
+            Some(t) => json!({ "listed": true, "text": t }),
+            None => json!({ "listed": false }),
+        });
+    }
+    let p700 = a.int("p700")?;
+    Ok(
+        match errors::POWERLINK_MODULE_E10
+            .iter()
+            .find(|(v, _)| i64::from(*v) == p700)
+        {
+            Some((_, t)) => json!({ "listed": true, "text": t }),
+            None => json!({ "listed": false }),
+        },
+    )
+}
+
 /// The functions of this theme.
 pub(super) const FNS: &[ComputeFn] = &[
     ComputeFn {
+        name: "tables.module_error",
+        doc: "A module's P170 error (p170, tenths) or the E010 inverter error a POWERLINK module causes (p700): listed, meaning (BU 2200 §8.4, BU 2100 §8.3)",
+        run: module_error,
+    },
+    ComputeFn {
+        name: "tables.xdd_file",
+        doc: "POWERLINK device description file of the product: name, and with `index` whether it holds that object (BU 2200 §5.2.1)",
+        run: xdd_file,
+    },
+    ComputeFn {
+        name: "tables.od_area",
+        doc: "Area of a POWERLINK object index (EPSG DS 301 object dictionary structure; BU 2200 §3.3)",
+        run: od_area,
+    },
+    ComputeFn {
         name: "tables.sdo_abort",
-        doc: "Is an SDO abort code in the protocol's list, and its text (BU 0620 §2.2.7.2, §2.4.7)",
+        doc: "Is an SDO abort code in the protocol's list, and its text (BU 0620 §2.2.7.2, §2.4.7; ds301: the standard's)",
         run: sdo_abort,
     },
     ComputeFn {
@@ -193,7 +288,7 @@ pub(super) const FNS: &[ComputeFn] = &[
     },
     ComputeFn {
         name: "tables.powerlink_error",
-        doc: "POWERLINK error code and register of a P700 error (BU 0620 §5.4.1.2)",
+        doc: "POWERLINK error code and register of a P700 error (BU 0620 §5.4.1.2; `manual: BU 2200`: the modules' §8.3.2)",
         run: powerlink_error,
     },
     ComputeFn {
@@ -293,3 +388,19 @@ pub(super) const FNS: &[ComputeFn] = &[
         },
     },
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::OD_AREAS;
+
+    #[test]
+    fn od_areas_cover_every_index_once() {
+        // EPSG DS 301's areas follow each other from 0000h to FFFFh without gap or overlap.
+        let mut next = 0u32;
+        for (first, last, _) in OD_AREAS {
+            assert_eq!(u32::from(*first), next, "gap or overlap at {first:04X}h");
+            next = u32::from(*last) + 1;
+        }
+        assert_eq!(next, 0x1_0000);
+    }
+}

@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use super::product::Protocol;
+use super::product::{Product, Protocol};
 
 /// A communication error as P700 [-01] shows it and its DS402 extended code (P700 [-04]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -313,6 +313,79 @@ pub fn powerlink_error(p700: u16) -> Option<&'static PlError> {
         .find(|e| e.p700.iter().any(|(lo, hi)| (*lo..=*hi).contains(&p700)))
 }
 
+/// BU 2200 §8.3.2 (p. 66): four rows of the allocation table that BU 0620 §5.4.1.2 prints without
+/// a P700 number carry one in the POWERLINK modules' manual.
+/// Its first row "Kein Fehler" is printed as 1000h, register 0; the manual's own error groups
+/// (00xxh "Kein Fehler", 10xxh "Nicht definierter Fehlertyp") and DS 301 give 0000h.
+pub const MODULE_POWERLINK_ERRORS: &[PlError] = &[
+    pl(0x0000, 0, &[(0, 0)], "No error"),
+    pl(
+        0x7332,
+        1,
+        &[(252, 252)],
+        "Universal encoder communication error",
+    ),
+    pl(0x7334, 1, &[(254, 254)], "Universal encoder error"),
+    pl(0x8612, 1, &[(142, 142)], "Reference point error"),
+    pl(0x8711, 1, &[(136, 136)], "Acceleration path error"),
+];
+
+/// The POWERLINK error code and register a unit of `product` reports for a P700 error: the
+/// SK TU3/TU4/CU4-POL by BU 2200 §8.3.2 (BU 0620 §5.4.1.2's rows and [`MODULE_POWERLINK_ERRORS`]),
+/// the SK 550P by BU 0620 §5.4.1.2.
+pub fn powerlink_error_of(product: Product, p700: u16) -> Option<&'static PlError> {
+    let module = matches!(product, Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol);
+    MODULE_POWERLINK_ERRORS
+        .iter()
+        .filter(|_| module)
+        .find(|e| e.p700.iter().any(|(lo, hi)| (*lo..=*hi).contains(&p700)))
+        .or_else(|| powerlink_error(p700))
+}
+
+/// The bus interface's own errors in P170 of the modules, in tenths (102.0 → 1020), with their
+/// meaning: BU 2200 §8.4 (p. 67), BU 2100 §8.3. Ranges are inclusive. BU 2200 prints "560.1
+/// Allgemeiner Netzwerkfehler" inside its own 560.0…560.9 "Interner Fehler"; BU 2100 prints
+/// 561.0, which the 561.x network group (watchdog, cable, IP address) confirms: 561.0 here.
+pub const MODULE_ERRORS: &[(u16, u16, &str)] = &[
+    (1000, 1000, "EEPROM error"),
+    (1020, 1020, "Bus timeout P151"),
+    (1030, 1030, "System bus off"),
+    (1040, 1040, "Overtemperature bus interface"),
+    (5501, 5501, "DIP switch error"),
+    (5600, 5609, "Internal error"),
+    (5610, 5610, "General network error"),
+    (5611, 5611, "Ethernet watchdog timeout"),
+    (5612, 5612, "Bus cable fault"),
+    (5613, 5613, "IP address error"),
+    (5630, 5630, "Firmware version incompatible"),
+    (5640, 5640, "MAC address error"),
+];
+
+/// The inverter's errors caused by a POWERLINK bus interface (E010, P700 in tenths): BU 2200
+/// §8.4 (p. 67).
+pub const POWERLINK_MODULE_E10: &[(u16, &str)] = &[
+    (100, "Connection error"),
+    (101, "Temperature too high"),
+    (102, "Timeout POWERLINK watchdog"),
+    (103, "Timeout by P151/P513"),
+    (104, "IP address error"),
+    (105, "Internal error"),
+    (106, "Bus cable fault"),
+    (108, "Connection error timeout (SK TU3-POL)"),
+    (
+        109,
+        "Connection error timeout between inverter and bus interface (SK CU4/TU4-POL)",
+    ),
+];
+
+/// The meaning of a module's P170 error (tenths).
+pub fn module_error(p170: u16) -> Option<&'static str> {
+    MODULE_ERRORS
+        .iter()
+        .find(|(lo, hi, _)| (*lo..=*hi).contains(&p170))
+        .map(|(_, _, t)| *t)
+}
+
 /// DS-301 error group of a code (§5.4.1.2 "Error Groups").
 pub fn error_group(code: u16) -> &'static str {
     if code == 0xFF00 || code >= 0xFF00 {
@@ -371,5 +444,30 @@ mod tests {
         assert_eq!(e.p700, 103);
         assert_eq!(profinet_alarm(e.p700), 359);
         assert_eq!(profinet_alarm(LOST_INVERTER), 1256);
+    }
+
+    #[test]
+    fn the_modules_have_four_more_rows() {
+        // BU 2200 §8.3.2: 25.2 → 7332h, 25.4 → 7334h, 14.2 → 8612h, 13.6 → 8711h, register 1.
+        for (p700, code) in [(252, 0x7332), (254, 0x7334), (142, 0x8612), (136, 0x8711)] {
+            let e = powerlink_error_of(Product::Tu4Pol, p700).unwrap();
+            assert_eq!((e.code, e.register), (code, 1), "P700 {p700}");
+            assert!(powerlink_error_of(Product::Sk550p, p700).is_none());
+        }
+        // The shared rows are the same.
+        assert_eq!(
+            powerlink_error_of(Product::Cu4Pol, 30).unwrap().code,
+            0x2310
+        );
+    }
+
+    #[test]
+    fn module_errors_in_tenths() {
+        // BU 2200 §8.4: 102.0 bus timeout, 561.3 IP address twice; 560.x internal.
+        assert_eq!(module_error(1020), Some("Bus timeout P151"));
+        assert_eq!(module_error(5613), Some("IP address error"));
+        assert_eq!(module_error(5601), Some("Internal error"));
+        assert_eq!(module_error(5610), Some("General network error"));
+        assert_eq!(module_error(5620), None);
     }
 }

@@ -169,7 +169,6 @@ const fn module(p: ParamDef, products: &'static [Product]) -> ParamDef {
 }
 
 const EIP_ALL: &[Product] = &[Product::Tu3Eip, Product::Tu4Eip, Product::Cu4Eip];
-const EIP_TU4_CU4: &[Product] = &[Product::Tu4Eip, Product::Cu4Eip];
 const POL_ALL: &[Product] = &[Product::Tu3Pol, Product::Tu4Pol, Product::Cu4Pol];
 const PNT: &[Product] = &[Product::Tu3Pnt];
 const POL_TU4_CU4: &[Product] = &[Product::Tu4Pol, Product::Cu4Pol];
@@ -239,11 +238,11 @@ pub const CATALOGUE: &[ParamDef] = &[
     iface(ro(array(inv(874, "Process data bus Out", 0, 0xFFFF, 0, 0, "BU 0620 §4.3: [-01] status word, [-02]..[-06] actual values of FI 1; six elements per FI up to [-48] for FI 8"), 48))),
     iface(ro(array(inv(879, "PPO Type", 0, 255, 3, 0, "BU 0620 §4.4.3 (PROFINET): [-01]..[-08] FI 1..8; 3 = empty slot, 6 PPO3, 7 PPO4, 8 PPO6, 9 PPO1, 10 PPO2. Under EtherNet/IP (§4.4.1) P879 is \"Active Assembly\": [-01] setpoints, [-02] actual values"), 8))),
     iface(inv(899, "Changing the bus protocol", 0, 4, 0, 0, "BU 0620 §4.2: 0…4, factory 0")),
-    module(inv(150, "Set relay", 0, 4, 0, 0, "BU 2100 §7.1.1: 0…4, factory 0, SK TU4-EIP only"), &[Product::Tu4Eip]),
+    module(inv(150, "Set relay", 0, 4, 0, 0, "BU 2100 §7.1.1: 0…4, factory 0, SK TU4-EIP only; BU 2200 §7.1.1 (p. 48): the same on the SK TU4-POL only"), &[Product::Tu4Eip, Product::Tu4Pol]),
     module(inv(151, "Timeout for external bus", -1, 32767, 0, 0, "BU 2100 §7.1.1, BU 2200 §7: ms, factory 0; -1 = monitoring off (the printed range 0…32767 omits it)"), TU4_CU4),
     module(inv(152, "Factory setting", 0, 3, 0, 0, "BU 2100 §7.1.1, BU 2200 §7: 0…3, returns to 0 after loading"), EIP_POL_ALL),
     module(elements(inv(153, "Min. system bus cycle", 0, 250, 0, 0, "BU 2100 §7.1.1, BU 2200 §7: ms, [-01] TxSDO {10}, [-02] TxPDO {5}"), &[10, 5]), TU4_CU4),
-    module(array(inv(154, "TB-IO access", 0, 5, 0, 0, "BU 2100 §7.1.1: [-01] inputs, [-02] outputs, {0}"), 2), EIP_TU4_CU4),
+    module(array(inv(154, "TB-IO access", 0, 5, 0, 0, "BU 2100 §7.1.1, BU 2200 §7.1.1 (p. 49): [-01] inputs, [-02] outputs, {0}; SK TU4/CU4 only"), 2), TU4_CU4),
     module(elements(inv(160, "IP address", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 192.168.1.100"), IP_DEFAULT), EIP_ALL),
     module(elements(inv(161, "IP subnet mask", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 255.255.255.0"), MASK_DEFAULT), EIP_ALL),
     module(array(inv(164, "IP Gateway", 0, 255, 0, 0, "BU 2100 §7.1.2: factory 0.0.0.0"), 4), EIP_ALL),

@@ -13,12 +13,13 @@ use proto::epl::{
     MULTICAST_PRES,
 };
 use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
-use proto::nord::epl::{self as def, MappedWord, Slot};
+use proto::nord::epl::{self as def, Slot};
 use proto::nord::led::{self, Row};
 use proto::nord::nmt::PlState;
-use proto::nord::{ArrayElement, ParamNumber, Product, Protocol};
+use proto::nord::{ArrayElement, Inverter, ParamNumber, Product, Protocol};
 
-use super::od::{Context, Dictionary, Mapping, NodeVars, HISTORY_LEN};
+use super::mapping::PdoMap;
+use super::od::{Context, Dictionary, NodeVars, HISTORY_LEN};
 use super::sdo::{Peer, Server};
 use crate::device::Device;
 use crate::ecat::pdo::{self, ProcessWords};
@@ -111,8 +112,6 @@ pub struct Node {
     od: Dictionary,
     sdo: Server,
     words: ProcessWords,
-    rx_map: Vec<MappedWord>,
-    tx_map: Vec<MappedWord>,
     /// When the state was entered.
     since: Duration,
     last_soc: Option<Duration>,
@@ -152,14 +151,13 @@ impl Node {
                 basic_ethernet_us: def::BASIC_ETHERNET_TIMEOUT_US,
                 error_register: 0,
                 history: Vec::new(),
-                rx_mapping: Mapping::default_of(product, true),
-                tx_mapping: Mapping::default_of(product, false),
+                rx_map: PdoMap::fixed(product, true),
+                tx_map: PdoMap::fixed(product, false),
+                lost: 0,
             },
             od: Dictionary::new(product),
             sdo: Server::default(),
             words: ProcessWords::default(),
-            rx_map: def::process_map(product, true),
-            tx_map: def::process_map(product, false),
             since: Duration::ZERO,
             last_soc: None,
             error: false,
@@ -200,6 +198,13 @@ impl Node {
     /// Frames that were not POWERLINK the node could parse (ignored, as DS 301's DLL does).
     pub fn dropped(&self) -> u64 {
         self.dropped
+    }
+
+    /// FI `fi` drops off the system bus (switched off, cable cut): its parameter objects answer
+    /// 08000020h from now on (BU 2200 §5.2.4: an interface that cannot reach its inverter
+    /// "kann keine Daten im Gerät speichern und antwortet mit einem Fehler").
+    pub fn lose_inverter(&mut self, fi: Inverter) {
+        self.vars.lost |= 1 << (fi.get() - 1);
     }
 
     /// The simulated device.
@@ -305,12 +310,12 @@ impl Node {
     }
 
     /// Handles an SDO datagram from `from` on UDP port 3819; returns the datagrams to answer.
-    /// UDP is the only way in while the node is in Basic Ethernet (BU 0620 §2.4.4). In
-    /// Initialisation (NOT_ACTIVE) there is "no communication of process data and parameters"
-    /// (§2.4.4): the node only watches for POWERLINK frames, and drops the datagram.
+    /// UDP is the only way in while the node is in Basic Ethernet (BU 0620 §2.4.4).
     pub fn udp(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Vec<u8>> {
         self.timers(now);
         if self.vars.state == NmtState::NOT_ACTIVE {
+            // Initialisation: "Keine Prozessdaten- und Parameterkommunikation" (BU 2200 §6.2,
+            // BU 0620 §2.4.4); the node only watches for POWERLINK frames.
             self.dropped += 1;
             return Vec::new();
         }
@@ -375,11 +380,7 @@ impl Node {
             words: &self.words,
             vars: &mut self.vars,
         };
-        let answer = self.sdo.handle(peer, frame, &self.od, &mut cx);
-        // The MN may have rewritten the mapping (BU 0620 §2.4.5 dynamic mapping).
-        self.rx_map = self.vars.rx_mapping.words(self.product);
-        self.tx_map = self.vars.tx_mapping.words(self.product);
-        answer
+        self.sdo.handle(peer, frame, &self.od, &mut cx)
     }
 
     /// Enters `to`: resets pass through to NOT_ACTIVE (DS 301 NMT_GT2…GT8: the node
@@ -394,6 +395,10 @@ impl Node {
                 self.sdo.reset();
                 self.queued.clear();
                 self.last_soc = None;
+                // The communication profile area (1000h…1FFFh) returns to its power-on values
+                // (DS 301 NMT_GS_RESET_COMMUNICATION): the fixed mapping (BU 2200 §6.3.5).
+                self.vars.rx_map = PdoMap::fixed(self.product, true);
+                self.vars.tx_map = PdoMap::fixed(self.product, false);
                 if to != NmtState::RESET_COMMUNICATION {
                     // A reset of the application is the restart the manuals ask for after
                     // changing the addressing parameters ("so that the parameter settings
@@ -452,14 +457,14 @@ impl Node {
     fn outputs(&mut self, payload: &[u8], rd: bool, now: Duration) {
         let evaluate = self.vars.state == NmtState::OPERATIONAL
             && rd
-            && payload.len() >= 2 * self.rx_map.len();
+            && payload.len() >= 2 * self.vars.rx_map.words.len();
         if !evaluate {
             // Not evaluated: the PRes carries the inputs [`Node::poll`] refreshes.
             return;
         }
         let mut image = vec![0u8; 8 * 12];
         let mut io = None;
-        for (m, w) in self.rx_map.iter().zip(payload.chunks_exact(2)) {
+        for (m, w) in self.vars.rx_map.words.iter().zip(payload.chunks_exact(2)) {
             match m.slot {
                 Slot::Inverter { fi, word } => {
                     let at = usize::from(fi - 1) * 12 + usize::from(word) * 2;
@@ -488,11 +493,15 @@ impl Node {
                 s.set_info(175, 1, i32::from(word & 0x03));
             }
         }
+        // P150 1…4 overrides the bus (BU 2200 §7.1.1).
+        self.device.set_relays();
     }
 
     fn pres(&self) -> Vec<u8> {
         let payload: Vec<u8> = self
+            .vars
             .tx_map
+            .words
             .iter()
             .flat_map(|m| {
                 let w = match m.slot {
@@ -551,7 +560,14 @@ impl Node {
     /// The IdentResponse: identity of `proto::nord::epl`, the node's addresses.
     pub fn ident(&self) -> IdentResponse {
         let n = self.vars.node_id;
-        let bytes = |outputs| 2 * def::process_map(self.product, outputs).len() as u16;
+        let bytes = |outputs: bool| {
+            let map = if outputs {
+                &self.vars.rx_map
+            } else {
+                &self.vars.tx_map
+            };
+            2 * map.words.len() as u16
+        };
         IdentResponse {
             flags: self.flags(),
             state: self.vars.state,
@@ -607,6 +623,7 @@ impl Node {
             if let Ok(s) = self.device.store(Unit::Interface) {
                 s.set_info(170, 1, if valid { 0 } else { SET_CONFIG_ERROR });
             }
+            self.device.set_config_error(!valid);
         }
         self.show_identity();
     }
@@ -660,8 +677,9 @@ impl Node {
             if value == 0 {
                 continue;
             }
-            let (code, register) = proto::nord::errors::powerlink_error(value as u16)
-                .map_or((0x1000, 1), |e| (e.code, e.register));
+            let (code, register) =
+                proto::nord::errors::powerlink_error_of(self.product, value as u16)
+                    .map_or((0x1000, 1), |e| (e.code, e.register));
             let text = format!(
                 "{}{:>7}",
                 fi.get(),

@@ -180,7 +180,7 @@ fn basic_ethernet_and_loss_of_the_mn() {
 fn udp(n: &mut Node, seq: Seq, command: Option<Command>) -> SdoFrame {
     let from: SocketAddr = "192.168.100.240:3819".parse().unwrap();
     let d = SdoFrame { seq, command }.emit_udp().unwrap();
-    let out = n.udp(from, &d, ms(5_010));
+    let out = n.udp(from, &d, ms(10));
     SdoFrame::parse(SdoFrame::strip_udp(&out[0]).unwrap()).unwrap()
 }
 
@@ -196,9 +196,8 @@ fn seq(ssnr: u8, scon: Con) -> Seq {
 #[test]
 fn sdo_over_udp_reads_writes_and_refuses() {
     let mut n = node(Product::Sk550p);
-    // No POWERLINK frame within 1F99h (5 s): Basic Ethernet, parameters over UDP only.
-    n.poll(ms(5_000));
-    assert_eq!(n.state(), NmtState::BASIC_ETHERNET);
+    // Out of Initialisation, where the node does not answer (BU 2200 §6.2).
+    n.receive(&soa(RequestedService::NO_SERVICE), ms(1));
     let init = udp(&mut n, seq(5, Con::Init), None);
     assert_eq!(
         (init.seq.rcon, init.seq.scon, init.seq.rsnr),
@@ -254,17 +253,76 @@ fn sdo_over_udp_reads_writes_and_refuses() {
 }
 
 #[test]
-fn initialisation_answers_no_udp_sdo() {
-    // BU 0620 §2.4.4 Initialisation: "No communication of process data and parameters".
-    let mut n = node(Product::Sk550p);
+fn no_parameter_communication_during_initialisation() {
+    // BU 2200 §6.2 Initialisation: "Keine Prozessdaten- und Parameterkommunikation".
+    let mut n = node(Product::Tu3Pol);
     assert_eq!(n.state(), NmtState::NOT_ACTIVE);
     let from: SocketAddr = "192.168.100.240:3819".parse().unwrap();
     let d = SdoFrame {
-        seq: seq(5, Con::Init),
+        seq: seq(0, Con::Init),
         command: None,
     }
     .emit_udp()
     .unwrap();
     assert!(n.udp(from, &d, ms(10)).is_empty());
-    assert_eq!(n.state(), NmtState::NOT_ACTIVE);
+    // Out of it (Pre-Operational 1 after an SoA) the same datagram is answered.
+    n.receive(&soa(RequestedService::NO_SERVICE), ms(11));
+    assert_eq!(n.udp(from, &d, ms(12)).len(), 1);
+}
+
+#[test]
+fn a_lost_inverter_answers_08000020h() {
+    // BU 2200 §5.2.4 / §6.4.1: no connection between bus interface and FI.
+    let mut n = node(Product::Tu3Pol);
+    n.receive(&soa(RequestedService::NO_SERVICE), ms(1));
+    udp(&mut n, seq(5, Con::Init), None);
+    n.lose_inverter(proto::nord::Inverter::new(2).unwrap());
+    // FI 2's P102 (3066h) cannot be stored; FI 1's (2866h) still can.
+    let w = udp(
+        &mut n,
+        seq(6, Con::Valid),
+        Some(Command::write_by_index(1, 0x3066, 1, &300i16.to_le_bytes())),
+    );
+    assert_eq!(w.command.unwrap().abort_code(), Some(0x0800_0020));
+    let w = udp(
+        &mut n,
+        seq(7, Con::Valid),
+        Some(Command::write_by_index(2, 0x2866, 1, &300i16.to_le_bytes())),
+    );
+    assert_eq!(w.command.unwrap().abort_code(), None);
+}
+
+#[test]
+fn the_mapping_is_the_mns_to_configure_in_pre_operational_only() {
+    // BU 0620 §2.4.5 / BU 2200 §6.3.6: the SK 550P and the SK TU3-POL map dynamically while the
+    // MN configures them; from Ready To Operate on the mapping stays (08000022h). The SK
+    // TU4-POL's mapping is static: its mapping objects are read-only (06010002h).
+    let off = |product, state| {
+        let mut n = node(product);
+        boot(&mut n, state);
+        assert_eq!(n.state(), state);
+        udp(&mut n, seq(5, Con::Init), None);
+        let w = udp(
+            &mut n,
+            seq(6, Con::Valid),
+            Some(Command::write_by_index(1, 0x1A00, 0, &[0])),
+        );
+        w.command.unwrap().abort_code()
+    };
+    for product in [Product::Sk550p, Product::Tu3Pol] {
+        assert_eq!(
+            off(product, NmtState::PRE_OPERATIONAL_2),
+            None,
+            "{product:?}"
+        );
+        assert_eq!(
+            off(product, NmtState::READY_TO_OPERATE),
+            Some(0x0800_0022),
+            "{product:?}"
+        );
+    }
+    assert_eq!(
+        off(Product::Tu4Pol, NmtState::PRE_OPERATIONAL_2),
+        Some(0x0601_0002)
+    );
 }

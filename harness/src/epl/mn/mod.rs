@@ -142,6 +142,19 @@ pub(crate) struct Received {
     pub(crate) bytes: Vec<u8>,
     /// The kernel's receive stamp, on a network link.
     pub(crate) stamp: Option<Duration>,
+    /// The Ethernet frame it came in (none over UDP).
+    pub(crate) ether: Option<Ether>,
+}
+
+/// The Ethernet frame around a node's POWERLINK frame (BU 2200 §3.3 figure 6).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Ether {
+    /// Destination address (multicast for SoC, PRes, SoA and ASnd; §3.3 table).
+    pub(crate) dst: MacAddr,
+    /// EtherType (88ABh).
+    pub(crate) ethertype: u16,
+    /// Frame length without the FCS, padding included.
+    pub(crate) len: usize,
 }
 
 /// The managing node of one controlled node.
@@ -376,7 +389,17 @@ impl<L: Link> Manager<L> {
                 None if bytes.get(2) != Some(&self.config.node) => continue,
                 None => {}
             }
-            return Ok(Some(Received { repr, bytes, stamp }));
+            let ether = Some(Ether {
+                dst: eth.dst(),
+                ethertype: eth.ethertype(),
+                len: frame.len(),
+            });
+            return Ok(Some(Received {
+                repr,
+                bytes,
+                stamp,
+                ether,
+            }));
         }
         Ok(None)
     }
@@ -787,6 +810,7 @@ impl<L: Link> Manager<L> {
                 repr: None,
                 bytes: d.clone(),
                 stamp: None,
+                ether: None,
             };
             if self.recording {
                 self.exchanges.push(Exchange {
