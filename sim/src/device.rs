@@ -37,6 +37,10 @@ const P700: ParamNumber = match ParamNumber::new(700) {
     Ok(p) => p,
     Err(_) => panic!("in range"),
 };
+const P701: ParamNumber = match ParamNumber::new(701) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
 const P899: ParamNumber = match ParamNumber::new(899) {
     Ok(p) => p,
     Err(_) => panic!("in range"),
@@ -173,6 +177,9 @@ struct InverterUnit {
     last_process: Option<Duration>,
     /// The words P740/P741 show, so that an unchanged cycle writes no parameter.
     shown: Option<([u16; 6], [u16; 6])>,
+    /// The extended code (P700 [-04]) of an error whose cause names one row of several with
+    /// the same P700 number (BU 0620 §5.3).
+    extended: Option<(FaultCode, u16)>,
 }
 
 impl InverterUnit {
@@ -218,12 +225,31 @@ impl InverterUnit {
     }
 
     /// P700 [-01] shows the present error as soon as it is raised, not only with the next
-    /// process data.
+    /// process data, and [-04] its extended code ("DS402: Extended error number", BU 0620
+    /// §5.3: E10.3 → 7592h; E10.5 of a refused protocol change → 7598h). A new error goes to
+    /// P701 "Last error" [-01], the older ones one element down (BU 0620 §4.5, §5.3: "Error
+    /// messages … are depicted with parameters P700 and P701").
     fn show_fault(&mut self) {
         let code = self.drive.fault().or(self.drive.pending_fault());
-        self.params
-            .store
-            .set_info(700, 1, code.map_or(0, |f| i32::from(f.p700())));
+        let p700 = code.map_or(0, FaultCode::p700);
+        let store = &mut self.params.store;
+        let element = |e: i64| proto::nord::ArrayElement::new(e).ok();
+        let shown = store.read(P700, None, element(1)).unwrap_or(0);
+        if p700 != 0 && i32::from(p700) != shown {
+            let last: Vec<i32> = (1..=4)
+                .map(|e| store.read(P701, None, element(e)).unwrap_or(0))
+                .collect();
+            for (e, v) in (2..).zip(last) {
+                store.set_info(701, e, v);
+            }
+            store.set_info(701, 1, i32::from(p700));
+        }
+        let extended = match self.extended {
+            Some((c, x)) if Some(c) == code => x,
+            _ => proto::nord::errors::extended_code(p700),
+        };
+        store.set_info(700, 1, i32::from(p700));
+        store.set_info(700, 4, i32::from(extended));
     }
 }
 
@@ -255,15 +281,29 @@ impl Device {
     /// A device in its power-on state.
     pub fn new(config: DeviceConfig) -> Device {
         let count = config.inverters.clamp(1, 8);
-        let inverters = (1..=count)
+        let mut inverters: Vec<InverterUnit> = (1..=count)
             .filter_map(|n| Inverter::new(i64::from(n)).ok())
             .map(|i| InverterUnit {
                 params: ParamChannel::new(ParamStore::new(config.product, Target::Inverter(i))),
                 drive: Drive::new(),
                 last_process: None,
                 shown: None,
+                extended: None,
             })
             .collect();
+        // The XU5 extension of the SK 550P (BU 0620 §4.5, p. 91): FI 1 carries the Industrial
+        // Ethernet interface (P744 [-02] = 2 "Industrial Ethernet present", P746 [-03] = 1
+        // "Ready", P745 [-07]/[-08] the interface software V 1.1 R1 of §1.1.2); the further
+        // SK 5x0P on the system bus have none (P744 [-02] = 0 "No extension present").
+        if config.product == Product::Sk550p {
+            if let Some(fi1) = inverters.first_mut() {
+                let store = &mut fi1.params.store;
+                store.set_info(744, 2, 2);
+                store.set_info(745, 7, 11);
+                store.set_info(745, 8, 1);
+                store.set_info(746, 3, 1);
+            }
+        }
         let mut interface = ParamChannel::new(ParamStore::new(config.product, Target::Interface));
         // P172 "Configuration level" (BU 2100 §7.1.3, BU 0590 §5.1.3, BU 2200 §7.1.3): 0 CU4,
         // 1 TU4, 2 TU3 (the simulated TU3 modules have no DIP-switch addressing: never 3).
@@ -390,6 +430,8 @@ impl Device {
         if busy {
             if let Some(fi1) = self.inverters.first_mut() {
                 fi1.drive.inject_fault(E10_5);
+                // "Condition for change of field bus protocol not present" (BU 0620 §5.3).
+                fi1.extended = Some((E10_5, 0x7598));
             }
         } else {
             self.interface.store.set_info(870, 1, wanted);
@@ -734,6 +776,34 @@ mod tests {
         store
             .read(ParamNumber::new(number).unwrap(), None, element)
             .unwrap()
+    }
+
+    fn read_fi(d: &mut Device, fi: i64, number: i64, element: i64) -> i32 {
+        let store = d.store(Unit::Inverter(Inverter::new(fi).unwrap())).unwrap();
+        let element = proto::nord::ArrayElement::new(element).ok();
+        store
+            .read(ParamNumber::new(number).unwrap(), None, element)
+            .unwrap()
+    }
+
+    #[test]
+    fn p700_extended_code_and_p701_last_error() {
+        let mut d = Device::new(DeviceConfig::new(Product::Sk550p));
+        let fi1 = Inverter::new(1).unwrap();
+        d.inject_fault(fi1, "10.3").unwrap();
+        assert_eq!(read_fi(&mut d, 1, 700, 1), 103);
+        assert_eq!(read_fi(&mut d, 1, 700, 4), 0x7592, "BU 0620 §5.3");
+        assert_eq!(read_fi(&mut d, 1, 701, 1), 103);
+        d.inject_fault(Inverter::new(2).unwrap(), "3.0").unwrap();
+        assert_eq!(read_fi(&mut d, 2, 700, 4), 0x2310, "§5.4.1.2 code");
+        // The XU5 extension: FI 1 has the Industrial Ethernet interface, FI 2 none.
+        assert_eq!(read_fi(&mut d, 1, 744, 2), 2);
+        assert_eq!(read_fi(&mut d, 2, 744, 2), 0);
+        assert_eq!(read_fi(&mut d, 1, 746, 3), 1);
+        assert_eq!(
+            (read_fi(&mut d, 1, 745, 7), read_fi(&mut d, 1, 745, 8)),
+            (11, 1)
+        );
     }
 
     #[test]
