@@ -235,7 +235,11 @@ impl InverterUnit {
         let store = &mut self.params.store;
         let element = |e: i64| proto::nord::ArrayElement::new(e).ok();
         let shown = store.read(P700, None, element(1)).unwrap_or(0);
-        if p700 != 0 && i32::from(p700) != shown {
+        if i32::from(p700) == shown {
+            // Runs every bus cycle for every inverter: nothing to do while the error stays.
+            return;
+        }
+        if p700 != 0 {
             let last: Vec<i32> = (1..=4)
                 .map(|e| store.read(P701, None, element(e)).unwrap_or(0))
                 .collect();
