@@ -13,7 +13,7 @@
 
 use proto::nord::pkw::PkwRepr;
 use proto::nord::ppo::{PpoRepr, PpoType};
-use proto::nord::{led, ArrayElement, Inverter, ParamNumber, Product};
+use proto::nord::{led, Inverter, ParamNumber, Product};
 use std::time::Duration;
 
 use crate::bus_status::{self, BusFlags};
@@ -48,6 +48,14 @@ const P170: ParamNumber = match ParamNumber::new(170) {
 const P700: ParamNumber = match ParamNumber::new(700) {
     Ok(p) => p,
     Err(_) => panic!("in range"),
+};
+const P701: ParamNumber = match ParamNumber::new(701) {
+    Ok(p) => p,
+    Err(_) => panic!("in range"),
+};
+const P870: ParamNumber = match ParamNumber::new(870) {
+    Ok(n) => n,
+    Err(_) => panic!("P870"),
 };
 const P899: ParamNumber = match ParamNumber::new(899) {
     Ok(p) => p,
@@ -218,6 +226,9 @@ struct InverterUnit {
     last_process: Option<Duration>,
     /// The words P740/P741 show, so that an unchanged cycle writes no parameter.
     shown: Option<([u16; 6], [u16; 6])>,
+    /// The extended code (P700 [-04]) of an error whose cause names one row of several with
+    /// the same P700 number (BU 0620 §5.3).
+    extended: Option<(FaultCode, u16)>,
 }
 
 impl InverterUnit {
@@ -263,33 +274,35 @@ impl InverterUnit {
     }
 
     /// P700 [-01] shows the present error as soon as it is raised, not only with the next
-    /// process data.
+    /// process data, and [-04] its extended code ("DS402: Extended error number", BU 0620
+    /// §5.3: E10.3 → 7592h; E10.5 of a refused protocol change → 7598h). A new error goes to
+    /// P701 "Last error" [-01], the older ones one element down (BU 0620 §4.5, §5.3: "Error
+    /// messages … are depicted with parameters P700 and P701").
     fn show_fault(&mut self) {
         let code = self.drive.fault().or(self.drive.pending_fault());
-        let value = code.map_or(0, |f| i32::from(f.p700()));
+        let p700 = code.map_or(0, FaultCode::p700);
         let store = &mut self.params.store;
-        let before = ParamNumber::new(700)
-            .ok()
-            .and_then(|n| store.read(n, None, ArrayElement::new(1).ok()).ok());
-        store.set_info(700, 1, value);
-        // The error memory P701 "Last error" [-01]…[-05] (BU 0590 §6.2: the error "is
-        // permanently stored in the FI error statistics"; BU 0620 §5: P700 and P701), newest
-        // first, where the unit has it.
-        if value != 0 && before != Some(value) {
-            if let Ok(p701) = ParamNumber::new(701) {
-                let last: Vec<i32> = (1..=4)
-                    .map(|e| {
-                        store
-                            .read(p701, None, ArrayElement::new(e).ok())
-                            .unwrap_or(0)
-                    })
-                    .collect();
-                store.set_info(701, 1, value);
-                for (e, v) in (2..).zip(last) {
-                    store.set_info(701, e, v);
-                }
-            }
+        let element = |e: i64| proto::nord::ArrayElement::new(e).ok();
+        let shown = store.read(P700, None, element(1)).unwrap_or(0);
+        if i32::from(p700) == shown {
+            // Runs every bus cycle for every inverter: nothing to do while the error stays.
+            return;
         }
+        if p700 != 0 {
+            let last: Vec<i32> = (1..=4)
+                .map(|e| store.read(P701, None, element(e)).unwrap_or(0))
+                .collect();
+            for (e, v) in (2..).zip(last) {
+                store.set_info(701, e, v);
+            }
+            store.set_info(701, 1, i32::from(p700));
+        }
+        let extended = match self.extended {
+            Some((c, x)) if Some(c) == code => x,
+            _ => proto::nord::errors::extended_code(p700),
+        };
+        store.set_info(700, 1, i32::from(p700));
+        store.set_info(700, 4, i32::from(extended));
     }
 }
 
@@ -325,15 +338,29 @@ impl Device {
     /// A device in its power-on state.
     pub fn new(config: DeviceConfig) -> Device {
         let count = config.inverters.clamp(1, 8);
-        let inverters = (1..=count)
+        let mut inverters: Vec<InverterUnit> = (1..=count)
             .filter_map(|n| Inverter::new(i64::from(n)).ok())
             .map(|i| InverterUnit {
                 params: ParamChannel::new(ParamStore::new(config.product, Target::Inverter(i))),
                 drive: Drive::new(),
                 last_process: None,
                 shown: None,
+                extended: None,
             })
             .collect();
+        // The XU5 extension of the SK 550P (BU 0620 §4.5, p. 91): FI 1 carries the Industrial
+        // Ethernet interface (P744 [-02] = 2 "Industrial Ethernet present", P746 [-03] = 1
+        // "Ready", P745 [-07]/[-08] the interface software V 1.1 R1 of §1.1.2); the further
+        // SK 5x0P on the system bus have none (P744 [-02] = 0 "No extension present").
+        if config.product == Product::Sk550p {
+            if let Some(fi1) = inverters.first_mut() {
+                let store = &mut fi1.params.store;
+                store.set_info(744, 2, 2);
+                store.set_info(745, 7, 11);
+                store.set_info(745, 8, 1);
+                store.set_info(746, 3, 1);
+            }
+        }
         let mut interface = ParamChannel::new(ParamStore::new(config.product, Target::Interface));
         // P172 "Configuration level" (BU 2100 §7.1.3, BU 0590 §5.1.3, BU 2200 §7.1.3): 0 CU4,
         // 1 TU4, 2 TU3 (the simulated TU3 modules have no DIP-switch addressing: never 3).
@@ -522,6 +549,8 @@ impl Device {
         if busy {
             if let Some(fi1) = self.inverters.first_mut() {
                 fi1.drive.inject_fault(E10_5);
+                // "Condition for change of field bus protocol not present" (BU 0620 §5.3).
+                fi1.extended = Some((E10_5, 0x7598));
             }
         } else {
             self.interface.store.set_info(870, 1, wanted);
@@ -569,8 +598,7 @@ impl Device {
         match unit {
             Unit::Interface => {
                 let answer = self.interface.cycle(order, delay, product, unit);
-                self.adopt_gateway(&order, &answer);
-                self.adopt_address_and_mask(&order, &answer);
+                self.adopt_ip_settings(&order, &answer);
                 Ok(answer)
             }
             Unit::Inverter(i) => {
@@ -582,90 +610,40 @@ impl Device {
         }
     }
 
-    /// P877 "Present IP gateway" (BU 0620 §4.4.3, p. 88) shows the gateway set in P852 once it
-    /// is saved, which happens when element [-04] is written (§4.2.4 P852, p. 83: "this is only
-    /// saved after a value is entered in the index [-04]").
-    fn adopt_gateway(&mut self, order: &PkwRepr, answer: &PkwRepr) {
+    /// The present IP settings show a saved one: P877 "Present IP gateway" the gateway of P852
+    /// (BU 0620 §4.4.3, p. 88), and under PROFINET IO (P870 = 1) P875 / P876 the address and
+    /// mask of P850 / P851 (§3.8.1 p. 72) — once element [-04] is written, which saves them
+    /// (§4.2.4 p. 82–83: "only saved after a value is entered in the index [-04]"; the store
+    /// keeps [-01]…[-03] until then, and corrects or refuses a mask that does not conform).
+    fn adopt_ip_settings(&mut self, order: &PkwRepr, answer: &PkwRepr) {
         let label = proto::nord::pkw::OrderLabel(order.ak);
         let written = label.is_array()
             && label != proto::nord::pkw::OrderLabel::REQUEST_ARRAY_VALUE
             && answer.ak != 0
             && answer.ak != proto::nord::pkw::ResponseLabel::CANNOT_EXECUTE.0;
-        let p852 = matches!(order.pnu, 852 | 1852);
-        if !(written && p852 && proto::nord::pkw::Ind(order.ind).subindex() == 3) {
+        if !(written && proto::nord::pkw::Ind(order.ind).subindex() == 3) {
             return;
         }
         let store = &mut self.interface.store;
-        let Ok(n) = ParamNumber::new(852) else {
-            return;
-        };
-        for e in 1..=4u8 {
-            let element = proto::nord::ArrayElement::new(i64::from(e)).ok();
-            if let Ok(v) = store.read(n, None, element) {
-                store.set_info(877, e, v);
-            }
-        }
-    }
-
-    /// Under PROFINET IO (P870 = 1) P850 IP address and P851 sub-net mask are saved when
-    /// element [-04] is entered, and P875 / P876 then show them (BU 0620 §3.8.1 p. 72, §4.2.4
-    /// P850/P851 p. 82: "only saved after a value is entered in the array element [-04]"). An
-    /// address that does not conform with the mask in P851 corrects the mask; a mask that
-    /// does not conform with the address in P850 is not saved (P851 returns to the saved
-    /// mask). "Conforms": [`proto::nord::pnio::mask_conforms`] (contiguous, no shorter
-    /// than the address's class mask, the reading BU 0590's P161 example gives).
-    fn adopt_address_and_mask(&mut self, order: &PkwRepr, answer: &PkwRepr) {
-        use proto::nord::pnio::{corrected_mask, mask_conforms, BUS_PROTOCOL_CODE};
-        use std::net::Ipv4Addr;
-        let label = proto::nord::pkw::OrderLabel(order.ak);
-        let written = label.is_array()
-            && label != proto::nord::pkw::OrderLabel::REQUEST_ARRAY_VALUE
-            && answer.ak != 0
-            && answer.ak != proto::nord::pkw::ResponseLabel::CANNOT_EXECUTE.0;
-        let param = match order.pnu {
-            850 | 1850 => 850,
-            851 | 1851 => 851,
+        let profinet = store
+            .read(P870, None, None)
+            .is_ok_and(|p| p == i32::from(proto::nord::pnio::BUS_PROTOCOL_CODE));
+        let shown: &[(u16, u16)] = match order.pnu {
+            852 | 1852 => &[(852, 877)],
+            850 | 1850 if profinet => &[(850, 875), (851, 876)],
+            851 | 1851 if profinet => &[(851, 876)],
             _ => return,
         };
-        let store = &mut self.interface.store;
-        let profinet = ParamNumber::new(870)
-            .ok()
-            .and_then(|n| store.read(n, None, None).ok())
-            == Some(i32::from(BUS_PROTOCOL_CODE));
-        if !(self.config.product == Product::Sk550p
-            && profinet
-            && written
-            && proto::nord::pkw::Ind(order.ind).subindex() == 3)
-        {
-            return;
-        }
-        let read4 = |store: &ParamStore, number: i64| -> Option<Ipv4Addr> {
-            let n = ParamNumber::new(number).ok()?;
-            let mut b = [0u8; 4];
-            for (e, slot) in (1..=4i64).zip(b.iter_mut()) {
-                let element = proto::nord::ArrayElement::new(e).ok();
-                *slot = u8::try_from(store.read(n, None, element).ok()?).ok()?;
-            }
-            Some(Ipv4Addr::from(b))
-        };
-        let write4 = |store: &mut ParamStore, numbers: &[u16], value: Ipv4Addr| {
-            for &number in numbers {
-                for (e, b) in (1..=4u8).zip(value.octets()) {
-                    store.set_info(number, e, i32::from(b));
+        for &(from, to) in shown {
+            let Ok(n) = ParamNumber::new(i64::from(from)) else {
+                continue;
+            };
+            for e in 1..=4u8 {
+                let element = proto::nord::ArrayElement::new(i64::from(e)).ok();
+                if let Ok(v) = store.read(n, None, element) {
+                    store.set_info(to, e, v);
                 }
             }
-        };
-        let (Some(ip), Some(mask)) = (read4(store, 850), read4(store, 851)) else {
-            return;
-        };
-        if param == 850 {
-            write4(store, &[875], ip);
-            let mask = corrected_mask(ip, mask);
-            write4(store, &[851, 876], mask);
-        } else if mask_conforms(ip, mask) {
-            write4(store, &[876], mask);
-        } else if let Some(saved) = read4(store, 876) {
-            write4(store, &[851], saved);
         }
     }
 
@@ -977,6 +955,34 @@ mod tests {
         store
             .read(ParamNumber::new(number).unwrap(), None, element)
             .unwrap()
+    }
+
+    fn read_fi(d: &mut Device, fi: i64, number: i64, element: i64) -> i32 {
+        let store = d.store(Unit::Inverter(Inverter::new(fi).unwrap())).unwrap();
+        let element = proto::nord::ArrayElement::new(element).ok();
+        store
+            .read(ParamNumber::new(number).unwrap(), None, element)
+            .unwrap()
+    }
+
+    #[test]
+    fn p700_extended_code_and_p701_last_error() {
+        let mut d = Device::new(DeviceConfig::new(Product::Sk550p));
+        let fi1 = Inverter::new(1).unwrap();
+        d.inject_fault(fi1, "10.3").unwrap();
+        assert_eq!(read_fi(&mut d, 1, 700, 1), 103);
+        assert_eq!(read_fi(&mut d, 1, 700, 4), 0x7592, "BU 0620 §5.3");
+        assert_eq!(read_fi(&mut d, 1, 701, 1), 103);
+        d.inject_fault(Inverter::new(2).unwrap(), "3.0").unwrap();
+        assert_eq!(read_fi(&mut d, 2, 700, 4), 0x2310, "§5.4.1.2 code");
+        // The XU5 extension: FI 1 has the Industrial Ethernet interface, FI 2 none.
+        assert_eq!(read_fi(&mut d, 1, 744, 2), 2);
+        assert_eq!(read_fi(&mut d, 2, 744, 2), 0);
+        assert_eq!(read_fi(&mut d, 1, 746, 3), 1);
+        assert_eq!(
+            (read_fi(&mut d, 1, 745, 7), read_fi(&mut d, 1, 745, 8)),
+            (11, 1)
+        );
     }
 
     #[test]

@@ -233,6 +233,7 @@ impl Drive {
         let max_hz = f64::from(params.get(105, None).unwrap_or(DEFAULT_MAX_FREQUENCY)) / 10.0;
 
         self.automatic_transitions(now);
+        self.auto_acknowledge(params, now);
         if control.valid() {
             self.evaluate(control, now);
             let functions = setpoint_functions(params);
@@ -262,6 +263,21 @@ impl Drive {
         }
         if now.saturating_sub(self.entered) >= FAULT_REACTION {
             self.take_automatic(14, now);
+        }
+    }
+
+    /// P506 "Auto. Acknowledge Error" (BU 0620 §5.2): when activated (not 0), an error is
+    /// acknowledged without the bus once its reaction is complete — transition 15 from
+    /// "Fault" to "Switch-on block", as the acknowledge edge of control bit 7 takes it.
+    fn auto_acknowledge(&mut self, params: &dyn DriveParams, now: Duration) {
+        if self.state == State::Fault && params.get(506, None).unwrap_or(0) != 0 {
+            if let Some(t) = state_machine::TRANSITIONS
+                .iter()
+                .find(|t| t.number == 15 && t.from.contains(&State::Fault))
+            {
+                self.fault = None;
+                self.take(t, now);
+            }
         }
     }
 
@@ -544,6 +560,27 @@ mod tests {
         d.cycle(0x0480, &[], &Example, ms(84));
         assert_eq!(d.state(), State::SwitchOnBlock);
         assert_eq!(d.fault(), None);
+    }
+
+    #[test]
+    fn p506_acknowledges_automatically() {
+        struct AutoAck;
+        impl DriveParams for AutoAck {
+            fn get(&self, number: u16, element: Option<u8>) -> Option<i32> {
+                match number {
+                    506 => Some(1),
+                    _ => Example.get(number, element),
+                }
+            }
+        }
+        let mut d = Drive::new();
+        d.cycle(0x047E, &[], &AutoAck, ms(40));
+        d.inject_fault("3.0".parse().unwrap());
+        d.cycle(0x047E, &[], &AutoAck, ms(44));
+        assert_eq!(d.state(), State::ErrorReactionActive);
+        // After the reaction (14) P506 takes transition 15; 047Eh then shuts down (2).
+        d.cycle(0x047E, &[], &AutoAck, ms(80));
+        assert_eq!((d.state(), d.fault()), (State::ReadyForSwitchOn, None));
     }
 
     #[test]

@@ -66,6 +66,29 @@ pub struct ParamStore {
     eeprom_writes: u64,
     /// SK TU3-PNT: the IP address P160 and mask P161 last saved (`None`: the factory's).
     saved_ip: Option<[[i32; 4]; 2]>,
+    /// Elements [-01]..[-03] of P850/P851/P852 entered under PROFINET IO and not saved yet
+    /// (see [`ParamStore::write`]): (number, element index 0..2) → value.
+    entered: BTreeMap<(u16, u8), i32>,
+}
+
+/// The SK 550P's IP parameters whose new value PROFINET IO saves only once element [-04] is
+/// entered (BU 0620 §3.8.1 p. 72, §4.2.4 p. 82–83: P850 IP address, P851 sub-net mask, P852
+/// gateway).
+const IP_PARAMETERS: [u16; 3] = [850, 851, 852];
+/// P870 "Present bus protocol" 1 = PROFINET IO (BU 0620 §4.3).
+const PROFINET_IO: i32 = 1;
+
+/// Whether `ip` with `mask` is an IP setting the interface saves: a host address of its
+/// network (`proto::nord::pnio::check_ip_suite`: not the network or broadcast address, no
+/// loopback) under a mask that conforms with it (`mask_conforms`: contiguous, no shorter than
+/// the address's class mask — the reading BU 0590's P161 example gives).
+fn conforms(ip: [u8; 4], mask: [u8; 4]) -> bool {
+    let suite = IpSuite {
+        ip: ip.into(),
+        mask: mask.into(),
+        gateway: std::net::Ipv4Addr::UNSPECIFIED,
+    };
+    pnio::check_ip_suite(&suite).is_ok() && pnio::mask_conforms(ip.into(), mask.into())
 }
 
 impl ParamStore {
@@ -81,6 +104,7 @@ impl ParamStore {
             values: BTreeMap::new(),
             eeprom_writes: 0,
             saved_ip: None,
+            entered: BTreeMap::new(),
         }
     }
 
@@ -158,6 +182,9 @@ impl ParamStore {
             }
             return Ok(());
         }
+        if self.profinet_ip(def.number) {
+            return self.enter_ip(key, value, persist);
+        }
         self.values.insert(key, value);
         // P560 itself is always saved, so that the choice outlives a power-off.
         if persist == Persist::Eeprom && (def.number == SAVE_IN_EEPROM || self.saves_to_eeprom()) {
@@ -204,14 +231,8 @@ impl ParamStore {
             .unwrap_or([self.factory_ip(160), self.factory_ip(161)]);
         let (ip, mut mask) = (self.ip_values(160), self.ip_values(161));
         let addr = |o: [i32; 4]| std::net::Ipv4Addr::from(o.map(|b| b as u8));
-        let conforms = |ip, mask| {
-            let suite = IpSuite {
-                ip: addr(ip),
-                mask: addr(mask),
-                gateway: std::net::Ipv4Addr::UNSPECIFIED,
-            };
-            pnio::check_ip_suite(&suite).is_ok() && pnio::mask_conforms(addr(ip), addr(mask))
-        };
+        let conforms =
+            |ip: [i32; 4], mask: [i32; 4]| conforms(ip.map(|b| b as u8), mask.map(|b| b as u8));
         let ok = if ip == [0; 4] {
             mask = [0; 4];
             true
@@ -266,6 +287,74 @@ impl ParamStore {
             .ok()
             .and_then(|n| self.read(n, None, None).ok())
             .is_none_or(|v| v != 0)
+    }
+
+    /// Whether `number` is an IP parameter of the SK 550P's interface under PROFINET IO.
+    fn profinet_ip(&self, number: u16) -> bool {
+        self.owner == Owner::Interface
+            && self.product == Product::Sk550p
+            && IP_PARAMETERS.contains(&number)
+            && self.values.get(&(870, 0, 0)) == Some(&PROFINET_IO)
+    }
+
+    /// The four elements of an IP parameter as stored.
+    fn ip4(&self, number: u16) -> [u8; 4] {
+        let def = ParamNumber::new(i64::from(number))
+            .ok()
+            .and_then(|n| self.def(n));
+        std::array::from_fn(|i| {
+            let value = self
+                .values
+                .get(&(number, 0, i as u8))
+                .copied()
+                .unwrap_or_else(|| def.map_or(0, |d| params::element_default(d, i as u8 + 1)));
+            u8::try_from(value).unwrap_or(0)
+        })
+    }
+
+    /// PROFINET IO (BU 0620 §4.2.4, §3.8.1): a new IP address, sub-net mask or gateway "is
+    /// only saved after a value is entered in the element [-04]" — elements [-01]..[-03] are
+    /// held until then. On [-04] the new address is saved and a mask it does not conform with
+    /// is corrected (to the class mask); a new mask that does not conform with the address
+    /// in P850 is not saved.
+    fn enter_ip(
+        &mut self,
+        key: (u16, u8, u8),
+        value: i32,
+        persist: Persist,
+    ) -> Result<(), AccessError> {
+        let (number, _, element) = key;
+        if element < 3 {
+            self.entered.insert((number, element), value);
+            return Ok(());
+        }
+        let mut new = self.ip4(number);
+        for (i, b) in new.iter_mut().enumerate().take(3) {
+            if let Some(v) = self.entered.remove(&(number, i as u8)) {
+                *b = u8::try_from(v).unwrap_or(0);
+            }
+        }
+        new[3] = u8::try_from(value).unwrap_or(0);
+        let mut save = vec![(number, new)];
+        match number {
+            850 if !conforms(new, self.ip4(851)) => {
+                // "The IP sub-net mask is corrected automatically": to the address's class.
+                if let Some(mask) = pnio::class_mask(new.into()) {
+                    save.push((851, mask.octets()));
+                }
+            }
+            851 if !conforms(self.ip4(850), new) => return Ok(()),
+            _ => {}
+        }
+        for (n, bytes) in save {
+            for (i, b) in bytes.iter().enumerate() {
+                self.values.insert((n, 0, i as u8), i32::from(*b));
+            }
+        }
+        if persist == Persist::Eeprom {
+            self.eeprom_writes += 1;
+        }
+        Ok(())
     }
 
     /// Elements of an array parameter.
@@ -407,6 +496,48 @@ mod tests {
         w(&mut s, 160, 4, 7);
         assert_eq!(s.eeprom_writes(), 2);
         assert_eq!(s.read(n(161), None, e(3)), Ok(255));
+    }
+
+    #[test]
+    fn profinet_saves_ip_parameters_with_element_4() {
+        let e = |i: i64| ArrayElement::new(i).ok();
+        let mut s = ParamStore::new(Product::Sk550p, Target::Interface);
+        for (i, b) in [192, 168, 20, 200].into_iter().enumerate() {
+            s.set_info(850, i as u8 + 1, b);
+        }
+        // Not under PROFINET: every element is saved at once.
+        s.write(n(852), None, e(1), 10, Persist::Eeprom).unwrap();
+        assert_eq!(s.read(n(852), None, e(1)), Ok(10));
+        s.set_info(870, 1, PROFINET_IO);
+        s.write(n(852), None, e(1), 192, Persist::Eeprom).unwrap();
+        assert_eq!(s.read(n(852), None, e(1)), Ok(10), "held until [-04]");
+        s.write(n(852), None, e(4), 1, Persist::Eeprom).unwrap();
+        assert_eq!(s.read(n(852), None, e(1)), Ok(192));
+        // A mask the address is no host of is not saved: 192.168.20.200 under /30 is 200 & 3 = 0.
+        s.write(n(851), None, e(4), 252, Persist::Eeprom).unwrap();
+        assert_eq!(s.read(n(851), None, e(4)), Ok(0));
+        // An address the mask does not fit (10.0.0.255 is a broadcast under /24): corrected.
+        for (i, b) in [10, 0, 0, 255].into_iter().enumerate() {
+            s.write(n(850), None, e(i as i64 + 1), b, Persist::Eeprom)
+                .unwrap();
+        }
+        assert_eq!(s.read(n(850), None, e(1)), Ok(10));
+        assert_eq!(
+            (1..=4)
+                .map(|i| s.read(n(851), None, e(i)).unwrap())
+                .collect::<Vec<_>>(),
+            [255, 0, 0, 0]
+        );
+    }
+
+    #[rstest::rstest]
+    #[case([192, 168, 20, 200], [255, 255, 255, 0], true)]
+    #[case([192, 168, 20, 0], [255, 255, 255, 0], false)]
+    #[case([192, 168, 20, 255], [255, 255, 255, 0], false)]
+    #[case([192, 168, 20, 200], [255, 0, 255, 0], false)]
+    #[case([10, 0, 0, 255], [255, 0, 0, 0], true)]
+    fn conformance(#[case] ip: [u8; 4], #[case] mask: [u8; 4], #[case] ok: bool) {
+        assert_eq!(conforms(ip, mask), ok);
     }
 
     #[test]

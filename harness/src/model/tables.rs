@@ -138,19 +138,27 @@ fn ethercat_nmt(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
 }
 
 fn powerlink_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    if a.raw_present("code") {
+        // The rows of one DS-301 code (§5.4.1.2), e.g. 1000h with no P700 number.
+        let code = a.int("code")? as u16;
+        let rows: Vec<Value> = errors::powerlink_rows(code)
+            .map(|e| json!({ "register": e.register, "p700": e.p700, "text": e.text }))
+            .collect();
+        return Ok(json!({ "code": code, "group": errors::error_group(code), "rows": rows }));
+    }
     let p700 = a.int("p700")? as u16;
-    // `manual: "BU 2200"`: the POWERLINK modules' table (§8.3.2); else BU 0620 §5.4.1.2's.
-    let product = match a.opt_str("manual")? {
-        None | Some("BU 0620") => proto::nord::Product::Sk550p,
-        Some("BU 2200") => proto::nord::Product::Tu3Pol,
-        Some(m) => {
-            return Err(bad(
-                "manual",
-                format!("`{m}` has no POWERLINK error table (BU 0620, BU 2200)"),
-            ))
-        }
-    };
-    let e = errors::powerlink_error_of(product, p700).ok_or_else(|| {
+    // `manual:` names the table's manual: BU 0620 §5.4.1.2 or BU 2200 §8.3.2, which print the
+    // same 44 rows.
+    if let Some(m) = a
+        .opt_str("manual")?
+        .filter(|m| !matches!(*m, "BU 0620" | "BU 2200"))
+    {
+        return Err(bad(
+            "manual",
+            format!("`{m}` has no POWERLINK error table (BU 0620, BU 2200)"),
+        ));
+    }
+    let e = errors::powerlink_error(p700).ok_or_else(|| {
         ComputeError::Refused(format!(
             "P700 {p700} has no POWERLINK error code in BU 0620 §5.4.1.2 (BU 2200 §8.3.2)"
         ))
@@ -287,8 +295,20 @@ pub(super) const FNS: &[ComputeFn] = &[
         },
     },
     ComputeFn {
+        name: "tables.bus_protocol",
+        doc: "What a P899 / P870 value means (BU 0620 §3.3, §4.1, §4.3)",
+        run: |_: &Ctx, a: &Args| {
+            let value = a.int("value")?;
+            let (_, p899, p870) = proto::nord::product::BUS_PROTOCOL_VALUES
+                .iter()
+                .find(|(v, _, _)| i64::from(*v) == value)
+                .ok_or_else(|| ComputeError::Refused(format!("{value} is not in 0…4")))?;
+            Ok(json!({ "p899": p899, "p870": p870 }))
+        },
+    },
+    ComputeFn {
         name: "tables.powerlink_error",
-        doc: "POWERLINK error code and register of a P700 error (BU 0620 §5.4.1.2; `manual: BU 2200`: the modules' §8.3.2)",
+        doc: "POWERLINK error code and register of a P700 error, or (`code`) the rows of a code (BU 0620 §5.4.1.2; `manual: BU 2200`: §8.3.2, the same table)",
         run: powerlink_error,
     },
     ComputeFn {

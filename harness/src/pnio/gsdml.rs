@@ -403,7 +403,8 @@ fn error_name(p700: u16) -> String {
 /// §5.3 (where one row names the error) or §5.4.1.2, the lost inverter, the module error.
 fn diagnosis(product: Product, texts: &mut Texts) -> Vec<Diag> {
     let mut errors: BTreeMap<u16, String> = BTreeMap::new();
-    for row in POWERLINK_ERRORS {
+    // Rows that print no meaning (7332h, 7334h, 8612h, 8711h) give no diagnosis text.
+    for row in POWERLINK_ERRORS.iter().filter(|r| !r.text.is_empty()) {
         for &(lo, hi) in row.p700 {
             for p700 in (lo..=hi).filter(|&v| v > 0) {
                 errors.entry(p700).or_insert_with(|| row.text.to_string());

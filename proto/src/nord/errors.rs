@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use super::product::{Product, Protocol};
+use super::product::Protocol;
 
 /// A communication error as P700 [-01] shows it and its DS402 extended code (P700 [-04]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -228,9 +228,22 @@ const fn pl(code: u16, register: u8, p700: &'static [(u16, u16)], text: &'static
     }
 }
 
-/// §5.4.1.2 table (rows without a P700 number are left out).
+/// §5.4.1.2 table. The first row prints "1000h, error index 0, P700 0: No error"; the table's
+/// own error groups ("00xxh No error", "10xxh Undefined error type") and CiA 301's emergency
+/// error codes (0000h "error reset or no error", 1000h "generic error") say no error is
+/// 0000h, so the row is kept as 0000h (the case `tables-error-rows/no-error-is-0000h` records
+/// the printed value). The second 1000h row (error index 1) has no P700 number: the error
+/// must be read from P700. Rows 7332h, 7334h, 8612h and 8711h print no meaning of their own:
+/// the meaning stands in a cell merged with the row above (the extractions of BU 0620 and of
+/// BU 2200 §8.3.2, whose table is row for row the same, place it between the two rows).
 pub const POWERLINK_ERRORS: &[PlError] = &[
-    pl(0x1000, 0, &[(0, 0)], "No error"),
+    pl(0x0000, 0, &[(0, 0)], "No error"),
+    pl(
+        0x1000,
+        1,
+        &[],
+        "The error number must be read out via parameter P700 or an actual value.",
+    ),
     pl(
         0x2200,
         3,
@@ -289,7 +302,14 @@ pub const POWERLINK_ERRORS: &[PlError] = &[
         &[(251, 251)],
         "Universal encoder communication error",
     ),
+    pl(
+        0x7332,
+        1,
+        &[(252, 252)],
+        "Universal encoder communication error",
+    ),
     pl(0x7333, 1, &[(253, 253)], "Universal encoder error"),
+    pl(0x7334, 1, &[(254, 254)], "Universal encoder error"),
     pl(0x8100, 17, &[(100, 102)], "Bus timeout"),
     pl(
         0x8111,
@@ -300,7 +320,9 @@ pub const POWERLINK_ERRORS: &[PlError] = &[
     pl(0x8300, 1, &[(132, 132)], "Slip error switch-off monitoring"),
     pl(0x8400, 1, &[(131, 131)], "Speed slip error"),
     pl(0x8600, 1, &[(140, 141)], "Reference point error"),
+    pl(0x8612, 1, &[(142, 142)], "Reference point error"),
     pl(0x8710, 1, &[(135, 135)], "Acceleration path error"),
+    pl(0x8711, 1, &[(136, 136)], "Acceleration path error"),
     pl(0x9000, 1, &[(120, 122)], "External watchdog"),
     pl(0xFF10, 129, &[(180, 180)], "Reserved"),
     pl(0xFF11, 129, &[(190, 190)], "Connected motor not identified"),
@@ -313,33 +335,21 @@ pub fn powerlink_error(p700: u16) -> Option<&'static PlError> {
         .find(|e| e.p700.iter().any(|(lo, hi)| (*lo..=*hi).contains(&p700)))
 }
 
-/// BU 2200 §8.3.2 (p. 66): four rows of the allocation table that BU 0620 §5.4.1.2 prints without
-/// a P700 number carry one in the POWERLINK modules' manual.
-/// Its first row "Kein Fehler" is printed as 1000h, register 0; the manual's own error groups
-/// (00xxh "Kein Fehler", 10xxh "Nicht definierter Fehlertyp") and DS 301 give 0000h.
-pub const MODULE_POWERLINK_ERRORS: &[PlError] = &[
-    pl(0x0000, 0, &[(0, 0)], "No error"),
-    pl(
-        0x7332,
-        1,
-        &[(252, 252)],
-        "Universal encoder communication error",
-    ),
-    pl(0x7334, 1, &[(254, 254)], "Universal encoder error"),
-    pl(0x8612, 1, &[(142, 142)], "Reference point error"),
-    pl(0x8711, 1, &[(136, 136)], "Acceleration path error"),
-];
+/// The rows of a DS-301 error code.
+pub fn powerlink_rows(code: u16) -> impl Iterator<Item = &'static PlError> {
+    POWERLINK_ERRORS.iter().filter(move |e| e.code == code)
+}
 
-/// The POWERLINK error code and register a unit of `product` reports for a P700 error: the
-/// SK TU3/TU4/CU4-POL by BU 2200 §8.3.2 (BU 0620 §5.4.1.2's rows and [`MODULE_POWERLINK_ERRORS`]),
-/// the SK 550P by BU 0620 §5.4.1.2.
-pub fn powerlink_error_of(product: Product, p700: u16) -> Option<&'static PlError> {
-    let module = matches!(product, Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol);
-    MODULE_POWERLINK_ERRORS
+/// The extended error P700 [-04] shows for a present error (tenths): the DS402 code of
+/// §5.3's table ("DS402: Extended error number", its first row where several share the
+/// P700 number), else the error's code of §5.4.1.2's allocation table, else 0.
+pub fn extended_code(p700: u16) -> u16 {
+    COMM_ERRORS
         .iter()
-        .filter(|_| module)
-        .find(|e| e.p700.iter().any(|(lo, hi)| (*lo..=*hi).contains(&p700)))
-        .or_else(|| powerlink_error(p700))
+        .find(|e| e.p700 == p700)
+        .map(|e| e.ds402)
+        .or_else(|| powerlink_error(p700).map(|e| e.code))
+        .unwrap_or(0)
 }
 
 /// The bus interface's own errors in P170 of the modules, in tenths (102.0 → 1020), with their
@@ -436,6 +446,33 @@ mod tests {
         assert_eq!(powerlink_error(999), None);
         assert_eq!(error_group(0x8111), "Communication");
         assert_eq!(error_group(0xFF11), "Specific to device");
+        // The rows that print no meaning, and no error as 0000h (CiA 301: 00xxh).
+        for (p700, code) in [(252, 0x7332), (254, 0x7334), (142, 0x8612), (136, 0x8711)] {
+            assert_eq!(
+                powerlink_error(p700).map(|e| (e.code, e.register)),
+                Some((code, 1))
+            );
+        }
+        assert_eq!(
+            powerlink_error(0).map(|e| (e.code, e.register)),
+            Some((0, 0))
+        );
+        assert_eq!(
+            powerlink_rows(0x1000)
+                .map(|e| e.register)
+                .collect::<Vec<_>>(),
+            [1]
+        );
+    }
+
+    #[test]
+    fn extended_codes_of_p700() {
+        assert_eq!(extended_code(103), 0x7592);
+        assert_eq!(extended_code(102), 0x7591);
+        assert_eq!(extended_code(105), 0x7594);
+        assert_eq!(extended_code(30), 0x2310);
+        assert_eq!(extended_code(0), 0);
+        assert_eq!(extended_code(999), 0);
     }
 
     #[test]
@@ -444,21 +481,6 @@ mod tests {
         assert_eq!(e.p700, 103);
         assert_eq!(profinet_alarm(e.p700), 359);
         assert_eq!(profinet_alarm(LOST_INVERTER), 1256);
-    }
-
-    #[test]
-    fn the_modules_have_four_more_rows() {
-        // BU 2200 §8.3.2: 25.2 → 7332h, 25.4 → 7334h, 14.2 → 8612h, 13.6 → 8711h, register 1.
-        for (p700, code) in [(252, 0x7332), (254, 0x7334), (142, 0x8612), (136, 0x8711)] {
-            let e = powerlink_error_of(Product::Tu4Pol, p700).unwrap();
-            assert_eq!((e.code, e.register), (code, 1), "P700 {p700}");
-            assert!(powerlink_error_of(Product::Sk550p, p700).is_none());
-        }
-        // The shared rows are the same.
-        assert_eq!(
-            powerlink_error_of(Product::Cu4Pol, 30).unwrap().code,
-            0x2310
-        );
     }
 
     #[test]

@@ -49,6 +49,13 @@ pub enum Pattern {
     },
     /// Green and red alternately (power up, self test).
     FlashingGreenRed,
+    /// Green and red alternately at `tenths_hz` / 10 Hz (the "DEV" LED's warning, §5.5.1.1).
+    AlternatingGreenRed {
+        /// Frequency in 0.1 Hz.
+        tenths_hz: u16,
+    },
+    /// Green and red flashing together (the "DEV" LED while update data are communicated).
+    SimultaneousGreenRed,
 }
 
 /// One row of an LED table.
@@ -65,7 +72,9 @@ const fn row(pattern: Pattern, meaning: &'static str) -> Row {
     Row { pattern, meaning }
 }
 
-/// "DEV" LED (§5.5.1.1), the rows the simulator can show.
+/// "DEV" LED (§5.5.1.1): the rows the simulator shows ([`dev`]), then the warning and update
+/// rows (the simulator has no warnings and no update mode). "Flashing red (2 Hz/1 Hz)", the
+/// error number, is [`Pattern::ErrorCode`], made by [`dev`].
 pub const DEV: &[Row] = &[
     row(
         Pattern::Off,
@@ -79,6 +88,12 @@ pub const DEV: &[Row] = &[
     row(
         Pattern::FlashingGreen { tenths_hz: 5 },
         "FI is in standby but not enabled",
+    ),
+    row(Pattern::AlternatingGreenRed { tenths_hz: 40 }, "Warning"),
+    row(Pattern::FlashingGreenRed, "FI in Update mode"),
+    row(
+        Pattern::SimultaneousGreenRed,
+        "Update data are communicated",
     ),
 ];
 

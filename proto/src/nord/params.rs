@@ -158,6 +158,14 @@ const fn only(p: ParamDef, products: &'static [Product]) -> ParamDef {
     ParamDef { products, ..p }
 }
 
+/// An inverter parameter only the SK 550P's inverters have (BU 0620 §4.5: the XU5 extension).
+const fn integrated(p: ParamDef) -> ParamDef {
+    ParamDef {
+        family: Some(Family::Integrated),
+        ..p
+    }
+}
+
 /// A bus-module parameter of the listed products (BU 2100 §7.1 "Bus interface" rows).
 const fn module(p: ParamDef, products: &'static [Product]) -> ParamDef {
     ParamDef {
@@ -208,8 +216,10 @@ pub const CATALOGUE: &[ParamDef] = &[
     only(ro(array(inv(701, "Last error", 0, 9999, 0, 1, "BU 0590 §6.2 (p. 44): the error 'is permanently stored in the FI error statistics'; BU 0620 §4.5 / BU 2100 §7.2 name P701 'Last error'; [-01]..[-05] newest first assumed from BU 0500"), 5)), PNT),
     only(ro(inv(745, "Module version", 0, 9999, 0, 1, "BU 0590 §5.2.2 (p. 43): 0.0…999.9, the technology unit's software version")), PNT),
     only(ro(inv(746, "Module status", 0, 0xFFFF, 0, 0, "BU 0590 §5.2.2 (p. 43): 0000…FFFFh, readiness, error and communication of the technology unit")), PNT),
+    array(inv(120, "Option monitoring", 0, 2, 1, 0, "BU 0620 §3.9 step 7 (p. 74): [-01] 1 (Auto) or 2 (monitoring active immediately) for the system bus; 0 = off, factory 1 and 4 elements assumed from BU 0600"), 4),
+    inv(506, "Auto. Acknowledge Error", 0, 7, 0, 0, "BU 0620 §5.2 (p. 93): activating P506 acknowledges errors automatically; 0 = off (factory) and range 0…7 assumed from BU 0600, any other value acknowledges (BU 0600's count of acknowledgements per mains-on is not modelled)"),
     inv(509, "Control word source", 0, 10, 0, 0, "BU 0620 §4.5: 8 = Ethernet (FI 1), 6 = CANopen (further FIs)"),
-    inv(510, "Setpoint source", 0, 10, 0, 0, "BU 0620 §4.5: 8 = Ethernet, 6 = CANopen"),
+    array(inv(510, "Setpoint source", 0, 10, 0, 0, "BU 0620 §4.5: 8 = Ethernet, 6 = CANopen; §3.9 step 5 (p. 74): elements [-01] and [-02], 0 = Auto"), 2),
     array(inv(513, "Telegram timeout time", -1, 3200, 0, 1, "BU 0620 §4.5: [-03] CANopen, [-04] Ethernet, factory Off (0)"), 4),
     inv(514, "CAN baud rate", 0, 7, 5, 0, "BU 0620 §4.5: 5 = 250 kBaud"),
     array(inv(515, "CAN address", 0, 255, 32, 0, "BU 0620 §4.5: [-01] system bus address 32 (further FIs 34, 36, …)"), 3),
@@ -217,9 +227,15 @@ pub const CATALOGUE: &[ParamDef] = &[
     elements(inv(546, "Function bus setpoint", 0, 60, 0, 0, "BU 0620 §6.1.2.4/§6.1.3: [-01]..[-05], [-01] = 1 setpoint frequency"), &[1, 0, 0, 0, 0]),
     inv(560, "Save in EEPROM", 0, 1, 1, 0, "BU 0620 §2.5.6 (RAM-only saving via P560); 1 = save assumed default"),
     ro(array(inv(700, "Present operating status", 0, 0xFFFF, 0, 0, "BU 0620 §5.3: [-01] present error (10.3 shown as 103)"), 4)),
+    dword(inv(615, "Maximum position", -5_000_000, 5_000_000, 0, 2, "BU 0620 §4 (p. 75): POSICON position values are communicated as double words; §6.1.2.4: positions range -50000.00…50000.00 rotations. The number P615 \"Maximum position\" and its factory 0 are assumed from the POSICON manual BU 0510")),
+    ro(array(inv(701, "Last error", 0, 0xFFFF, 0, 0, "BU 0620 §4.5 (p. 91), §5.3: the last error (as P700 shows it, 10.3 → 103); [-01] the latest, five elements assumed from BU 0600"), 5)),
+    ro(array(inv(707, "Software version", 0, 99999, 12, 1, "BU 0620 §7.1 (p. 119): the software version is shown in P707; [-01] version, [-02] revision, [-03] special version as the modules' P171; the value V 1.2 R0 is assumed (BU 0620 prints none for the inverter)"), 3)),
     ro(inv(717, "Current speed", -32768, 32767, 0, 0, "BU 0620 §2.5.6.4: read example, 1020 (03FCh)")),
     ro(array(inv(740, "PZD bus in", 0, 0xFFFF, 0, 0, "BU 0620 §4.5: control word and setpoints as received"), 6)),
     ro(array(inv(741, "PZD bus out", 0, 0xFFFF, 0, 0, "BU 0620 §4.5: status word and actual values as sent"), 6)),
+    integrated(ro(array(inv(744, "Configuration", 0, 0xFFFF, 0, 0, "BU 0620 §4.5 (p. 91): [-02] XU5 type: 0 no extension present, 1 reserved, 2 Industrial Ethernet present (the SK 550P's FI 1); [-01] not printed"), 2))),
+    integrated(ro(array(inv(745, "Module version", 0, 99999, 0, 0, "BU 0620 §4.5 (p. 91): [-07] XU5 version, [-08] revision, [-09] special version, [-10] stack 1, [-11] stack 2; [-01]..[-06] not printed; FI 1 shows the interface software V 1.1 R1 of §1.1.2 as 11 and 1"), 11))),
+    integrated(ro(array(inv(746, "Module status", 0, 0xFFFF, 0, 0, "BU 0620 §4.5 (p. 91): [-03] XU5 status: 0 not ready, 1 ready; [-01]/[-02] not printed"), 3))),
     iface(elements(inv(850, "IP address", 0, 255, 0, 0, "BU 0620 §4.2.2: [-01]..[-04], factory 192.168.1.100"), IP_DEFAULT)),
     iface(elements(inv(851, "IP sub-net mask", 0, 255, 0, 0, "BU 0620 §4.2.2: factory 255.255.255.0"), MASK_DEFAULT)),
     iface(array(inv(852, "IP Gateway", 0, 255, 0, 0, "BU 0620 §4.2.2: factory 0.0.0.0"), 4)),
@@ -427,6 +443,26 @@ mod tests {
     ) {
         let d = lookup(product, Owner::Interface, p(number)).unwrap();
         assert_eq!((d.min, d.max, d.default), (min, max, default));
+    }
+
+    #[test]
+    fn inverter_parameters_of_chapters_4_to_7() {
+        // BU 0620 §3.9 step 7, §4.5, §5.2, §7.1.
+        let fi = |n| lookup(Product::Sk550p, Owner::Inverter, p(n)).unwrap();
+        assert_eq!((fi(120).array, fi(120).min, fi(120).max), (Some(4), 0, 2));
+        assert_eq!(fi(506).access, Access::ReadWrite);
+        assert_eq!(
+            (fi(701).access, fi(707).access),
+            (Access::ReadOnly, Access::ReadOnly)
+        );
+        assert_eq!(
+            (fi(744).array, fi(745).array, fi(746).array),
+            (Some(2), Some(11), Some(3))
+        );
+        // The XU5 extension parameters are the SK 550P's only.
+        assert!(lookup(Product::Tu3Eip, Owner::Inverter, p(744)).is_none());
+        // §4: position values (POSICON) are double words.
+        assert_eq!((fi(615).width, fi(102).width), (Width::Dword, Width::Word));
     }
 
     #[test]

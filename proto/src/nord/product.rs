@@ -31,6 +31,16 @@ impl Protocol {
     ];
 }
 
+/// The values of P899 "Changing the bus protocol" and P870 "Present bus protocol" of the
+/// SK 550P (BU 0620 §3.3, §4.1 p. 76, §4.3 p. 84): value, P899's meaning, P870's meaning.
+pub const BUS_PROTOCOL_VALUES: [(u8, &str, &str); 5] = [
+    (0, "No action", "No bus system active"),
+    (1, "PROFINET IO", "PROFINET IO"),
+    (2, "EtherCAT", "EtherCAT"),
+    (3, "Ethernet/IP", "Ethernet/IP"),
+    (4, "Powerlink", "Powerlink"),
+];
+
 /// Product family: the parameter numbering scheme follows it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

@@ -66,6 +66,9 @@ pub struct Adapter {
     /// keeps it in non-volatile memory.
     inactivity_timeout: u16,
     conns: connections::Table,
+    /// The gateway read in at power-on (P852 / P164, BU 0620 §4.2.2: "After setting, restart
+    /// … so that the parameter setting is read in"), as TCP/IP Interface attribute 5 shows it.
+    gateway: [u8; 4],
     /// Frames that could not be understood, per kind (for diagnostics and tests).
     dropped: u64,
 }
@@ -98,6 +101,7 @@ impl Adapter {
             max_sessions: MAX_SESSIONS,
             inactivity_timeout: DEFAULT_INACTIVITY_TIMEOUT,
             conns: connections::Table::default(),
+            gateway: [0; 4],
             dropped: 0,
         };
         objects::power_on(&mut a);

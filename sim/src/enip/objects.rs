@@ -100,9 +100,11 @@ pub(super) fn power_on(a: &mut Adapter) {
     for (i, b) in mac.iter().enumerate() {
         store.set_info(p.mac, i as u8 + 1, i32::from(*b));
     }
+    let gateway = read4(store, p.gateway);
     for e in 1..=2 {
         store.set_info(p.active_assembly, e, 0);
     }
+    a.gateway = gateway;
 }
 
 /// Shows the active assemblies (P879 / P180: [-01] consumed, [-02] produced).
@@ -296,6 +298,7 @@ fn tcp_ip(a: &mut Adapter, req: &MrRequest) -> MrResponse {
     }
     let p = ip_params(a.product());
     let inactivity_timeout = a.inactivity_timeout;
+    let gateway = a.gateway;
     if Service(req.service) == Service::SET_ATTRIBUTE_SINGLE && req.path.attribute_id() == Some(13)
     {
         return set_inactivity_timeout(a, req);
@@ -317,7 +320,7 @@ fn tcp_ip(a: &mut Adapter, req: &MrRequest) -> MrResponse {
                 5 => {
                     let mut v = ipv4(read4(store, p.present_address));
                     v.extend(ipv4(read4(store, p.present_mask)));
-                    v.extend(ipv4(read4(store, p.gateway)));
+                    v.extend(ipv4(gateway));
                     v.extend([0; 8]);
                     v.extend([0, 0]);
                     v

@@ -677,9 +677,8 @@ impl Node {
             if value == 0 {
                 continue;
             }
-            let (code, register) =
-                proto::nord::errors::powerlink_error_of(self.product, value as u16)
-                    .map_or((0x1000, 1), |e| (e.code, e.register));
+            let (code, register) = proto::nord::errors::powerlink_error(value as u16)
+                .map_or((0x1000, 1), |e| (e.code, e.register));
             let text = format!(
                 "{}{:>7}",
                 fi.get(),
