@@ -230,6 +230,21 @@ pub(super) const FNS: &[ComputeFn] = &[
         run: led_table,
     },
     ComputeFn {
+        name: "tables.eip_identity",
+        doc: "EtherNet/IP identity of the product: product code, name, revision, EDS file (BU 2100 §5.2.1)",
+        run: |c: &Ctx, _: &Args| {
+            let id = proto::nord::eip::identity(c.product).ok_or_else(|| {
+                ComputeError::Refused(format!("{} has no EtherNet/IP interface", c.product.name()))
+            })?;
+            Ok(json!({
+                "product_code": id.product_code,
+                "name": id.name,
+                "revision": format!("{}.{}", id.revision.0, id.revision.1),
+                "eds_file": id.eds_file,
+            }))
+        },
+    },
+    ComputeFn {
         name: "tables.device_name",
         doc: "Checks a PROFINET device name against the rules (BU 0620 §3.8.1, P854)",
         run: |_: &Ctx, a: &Args| {

@@ -480,12 +480,18 @@ fn apply_outputs(a: &mut Adapter, asm: &Assembly, data: &[u8], run: bool, now: D
         // Idle (PLC in program mode) counts as an invalid control word (bit 10 clear).
         let control = if run { control } else { 0 };
         if let Ok(out) = a.device.process(fi, control, setpoints, now) {
+            // P176/P177 show what the master sent and what went back (BU 2100 §7.1.3).
+            a.device.show_process_data(fi, None, &words, &out);
             let dst = &mut a.conns.inputs[n - 1];
             *dst = [0; WORDS_PER_INVERTER];
             for (d, s) in dst.iter_mut().zip(out) {
                 *d = s;
             }
         }
+    }
+    // The interface word of 110 sets the SK xU4-EIP's outputs (BU 2100 §6.2.1, p. 32).
+    if let (true, Some([lo, hi])) = (asm.io_word, data.get(..2)) {
+        a.device.set_module_outputs(u16::from_le_bytes([*lo, *hi]));
     }
     match a.conns.outputs.iter_mut().find(|(i, _)| *i == asm.instance) {
         Some((_, d)) => *d = data.to_vec(),

@@ -149,7 +149,13 @@ pub(super) fn request(
         },
         Some(class::TCP_IP) => tcp_ip(a, &req),
         Some(class::ETHERNET_LINK) => ethernet_link(a, &req),
-        Some(c @ 100..=108) => parameter(a, c, &req),
+        Some(class::DLR) => dlr(&req),
+        Some(c @ 100..=108) => {
+            let r = parameter(a, c, &req);
+            // What a written parameter sets in motion shows at once (P150 → P175).
+            a.device.tick(now);
+            r
+        }
         _ => MrResponse::error(s, GS::PATH_DESTINATION_UNKNOWN),
     }
 }
@@ -249,14 +255,39 @@ fn identity(a: &mut Adapter, req: &MrRequest) -> MrResponse {
 }
 
 /// The object classes the message router knows (attribute 1 of instance 1).
-const OBJECTS: [u16; 6] = [
+const OBJECTS: [u16; 7] = [
     class::IDENTITY,
     class::MESSAGE_ROUTER,
     class::ASSEMBLY,
     class::CONNECTION_MANAGER,
     class::TCP_IP,
     class::ETHERNET_LINK,
+    class::DLR,
 ];
+
+/// Device Level Ring object (47h), instance 1, of a ring node that is no supervisor (BU 2100
+/// §3.1 and BU 0620 §2.3.1 "Supported functions: UCMM, DLR"; attributes as OpENer's DLR
+/// object for a non-supervisor device: 1 network topology, 2 network status). The simulated
+/// adapter has one port and no ring: linear topology, status normal.
+fn dlr(req: &MrRequest) -> MrResponse {
+    if let Some(r) = class_attribute(req, 3) {
+        return r;
+    }
+    if !instance_one(req) {
+        return MrResponse::error(req.service, GS::PATH_DESTINATION_UNKNOWN);
+    }
+    match Service(req.service) {
+        Service::GET_ATTRIBUTE_SINGLE => get_single(req, |attr| match attr {
+            // Network topology: 0 linear, 1 ring.
+            1 => Some(vec![0]),
+            // Network status: 0 normal.
+            2 => Some(vec![0]),
+            _ => None,
+        }),
+        Service::SET_ATTRIBUTE_SINGLE => MrResponse::error(req.service, GS::ATTRIBUTE_NOT_SETTABLE),
+        _ => MrResponse::error(req.service, GS::SERVICE_NOT_SUPPORTED),
+    }
+}
 
 fn message_router(req: &MrRequest) -> MrResponse {
     if let Some(r) = class_attribute(req, 1) {
