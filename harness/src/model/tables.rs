@@ -230,6 +230,18 @@ pub(super) const FNS: &[ComputeFn] = &[
         run: led_table,
     },
     ComputeFn {
+        name: "tables.tu3_update_cycle",
+        doc: "Process-data update cycle of an SK TU3-EIP over the system bus per inverter count, µs (BU 2100 §4.3)",
+        run: |_: &Ctx, a: &Args| {
+            let n = a.int("inverters")?;
+            let us = u8::try_from(n)
+                .ok()
+                .and_then(proto::nord::eip::tu3_update_cycle_us)
+                .ok_or_else(|| bad("inverters", format!("{n}: an SK TU3-EIP takes 1…8")))?;
+            Ok(json!({ "us": us }))
+        },
+    },
+    ComputeFn {
         name: "tables.eip_identity",
         doc: "EtherNet/IP identity of the product: product code, name, revision, EDS file (BU 2100 §5.2.1)",
         run: |c: &Ctx, _: &Args| {
