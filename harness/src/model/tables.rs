@@ -242,6 +242,30 @@ pub(super) const FNS: &[ComputeFn] = &[
         },
     },
     ComputeFn {
+        name: "tables.ethernet_frame",
+        doc: "The Ethernet II frame a bus travels in: EtherType, data 46…1500 bytes, frame 64…1518 bytes with FCS (IEEE 802.3; BU 2100 §3.3)",
+        run: |_: &Ctx, a: &Args| {
+            use proto::eth;
+            let protocol = a.str("protocol")?;
+            let ethertype = match protocol {
+                // EtherNet/IP: TCP and UDP over IPv4.
+                "enip" => eth::ETHERTYPE_IPV4,
+                "ecat" => eth::ETHERTYPE_ECAT,
+                "powerlink" => eth::ETHERTYPE_POWERLINK,
+                "profinet" => eth::ETHERTYPE_PROFINET,
+                other => return Err(bad("protocol", format!("`{other}`: enip, ecat, powerlink or profinet"))),
+            };
+            let fcs = 4;
+            Ok(json!({
+                "ethertype": ethertype,
+                "min_data": eth::MIN_FRAME_LEN - eth::HEADER_LEN,
+                "max_data": eth::MAX_FRAME_LEN - eth::HEADER_LEN,
+                "min_frame": eth::MIN_FRAME_LEN + fcs,
+                "llc": false,
+            }))
+        },
+    },
+    ComputeFn {
         name: "tables.eip_identity",
         doc: "EtherNet/IP identity of the product: product code, name, revision, EDS file (BU 2100 §5.2.1)",
         run: |c: &Ctx, _: &Args| {
