@@ -65,13 +65,12 @@ pub(crate) fn status_parameters(
             )),
             Some((170, 1, if f.telegram_timeout { 1020 } else { 0 })),
         ],
-        // The SK xU4 modules' P173 has no array: element 2 is ignored by their store.
-        Product::Tu3Pol
-        | Product::Tu4Pol
-        | Product::Cu4Pol
-        | Product::Tu3Eip
-        | Product::Tu4Eip
-        | Product::Cu4Eip => [
+        Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => [
+            Some((173, 1, low | online_pairs(f.online, 4, 8))),
+            Some((173, 2, online_pairs(f.online, 8, 0))),
+        ],
+        // The SK xU4-EIP's P173 has no array: element 2 is ignored by their store.
+        Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => [
             Some((173, 1, low | online_pairs(f.online, 4, 8))),
             Some((173, 2, online_pairs(f.online, 8, 0))),
         ],

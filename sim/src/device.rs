@@ -61,9 +61,9 @@ fn ethernet_timeout(store: &ParamStore) -> Option<Duration> {
         .map(|t| Duration::from_millis(100 * t))
 }
 
-/// P513 [-04] = -0.1 "No error": the inverter ignores every communication error of the field
-/// bus and the system bus and keeps its operating status (BU 2100 §8.1 "Parameter P513").
-fn ignores_bus_errors(store: &ParamStore) -> bool {
+/// P513 [-04] = -0.1 "Kein Fehler" (BU 2200 §8.1): the inverter ignores all communication
+/// errors on the field bus and the system bus.
+fn ignores_communication_errors(store: &ParamStore) -> bool {
     store.read(P513, None, ELEMENT_ETHERNET) == Ok(-1)
 }
 
@@ -252,11 +252,11 @@ pub struct Device {
     interface: ParamChannel,
     inverters: Vec<InverterUnit>,
     fieldbus_timeout: bool,
-    /// The interface word of output assembly 110 (the SK xU4-EIP's digital outputs).
-    module_outputs: u16,
     /// The flags the bus status parameters show (written again only when they change: the
     /// monitoring runs on every frame).
     shown: Option<BusFlags>,
+    /// The interface word of output assembly 110 (the SK xU4-EIP's digital outputs).
+    module_outputs: u16,
 }
 
 impl Device {
@@ -324,8 +324,8 @@ impl Device {
             interface,
             inverters,
             fieldbus_timeout: false,
-            module_outputs: 0,
             shown: None,
+            module_outputs: 0,
         }
     }
 
@@ -352,6 +352,7 @@ impl Device {
     ///   [`bus_status`]): ready, cyclic communication, field-bus timeout, timeout P513/P151
     ///   (while an inverter shows E10.3), the inverters online.
     fn monitor(&mut self, now: Duration) {
+        self.show_relays();
         let mut flags = BusFlags {
             fieldbus_timeout: self.fieldbus_timeout,
             online: self.config.inverters,
@@ -377,7 +378,10 @@ impl Device {
                 flags.cyclic = true;
             }
             let p513 = ethernet_timeout(&unit.params.store);
-            let p151 = p151.filter(|_| !ignores_bus_errors(&unit.params.store));
+            // P513 = -0.1 "Kein Fehler": the inverter ignores every communication error, the
+            // module's P151 time-out included, and keeps its state (BU 2200 §8.1 "Parameter
+            // P513", BU 2100 §8.1).
+            let p151 = p151.filter(|_| !ignores_communication_errors(&unit.params.store));
             if p513.into_iter().chain(p151).any(|limit| silent > limit) {
                 if unit.drive.fault().is_none() {
                     unit.drive.inject_fault(E10_3);
@@ -394,7 +398,6 @@ impl Device {
             }
             self.shown = Some(flags);
         }
-        self.show_relays();
         self.change_protocol(now);
     }
 
@@ -583,7 +586,7 @@ impl Device {
     /// ignores communication errors (P513 = -0.1 "No error", BU 2100 §8.1).
     pub fn raise(&mut self, inverter: Inverter, code: FaultCode) -> Result<(), DeviceError> {
         let unit = self.inverter_mut(inverter)?;
-        if unit.drive.fault().is_none() && !ignores_bus_errors(&unit.params.store) {
+        if unit.drive.fault().is_none() && !ignores_communication_errors(&unit.params.store) {
             unit.drive.inject_fault(code);
             unit.show_fault();
         }
