@@ -564,35 +564,6 @@ impl Device {
         self.monitor(now);
     }
 
-    /// A unit's parameter store, for protocol endpoints that address parameters themselves
-    /// (CIP classes 100–108).
-    pub fn store(&mut self, unit: Unit) -> Result<&mut ParamStore, DeviceError> {
-        match unit {
-            Unit::Interface => Ok(&mut self.interface.store),
-            Unit::Inverter(i) => Ok(&mut self.inverter_mut(i)?.params.store),
-        }
-    }
-
-    /// The Ethernet telegram time-out of `inverter` (P513 [-04]), `None` when it ignores
-    /// field-bus errors.
-    pub fn ethernet_timeout(&self, inverter: Inverter) -> Option<Duration> {
-        let unit = self
-            .inverters
-            .get(usize::from(inverter.get()).checked_sub(1)?)?;
-        ethernet_timeout(&unit.params.store)
-    }
-
-    /// Raises an inverter error unless one is present (a bus watchdog, E10.x) or the inverter
-    /// ignores communication errors (P513 = -0.1 "No error", BU 2100 §8.1).
-    pub fn raise(&mut self, inverter: Inverter, code: FaultCode) -> Result<(), DeviceError> {
-        let unit = self.inverter_mut(inverter)?;
-        if unit.drive.fault().is_none() && !ignores_communication_errors(&unit.params.store) {
-            unit.drive.inject_fault(code);
-            unit.show_fault();
-        }
-        Ok(())
-    }
-
     /// The interface word an SK xU4-EIP receives in output assembly 110 (BU 2100 §6.2.1, p. 32:
     /// DO1 bit 0, DO2 bit 1): shown in P176 [-01] "Bus module outputs"; on the SK TU4-EIP it
     /// sets the digital outputs while P150 "Set relay" is 0 "Via bus".
@@ -623,6 +594,35 @@ impl Device {
             _ => i32::from(self.module_outputs & 0b11),
         };
         self.interface.store.set_info(175, 1, relays);
+    }
+
+    /// A unit's parameter store, for protocol endpoints that address parameters themselves
+    /// (CIP classes 100–108).
+    pub fn store(&mut self, unit: Unit) -> Result<&mut ParamStore, DeviceError> {
+        match unit {
+            Unit::Interface => Ok(&mut self.interface.store),
+            Unit::Inverter(i) => Ok(&mut self.inverter_mut(i)?.params.store),
+        }
+    }
+
+    /// The Ethernet telegram time-out of `inverter` (P513 [-04]), `None` when it ignores
+    /// field-bus errors.
+    pub fn ethernet_timeout(&self, inverter: Inverter) -> Option<Duration> {
+        let unit = self
+            .inverters
+            .get(usize::from(inverter.get()).checked_sub(1)?)?;
+        ethernet_timeout(&unit.params.store)
+    }
+
+    /// Raises an inverter error unless one is present (a bus watchdog, E10.x) or the inverter
+    /// ignores communication errors (P513 = -0.1 "No error", BU 2100 §8.1).
+    pub fn raise(&mut self, inverter: Inverter, code: FaultCode) -> Result<(), DeviceError> {
+        let unit = self.inverter_mut(inverter)?;
+        if unit.drive.fault().is_none() && !ignores_communication_errors(&unit.params.store) {
+            unit.drive.inject_fault(code);
+            unit.show_fault();
+        }
+        Ok(())
     }
 
     /// Marks the field-bus watchdog (P872/P173 bit 2) as tripped or clear.
