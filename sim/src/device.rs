@@ -352,6 +352,7 @@ impl Device {
     ///   [`bus_status`]): ready, cyclic communication, field-bus timeout, timeout P513/P151
     ///   (while an inverter shows E10.3), the inverters online.
     fn monitor(&mut self, now: Duration) {
+        self.interface.store.load_module_factory_setting();
         self.show_relays();
         let mut flags = BusFlags {
             fieldbus_timeout: self.fieldbus_timeout,

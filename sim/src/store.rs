@@ -9,11 +9,6 @@ use std::collections::BTreeMap;
 use proto::nord::params::{self, Access, Owner, ParamDef};
 use proto::nord::{ArrayElement, Inverter, ParamNumber, ParamSet, Product};
 
-/// P152 "Factory setting" of the bus modules.
-const P152: u16 = 152;
-/// P560 "Save in EEPROM" of the inverters.
-const P560: u16 = 560;
-
 /// Where an order goes: the bus interface's own parameters, or an inverter's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Target {
@@ -132,58 +127,23 @@ impl ParamStore {
         persist: Persist,
     ) -> Result<(), AccessError> {
         let (def, key) = self.key(number, set, element)?;
+        // An ASCII text parameter takes 0 and its characters only (BU 2100 §7.1.2 P169).
+        if !def.accepts(value) && def.text_from > 0 {
+            return Err(AccessError::OutOfRange);
+        }
         match def.access {
             Access::ReadOnly => return Err(AccessError::ReadOnly),
             Access::ResetOnly if value != 0 => return Err(AccessError::OnlyResettable),
             _ => {}
         }
-        if !def.accepts(value) {
+        if !(def.min..=def.max).contains(&value) {
             return Err(AccessError::OutOfRange);
         }
-        // P560 "Save in EEPROM" = 0: the inverter keeps parameter changes in RAM only
-        // (BU 0620 §2.5.6, BU 0590 §4.2.4.4); P560 itself is always saved.
-        let persist = match self.owner {
-            Owner::Inverter if def.number != P560 && self.read_plain(P560) == Some(0) => {
-                Persist::RamOnly
-            }
-            _ => persist,
-        };
         self.values.insert(key, value);
         if persist == Persist::Eeprom {
             self.eeprom_writes += 1;
         }
-        if self.owner == Owner::Interface && def.number == P152 && def.family.is_some() {
-            self.load_factory_setting(value);
-        }
         Ok(())
-    }
-
-    fn read_plain(&self, number: u16) -> Option<i32> {
-        let n = ParamNumber::new(i64::from(number)).ok()?;
-        self.read(n, None, None).ok()
-    }
-
-    /// P152 "Factory setting" of a bus module (BU 2100 §7.1.1, p. 46; BU 0590 §5.1.1; BU 2200
-    /// §7.1.1): 1 resets every setting parameter of the bus interface, 2 its basic parameters
-    /// (the NORD standard parameters P15x, "the basic settings of the bus interface", §7.1.1),
-    /// 3 the i-parameters P800…P830; P152 then returns to {0}. Information parameters
-    /// (P17x/P18x) show the device's state and are not settings.
-    fn load_factory_setting(&mut self, value: i32) {
-        let reset: fn(u16) -> bool = match value {
-            1 => |_| true,
-            2 => |n| (150..=159).contains(&n),
-            3 => |n| (800..=830).contains(&n),
-            _ => return,
-        };
-        let (product, owner) = (self.product, self.owner);
-        self.values.retain(|&(number, _, _), _| {
-            let setting = ParamNumber::new(i64::from(number))
-                .ok()
-                .and_then(|n| params::lookup(product, owner, n))
-                .is_some_and(|d| d.access != Access::ReadOnly);
-            !(setting && reset(number))
-        });
-        self.values.remove(&(P152, 0, 0));
     }
 
     /// Elements of an array parameter.
@@ -209,6 +169,32 @@ impl ParamStore {
     /// EEPROM writes so far.
     pub fn eeprom_writes(&self) -> u64 {
         self.eeprom_writes
+    }
+
+    /// P152 "Factory setting" of a bus module (BU 2100 §7.1.1, p. 46): 1 resets every setting
+    /// parameter of the bus interface, 2 its basic parameters (the NORD standard parameters
+    /// P15x: "the basic settings of the bus interface can be made via NORD standard
+    /// parameters", §7.1.1), 3 the i-parameters P800…P830; P152 then returns to {0}.
+    /// Information parameters (P17x/P18x) show the device's state and are not settings.
+    pub fn load_module_factory_setting(&mut self) {
+        let Some(value) = self.values.get(&(152, 0, 0)).copied() else {
+            return;
+        };
+        let reset: fn(u16) -> bool = match value {
+            1 => |_| true,
+            2 => |n| (150..=159).contains(&n),
+            3 => |n| (800..=830).contains(&n),
+            _ => return,
+        };
+        let (product, owner) = (self.product, self.owner);
+        self.values.retain(|&(number, _, _), _| {
+            let setting = ParamNumber::new(i64::from(number))
+                .ok()
+                .and_then(|n| params::lookup(product, owner, n))
+                .is_some_and(|d| d.access != Access::ReadOnly);
+            !(setting && reset(number))
+        });
+        self.values.remove(&(152, 0, 0));
     }
 }
 
@@ -262,19 +248,11 @@ mod tests {
     }
 
     #[test]
-    fn p560_0_keeps_changes_in_ram() {
-        // BU 0620 §2.5.6, BU 0590 §4.2.4.4: P560 "Save in EEPROM" = 0 → RAM only.
+    fn info_parameters_are_set_by_the_device() {
         let mut s = ParamStore::new(Product::Sk550p, fi1());
-        s.write(n(560), None, None, 0, Persist::Eeprom).unwrap();
-        assert_eq!(s.eeprom_writes(), 1, "P560 itself is saved");
-        s.write(n(102), None, None, 300, Persist::Eeprom).unwrap();
-        assert_eq!(
-            (s.read(n(102), None, None), s.eeprom_writes()),
-            (Ok(300), 1)
-        );
-        s.write(n(560), None, None, 1, Persist::Eeprom).unwrap();
-        s.write(n(102), None, None, 400, Persist::Eeprom).unwrap();
-        assert_eq!(s.eeprom_writes(), 3);
+        s.set_info(717, 1, 1020);
+        assert_eq!(s.read(n(717), None, None), Ok(1020));
+        s.set_info(1000, 1, 5);
     }
 
     #[test]
@@ -286,15 +264,13 @@ mod tests {
         s.write(n(160), None, e4, 7, Persist::Eeprom).unwrap();
         s.set_info(185, 4, 7);
         s.write(n(152), None, None, 2, Persist::Eeprom).unwrap();
+        s.load_module_factory_setting();
         assert_eq!(s.read(n(151), None, None), Ok(0));
-        assert_eq!(
-            s.read(n(160), None, e4),
-            Ok(7),
-            "P16x are no basic parameters"
-        );
+        assert_eq!(s.read(n(160), None, e4), Ok(7), "no basic parameter");
         assert_eq!(s.read(n(152), None, None), Ok(0));
         s.write(n(151), None, None, 200, Persist::Eeprom).unwrap();
         s.write(n(152), None, None, 1, Persist::Eeprom).unwrap();
+        s.load_module_factory_setting();
         assert_eq!(s.read(n(151), None, None), Ok(0));
         assert_eq!(s.read(n(160), None, e4), Ok(100));
         assert_eq!(s.read(n(185), None, e4), Ok(7), "information stays");
@@ -302,21 +278,20 @@ mod tests {
     }
 
     #[test]
-    fn text_parameters_take_0() {
+    fn text_parameters_take_0_and_their_characters() {
+        // BU 2100 §7.1.2 P169: ASCII 45…122, factory {0}.
         let mut s = ParamStore::new(Product::Tu3Eip, Target::Interface);
         let e1 = ArrayElement::new(1).ok();
-        assert_eq!(s.write(n(169), None, e1, 0, Persist::Eeprom), Ok(()));
-        assert_eq!(
-            s.write(n(169), None, e1, 44, Persist::Eeprom),
-            Err(AccessError::OutOfRange)
-        );
-    }
-
-    #[test]
-    fn info_parameters_are_set_by_the_device() {
-        let mut s = ParamStore::new(Product::Sk550p, fi1());
-        s.set_info(717, 1, 1020);
-        assert_eq!(s.read(n(717), None, None), Ok(1020));
-        s.set_info(1000, 1, 5);
+        for (value, ok) in [
+            (0, true),
+            (1, false),
+            (44, false),
+            (45, true),
+            (122, true),
+            (123, false),
+        ] {
+            let r = s.write(n(169), None, e1, value, Persist::Eeprom);
+            assert_eq!(r.is_ok(), ok, "{value}: {r:?}");
+        }
     }
 }

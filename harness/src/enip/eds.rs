@@ -370,13 +370,7 @@ fn nord_param(def: &ParamDef, class: u16, fi: Option<Inverter>) -> Param {
         name,
         units: "",
         help,
-        // A text parameter also takes 0 (its end mark, BU 2100 §7.1.2 P169): an EDS range
-        // has no holes, so it starts at 0.
-        min: i64::from(if def.also_zero {
-            def.min.min(0)
-        } else {
-            def.min
-        }),
+        min: i64::from(def.min),
         max: i64::from(def.max),
         default: i64::from(params::element_default(def, 1)),
         scaling: (1, div, 1, 0),

@@ -75,10 +75,10 @@ pub struct ParamDef {
     pub set_dependent: bool,
     /// Writability.
     pub access: Access,
-    /// 0 is accepted besides `min..=max`: a text parameter of ASCII codes whose 0 ends or
-    /// clears the text (BU 2100 §7.1.2 P169 "45...122 ASCII", factory {0}; BU 0590 §5.1.2
-    /// P162 "45 ... 122", "saved after the entry of a 0").
-    pub also_zero: bool,
+    /// A text parameter of ASCII codes: besides 0, which ends or clears the text, it takes only
+    /// `text_from..=max` (BU 2100 §7.1.2 P169 "45...122 ASCII", factory {0}); 0 for every
+    /// other parameter.
+    pub text_from: i32,
     /// Where the manuals state it, and what was assumed.
     pub source: &'static str,
 }
@@ -107,7 +107,7 @@ const fn inv(
         element_defaults: &[],
         set_dependent: false,
         access: Access::ReadWrite,
-        also_zero: false,
+        text_from: 0,
         source,
     }
 }
@@ -142,10 +142,10 @@ const fn dword(p: ParamDef) -> ParamDef {
     }
 }
 
-/// An ASCII text parameter: 0 (end of text, no text) is accepted besides its range.
-const fn text(p: ParamDef) -> ParamDef {
+/// An ASCII text parameter of the characters `from..=max` and the 0 that ends the text.
+const fn text(p: ParamDef, from: i32) -> ParamDef {
     ParamDef {
-        also_zero: true,
+        text_from: from,
         ..p
     }
 }
@@ -261,9 +261,9 @@ pub const CATALOGUE: &[ParamDef] = &[
     module(ro(array(inv(176, "Process data Bus In", -32768, 32767, 0, 0, "BU 2100 §7.1.3 (p. 52): [-01] bus module outputs (xU4), [-02 + 6(n-1)] control word and setpoints 1..5 of FI n, up to [-49]"), 49)), EIP_ALL),
     module(ro(array(inv(177, "Process data Bus Out", -32768, 32767, 0, 0, "BU 2100 §7.1.3 (p. 52): [-01] bus module inputs (xU4), [-02 + 6(n-1)] status word and actual values 1..5 of FI n, up to [-49]"), 49)), EIP_ALL),
     module(ro(inv(178, "Internal temperature", -128, 127, 0, 0, "BU 2100 §7.1.3 (p. 52): -128…127 °C, SK CU4-EIP only; above +97 °C error 10.1")), &[Product::Cu4Eip]),
-    module(text(array(inv(169, "Password", 45, 122, 0, 0, "BU 2100 §7.1.2 (p. 49): up to 20 characters of ASCII 45…122, factory {0} (outside the printed range: 0 = no password / end of text)"), 20)), EIP_ALL),
+    module(text(array(inv(169, "Password", 0, 122, 0, 0, "BU 2100 §7.1.2 (p. 49): up to 20 characters of ASCII 45…122, factory {0} (outside the printed range: 0 = no password / end of text)"), 20), 45), EIP_ALL),
     module(inv(152, "Factory setting", 0, 1, 0, 0, "BU 0590 §5.1.1: 0…1, factory 0"), PNT),
-    module(text(inv(162, "Device name", 45, 122, 0, 0, "BU 0590 §5.1.2 (p. 35): ASCII characters 45…122, up to 240 of them; a 0 ends and saves the name (so 0 is allowed, which the printed range 45…122 omits; 1…44 stay refused); no factory setting printed, 0 (no name) assumed")), PNT),
+    module(inv(162, "Device name", 0, 122, 0, 0, "BU 0590 §5.1.2 (p. 35): ASCII characters 45…122, up to 240 of them; a 0 ends and saves the name (so 0 is allowed, which the printed range 45…122 omits); no factory setting printed, 0 (no name) assumed"), PNT),
     module(ro(array(inv(170, "Present error", 0, 5420, 0, 0, "BU 0590 §5.1.3 (p. 35): 0…5420, [-01] actual module error, [-02] last (printed \"actual\" twice); 1020 = bus time-out via P151/P513"), 2)), PNT),
     module(ro(array(inv(171, "Software version", 0, 99999, 0, 1, "BU 0590 §5.1.3 (p. 35): 0.0…9999.9, [-01] version, [-02] revision, [-03] special version (0 = standard)"), 3)), PNT),
     module(ro(inv(172, "Configuration level", 0, 2, 0, 0, "BU 0590 §5.1.3 (p. 36): 0 SK CU4, 1 SK TU4, 2 SK TU3-PNT")), PNT),
@@ -306,9 +306,10 @@ pub fn element_default(def: &ParamDef, element: u8) -> i32 {
 }
 
 impl ParamDef {
-    /// Whether a value is in the setting range (or is the 0 of a text parameter).
+    /// Whether a value is in the setting range (a text parameter's: 0 or a character).
     pub fn accepts(&self, value: i32) -> bool {
-        (self.min..=self.max).contains(&value) || (self.also_zero && value == 0)
+        (self.min..=self.max).contains(&value)
+            && (self.text_from == 0 || value == 0 || value >= self.text_from)
     }
 
     /// Whether `product` has the parameter.
@@ -408,9 +409,9 @@ mod tests {
     #[case(Product::Sk550p, 858, 400, 2000, 1000)]
     #[case(Product::Sk550p, 877, 0, 255, 0)]
     // BU 0590 §5.1.2–§5.1.4 (p. 35–37).
-    #[case(Product::Tu3Pnt, 162, 45, 122, 0)]
+    #[case(Product::Tu3Pnt, 162, 0, 122, 0)]
     // BU 2100 §7.1.2–§7.1.3 (p. 49–52).
-    #[case(Product::Tu4Eip, 169, 45, 122, 0)]
+    #[case(Product::Tu4Eip, 169, 0, 122, 0)]
     #[case(Product::Cu4Eip, 178, -128, 127, 0)]
     #[case(Product::Tu4Eip, 175, 0, 3, 0)]
     #[case(Product::Tu3Pnt, 170, 0, 5420, 0)]
@@ -471,15 +472,13 @@ mod tests {
 
     #[test]
     fn text_parameters_take_0_and_their_ascii_range() {
-        // BU 2100 §7.1.2 P169 "45...122 ASCII", factory {0}; BU 0590 §5.1.2 P162 "45 ... 122".
-        for (product, number) in [(Product::Tu3Eip, 169), (Product::Tu3Pnt, 162)] {
-            let d = lookup(product, Owner::Interface, p(number)).unwrap();
-            let taken: Vec<i32> = [0, 1, 44, 45, 122, 123]
-                .into_iter()
-                .filter(|v| d.accepts(*v))
-                .collect();
-            assert_eq!(taken, [0, 45, 122], "P{number}");
-        }
+        // BU 2100 §7.1.2 P169 "45...122 ASCII", factory {0}.
+        let d = lookup(Product::Tu3Eip, Owner::Interface, p(169)).unwrap();
+        let taken: Vec<i32> = [0, 1, 44, 45, 122, 123]
+            .into_iter()
+            .filter(|v| d.accepts(*v))
+            .collect();
+        assert_eq!((taken, d.text_from), (vec![0, 45, 122], 45));
     }
 
     #[test]
