@@ -19,12 +19,12 @@ pub mod class {
     pub const ASSEMBLY: u16 = 0x04;
     /// Connection Manager.
     pub const CONNECTION_MANAGER: u16 = 0x06;
-    /// Device Level Ring (CIP Vol 2 chapter 5; OpENer `kCipDlrClassCode` 0x47).
-    pub const DLR: u16 = 0x47;
     /// TCP/IP Interface.
     pub const TCP_IP: u16 = 0xF5;
     /// Ethernet Link.
     pub const ETHERNET_LINK: u16 = 0xF6;
+    /// Device Level Ring (DLR, CIP Vol 2 chapter 5).
+    pub const DLR: u16 = 0x47;
 }
 
 /// A CIP service code.

@@ -480,8 +480,10 @@ fn apply_outputs(a: &mut Adapter, asm: &Assembly, data: &[u8], run: bool, now: D
         // Idle (PLC in program mode) counts as an invalid control word (bit 10 clear).
         let control = if run { control } else { 0 };
         if let Ok(out) = a.device.process(fi, control, setpoints, now) {
-            // P176/P177 show what the master sent and what went back (BU 2100 §7.1.3).
-            a.device.show_process_data(fi, None, &words, &out);
+            // P873 / P874 (BU 0620 §4.3) show the words exchanged, as on the other buses.
+            let mut sent = vec![control];
+            sent.extend_from_slice(setpoints);
+            a.device.show_process_data(fi, None, &sent, &out);
             let dst = &mut a.conns.inputs[n - 1];
             *dst = [0; WORDS_PER_INVERTER];
             for (d, s) in dst.iter_mut().zip(out) {

@@ -134,6 +134,9 @@ pub(super) fn request(
             return malformed(service, status);
         }
     };
+    // What an earlier parameter write set in motion shows before this request (P150 → P175,
+    // P152's factory settings): the device's monitoring runs.
+    a.device.tick(now);
     let s = req.service;
     match req.path.class_id() {
         Some(class::IDENTITY) => identity(a, &req),
@@ -150,12 +153,7 @@ pub(super) fn request(
         Some(class::TCP_IP) => tcp_ip(a, &req),
         Some(class::ETHERNET_LINK) => ethernet_link(a, &req),
         Some(class::DLR) => dlr(&req),
-        Some(c @ 100..=108) => {
-            let r = parameter(a, c, &req);
-            // What a written parameter sets in motion shows at once (P150 → P175).
-            a.device.tick(now);
-            r
-        }
+        Some(c @ 100..=108) => parameter(a, c, &req),
         _ => MrResponse::error(s, GS::PATH_DESTINATION_UNKNOWN),
     }
 }
@@ -260,34 +258,10 @@ const OBJECTS: [u16; 7] = [
     class::MESSAGE_ROUTER,
     class::ASSEMBLY,
     class::CONNECTION_MANAGER,
+    class::DLR,
     class::TCP_IP,
     class::ETHERNET_LINK,
-    class::DLR,
 ];
-
-/// Device Level Ring object (47h), instance 1, of a ring node that is no supervisor (BU 2100
-/// §3.1 and BU 0620 §2.3.1 "Supported functions: UCMM, DLR"; attributes as OpENer's DLR
-/// object for a non-supervisor device: 1 network topology, 2 network status). The simulated
-/// adapter has one port and no ring: linear topology, status normal.
-fn dlr(req: &MrRequest) -> MrResponse {
-    if let Some(r) = class_attribute(req, 3) {
-        return r;
-    }
-    if !instance_one(req) {
-        return MrResponse::error(req.service, GS::PATH_DESTINATION_UNKNOWN);
-    }
-    match Service(req.service) {
-        Service::GET_ATTRIBUTE_SINGLE => get_single(req, |attr| match attr {
-            // Network topology: 0 linear, 1 ring.
-            1 => Some(vec![0]),
-            // Network status: 0 normal.
-            2 => Some(vec![0]),
-            _ => None,
-        }),
-        Service::SET_ATTRIBUTE_SINGLE => MrResponse::error(req.service, GS::ATTRIBUTE_NOT_SETTABLE),
-        _ => MrResponse::error(req.service, GS::SERVICE_NOT_SUPPORTED),
-    }
-}
 
 fn message_router(req: &MrRequest) -> MrResponse {
     if let Some(r) = class_attribute(req, 1) {
@@ -422,6 +396,50 @@ fn ethernet_link(a: &mut Adapter, req: &MrRequest) -> MrResponse {
             })
         }),
         Service::SET_ATTRIBUTE_SINGLE => MrResponse::error(req.service, GS::ATTRIBUTE_NOT_SETTABLE),
+        _ => MrResponse::error(req.service, GS::SERVICE_NOT_SUPPORTED),
+    }
+}
+
+/// DLR object class revision: 3 (the attributes a revision-4 object adds are optional for a
+/// ring node and not kept).
+const DLR_REVISION: u16 = 3;
+/// DLR capability flags (attribute 12): beacon-based ring node (bit 1) that handles the
+/// Flush_Tables frame (bit 7), as a revision-3 ring node must; not supervisor-capable (bit 5),
+/// no redundant gateway (bit 6).
+const DLR_CAPABILITIES: u32 = 0x02 | 0x80;
+
+/// The Device Level Ring object (class 47h): BU 0620 §2.3.1 "Supported functions UCMM, DLR",
+/// §2.3.2 ring topology without an external switch (BU 2100 §2.1 the same). The device is a
+/// ring node, not a ring supervisor, so instance 1 has the attributes CIP Vol 2 requires of a
+/// non-supervisor node: 1 network topology, 2 network status, 10 active supervisor address,
+/// 12 capability flags; the supervisor's (3–9, 11) and a redundant gateway's (13–16) are
+/// absent. The simulator sits on one link, not in a ring: topology 0 (linear), status 0
+/// (normal), no active supervisor (address 0.0.0.0, MAC 00-00-00-00-00-00).
+fn dlr(req: &MrRequest) -> MrResponse {
+    if let Some(r) = class_attribute(req, DLR_REVISION) {
+        return r;
+    }
+    if !instance_one(req) {
+        return MrResponse::error(req.service, GS::PATH_DESTINATION_UNKNOWN);
+    }
+    let attribute = |attr: u16| -> Option<Vec<u8>> {
+        Some(match attr {
+            1 => vec![0],
+            2 => vec![0],
+            10 => vec![0; 10],
+            12 => DLR_CAPABILITIES.to_le_bytes().to_vec(),
+            _ => return None,
+        })
+    };
+    match Service(req.service) {
+        Service::GET_ATTRIBUTE_SINGLE => get_single(req, attribute),
+        Service::GET_ATTRIBUTES_ALL => {
+            let mut v = Vec::new();
+            for attr in [1, 2, 10, 12] {
+                v.extend(attribute(attr).unwrap_or_default());
+            }
+            MrResponse::ok(req.service, v)
+        }
         _ => MrResponse::error(req.service, GS::SERVICE_NOT_SUPPORTED),
     }
 }
