@@ -236,3 +236,68 @@ fn coverage_counts_the_inventories_and_names_what_keeps_them_dishonest() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn coverage_gates_on_a_share_per_section_and_counts_errata_by_check() {
+    let dir = scratch("coverage-min");
+    std::fs::create_dir_all(dir.join("inventory")).unwrap();
+    std::fs::write(
+        dir.join("p102.yaml"),
+        "doc: BU 0620\nedition: \"2020-03 en\"\ncases:\n  - id: read\n    title: P102 reads\n    ref: { section: \"2.5.6\", page: 51 }\n    manual_says: { printed: \"06020002h\", correct: \"06010002h\", why: \"w\", check: standard, standard: \"CiA 301 4.2.0 §7.2.4.3.17\" }\n    steps:\n      - read: { param: 102 }\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("inventory/bu0620.yaml"),
+        "doc: BU 0620\nedition: \"2020-03 en\"\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/read]\n  - section: \"2.5.6\"\n    says: P102 writes\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("inventory/floors.yaml"),
+        "\"BU 0620 2020-03 en\": 1\n",
+    )
+    .unwrap();
+    let suites = dir.to_str().unwrap();
+    let o = harness(&["coverage", "--suites", suites, "--min", "50"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{stdout}{}", stderr(&o));
+    let errata: Vec<&str> = stdout
+        .lines()
+        .find(|l| l.starts_with("BU 0620 2020-03 en"))
+        .expect("an errata row")
+        .split_whitespace()
+        .collect();
+    // errata, own-text, standard, other-manual, range-default, unclassified, ambiguous
+    assert_eq!(errata[4..], ["1", "0", "1", "0", "0", "0", "0"], "{stdout}");
+    let o = harness(&["coverage", "--suites", suites, "--min", "90"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("PROBLEM BU 0620 2020-03 en §2.5.6: 1 of 2 testable statements asserted (50 %), below 90 %"),
+        "{stdout}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn each_bus_served_shows_its_own_options() {
+    for (bus, option) in [
+        ("enip", "--max-sessions"),
+        ("ecat", "--iface"),
+        ("epl", "--node-id"),
+        ("pnio", "--name"),
+    ] {
+        let o = harness(&["serve", bus, "--help"]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(o.status.code(), Some(0), "{bus}: {}", stderr(&o));
+        assert!(
+            stdout.contains(&format!("Usage: harness serve {bus}")) && stdout.contains(option),
+            "{bus}: {stdout}"
+        );
+    }
+    let o = harness(&["serve", "can"]);
+    assert!(
+        stderr(&o).contains("cannot serve `can` (buses: enip, ecat, epl, pnio)"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -11,19 +11,18 @@
 //! them the test says so and skips on a developer's machine, and fails when `CI` is set.
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use harness::ecat_serve::{start, ServeOptions};
 use pcap_file::pcapng::blocks::enhanced_packet::EnhancedPacketOption;
 use pcap_file::pcapng::{Block, PcapNgReader};
-use serde_json::Value;
 
 #[allow(dead_code)] // what the EtherNet/IP tests share
 mod common;
 use common::netns::{require_root_or_skip, Netns};
 use common::peer::require_tshark;
-use common::tshark::Capture;
+use common::suite_run::SuiteRun;
 
 /// Every packet of a pcapng file: its bytes and its comment (the harness's label).
 fn packets(path: &Path) -> Vec<(Vec<u8>, Option<String>)> {
@@ -103,58 +102,17 @@ fn every_ethercat_suite_passes_against_the_served_slave_over_a_veth_pair() {
     if !require_tshark(why) {
         return;
     }
-    let dir = std::env::temp_dir().join(format!("harness-network-ecat-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let (out, run_pcap, wire_pcap) = (
-        dir.join("out"),
-        dir.join("run.pcapng"),
-        dir.join("wire.pcapng"),
-    );
     let ns = Netns::new("ecsuites");
     let served = start(&ServeOptions::new(ns.root_if())).expect("serve ecat");
-    let capture = Capture::start(&ns, ns.ns_if(), &wire_pcap);
-
-    let suites = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../suites");
-    let run = ns
-        .command(env!("CARGO_BIN_EXE_harness"))
-        .args(["run", "--profile", "sk550p@ecat", "--suites"])
-        .arg(&suites)
-        .arg("--dut")
-        .arg(format!("ecat://{}", ns.ns_if()))
-        // The served simulator has no motor to turn and no EEPROM to wear.
-        .args(["--allow-motion", "--max-eeprom-writes", "10000"])
-        .arg("--out")
-        .arg(&out)
-        .arg("--pcap")
-        .arg(&run_pcap)
-        .output()
-        .expect("harness run starts");
-    capture.stop();
+    let run = SuiteRun::new(
+        &ns,
+        "ecat",
+        "sk550p@ecat",
+        &format!("ecat://{}", ns.ns_if()),
+    );
     let stats = served.stop().expect("the slave served to the end");
-    let stdout = String::from_utf8_lossy(&run.stdout);
-
-    // No case failed or ended in error; the EtherCAT suites and the manual-level cases ran.
-    let report: Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("run.json")).expect("run.json written"),
-    )
-    .unwrap();
-    let cases = report["cases"].as_array().expect("cases");
-    let bad: Vec<String> = cases
-        .iter()
-        .filter(|c| c["verdict"] == "fail" || c["verdict"] == "error")
-        .map(|c| format!("{} {}: {}", c["id"], c["verdict"], c["message"]))
-        .collect();
-    assert!(bad.is_empty(), "{}\n{stdout}", bad.join("\n"));
-    assert_eq!(run.status.code(), Some(0), "{stdout}");
-    let passed = |prefix: &str| {
-        cases
-            .iter()
-            .filter(|c| c["verdict"] == "pass")
-            .filter(|c| c["id"].as_str().is_some_and(|id| id.starts_with(prefix)))
-            .count()
-    };
-    for (prefix, at_least) in [
+    // The EtherCAT suites and the manual-level cases ran.
+    run.assert_passed(&[
         ("bu0620/ecat-al/", 5),
         ("bu0620/ecat-sdo-abort/", 5),
         ("bu0620/ecat-coe/", 5),
@@ -163,19 +121,14 @@ fn every_ethercat_suite_passes_against_the_served_slave_over_a_veth_pair() {
         ("bu0620/ecat-hot-connect/", 2),
         ("bu0620/drive-switching/", 5),
         ("ecat/", 30),
-    ] {
-        assert!(
-            passed(prefix) >= at_least,
-            "{prefix}: {} cases passed, {at_least} expected\n{stdout}",
-            passed(prefix)
-        );
-    }
+    ]);
     assert!(stats.frames > 10_000, "{stats:?}");
 
     // tshark dissects both captures as EtherCAT with mailbox and CoE.
-    let (run_bad, run_protocols) = dissect(&run_pcap);
-    let (wire_bad, wire_protocols) = dissect(&wire_pcap);
-    for (path, protocols) in [(&run_pcap, run_protocols), (&wire_pcap, wire_protocols)] {
+    let (run_pcap, wire_pcap) = (&run.run_pcap, &run.wire_pcap);
+    let (run_bad, run_protocols) = dissect(run_pcap);
+    let (wire_bad, wire_protocols) = dissect(wire_pcap);
+    for (path, protocols) in [(run_pcap, run_protocols), (wire_pcap, wire_protocols)] {
         for p in ["ecatf", "ecat", "ecat_mailbox", "coe"] {
             assert!(
                 protocols.get(p).is_some_and(|n| *n > 100),
@@ -188,12 +141,12 @@ fn every_ethercat_suite_passes_against_the_served_slave_over_a_veth_pair() {
     // The only malformed frames are those of steps sending malformed bytes on purpose. The
     // run's own capture labels each frame; a frame of the wire capture takes the label of the
     // run's frame with the same bytes.
-    let run_packets = packets(&run_pcap);
+    let run_packets = packets(run_pcap);
     let label_of: HashMap<&[u8], &str> = run_packets
         .iter()
         .filter_map(|(bytes, c)| c.as_deref().map(|c| (bytes.as_slice(), c)))
         .collect();
-    let wire_packets = packets(&wire_pcap);
+    let wire_packets = packets(wire_pcap);
     let mut wrong = Vec::new();
     for n in &run_bad {
         let label = run_packets[n - 1].1.as_deref().unwrap_or("(no label)");
@@ -222,5 +175,5 @@ fn every_ethercat_suite_passes_against_the_served_slave_over_a_veth_pair() {
         !run_bad.is_empty(),
         "the bad-input cases send malformed frames, and tshark should see them"
     );
-    let _ = std::fs::remove_dir_all(&dir);
+    run.finish();
 }

@@ -14,17 +14,16 @@
 //! them the test says so and skips on a developer's machine, and fails when `CI` is set.
 
 use std::collections::{HashMap, HashSet};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use harness::epl_serve::{start, ServeOptions};
-use serde_json::Value;
 
 #[allow(dead_code)] // what the other network tests share
 mod common;
 use common::netns::{require_root_or_skip, Netns};
 use common::peer::require_tshark;
-use common::tshark::Capture;
+use common::suite_run::SuiteRun;
 
 /// What tshark makes of a capture.
 struct Dissected {
@@ -132,80 +131,31 @@ fn every_powerlink_suite_passes_against_the_served_node_over_a_veth_pair() {
     if !require_root_or_skip(why) || !require_tshark(why) {
         return;
     }
-    let suites = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../suites");
     for product in ["sk550p", "tu3-pol", "tu4-pol", "cu4-pol"] {
-        let dir = std::env::temp_dir().join(format!(
-            "harness-network-epl-{}-{product}",
-            std::process::id()
-        ));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let (out, run_pcap, wire_pcap) = (
-            dir.join("out"),
-            dir.join("run.pcapng"),
-            dir.join("wire.pcapng"),
-        );
         let ns = Netns::new("eplsuites");
         ns.add_ipv4("192.168.100.1/24", "192.168.100.240/24");
         let mut options = ServeOptions::new(ns.root_if());
         options.profile = product.to_string();
         let served = start(&options).expect("serve epl");
-        let capture = Capture::start(&ns, ns.ns_if(), &wire_pcap);
-        let run = ns
-            .command(env!("CARGO_BIN_EXE_harness"))
-            .args(["run", "--profile", &format!("{product}@epl"), "--suites"])
-            .arg(&suites)
-            .arg("--dut")
-            .arg(format!("epl://{}", ns.ns_if()))
-            // The served simulator has no motor to turn and no EEPROM to wear.
-            .args(["--allow-motion", "--max-eeprom-writes", "10000"])
-            .arg("--out")
-            .arg(&out)
-            .arg("--pcap")
-            .arg(&run_pcap)
-            .output()
-            .expect("harness run starts");
-        capture.stop();
+        let run = SuiteRun::new(
+            &ns,
+            "epl",
+            &format!("{product}@epl"),
+            &format!("epl://{}", ns.ns_if()),
+        );
         let stats = served.stop().expect("the node served to the end");
-        let stdout = String::from_utf8_lossy(&run.stdout);
-
-        let report: Value = serde_json::from_str(
-            &std::fs::read_to_string(out.join("run.json")).expect("run.json written"),
-        )
-        .unwrap();
-        let cases = report["cases"].as_array().expect("cases");
-        let bad: Vec<String> = cases
-            .iter()
-            .filter(|c| c["verdict"] == "fail" || c["verdict"] == "error")
-            .map(|c| format!("{} {}: {}", c["id"], c["verdict"], c["message"]))
-            .collect();
-        assert!(bad.is_empty(), "{product}: {}\n{stdout}", bad.join("\n"));
-        assert_eq!(run.status.code(), Some(0), "{product}: {stdout}");
-        let passed = |prefix: &str| {
-            cases
-                .iter()
-                .filter(|c| c["verdict"] == "pass")
-                .filter(|c| c["id"].as_str().is_some_and(|id| id.starts_with(prefix)))
-                .count()
-        };
         let manual = if product == "sk550p" {
             "bu0620"
         } else {
             "bu2200"
         };
-        for (prefix, at_least) in [
+        run.assert_passed(&[
             (format!("{manual}/epl-nmt/"), 3),
             (format!("{manual}/epl-sdo-abort/"), 5),
             (format!("{manual}/epl-pdo-mapping/"), 3),
             (format!("{manual}/drive-words/"), 1),
             ("epl/bad-input/".to_string(), 30),
-        ] {
-            assert!(
-                passed(&prefix) >= at_least,
-                "{product} {prefix}: {} cases passed, {at_least} expected\n{stdout}",
-                passed(&prefix)
-            );
-        }
+        ]);
         assert!(stats.frames_in > 5_000, "{product}: {stats:?}");
         assert!(
             stats.datagrams_in > 0,
@@ -213,8 +163,8 @@ fn every_powerlink_suite_passes_against_the_served_node_over_a_veth_pair() {
         );
 
         // Both captures dissect as POWERLINK; the wire's has SDO over UDP too.
-        let run_d = dissect(&run_pcap);
-        let wire_d = dissect(&wire_pcap);
+        let run_d = dissect(&run.run_pcap);
+        let wire_d = dissect(&run.wire_pcap);
         let count = |d: &Dissected, stack: &str| {
             d.stacks
                 .iter()
@@ -277,6 +227,6 @@ fn every_powerlink_suite_passes_against_the_served_node_over_a_veth_pair() {
                 m.1
             );
         }
-        let _ = std::fs::remove_dir_all(&dir);
+        run.finish();
     }
 }

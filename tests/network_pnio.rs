@@ -13,7 +13,7 @@
 //! them the test says so and skips on a developer's machine, and fails when `CI` is set.
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use harness::pnio_serve::{start, ServeOptions};
@@ -23,7 +23,7 @@ use serde_json::Value;
 mod common;
 use common::netns::{require_root_or_skip, Netns};
 use common::peer::require_tshark;
-use common::tshark::Capture;
+use common::suite_run::SuiteRun;
 
 /// The name of station the suites address the device by.
 const NAME: &str = "nord-device";
@@ -100,69 +100,26 @@ fn every_profinet_suite_passes_against_the_served_device_over_a_veth_pair() {
     if !require_root_or_skip(why) || !require_tshark(why) {
         return;
     }
-    let suites = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../suites");
     for product in ["sk550p", "tu3-pnt"] {
-        let dir = std::env::temp_dir().join(format!(
-            "harness-network-pnio-{}-{product}",
-            std::process::id()
-        ));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let (out, run_pcap, wire_pcap) = (
-            dir.join("out"),
-            dir.join("run.pcapng"),
-            dir.join("wire.pcapng"),
-        );
         let ns = Netns::new("pniosuites");
         ns.add_ipv4("192.168.20.200/24", "192.168.20.1/24");
         let mut options = ServeOptions::new(ns.root_if());
         options.profile = product.to_string();
         options.name = NAME.to_string();
         let served = start(&options).expect("serve pnio");
-        let capture = Capture::start(&ns, ns.ns_if(), &wire_pcap);
-        let run = ns
-            .command(env!("CARGO_BIN_EXE_harness"))
-            .args(["run", "--profile", &format!("{product}@pnio"), "--suites"])
-            .arg(&suites)
-            .arg("--dut")
-            .arg(format!("pnio://{}/{NAME}", ns.ns_if()))
-            // The served simulator has no motor to turn and no EEPROM to wear.
-            .args(["--allow-motion", "--max-eeprom-writes", "10000"])
-            .arg("--out")
-            .arg(&out)
-            .arg("--pcap")
-            .arg(&run_pcap)
-            .output()
-            .expect("harness run starts");
-        capture.stop();
+        let run = SuiteRun::new(
+            &ns,
+            "pnio",
+            &format!("{product}@pnio"),
+            &format!("pnio://{}/{NAME}", ns.ns_if()),
+        );
         let stats = served.stop().expect("the device served to the end");
-        let stdout = String::from_utf8_lossy(&run.stdout);
-
-        let report: Value = serde_json::from_str(
-            &std::fs::read_to_string(out.join("run.json")).expect("run.json written"),
-        )
-        .unwrap();
-        let cases = report["cases"].as_array().expect("cases");
-        let bad: Vec<String> = cases
-            .iter()
-            .filter(|c| c["verdict"] == "fail" || c["verdict"] == "error")
-            .map(|c| format!("{} {}: {}", c["id"], c["verdict"], c["message"]))
-            .collect();
-        assert!(bad.is_empty(), "{product}: {}\n{stdout}", bad.join("\n"));
-        assert_eq!(run.status.code(), Some(0), "{product}: {stdout}");
-        let passed = |prefix: &str| {
-            cases
-                .iter()
-                .filter(|c| c["verdict"] == "pass")
-                .filter(|c| c["id"].as_str().is_some_and(|id| id.starts_with(prefix)))
-                .count()
-        };
         let manual = if product == "sk550p" {
             "bu0620"
         } else {
             "bu0590"
         };
-        for (prefix, at_least) in [
+        run.assert_passed(&[
             ("pnio/dcp/".to_string(), 10),
             ("pnio/connect/".to_string(), 5),
             ("pnio/records/".to_string(), 10),
@@ -170,20 +127,14 @@ fn every_profinet_suite_passes_against_the_served_device_over_a_veth_pair() {
             ("pnio/alarms/".to_string(), 1),
             ("pnio/bad-input/".to_string(), 30),
             (format!("{manual}/drive-words/"), 1),
-        ] {
-            assert!(
-                passed(&prefix) >= at_least,
-                "{product} {prefix}: {} cases passed, {at_least} expected\n{stdout}",
-                passed(&prefix)
-            );
-        }
+        ]);
         assert!(stats.frames_in > 5_000, "{product}: {stats:?}");
         assert!(stats.datagrams_in > 100, "{product}: RPC ran: {stats:?}");
 
         // Both captures dissect as PROFINET: DCP, RT, and the RPC calls of the context
         // management on the wire.
-        let run_d = dissect(&run_pcap);
-        let wire_d = dissect(&wire_pcap);
+        let run_d = dissect(&run.run_pcap);
+        let wire_d = dissect(&run.wire_pcap);
         let count = |d: &Dissected, stack: &str| {
             d.stacks
                 .iter()
@@ -221,7 +172,7 @@ fn every_profinet_suite_passes_against_the_served_device_over_a_veth_pair() {
             wire_d.malformed.len(),
             run_d.malformed.len()
         );
-        let _ = std::fs::remove_dir_all(&dir);
+        run.finish();
     }
 }
 

@@ -78,11 +78,16 @@ struct DescribeArgs {
 
 #[derive(ClapArgs, Debug)]
 struct ServeArgs {
-    /// The bus to serve: enip, ecat.
-    bus: String,
-    /// The bus's own options (`harness serve <bus> --help`).
-    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-    args: Vec<String>,
+    /// The bus to serve (enip, ecat, epl, pnio), then its own options (`harness serve <bus>
+    /// --help`). One list, so that clap hands everything after the bus, `--help` included, to
+    /// the bus's own parser.
+    #[arg(
+        value_name = "BUS",
+        required = true,
+        trailing_var_arg = true,
+        allow_hyphen_values = true
+    )]
+    words: Vec<String>,
 }
 
 #[derive(ClapArgs, Debug, Default)]
@@ -287,9 +292,10 @@ fn describe(a: DescribeArgs) -> Result<i32, String> {
 }
 
 fn serve(a: ServeArgs) -> Result<i32, String> {
-    let bus = crate::bus::by_name(&a.bus)
-        .ok_or_else(|| format!("cannot serve `{}` (buses: {})", a.bus, crate::bus::names()))?;
-    (bus.serve)(&a.args)
+    let (name, args) = a.words.split_first().ok_or("`harness serve` needs a bus")?;
+    let bus = crate::bus::by_name(name)
+        .ok_or_else(|| format!("cannot serve `{name}` (buses: {})", crate::bus::names()))?;
+    (bus.serve)(args)
 }
 
 fn run(a: RunArgs) -> Result<i32, String> {

@@ -91,10 +91,15 @@ pub(crate) struct CoverageArgs {
     /// Suites folder (its `inventory/` holds the statement inventories).
     #[arg(long)]
     suites: Option<PathBuf>,
+    /// Also a problem: a section whose asserted share of its testable statements is below
+    /// PERCENT (the release gate is 90).
+    #[arg(long, value_name = "PERCENT", value_parser = clap::value_parser!(u8).range(0..=100))]
+    min: Option<u8>,
 }
 
 /// Prints the statements per manual and section (statements, asserted, pending, untestable,
-/// open, asserted of the testable), then what keeps the inventories honest: a case id that no
+/// open, asserted of the testable), the errata per manual by the check that found them, then
+/// what keeps the inventories honest: a case id that no
 /// suite has, a case of an inventoried manual that no statement names, an asserted count below
 /// its floor. Exit 1 when any of those, 2 when an inventory or suite does not load.
 pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
@@ -113,8 +118,29 @@ pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
     }
     let floors = inventory::floors(&dir).map_err(|e| e.to_string())?;
     let mut out = std::io::stdout().lock();
-    let _ = out.write_all(report::statements_table(&inventory::coverage(&inventories)).as_bytes());
-    let problems = inventory::check(&inventories, &loaded, &floors);
+    let sections = inventory::coverage(&inventories);
+    let _ = out.write_all(report::statements_table(&sections).as_bytes());
+    let _ = writeln!(out);
+    let _ = out.write_all(report::errata_table(&loaded.errata).as_bytes());
+    let mut problems = inventory::check(&inventories, &loaded, &floors);
+    if let Some(min) = a.min {
+        problems.extend(
+            sections
+                .iter()
+                .filter(|s| s.percent() < f64::from(min))
+                .map(|s| {
+                    format!(
+                        "{} {} §{}: {} of {} testable statements asserted ({:.0} %), below {min} %",
+                        s.doc,
+                        s.edition,
+                        s.section,
+                        s.asserted,
+                        s.asserted + s.open(),
+                        s.percent()
+                    )
+                }),
+        );
+    }
     for p in &problems {
         let _ = writeln!(out, "PROBLEM {p}");
     }

@@ -16,9 +16,10 @@
 //!   11 lost.
 //!
 //! The embedded link stands in for the field bus: its cyclic process data count as cyclic
-//! communication (and, for PROFINET, as an established application relation). Bits the
-//! simulator has no cause for (TU3-PNT bit 0 "Initialisation" and bit 5 "Ethernet connection",
-//! whose polarity the manual does not give; POWERLINK ASIC and system-bus errors) stay 0.
+//! communication (and, for PROFINET, as an established application relation), and the
+//! TU3-PNT's bit 5 "Ethernet connection" is set, as every other bit of its list reads 1 = the
+//! condition named (the simulated module is always on its network). Bits the simulator has no
+//! cause for (TU3-PNT bit 0 "Initialisation"; POWERLINK ASIC and system-bus errors) stay 0.
 
 use proto::nord::Product;
 
@@ -61,6 +62,7 @@ pub(crate) fn status_parameters(
                 1,
                 i32::from(f.cyclic) << 1
                     | i32::from(f.telegram_timeout) << 3
+                    | 1 << 5
                     | online_pairs(f.online, 1, 8),
             )),
             Some((170, 1, if f.telegram_timeout { 1020 } else { 0 })),
@@ -100,8 +102,8 @@ mod tests {
     #[case(Product::Tu4Eip, flags(true, true, 4), vec![(173, 1, 0xAA0B), (173, 2, 0x00AA)])]
     #[case(Product::Tu3Eip, flags(false, false, 6), vec![(173, 1, 0xAA01), (173, 2, 0x0AAA)])]
     // BU 0590 §5.1.3: AR installed, FI online = bits 9–8 10b; P170 1020 on a timeout.
-    #[case(Product::Tu3Pnt, flags(true, false, 1), vec![(173, 1, 0x0202), (170, 1, 0)])]
-    #[case(Product::Tu3Pnt, flags(false, true, 1), vec![(173, 1, 0x0208), (170, 1, 1020)])]
+    #[case(Product::Tu3Pnt, flags(true, false, 1), vec![(173, 1, 0x0222), (170, 1, 0)])]
+    #[case(Product::Tu3Pnt, flags(false, true, 1), vec![(173, 1, 0x0228), (170, 1, 1020)])]
     // BU 2200 §7.1.3: [-01] FI 1..4 in bits 8–15, [-02] FI 1..8 in bits 0–15, 10b each.
     #[case(Product::Tu4Pol, flags(true, false, 4), vec![(173, 1, 0xAA03), (173, 2, 0x00AA)])]
     #[case(Product::Tu3Pol, flags(false, false, 1), vec![(173, 1, 0x0201), (173, 2, 0x0002)])]

@@ -11,9 +11,9 @@
 //! answer follows in a later cycle — which is why the manuals require the master to repeat an
 //! order until its answer arrives (BU 0620 §2.5.6).
 
-use proto::nord::pkw::PkwRepr;
+use proto::nord::pkw::{PkwRepr, ResponseLabel};
 use proto::nord::ppo::{PpoRepr, PpoType};
-use proto::nord::{led, Inverter, ParamNumber, Product};
+use proto::nord::{led, ArrayElement, Inverter, ParamNumber, Product};
 use std::time::Duration;
 
 use crate::bus_status::{self, BusFlags};
@@ -54,7 +54,11 @@ const E10_5: FaultCode = FaultCode { group: 10, sub: 5 };
 /// 0 "Off" and -0.1 "No error", which both make the inverter ignore communication errors on
 /// the field bus (BU 0620 §4.5, BU 2100 §8.1 "Parameter P513").
 fn ethernet_timeout(store: &ParamStore) -> Option<Duration> {
-    let tenths = store.read(P513, None, ELEMENT_ETHERNET).ok()?;
+    // SK 550P: [-04] "Ethernet"; behind the SK TU3-PNT one value (BU 0590 §5.2.1).
+    let tenths = store
+        .read(P513, None, ELEMENT_ETHERNET)
+        .or_else(|_| store.read(P513, None, None))
+        .ok()?;
     u64::try_from(tenths)
         .ok()
         .filter(|t| *t > 0)
@@ -161,6 +165,29 @@ impl ParamChannel {
     }
 }
 
+/// P740 / P741 [-08]…[-12] "Parameter data In / Out 1…5" of an SK 5xxE from SK 540E (BU 0590
+/// §5.2.2, p. 42–43): the parameter transfer's order label (AK), parameter number (PNU), index
+/// (IND) and value (PWE 1/2); a unit whose P740/P741 are shorter ignores them.
+fn show_parameter_data(store: &mut ParamStore, order: &PkwRepr, answer: &PkwRepr) {
+    let words = |p: &PkwRepr| {
+        [
+            i32::from(p.ak),
+            i32::from(p.pnu),
+            i32::from(p.ind),
+            (p.pwe >> 16) as i32,
+            (p.pwe & 0xFFFF) as i32,
+        ]
+    };
+    for (e, w) in (8..).zip(words(order)) {
+        store.set_info(740, e, w);
+    }
+    if answer.ak != 0 {
+        for (e, w) in (8..).zip(words(answer)) {
+            store.set_info(741, e, w);
+        }
+    }
+}
+
 /// FI 1 of the SK 550P (and the interface itself) is the device the bus interface is built
 /// into; inverters reached over the system bus support fewer order labels (BU 0620 §2.5.6.3).
 fn unit_is_first(unit: Unit) -> bool {
@@ -227,9 +254,30 @@ impl InverterUnit {
     /// process data.
     fn show_fault(&mut self) {
         let code = self.drive.fault().or(self.drive.pending_fault());
-        self.params
-            .store
-            .set_info(700, 1, code.map_or(0, |f| i32::from(f.p700())));
+        let value = code.map_or(0, |f| i32::from(f.p700()));
+        let store = &mut self.params.store;
+        let before = ParamNumber::new(700)
+            .ok()
+            .and_then(|n| store.read(n, None, ArrayElement::new(1).ok()).ok());
+        store.set_info(700, 1, value);
+        // The error memory P701 "Last error" [-01]…[-05] (BU 0590 §6.2: the error "is
+        // permanently stored in the FI error statistics"; BU 0620 §5: P700 and P701), newest
+        // first, where the unit has it.
+        if value != 0 && before != Some(value) {
+            if let Ok(p701) = ParamNumber::new(701) {
+                let last: Vec<i32> = (1..=4)
+                    .map(|e| {
+                        store
+                            .read(p701, None, ArrayElement::new(e).ok())
+                            .unwrap_or(0)
+                    })
+                    .collect();
+                store.set_info(701, 1, value);
+                for (e, v) in (2..).zip(last) {
+                    store.set_info(701, e, v);
+                }
+            }
+        }
     }
 }
 
@@ -252,6 +300,8 @@ pub struct Device {
     interface: ParamChannel,
     inverters: Vec<InverterUnit>,
     fieldbus_timeout: bool,
+    /// Inverters lost from the system bus (bit n: FI n + 1), no longer online.
+    lost: u8,
     /// The flags the bus status parameters show (written again only when they change: the
     /// monitoring runs on every frame).
     shown: Option<BusFlags>,
@@ -312,6 +362,13 @@ impl Device {
             interface.store.set_info(171, 1, 13);
             interface.store.set_info(171, 2, r);
         }
+        if config.product == Product::Tu3Pnt {
+            // [-04]…[-06]: the rest of the example address 00:0E:CF:03:60:00 (BU 0590 §5.1.4),
+            // the one the PROFINET station answers DCP with.
+            for (e, b) in (4..).zip([0x03, 0x60, 0x00]) {
+                interface.store.set_info(181, e, b);
+            }
+        }
         if config.firmware == Firmware::Next {
             interface.store.set_info(171, 2, 1);
             interface.store.set_info(856, 1, 2);
@@ -324,6 +381,7 @@ impl Device {
             interface,
             inverters,
             fieldbus_timeout: false,
+            lost: 0,
             shown: None,
             module_outputs: 0,
         }
@@ -352,11 +410,19 @@ impl Device {
     ///   [`bus_status`]): ready, cyclic communication, field-bus timeout, timeout P513/P151
     ///   (while an inverter shows E10.3), the inverters online.
     fn monitor(&mut self, now: Duration) {
-        self.interface.store.load_module_factory_setting();
+        if matches!(
+            self.config.product,
+            Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip
+        ) {
+            self.interface.store.load_module_factory_setting();
+        }
         self.show_relays();
         let mut flags = BusFlags {
             fieldbus_timeout: self.fieldbus_timeout,
-            online: self.config.inverters,
+            // FI 1..=n online, up to the first one lost.
+            online: (0..self.config.inverters)
+                .find(|n| self.lost & 1 << n != 0)
+                .unwrap_or(self.config.inverters),
             ..BusFlags::default()
         };
         let p151 = match self.config.product.family() {
@@ -466,13 +532,33 @@ impl Device {
             Unit::Interface => {
                 let answer = self.interface.cycle(order, delay, product, unit);
                 self.adopt_gateway(&order, &answer);
+                self.adopt_address_and_mask(&order, &answer);
+                self.load_factory_settings(&order, &answer);
                 Ok(answer)
             }
-            Unit::Inverter(i) => Ok(self
-                .inverter_mut(i)?
-                .params
-                .cycle(order, delay, product, unit)),
+            Unit::Inverter(i) => {
+                let params = &mut self.inverter_mut(i)?.params;
+                let answer = params.cycle(order, delay, product, unit);
+                show_parameter_data(&mut params.store, &order, &answer);
+                Ok(answer)
+            }
         }
+    }
+
+    /// SK TU3-PNT P152 "Factory setting" (BU 0590 §5.1.1, p. 34): 1 loads the factory settings
+    /// of the module's parameters (data record 100 reaches the module's P150…P199, §4.2.2.1)
+    /// and the parameter "returns automatically to 0".
+    fn load_factory_settings(&mut self, order: &PkwRepr, answer: &PkwRepr) {
+        let positive = answer.ak != 0 && answer.ak != ResponseLabel::CANNOT_EXECUTE.0;
+        if self.config.product != Product::Tu3Pnt
+            || !positive
+            || order.parameter() != 152
+            || order.pwe != 1
+            || !matches!(order.ak, 2 | 3 | 7 | 8 | 11..=14)
+        {
+            return;
+        }
+        self.interface.store.load_factory_settings();
     }
 
     /// P877 "Present IP gateway" (BU 0620 §4.4.3, p. 88) shows the gateway set in P852 once it
@@ -497,6 +583,68 @@ impl Device {
             if let Ok(v) = store.read(n, None, element) {
                 store.set_info(877, e, v);
             }
+        }
+    }
+
+    /// Under PROFINET IO (P870 = 1) P850 IP address and P851 sub-net mask are saved when
+    /// element [-04] is entered, and P875 / P876 then show them (BU 0620 §3.8.1 p. 72, §4.2.4
+    /// P850/P851 p. 82: "only saved after a value is entered in the array element [-04]"). An
+    /// address that does not conform with the mask in P851 corrects the mask; a mask that
+    /// does not conform with the address in P850 is not saved (P851 returns to the saved
+    /// mask). "Conforms": [`proto::nord::pnio::mask_conforms`] (contiguous, no shorter
+    /// than the address's class mask, the reading BU 0590's P161 example gives).
+    fn adopt_address_and_mask(&mut self, order: &PkwRepr, answer: &PkwRepr) {
+        use proto::nord::pnio::{corrected_mask, mask_conforms, BUS_PROTOCOL_CODE};
+        use std::net::Ipv4Addr;
+        let label = proto::nord::pkw::OrderLabel(order.ak);
+        let written = label.is_array()
+            && label != proto::nord::pkw::OrderLabel::REQUEST_ARRAY_VALUE
+            && answer.ak != 0
+            && answer.ak != proto::nord::pkw::ResponseLabel::CANNOT_EXECUTE.0;
+        let param = match order.pnu {
+            850 | 1850 => 850,
+            851 | 1851 => 851,
+            _ => return,
+        };
+        let store = &mut self.interface.store;
+        let profinet = ParamNumber::new(870)
+            .ok()
+            .and_then(|n| store.read(n, None, None).ok())
+            == Some(i32::from(BUS_PROTOCOL_CODE));
+        if !(self.config.product == Product::Sk550p
+            && profinet
+            && written
+            && proto::nord::pkw::Ind(order.ind).subindex() == 3)
+        {
+            return;
+        }
+        let read4 = |store: &ParamStore, number: i64| -> Option<Ipv4Addr> {
+            let n = ParamNumber::new(number).ok()?;
+            let mut b = [0u8; 4];
+            for (e, slot) in (1..=4i64).zip(b.iter_mut()) {
+                let element = proto::nord::ArrayElement::new(e).ok();
+                *slot = u8::try_from(store.read(n, None, element).ok()?).ok()?;
+            }
+            Some(Ipv4Addr::from(b))
+        };
+        let write4 = |store: &mut ParamStore, numbers: &[u16], value: Ipv4Addr| {
+            for &number in numbers {
+                for (e, b) in (1..=4u8).zip(value.octets()) {
+                    store.set_info(number, e, i32::from(b));
+                }
+            }
+        };
+        let (Some(ip), Some(mask)) = (read4(store, 850), read4(store, 851)) else {
+            return;
+        };
+        if param == 850 {
+            write4(store, &[875], ip);
+            let mask = corrected_mask(ip, mask);
+            write4(store, &[851, 876], mask);
+        } else if mask_conforms(ip, mask) {
+            write4(store, &[876], mask);
+        } else if let Some(saved) = read4(store, 876) {
+            write4(store, &[851], saved);
         }
     }
 
@@ -624,6 +772,15 @@ impl Device {
             unit.show_fault();
         }
         Ok(())
+    }
+
+    /// FI `inverter` is lost from the system bus: the SK TU3-PNT's bus status no longer shows
+    /// its one FI online (BU 0590 §5.1.3 P173 bits 9–8 "00 FI is offline"). The others' bus
+    /// status counts the FIs online from FI 1 and is left as it was.
+    pub fn lose(&mut self, inverter: Inverter) {
+        if self.config.product == Product::Tu3Pnt {
+            self.lost |= 1 << (inverter.get() - 1);
+        }
     }
 
     /// Marks the field-bus watchdog (P872/P173 bit 2) as tripped or clear.
@@ -836,6 +993,47 @@ mod tests {
         interface_order(&mut d, write(3, 1), 10);
         assert_eq!(read_interface(&mut d, 877, 1), 192);
         assert_eq!(read_interface(&mut d, 877, 4), 1);
+    }
+
+    #[test]
+    fn p875_p876_follow_p850_p851_under_profinet_once_element_4_is_written() {
+        let mut d = Device::new(DeviceConfig::new(Product::Sk550p));
+        d.interface.store.set_info(870, 1, 1);
+        let write = |pnu: u16, sub: u16, value: u32| PkwRepr {
+            ak: 7,
+            pnu,
+            ind: sub << 8,
+            pwe: value,
+            ..Default::default()
+        };
+        let before = read_interface(&mut d, 875, 1);
+        for (sub, v) in [(0, 10), (1, 1), (2, 2)] {
+            interface_order(&mut d, write(1850, sub, v), u64::from(sub) * 10);
+        }
+        assert_eq!(
+            read_interface(&mut d, 875, 1),
+            before,
+            "not saved before [-04]"
+        );
+        interface_order(&mut d, write(1850, 3, 3), 40);
+        assert_eq!(read_interface(&mut d, 875, 1), 10);
+        // 255.0.0.0 conforms with 10.1.2.3 (class A) and is saved with [-04].
+        for (sub, t) in [(1, 50), (2, 60), (3, 70)] {
+            interface_order(&mut d, write(1851, sub, 0), t);
+        }
+        assert_eq!(read_interface(&mut d, 876, 2), 0);
+        // 192.168.20.201 (class C) corrects the mask to 255.255.255.0.
+        for (sub, v, t) in [(0, 192, 80), (1, 168, 90), (2, 20, 100), (3, 201, 110)] {
+            interface_order(&mut d, write(1850, sub, v), t);
+        }
+        assert_eq!(read_interface(&mut d, 851, 3), 255);
+        assert_eq!(read_interface(&mut d, 876, 3), 255);
+        // 255.0.0.0 does not conform with it: not saved.
+        for (sub, t) in [(1, 120), (2, 130), (3, 140)] {
+            interface_order(&mut d, write(1851, sub, 0), t);
+        }
+        assert_eq!(read_interface(&mut d, 851, 2), 255);
+        assert_eq!(read_interface(&mut d, 876, 2), 255);
     }
 
     #[test]

@@ -332,7 +332,7 @@ impl Drive {
         };
         self.goal = goal;
         let from = self.position;
-        self.position += (before + self.frequency) / 2.0 * dt;
+        self.position += (before + self.frequency) / 2.0 * dt * gear_factor(params);
         if let (State::OperationEnabled, Some(t)) = (self.state, self.target) {
             // Reached or passed within this cycle: stop at the position.
             let target = rotations(t);
@@ -432,6 +432,16 @@ fn setpoint_hz(control: ControlWord, setpoints: &[u16], functions: &[i32; 5], ma
         -sum
     } else {
         sum
+    }
+}
+
+/// The gear ratio factor P607 / P608 (BU 0590 §4.1.5: with it the low word's position range
+/// "can be extended … an according reduction in the resolution"): positions count rotations
+/// of the output, motor rotations × P607 / P608; 1 where the inverter has neither.
+fn gear_factor(params: &dyn DriveParams) -> f64 {
+    match (params.get(607, None), params.get(608, None)) {
+        (Some(n), Some(d)) if n > 0 && d > 0 => f64::from(n) / f64::from(d),
+        _ => 1.0,
     }
 }
 
@@ -607,6 +617,23 @@ mod tests {
             out = d.cycle(word, setpoints, &Positioning, ms(t));
         }
         out
+    }
+
+    #[test]
+    fn gear_ratio_factor_scales_the_position() {
+        // BU 0590 §4.1.5: P607 / P608 = 1 / 10: 10 motor rotations are one output rotation.
+        struct Gear;
+        impl DriveParams for Gear {
+            fn get(&self, number: u16, _: Option<u8>) -> Option<i32> {
+                match number {
+                    607 => Some(1),
+                    608 => Some(10),
+                    _ => None,
+                }
+            }
+        }
+        assert_eq!(gear_factor(&Gear), 0.1);
+        assert_eq!(gear_factor(&Positioning), 1.0);
     }
 
     #[rstest::rstest]

@@ -7,7 +7,7 @@
 
 use proto::nord::params::Width;
 use proto::nord::pkw::{ErrorNumber, Ind, OrderLabel, PkwRepr, ResponseLabel};
-use proto::nord::{ArrayElement, ParamNumber, ParamSet};
+use proto::nord::{ArrayElement, ParamNumber, ParamSet, Product};
 
 use crate::store::{AccessError, ParamStore, Persist};
 
@@ -104,10 +104,13 @@ fn serve(
             store.read(number, set, element).map_err(err)?,
         )),
         _ => {
-            if ak.is_dword() != dword {
+            // Error 5 "at present only for SK 700E" (BU 0590 §4.2.3.1 Table 24): the SK 5xxE under
+            // the SK TU3-PNT takes a value in either width.
+            if ak.is_dword() != dword && store.product() != Product::Tu3Pnt {
                 return Err(ErrorNumber::BAD_TYPE);
             }
             let value = order.pwe as i32;
+            // P560 "Save in EEPROM" = 0 keeps changes in RAM too: the store decides that.
             let persist = if ak.is_ram_only() {
                 Persist::RamOnly
             } else {
@@ -126,7 +129,7 @@ mod tests {
     use super::*;
     use crate::store::Target;
     use proto::nord::pkw::supported_orders;
-    use proto::nord::{Inverter, Product};
+    use proto::nord::Inverter;
 
     fn fi(n: i64) -> ParamStore {
         ParamStore::new(Product::Sk550p, Target::Inverter(Inverter::new(n).unwrap()))
@@ -236,6 +239,38 @@ mod tests {
             let r = handle_order(&mut s, all, &o);
             assert_eq!((r.ak, r.pwe), (7, e), "{o:?}");
         }
+    }
+
+    #[test]
+    fn no_error_5_behind_the_tu3_pnt() {
+        // BU 0590 Table 24: error 5 "Invalid data type (at present only for SK 700E)".
+        let mut s = ParamStore::new(Product::Tu3Pnt, Target::Inverter(Inverter::new(1).unwrap()));
+        let o = PkwRepr {
+            ak: 3,
+            pnu: 1102,
+            pwe: 300,
+            ..Default::default()
+        };
+        let r = handle_order(&mut s, supported_orders(Product::Tu3Pnt, true), &o);
+        assert_eq!((r.ak, r.pwe), (2, 300));
+    }
+
+    #[test]
+    fn p560_zero_keeps_writes_in_ram() {
+        // BU 0590 §4.2.4.4: P560 "Save in EEPROM" decides whether changes reach the EEPROM
+        // (the store counts P560's own write, then no other while it is 0).
+        let mut s = fi(1);
+        let all = supported_orders(Product::Tu3Pnt, true);
+        let write = |pnu, pwe| PkwRepr {
+            ak: 2,
+            pnu,
+            pwe,
+            ..Default::default()
+        };
+        assert_eq!(handle_order(&mut s, all, &write(1560, 0)).ak, 1);
+        assert_eq!(s.eeprom_writes(), 1);
+        assert_eq!(handle_order(&mut s, all, &write(1102, 300)).ak, 1);
+        assert_eq!(s.eeprom_writes(), 1);
     }
 
     #[test]

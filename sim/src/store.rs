@@ -2,12 +2,18 @@
 //! catalogue (`proto::nord::params`), with EEPROM writes counted.
 //!
 //! The EEPROM allows 100,000 write cycles (BU 0620 §2.5.6 "Max. 100,000 permissible writing
-//! cycles"); order labels 11–14 write RAM only, so the store counts only EEPROM writes.
+//! cycles"); order labels 11–14 write RAM only, and so does every write while P560 "Save in
+//! EEPROM" is 0 (§2.5.6: "via the parameter P560 Save in EEPROM"), so the store counts only
+//! EEPROM writes.
 
 use std::collections::BTreeMap;
 
 use proto::nord::params::{self, Access, Owner, ParamDef};
+use proto::nord::pnio::{self, IpSuite};
 use proto::nord::{ArrayElement, Inverter, ParamNumber, ParamSet, Product};
+
+/// P560 "Save in EEPROM" (BU 0620 §2.5.6): 0 keeps parameter changes in RAM only.
+const SAVE_IN_EEPROM: u16 = 560;
 
 /// Where an order goes: the bus interface's own parameters, or an inverter's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,6 +64,8 @@ pub struct ParamStore {
     /// (number, set 0..3, element 0..) → value; absent = factory setting.
     values: BTreeMap<(u16, u8, u8), i32>,
     eeprom_writes: u64,
+    /// SK TU3-PNT: the IP address P160 and mask P161 last saved (`None`: the factory's).
+    saved_ip: Option<[[i32; 4]; 2]>,
 }
 
 impl ParamStore {
@@ -72,7 +80,13 @@ impl ParamStore {
             owner,
             values: BTreeMap::new(),
             eeprom_writes: 0,
+            saved_ip: None,
         }
+    }
+
+    /// The product the unit belongs to.
+    pub fn product(&self) -> Product {
+        self.product
     }
 
     /// The catalogue entry of a parameter this unit has.
@@ -136,14 +150,126 @@ impl ParamStore {
             Access::ResetOnly if value != 0 => return Err(AccessError::OnlyResettable),
             _ => {}
         }
-        if !(def.min..=def.max).contains(&value) {
+        if !(def.min..=def.max).contains(&value) || !params::value_allowed(def, self.product, value)
+        {
             return Err(AccessError::OutOfRange);
         }
+        if let Some(ip_param) = self.ip_parameter(def) {
+            self.values.insert(key, value);
+            // [-01]…[-03] wait in RAM for [-04]
+            if key.2 == 3 {
+                self.save_ip(ip_param, persist);
+            }
+            return Ok(());
+        }
         self.values.insert(key, value);
-        if persist == Persist::Eeprom {
+        // P560 itself is always saved, so that the choice outlives a power-off.
+        if persist == Persist::Eeprom && (def.number == SAVE_IN_EEPROM || self.saves_to_eeprom()) {
             self.eeprom_writes += 1;
         }
         Ok(())
+    }
+
+    /// SK TU3-PNT P160 / P161 (0 / 1): "only saved by writing it to Index 4" (BU 0590 §5.1.2).
+    fn ip_parameter(&self, def: &ParamDef) -> Option<usize> {
+        let module = self.product == Product::Tu3Pnt && self.owner == Owner::Interface;
+        match def.number {
+            160 if module => Some(0),
+            161 if module => Some(1),
+            _ => None,
+        }
+    }
+
+    fn ip_values(&self, number: u16) -> [i32; 4] {
+        let n = ParamNumber::new(i64::from(number)).ok();
+        std::array::from_fn(|e| {
+            n.and_then(|n| {
+                self.read(n, None, ArrayElement::new(e as i64 + 1).ok())
+                    .ok()
+            })
+            .unwrap_or(0)
+        })
+    }
+
+    fn set_ip_values(&mut self, number: u16, octets: [i32; 4]) {
+        for (e, v) in (0u8..).zip(octets) {
+            self.values.insert((number, 0, e), v);
+        }
+    }
+
+    /// Index [-04] of P160 (`which` 0) or P161 (1) was written (BU 0590 §5.1.2, p. 34): the
+    /// address is saved unless it is against the convention; a mask that contradicts the saved
+    /// address is corrected when the address is written (P160: "the mask is corrected
+    /// automatically") and not saved when the mask is written (P161: "Saving is prevented"); in
+    /// both refusals the parameters show what was saved before. 0.0.0.0 deletes the settings.
+    fn save_ip(&mut self, which: usize, persist: Persist) {
+        let saved = self
+            .saved_ip
+            .unwrap_or([self.factory_ip(160), self.factory_ip(161)]);
+        let (ip, mut mask) = (self.ip_values(160), self.ip_values(161));
+        let addr = |o: [i32; 4]| std::net::Ipv4Addr::from(o.map(|b| b as u8));
+        let conforms = |ip, mask| {
+            let suite = IpSuite {
+                ip: addr(ip),
+                mask: addr(mask),
+                gateway: std::net::Ipv4Addr::UNSPECIFIED,
+            };
+            pnio::check_ip_suite(&suite).is_ok() && pnio::mask_conforms(addr(ip), addr(mask))
+        };
+        let ok = if ip == [0; 4] {
+            mask = [0; 4];
+            true
+        } else if conforms(ip, mask) {
+            true
+        } else if which == 0 {
+            // P160: the mask is corrected to the address's class, then the address is checked.
+            mask = pnio::corrected_mask(addr(ip), addr(mask))
+                .octets()
+                .map(i32::from);
+            conforms(ip, mask)
+        } else {
+            false
+        };
+        let keep = if ok { [ip, mask] } else { saved };
+        self.set_ip_values(160, keep[0]);
+        self.set_ip_values(161, keep[1]);
+        if ok {
+            self.saved_ip = Some(keep);
+            if persist == Persist::Eeprom {
+                self.eeprom_writes += 1;
+            }
+        }
+    }
+
+    fn factory_ip(&self, number: u16) -> [i32; 4] {
+        let def = ParamNumber::new(i64::from(number))
+            .ok()
+            .and_then(|n| self.def(n));
+        std::array::from_fn(|e| def.map_or(0, |d| params::element_default(d, e as u8 + 1)))
+    }
+
+    /// Loads the factory settings of every setting parameter (information parameters keep
+    /// what the device shows).
+    pub fn load_factory_settings(&mut self) {
+        let product = self.product;
+        let owner = self.owner;
+        self.saved_ip = None;
+        self.values.retain(|(number, _, _), _| {
+            ParamNumber::new(i64::from(*number))
+                .ok()
+                .and_then(|n| params::lookup(product, owner, n))
+                .is_none_or(|d| d.access == Access::ReadOnly)
+        });
+        self.eeprom_writes += 1;
+    }
+
+    /// Whether parameter changes reach the EEPROM: P560 "Save in EEPROM" is not 0 (RAM only),
+    /// or the unit has no P560 (the bus interface).
+    fn saves_to_eeprom(&self) -> bool {
+        ParamNumber::new(i64::from(SAVE_IN_EEPROM))
+            .ok()
+            .and_then(|n| self.read(n, None, None).ok())
+            .is_none_or(|v| v != 0)
     }
 
     /// Elements of an array parameter.
@@ -221,6 +347,19 @@ mod tests {
     }
 
     #[test]
+    fn p560_zero_keeps_changes_in_ram() {
+        let mut s = ParamStore::new(Product::Sk550p, fi1());
+        s.write(n(560), None, None, 0, Persist::Eeprom).unwrap();
+        assert_eq!(s.eeprom_writes(), 1, "P560 itself is saved");
+        s.write(n(102), None, None, 300, Persist::Eeprom).unwrap();
+        assert_eq!(s.read(n(102), None, None), Ok(300));
+        assert_eq!(s.eeprom_writes(), 1);
+        s.write(n(560), None, None, 1, Persist::Eeprom).unwrap();
+        s.write(n(102), None, None, 400, Persist::Eeprom).unwrap();
+        assert_eq!(s.eeprom_writes(), 3);
+    }
+
+    #[test]
     fn refusals() {
         let mut s = ParamStore::new(Product::Sk550p, fi1());
         assert_eq!(
@@ -245,6 +384,59 @@ mod tests {
         );
         assert_eq!(s.array_len(n(543)), Ok(5));
         assert_eq!(s.eeprom_writes(), 0);
+    }
+
+    #[test]
+    fn tu3_pnt_device_name_and_factory_settings() {
+        // BU 0590 §5.1.2 P162: ASCII 45…122 and the closing 0; §5.1.1 P152 = 1 loads the
+        // factory settings (P160 back to 192.168.20.200).
+        let mut s = ParamStore::new(Product::Tu3Pnt, Target::Interface);
+        assert_eq!(
+            s.write(n(162), None, None, 44, Persist::Eeprom),
+            Err(AccessError::OutOfRange)
+        );
+        assert_eq!(s.write(n(162), None, None, 45, Persist::Eeprom), Ok(()));
+        assert_eq!(s.write(n(162), None, None, 0, Persist::Eeprom), Ok(()));
+        let e1 = ArrayElement::new(1).ok();
+        s.write(n(160), None, e1, 10, Persist::Eeprom).unwrap();
+        s.set_info(172, 1, 2);
+        s.load_factory_settings();
+        assert_eq!(s.read(n(160), None, e1), Ok(192));
+        assert_eq!(s.read(n(172), None, None), Ok(2));
+    }
+
+    #[test]
+    fn tu3_pnt_ip_saved_by_index_4() {
+        // BU 0590 §5.1.2 P160/P161 (p. 34).
+        let mut s = ParamStore::new(Product::Tu3Pnt, Target::Interface);
+        let e = |i: i64| ArrayElement::new(i).ok();
+        let w = |s: &mut ParamStore, p: i64, i: i64, v: i32| {
+            s.write(n(p), None, e(i), v, Persist::Eeprom).unwrap();
+        };
+        w(&mut s, 160, 1, 10);
+        assert_eq!(s.eeprom_writes(), 0);
+        w(&mut s, 160, 4, 5);
+        assert_eq!(s.eeprom_writes(), 1);
+        assert_eq!(s.read(n(160), None, e(1)), Ok(10));
+        // 10.168.20.5 / 255.0.0.0 would fit, but back to the class C example: not saved.
+        w(&mut s, 160, 1, 192);
+        w(&mut s, 161, 2, 0);
+        w(&mut s, 161, 3, 0);
+        w(&mut s, 161, 4, 0);
+        assert_eq!(s.eeprom_writes(), 1);
+        assert_eq!(s.read(n(161), None, e(2)), Ok(255));
+        assert_eq!(s.read(n(160), None, e(1)), Ok(10));
+        // Against the convention (loopback): not saved.
+        w(&mut s, 160, 1, 127);
+        w(&mut s, 160, 4, 1);
+        assert_eq!(s.eeprom_writes(), 1);
+        assert_eq!(s.read(n(160), None, e(1)), Ok(10));
+        // A mask that contradicts the address is corrected when the address is written.
+        w(&mut s, 161, 3, 0);
+        w(&mut s, 160, 1, 192);
+        w(&mut s, 160, 4, 7);
+        assert_eq!(s.eeprom_writes(), 2);
+        assert_eq!(s.read(n(161), None, e(3)), Ok(255));
     }
 
     #[test]

@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 
 pub(crate) mod netns;
 pub(crate) mod peer;
+pub(crate) mod suite_run;
 pub(crate) mod tshark;
 
 /// A child process, killed when dropped (a served simulator, a third-party server).

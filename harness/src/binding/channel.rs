@@ -131,14 +131,18 @@ impl Channel {
             Action::Read(o) | Action::Write(o) => {
                 let order = self.order_for(o)?;
                 let unit = unit(o.target);
-                let resp = self.param_order(unit, order)?;
-                pkw_result(&resp, json!({}))
+                let (resp, cycles) = self.param_order(unit, order)?;
+                pkw_result(&resp, json!({ "cycles": cycles }))
             }
             Action::Pkw { inverter, bytes } => {
                 let order = PkwRepr::parse(bytes)
                     .map_err(|e| StepError::Suite(format!("pkw bytes: {e}")))?;
-                let resp = self.param_order(Unit::Inverter(*inverter), order)?;
-                let extra = json!({ "bytes": hex(&resp.emit_bytes()), "pwe": resp.pwe });
+                let (resp, cycles) = self.param_order(Unit::Inverter(*inverter), order)?;
+                let extra = json!({
+                    "bytes": hex(&resp.emit_bytes()),
+                    "pwe": resp.pwe,
+                    "cycles": cycles,
+                });
                 pkw_result(&resp, extra)
             }
             Action::Process {
@@ -240,8 +244,9 @@ impl Channel {
         decoded.transpose().map_err(StepError::Protocol)
     }
 
-    /// Repeats `order` every cycle until the answer carries its PNU with a response label.
-    fn param_order(&mut self, unit: Unit, order: PkwRepr) -> Result<PkwRepr, StepError> {
+    /// Repeats `order` every cycle until the answer carries its PNU with a response label;
+    /// returns the answer and the bus cycles it took (1: the first answer carried it).
+    fn param_order(&mut self, unit: Unit, order: PkwRepr) -> Result<(PkwRepr, u32), StepError> {
         if !self.ppo.has_pkw() {
             return Err(StepError::Suite(format!(
                 "PPO type {} has no parameter channel",
@@ -249,11 +254,11 @@ impl Channel {
             )));
         }
         let mut last = None;
-        for _ in 0..self.retries {
+        for cycle in 1..=self.retries {
             if let Some(ppo) = self.exchange(unit, Some(order))? {
                 if let Some(resp) = ppo.pkw {
                     if resp.ak != 0 && resp.pnu == order.pnu {
-                        return Ok(resp);
+                        return Ok((resp, cycle));
                     }
                     last = Some(resp);
                 }

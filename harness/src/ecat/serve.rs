@@ -14,6 +14,7 @@ use std::sync::Arc;
 use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
+use crate::net::serve_args::RawServeArgs;
 pub use crate::net::LinkError;
 use crate::net::{RawLink, MAX_FRAME};
 use sim::ecat::Slave;
@@ -166,18 +167,8 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
     about = "Serve the simulator as an EtherCAT slave on a network interface (raw Ethernet: root or CAP_NET_RAW)"
 )]
 struct ServeArgs {
-    /// The network interface, e.g. one end of a veth pair.
-    #[arg(long)]
-    iface: String,
-    /// Product profile (a product with EtherCAT: sk550p).
-    #[arg(long, default_value = "sk550p")]
-    profile: String,
-    /// Inverters behind the interface (default: the product's maximum).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
-    inverters: Option<u8>,
-    /// Stop after this many seconds (default: serve until killed).
-    #[arg(long)]
-    seconds: Option<u64>,
+    #[command(flatten)]
+    common: RawServeArgs,
 }
 
 /// `harness serve ecat ARGS…`; returns the exit code.
@@ -187,33 +178,23 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         Err(code) => return Ok(code),
     };
     let opts = ServeOptions {
-        iface: a.iface,
-        profile: a.profile,
-        inverters: a.inverters,
+        iface: a.common.iface,
+        profile: a.common.profile,
+        inverters: a.common.inverters,
     };
-    serve(&opts, a.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
+    serve(&opts, a.common.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
     Ok(crate::cli::EXIT_PASS)
 }
 
 /// The simulated device of `opts`: a product with an EtherCAT interface.
 fn device_config(opts: &ServeOptions) -> Result<sim::device::DeviceConfig, ServeError> {
-    let product = crate::profile::Profile::by_name(&opts.profile)
-        .and_then(|p| p.nord())
-        .map_err(ServeError::Profile)?;
-    if !product
-        .protocols()
-        .contains(&proto::nord::Protocol::Ethercat)
-    {
-        return Err(ServeError::Profile(format!(
-            "{} has no EtherCAT interface",
-            product.name()
-        )));
-    }
-    let max = product.max_inverters();
-    Ok(sim::device::DeviceConfig {
-        inverters: opts.inverters.unwrap_or(max).clamp(1, max),
-        ..sim::device::DeviceConfig::new(product)
-    })
+    crate::net::serve_args::device_config(
+        &opts.profile,
+        opts.inverters,
+        proto::nord::Protocol::Ethercat,
+        "EtherCAT",
+    )
+    .map_err(ServeError::Profile)
 }
 
 /// The simulated slave of `config` as the loop drives it.

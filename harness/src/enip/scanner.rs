@@ -661,14 +661,30 @@ impl Scanner {
                 }
                 Ok(v)
             }
-            EnipStep::StopIo { time } => {
-                // The scanner goes quiet: time passes without O→T frames.
+            EnipStep::StopIo { time, foreign_id } => {
+                // The scanner goes quiet: time passes without O→T frames of the connection
+                // (with `foreign_id`, frames whose connection ID is not the connection's).
                 let cycles = cycles_for(*time, RPI);
                 let mut frames = 0;
                 for _ in 0..cycles {
+                    let sent = match (foreign_id, self.io.as_mut()) {
+                        (true, Some(io)) => {
+                            io.sequence = io.sequence.wrapping_add(1);
+                            io.count = io.count.wrapping_add(1);
+                            let frame = IoFrame {
+                                connection: !io.o_t_id,
+                                sequence: io.sequence,
+                                count: io.count,
+                                run_idle: io.run_idle.then_some(u32::from(self.run)),
+                                data: vec![0; io.o_t_len],
+                            };
+                            Some(frame.emit().map_err(|e| StepError::Suite(e.to_string()))?)
+                        }
+                        _ => None,
+                    };
                     frames += self
                         .link
-                        .io_cycle(None, RPI)
+                        .io_cycle(sent.as_deref(), RPI)
                         .map_err(StepError::from)?
                         .len();
                 }

@@ -36,8 +36,10 @@ pub(crate) enum EnipStep {
     /// A Forward_Open with the given parameters; an accepted owner connection carries the
     /// following process-data steps.
     ForwardOpen(ForwardOpenSpec),
-    /// The scanner stops sending O→T data for this long.
-    StopIo { time: Duration },
+    /// The scanner stops sending O→T data for this long; with `foreign_id` it keeps sending
+    /// frames, but under a connection ID that is not the connection's (BU 0620 §2.3.1: a
+    /// consumer decides by the connection ID whether a telegram is for it).
+    StopIo { time: Duration, foreign_id: bool },
     /// The run/idle header of the following O→T frames: run (`true`) or idle.
     Run(bool),
 }
@@ -112,7 +114,14 @@ fn describe(e: &EnipStep) -> String {
                 ", no run/idle header"
             }
         ),
-        EnipStep::StopIo { time } => format!("stop O→T data for {time:?}"),
+        EnipStep::StopIo {
+            time,
+            foreign_id: false,
+        } => format!("stop O→T data for {time:?}"),
+        EnipStep::StopIo {
+            time,
+            foreign_id: true,
+        } => format!("O→T data under a foreign connection ID for {time:?}"),
         EnipStep::Run(true) => "run/idle header: run".into(),
         EnipStep::Run(false) => "run/idle header: idle".into(),
     }
@@ -205,9 +214,10 @@ fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
         }));
     }
     if m.contains_key("stop_io") {
-        let f = Fields::new("enip", m, &["stop_io"])?;
+        let f = Fields::new("enip", m, &["stop_io", "foreign_id"])?;
         return Ok(EnipStep::StopIo {
             time: parse_duration(&f.text("stop_io")?.unwrap_or_default())?,
+            foreign_id: f.bool("foreign_id")?.unwrap_or(false),
         });
     }
     if m.contains_key("run") {

@@ -379,11 +379,11 @@ impl<L: Link> EplBinding<L> {
                 let got = self.mn.raw_exchange(bytes).map_err(step_error)?;
                 let state = self.mn.node_state();
                 let mut f = json!({
-                    "answered": !got.is_empty(),
-                    "reply": got.first().map(|r| hex(&r.bytes)),
+                    "answered": got.is_some(),
+                    "reply": got.as_ref().map(|r| hex(&r.bytes)),
                     "state": state.map(|s| s.to_string()),
                 });
-                if let Some(r) = got.first().and_then(|r| r.repr.as_ref()) {
+                if let Some(r) = got.as_ref().and_then(|r| r.repr.as_ref()) {
                     f["type"] = json!(r.message_type().name());
                     f["decoded"] = json!(describe(r));
                 }

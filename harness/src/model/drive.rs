@@ -255,7 +255,11 @@ pub(super) const FNS: &[ComputeFn] = &[
         doc: "P543 actual-value function code: name and scaling (BU 0590 §5, BU 0620 §3.9)",
         run: |_: &Ctx, a: &Args| {
             let (c, i) = code(a)?;
-            function("P543", scaling::actual_function(i), c)
+            let mut v = function("P543", scaling::actual_function(i), c)?;
+            if i == 5 {
+                v["bits"] = json!(scaling::DIGITAL_IO_BITS);
+            }
+            Ok(v)
         },
     },
     ComputeFn {

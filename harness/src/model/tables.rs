@@ -34,6 +34,22 @@ fn comm_error(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     Ok(json!({ "p700": e.p700, "text": e.text, "profinet_alarm": errors::profinet_alarm(e.p700) }))
 }
 
+fn ethertype(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
+    use proto::eth::{ethertype_name, ETHERTYPE_ECAT, ETHERTYPE_POWERLINK, ETHERTYPE_PROFINET};
+    let value = match a.str("protocol")? {
+        "ethercat" => ETHERTYPE_ECAT,
+        "powerlink" => ETHERTYPE_POWERLINK,
+        "profinet" => ETHERTYPE_PROFINET,
+        p => {
+            return Err(ComputeError::BadArg {
+                arg: "protocol".into(),
+                why: format!("`{p}` has no EtherType of its own (ethercat, powerlink, profinet)"),
+            })
+        }
+    };
+    Ok(json!({ "value": value, "name": ethertype_name(value) }))
+}
+
 fn led_table(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let rows = match a.str("led")? {
         "dev" => led::DEV,
@@ -47,10 +63,12 @@ fn led_table(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
         "profinet-run" => led::PROFINET_RUN,
         "profinet-bf" => led::PROFINET_BF,
         "tu3-pnt-err" => led::TU3_PNT_ERR,
+        "tu3-pnt-ds" => led::TU3_PNT_DS,
+        "tu3-pnt-de" => led::TU3_PNT_DE,
         other => {
             return Err(ComputeError::BadArg {
                 arg: "led".into(),
-                why: format!("no LED table `{other}` (dev, bus, ethercat-run, ethercat-err, ethernetip-ms, ethernetip-ns, powerlink-bs, powerlink-be, profinet-run, profinet-bf, tu3-pnt-err)"),
+                why: format!("no LED table `{other}` (dev, bus, ethercat-run, ethercat-err, ethernetip-ms, ethernetip-ns, powerlink-bs, powerlink-be, profinet-run, profinet-bf, tu3-pnt-err, tu3-pnt-ds, tu3-pnt-de)"),
             })
         }
     };
@@ -278,6 +296,41 @@ pub(super) const FNS: &[ComputeFn] = &[
                 "revision": format!("{}.{}", id.revision.0, id.revision.1),
                 "eds_file": id.eds_file,
             }))
+        },
+    },
+    ComputeFn {
+        name: "tables.error_group",
+        doc: "DS-301 error group of an error code: 00xxh no error … FF00h specific to device (BU 0620 §5.4.1.2)",
+        run: |_: &Ctx, a: &Args| {
+            let code = u16::try_from(a.int("code")?).map_err(|_| ComputeError::BadArg {
+                arg: "code".into(),
+                why: "an error code is 16 bits".into(),
+            })?;
+            Ok(json!({ "group": errors::error_group(code) }))
+        },
+    },
+    ComputeFn {
+        name: "tables.ethertype",
+        doc: "EtherType of a real-time Ethernet: ethercat 88A4h, powerlink 88ABh, profinet 8892h (BU 0620 §2.2.3, §2.4.3, §2.5.3; IEEE EtherType registry)",
+        run: ethertype,
+    },
+    ComputeFn {
+        name: "tables.can_termination",
+        doc: "Is the CAN termination of the device at `position` of a system-bus line of `count` devices on (both ends only; BU 0620 §3.9 step 1)",
+        run: |_: &Ctx, a: &Args| {
+            let byte = |name: &str| {
+                u8::try_from(a.int(name)?).map_err(|_| ComputeError::BadArg {
+                    arg: name.into(),
+                    why: "a position on the line is 1..255".into(),
+                })
+            };
+            let (position, count) = (byte("position")?, byte("count")?);
+            match rules::can_termination(position, count) {
+                Some(on) => Ok(json!({ "termination": if on { "ON" } else { "OFF" } })),
+                None => Err(ComputeError::Refused(format!(
+                    "position {position} is not on a line of {count} devices"
+                ))),
+            }
         },
     },
     ComputeFn {

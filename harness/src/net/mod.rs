@@ -7,6 +7,7 @@ mod error;
 mod iface;
 mod link;
 pub(crate) mod peer;
+pub(crate) mod serve_args;
 pub(crate) mod udp;
 #[cfg(test)]
 pub(crate) mod veth;

@@ -33,6 +33,7 @@ use proto::nord::Protocol;
 use proto::pnio::RPC_PORT;
 use sim::pnio::{IoConfig, IoDevice, Out, POLL_PERIOD};
 
+use crate::net::serve_args::RawServeArgs;
 use crate::net::udp::{ipv4_of, transient};
 use crate::net::workers::{serve_for, Workers};
 use crate::net::{LinkError, RawLink, MAX_FRAME};
@@ -171,20 +172,14 @@ impl Drop for Served {
 
 /// The device of `opts`, its IP suite the interface's when it has one.
 fn device(opts: &ServeOptions, ip: Option<(Ipv4Addr, u8)>) -> Result<IoDevice, ServeError> {
-    let product = crate::profile::Profile::by_name(&opts.profile)
-        .and_then(|p| p.nord())
-        .map_err(ServeError::Profile)?;
-    if !product.protocols().contains(&Protocol::Profinet) {
-        return Err(ServeError::Profile(format!(
-            "{} has no PROFINET IO interface (PROFINET profiles: sk550p, tu3-pnt)",
-            product.name()
-        )));
-    }
-    let max = product.max_inverters();
-    let config = sim::device::DeviceConfig {
-        inverters: opts.inverters.unwrap_or(max).clamp(1, max),
-        ..sim::device::DeviceConfig::new(product)
-    };
+    let config = crate::net::serve_args::device_config(
+        &opts.profile,
+        opts.inverters,
+        Protocol::Profinet,
+        "PROFINET IO",
+    )
+    .map_err(ServeError::Profile)?;
+    let product = config.product;
     let ip = ip.map(|(ip, prefix)| IpSuite {
         ip,
         mask: Ipv4Addr::from(u32::MAX.checked_shl(32 - u32::from(prefix)).unwrap_or(0)),
@@ -426,21 +421,11 @@ fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeErr
     about = "Serve the simulator as a PROFINET IO device on a network interface (raw Ethernet: root or CAP_NET_RAW; RPC on UDP 34964 at the interface's IPv4 address)"
 )]
 struct ServeArgs {
-    /// The network interface, e.g. one end of a veth pair.
-    #[arg(long)]
-    iface: String,
-    /// Product profile (a product with PROFINET IO: sk550p, tu3-pnt).
-    #[arg(long, default_value = "sk550p")]
-    profile: String,
+    #[command(flatten)]
+    common: RawServeArgs,
     /// The name of station at power-on (default: none, as delivered).
     #[arg(long, default_value = "")]
     name: String,
-    /// Inverters behind the interface (default: the product's maximum).
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
-    inverters: Option<u8>,
-    /// Stop after this many seconds (default: serve until killed).
-    #[arg(long)]
-    seconds: Option<u64>,
 }
 
 /// `harness serve pnio ARGS…`; returns the exit code.
@@ -450,11 +435,11 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         Err(code) => return Ok(code),
     };
     let opts = ServeOptions {
-        iface: a.iface,
-        profile: a.profile,
+        iface: a.common.iface,
+        profile: a.common.profile,
         name: a.name,
-        inverters: a.inverters,
+        inverters: a.common.inverters,
     };
-    serve(&opts, a.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
+    serve(&opts, a.common.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
     Ok(crate::cli::EXIT_PASS)
 }

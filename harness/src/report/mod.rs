@@ -7,6 +7,7 @@
 
 mod diff;
 mod diff_view;
+mod errata_counts;
 #[cfg(test)]
 mod fixtures;
 mod html;
@@ -24,6 +25,7 @@ mod write;
 
 pub(crate) use diff::compare_runs;
 pub(crate) use diff_view::{text as diff_text, write_diff};
+pub(crate) use errata_counts::text_table as errata_table;
 pub(crate) use merge::merge;
 pub(crate) use read::{read, run_json};
 pub(crate) use snapshot::{apply_snapshots, SnapshotMode};

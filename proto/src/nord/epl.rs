@@ -78,13 +78,14 @@ pub fn product_code(product: Product) -> u32 {
 }
 
 /// Revision number: the software version of BU 2200 §1.1.2 (V 1.3 R3 SK TU4-POL, V 1.3 R2
-/// SK TU3-POL, V 1.3 R1 SK CU4-POL); the SK 550P's is assumed V 1.0 R0.
+/// SK TU3-POL, V 1.3 R1 SK CU4-POL); the SK 550P's is V 1.1 R1, the version BU 0620 (March
+/// 2020) describes (§1.1.2 document history).
 pub fn revision(product: Product) -> u32 {
     match product {
         Product::Tu4Pol => 0x0001_0303,
         Product::Tu3Pol => 0x0001_0302,
         Product::Cu4Pol => 0x0001_0301,
-        _ => 0x0001_0000,
+        _ => 0x0001_0101,
     }
 }
 

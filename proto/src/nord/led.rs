@@ -201,11 +201,43 @@ pub const TU3_PNT_ERR: &[Row] = &[
     row(Pattern::Off, "No error PROFINET IO functioning normally"),
     row(
         Pattern::DoubleFlashRed,
-        "Timeout: the IO controller monitoring has detected an error (see parameter P151 or P513)",
+        "Timeout (double flash, cycle 2 x 0.25 s, pause 1 s): the IO controller monitoring has detected an error (see parameter P151 or P513)",
     ),
     row(
         Pattern::Red,
         "Ethernet error, no mains: TU3-PNT not connected to any Ethernet participant",
+    ),
+];
+
+/// SK TU3-PNT green "DS" LED (BU 0590 §2.2.4 table 7, the module's own state; cycle 0.5 s =
+/// 2 Hz).
+pub const TU3_PNT_DS: &[Row] = &[
+    row(
+        Pattern::Off,
+        "The technology unit does not have a power supply (DE off)",
+    ),
+    row(
+        Pattern::FlashingGreen { tenths_hz: 20 },
+        "The technology unit has a fatal system error (DE off)",
+    ),
+    row(
+        Pattern::Green,
+        "Technology unit OK (DE tells the FI's state)",
+    ),
+];
+
+/// SK TU3-PNT red "DE" LED with DS on (BU 0590 §2.2.4 table 7; cycle 0.25 s, pause 1 s). The
+/// table prints one flash both for "no FI detected" and as the first of the FI's "1…7" error
+/// flashes.
+pub const TU3_PNT_DE: &[Row] = &[
+    row(Pattern::Off, "Technology unit OK and FI detected"),
+    row(
+        Pattern::SingleFlashRed,
+        "Technology unit OK but no FI detected: the FI has no power supply or the technology unit is not correctly plugged in",
+    ),
+    row(
+        Pattern::FlashingRed { tenths_hz: 40 },
+        "Flashing 1...7x (cycle 0.25 s, pause 1 s): the FI is in an error condition",
     ),
 ];
 

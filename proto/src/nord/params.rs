@@ -165,6 +165,12 @@ const fn iface(p: ParamDef) -> ParamDef {
     }
 }
 
+/// An inverter parameter as the manual of the listed products prints it (the inverter they sit
+/// on differs from the SK 550P).
+const fn only(p: ParamDef, products: &'static [Product]) -> ParamDef {
+    ParamDef { products, ..p }
+}
+
 /// A bus-module parameter of the listed products (BU 2100 §7.1 "Bus interface" rows).
 const fn module(p: ParamDef, products: &'static [Product]) -> ParamDef {
     ParamDef {
@@ -203,6 +209,19 @@ pub const CATALOGUE: &[ParamDef] = &[
     sets(inv(112, "Torque current limit", 25, 400, 400, 0, "BU 0620 §6.1.2.4 (100 % of currents); range 25–400 % assumed")),
     sets(array(inv(400, "Function setpoint inputs", 0, 80, 0, 0, "BU 0620 §2.3.5 (array depending on parameter sets); range assumed"), 9)),
     array(inv(465, "Fixed frequency array", -4000, 4000, 0, 1, "BU 0620 §2.3.5 (array, not set-dependent); range assumed"), 31),
+    // The SK 5xxE under the SK TU3-PNT (BU 0590 §5.2, SK 540E and above), ahead of the SK 550P's
+    // entries of the same numbers: the lookup takes the first that applies.
+    only(elements(inv(510, "Source setpoints", 0, 10, 0, 0, "BU 0590 §5.2.1 (p. 38): [-01] main, [-02] auxiliary setpoint source, 0…10, factory all 0 (0 = auto, 8 = Ethernet TU)"), &[0, 0]), PNT),
+    only(inv(513, "Telegram time-out", -1, 1000, 0, 1, "BU 0590 §5.2.1 (p. 38): -0.1 (no error) / 0.0 (off) / 0.1…100.0 s, factory 0.0; one value"), PNT),
+    only(elements(inv(543, "Bus actual value", 0, 57, 0, 0, "BU 0590 §5.2.1 (p. 39), SK 540E and above: [-01]..[-05], 0…57, factory 1, 4, 9, 0, 0"), &[1, 4, 9, 0, 0]), PNT),
+    only(elements(inv(546, "Function bus setpoint", 0, 57, 0, 0, "BU 0590 §5.2.1 (p. 40), SK 540E and above: [-01]..[-05], 0…57, factory [-01] = 1, all others 0"), &[1, 0, 0, 0, 0]), PNT),
+    only(ro(array(inv(740, "PZD bus in", 0, 0xFFFF, 0, 0, "BU 0590 §5.2.2 (p. 42), SK 540E and above: [-01] control word, [-02]..[-06] setpoints 1..5, [-07] bus I/O in bits, [-08]..[-12] parameter data in (AK, PNU, IND, PWE 1/2), [-13]..[-23] broadcast and PLC"), 23)), PNT),
+    only(ro(array(inv(741, "PZD bus out", 0, 0xFFFF, 0, 0, "BU 0590 §5.2.2 (p. 43), SK 540E and above: [-01] status word, [-02]..[-06] actual values 1..5, [-07] bus I/O out bits, [-08]..[-12] parameter data out, [-13]..[-23] master function and PLC"), 23)), PNT),
+    only(inv(607, "Speed ratio", 1, 65535, 1, 0, "BU 0590 §4.1.5 (p. 23): the gear ratio factor P607 & P608 extends the low word's position range at a lower resolution; positions count output rotations = motor rotations × P607 / P608 (POSICON, BU 0510, not among the manuals: range 1…65535 and factory 1 assumed, one value)"), PNT),
+    only(inv(608, "Reduction ratio", 1, 65535, 1, 0, "BU 0590 §4.1.5 (p. 23): the denominator of the gear ratio factor P607 / P608 (range 1…65535 and factory 1 assumed)"), PNT),
+    only(ro(array(inv(701, "Last error", 0, 9999, 0, 1, "BU 0590 §6.2 (p. 44): the error 'is permanently stored in the FI error statistics'; BU 0620 §4.5 / BU 2100 §7.2 name P701 'Last error'; [-01]..[-05] newest first assumed from BU 0500"), 5)), PNT),
+    only(ro(inv(745, "Module version", 0, 9999, 0, 1, "BU 0590 §5.2.2 (p. 43): 0.0…999.9, the technology unit's software version")), PNT),
+    only(ro(inv(746, "Module status", 0, 0xFFFF, 0, 0, "BU 0590 §5.2.2 (p. 43): 0000…FFFFh, readiness, error and communication of the technology unit")), PNT),
     inv(509, "Control word source", 0, 10, 0, 0, "BU 0620 §4.5: 8 = Ethernet (FI 1), 6 = CANopen (further FIs)"),
     inv(510, "Setpoint source", 0, 10, 0, 0, "BU 0620 §4.5: 8 = Ethernet, 6 = CANopen"),
     array(inv(513, "Telegram timeout time", -1, 3200, 0, 1, "BU 0620 §4.5: [-03] CANopen, [-04] Ethernet, factory Off (0)"), 4),
@@ -303,6 +322,14 @@ pub fn element_default(def: &ParamDef, element: u8) -> i32 {
         .and_then(|i| def.element_defaults.get(i))
         .copied()
         .unwrap_or(def.default)
+}
+
+/// Values inside min..=max that a parameter still refuses: the SK TU3-PNT's device name P162
+/// takes the ASCII characters 45…122 and the 0 that ends the name (BU 0590 §5.1.2, p. 35), not
+/// 1…44.
+pub fn value_allowed(def: &ParamDef, product: Product, value: i32) -> bool {
+    let name_gap = product == Product::Tu3Pnt && def.owner == Owner::Interface && def.number == 162;
+    !(name_gap && (1..45).contains(&value))
 }
 
 impl ParamDef {
@@ -502,11 +529,15 @@ mod tests {
             assert!(d.accepts(d.default), "P{} default outside range", d.number);
             assert!(d.number <= 999 && !d.source.is_empty());
             for product in Product::ALL {
-                let same = CATALOGUE.iter().filter(|o| {
-                    o.number == d.number && o.owner == d.owner && o.applies_to(product)
-                });
+                let same: Vec<_> = CATALOGUE
+                    .iter()
+                    .filter(|o| o.number == d.number && o.owner == d.owner && o.applies_to(product))
+                    .collect();
+                // Two only where the first names the product (it overrides the general entry
+                // for the inverter that product sits on, as BU 0590's SK 5xxE).
+                let overridden = same.len() == 2 && same[0].products.contains(&product);
                 assert!(
-                    same.count() <= 1 || !d.applies_to(product),
+                    same.len() <= 1 || overridden || !d.applies_to(product),
                     "P{} twice",
                     d.number
                 );

@@ -532,7 +532,8 @@ impl fmt::Debug for ErrorNumber {
 /// inverters connected to the NORD system bus only support the order codes 1, 2, 3, 6, 7 and
 /// 8." Labels 9 and 11–14 are "only relevant for frequency inverters with a mounted bus
 /// interface". `first` is the unit the interface is built into or mounted on (FI 1, or the
-/// interface itself).
+/// interface itself). BU 0590 §4.2.3.1 Tables 21/22: the SK TU3-PNT and its FI take label 9
+/// and the RAM-only labels 11–14 ("to the frequency inverter or the technology units").
 pub fn supported_orders(product: Product, first: bool) -> &'static [OrderLabel] {
     const ALL: &[OrderLabel] = &[
         OrderLabel::NONE,
@@ -559,6 +560,7 @@ pub fn supported_orders(product: Product, first: bool) -> &'static [OrderLabel] 
     ];
     match (product.family(), first) {
         (Family::Integrated, true) => ALL,
+        _ if product == Product::Tu3Pnt && first => ALL,
         _ => SYSTEM_BUS,
     }
 }
@@ -726,7 +728,8 @@ mod tests {
     fn supported_labels_per_unit() {
         assert_eq!(supported_orders(Product::Sk550p, true).len(), 12);
         assert!(!supported_orders(Product::Sk550p, false).contains(&OrderLabel::CHANGE_WORD_RAM));
-        assert!(!supported_orders(Product::Tu3Pnt, true).contains(&OrderLabel::REQUEST_ARRAY_LEN));
+        // BU 0590 §4.2.3.1 Tables 21/22: the SK TU3-PNT takes 9 and 11–14.
+        assert_eq!(supported_orders(Product::Tu3Pnt, true).len(), 12);
     }
 
     #[test]

@@ -112,6 +112,19 @@ pub fn powerlink_gateway(ip: [u8; 4]) -> Result<(), PlAddressError> {
     }
 }
 
+/// Whether the CAN termination resistor (the CAN DIP switch of an inverter, the DIP switch of an
+/// absolute encoder) of the device at `position` (1 = first) on a system-bus line of `count`
+/// devices is switched on: a CAN line (ISO 11898-2) is terminated with 120 Ω at both of its
+/// ends and nowhere between. BU 0620 §3.9 step 1 (p. 73, English edition): ON on FI 1 and FI 3,
+/// OFF on FI 2 of a line of three; the Chinese edition prints ON for FI 2 as well (an erratum).
+/// `None` where `position` is not on the line (0 or beyond `count`).
+pub fn can_termination(position: u8, count: u8) -> Option<bool> {
+    if position == 0 || position > count {
+        return None;
+    }
+    Some(position == 1 || position == count)
+}
+
 /// Where an EtherNet/IP interface takes its IP configuration from (P856 on the SK 550P, P165 on
 /// the modules; BU 0620 §4.2.2, BU 2100 §7.1.2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -169,6 +182,17 @@ mod tests {
             .contains("5605"));
         assert_eq!(AddressingMode::from_value(1), Some(AddressingMode::Bootp));
         assert_eq!(AddressingMode::from_value(3), None);
+    }
+
+    #[test]
+    fn can_termination_at_both_ends_only() {
+        // §3.9 step 1: FI 1 and FI 3 ON, FI 2 OFF.
+        assert_eq!(can_termination(1, 3), Some(true));
+        assert_eq!(can_termination(2, 3), Some(false));
+        assert_eq!(can_termination(3, 3), Some(true));
+        assert_eq!(can_termination(1, 1), Some(true));
+        assert_eq!(can_termination(0, 3), None);
+        assert_eq!(can_termination(4, 3), None);
     }
 
     #[test]

@@ -283,6 +283,27 @@ pub const SETPOINT_FUNCTIONS: &[ProcessFunction] = &[
     f(55, "d-correction F+torque", UNSTATED),
 ];
 
+/// The bits of the actual value "Digital IO status" (P543 = 5), bit 0 first (BU 0590 §5.2.1,
+/// p. 39: "The assignment of the digital inputs in P543/544/545 = 5").
+pub const DIGITAL_IO_BITS: [&str; 16] = [
+    "DigIn 1",
+    "DigIn 2",
+    "DigIn 3",
+    "DigIn 4",
+    "DigIn 5",
+    "DigIn 6 (SK 520E and above)",
+    "DigIn 7 (SK 520E and above)",
+    "Dig. func. AIN1",
+    "Dig. func. AIN2",
+    "DigIn 8 (SK 540E and above)",
+    "DigIn 1, 1st IOE (SK 540E and above)",
+    "DigIn 2, 1st IOE (SK 540E and above)",
+    "Out 1/ MFR1",
+    "Out 2/ MFR2",
+    "Out 3/ DOUT1 (SK 520E and above)",
+    "Out 4/ DOUT2 (SK 520E and above)",
+];
+
 /// The P543 function `code`, or `None` when reserved or not in these manuals.
 pub fn actual_function(code: i32) -> Option<&'static ProcessFunction> {
     ACTUAL_FUNCTIONS.iter().find(|p| i32::from(p.code) == code)

@@ -1356,3 +1356,56 @@ fn identity_attributes_are_read_only() {
         GS::PATH_DESTINATION_UNKNOWN
     );
 }
+
+#[test]
+fn dlr_object_is_a_ring_node() {
+    // BU 0620 §2.3.1 "Supported functions UCMM, DLR": class 47h, revision 3, instance 1 with
+    // the attributes of a non-supervisor ring node.
+    let mut b = Bench::new(Product::Sk550p);
+    let get = |instance: u32, attribute: u16| MrRequest {
+        service: Service::GET_ATTRIBUTE_SINGLE.0,
+        path: EPath::attribute(class::DLR, instance, attribute),
+        data: Vec::new(),
+    };
+    let r = b.request(&get(0, 1));
+    assert_eq!((r.status(), r.data.clone()), (GS::SUCCESS, vec![3, 0]));
+    assert_eq!(b.request(&get(1, 1)).data, [0], "linear topology");
+    assert_eq!(b.request(&get(1, 2)).data, [0], "normal");
+    assert_eq!(b.request(&get(1, 10)).data, [0; 10], "no active supervisor");
+    assert_eq!(b.request(&get(1, 12)).data, [0x82, 0, 0, 0]);
+    // A supervisor's attribute is not there; the object cannot be written.
+    assert_eq!(b.request(&get(1, 3)).status(), GS::ATTRIBUTE_NOT_SUPPORTED);
+    let set = MrRequest {
+        service: Service::SET_ATTRIBUTE_SINGLE.0,
+        path: EPath::attribute(class::DLR, 1, 1),
+        data: vec![1],
+    };
+    assert_eq!(b.request(&set).status(), GS::SERVICE_NOT_SUPPORTED);
+}
+
+#[test]
+fn p873_p874_show_the_words_of_the_assemblies() {
+    // BU 0620 §4.3: P873 "Process data bus In", P874 "Process data bus Out", 6 words per FI.
+    let mut b = Bench::new(Product::Sk550p);
+    let fo = b.open_ok(&io_open(1, 100, 101, 102, 98));
+    let mut data = outputs(0x047E);
+    data.resize(96, 0);
+    // FI 2: control word 047Eh, setpoint 1 = 1000 (words 7, 8).
+    data[12..14].copy_from_slice(&0x047Eu16.to_le_bytes());
+    data[14..16].copy_from_slice(&1000u16.to_le_bytes());
+    for k in 1..=5u16 {
+        b.now = ms(u64::from(k) * 5);
+        b.io(&io(fo.o_t_id, k, Some(1), data.clone())).unwrap();
+    }
+    let iface = |b: &mut Bench, number: u16, e: u32| word(&b.get(101, e - 1, number));
+    assert_eq!(iface(&mut b, 873, 1) as u16, 0x047E);
+    assert_eq!(iface(&mut b, 873, 7) as u16, 0x047E);
+    assert_eq!(iface(&mut b, 873, 8), 1000);
+    let status = iface(&mut b, 874, 1) as u16;
+    assert_eq!(
+        status & 0x00FF,
+        0x31,
+        "ready for operation after 047Eh: {status:04X}"
+    );
+    assert_eq!(iface(&mut b, 874, 7) as u16 & 0x00FF, 0x31);
+}

@@ -18,7 +18,7 @@ use proto::nord::led::{self, Row};
 use proto::nord::nmt::PlState;
 use proto::nord::{ArrayElement, ParamNumber, Product, Protocol};
 
-use super::od::{Context, Dictionary, NodeVars, HISTORY_LEN};
+use super::od::{Context, Dictionary, Mapping, NodeVars, HISTORY_LEN};
 use super::sdo::{Peer, Server};
 use crate::device::Device;
 use crate::ecat::pdo::{self, ProcessWords};
@@ -152,6 +152,8 @@ impl Node {
                 basic_ethernet_us: def::BASIC_ETHERNET_TIMEOUT_US,
                 error_register: 0,
                 history: Vec::new(),
+                rx_mapping: Mapping::default_of(product, true),
+                tx_mapping: Mapping::default_of(product, false),
             },
             od: Dictionary::new(product),
             sdo: Server::default(),
@@ -303,9 +305,15 @@ impl Node {
     }
 
     /// Handles an SDO datagram from `from` on UDP port 3819; returns the datagrams to answer.
-    /// UDP is the only way in while the node is in Basic Ethernet (BU 0620 §2.4.4).
+    /// UDP is the only way in while the node is in Basic Ethernet (BU 0620 §2.4.4). In
+    /// Initialisation (NOT_ACTIVE) there is "no communication of process data and parameters"
+    /// (§2.4.4): the node only watches for POWERLINK frames, and drops the datagram.
     pub fn udp(&mut self, from: SocketAddr, datagram: &[u8], now: Duration) -> Vec<Vec<u8>> {
         self.timers(now);
+        if self.vars.state == NmtState::NOT_ACTIVE {
+            self.dropped += 1;
+            return Vec::new();
+        }
         let Ok(frame) = SdoFrame::strip_udp(datagram).and_then(SdoFrame::parse) else {
             self.dropped += 1;
             return Vec::new();
@@ -367,7 +375,11 @@ impl Node {
             words: &self.words,
             vars: &mut self.vars,
         };
-        self.sdo.handle(peer, frame, &self.od, &mut cx)
+        let answer = self.sdo.handle(peer, frame, &self.od, &mut cx);
+        // The MN may have rewritten the mapping (BU 0620 §2.4.5 dynamic mapping).
+        self.rx_map = self.vars.rx_mapping.words(self.product);
+        self.tx_map = self.vars.tx_mapping.words(self.product);
+        answer
     }
 
     /// Enters `to`: resets pass through to NOT_ACTIVE (DS 301 NMT_GT2…GT8: the node

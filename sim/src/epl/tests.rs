@@ -180,7 +180,7 @@ fn basic_ethernet_and_loss_of_the_mn() {
 fn udp(n: &mut Node, seq: Seq, command: Option<Command>) -> SdoFrame {
     let from: SocketAddr = "192.168.100.240:3819".parse().unwrap();
     let d = SdoFrame { seq, command }.emit_udp().unwrap();
-    let out = n.udp(from, &d, ms(10));
+    let out = n.udp(from, &d, ms(5_010));
     SdoFrame::parse(SdoFrame::strip_udp(&out[0]).unwrap()).unwrap()
 }
 
@@ -196,6 +196,9 @@ fn seq(ssnr: u8, scon: Con) -> Seq {
 #[test]
 fn sdo_over_udp_reads_writes_and_refuses() {
     let mut n = node(Product::Sk550p);
+    // No POWERLINK frame within 1F99h (5 s): Basic Ethernet, parameters over UDP only.
+    n.poll(ms(5_000));
+    assert_eq!(n.state(), NmtState::BASIC_ETHERNET);
     let init = udp(&mut n, seq(5, Con::Init), None);
     assert_eq!(
         (init.seq.rcon, init.seq.scon, init.seq.rsnr),
@@ -248,4 +251,20 @@ fn sdo_over_udp_reads_writes_and_refuses() {
         Some(Command::read_by_index(6, 0x6000, 0)),
     );
     assert_eq!(r.command.unwrap().abort_code(), Some(0x0602_0000));
+}
+
+#[test]
+fn initialisation_answers_no_udp_sdo() {
+    // BU 0620 §2.4.4 Initialisation: "No communication of process data and parameters".
+    let mut n = node(Product::Sk550p);
+    assert_eq!(n.state(), NmtState::NOT_ACTIVE);
+    let from: SocketAddr = "192.168.100.240:3819".parse().unwrap();
+    let d = SdoFrame {
+        seq: seq(5, Con::Init),
+        command: None,
+    }
+    .emit_udp()
+    .unwrap();
+    assert!(n.udp(from, &d, ms(10)).is_empty());
+    assert_eq!(n.state(), NmtState::NOT_ACTIVE);
 }

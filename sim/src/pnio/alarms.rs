@@ -236,6 +236,39 @@ impl IoDevice {
         }
     }
 
+    /// The SK TU3-PNT's test alarm (BU 0590 §5.1.2 P163, p. 35): a value written to [-04]
+    /// (slot 3, the FI) is sent as the diagnosis alarm 100h + value from slot 3, "incoming";
+    /// back to 0 it is "outgoing".
+    pub(super) fn test_alarms(&mut self) {
+        if self.product != proto::nord::Product::Tu3Pnt {
+            return;
+        }
+        let (Ok(fi), Ok(p163)) = (Inverter::new(1), proto::nord::ParamNumber::new(163)) else {
+            return;
+        };
+        let slot3 = proto::nord::ArrayElement::new(4).ok();
+        let value = self
+            .device
+            .store(crate::link::Unit::Interface)
+            .ok()
+            .and_then(|s| s.read(p163, None, slot3).ok())
+            .unwrap_or(0);
+        let now = match u16::try_from(value) {
+            Ok(v) if v > 0 => def::fi_error_alarm(v),
+            _ => 0,
+        };
+        if now == self.test_alarm {
+            return;
+        }
+        if self.test_alarm != 0 {
+            self.diagnosis(fi, false, self.test_alarm);
+        }
+        if now != 0 {
+            self.diagnosis(fi, true, now);
+        }
+        self.test_alarm = now;
+    }
+
     /// FI `fi` is lost from the system bus: alarm 1256 from its slot (BU 0620 §5.4.2), its
     /// data no longer exchanged (IOPS bad).
     pub fn lose_inverter(&mut self, fi: Inverter) -> Result<(), String> {
@@ -245,6 +278,7 @@ impl IoDevice {
         }
         if !self.lost_fis[i] {
             self.lost_fis[i] = true;
+            self.device.lose(fi);
             self.diagnosis(fi, true, def::lost_inverter_alarm());
         }
         Ok(())

@@ -111,6 +111,8 @@ pub struct IoDevice {
     raised: [u16; 8],
     /// Inverters lost from the system bus ([`IoDevice::lose_inverter`]).
     lost_fis: [bool; 8],
+    /// The alarm number the SK TU3-PNT's test alarm P163 [-04] raised (0: none).
+    test_alarm: u16,
     /// Frames and datagrams the device could not parse or that were not for it.
     dropped: u64,
     /// The activity of the device's own RPC calls (ApplicationReady).
@@ -145,6 +147,7 @@ impl IoDevice {
             faults: [0; 8],
             raised: [0; 8],
             lost_fis: [false; 8],
+            test_alarm: 0,
             dropped: 0,
             calls: 0,
         };
@@ -278,6 +281,7 @@ impl IoDevice {
             self.ar = None;
         }
         self.fault_alarms();
+        self.test_alarms();
         if let Some(ar) = self.ar.as_mut() {
             out.extend(ar.due(now));
         }

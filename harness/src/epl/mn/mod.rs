@@ -17,8 +17,8 @@ use proto::epl::asnd::{IdentResponse, NmtCommandFrame, StatusResponse};
 use proto::epl::frame::{Asnd, Body, Preq, Soa, Soc};
 use proto::epl::sdo::{Command, Con, SdoFrame, Segmentation, Seq, SEQ_MODULO};
 use proto::epl::{
-    EplRepr, NmtCommand, NmtState, RequestedService, ServiceId, BROADCAST_NODE_ID, MN_NODE_ID,
-    MULTICAST_ASND, MULTICAST_SOA, MULTICAST_SOC,
+    EplRepr, MessageType, NmtCommand, NmtState, RequestedService, ServiceId, BROADCAST_NODE_ID,
+    MN_NODE_ID, MULTICAST_ASND, MULTICAST_SOA, MULTICAST_SOC,
 };
 use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
 
@@ -1036,18 +1036,44 @@ impl<L: Link> Manager<L> {
         Ok(out)
     }
 
-    /// Sends a raw POWERLINK frame and gathers what the node sends within one cycle.
-    pub(crate) fn raw_exchange(&mut self, bytes: &[u8]) -> Result<Vec<Received>, MnError> {
+    /// Sends a raw POWERLINK frame and waits for the node's answer to it, up to
+    /// [`RAW_ANSWER_CYCLES`] cycles. Frames already queued are dropped first, and a PRes or
+    /// ASnd counts only after a PReq or SoA: a late answer to an earlier request (a busy host,
+    /// a slow device) is not this frame's.
+    pub(crate) fn raw_exchange(&mut self, bytes: &[u8]) -> Result<Option<Received>, MnError> {
+        let now = self.link.now();
+        while self.receive(now)?.is_some() {}
         self.send_raw(bytes)?;
-        let deadline = self.link.now() + self.config.reply.max(self.config.cycle);
-        let mut got = Vec::new();
+        let deadline =
+            self.link.now() + self.config.reply.max(self.config.cycle) * RAW_ANSWER_CYCLES;
+        let sent = bytes.first().map(|b| MessageType(b & 0x7F));
+        let mut answer = None;
         while let Some(r) = self.receive(deadline)? {
-            got.push(r);
+            if can_answer(sent, &r) {
+                answer = Some(r);
+                break;
+            }
         }
         if self.recording {
-            self.record(bytes, got.first());
+            self.record(bytes, answer.as_ref());
         }
-        Ok(got)
+        Ok(answer)
+    }
+}
+
+/// Cycles a raw frame's answer is waited for. `answered` is no timing check (the cyclic steps
+/// check timing): ten cycles let a loaded host's scheduling pass, and stay well inside the
+/// node's loss-of-SoC time (ten cycles, at least 100 ms) across consecutive silent steps.
+const RAW_ANSWER_CYCLES: u32 = 10;
+
+/// Whether a frame of the node can answer a frame of type `sent`: a PRes answers only a PReq,
+/// an ASnd only an SoA (EPSG DS 301: a CN sends PRes when a PReq polls it, ASnd when an SoA
+/// invites it).
+fn can_answer(sent: Option<MessageType>, reply: &Received) -> bool {
+    match reply.bytes.first().map(|b| MessageType(b & 0x7F)) {
+        Some(MessageType::PRES) => sent == Some(MessageType::PREQ),
+        Some(MessageType::ASND) => sent == Some(MessageType::SOA),
+        _ => true,
     }
 }
 

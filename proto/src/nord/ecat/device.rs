@@ -5,9 +5,10 @@
 pub const VENDOR_ID: u32 = 0x0000_0538;
 /// Product code (1018h:02). The manual gives no value; 0550h ("SK 550P") is an assumption.
 pub const PRODUCT_CODE: u32 = 0x0000_0550;
-/// Revision number (1018h:03, "software version and revision number (2 × 16 bit)"): major 1,
-/// minor 0. An assumption: the manual gives no value.
-pub const REVISION: u32 = 0x0001_0000;
+/// Revision number (1018h:03, "software version and revision number (2 × 16 bit)"): the
+/// interface software V 1.1 R1 that the March 2020 edition describes (§1.1.2 document
+/// history), coded as the POWERLINK modules' (BU 2200 §1.1.2, [`crate::nord::epl::revision`]).
+pub const REVISION: u32 = 0x0001_0101;
 /// Serial number (1018h:04): "Not supported" (§2.2.7.1), so 0.
 pub const SERIAL_NUMBER: u32 = 0;
 /// Device type (1000h). NORD's control and status words follow no CiA device profile, so
@@ -17,8 +18,8 @@ pub const DEVICE_TYPE: u32 = 0;
 pub const DEVICE_NAME: &str = "NORDAC PRO SK 550P";
 /// Hardware version (1009h). An assumption.
 pub const HARDWARE_VERSION: &str = "1.0";
-/// Software version (100Ah). An assumption, matching [`REVISION`].
-pub const SOFTWARE_VERSION: &str = "V1.0 R0";
+/// Software version (100Ah): V 1.1 R1, the version BU 0620 (March 2020) describes (§1.1.2).
+pub const SOFTWARE_VERSION: &str = "V1.1 R1";
 /// The device group of the ESI file and the SII general category.
 pub const GROUP: &str = "NORD Frequency Inverter";
 /// The order number ("type") of the ESI file.

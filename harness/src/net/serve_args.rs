@@ -1,0 +1,82 @@
+//! What every raw-Ethernet `harness serve <bus>` (EtherCAT, POWERLINK, PROFINET IO) takes —
+//! the interface, the product, the inverters behind it, how long — and the simulated device
+//! those name, so the three commands read and refuse them alike.
+
+use proto::nord::{Product, Protocol};
+use sim::device::DeviceConfig;
+
+/// `--iface --profile --inverters --seconds`, flattened into each bus's own arguments.
+#[derive(clap::Args, Debug)]
+pub(crate) struct RawServeArgs {
+    /// The network interface, e.g. one end of a veth pair.
+    #[arg(long)]
+    pub(crate) iface: String,
+    /// Product profile: a product with this bus's interface.
+    #[arg(long, default_value = "sk550p")]
+    pub(crate) profile: String,
+    /// Inverters behind the interface (default: the product's maximum).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
+    pub(crate) inverters: Option<u8>,
+    /// Stop after this many seconds (default: serve until killed).
+    #[arg(long)]
+    pub(crate) seconds: Option<u64>,
+}
+
+/// The simulated device of `profile` with `inverters` (default and ceiling: the product's
+/// maximum), if the product has a `protocol` interface; else why not, naming the products
+/// that have one.
+pub(crate) fn device_config(
+    profile: &str,
+    inverters: Option<u8>,
+    protocol: Protocol,
+    bus_name: &str,
+) -> Result<DeviceConfig, String> {
+    let product = crate::profile::Profile::by_name(profile)?.nord()?;
+    if !product.protocols().contains(&protocol) {
+        let with: Vec<&str> = Product::ALL
+            .into_iter()
+            .filter(|p| p.protocols().contains(&protocol))
+            .map(Product::name)
+            .collect();
+        return Err(format!(
+            "{} has no {bus_name} interface ({bus_name} profiles: {})",
+            product.name(),
+            with.join(", ")
+        ));
+    }
+    let max = product.max_inverters();
+    Ok(DeviceConfig {
+        inverters: inverters.unwrap_or(max).clamp(1, max),
+        ..DeviceConfig::new(product)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_product_without_the_bus_is_refused_naming_those_with_it() {
+        let e = device_config("tu3-eip", None, Protocol::Powerlink, "POWERLINK").unwrap_err();
+        assert_eq!(
+            e,
+            "tu3-eip has no POWERLINK interface (POWERLINK profiles: sk550p, tu3-pol, tu4-pol, cu4-pol)"
+        );
+        assert!(device_config("nope", None, Protocol::Ethercat, "EtherCAT")
+            .unwrap_err()
+            .contains("unknown profile `nope`"));
+    }
+
+    #[test]
+    fn inverters_default_to_and_stop_at_the_products_maximum() {
+        let max = Product::Sk550p.max_inverters();
+        let at = |n| {
+            device_config("sk550p", n, Protocol::Ethercat, "EtherCAT")
+                .unwrap()
+                .inverters
+        };
+        assert_eq!(at(None), max);
+        assert_eq!(at(Some(1)), 1);
+        assert_eq!(at(Some(8)), max.min(8));
+    }
+}
