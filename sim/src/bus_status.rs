@@ -4,7 +4,9 @@
 //! - SK 550P: P872 "Bus status" (BU 0620 §4.3, p. 84): bit 0 module ready, 1 cyclic PZD
 //!   communication, 2 field bus timeout, 3 timeout P513, bits 8–15 FI 1..8 online.
 //! - SK TU3/TU4/CU4-EIP: P173 [-01] "Module status" (BU 2100 §7.1.3, p. 51): bits 0–3 as the
-//!   SK 550P's (ready, cyclic communication, field bus timeout, timeout P151/P513).
+//!   SK 550P's (ready, cyclic communication, field bus timeout, timeout P151/P513), bits 8–15
+//!   FI 1..4 in bit pairs; [-02] (SK TU3-EIP only) FI 1..8 in bit pairs, as the POWERLINK
+//!   modules'.
 //! - SK TU3-PNT: P173 "Module status" (BU 0590 §5.1.3, p. 36): bit 1 AR installed, bit 3
 //!   timeout (P151/P513), bits 9–8 FI status (10b = online); P170 [-01] "Present error" 1020
 //!   "Bus Time Out via P151 or P513" (p. 35).
@@ -76,7 +78,11 @@ pub(crate) fn status_parameters(
             )),
             Some((173, 2, online_pairs(f.online, 8, 0))),
         ],
-        Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => [Some((173, 1, low)), None],
+        // The SK xU4-EIP's P173 has no array: element 2 is ignored by their store.
+        Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => [
+            Some((173, 1, low | online_pairs(f.online, 4, 8))),
+            Some((173, 2, online_pairs(f.online, 8, 0))),
+        ],
     };
     words.into_iter().flatten()
 }
@@ -136,8 +142,9 @@ mod tests {
     // BU 0620 §4.3: ready + cyclic + FI 1..3 online = 0703h.
     #[case(Product::Sk550p, flags(true, false, 3), vec![(872, 1, 0x0703)])]
     #[case(Product::Sk550p, flags(false, true, 8), vec![(872, 1, 0xFF09)])]
-    // BU 2100 §7.1.3: the low four bits only.
-    #[case(Product::Tu4Eip, flags(true, true, 4), vec![(173, 1, 0x000B)])]
+    // BU 2100 §7.1.3: ready, cyclic, timeout P151; FI 1..4 online (10b each).
+    #[case(Product::Tu4Eip, flags(true, true, 4), vec![(173, 1, 0xAA0B), (173, 2, 0x00AA)])]
+    #[case(Product::Tu3Eip, flags(false, false, 6), vec![(173, 1, 0xAA01), (173, 2, 0x0AAA)])]
     // BU 0590 §5.1.3: AR installed, FI online = bits 9–8 10b; P170 1020 on a timeout.
     #[case(Product::Tu3Pnt, flags(true, false, 1), vec![(173, 1, 0x0222), (170, 1, 0)])]
     #[case(Product::Tu3Pnt, flags(false, true, 1), vec![(173, 1, 0x0228), (170, 1, 1020)])]

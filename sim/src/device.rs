@@ -332,6 +332,8 @@ pub struct Device {
     /// The flags the bus status parameters show (written again only when they change: the
     /// monitoring runs on every frame).
     shown: Option<BusFlags>,
+    /// The interface word of output assembly 110 (the SK xU4-EIP's digital outputs).
+    module_outputs: u16,
 }
 
 impl Device {
@@ -388,6 +390,19 @@ impl Device {
                 interface.store.set_info(number, e, b);
             }
         }
+        // P171 "Software version" of the EtherNet/IP modules (BU 2100 §7.1.3, p. 50; the
+        // edition's software, §1.1.2): [-01] 1.3, [-02] R1 (SK TU3), R5 (SK TU4), R4 (SK CU4),
+        // [-03] 0 = standard version.
+        let revision = match config.product {
+            Product::Tu3Eip => Some(1),
+            Product::Tu4Eip => Some(5),
+            Product::Cu4Eip => Some(4),
+            _ => None,
+        };
+        if let Some(r) = revision {
+            interface.store.set_info(171, 1, 13);
+            interface.store.set_info(171, 2, r);
+        }
         if config.product == Product::Tu3Pnt {
             // [-04]…[-06]: the rest of the example address 00:0E:CF:03:60:00 (BU 0590 §5.1.4),
             // the one the PROFINET station answers DCP with.
@@ -410,6 +425,7 @@ impl Device {
             lost: 0,
             config_error: false,
             shown: None,
+            module_outputs: 0,
         }
     }
 
@@ -436,6 +452,7 @@ impl Device {
     ///   [`bus_status`]): ready, cyclic communication, field-bus timeout, timeout P513/P151
     ///   (while an inverter shows E10.3), the inverters online.
     fn monitor(&mut self, now: Duration) {
+        self.show_relays();
         let mut flags = BusFlags {
             fieldbus_timeout: self.fieldbus_timeout,
             config_error: self.config_error,
@@ -505,18 +522,24 @@ impl Device {
         self.factory_setting();
     }
 
-    /// P152 "Werkseinstellung" of a module (BU 2200 §7.1.1, p. 48; BU 0590 §5.1.1, p. 34: the
-    /// parameter "returns automatically to 0"): 1 loads the factory settings of all the bus
-    /// interface's parameters; 2 "Basis-Parameter" and 3 "I-Parameter"
-    /// (the individual safety parameters P800…P830, which the simulated modules do not have)
-    /// reset only their own group, which leaves the catalogued parameters as they are. Each
-    /// returns P152 to 0 by itself.
+    /// P152 "Factory setting" of a module (BU 2100 §7.1.1 p. 46, BU 2200 §7.1.1 p. 48, BU 0590
+    /// §5.1.1 p. 34): 1 loads the factory settings of all the bus interface's setting
+    /// parameters, 2 those of its basic parameters (the NORD standard parameters P15x: "the
+    /// basic settings of the bus interface can be made via NORD standard parameters"), 3 the
+    /// i-parameters P800…P830 (which the simulated modules do not have); then P152 "returns
+    /// automatically to 0".
     fn factory_setting(&mut self) {
         let Ok(p152 @ 1..) = self.interface.store.read(P152, None, None) else {
             return;
         };
-        if p152 == 1 {
-            self.interface.store.load_factory_settings();
+        let which: Option<fn(u16) -> bool> = match p152 {
+            1 => Some(|_| true),
+            2 => Some(|n| (150..=159).contains(&n)),
+            3 => Some(|n| (800..=830).contains(&n)),
+            _ => None,
+        };
+        if let Some(which) = which {
+            self.interface.store.load_factory_settings(which);
         }
         self.interface.store.set_info(152, 1, 0);
     }
@@ -654,8 +677,9 @@ impl Device {
     /// - SK TU3-PNT (BU 0590 §5.1.3–§5.1.4, p. 36–37): P176 [-02] control word, [-03]/[-04]
     ///   setpoints 1/2; P177 [-02] status word, [-03]/[-04] actual values 1/2; P180 [-03] (slot
     ///   3, the FI) the module id of the PPO type (3 = PPO3 … 7 = PPO2).
-    /// - SK TU3/TU4/CU4-POL (BU 2200 §7.1.3, p. 55): P176/P177 [-02 + 6(n-1)] control/status
-    ///   word of FI n and the next five elements its setpoints/actual values 1..5.
+    /// - SK TU3/TU4/CU4-POL (BU 2200 §7.1.3, p. 55) and -EIP (BU 2100 §7.1.3, p. 52): P176/P177
+    ///   [-02 + 6(n-1)] control/status word of FI n and the next five elements its
+    ///   setpoints/actual values 1..5.
     pub fn show_process_data(
         &mut self,
         inverter: Inverter,
@@ -671,9 +695,13 @@ impl Device {
                 }
                 ((176, 177), 2, 3)
             }
-            Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => ((176, 177), 2 + 6 * n, 6),
+            Product::Tu3Pol
+            | Product::Tu4Pol
+            | Product::Cu4Pol
+            | Product::Tu3Eip
+            | Product::Tu4Eip
+            | Product::Cu4Eip => ((176, 177), 2 + 6 * n, 6),
             Product::Sk550p => ((873, 874), 1 + 6 * n, 6),
-            _ => return,
         };
         let store = &mut self.interface.store;
         for (e, (i, o)) in (first..).zip(sent.iter().zip(answer)).take(words) {
@@ -707,6 +735,38 @@ impl Device {
         self.monitor(now);
     }
 
+    /// The interface word an SK xU4-EIP receives in output assembly 110 (BU 2100 §6.2.1, p. 32:
+    /// DO1 bit 0, DO2 bit 1): shown in P176 [-01] "Bus module outputs"; on the SK TU4-EIP it
+    /// sets the digital outputs while P150 "Set relay" is 0 "Via bus".
+    pub fn set_module_outputs(&mut self, word: u16) {
+        self.module_outputs = word;
+        self.interface
+            .store
+            .set_info(176, 1, i32::from(word as i16));
+        self.show_relays();
+    }
+
+    /// P175 "Relay status" of the SK TU4-EIP (BU 2100 §7.1.3, p. 52: bit 0 DO1, bit 1 DO2) as
+    /// P150 "Set relay" sets them (§7.1.1, p. 45): 0 via bus, 1 both off, 2 DO1 on, 3 DO2 on,
+    /// 4 both on.
+    fn show_relays(&mut self) {
+        if self.config.product != Product::Tu4Eip {
+            return;
+        }
+        let p150 = ParamNumber::new(150)
+            .ok()
+            .and_then(|n| self.interface.store.read(n, None, None).ok())
+            .unwrap_or(0);
+        let relays = match p150 {
+            1 => 0,
+            2 => 0b01,
+            3 => 0b10,
+            4 => 0b11,
+            _ => i32::from(self.module_outputs & 0b11),
+        };
+        self.interface.store.set_info(175, 1, relays);
+    }
+
     /// A unit's parameter store, for protocol endpoints that address parameters themselves
     /// (CIP classes 100–108).
     pub fn store(&mut self, unit: Unit) -> Result<&mut ParamStore, DeviceError> {
@@ -725,10 +785,11 @@ impl Device {
         ethernet_timeout(&unit.params.store)
     }
 
-    /// Raises an inverter error unless one is present (a bus watchdog, E10.x).
+    /// Raises an inverter error unless one is present (a bus watchdog, E10.x) or the inverter
+    /// ignores communication errors (P513 = -0.1 "No error", BU 2100 §8.1).
     pub fn raise(&mut self, inverter: Inverter, code: FaultCode) -> Result<(), DeviceError> {
         let unit = self.inverter_mut(inverter)?;
-        if unit.drive.fault().is_none() {
+        if unit.drive.fault().is_none() && !ignores_communication_errors(&unit.params.store) {
             unit.drive.inject_fault(code);
             unit.show_fault();
         }
@@ -1081,6 +1142,48 @@ mod tests {
             .unwrap();
         assert_eq!(read_interface(&mut pnt, 180, 3), 3, "PPO3");
         assert_eq!(read_interface(&mut pnt, 172, 1), 2);
+    }
+
+    #[test]
+    fn tu4_eip_relays_follow_p150_or_the_bus() {
+        // BU 2100 §7.1.1 P150 (p. 45), §7.1.3 P175 (p. 52), §6.2.1 instance 110 (p. 32).
+        let mut d = Device::new(DeviceConfig::new(Product::Tu4Eip));
+        d.set_module_outputs(0xFFFE);
+        assert_eq!(read_interface(&mut d, 175, 1), 0b10, "via bus: DO2 (bit 1)");
+        assert_eq!(
+            read_interface(&mut d, 176, 1),
+            -2,
+            "P176 [-01] the outputs word"
+        );
+        for (p150, relays) in [(1, 0), (2, 0b01), (3, 0b10), (4, 0b11)] {
+            let n = ParamNumber::new(150).unwrap();
+            d.interface
+                .store
+                .write(n, None, None, p150, crate::store::Persist::Eeprom)
+                .unwrap();
+            d.tick(ms(10));
+            assert_eq!(read_interface(&mut d, 175, 1), relays, "P150 = {p150}");
+        }
+    }
+
+    #[test]
+    fn p513_no_error_ignores_a_lost_master() {
+        // BU 2100 §8.1: P513 = -0.1 "No error" → no E10.2 when the connection times out.
+        let mut d = Device::new(DeviceConfig::new(Product::Tu3Eip));
+        let fi1 = Inverter::new(1).unwrap();
+        let p513 = ParamNumber::new(513).unwrap();
+        d.store(Unit::Inverter(fi1))
+            .unwrap()
+            .write(
+                p513,
+                None,
+                ELEMENT_ETHERNET,
+                -1,
+                crate::store::Persist::Eeprom,
+            )
+            .unwrap();
+        d.raise(fi1, FaultCode { group: 10, sub: 2 }).unwrap();
+        assert_eq!(d.fault_changes(&mut [0; 8]), vec![], "P700 [-01] stays 0");
     }
 
     #[test]

@@ -165,6 +165,10 @@ impl ParamStore {
         persist: Persist,
     ) -> Result<(), AccessError> {
         let (def, key) = self.key(number, set, element)?;
+        // An ASCII text parameter takes 0 and its characters only (BU 2100 §7.1.2 P169).
+        if !def.accepts(value) && def.text_from > 0 {
+            return Err(AccessError::OutOfRange);
+        }
         match def.access {
             Access::ReadOnly => return Err(AccessError::ReadOnly),
             Access::ResetOnly if value != 0 => return Err(AccessError::OnlyResettable),
@@ -265,17 +269,20 @@ impl ParamStore {
         std::array::from_fn(|e| def.map_or(0, |d| params::element_default(d, e as u8 + 1)))
     }
 
-    /// Loads the factory settings of every setting parameter (information parameters keep
-    /// what the device shows).
-    pub fn load_factory_settings(&mut self) {
-        let product = self.product;
-        let owner = self.owner;
-        self.saved_ip = None;
-        self.values.retain(|(number, _, _), _| {
-            ParamNumber::new(i64::from(*number))
+    /// Loads the factory settings of the setting parameters `which` selects by number
+    /// (information parameters keep what the device shows): a module's P152 "Factory setting"
+    /// (see `Device::factory_setting`).
+    pub fn load_factory_settings(&mut self, which: fn(u16) -> bool) {
+        let (product, owner) = (self.product, self.owner);
+        if which(160) {
+            self.saved_ip = None;
+        }
+        self.values.retain(|&(number, _, _), _| {
+            let setting = ParamNumber::new(i64::from(number))
                 .ok()
                 .and_then(|n| params::lookup(product, owner, n))
-                .is_none_or(|d| d.access == Access::ReadOnly)
+                .is_some_and(|d| d.access != Access::ReadOnly);
+            !(setting && which(number))
         });
         self.eeprom_writes += 1;
     }
@@ -459,7 +466,7 @@ mod tests {
         let e1 = ArrayElement::new(1).ok();
         s.write(n(160), None, e1, 10, Persist::Eeprom).unwrap();
         s.set_info(172, 1, 2);
-        s.load_factory_settings();
+        s.load_factory_settings(|_| true);
         assert_eq!(s.read(n(160), None, e1), Ok(192));
         assert_eq!(s.read(n(172), None, None), Ok(2));
     }
@@ -546,5 +553,41 @@ mod tests {
         s.set_info(717, 1, 1020);
         assert_eq!(s.read(n(717), None, None), Ok(1020));
         s.set_info(1000, 1, 5);
+    }
+
+    #[test]
+    fn factory_settings_of_a_group_or_all() {
+        // BU 2100 §7.1.1 (p. 46): P152 = 1 all, 2 the basic (P15x) parameters.
+        let mut s = ParamStore::new(Product::Tu4Eip, Target::Interface);
+        let e4 = ArrayElement::new(4).ok();
+        s.write(n(151), None, None, 200, Persist::Eeprom).unwrap();
+        s.write(n(160), None, e4, 7, Persist::Eeprom).unwrap();
+        s.set_info(185, 4, 7);
+        s.load_factory_settings(|n| (150..=159).contains(&n));
+        assert_eq!(s.read(n(151), None, None), Ok(0));
+        assert_eq!(s.read(n(160), None, e4), Ok(7), "no basic parameter");
+        s.write(n(151), None, None, 200, Persist::Eeprom).unwrap();
+        s.load_factory_settings(|_| true);
+        assert_eq!(s.read(n(151), None, None), Ok(0));
+        assert_eq!(s.read(n(160), None, e4), Ok(100));
+        assert_eq!(s.read(n(185), None, e4), Ok(7), "information stays");
+    }
+
+    #[test]
+    fn text_parameters_take_0_and_their_characters() {
+        // BU 2100 §7.1.2 P169: ASCII 45…122, factory {0}.
+        let mut s = ParamStore::new(Product::Tu3Eip, Target::Interface);
+        let e1 = ArrayElement::new(1).ok();
+        for (value, ok) in [
+            (0, true),
+            (1, false),
+            (44, false),
+            (45, true),
+            (122, true),
+            (123, false),
+        ] {
+            let r = s.write(n(169), None, e1, value, Persist::Eeprom);
+            assert_eq!(r.is_ok(), ok, "{value}: {r:?}");
+        }
     }
 }

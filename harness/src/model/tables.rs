@@ -363,6 +363,57 @@ pub(super) const FNS: &[ComputeFn] = &[
         run: led_table,
     },
     ComputeFn {
+        name: "tables.tu3_update_cycle",
+        doc: "Process-data update cycle of an SK TU3-EIP over the system bus per inverter count, µs (BU 2100 §4.3)",
+        run: |_: &Ctx, a: &Args| {
+            let n = a.int("inverters")?;
+            let us = u8::try_from(n)
+                .ok()
+                .and_then(proto::nord::eip::tu3_update_cycle_us)
+                .ok_or_else(|| bad("inverters", format!("{n}: an SK TU3-EIP takes 1…8")))?;
+            Ok(json!({ "us": us }))
+        },
+    },
+    ComputeFn {
+        name: "tables.ethernet_frame",
+        doc: "The Ethernet II frame a bus travels in: EtherType, data 46…1500 bytes, frame 64…1518 bytes with FCS (IEEE 802.3; BU 2100 §3.3)",
+        run: |_: &Ctx, a: &Args| {
+            use proto::eth;
+            let protocol = a.str("protocol")?;
+            let ethertype = match protocol {
+                // EtherNet/IP: TCP and UDP over IPv4.
+                "enip" => eth::ETHERTYPE_IPV4,
+                "ecat" => eth::ETHERTYPE_ECAT,
+                "powerlink" => eth::ETHERTYPE_POWERLINK,
+                "profinet" => eth::ETHERTYPE_PROFINET,
+                other => return Err(bad("protocol", format!("`{other}`: enip, ecat, powerlink or profinet"))),
+            };
+            let fcs = 4;
+            Ok(json!({
+                "ethertype": ethertype,
+                "min_data": eth::MIN_FRAME_LEN - eth::HEADER_LEN,
+                "max_data": eth::MAX_FRAME_LEN - eth::HEADER_LEN,
+                "min_frame": eth::MIN_FRAME_LEN + fcs,
+                "llc": false,
+            }))
+        },
+    },
+    ComputeFn {
+        name: "tables.eip_identity",
+        doc: "EtherNet/IP identity of the product: product code, name, revision, EDS file (BU 2100 §5.2.1)",
+        run: |c: &Ctx, _: &Args| {
+            let id = proto::nord::eip::identity(c.product).ok_or_else(|| {
+                ComputeError::Refused(format!("{} has no EtherNet/IP interface", c.product.name()))
+            })?;
+            Ok(json!({
+                "product_code": id.product_code,
+                "name": id.name,
+                "revision": format!("{}.{}", id.revision.0, id.revision.1),
+                "eds_file": id.eds_file,
+            }))
+        },
+    },
+    ComputeFn {
         name: "tables.error_group",
         doc: "DS-301 error group of an error code: 00xxh no error … FF00h specific to device (BU 0620 §5.4.1.2)",
         run: |_: &Ctx, a: &Args| {

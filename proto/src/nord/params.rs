@@ -75,6 +75,10 @@ pub struct ParamDef {
     pub set_dependent: bool,
     /// Writability.
     pub access: Access,
+    /// A text parameter of ASCII codes: besides 0, which ends or clears the text, it takes only
+    /// `text_from..=max` (BU 2100 §7.1.2 P169 "45...122 ASCII", factory {0}); 0 for every
+    /// other parameter.
+    pub text_from: i32,
     /// Where the manuals state it, and what was assumed.
     pub source: &'static str,
 }
@@ -103,6 +107,7 @@ const fn inv(
         element_defaults: &[],
         set_dependent: false,
         access: Access::ReadWrite,
+        text_from: 0,
         source,
     }
 }
@@ -133,6 +138,14 @@ const fn array(p: ParamDef, n: u8) -> ParamDef {
 const fn dword(p: ParamDef) -> ParamDef {
     ParamDef {
         width: Width::Dword,
+        ..p
+    }
+}
+
+/// An ASCII text parameter of the characters `from..=max` and the 0 that ends the text.
+const fn text(p: ParamDef, from: i32) -> ParamDef {
+    ParamDef {
+        text_from: from,
         ..p
     }
 }
@@ -274,7 +287,15 @@ pub const CATALOGUE: &[ParamDef] = &[
     module(ro(array(inv(186, "Present IP subnet mask", 0, 255, 0, 0, "BU 2100 §7.1.4, BU 2200 §7.1.4 (p. 58): [-01]..[-04]"), 4)), EIP_POL_ALL),
     module(ro(array(inv(170, "Actual error", 0, 9999, 0, 0, "BU 2100 §7.1.3: [-01] actual, [-02] last error of the bus interface"), 2)), EIP_ALL),
     module(ro(inv(172, "Configuration level", 0, 3, 0, 0, "BU 2100 §7.1.3: 0 CU4, 1 TU4, 2 TU3, 3 TU3 with DIP switch")), EIP_ALL),
-    module(ro(array(inv(173, "Module status", 0, 0xFFFF, 0, 0, "BU 2100 §7.1.3: [-01] bit 0 ready, 1 cyclic communication, 3 timeout P151/P513"), 2)), EIP_ALL),
+    module(ro(array(inv(173, "Module status", 0, 0xFFFF, 0, 0, "BU 2100 §7.1.3 (p. 51): [-01] bit 0 ready, 1 cyclic communication, 2 timeout EtherNet/IP, 3 timeout P151/P513, bits 8–15 FI 1..4 in bit pairs; [-02] FI 1..8 in bit pairs (SK TU3-EIP: two arrays)"), 2)), &[Product::Tu3Eip]),
+    module(ro(inv(173, "Module status", 0, 0xFFFF, 0, 0, "BU 2100 §7.1.3 (p. 51) footnote 1: on the SK xU4-EIP no arrays, the bits of column [-01]")), &[Product::Tu4Eip, Product::Cu4Eip]),
+    module(ro(array(inv(171, "Software version", 0, 99999, 0, 1, "BU 2100 §7.1.3 (p. 50): 0.0…9999.9, [-01] version, [-02] revision, [-03] special version (0 = standard); §1.1.2: V 1.3 R1 (SK TU3), R5 (SK TU4), R4 (SK CU4)"), 3)), EIP_ALL),
+    module(ro(inv(174, "Digital input status", 0, 255, 0, 0, "BU 2100 §7.1.3 (p. 52): bit n = DIN n+1 of the bus interface (DIN3..DIN8 SK TU4-EIP only)")), &[Product::Tu4Eip, Product::Cu4Eip]),
+    module(ro(inv(175, "Relay status", 0, 3, 0, 0, "BU 2100 §7.1.3 (p. 52): bit 0 DO1, bit 1 DO2")), &[Product::Tu4Eip]),
+    module(ro(array(inv(176, "Process data Bus In", -32768, 32767, 0, 0, "BU 2100 §7.1.3 (p. 52): [-01] bus module outputs (xU4), [-02 + 6(n-1)] control word and setpoints 1..5 of FI n, up to [-49]"), 49)), EIP_ALL),
+    module(ro(array(inv(177, "Process data Bus Out", -32768, 32767, 0, 0, "BU 2100 §7.1.3 (p. 52): [-01] bus module inputs (xU4), [-02 + 6(n-1)] status word and actual values 1..5 of FI n, up to [-49]"), 49)), EIP_ALL),
+    module(ro(inv(178, "Internal temperature", -128, 127, 0, 0, "BU 2100 §7.1.3 (p. 52): -128…127 °C, SK CU4-EIP only; above +97 °C error 10.1")), &[Product::Cu4Eip]),
+    module(text(array(inv(169, "Password", 0, 122, 0, 0, "BU 2100 §7.1.2 (p. 49): up to 20 characters of ASCII 45…122, factory {0} (outside the printed range: 0 = no password / end of text)"), 20), 45), EIP_ALL),
     module(inv(152, "Factory setting", 0, 1, 0, 0, "BU 0590 §5.1.1: 0…1, factory 0"), PNT),
     module(inv(162, "Device name", 0, 122, 0, 0, "BU 0590 §5.1.2 (p. 35): ASCII characters 45…122, up to 240 of them; a 0 ends and saves the name (so 0 is allowed, which the printed range 45…122 omits); no factory setting printed, 0 (no name) assumed"), PNT),
     module(ro(array(inv(170, "Present error", 0, 5420, 0, 0, "BU 0590 §5.1.3 (p. 35): 0…5420, [-01] actual module error, [-02] last (printed \"actual\" twice); 1020 = bus time-out via P151/P513"), 2)), PNT),
@@ -327,6 +348,12 @@ pub fn value_allowed(def: &ParamDef, product: Product, value: i32) -> bool {
 }
 
 impl ParamDef {
+    /// Whether a value is in the setting range (a text parameter's: 0 or a character).
+    pub fn accepts(&self, value: i32) -> bool {
+        (self.min..=self.max).contains(&value)
+            && (self.text_from == 0 || value == 0 || value >= self.text_from)
+    }
+
     /// Whether `product` has the parameter.
     pub fn applies_to(&self, product: Product) -> bool {
         self.family.is_none_or(|f| f == product.family())
@@ -425,6 +452,10 @@ mod tests {
     #[case(Product::Sk550p, 877, 0, 255, 0)]
     // BU 0590 §5.1.2–§5.1.4 (p. 35–37).
     #[case(Product::Tu3Pnt, 162, 0, 122, 0)]
+    // BU 2100 §7.1.2–§7.1.3 (p. 49–52).
+    #[case(Product::Tu4Eip, 169, 0, 122, 0)]
+    #[case(Product::Cu4Eip, 178, -128, 127, 0)]
+    #[case(Product::Tu4Eip, 175, 0, 3, 0)]
     #[case(Product::Tu3Pnt, 170, 0, 5420, 0)]
     #[case(Product::Tu3Pnt, 172, 0, 2, 0)]
     #[case(Product::Tu3Pnt, 180, 0, 7, 0)]
@@ -486,6 +517,33 @@ mod tests {
     }
 
     #[test]
+    fn ethernet_ip_module_information_parameters() {
+        // BU 2100 §7.1.3 (p. 51) P173: two arrays on the SK TU3-EIP, none on the SK xU4-EIP.
+        let p173 = |product| lookup(product, Owner::Interface, p(173)).unwrap().array;
+        assert_eq!(p173(Product::Tu3Eip), Some(2));
+        assert_eq!((p173(Product::Tu4Eip), p173(Product::Cu4Eip)), (None, None));
+        // P174 on the SK CU4/TU4-EIP, P175 on the SK TU4-EIP, P178 on the SK CU4-EIP only.
+        assert!(lookup(Product::Tu3Eip, Owner::Interface, p(174)).is_none());
+        assert!(lookup(Product::Cu4Eip, Owner::Interface, p(175)).is_none());
+        assert!(lookup(Product::Tu4Eip, Owner::Interface, p(178)).is_none());
+        assert_eq!(
+            lookup(Product::Tu3Eip, Owner::Interface, p(177)).and_then(|d| d.array),
+            Some(49)
+        );
+    }
+
+    #[test]
+    fn text_parameters_take_0_and_their_ascii_range() {
+        // BU 2100 §7.1.2 P169 "45...122 ASCII", factory {0}.
+        let d = lookup(Product::Tu3Eip, Owner::Interface, p(169)).unwrap();
+        let taken: Vec<i32> = [0, 1, 44, 45, 122, 123]
+            .into_iter()
+            .filter(|v| d.accepts(*v))
+            .collect();
+        assert_eq!((taken, d.text_from), (vec![0, 45, 122], 45));
+    }
+
+    #[test]
     fn lookup_finds_every_entry_of_the_catalogue() {
         for d in CATALOGUE {
             let n = ParamNumber::new(i64::from(d.number)).unwrap();
@@ -503,11 +561,7 @@ mod tests {
     #[test]
     fn catalogue_is_consistent() {
         for d in CATALOGUE {
-            assert!(
-                d.min <= d.default && d.default <= d.max,
-                "P{} default outside range",
-                d.number
-            );
+            assert!(d.accepts(d.default), "P{} default outside range", d.number);
             assert!(d.number <= 999 && !d.source.is_empty());
             for product in Product::ALL {
                 let same: Vec<_> = CATALOGUE

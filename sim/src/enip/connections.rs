@@ -491,6 +491,10 @@ fn apply_outputs(a: &mut Adapter, asm: &Assembly, data: &[u8], run: bool, now: D
             }
         }
     }
+    // The interface word of 110 sets the SK xU4-EIP's outputs (BU 2100 §6.2.1, p. 32).
+    if let (true, Some([lo, hi])) = (asm.io_word, data.get(..2)) {
+        a.device.set_module_outputs(u16::from_le_bytes([*lo, *hi]));
+    }
     match a.conns.outputs.iter_mut().find(|(i, _)| *i == asm.instance) {
         Some((_, d)) => *d = data.to_vec(),
         None => a.conns.outputs.push((asm.instance, data.to_vec())),

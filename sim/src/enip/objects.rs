@@ -136,6 +136,9 @@ pub(super) fn request(
             return malformed(service, status);
         }
     };
+    // What an earlier parameter write set in motion shows before this request (P150 → P175,
+    // P152's factory settings): the device's monitoring runs.
+    a.device.tick(now);
     let s = req.service;
     match req.path.class_id() {
         Some(class::IDENTITY) => identity(a, &req),

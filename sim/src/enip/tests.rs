@@ -435,6 +435,37 @@ fn an_unknown_command_is_invalid_command_and_the_connection_stays() {
 }
 
 #[test]
+fn the_dlr_object_is_listed_and_answers_topology_and_status() {
+    // BU 2100 §3.1 "Supported functions: UCMM, DLR": DLR object 47h, instance 1.
+    let mut b = Bench::new(Product::Tu4Eip);
+    let list = b.get(class::MESSAGE_ROUTER, 1, 1);
+    assert!(
+        list.data.chunks(2).skip(1).any(|c| c == [0x47, 0x00]),
+        "{list:?}"
+    );
+    assert_eq!(b.get(class::DLR, 1, 1).data, [0], "linear topology");
+    assert_eq!(b.get(class::DLR, 1, 2).data, [0], "status normal");
+    assert_eq!(
+        b.get(class::DLR, 1, 9).status(),
+        GS::ATTRIBUTE_NOT_SUPPORTED
+    );
+    assert_eq!(
+        b.get(class::DLR, 2, 1).status(),
+        GS::PATH_DESTINATION_UNKNOWN
+    );
+}
+
+#[test]
+fn assembly_110_drives_the_tu4_relays_and_p176() {
+    // BU 2100 §6.2.1 (p. 32): the interface word of 110, DO1 bit 0, DO2 bit 1 → P175, P176 [-01].
+    let mut b = Bench::new(Product::Tu4Eip);
+    let r = b.set(class::ASSEMBLY, 110, 3, &[0x02, 0x00]);
+    assert_eq!(r.status(), GS::SUCCESS, "{r:?}");
+    assert_eq!(word(&b.module_param(175, None)), 2);
+    assert_eq!(word(&b.module_param(176, element(1))), 2);
+}
+
+#[test]
 fn nop_and_non_zero_options_get_no_reply() {
     let mut b = Bench::new(Product::Tu3Eip);
     let nop = encap(Command::NOP, 0, vec![1, 2, 3]);
