@@ -128,10 +128,6 @@ impl Mapping {
             self.count = n;
             return Ok(());
         }
-        // An entry changes only while sub-index 0 is 0 (the mapping is switched off).
-        if self.count != 0 {
-            return Err(abort::UNSUPPORTED_ACCESS);
-        }
         let bytes: [u8; 8] = data.try_into().map_err(|_| {
             if data.len() > 8 {
                 abort::TOO_LONG
@@ -140,6 +136,15 @@ impl Mapping {
             }
         })?;
         let entry = u64::from_le_bytes(bytes);
+        // An entry changes only while sub-index 0 is 0 (the mapping is switched off); writing
+        // the value it has changes nothing and is taken (a master restoring its settings).
+        if self.count != 0 {
+            return if self.entries[usize::from(sub) - 1] == entry {
+                Ok(())
+            } else {
+                Err(abort::UNSUPPORTED_ACCESS)
+            };
+        }
         if !self.mappable(product, entry, usize::from(sub) - 1) {
             return Err(NOT_MAPPABLE);
         }
@@ -367,6 +372,11 @@ mod mapping_tests {
         assert_eq!(
             m.download(p, 1, &entry(0x5011, 1, 0)),
             Err(abort::UNSUPPORTED_ACCESS)
+        );
+        assert_eq!(
+            m.download(p, 1, &entry(0x5010, 1, 0)),
+            Ok(()),
+            "the value it has"
         );
         m.download(p, 0, &[0]).unwrap();
         m.download(p, 1, &entry(0x5011, 1, 0)).unwrap();
