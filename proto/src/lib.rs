@@ -10,6 +10,7 @@ pub mod ecat;
 pub mod enip;
 pub mod epl;
 pub mod eth;
+pub mod lldp;
 pub mod nord;
 pub mod pnio;
 mod wire;

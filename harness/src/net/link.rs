@@ -59,6 +59,8 @@ pub(crate) struct Received {
 pub(crate) struct RawLink {
     iface: Interface,
     ethertype: Option<u16>,
+    /// A second EtherType taken besides `ethertype` ([`RawLink::also_take`]).
+    also: Option<u16>,
     tx: Box<dyn DataLinkSender>,
     /// pnet's receiver on the same socket. Never read (frames are read with `recvmsg` on
     /// `socket`), kept because it shares the socket's descriptor with `tx`.
@@ -122,6 +124,7 @@ impl RawLink {
         Ok(RawLink {
             iface,
             ethertype,
+            also: None,
             tx,
             _rx: rx,
             socket: dup,
@@ -236,6 +239,11 @@ impl RawLink {
         }
     }
 
+    /// Takes frames of `ethertype` too (a PROFINET controller: LLDP beside PROFINET).
+    pub(crate) fn also_take(&mut self, ethertype: u16) {
+        self.also = Some(ethertype);
+    }
+
     /// Whether `frame` carries the link's EtherType (behind one 802.1Q tag or none).
     fn wanted(&self, frame: &[u8]) -> bool {
         let Some(want) = self.ethertype else {
@@ -246,11 +254,11 @@ impl RawLink {
                 .get(i..i + 2)
                 .map(|b| u16::from_be_bytes([b[0], b[1]]))
         };
-        match at(12) {
-            Some(VLAN) => at(16) == Some(want),
-            Some(t) => t == want,
-            None => false,
-        }
+        let carried = match at(12) {
+            Some(VLAN) => at(16),
+            t => t,
+        };
+        carried.is_some_and(|t| t == want || Some(t) == self.also)
     }
 
     fn error(&self, op: &'static str, e: Errno) -> LinkError {

@@ -223,6 +223,11 @@ impl<D> std::fmt::Debug for NetLink<D> {
 }
 
 impl<D> NetLink<D> {
+    /// Takes frames of `ethertype` too, besides the one the link was opened for.
+    pub(crate) fn also_take(&mut self, ethertype: u16) {
+        self.raw.also_take(ethertype);
+    }
+
     /// Opens `iface` for frames of `ethertype` and a UDP socket on `local_port` (0: any) to
     /// `peer`, the device's UDP address.
     pub(crate) fn open(

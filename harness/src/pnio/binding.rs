@@ -405,6 +405,24 @@ impl<L: Link + 'static> PnioBinding<L> {
                 ctl.silence(*d).map_err(step_error)?;
                 json!({}).into()
             }
+            PnioStep::Lldp(d) => {
+                let (frames, last) = ctl.lldp_for(*d).map_err(step_error)?;
+                let du = last.as_deref().map(proto::lldp::Lldpdu::parse);
+                let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+                match du {
+                    Some(Err(e)) => return Err(StepError::Protocol(format!("LLDP: {e}"))),
+                    Some(Ok(du)) => json!({
+                        "frames": frames,
+                        "chassis": text(&du.chassis.1),
+                        "chassis_subtype": du.chassis.0,
+                        "port": text(&du.port.1),
+                        "port_subtype": du.port.0,
+                        "ttl": du.ttl,
+                    }),
+                    None => json!({ "frames": frames, "chassis": null }),
+                }
+                .into()
+            }
             PnioStep::Cycles(n) => {
                 let d = ctl.cycle() * (*n as u32);
                 ctl.run_for(d).map_err(step_error)?;

@@ -178,6 +178,9 @@ pub(crate) struct Controller<L> {
     exchanges: Vec<Exchange>,
     cycles: CycleLog,
     recording: bool,
+    /// The last LLDP frame's payload (BU 0620 §2.5.3 topology detection) and how many came.
+    lldp: Option<Vec<u8>>,
+    lldp_frames: u64,
 }
 
 impl<L: Link> Controller<L> {
@@ -198,6 +201,8 @@ impl<L: Link> Controller<L> {
             exchanges: Vec::new(),
             cycles: CycleLog::default(),
             recording: true,
+            lldp: None,
+            lldp_frames: 0,
         }
     }
 
@@ -309,6 +314,11 @@ impl<L: Link> Controller<L> {
             let Ok(eth) = EthernetFrame::new_checked(&frame[..]) else {
                 continue;
             };
+            if eth.inner_ethertype() == proto::eth::ETHERTYPE_LLDP {
+                self.lldp = Some(eth.inner_payload().to_vec());
+                self.lldp_frames += 1;
+                continue;
+            }
             if eth.inner_ethertype() != ETHERTYPE_PROFINET {
                 continue;
             }
@@ -323,6 +333,15 @@ impl<L: Link> Controller<L> {
             let payload = payload.to_vec();
             self.cyclic_or_alarm(&payload)?;
         }
+    }
+
+    /// Lets `d` pass with the cycle running and returns the LLDP frames that came in that time
+    /// (their number, the last one's payload).
+    pub(crate) fn lldp_for(&mut self, d: Duration) -> Result<(u64, Option<Vec<u8>>), PnioError> {
+        let before = self.lldp_frames;
+        self.lldp = None;
+        self.run_for(d)?;
+        Ok((self.lldp_frames - before, self.lldp.take()))
     }
 
     /// Lets `d` pass with the cycle running.

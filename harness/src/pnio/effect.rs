@@ -33,6 +33,7 @@ pub(super) fn of(step: &PnioStep) -> Effect {
         | PnioStep::Read { .. }
         | PnioStep::Alarm(_)
         | PnioStep::Silence(_)
+        | PnioStep::Lldp(_)
         | PnioStep::Cycles(_) => Effect::NONE,
         PnioStep::SetName { permanent, .. } | PnioStep::SetIp { permanent, .. } => {
             Effect::eeprom(u32::from(*permanent))

@@ -185,7 +185,7 @@ impl DutFactory for NetworkFactory {
         let product = profile.nord().map_err(OpenError::Profile)?;
         // The device's address comes with DCP Identify; until then the socket points nowhere.
         let nowhere = SocketAddr::from((std::net::Ipv4Addr::LOCALHOST, proto::pnio::RPC_PORT));
-        let link = NetLink::open(
+        let mut link = NetLink::open(
             &self.iface,
             proto::eth::ETHERTYPE_PROFINET,
             nowhere,
@@ -195,6 +195,8 @@ impl DutFactory for NetworkFactory {
             LinkError::NeedsRoot { .. } => OpenError::NotPermitted(e.to_string()),
             other => OpenError::Unreachable(other.to_string()),
         })?;
+        // The device's LLDP frames (BU 0620 §2.5.3), for the `lldp` step.
+        link.also_take(proto::eth::ETHERTYPE_LLDP);
         let mac = MacAddr(link.mac());
         let target = Target {
             product,

@@ -69,6 +69,8 @@ pub(crate) enum PnioStep {
     Alarm(Duration),
     /// The controller sends no RT frames for this long (the device's watchdog).
     Silence(Duration),
+    /// The cycle runs this long; the LLDP frames the device sent meanwhile.
+    Lldp(Duration),
     /// This many cycles as they run.
     Cycles(u64),
     /// A PROFINET frame as written (from the frame id on), and what comes back.
@@ -151,6 +153,7 @@ impl BusStep for PnioStep {
             ),
             PnioStep::Alarm(d) => format!("wait {d:?} for an alarm, acknowledge it"),
             PnioStep::Silence(d) => format!("controller silent for {d:?}"),
+            PnioStep::Lldp(d) => format!("LLDP frames within {d:?}"),
             PnioStep::Cycles(n) => format!("{n} cycles"),
             PnioStep::Frame(b) => format!("frame {}", hex(b)),
             PnioStep::Rpc {
@@ -290,6 +293,9 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
     } else if has("silence") {
         let f = Fields::new("pnio", m, &["silence"])?;
         PnioStep::Silence(duration(&f, "silence")?)
+    } else if has("lldp") {
+        let f = Fields::new("pnio", m, &["lldp"])?;
+        PnioStep::Lldp(duration(&f, "lldp")?)
     } else if has("cycles") {
         let f = Fields::new("pnio", m, &["cycles"])?;
         let n = f.req_int("cycles")?;
@@ -313,7 +319,7 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
         return Err(
             "`pnio` needs one of `identify`, `set-name`, `set-ip`, `signal`, \
                     `reset-factory`, `connect`, `release`, `read`, `write`, `alarm`, \
-                    `silence`, `cycles`, `frame`, `rpc`"
+                    `silence`, `lldp`, `cycles`, `frame`, `rpc`"
                 .into(),
         );
     };

@@ -154,7 +154,7 @@ pub(super) fn request(
         },
         Some(class::TCP_IP) => tcp_ip(a, &req),
         Some(class::ETHERNET_LINK) => ethernet_link(a, &req),
-        Some(class::DLR) => dlr(a, &req),
+        Some(class::DLR) => dlr(&req),
         Some(c @ 100..=108) => parameter(a, c, &req),
         _ => MrResponse::error(s, GS::PATH_DESTINATION_UNKNOWN),
     }
@@ -418,8 +418,7 @@ const DLR_CAPABILITIES: u32 = 0x02 | 0x80;
 /// 12 capability flags; the supervisor's (3–9, 11) and a redundant gateway's (13–16) are
 /// absent. The simulator sits on one link, not in a ring: topology 0 (linear), status 0
 /// (normal), no active supervisor (address 0.0.0.0, MAC 00-00-00-00-00-00).
-fn dlr(a: &mut Adapter, req: &MrRequest) -> MrResponse {
-    let _ = a;
+fn dlr(req: &MrRequest) -> MrResponse {
     if let Some(r) = class_attribute(req, DLR_REVISION) {
         return r;
     }

@@ -101,15 +101,21 @@ impl PdoMap {
                 abort::TOO_SHORT
             }
         })?;
-        if self.count != 0 {
-            // DS 301: entries change only while sub-index 0 is 0.
-            return Err(abort::UNSUPPORTED_ACCESS);
-        }
         let i = usize::from(sub) - 1;
+        let entry = u64::from_le_bytes(bytes);
+        if self.count != 0 {
+            // DS 301: entries change only while sub-index 0 is 0; writing the value an entry
+            // has changes nothing and is taken (a master restoring its settings).
+            return if self.entries.get(i) == Some(&entry) {
+                Ok(())
+            } else {
+                Err(abort::UNSUPPORTED_ACCESS)
+            };
+        }
         if self.entries.len() <= i {
             self.entries.resize(i + 1, 0);
         }
-        self.entries[i] = u64::from_le_bytes(bytes);
+        self.entries[i] = entry;
         Ok(())
     }
 }
@@ -155,10 +161,14 @@ mod tests {
     #[test]
     fn the_mn_maps_two_words() {
         let mut m = PdoMap::fixed(Product::Tu3Pol, true);
-        // Entries change only while sub-index 0 is 0.
+        // Entries change only while sub-index 0 is 0; the value an entry has is taken.
+        assert_eq!(
+            m.write(Product::Tu3Pol, true, 1, &entry(0x5002, 1, 0)),
+            Err(abort::UNSUPPORTED_ACCESS)
+        );
         assert_eq!(
             m.write(Product::Tu3Pol, true, 1, &entry(0x5000, 1, 0)),
-            Err(abort::UNSUPPORTED_ACCESS)
+            Ok(())
         );
         m.write(Product::Tu3Pol, true, 0, &[0]).unwrap();
         m.write(Product::Tu3Pol, true, 1, &entry(0x5000, 1, 0))

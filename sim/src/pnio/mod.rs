@@ -117,7 +117,13 @@ pub struct IoDevice {
     dropped: u64,
     /// The activity of the device's own RPC calls (ApplicationReady).
     calls: u32,
+    /// When the next LLDP frame goes out.
+    next_lldp: Duration,
 }
+
+/// LLDP: a frame every 5 s (IEC 61158-6-10 for PROFINET devices), valid for 4 intervals.
+const LLDP_INTERVAL: Duration = Duration::from_secs(5);
+const LLDP_TTL_S: u16 = 20;
 
 impl IoDevice {
     /// The IO device of `device`, powered on at time zero.
@@ -150,6 +156,7 @@ impl IoDevice {
             test_alarm: 0,
             dropped: 0,
             calls: 0,
+            next_lldp: LLDP_INTERVAL,
         };
         if factory {
             // The IP parameters hold the factory suite DCP reports (BU 0620 §4.2.4, BU 0590
@@ -287,7 +294,32 @@ impl IoDevice {
         }
         out.extend(self.alarms_due(now));
         out.extend(self.send_input(now));
+        if now >= self.next_lldp {
+            self.next_lldp = now + LLDP_INTERVAL;
+            out.push(self.lldp());
+        }
         out
+    }
+
+    /// The LLDP frame of conformance class B (BU 0620 §2.5.3 "Topology detection with the Link
+    /// Layer Discovery Protocol"): chassis ID the name of station, port ID "port-001".
+    fn lldp(&self) -> Out {
+        let du = proto::lldp::Lldpdu {
+            chassis: (
+                proto::lldp::LOCALLY_ASSIGNED,
+                self.name().as_bytes().to_vec(),
+            ),
+            port: (proto::lldp::LOCALLY_ASSIGNED, b"port-001".to_vec()),
+            ttl: LLDP_TTL_S,
+        };
+        Out::Frame(
+            EthernetRepr {
+                dst: proto::lldp::MULTICAST,
+                src: self.mac,
+                ethertype: proto::eth::ETHERTYPE_LLDP,
+            }
+            .emit(&du.emit()),
+        )
     }
 
     /// What the interface's information parameters say of the bus: SK 550P P870 = 1

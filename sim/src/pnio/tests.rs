@@ -641,3 +641,30 @@ fn impossible_iocr_sizes_are_refused_naming_data_length() {
     }
     run_ar(&mut io, &[(3, ppo6)]);
 }
+
+#[test]
+fn lldp_names_the_station_every_5_s() {
+    // BU 0620 §2.5.3 CC-B: topology detection with LLDP.
+    let mut d = io(Product::Sk550p, "nord-device");
+    let lldp = |out: Vec<Out>| -> Vec<proto::lldp::Lldpdu> {
+        out.into_iter()
+            .filter_map(|o| match o {
+                Out::Frame(f) => Some(f),
+                Out::Datagram { .. } => None,
+            })
+            .filter_map(|f| {
+                let eth = EthernetFrame::new_checked(f).ok()?;
+                (eth.inner_ethertype() == proto::eth::ETHERTYPE_LLDP)
+                    .then(|| proto::lldp::Lldpdu::parse(eth.inner_payload()).ok())?
+            })
+            .collect()
+    };
+    assert!(lldp(d.poll(Duration::from_millis(4_999))).is_empty());
+    let got = lldp(d.poll(Duration::from_secs(5)));
+    assert_eq!(got.len(), 1);
+    assert_eq!(got[0].chassis, (7, b"nord-device".to_vec()));
+    assert_eq!(got[0].port, (7, b"port-001".to_vec()));
+    assert_eq!(got[0].ttl, 20);
+    assert!(lldp(d.poll(Duration::from_millis(9_999))).is_empty());
+    assert_eq!(lldp(d.poll(Duration::from_secs(10))).len(), 1);
+}
