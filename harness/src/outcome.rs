@@ -94,8 +94,7 @@ pub struct Erratum {
     #[serde(default)]
     pub ambiguous: bool,
     /// Which check of the errata pass found it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub check: Option<ErratumCheck>,
+    pub check: ErratumCheck,
     /// The clause of the standard the correct value comes from (`CiA 301 4.2.0 §7.2.4.3.17`);
     /// always there for [`ErratumCheck::Standard`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -115,7 +114,7 @@ impl Erratum {
     /// How it was found, with the standard's clause where there is one: `standard: CiA 301
     /// 4.2.0 §7.2.4.3.17`.
     pub fn found_by(&self) -> String {
-        let check = self.check.map_or("unclassified", ErratumCheck::label);
+        let check = self.check.label();
         match &self.standard {
             Some(clause) => format!("{check}: {clause}"),
             None => check.to_string(),

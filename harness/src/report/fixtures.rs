@@ -188,7 +188,7 @@ pub(super) fn sample_run() -> RunResult {
             correct: "class 102".into(),
             why: "FI 2 is class 102".into(),
             ambiguous: false,
-            check: Some(ErratumCheck::OwnText),
+            check: ErratumCheck::OwnText,
             standard: None,
         }],
         statements: vec![

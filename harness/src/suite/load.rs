@@ -180,7 +180,7 @@ pub(crate) fn load_text(
             continue;
         }
         for e in case_doc.manual_says.into_vec() {
-            if e.check == Some(ErratumCheck::Standard) && e.standard.is_none() {
+            if e.check == ErratumCheck::Standard && e.standard.is_none() {
                 loaded.errors.push(err(
                     line,
                     format!(
@@ -235,7 +235,7 @@ cases:
   - id: coe-p102
     title: P102 of FI 3 is 3066h
     ref: { section: "2.2.7", page: 20 }
-    manual_says: { printed: "a", correct: "b", why: "c" }
+    manual_says: { printed: "a", correct: "b", why: "c", check: own-text }
     steps:
       - wait: 10ms
         expect: { status: xx31h }
@@ -254,7 +254,7 @@ cases:
 
     #[test]
     fn an_erratum_found_against_a_standard_names_its_clause() {
-        let bare = load(&GOOD.replace(r#"why: "c" }"#, r#"why: "c", check: standard }"#));
+        let bare = load(&GOOD.replace("check: own-text", "check: standard"));
         assert!(bare.cases.is_empty());
         assert!(
             bare.errors[0].message.contains("names its clause"),
@@ -262,16 +262,21 @@ cases:
             bare.errors
         );
         let named = load(&GOOD.replace(
-            r#"why: "c" }"#,
-            r#"why: "c", check: standard, standard: "CiA 301 4.2.0 §7.2.4.3.17" }"#,
+            "check: own-text",
+            r#"check: standard, standard: "CiA 301 4.2.0 §7.2.4.3.17""#,
         ));
         assert!(named.errors.is_empty(), "{:?}", named.errors);
         assert_eq!(
             named.errata[0].found_by(),
             "standard: CiA 301 4.2.0 §7.2.4.3.17"
         );
-        let unknown = load(&GOOD.replace(r#"why: "c" }"#, r#"why: "c", check: hunch }"#));
+        let unknown = load(&GOOD.replace("check: own-text", "check: hunch"));
         assert!(unknown.cases.is_empty(), "an unknown check is refused");
+        let missing = load(&GOOD.replace(", check: own-text", ""));
+        assert!(
+            missing.cases.is_empty(),
+            "every erratum says how it was found"
+        );
     }
 
     #[test]

@@ -85,8 +85,7 @@ pub(super) struct ErratumDoc {
     #[serde(default)]
     pub(super) ambiguous: bool,
     /// Which check of the errata pass found it.
-    #[serde(default)]
-    pub(super) check: Option<ErratumCheck>,
+    pub(super) check: ErratumCheck,
     /// The standard's clause; required when `check: standard`.
     #[serde(default)]
     pub(super) standard: Option<String>,
