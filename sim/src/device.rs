@@ -25,42 +25,22 @@ use crate::store::{ParamStore, Target};
 /// How long after the last valid process data the "BUS" LED still shows communication.
 pub const PROCESS_DATA_WINDOW: Duration = Duration::from_millis(100);
 
-const P513: ParamNumber = match ParamNumber::new(513) {
-    Ok(p) => p,
-    Err(_) => panic!("in range"),
-};
-const P151: ParamNumber = match ParamNumber::new(151) {
-    Ok(p) => p,
-    Err(_) => panic!("in range"),
-};
-const P150: ParamNumber = match ParamNumber::new(150) {
-    Ok(p) => p,
-    Err(_) => panic!("in range"),
-};
-const P152: ParamNumber = match ParamNumber::new(152) {
-    Ok(p) => p,
-    Err(_) => panic!("in range"),
-};
-const P170: ParamNumber = match ParamNumber::new(170) {
-    Ok(p) => p,
-    Err(_) => panic!("in range"),
-};
-const P700: ParamNumber = match ParamNumber::new(700) {
-    Ok(p) => p,
-    Err(_) => panic!("in range"),
-};
-const P701: ParamNumber = match ParamNumber::new(701) {
-    Ok(p) => p,
-    Err(_) => panic!("in range"),
-};
-const P870: ParamNumber = match ParamNumber::new(870) {
-    Ok(n) => n,
-    Err(_) => panic!("P870"),
-};
-const P899: ParamNumber = match ParamNumber::new(899) {
-    Ok(p) => p,
-    Err(_) => panic!("in range"),
-};
+/// A parameter number, checked to be one when compiling.
+const fn param(number: i64) -> ParamNumber {
+    match ParamNumber::new(number) {
+        Ok(p) => p,
+        Err(_) => panic!("not a parameter number"),
+    }
+}
+const P513: ParamNumber = param(513);
+const P151: ParamNumber = param(151);
+const P150: ParamNumber = param(150);
+const P152: ParamNumber = param(152);
+const P170: ParamNumber = param(170);
+const P700: ParamNumber = param(700);
+const P701: ParamNumber = param(701);
+const P870: ParamNumber = param(870);
+const P899: ParamNumber = param(899);
 /// P513 [-04] is the Ethernet timeout (BU 0620 §4.5: "[-3] = CANopen, [-4] = Ethernet").
 const ELEMENT_ETHERNET: Option<proto::nord::ArrayElement> = match proto::nord::ArrayElement::new(4)
 {
