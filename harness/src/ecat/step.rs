@@ -208,7 +208,7 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
             None => None,
         }
         .ok_or_else(|| {
-            format!("`ecat.state`: give INIT, PREOP, BOOT, SAFEOP, OP or a byte like 0Fh")
+            "`ecat.state`: give INIT, PREOP, BOOT, SAFEOP, OP or a byte like 0Fh".to_string()
         })?;
         EcatStep::State {
             state,

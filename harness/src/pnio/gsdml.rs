@@ -1013,7 +1013,7 @@ mod tests {
             .collect()
     }
 
-    fn module_el<'a>(els: &'a [El], id: u32) -> &'a El {
+    fn module_el(els: &[El], id: u32) -> &El {
         named(els, "ModuleItem")
             .into_iter()
             .find(|m| attr(m, "ModuleIdentNumber") == ident(id))
