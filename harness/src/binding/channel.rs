@@ -84,6 +84,9 @@ pub(crate) struct Channel {
     ppo: PpoType,
     process: [Process; 9],
     exchanges: Vec<Exchange>,
+    /// Whether an exchange goes into the transcript: off for the middle cycles of a long
+    /// process-data run, which the transcript leaves out (see [`compact`]).
+    recording: bool,
 }
 
 impl super::Binding for Channel {
@@ -114,6 +117,7 @@ impl Channel {
             ppo: PpoType::TYPE_2,
             process: Default::default(),
             exchanges: Vec::new(),
+            recording: true,
         }
     }
 
@@ -231,6 +235,9 @@ impl Channel {
         let sent_bytes = frame.emit();
         let answer = self.dut.cycle(&sent_bytes);
         let decoded = answer.as_deref().map(|b| decode_answer(b, unit, self.ppo));
+        if !self.recording && !matches!(decoded, Some(Err(_))) {
+            return decoded.transpose().map_err(StepError::Protocol);
+        }
         self.exchanges.push(Exchange {
             sent_hex: hex(&sent_bytes),
             sent: ppo.describe_order(),
@@ -279,12 +286,22 @@ impl Channel {
     fn run_process(&mut self, inverter: Inverter, cycles: u32) -> Result<Value, StepError> {
         let mut last = None;
         let first = self.exchanges.len();
-        for _ in 0..cycles {
-            if let Some(ppo) = self.exchange(Unit::Inverter(inverter), None)? {
+        let long = cycles as usize > KEEP_HEAD + 2;
+        for i in 0..cycles {
+            // Only what the transcript keeps is formatted: the first cycles and the last.
+            self.recording = !long || (i as usize) < KEEP_HEAD || i + 1 == cycles;
+            let answer = self.exchange(Unit::Inverter(inverter), None);
+            self.recording = true;
+            if let Some(ppo) = answer? {
                 last = Some(ppo);
             }
         }
-        self.compact(first);
+        if long {
+            self.exchanges.insert(
+                first + KEEP_HEAD,
+                cycles_left_out(u64::from(cycles) - KEEP_HEAD as u64 - 1),
+            );
+        }
         let ppo = last.ok_or(StepError::Silent { cycles })?;
         let status = ppo
             .pzd
@@ -295,16 +312,12 @@ impl Channel {
     }
 }
 
-impl Channel {
-    fn compact(&mut self, from: usize) {
-        compact(&mut self.exchanges, from);
-    }
-}
+/// Exchanges a long process-data run's transcript keeps before the cycles it leaves out.
+const KEEP_HEAD: usize = 2;
 
 /// Keeps the first two and the last exchange of a long process-data run, so transcripts stay
 /// readable; the note says how many cycles were left out.
 pub(crate) fn compact(exchanges: &mut Vec<Exchange>, from: usize) {
-    const KEEP_HEAD: usize = 2;
     let n = exchanges.len().saturating_sub(from);
     if n <= KEEP_HEAD + 2 {
         return;
