@@ -305,6 +305,9 @@ pub struct Device {
     interface: ParamChannel,
     inverters: Vec<InverterUnit>,
     fieldbus_timeout: bool,
+    /// The module's P151 time-out as the monitor saw it last, and since when: a time-out just
+    /// set counts the silence from then, not from process data that stopped long before.
+    p151_seen: (Option<Duration>, Duration),
     /// Inverters lost from the system bus (bit n: FI n + 1), no longer online.
     lost: u8,
     /// The module's configuration is refused (P173 bit 5, BU 2200 §7.1.3).
@@ -402,6 +405,7 @@ impl Device {
             interface,
             inverters,
             fieldbus_timeout: false,
+            p151_seen: (None, Duration::ZERO),
             lost: 0,
             config_error: false,
             shown: None,
@@ -445,6 +449,10 @@ impl Device {
         }
         .filter(|ms| *ms > 0)
         .map(|ms| Duration::from_millis(ms as u64));
+        if p151 != self.p151_seen.0 {
+            self.p151_seen = (p151, now);
+        }
+        let p151_set_at = self.p151_seen.1;
         for unit in self.inverters.iter_mut() {
             // Raised and shown in P700 (a bus watchdog's E10.3 when no cycle runs to take it
             // into the status machine) counts as much as taken.
@@ -463,7 +471,8 @@ impl Device {
             // module's P151 time-out included, and keeps its state (BU 2200 §8.1 "Parameter
             // P513", BU 2100 §8.1).
             let p151 = p151.filter(|_| !ignores_communication_errors(&unit.params.store));
-            if p513.into_iter().chain(p151).any(|limit| silent > limit) {
+            let p151_silent = now.saturating_sub(last.max(p151_set_at));
+            if p513.is_some_and(|limit| silent > limit) || p151.is_some_and(|l| p151_silent > l) {
                 if unit.drive.fault().is_none() {
                     unit.drive.inject_fault(E10_3);
                     unit.show_fault();
@@ -1164,6 +1173,32 @@ mod tests {
             .unwrap();
         d.raise(fi1, FaultCode { group: 10, sub: 2 }).unwrap();
         assert_eq!(d.fault_changes(&mut [0; 8]), vec![], "P700 [-01] stays 0");
+    }
+
+    #[test]
+    fn a_p151_time_out_set_after_a_long_silence_counts_from_when_it_is_set() {
+        // Process data stopped long ago; P151 = 200 ms set now trips only 200 ms later.
+        let mut d = Device::new(DeviceConfig::new(Product::Tu4Pol));
+        let fi1 = Inverter::new(1).unwrap();
+        let ppo = PpoRepr {
+            pkw: None,
+            pzd: vec![0x047E, 0],
+        };
+        d.handle(&frame(101, 3, &ppo.emit(PpoType::TYPE_3)), ms(0))
+            .unwrap();
+        d.monitor(ms(10_000));
+        d.store(Unit::Interface)
+            .unwrap()
+            .write(P151, None, None, 200, crate::store::Persist::Eeprom)
+            .unwrap();
+        d.monitor(ms(10_010));
+        assert_eq!(d.fault_changes(&mut [0; 8]), vec![], "not at once");
+        d.monitor(ms(10_300));
+        assert_eq!(
+            d.fault_changes(&mut [0; 8]),
+            vec![(fi1, 103)],
+            "E10.3 200 ms later"
+        );
     }
 
     #[test]
