@@ -204,6 +204,8 @@ struct InverterUnit {
     drive: Drive,
     /// When the last valid process data (control bit 10) arrived.
     last_process: Option<Duration>,
+    /// Its P513 time-out as the monitor saw it last, and since when (as the module's P151).
+    p513_seen: (Option<Duration>, Duration),
     /// The words P740/P741 show, so that an unchanged cycle writes no parameter.
     shown: Option<([u16; 6], [u16; 6])>,
     /// The extended code (P700 [-04]) of an error whose cause names one row of several with
@@ -306,7 +308,8 @@ pub struct Device {
     inverters: Vec<InverterUnit>,
     fieldbus_timeout: bool,
     /// The module's P151 time-out as the monitor saw it last, and since when: a time-out just
-    /// set counts the silence from then, not from process data that stopped long before.
+    /// set watches from the next valid process data on, not from process data that stopped
+    /// long before (the inverters' P513 alike).
     p151_seen: (Option<Duration>, Duration),
     /// Inverters lost from the system bus (bit n: FI n + 1), no longer online.
     lost: u8,
@@ -329,6 +332,7 @@ impl Device {
                 params: ParamChannel::new(ParamStore::new(config.product, Target::Inverter(i))),
                 drive: Drive::new(),
                 last_process: None,
+                p513_seen: (None, Duration::ZERO),
                 shown: None,
                 extended: None,
             })
@@ -467,12 +471,19 @@ impl Device {
                 flags.cyclic = true;
             }
             let p513 = ethernet_timeout(&unit.params.store);
+            if p513 != unit.p513_seen.0 {
+                unit.p513_seen = (p513, now);
+            }
+            // A time-out just set watches from the next valid telegram on (BU 0590 §4.1.7: "the
+            // monitoring is activated with the first valid telegram").
+            let watched = |set_at: Duration| last >= set_at;
             // P513 = -0.1 "Kein Fehler": the inverter ignores every communication error, the
             // module's P151 time-out included, and keeps its state (BU 2200 §8.1 "Parameter
             // P513", BU 2100 §8.1).
             let p151 = p151.filter(|_| !ignores_communication_errors(&unit.params.store));
-            let p151_silent = now.saturating_sub(last.max(p151_set_at));
-            if p513.is_some_and(|limit| silent > limit) || p151.is_some_and(|l| p151_silent > l) {
+            if p513.is_some_and(|l| watched(unit.p513_seen.1) && silent > l)
+                || p151.is_some_and(|l| watched(p151_set_at) && silent > l)
+            {
                 if unit.drive.fault().is_none() {
                     unit.drive.inject_fault(E10_3);
                     unit.show_fault();
@@ -1176,28 +1187,33 @@ mod tests {
     }
 
     #[test]
-    fn a_p151_time_out_set_after_a_long_silence_counts_from_when_it_is_set() {
-        // Process data stopped long ago; P151 = 200 ms set now trips only 200 ms later.
+    fn a_p151_time_out_set_after_a_long_silence_watches_from_the_next_valid_telegram() {
+        // Process data stopped long ago; P151 = 200 ms set now trips nothing until valid
+        // process data has run again, then 200 ms of silence do (BU 0590 §4.1.7).
         let mut d = Device::new(DeviceConfig::new(Product::Tu4Pol));
         let fi1 = Inverter::new(1).unwrap();
         let ppo = PpoRepr {
             pkw: None,
             pzd: vec![0x047E, 0],
         };
-        d.handle(&frame(101, 3, &ppo.emit(PpoType::TYPE_3)), ms(0))
-            .unwrap();
+        let valid = frame(101, 3, &ppo.emit(PpoType::TYPE_3));
+        d.handle(&valid, ms(0)).unwrap();
         d.monitor(ms(10_000));
         d.store(Unit::Interface)
             .unwrap()
             .write(P151, None, None, 200, crate::store::Persist::Eeprom)
             .unwrap();
         d.monitor(ms(10_010));
-        assert_eq!(d.fault_changes(&mut [0; 8]), vec![], "not at once");
-        d.monitor(ms(10_300));
+        d.monitor(ms(11_000));
+        assert_eq!(d.fault_changes(&mut [0; 8]), vec![], "not armed yet");
+        d.handle(&valid, ms(11_010)).unwrap();
+        d.monitor(ms(11_150));
+        assert_eq!(d.fault_changes(&mut [0; 8]), vec![], "150 ms of silence");
+        d.monitor(ms(11_250));
         assert_eq!(
             d.fault_changes(&mut [0; 8]),
             vec![(fi1, 103)],
-            "E10.3 200 ms later"
+            "E10.3 after 200 ms"
         );
     }
 
