@@ -290,7 +290,7 @@ fn snapshots_report_the_same_change_the_same_way() {
     // first changed line the way `harness diff` shows it.
     let run_json = std::fs::read_to_string(dir.0.join("out/run.json")).unwrap();
     let want = format!(
-        "transcript differs from snapshot {}: first difference at line 9 (step 1: read P856 interface): expected `  observed: {{\\\"ak\\\":1,\\\"error\\\":null,\\\"ind\\\":0,\\\"pnu\\\":1856,\\\"value\\\":1}}`, got `  observed: {{\\\"ak\\\":1,\\\"error\\\":null,\\\"ind\\\":0,\\\"pnu\\\":1856,\\\"value\\\":2}}`",
+        "transcript differs from snapshot {}: first difference at line 9 (step 1: read P856 interface): expected `  observed: {{\\\"ak\\\":1,\\\"cycles\\\":2,\\\"error\\\":null,\\\"ind\\\":0,\\\"pnu\\\":1856,\\\"value\\\":1}}`, got `  observed: {{\\\"ak\\\":1,\\\"cycles\\\":2,\\\"error\\\":null,\\\"ind\\\":0,\\\"pnu\\\":1856,\\\"value\\\":2}}`",
         s(&snaps.join("sk550p/bu0620__firmware__p856-a-mode.snap"))
     );
     assert!(run_json.contains(&want), "{want}\n---\n{run_json}");
