@@ -158,6 +158,11 @@ struct RunArgs {
     /// parallel CI; `harness merge` joins the N report folders.
     #[arg(long, value_name = "K/N")]
     shard: Option<crate::shard::Shard>,
+    /// Run each profile's cases in an order shuffled from SEED (recorded in run.json), to find
+    /// cases whose verdict depends on the cases before them. The same seed gives the same
+    /// order; shards of one run take the same seed.
+    #[arg(long, value_name = "SEED")]
+    shuffle: Option<u64>,
     /// Against a `--dut`, also run the cases that can make a motor turn: a control word that
     /// enables operation, a setpoint, a fault acknowledgement, a parameter write that can start
     /// the drive (P420…P425, P470, P480, P506, P509, P510), output data the harness cannot
@@ -361,6 +366,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
         tap: tap.clone(),
         progress: std::cell::RefCell::new(crate::progress::on_stderr(verbosity)),
         limits: None,
+        shuffle: a.shuffle,
         ..RunOptions::new(profiles)
     };
     let mut run = match &a.dut {
@@ -415,6 +421,8 @@ fn run(a: RunArgs) -> Result<i32, String> {
         eeprom_writes: found.eeprom_writes,
         eeprom_cap: found.eeprom_cap,
         shard: found.shard,
+        shuffle: found.shuffle,
+        discarded_attempts: found.discarded_attempts,
         ..meta
     };
     // What the manuals state and the suites assert (an inventory that does not load is a

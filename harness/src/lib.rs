@@ -56,6 +56,7 @@ mod safety;
 pub mod shard;
 pub mod stats;
 mod suite;
+mod timing;
 
 /// Runs every suite below `suites` against the embedded simulator under every built-in profile
 /// (the default job, without writing reports). Used by the bench.

@@ -252,11 +252,25 @@ pub struct CaseResult {
     /// loaded), so `harness merge` can restore that order from shards.
     #[serde(default)]
     pub seq: usize,
+    /// Attempts that did not count: the host was late while a step waited on the device
+    /// (`crate::timing`), and the case ran again. Shown in the transcript before the steps of
+    /// the attempt that counted.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub discarded: Vec<Discarded>,
     /// The transcript text of a case read back from a report folder (`run.json` keeps the
     /// deciding step at most, without exchanges): the reports render it in place of the steps
     /// (see `report::read`).
     #[serde(skip)]
     pub transcript: Option<String>,
+}
+
+/// An attempt at a case that did not count, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Discarded {
+    /// Why it did not count: how late the host was, in which step, against which limit.
+    pub why: String,
+    /// Its steps, as they ran.
+    pub steps: Vec<StepResult>,
 }
 
 impl CaseResult {
@@ -342,6 +356,12 @@ pub struct RunMeta {
     /// The share of the case-runs this run made (`--shard K/N`); none for a whole run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<crate::shard::Shard>,
+    /// The seed of the shuffled case order (`--shuffle SEED`); none for the suites' order.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shuffle: Option<u64>,
+    /// The attempts discarded because the host was late (see `crate::timing`), over all cases.
+    #[serde(default)]
+    pub discarded_attempts: usize,
     /// The EEPROM writes the run's cases made on a DUT on the network, each counted with the
     /// cleanup's restore of it (`--max-eeprom-writes` caps them).
     #[serde(default)]

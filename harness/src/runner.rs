@@ -14,7 +14,7 @@ use std::cell::RefCell;
 use std::collections::BTreeMap;
 
 use crate::outcome::{
-    CaseKind, CaseResult, Identity, ManualRef, RunMeta, RunResult, StepResult, Verdict,
+    CaseKind, CaseResult, Discarded, Identity, ManualRef, RunMeta, RunResult, StepResult, Verdict,
 };
 use crate::profile::{Capability, Profile};
 use crate::progress::Progress;
@@ -38,6 +38,9 @@ pub(crate) struct RunOptions {
     /// What a DUT on the network allows (`--allow-motion`, `--max-eeprom-writes`); `None`
     /// for the embedded simulator, which has no motor to turn and no EEPROM to wear.
     pub(crate) limits: Option<crate::safety::Limits>,
+    /// Runs each profile's cases in an order shuffled from this seed (`--shuffle SEED`), to
+    /// find cases whose verdict depends on what ran before them.
+    pub(crate) shuffle: Option<u64>,
 }
 
 impl RunOptions {
@@ -51,9 +54,20 @@ impl RunOptions {
             tap: None,
             progress: RefCell::new(Box::new(crate::progress::Silent)),
             limits: None,
+            shuffle: None,
         }
     }
+
+    /// Whether the DUT runs on the real clock (a device on the network): then a step that timed
+    /// out while the host was late does not count (see [`crate::timing`]).
+    fn real_time(&self) -> bool {
+        self.limits.is_some()
+    }
 }
+
+/// Attempts at a case whose deciding step timed out while the host was late, before its
+/// verdict is inconclusive.
+const ATTEMPTS: usize = 3;
 
 /// Opens a DUT for a profile; called once per case so every case starts from a known state.
 pub(crate) trait DutFactory {
@@ -84,6 +98,10 @@ pub(crate) fn run_shard(
     let mut cases = Vec::new();
     let mut seq = 0;
     let mut guard = opts.limits.map(Guard::new);
+    if opts.real_time() {
+        crate::timing::start_watch();
+    }
+    let mut rng = opts.shuffle.map(fastrand::Rng::with_seed);
     match connection_check(loaded, opts, factory, &selected) {
         Ok(identities) => {
             meta.identities = identities;
@@ -92,7 +110,11 @@ pub(crate) fn run_shard(
                 .filter(|&i| shard.is_none_or(|s| s.selects(i)))
                 .count();
             for profile in &opts.profiles {
-                for case in loaded.cases.iter().filter(selected) {
+                let mut order: Vec<&Case> = loaded.cases.iter().filter(selected).collect();
+                if let Some(rng) = rng.as_mut() {
+                    rng.shuffle(&mut order);
+                }
+                for case in order {
                     if shard.is_none_or(|s| s.selects(seq)) {
                         opts.progress.borrow_mut().start(
                             profile.name(),
@@ -134,6 +156,8 @@ pub(crate) fn run_shard(
         duration: start.elapsed(),
     };
     run.meta.shard = shard.map(|s| Shard { of: seq, ..s });
+    run.meta.shuffle = opts.shuffle;
+    run.meta.discarded_attempts = run.cases.iter().map(|c| c.discarded.len()).sum();
     run
 }
 
@@ -180,6 +204,7 @@ fn connection_check(
             steps: Vec::new(),
             duration: start.elapsed(),
             seq: 0,
+            discarded: Vec::new(),
             transcript: None,
         };
         let mut dut = match factory.open(profile, opts.retries) {
@@ -191,7 +216,7 @@ fn connection_check(
             Ok(id) => {
                 identities.insert(profile.name().to_string(), id);
             }
-            Err(e @ (StepError::Link(_) | StepError::Silent { .. })) => {
+            Err(e @ (StepError::Link(_) | StepError::Silent { .. } | StepError::Late { .. })) => {
                 return Err(unreachable(format!("the DUT does not answer: {e}")))
             }
             Err(_) => {}
@@ -226,6 +251,7 @@ fn result(
         steps,
         duration: start.elapsed(),
         seq: 0,
+        discarded: Vec::new(),
         transcript: None,
     }
 }
@@ -315,12 +341,49 @@ fn run_case(
             start,
         );
     }
+    let mut discarded = Vec::new();
+    loop {
+        let (mut r, excuse) = attempt(case, profile, opts, guard, factory, start);
+        match excuse {
+            Some(why) if discarded.len() + 1 < ATTEMPTS => {
+                discarded.push(Discarded {
+                    why: format!("{why}; the case runs again"),
+                    steps: r.steps,
+                });
+                continue;
+            }
+            Some(why) => {
+                r.message = format!(
+                    "{why}, in each of {ATTEMPTS} attempts: no attempt ran on time, nothing \
+                     is known of the device (last attempt: {})",
+                    r.message
+                );
+                r.verdict = Verdict::Inconclusive;
+            }
+            None => {}
+        }
+        r.discarded = discarded;
+        r.duration = start.elapsed();
+        return r;
+    }
+}
+
+/// One attempt at a case: the DUT opened, the steps, the cleanup. With the result comes why it
+/// does not count, if it does not: its deciding step timed out while the host was late.
+fn attempt(
+    case: &Case,
+    profile: &Profile,
+    opts: &RunOptions,
+    guard: &mut Option<Guard>,
+    factory: &mut dyn DutFactory,
+    start: Instant,
+) -> (CaseResult, Option<String>) {
     label(opts, || format!("{} {}: open", profile.name(), case.id));
     let mut channel = if needs_dut(case) {
         match factory.open(profile, opts.retries) {
             Ok(dut) => {
                 if let Some(why) = not_applicable(case, profile, Some(dut.as_ref())) {
-                    return result(
+                    let r = result(
                         case,
                         profile,
                         Verdict::NotApplicable,
@@ -328,57 +391,80 @@ fn run_case(
                         Vec::new(),
                         start,
                     );
+                    return (r, None);
                 }
                 Some(dut)
             }
             Err(e) => {
-                return result(
+                let r = result(
                     case,
                     profile,
                     Verdict::Error,
                     format!("cannot open the DUT: {e}"),
                     Vec::new(),
                     start,
-                )
+                );
+                return (r, None);
             }
         }
     } else {
         None
     };
-    let mut r = run_steps(case, profile, opts, &mut channel, start);
+    let (mut r, excuse) = run_steps(case, profile, opts, &mut channel, start);
     if let Some(g) = guard.as_mut() {
         g.ran(case, r.steps.len());
     }
     if let Some(dut) = channel.as_mut() {
         finish(&mut r, dut.as_mut(), opts);
     }
-    r.duration = start.elapsed();
-    r
+    (r, excuse)
 }
 
-/// The case's steps in order, up to the first that does not pass.
+/// The case's steps in order, up to the first that does not pass; with it, why that step's
+/// outcome says nothing of the device, if the host was late while it waited (see [`excuse`]).
 fn run_steps(
     case: &Case,
     profile: &Profile,
     opts: &RunOptions,
     channel: &mut Option<Box<dyn Binding>>,
     start: Instant,
-) -> CaseResult {
+) -> (CaseResult, Option<String>) {
     let mut steps = Vec::new();
     for (n, step) in (1..).zip(&case.steps) {
         let (p, id) = (profile.name(), &case.id);
         label(opts, || {
             format!("{p} {id} step {n}: {}", describe(&step.action))
         });
-        let r = run_step(step, profile, channel.as_mut());
+        let (r, limit, window) = run_step(step, profile, channel.as_mut());
         let verdict = r.verdict;
         let message = r.message.clone();
         steps.push(r);
         if verdict != Verdict::Pass {
-            return result(case, profile, verdict, message, steps, start);
+            let excuse = limit
+                .filter(|_| opts.real_time())
+                .and_then(|limit| excuse(n, limit, window));
+            return (result(case, profile, verdict, message, steps, start), excuse);
         }
     }
-    result(case, profile, Verdict::Pass, String::new(), steps, start)
+    let r = result(case, profile, Verdict::Pass, String::new(), steps, start);
+    (r, None)
+}
+
+/// Why step `n`, which timed out waiting on a device's `limit` over `window`, says nothing of
+/// the device: the host lost a large part of the limit meanwhile ([`crate::timing::excuses`]).
+fn excuse(n: usize, limit: Duration, window: (Instant, Instant)) -> Option<String> {
+    let lost = crate::timing::host_lost(window.0, window.1);
+    crate::timing::excuses(lost, limit).then(|| {
+        let limit = if limit.is_zero() {
+            String::new()
+        } else {
+            format!(", against the device's limit of {}", crate::timing::ms(limit))
+        };
+        format!(
+            "host late by {} in step {n}{limit}",
+            crate::timing::ms(lost)
+        )
+    })
 }
 
 /// What every case with a DUT ends with, whatever its verdict: the binding leaves the DUT as
@@ -476,8 +562,15 @@ pub(crate) fn hex(bytes: &[u8]) -> String {
     String::from_utf8(s).unwrap_or_default()
 }
 
-fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding>>) -> StepResult {
+/// One step: its result, and, when it timed out waiting on the device, the device's limit (zero
+/// where the binding does not know it) and when the step ran.
+fn run_step(
+    step: &Step,
+    profile: &Profile,
+    channel: Option<&mut Box<dyn Binding>>,
+) -> (StepResult, Option<Duration>, (Instant, Instant)) {
     let line = describe(&step.action);
+    let began = Instant::now();
     let (outcome, exchanges) = match (&step.action, channel) {
         (
             Action::Compute {
@@ -488,7 +581,7 @@ fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding
             _,
         ) => {
             let Some(product) = product.or(profile.product) else {
-                return StepResult {
+                let r = StepResult {
                     step: line,
                     verdict: crate::outcome::Verdict::Error,
                     observed: Value::Null,
@@ -496,6 +589,7 @@ fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding
                     message: "a reference-model step needs a NORD product".into(),
                     exchanges: Vec::new(),
                 };
+                return (r, None, (began, Instant::now()));
             };
             let ctx = Ctx { product };
             let out = match (func.run)(&ctx, &Args(args.clone())) {
@@ -513,6 +607,12 @@ fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding
             Err(StepError::Suite("a DUT step without a DUT".into())),
             Vec::new(),
         ),
+    };
+    let window = (began, Instant::now());
+    let limit = match &outcome {
+        Err(StepError::Late { limit, .. }) => Some(*limit),
+        Err(StepError::Silent { .. } | StepError::Unanswered { .. }) => Some(Duration::ZERO),
+        _ => None,
     };
     let (verdict, observed, refusal, message) = match outcome {
         Err(e) => (e.verdict(), Value::Null, None, e.to_string()),
@@ -535,14 +635,15 @@ fn run_step(step: &Step, profile: &Profile, channel: Option<&mut Box<dyn Binding
             }
         }
     };
-    StepResult {
+    let r = StepResult {
         step: line,
         verdict,
         observed,
         refusal,
         message,
         exchanges,
-    }
+    };
+    (r, limit, window)
 }
 
 /// Virtual duration as bus cycles (at least one).

@@ -46,6 +46,21 @@ pub(crate) enum StepError {
     /// The link to the DUT broke or a request went unanswered (a hung, closing or silent DUT).
     #[error("link error: {0}")]
     Link(String),
+    /// The device did not answer within its limit (the manual's or the standard's), the wait
+    /// moved by the time the host lost meanwhile (`crate::timing::Deadline`).
+    #[error(
+        "{what}: no answer within the device's limit of {} (waited {})",
+        crate::timing::ms(*limit),
+        crate::timing::ms(*waited)
+    )]
+    Late {
+        /// What was asked.
+        what: String,
+        /// The device's limit.
+        limit: std::time::Duration,
+        /// How long the harness waited, the host's lost time included.
+        waited: std::time::Duration,
+    },
     /// The DUT answered with something that is not the protocol at all.
     #[error("the DUT does not speak the protocol: {0}")]
     Garbage(String),
@@ -58,7 +73,9 @@ impl StepError {
     /// The verdict this error stands for.
     pub(crate) fn verdict(&self) -> Verdict {
         match self {
-            StepError::Unanswered { .. } | StepError::Protocol(_) => Verdict::Fail,
+            StepError::Unanswered { .. } | StepError::Protocol(_) | StepError::Late { .. } => {
+                Verdict::Fail
+            }
             StepError::Silent { .. }
             | StepError::Refused(_)
             | StepError::Suite(_)

@@ -59,6 +59,7 @@ fn case(
         steps,
         duration: Duration::from_millis(3),
         seq: 0,
+        discarded: Vec::new(),
         transcript: None,
     }
 }

@@ -34,6 +34,9 @@ struct Case<'a> {
     /// The step that decided the verdict, without its exchanges (the transcript has them).
     #[serde(skip_serializing_if = "Option::is_none")]
     step: Option<Step<'a>>,
+    /// Why each attempt that did not count was discarded (the host was late).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    discarded: Vec<&'a str>,
 }
 
 /// A case's deciding step in `run.json`.
@@ -67,6 +70,7 @@ impl<'a> From<&'a CaseResult> for Case<'a> {
                 refusal: st.refusal.as_ref(),
                 message: &st.message,
             }),
+            discarded: c.discarded.iter().map(|d| d.why.as_str()).collect(),
         }
     }
 }

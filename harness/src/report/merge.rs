@@ -147,6 +147,7 @@ pub(crate) fn merge(shards: Vec<(String, RunResult)>) -> Result<RunResult, Merge
         }
         merged.duration = merged.duration.max(run.duration);
         merged.meta.eeprom_writes += run.meta.eeprom_writes;
+        merged.meta.discarded_attempts += run.meta.discarded_attempts;
         if !merged.meta.host.split(", ").any(|h| h == run.meta.host) {
             merged.meta.host = format!("{}, {}", merged.meta.host, run.meta.host);
         }

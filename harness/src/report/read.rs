@@ -75,6 +75,9 @@ struct Case {
     transcript: Option<String>,
     seq: Option<usize>,
     step: Option<Step>,
+    /// Why each discarded attempt did not count (their steps are in the transcript).
+    #[serde(default)]
+    discarded: Vec<String>,
 }
 
 /// The deciding step as `run.json` keeps it (without exchanges).
@@ -159,6 +162,14 @@ pub(crate) fn read(given: &Path) -> Result<RunResult, ReadError> {
                 })
                 .collect(),
             seq: c.seq.unwrap_or(n),
+            discarded: c
+                .discarded
+                .into_iter()
+                .map(|why| crate::outcome::Discarded {
+                    why,
+                    steps: Vec::new(),
+                })
+                .collect(),
             transcript,
         });
     }

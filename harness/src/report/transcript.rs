@@ -21,10 +21,14 @@
 //!   <- <received hex>           (`(nothing received)` when the DUT stayed silent)
 //!      <received decoded>
 //! ```
+//!
+//! An attempt that did not count (the host was late while a step waited on the device, see
+//! `crate::timing`) comes first, as `attempt <k> discarded: <why>` and its steps as
+//! `attempt <k>, step <n>: …`; then `attempt <k> (counted):` and the steps above.
 
 use std::fmt::Write;
 
-use crate::outcome::{CaseResult, Exchange};
+use crate::outcome::{CaseResult, Exchange, StepResult};
 
 fn exchange(s: &mut String, x: &Exchange) {
     let _ = writeln!(s, "  -> {}\n     {}", x.sent_hex, x.sent);
@@ -50,10 +54,23 @@ pub(crate) fn render(c: &CaseResult) -> String {
     if !c.message.is_empty() {
         let _ = writeln!(s, "message: {}", c.message);
     }
-    for (i, st) in c.steps.iter().enumerate() {
+    for (n, d) in (1..).zip(&c.discarded) {
+        let _ = writeln!(s, "\nattempt {n} discarded: {}", d.why);
+        steps(&mut s, &format!("attempt {n}, step"), &d.steps);
+    }
+    if !c.discarded.is_empty() {
+        let _ = writeln!(s, "\nattempt {} (counted):", c.discarded.len() + 1);
+    }
+    steps(&mut s, "step", &c.steps);
+    s
+}
+
+/// Steps, each under `label` and its number.
+fn steps(s: &mut String, label: &str, steps: &[StepResult]) {
+    for (i, st) in steps.iter().enumerate() {
         let _ = writeln!(
             s,
-            "\nstep {}: {}\n  verdict: {}",
+            "\n{label} {}: {}\n  verdict: {}",
             i + 1,
             st.step,
             st.verdict.name()
@@ -65,10 +82,9 @@ pub(crate) fn render(c: &CaseResult) -> String {
             let _ = writeln!(s, "  message: {}", st.message);
         }
         for x in &st.exchanges {
-            exchange(&mut s, x);
+            exchange(s, x);
         }
     }
-    s
 }
 
 #[cfg(test)]

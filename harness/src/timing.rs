@@ -1,0 +1,222 @@
+//! Time on a shared host: the device's limits, and how late the harness itself ran.
+//!
+//! A verdict about a device must not move with the host's load. Every wait for an answer is
+//! the device's limit (the manual's or the standard's) plus the harness's own scheduling
+//! delay, measured as it happens: the [watch](start_watch) is a thread that asks to wake every
+//! millisecond and records how late it woke, which is what any thread of the harness suffers
+//! at that moment (a request that should leave, an answer waiting to be read). A [`Deadline`]
+//! moves by the time the host lost meanwhile. A step that still timed out while the host lost
+//! a large part of the device's limit ([`excuses`]) says nothing about the device: the runner
+//! discards that attempt and runs the case again, and when no attempt runs on time the verdict
+//! is inconclusive, "host late by N ms" (see `crate::runner`). A device that answers late while
+//! the host was on time fails, with both times.
+//!
+//! Against the embedded simulator (a virtual clock) the watch never runs and nothing here
+//! changes a verdict.
+
+use std::collections::VecDeque;
+use std::sync::{Mutex, OnceLock};
+use std::time::{Duration, Instant};
+
+/// How often the watch asks to wake.
+const TICK: Duration = Duration::from_millis(1);
+/// Lateness of a wake-up that is the timer's own (slack, the wake-up path), not the host's
+/// load: not counted.
+const FLOOR: Duration = Duration::from_micros(500);
+/// How long the watch remembers: longer than any one step's wait.
+const MEMORY: Duration = Duration::from_secs(120);
+/// The least host lateness that excuses a timed-out step, whatever its limit: below it, the
+/// wait's own extension covers the host (see [`Deadline`]).
+const EXCUSE_MIN: Duration = Duration::from_millis(5);
+/// Of a limit, the share the host must have lost to excuse a time-out: a device given at least
+/// three quarters of its time with the host on time and still silent is late.
+const EXCUSE_SHARE: u32 = 4;
+
+/// A late wake-up of the watch: when it woke and how much later than asked, past [`FLOOR`].
+#[derive(Debug, Clone, Copy)]
+struct Late {
+    woke: Instant,
+    by: Duration,
+}
+
+/// The late wake-ups of the last [`MEMORY`], oldest first.
+static WATCH: OnceLock<Mutex<VecDeque<Late>>> = OnceLock::new();
+
+/// Starts the watch (once per process; later calls do nothing). Runs against a DUT on the
+/// network start it; the embedded simulator's virtual clock needs none.
+pub(crate) fn start_watch() {
+    let mut started = false;
+    WATCH.get_or_init(|| {
+        started = true;
+        Mutex::new(VecDeque::new())
+    });
+    if !started {
+        return;
+    }
+    let spawned = std::thread::Builder::new()
+        .name("host-watch".into())
+        .spawn(|| {
+            let mut asked = Instant::now() + TICK;
+            loop {
+                std::thread::sleep(asked.saturating_duration_since(Instant::now()));
+                let woke = Instant::now();
+                let by = woke.saturating_duration_since(asked);
+                if by > FLOOR {
+                    record(Late { woke, by: by - FLOOR });
+                }
+                asked = woke + TICK;
+            }
+        });
+    // Without the thread the host counts as on time: verdicts as without the watch.
+    if let Err(e) = spawned {
+        eprintln!("warning: host watch not started ({e}): a late host will not be recognised");
+    }
+}
+
+fn record(late: Late) {
+    let Some(w) = WATCH.get() else { return };
+    let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
+    while w
+        .front()
+        .is_some_and(|l| late.woke.duration_since(l.woke) > MEMORY)
+    {
+        w.pop_front();
+    }
+    w.push_back(late);
+}
+
+/// The time the host lost between `from` and `to`: the watch's lateness past its floor, added
+/// up over the wake-ups it delayed in that span (zero when the watch does not run).
+pub(crate) fn host_lost(from: Instant, to: Instant) -> Duration {
+    let Some(w) = WATCH.get() else {
+        return Duration::ZERO;
+    };
+    let w = w.lock().unwrap_or_else(|e| e.into_inner());
+    w.iter()
+        .rev()
+        .take_while(|l| l.woke > from)
+        // A wake-up just after `to` was held back during the span.
+        .filter(|l| l.woke.checked_sub(l.by).is_some_and(|s| s < to))
+        .map(|l| l.by)
+        .sum()
+}
+
+/// Whether `lost`, the time the host lost while a step waited on a device's `limit`, excuses
+/// the device for not answering: the host lost at least a quarter of the limit, and at least
+/// [`EXCUSE_MIN`].
+pub(crate) fn excuses(lost: Duration, limit: Duration) -> bool {
+    lost >= EXCUSE_MIN.max(limit / EXCUSE_SHARE)
+}
+
+/// Milliseconds, for messages: `37 ms`, `0.4 ms`.
+pub(crate) fn ms(d: Duration) -> String {
+    let ms = d.as_secs_f64() * 1000.0;
+    if ms >= 10.0 {
+        format!("{ms:.0} ms")
+    } else {
+        format!("{ms:.1} ms")
+    }
+}
+
+/// One wait for a device: its limit from when the request left, moved by the time the host
+/// lost meanwhile (the harness's own scheduling delay, measured as it happens).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Deadline {
+    start: Instant,
+    limit: Duration,
+}
+
+impl Deadline {
+    /// A wait of `limit` from now: call it as the request leaves.
+    pub(crate) fn after(limit: Duration) -> Deadline {
+        Deadline {
+            start: Instant::now(),
+            limit,
+        }
+    }
+
+    /// The device's limit.
+    pub(crate) fn limit(&self) -> Duration {
+        self.limit
+    }
+
+    /// Time since the request left.
+    pub(crate) fn waited(&self) -> Duration {
+        self.start.elapsed()
+    }
+
+    /// When the wait ends, as far as is known now: the limit plus the host's lost time so far.
+    pub(crate) fn end(&self) -> Instant {
+        self.start + self.limit + host_lost(self.start, Instant::now())
+    }
+
+    /// What is left of the wait (zero once it is over).
+    pub(crate) fn remaining(&self) -> Duration {
+        self.end().saturating_duration_since(Instant::now())
+    }
+
+    /// Whether the wait is over.
+    pub(crate) fn passed(&self) -> bool {
+        self.remaining().is_zero()
+    }
+
+    /// The time-out of this wait for `what`, as a step error: a failure of the device unless
+    /// the runner finds the host was late (then the attempt is discarded).
+    pub(crate) fn missed(&self, what: impl Into<String>) -> crate::binding::StepError {
+        crate::binding::StepError::Late {
+            what: what.into(),
+            limit: self.limit,
+            waited: self.waited(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_small_lateness_excuses_nothing_a_large_share_of_the_limit_does() {
+        let ms = Duration::from_millis;
+        assert!(!excuses(ms(4), ms(8)), "below the floor");
+        assert!(excuses(ms(5), ms(8)));
+        assert!(!excuses(ms(100), ms(2000)), "a device given 1.9 s of 2 s");
+        assert!(excuses(ms(500), ms(2000)));
+    }
+
+    #[test]
+    fn a_stalled_host_is_measured_and_moves_the_deadline() {
+        start_watch();
+        // Let the watch run on time for a while.
+        std::thread::sleep(Duration::from_millis(20));
+        let d = Deadline::after(Duration::from_millis(20));
+        let before = d.end();
+        // No thread of this process runs while it is stopped, the watch neither: stop it for
+        // 50 ms the way a loaded host holds it back (SIGSTOP, then SIGCONT from a child).
+        let pid = std::process::id().to_string();
+        let mut stopper = std::process::Command::new("sh")
+            .args(["-c", &format!("kill -STOP {pid}; sleep 0.05; kill -CONT {pid}")])
+            .spawn()
+            .expect("sh starts");
+        stopper.wait().expect("the child ends");
+        // Let the watch record its late wake-up.
+        std::thread::sleep(Duration::from_millis(5));
+        let lost = host_lost(d.start, Instant::now());
+        assert!(lost >= Duration::from_millis(30), "lost {lost:?}");
+        assert!(d.end() >= before + Duration::from_millis(30));
+        assert!(excuses(lost, d.limit()));
+    }
+
+    #[test]
+    fn lost_time_counts_only_in_its_span() {
+        start_watch();
+        let later = Instant::now() + Duration::from_secs(3600);
+        assert_eq!(host_lost(later, later + TICK), Duration::ZERO);
+    }
+
+    #[test]
+    fn milliseconds_read_as_people_write_them() {
+        assert_eq!(ms(Duration::from_micros(400)), "0.4 ms");
+        assert_eq!(ms(Duration::from_millis(37)), "37 ms");
+    }
+}
