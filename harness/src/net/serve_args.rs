@@ -5,7 +5,7 @@
 use proto::nord::{Product, Protocol};
 use sim::device::DeviceConfig;
 
-/// `--iface --profile --inverters --seconds`, flattened into each bus's own arguments.
+/// `--iface --profile --inverters --seconds --reply-delay`, flattened into each bus's own arguments.
 #[derive(clap::Args, Debug)]
 pub(crate) struct RawServeArgs {
     /// The network interface, e.g. one end of a veth pair.
@@ -20,6 +20,10 @@ pub(crate) struct RawServeArgs {
     /// Stop after this many seconds (default: serve until killed).
     #[arg(long)]
     pub(crate) seconds: Option<u64>,
+    /// Answer every request this many milliseconds late: a device late on purpose, to test
+    /// that the harness fails it (and does not blame its own host).
+    #[arg(long, value_name = "MS", default_value_t = 0)]
+    pub(crate) reply_delay: u64,
 }
 
 /// The simulated device of `profile` with `inverters` (default and ceiling: the product's
