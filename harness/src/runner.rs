@@ -1077,6 +1077,150 @@ cases:
         );
     }
 
+    /// The embedded simulator behind a binding whose first `late` steps time out against a
+    /// 20 ms limit, the host late by `host_late` meanwhile when that is not zero.
+    struct LateFactory {
+        late: usize,
+        host_late: Duration,
+    }
+
+    struct Late {
+        inner: Box<dyn Binding>,
+        late: bool,
+        host_late: Duration,
+    }
+
+    impl Binding for Late {
+        fn describe(&self) -> String {
+            self.inner.describe()
+        }
+        fn capabilities(&self) -> &[Capability] {
+            self.inner.capabilities()
+        }
+        fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+            if !self.late {
+                return self.inner.perform(action);
+            }
+            if !self.host_late.is_zero() {
+                crate::timing::pretend_host_late(self.host_late);
+            }
+            Err(StepError::Late {
+                what: "read P102".into(),
+                limit: Duration::from_millis(20),
+                waited: Duration::from_millis(21) + self.host_late,
+            })
+        }
+        fn take_exchanges(&mut self) -> Vec<crate::outcome::Exchange> {
+            self.inner.take_exchanges()
+        }
+    }
+
+    impl DutFactory for LateFactory {
+        fn describe(&self) -> String {
+            "late simulator".into()
+        }
+        fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+            let late = self.late > 0;
+            self.late = self.late.saturating_sub(1);
+            Ok(Box::new(Late {
+                inner: EmbeddedFactory::default().open(profile, retries)?,
+                late,
+                host_late: self.host_late,
+            }))
+        }
+    }
+
+    /// Case `read` of [`SUITE`] on a DUT on the network (real time) whose first `late` openings
+    /// time out, the host late by `host_late` meanwhile. The connection check opens it once
+    /// before (SK 550P: nothing to read, no step).
+    fn run_late(late: usize, host_late: Duration, real_time: bool) -> CaseResult {
+        let opts = RunOptions {
+            filter: Some("read".into()),
+            limits: real_time.then_some(crate::safety::Limits {
+                allow_motion: true,
+                max_eeprom_writes: 20,
+            }),
+            ..sk550p_options()
+        };
+        let mut f = LateFactory {
+            late: late + 1,
+            host_late,
+        };
+        let r = run(&load_text_for_tests(SUITE), &opts, &mut f);
+        r.cases.into_iter().next().unwrap()
+    }
+
+    #[test]
+    fn a_time_out_while_the_host_was_late_is_discarded_and_the_case_runs_again() {
+        let c = run_late(1, Duration::from_millis(40), true);
+        assert_eq!(c.verdict, Verdict::Pass, "{}", c.message);
+        assert_eq!(c.discarded.len(), 1);
+        let why = &c.discarded[0].why;
+        assert!(
+            why.starts_with("host late by ") && why.ends_with(
+                " in step 1, against the device's limit of 20 ms; the case runs again"
+            ),
+            "{why}"
+        );
+        let t = crate::report::transcript_for_tests(&c);
+        assert!(t.contains("\nattempt 1 discarded: host late by "), "{t}");
+        assert!(t.contains("\nattempt 1, step 1: read P102"), "{t}");
+        assert!(t.contains("\nattempt 2 (counted):\n\nstep 1: read P102"), "{t}");
+    }
+
+    #[test]
+    fn a_case_never_run_on_time_is_inconclusive_never_fail_or_error() {
+        let c = run_late(ATTEMPTS, Duration::from_millis(40), true);
+        assert_eq!(c.verdict, Verdict::Inconclusive, "{}", c.message);
+        assert!(c.message.starts_with("host late by "), "{}", c.message);
+        assert!(
+            c.message.contains("in each of 3 attempts: no attempt ran on time"),
+            "{}",
+            c.message
+        );
+        assert_eq!(c.discarded.len(), ATTEMPTS - 1);
+    }
+
+    #[test]
+    fn a_device_late_while_the_host_was_on_time_fails_with_both_times() {
+        let c = run_late(1, Duration::ZERO, true);
+        assert_eq!(c.verdict, Verdict::Fail);
+        assert!(c.discarded.is_empty());
+        assert!(
+            c.message
+                .starts_with("read P102: no answer within the device's limit of 20 ms (waited 21 ms)"),
+            "{}",
+            c.message
+        );
+        // The embedded simulator runs on a virtual clock: the host's lateness is not its.
+        let c = run_late(1, Duration::from_millis(40), false);
+        assert_eq!(c.verdict, Verdict::Fail);
+    }
+
+    #[test]
+    fn a_shuffled_run_is_the_same_cases_in_an_order_its_seed_repeats() {
+        let loaded = load_text_for_tests(SUITE);
+        let ids = |shuffle| {
+            let opts = RunOptions {
+                shuffle,
+                ..sk550p_options()
+            };
+            let r = run(&loaded, &opts, &mut EmbeddedFactory::default());
+            assert_eq!(r.meta.shuffle, shuffle);
+            r.cases.into_iter().map(|c| c.id).collect::<Vec<_>>()
+        };
+        let plain = ids(None);
+        let orders: Vec<_> = (0..8).map(|seed| ids(Some(seed))).collect();
+        assert_eq!(orders[3], ids(Some(3)), "a seed repeats its order");
+        assert!(orders.iter().any(|o| *o != plain), "{orders:?}");
+        for o in &orders {
+            let (mut a, mut b) = (o.clone(), plain.clone());
+            a.sort();
+            b.sort();
+            assert_eq!(a, b);
+        }
+    }
+
     #[test]
     fn a_shard_runs_its_round_robin_share_numbered_in_the_unsharded_order() {
         let loaded = load_text_for_tests(SUITE);

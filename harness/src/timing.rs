@@ -85,6 +85,17 @@ fn record(late: Late) {
     w.push_back(late);
 }
 
+/// Records that the host held the harness back by `by` just now, as the watch would have seen
+/// it: for tests of what the runner makes of a late host, which cannot load the machine on cue.
+#[cfg(test)]
+pub(crate) fn pretend_host_late(by: Duration) {
+    start_watch();
+    record(Late {
+        woke: Instant::now(),
+        by,
+    });
+}
+
 /// The time the host lost between `from` and `to`: the watch's lateness past its floor, added
 /// up over the wake-ups it delayed in that span (zero when the watch does not run).
 pub(crate) fn host_lost(from: Instant, to: Instant) -> Duration {

@@ -102,6 +102,8 @@ pub(super) fn sample_run() -> RunResult {
             .into(),
             motion_allowed: false,
             shard: None,
+            shuffle: None,
+            discarded_attempts: 0,
             eeprom_writes: 4,
             eeprom_cap: Some(20),
         },
