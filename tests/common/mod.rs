@@ -5,6 +5,7 @@ use std::net::{SocketAddr, TcpStream};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+pub(crate) mod hog;
 pub(crate) mod netns;
 pub(crate) mod peer;
 pub(crate) mod suite_run;
