@@ -71,6 +71,21 @@ pub(super) fn lines(run: &RunResult) -> Vec<(String, String)> {
         ("command line".into(), command_line(&m.command_line)),
         ("profiles".into(), run.profiles.join(", ")),
     ]);
+    if let Some(seed) = m.shuffle {
+        out.push((
+            "case order".into(),
+            format!("shuffled, seed {seed} (--shuffle)"),
+        ));
+    }
+    if m.eeprom_cap.is_some() {
+        out.push((
+            "host timing".into(),
+            match m.discarded_attempts {
+                0 => "on time: no attempt discarded".into(),
+                n => format!("late: {n} attempts discarded and run again (each case's transcript says why)"),
+            },
+        ));
+    }
     out
 }
 
