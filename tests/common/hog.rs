@@ -10,6 +10,7 @@
 #![allow(dead_code)] // each test binary uses a part
 
 use std::process::{Child, Command, Stdio};
+use std::sync::Mutex;
 
 /// The spinners; stopped when dropped.
 pub(crate) struct Hog(Vec<Child>);
@@ -31,11 +32,35 @@ impl Hog {
         Hog(spinners)
     }
 
-    /// A hog when `NORD_TEST_HOG` is set (not empty), else none.
-    pub(crate) fn if_asked() -> Option<Hog> {
-        std::env::var_os("NORD_TEST_HOG")
-            .is_some_and(|v| !v.is_empty())
-            .then(Hog::start)
+    /// When `NORD_TEST_HOG` is set (not empty), the hog of this test binary until the guard
+    /// is dropped: tests that run side by side share one (one spinner per core, not per test),
+    /// and the last guard dropped stops it.
+    pub(crate) fn if_asked() -> Option<Shared> {
+        if !std::env::var_os("NORD_TEST_HOG").is_some_and(|v| !v.is_empty()) {
+            return None;
+        }
+        let mut shared = SHARED.lock().unwrap_or_else(|e| e.into_inner());
+        shared.0 += 1;
+        if shared.1.is_none() {
+            shared.1 = Some(Hog::start());
+        }
+        Some(Shared)
+    }
+}
+
+/// The test binary's hog and the guards that hold it.
+static SHARED: Mutex<(usize, Option<Hog>)> = Mutex::new((0, None));
+
+/// A hold on the test binary's shared hog ([`Hog::if_asked`]).
+pub(crate) struct Shared;
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        let mut shared = SHARED.lock().unwrap_or_else(|e| e.into_inner());
+        shared.0 -= 1;
+        if shared.0 == 0 {
+            shared.1 = None;
+        }
     }
 }
 
