@@ -24,8 +24,8 @@ use sim::ecat::Slave;
 use std::time::Duration;
 
 use super::master::{
-    EmbeddedSegment, ErrorKind, Master, MasterConfig, MasterError, NetSegment, ProtocolError,
-    Refusal, Segment,
+    EmbeddedSegment, ErrorKind, LinkFailure, Master, MasterConfig, MasterError, NetSegment,
+    ProtocolError, Refusal, Segment,
 };
 use super::step::{state_name, EcatStep};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
@@ -725,6 +725,16 @@ fn step_error(e: &MasterError) -> StepError {
         ErrorKind::Refused => StepError::Refused(e.to_string()),
         ErrorKind::Link => match e {
             MasterError::Usage(_) => StepError::Suite(e.to_string()),
+            // The slave's limit passed: late unless the host was (the runner judges that).
+            MasterError::Link(LinkFailure::Timeout {
+                awaited,
+                limit,
+                waited,
+            }) => StepError::Late {
+                what: awaited.to_string(),
+                limit: *limit,
+                waited: *waited,
+            },
             _ => StepError::Link(e.to_string()),
         },
     }
@@ -831,7 +841,7 @@ impl<S: DutSegment> DutSegment for super::master::Faulty<S> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::master::{Fault, Faulty};
+    use super::super::master::{al_limit, Fault, Faulty};
     use super::*;
     use crate::binding::embedded::EmbeddedFactory;
     use crate::outcome::Verdict;
@@ -903,10 +913,12 @@ mod tests {
         assert_eq!(e.verdict(), Verdict::NotApplicable);
     }
 
-    /// A segment that goes silent, loops every frame back unprocessed, or returns garbage gives
-    /// an error verdict, within the master's time-outs (on the embedded segment's clock).
+    /// A segment that loops every frame back unprocessed or returns garbage gives an error
+    /// verdict; one that goes silent is a slave past its limit (a fail, unless the runner
+    /// finds the host late); each within the master's limits (on the embedded segment's
+    /// clock).
     #[test]
-    fn a_broken_segment_is_an_error_verdict_within_the_timeout() {
+    fn a_broken_segment_is_an_error_verdict_and_a_silent_one_late_within_the_limits() {
         for fault in [Fault::Silent, Fault::Loop, Fault::Garbage] {
             let mut b = binding();
             b.master.segment_mut().set_fault(fault);
@@ -919,10 +931,15 @@ mod tests {
             };
             for action in [read_p102(), process] {
                 let e = b.perform(&action).unwrap_err();
-                assert_eq!(e.verdict(), Verdict::Error, "{fault:?}: {e}");
+                if fault == Fault::Silent {
+                    assert!(matches!(e, StepError::Late { .. }), "{e:?}");
+                    assert_eq!(e.to_string(), "a frame back: no answer within the device's limit of 50 ms (waited 50 ms)");
+                } else {
+                    assert_eq!(e.verdict(), Verdict::Error, "{fault:?}: {e}");
+                }
             }
             let took = b.master.now() - start;
-            let bound = b.master.config().mailbox_timeout * 2 + b.master.config().al_timeout;
+            let bound = b.master.config().mailbox_response * 2 + al_limit(0x0F);
             assert!(took <= bound, "{fault:?}: {took:?}");
         }
     }

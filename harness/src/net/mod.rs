@@ -11,6 +11,7 @@ pub(crate) mod serve_args;
 pub(crate) mod udp;
 #[cfg(test)]
 pub(crate) mod veth;
+pub(crate) mod wait;
 pub(crate) mod workers;
 
 pub use error::LinkError;
