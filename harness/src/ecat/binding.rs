@@ -96,7 +96,15 @@ impl<S: DutSegment> EcatBinding<S> {
     ) -> Result<EcatBinding<S>, MasterError> {
         let mut master = Master::new(segment, MasterConfig::default());
         master.set_recording(false);
-        master.bring_up(EcState::PreOperational)?;
+        crate::net::wait::bring_up(
+            || master.bring_up(EcState::PreOperational),
+            |e| match e {
+                MasterError::Link(LinkFailure::Timeout { limit, waited, .. }) => {
+                    Some((*limit, *waited))
+                }
+                _ => None,
+            },
+        )?;
         let slave = &master.slaves()[0];
         let station = slave.station;
         let what = format!(

@@ -4,6 +4,7 @@
 //! receive stamp.
 
 mod error;
+pub(crate) mod held;
 mod iface;
 mod link;
 pub(crate) mod peer;

@@ -6,10 +6,13 @@
 //! clock a wait is a [`Deadline`]: the device's limit, moved by the time the host lost
 //! meanwhile (`crate::timing`). The virtual clock loses none: there the wait is the limit.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-use crate::binding::StepError;
 use crate::timing::Deadline;
+
+/// Attempts at a bring-up that timed out while the host was late, as the runner repeats a
+/// case (`crate::runner`).
+const BRING_UP_ATTEMPTS: usize = 3;
 
 /// A wait of a device's limit, from when the request left, on a link's clock.
 #[derive(Debug, Clone, Copy)]
@@ -55,16 +58,31 @@ impl Wait {
     pub(crate) fn waited(&self, now: Duration) -> Duration {
         now.saturating_sub(self.from)
     }
+}
 
-    /// The time-out of this wait for `what` at `now`, as the runner takes it: the device was
-    /// late unless the host was (`crate::timing::excuses`).
-    pub(crate) fn missed(&self, what: impl Into<String>, now: Duration) -> StepError {
-        StepError::Late {
-            what: what.into(),
-            limit: self.limit,
-            waited: self.waited(now),
+/// Runs `attempt`, a bring-up (opening a device: many waits, none of them a case's step),
+/// again while it fails by a wait that passed as the host lost a large part of the device's
+/// limit (`crate::timing::excuses`), [`BRING_UP_ATTEMPTS`] times in all; `late` gives such a
+/// failure's limit and time waited. A device late while the host was on time fails at once.
+pub(crate) fn bring_up<T, E>(
+    mut attempt: impl FnMut() -> Result<T, E>,
+    late: impl Fn(&E) -> Option<(Duration, Duration)>,
+) -> Result<T, E> {
+    for _ in 1..BRING_UP_ATTEMPTS {
+        match attempt() {
+            Err(e) if late(&e).is_some_and(|(limit, waited)| host_was_late(limit, waited)) => {}
+            r => return r,
         }
     }
+    attempt()
+}
+
+/// Whether the host lost enough of a wait of `limit` that ended now after `waited` to excuse
+/// the device.
+fn host_was_late(limit: Duration, waited: Duration) -> bool {
+    let now = Instant::now();
+    let from = now.checked_sub(waited).unwrap_or(now);
+    crate::timing::excuses(crate::timing::host_lost(from, now), limit)
 }
 
 #[cfg(test)]
@@ -78,11 +96,7 @@ mod tests {
         assert_eq!(w.end(ms(120)), ms(150));
         assert!(!w.passed(ms(149)));
         assert!(w.passed(ms(150)));
-        let e = w.missed("a frame back", ms(150)).to_string();
-        assert_eq!(
-            e,
-            "a frame back: no answer within the device's limit of 50 ms (waited 50 ms)"
-        );
+        assert_eq!((w.limit(), w.waited(ms(150))), (ms(50), ms(50)));
     }
 
     #[test]
