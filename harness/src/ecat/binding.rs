@@ -36,7 +36,7 @@ use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Identity};
 use crate::profile::Capability;
 use crate::runner::hex;
-use crate::suite::{Action, OrderSpec};
+use crate::suite::{Action, OrderSpec, Run};
 
 /// A segment the binding can run on: the embedded one also hands out the simulated slave,
 /// for `inject` and `observe`.
@@ -294,11 +294,13 @@ impl<S: DutSegment> EcatBinding<S> {
         Ok(())
     }
 
+    /// Process data for `cycles`, or for `time` on the segment's clock when given.
     fn process(
         &mut self,
         inverter: Inverter,
         words: Option<[u16; 6]>,
         cycles: u32,
+        time: Option<Duration>,
     ) -> Result<Value, StepError> {
         self.operational()?;
         let fi = inverter.get();
@@ -312,8 +314,11 @@ impl<S: DutSegment> EcatBinding<S> {
         }
         // The inputs of a cycle were written by the slave before it saw that cycle's outputs:
         // one more cycle brings the inverter's answer to the last of them.
-        self.cycles(u64::from(cycles) + 1)
-            .map_err(|e| step_error(&e))?;
+        match time {
+            Some(d) => self.cycles_for(d),
+            None => self.cycles(u64::from(cycles) + 1),
+        }
+        .map_err(|e| step_error(&e))?;
         let i = self
             .master
             .inverter_inputs(self.station, fi)
@@ -539,6 +544,22 @@ impl<S: DutSegment> EcatBinding<S> {
         settle::run_cycles(&mut c, &mut self.pending, n)
     }
 
+    /// Runs cycles for `d` on the segment's clock and one more, the transcript compacted as
+    /// [`settle::run_cycles`] compacts it: the first two cycles, the number left out, the last.
+    fn cycles_for(&mut self, d: Duration) -> Result<(), MasterError> {
+        let end = self.master.now() + d;
+        self.master.run_cycles(2)?;
+        self.pending.extend(self.master.take_exchanges());
+        self.master.set_recording(false);
+        let middle = self.master.run_cycles_until(end);
+        self.master.set_recording(true);
+        match middle? {
+            0 => {}
+            n => self.pending.push(crate::binding::channel::cycles_left_out(n)),
+        }
+        self.master.run_cycles(1)
+    }
+
     /// Cycles the drives back to "Switch-on block".
     fn settle(&mut self) -> Result<(), Problem> {
         let what = |e: MasterError| Problem::step("settling the drives", step_error(&e));
@@ -652,7 +673,16 @@ impl<S: DutSegment> Binding for EcatBinding<S> {
             }
             Action::Process { .. } | Action::Wait(_) => {
                 let (fi, words, cycles) = process_run(action, self.master.config().cycle)?;
-                self.process(fi, words, cycles)?
+                // On the real clock a step "for" a time lasts that time, however many cycles
+                // fit (on the virtual clock they all do).
+                let time = match action {
+                    Action::Process {
+                        run: Run::For(d), ..
+                    }
+                    | Action::Wait(d) => Some(*d).filter(|_| self.master.real_time()),
+                    _ => None,
+                };
+                self.process(fi, words, cycles, time)?
             }
             Action::Inject { inverter, error } => {
                 let (slave, _) = self.simulated()?;

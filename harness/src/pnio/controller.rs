@@ -12,7 +12,7 @@
 //! a network moved by the time the host lost meanwhile): an RPC answer and a DCP response
 //! within the harness's `--timeout` (IEC 61158-6-10 leaves the controller's RPC and DCP
 //! time-outs to it), a by-name Identify within [`IDENTIFY_WINDOW`], each cycle's input within
-//! three cycles and [`LATE`]. A limit that passes is [`PnioError::NoReply`] with the limit
+//! the input CR's data hold time ([`Controller::data_hold`]). A limit that passes is [`PnioError::NoReply`] with the limit
 //! and the time waited, which the binding reports as the device being late.
 
 use std::collections::VecDeque;
@@ -55,6 +55,9 @@ const SEND_CLOCK_FACTOR: u16 = 32;
 /// shared host, and being descheduled for a few milliseconds is not losing the controller.
 /// The watchdog steps wait longer than this.
 const WATCHDOG_FACTOR: u16 = 100;
+/// DataHoldFactor of both CRs: cycles a consumer keeps the last valid data before it counts
+/// them lost; the same 100 cycles as the watchdog, for the same reason.
+const DATA_HOLD_FACTOR: u16 = WATCHDOG_FACTOR;
 /// ArgsMaximum the controller offers for answers.
 const ARGS_MAXIMUM: u32 = 4096;
 /// The longest a DCP Identify collects answers on a network (the embedded device answers at
@@ -241,6 +244,13 @@ impl<L: Link> Controller<L> {
         self.cycle() * u32::from(WATCHDOG_FACTOR)
     }
 
+    /// The data hold time of the input CR (IEC 61158-6-10: DataHoldFactor × the cycle): the
+    /// longest the device may leave the controller without a new input frame, its limit for
+    /// each cycle's answer.
+    pub(crate) fn data_hold(&self) -> Duration {
+        self.cycle() * u32::from(DATA_HOLD_FACTOR)
+    }
+
     /// Sets the reduction ratio of the next Connect.
     pub(crate) fn set_reduction_ratio(&mut self, rr: u16) {
         self.reduction_ratio = rr.max(1);
@@ -404,7 +414,9 @@ impl<L: Link> Controller<L> {
 
     /// One cycle of the exchange: the output frame now, then the first input frame that left
     /// the device after that frame reached it, which carries the device's answer to it.
-    /// `false` when none came within three cycles and [`LATE`].
+    /// `false` when none came within the data hold time ([`Controller::data_hold`]): a device
+    /// that provides its inputs every cycle answers within a cycle or two, and one the host
+    /// held back for a moment is not taken for silent.
     ///
     /// The output goes out at once rather than on the controller's own clock: a run of
     /// cycles then follows the device's send clock (each output right after the input before
@@ -414,7 +426,7 @@ impl<L: Link> Controller<L> {
         let Some(input_id) = self.ar.as_ref().map(|a| a.input_frame_id) else {
             return Err(PnioError::NotConnected);
         };
-        let wait = self.wait(self.cycle() * 3 + LATE);
+        let wait = self.wait(self.data_hold());
         self.send_now()?;
         // When the output left: on the link's clock, and on the real-time clock the kernel
         // stamps received frames with.
@@ -558,6 +570,11 @@ impl<L: Link> Controller<L> {
 
     /// DCP Identify (all, or by name): every station that answers within the window.
     pub(crate) fn identify(&mut self, name: Option<&str>) -> Result<Vec<Station>, PnioError> {
+        self.identify_within(name).map(|(stations, _)| stations)
+    }
+
+    /// [`Controller::identify`], and the window it waited.
+    fn identify_within(&mut self, name: Option<&str>) -> Result<(Vec<Station>, Wait), PnioError> {
         let xid = self.next_xid();
         let req = match name {
             Some(n) => DcpRepr::identify_name(xid, 1, n),
@@ -613,19 +630,17 @@ impl<L: Link> Controller<L> {
                 what: "DCP Identify response",
                 error,
             }),
-            _ => Ok(stations),
+            _ => Ok((stations, wait)),
         }
     }
 
     /// Finds the device (by name, or the only one that answers) and keeps it as the target.
     pub(crate) fn locate(&mut self, name: Option<&str>) -> Result<Station, PnioError> {
-        let found = self.identify(name)?;
+        let (found, wait) = self.identify_within(name)?;
         let station = match (name, found.len()) {
-            (_, 0) => {
-                return Err(PnioError::NotFound(
-                    name.map_or(String::new(), |n| format!(" by the name {n:?}")),
-                ))
-            }
+            // The device to test, by its name, missed the window.
+            (Some(_), 0) => return Err(self.no_reply("DCP Identify response", &wait)),
+            (None, 0) => return Err(PnioError::NotFound(String::new())),
             (None, n) if n > 1 => {
                 return Err(PnioError::NotFound(format!(
                     ": {n} devices answered; name the one to test (pnio://IFACE/NAME)"
@@ -827,7 +842,7 @@ impl<L: Link> Controller<L> {
                 phase: 1,
                 frame_send_offset: 0xFFFF_FFFF,
                 watchdog_factor: WATCHDOG_FACTOR,
-                data_hold_factor: WATCHDOG_FACTOR,
+                data_hold_factor: DATA_HOLD_FACTOR,
                 tag_header: 0xC000,
                 apis: vec![layout.api.clone()],
                 ..IocrBlockReq::default()
@@ -1159,9 +1174,6 @@ pub(crate) struct Connected {
 /// How long after an output frame an input frame must arrive to carry the device's answer to
 /// it: the frame's way to the device and its handling there.
 const FRESH: Duration = Duration::from_micros(100);
-/// How much later than three cycles an input frame may come on a loaded host before the cycle
-/// counts as unanswered.
-const LATE: Duration = Duration::from_millis(20);
 
 /// The real-time clock as a duration since the Unix epoch (what receive stamps are on).
 fn wall_clock() -> Duration {

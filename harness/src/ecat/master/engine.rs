@@ -217,6 +217,11 @@ impl<S: Segment> Master<S> {
         self.port.now()
     }
 
+    /// Whether the segment runs on the real clock (a network), not a virtual one.
+    pub(crate) fn real_time(&self) -> bool {
+        self.port.real_time()
+    }
+
     /// Frame counters.
     #[cfg(test)]
     pub(crate) fn port_stats(&self) -> PortStats {

@@ -101,6 +101,11 @@ impl<S: Segment> Port<S> {
         self.segment.wait_until(t)
     }
 
+    /// Whether the segment runs on the real clock.
+    pub(crate) fn real_time(&self) -> bool {
+        self.segment.real_time()
+    }
+
     /// A wait of the slave's `limit` from now, on the segment's clock.
     pub(crate) fn wait(&self, limit: Duration) -> Wait {
         Wait::new(self.segment.now(), limit, self.segment.real_time())
