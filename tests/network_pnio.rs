@@ -326,7 +326,9 @@ fn a_device_whose_answers_leave_past_the_limit_is_late_with_both_times() {
     let (verdict, message) = (&cases[0]["verdict"], cases[0]["message"].as_str().unwrap());
     assert_eq!(verdict, "error", "{message}");
     assert!(
-        message.contains("no DCP Identify response from the device within its limit of 400 ms (waited "),
+        message.contains(
+            "no DCP Identify response from the device within its limit of 400 ms (waited "
+        ),
         "{message}"
     );
     assert!(!message.contains("host late"), "{message}");

@@ -555,7 +555,9 @@ impl<S: DutSegment> EcatBinding<S> {
         self.master.set_recording(true);
         match middle? {
             0 => {}
-            n => self.pending.push(crate::binding::channel::cycles_left_out(n)),
+            n => self
+                .pending
+                .push(crate::binding::channel::cycles_left_out(n)),
         }
         self.master.run_cycles(1)
     }
@@ -971,7 +973,10 @@ mod tests {
                 let e = b.perform(&action).unwrap_err();
                 if fault == Fault::Silent {
                     assert!(matches!(e, StepError::Late { .. }), "{e:?}");
-                    assert_eq!(e.to_string(), "a frame back: no answer within the device's limit of 50 ms (waited 50 ms)");
+                    assert_eq!(
+                        e.to_string(),
+                        "a frame back: no answer within the device's limit of 50 ms (waited 50 ms)"
+                    );
                 } else {
                     assert_eq!(e.verdict(), Verdict::Error, "{fault:?}: {e}");
                 }

@@ -130,9 +130,7 @@ fn open_error(e: PnioError) -> OpenError {
         PnioError::Link(_)
         | PnioError::NoReply { .. }
         | PnioError::NoInput
-        | PnioError::NotFound(_) => {
-            OpenError::Unreachable(e.to_string())
-        }
+        | PnioError::NotFound(_) => OpenError::Unreachable(e.to_string()),
         _ => OpenError::BringUp(e.to_string()),
     }
 }
