@@ -179,3 +179,55 @@ fn every_ethercat_suite_passes_against_the_served_slave_over_a_veth_pair() {
     );
     run.finish();
 }
+
+/// `harness run` of the cases whose id contains `filter` for `profile` against `dut` from
+/// inside `ns`: the report's cases (the connection check's, when the run stopped there).
+fn cases_of_run(ns: &Netns, profile: &str, dut: &str, filter: &str) -> Vec<serde_json::Value> {
+    let dir = std::env::temp_dir().join(format!("harness-late-{}-{profile}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let suites = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../suites");
+    let run = ns
+        .command(env!("CARGO_BIN_EXE_harness"))
+        .args(["run", "--profile", profile, "--suites"])
+        .arg(&suites)
+        .args(["--filter", filter, "--dut", dut, "--allow-motion", "--out"])
+        .arg(&dir)
+        .output()
+        .expect("harness run starts");
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("run.json")).expect("run.json written"),
+    )
+    .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&run.stdout)));
+    let _ = std::fs::remove_dir_all(&dir);
+    report["cases"].as_array().expect("cases").clone()
+}
+
+/// A slave whose frames come back later than the master's limit for a frame (50 ms; ETG.1000
+/// prints none) is late, and the report says so with both times — the limit and how long the
+/// harness waited — while the host was on time: never "host late", never a pass. The frames
+/// are late from the scan on, so the run ends at its connection check (the runner's verdict
+/// for a DUT that does not answer in time there).
+#[test]
+fn a_slave_whose_frames_come_back_past_the_limit_is_late_with_both_times() {
+    let why = "a late EtherCAT slave (serve ecat --reply-delay) over a veth pair";
+    if !require_root_or_skip(why) {
+        return;
+    }
+    let ns = Netns::new("eclate");
+    let options = ServeOptions {
+        reply_delay: std::time::Duration::from_millis(80),
+        ..ServeOptions::new(ns.root_if())
+    };
+    let served = start(&options).expect("serve ecat");
+    let dut = format!("ecat://{}", ns.ns_if());
+    let cases = cases_of_run(&ns, "sk550p@ecat", &dut, "bu0620/ecat-al/");
+    served.stop().expect("the slave served to the end");
+    assert_eq!(cases.len(), 1, "{cases:?}");
+    let (verdict, message) = (&cases[0]["verdict"], cases[0]["message"].as_str().unwrap());
+    assert_eq!(verdict, "error", "{message}");
+    assert!(
+        message.contains("a frame back: no answer within the device's limit of 50 ms (waited "),
+        "{message}"
+    );
+    assert!(!message.contains("host late"), "{message}");
+}

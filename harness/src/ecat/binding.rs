@@ -24,8 +24,8 @@ use sim::ecat::Slave;
 use std::time::Duration;
 
 use super::master::{
-    EmbeddedSegment, ErrorKind, Master, MasterConfig, MasterError, NetSegment, ProtocolError,
-    Refusal, Segment,
+    EmbeddedSegment, ErrorKind, LinkFailure, Master, MasterConfig, MasterError, NetSegment,
+    ProtocolError, Refusal, Segment,
 };
 use super::step::{state_name, EcatStep};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
@@ -36,7 +36,7 @@ use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Identity};
 use crate::profile::Capability;
 use crate::runner::hex;
-use crate::suite::{Action, OrderSpec};
+use crate::suite::{Action, OrderSpec, Run};
 
 /// A segment the binding can run on: the embedded one also hands out the simulated slave,
 /// for `inject` and `observe`.
@@ -96,7 +96,15 @@ impl<S: DutSegment> EcatBinding<S> {
     ) -> Result<EcatBinding<S>, MasterError> {
         let mut master = Master::new(segment, MasterConfig::default());
         master.set_recording(false);
-        master.bring_up(EcState::PreOperational)?;
+        crate::net::wait::bring_up(
+            || master.bring_up(EcState::PreOperational),
+            |e| match e {
+                MasterError::Link(LinkFailure::Timeout { limit, waited, .. }) => {
+                    Some((*limit, *waited))
+                }
+                _ => None,
+            },
+        )?;
         let slave = &master.slaves()[0];
         let station = slave.station;
         let what = format!(
@@ -286,11 +294,13 @@ impl<S: DutSegment> EcatBinding<S> {
         Ok(())
     }
 
+    /// Process data for `cycles`, or for `time` on the segment's clock when given.
     fn process(
         &mut self,
         inverter: Inverter,
         words: Option<[u16; 6]>,
         cycles: u32,
+        time: Option<Duration>,
     ) -> Result<Value, StepError> {
         self.operational()?;
         let fi = inverter.get();
@@ -304,8 +314,11 @@ impl<S: DutSegment> EcatBinding<S> {
         }
         // The inputs of a cycle were written by the slave before it saw that cycle's outputs:
         // one more cycle brings the inverter's answer to the last of them.
-        self.cycles(u64::from(cycles) + 1)
-            .map_err(|e| step_error(&e))?;
+        match time {
+            Some(d) => self.cycles_for(d),
+            None => self.cycles(u64::from(cycles) + 1),
+        }
+        .map_err(|e| step_error(&e))?;
         let i = self
             .master
             .inverter_inputs(self.station, fi)
@@ -531,6 +544,24 @@ impl<S: DutSegment> EcatBinding<S> {
         settle::run_cycles(&mut c, &mut self.pending, n)
     }
 
+    /// Runs cycles for `d` on the segment's clock and one more, the transcript compacted as
+    /// [`settle::run_cycles`] compacts it: the first two cycles, the number left out, the last.
+    fn cycles_for(&mut self, d: Duration) -> Result<(), MasterError> {
+        let end = self.master.now() + d;
+        self.master.run_cycles(2)?;
+        self.pending.extend(self.master.take_exchanges());
+        self.master.set_recording(false);
+        let middle = self.master.run_cycles_until(end);
+        self.master.set_recording(true);
+        match middle? {
+            0 => {}
+            n => self
+                .pending
+                .push(crate::binding::channel::cycles_left_out(n)),
+        }
+        self.master.run_cycles(1)
+    }
+
     /// Cycles the drives back to "Switch-on block".
     fn settle(&mut self) -> Result<(), Problem> {
         let what = |e: MasterError| Problem::step("settling the drives", step_error(&e));
@@ -644,7 +675,16 @@ impl<S: DutSegment> Binding for EcatBinding<S> {
             }
             Action::Process { .. } | Action::Wait(_) => {
                 let (fi, words, cycles) = process_run(action, self.master.config().cycle)?;
-                self.process(fi, words, cycles)?
+                // On the real clock a step "for" a time lasts that time, however many cycles
+                // fit (on the virtual clock they all do).
+                let time = match action {
+                    Action::Process {
+                        run: Run::For(d), ..
+                    }
+                    | Action::Wait(d) => Some(*d).filter(|_| self.master.real_time()),
+                    _ => None,
+                };
+                self.process(fi, words, cycles, time)?
             }
             Action::Inject { inverter, error } => {
                 let (slave, _) = self.simulated()?;
@@ -725,6 +765,16 @@ fn step_error(e: &MasterError) -> StepError {
         ErrorKind::Refused => StepError::Refused(e.to_string()),
         ErrorKind::Link => match e {
             MasterError::Usage(_) => StepError::Suite(e.to_string()),
+            // The slave's limit passed: late unless the host was (the runner judges that).
+            MasterError::Link(LinkFailure::Timeout {
+                awaited,
+                limit,
+                waited,
+            }) => StepError::Late {
+                what: awaited.to_string(),
+                limit: *limit,
+                waited: *waited,
+            },
             _ => StepError::Link(e.to_string()),
         },
     }
@@ -831,7 +881,7 @@ impl<S: DutSegment> DutSegment for super::master::Faulty<S> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::master::{Fault, Faulty};
+    use super::super::master::{al_limit, Fault, Faulty};
     use super::*;
     use crate::binding::embedded::EmbeddedFactory;
     use crate::outcome::Verdict;
@@ -903,10 +953,12 @@ mod tests {
         assert_eq!(e.verdict(), Verdict::NotApplicable);
     }
 
-    /// A segment that goes silent, loops every frame back unprocessed, or returns garbage gives
-    /// an error verdict, within the master's time-outs (on the embedded segment's clock).
+    /// A segment that loops every frame back unprocessed or returns garbage gives an error
+    /// verdict; one that goes silent is a slave past its limit (a fail, unless the runner
+    /// finds the host late); each within the master's limits (on the embedded segment's
+    /// clock).
     #[test]
-    fn a_broken_segment_is_an_error_verdict_within_the_timeout() {
+    fn a_broken_segment_is_an_error_verdict_and_a_silent_one_late_within_the_limits() {
         for fault in [Fault::Silent, Fault::Loop, Fault::Garbage] {
             let mut b = binding();
             b.master.segment_mut().set_fault(fault);
@@ -919,10 +971,18 @@ mod tests {
             };
             for action in [read_p102(), process] {
                 let e = b.perform(&action).unwrap_err();
-                assert_eq!(e.verdict(), Verdict::Error, "{fault:?}: {e}");
+                if fault == Fault::Silent {
+                    assert!(matches!(e, StepError::Late { .. }), "{e:?}");
+                    assert_eq!(
+                        e.to_string(),
+                        "a frame back: no answer within the device's limit of 50 ms (waited 50 ms)"
+                    );
+                } else {
+                    assert_eq!(e.verdict(), Verdict::Error, "{fault:?}: {e}");
+                }
             }
             let took = b.master.now() - start;
-            let bound = b.master.config().mailbox_timeout * 2 + b.master.config().al_timeout;
+            let bound = b.master.config().mailbox_response * 2 + al_limit(0x0F);
             assert!(took <= bound, "{fault:?}: {took:?}");
         }
     }

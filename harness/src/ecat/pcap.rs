@@ -39,6 +39,10 @@ impl<S: Segment> Segment for Tapped<S> {
         self.inner.now()
     }
 
+    fn real_time(&self) -> bool {
+        self.inner.real_time()
+    }
+
     fn send(&mut self, frame: &[u8]) -> Result<(), SegmentError> {
         self.record(frame);
         self.inner.send(frame)

@@ -7,13 +7,15 @@
 //! segment, so its port 0 returns what it processed (ETG.1000.4 §5, "processing and
 //! forwarding"). The slave sets the locally administered bit in the source address of what it
 //! sends. Between frames the thread waits at most until the slave's next timer (watchdogs) and
-//! lets it run with the real clock since start.
+//! lets it run with the real clock since start. With a reply delay (`--reply-delay MS`) each
+//! processed frame goes back that much later, the slave serving on meanwhile.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
+use crate::net::held::Held;
 use crate::net::serve_args::RawServeArgs;
 pub use crate::net::LinkError;
 use crate::net::{RawLink, MAX_FRAME};
@@ -39,15 +41,19 @@ pub struct ServeOptions {
     pub profile: String,
     /// Inverters behind the interface (`--inverters`; default the product's maximum).
     pub inverters: Option<u8>,
+    /// How much later than processed each frame goes back (`--reply-delay`; none by default).
+    pub reply_delay: Duration,
 }
 
 impl ServeOptions {
-    /// `iface` with the defaults: SK 550P, the product's maximum of inverters.
+    /// `iface` with the defaults: SK 550P, the product's maximum of inverters, frames back at
+    /// once.
     pub fn new(iface: &str) -> ServeOptions {
         ServeOptions {
             iface: iface.into(),
             profile: "sk550p".into(),
             inverters: None,
+            reply_delay: Duration::ZERO,
         }
     }
 }
@@ -135,14 +141,14 @@ impl Drop for Served {
 /// this process, until the returned handle is stopped or dropped.
 pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let config = device_config(opts)?;
-    start_core(&opts.iface, slave_core(config)?)
+    start_core(&opts.iface, slave_core(config)?, opts.reply_delay)
 }
 
 /// Serves until `duration` has passed (forever when `None`), after a line on stdout that says
 /// what is served where.
 pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeError> {
     let config = device_config(opts)?;
-    let served = start_core(&opts.iface, slave_core(config)?)?;
+    let served = start_core(&opts.iface, slave_core(config)?, opts.reply_delay)?;
     let m = served.mac();
     outln!(
         "serving EtherCAT slave ({}, {} inverters) on {} ({:02x}:{:02x}:{:02x}:{:02x}:{:02x}:{:02x})",
@@ -181,6 +187,7 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         iface: a.common.iface,
         profile: a.common.profile,
         inverters: a.common.inverters,
+        reply_delay: Duration::from_millis(a.common.reply_delay),
     };
     serve(&opts, a.common.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
     Ok(crate::cli::EXIT_PASS)
@@ -224,8 +231,13 @@ pub(crate) trait Core: Send {
     fn poll(&mut self, now: Duration) -> Option<Duration>;
 }
 
-/// Opens the interface and serves `core` on it in a thread.
-pub(crate) fn start_core(iface: &str, core: Box<dyn Core>) -> Result<Served, ServeError> {
+/// Opens the interface and serves `core` on it in a thread, each frame back `delay` after it
+/// was processed.
+pub(crate) fn start_core(
+    iface: &str,
+    core: Box<dyn Core>,
+    delay: Duration,
+) -> Result<Served, ServeError> {
     let mut link = RawLink::open(iface, Some(ETHERTYPE))?;
     link.set_spin(FRAME_POLL);
     let stop = Arc::new(AtomicBool::new(false));
@@ -234,7 +246,7 @@ pub(crate) fn start_core(iface: &str, core: Box<dyn Core>) -> Result<Served, Ser
         let stop = stop.clone();
         thread::Builder::new()
             .name(format!("ecat-slave-{iface}"))
-            .spawn(move || run(link, core, &stop))
+            .spawn(move || run(link, core, delay, &stop))
             .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))?
     };
     Ok(Served {
@@ -245,15 +257,31 @@ pub(crate) fn start_core(iface: &str, core: Box<dyn Core>) -> Result<Served, Ser
     })
 }
 
-/// The serving loop: frames in, processed, back out; timers between them.
-fn run(mut link: RawLink, mut core: Box<dyn Core>, stop: &AtomicBool) -> Result<Stats, ServeError> {
+/// The serving loop: frames in, processed, back out `delay` later; timers between them.
+fn run(
+    mut link: RawLink,
+    mut core: Box<dyn Core>,
+    delay: Duration,
+    stop: &AtomicBool,
+) -> Result<Stats, ServeError> {
     let start = Instant::now();
     let mut stats = Stats::default();
     let mut buf = vec![0u8; MAX_FRAME];
+    let mut held: Held<Vec<u8>> = Held::new(delay);
     while !stop.load(Ordering::Relaxed) {
+        while let Some(frame) = held.due() {
+            match link.send(&frame) {
+                Ok(()) => stats.frames += 1,
+                Err(e) if e.is_link_down() => stats.dropped += 1,
+                Err(e) => return Err(e.into()),
+            }
+        }
         let now = start.elapsed();
         let due = core.poll(now).map_or(STOP_CHECK, |t| t.saturating_sub(now));
-        let deadline = Instant::now() + due.min(STOP_CHECK);
+        let mut deadline = Instant::now() + due.min(STOP_CHECK);
+        if let Some(next) = held.next() {
+            deadline = deadline.min(next);
+        }
         let received = match link.recv(&mut buf, deadline) {
             Ok(r) => r,
             Err(e) if e.is_link_down() => {
@@ -269,11 +297,7 @@ fn run(mut link: RawLink, mut core: Box<dyn Core>, stop: &AtomicBool) -> Result<
             stats.dropped += 1;
             continue;
         }
-        match link.send(frame) {
-            Ok(()) => stats.frames += 1,
-            Err(e) if e.is_link_down() => stats.dropped += 1,
-            Err(e) => return Err(e.into()),
-        }
+        held.hold(frame.to_vec());
     }
     stats.oversized = link.oversized();
     Ok(stats)
@@ -328,7 +352,7 @@ mod tests {
             polls: polls.clone(),
             next: Duration::ZERO,
         };
-        let served = start_core(&v.0, Box::new(core)).expect("serve");
+        let served = start_core(&v.0, Box::new(core), Duration::ZERO).expect("serve");
         assert!(served.is_running());
         let mut master = RawLink::open(&v.1, Some(ETHERTYPE)).unwrap();
         let mut buf = [0u8; MAX_FRAME];
@@ -359,7 +383,7 @@ mod tests {
             polls: Default::default(),
             next: Duration::ZERO,
         };
-        let served = start_core(&v.0, Box::new(core)).expect("serve");
+        let served = start_core(&v.0, Box::new(core), Duration::ZERO).expect("serve");
         drop(v);
         let t = Instant::now();
         while served.is_running() && t.elapsed() < Duration::from_secs(2) {
@@ -377,7 +401,7 @@ mod tests {
             polls: Default::default(),
             next: Duration::ZERO,
         };
-        match start_core("no-such-if0", Box::new(core)) {
+        match start_core("no-such-if0", Box::new(core), Duration::ZERO) {
             Err(ServeError::Link(LinkError::NoSuchInterface { .. })) => {}
             other => panic!("{other:?}"),
         }

@@ -4,6 +4,7 @@
 //! receive stamp.
 
 mod error;
+pub(crate) mod held;
 mod iface;
 mod link;
 pub(crate) mod peer;
@@ -11,6 +12,7 @@ pub(crate) mod serve_args;
 pub(crate) mod udp;
 #[cfg(test)]
 pub(crate) mod veth;
+pub(crate) mod wait;
 pub(crate) mod workers;
 
 pub use error::LinkError;

@@ -209,7 +209,7 @@ impl Session {
             recording: false,
             frames: Vec::new(),
         };
-        let mut ctl = Controller::new(link, mac, timeout);
+        let mut ctl = Controller::new(link, mac, timeout, true);
         ctl.set_recording(false);
         let s = ctl
             .locate(None)

@@ -36,7 +36,7 @@ use super::restore::{self, Param, Settling};
 use super::step::{Module, PnioStep};
 use crate::binding::channel::Channel;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
-use crate::binding::settle::Drives;
+use crate::binding::settle::{self, Drives};
 use crate::binding::{Binding, CleanupError, Dut, DutError, Observation, OpenError, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Identity, Refusal};
@@ -108,7 +108,17 @@ fn status_hex(s: PnioStatus) -> String {
 fn step_error(e: PnioError) -> StepError {
     match e {
         PnioError::Link(l) => StepError::Link(l.to_string()),
-        e @ (PnioError::NoReply { .. } | PnioError::NotFound(_)) => StepError::Link(e.to_string()),
+        // The device's limit passed: late unless the host was (the runner judges that).
+        PnioError::NoReply {
+            what,
+            limit,
+            waited,
+        } => StepError::Late {
+            what: format!("{what} from the device"),
+            limit,
+            waited,
+        },
+        e @ (PnioError::NoInput | PnioError::NotFound(_)) => StepError::Link(e.to_string()),
         e @ PnioError::Malformed { .. } => StepError::Garbage(e.to_string()),
         e @ (PnioError::Nca { .. } | PnioError::NotConnected) => StepError::Refused(e.to_string()),
     }
@@ -117,9 +127,10 @@ fn step_error(e: PnioError) -> StepError {
 /// Why the device could not be opened.
 fn open_error(e: PnioError) -> OpenError {
     match e {
-        PnioError::Link(_) | PnioError::NoReply { .. } | PnioError::NotFound(_) => {
-            OpenError::Unreachable(e.to_string())
-        }
+        PnioError::Link(_)
+        | PnioError::NoReply { .. }
+        | PnioError::NoInput
+        | PnioError::NotFound(_) => OpenError::Unreachable(e.to_string()),
         _ => OpenError::BringUp(e.to_string()),
     }
 }
@@ -535,6 +546,21 @@ impl<L: Link + 'static> PnioBinding<L> {
         }
         drop(ctl);
         let channel = &mut self.channel;
+        // The channel sends the control words it last had with every record call below: from
+        // now on "disable voltage", where the drives now are, not the case's last words, which
+        // would take them out of "Switch-on block" again for the next case to find.
+        for &inverter in &p.commanded {
+            if account.attempt(|| format!("{inverter} disable voltage in the cyclic data")) {
+                let disable = Action::Process {
+                    inverter,
+                    control: settle::DISABLE,
+                    setpoints: Vec::new(),
+                    run: Run::Cycles(1),
+                };
+                let r = channel.perform(&disable).map(drop);
+                account.note(r.map_err(|e| Problem::step("disabling voltage", e)));
+            }
+        }
         p.ledger.restore(&mut account, |key, before| {
             let value = restore::value_of(before);
             match channel.perform(&Action::Write(key.write(value))) {

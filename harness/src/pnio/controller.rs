@@ -7,6 +7,13 @@
 //! cycle (a device whose watchdog sees no outputs ends the AR), takes the input CR's frames,
 //! acknowledges alarm PDUs at transport level and queues their notifications, and answers
 //! the device's own ApplicationReady call.
+//!
+//! Every wait for the device is its limit on the link's clock ([`crate::net::wait::Wait`]: on
+//! a network moved by the time the host lost meanwhile): an RPC answer and a DCP response
+//! within the harness's `--timeout` (IEC 61158-6-10 leaves the controller's RPC and DCP
+//! time-outs to it), a by-name Identify within [`IDENTIFY_WINDOW`], each cycle's input within
+//! the input CR's data hold time ([`Controller::data_hold`]). A limit that passes is [`PnioError::NoReply`] with the limit
+//! and the time waited, which the binding reports as the device being late.
 
 use std::collections::VecDeque;
 use std::net::SocketAddr;
@@ -30,6 +37,7 @@ use proto::pnio::status::cm;
 use proto::pnio::{FrameId, FrameKind, PnioStatus, MULTICAST_DCP_IDENTIFY};
 
 use super::link::Link;
+use crate::net::wait::Wait;
 use crate::net::LinkError;
 use crate::outcome::Exchange;
 use crate::runner::hex;
@@ -47,6 +55,9 @@ const SEND_CLOCK_FACTOR: u16 = 32;
 /// shared host, and being descheduled for a few milliseconds is not losing the controller.
 /// The watchdog steps wait longer than this.
 const WATCHDOG_FACTOR: u16 = 100;
+/// DataHoldFactor of both CRs: cycles a consumer keeps the last valid data before it counts
+/// them lost; the same 100 cycles as the watchdog, for the same reason.
+const DATA_HOLD_FACTOR: u16 = WATCHDOG_FACTOR;
 /// ArgsMaximum the controller offers for answers.
 const ARGS_MAXIMUM: u32 = 4096;
 /// The longest a DCP Identify collects answers on a network (the embedded device answers at
@@ -59,12 +70,20 @@ pub(crate) enum PnioError {
     /// The link broke.
     #[error(transparent)]
     Link(#[from] LinkError),
-    /// Nothing answered in time.
-    #[error("no {what} from the device within {waited:?}")]
+    /// Nothing answered within the device's limit.
+    #[error(
+        "no {what} from the device within its limit of {} (waited {})",
+        crate::timing::ms(*limit),
+        crate::timing::ms(*waited)
+    )]
     NoReply {
         what: &'static str,
+        limit: Duration,
         waited: Duration,
     },
+    /// No input frame has come since the AR started.
+    #[error("no input frame from the device yet")]
+    NoInput,
     /// The answer broke the protocol.
     #[error("malformed {what}: {error}")]
     Malformed { what: &'static str, error: String },
@@ -165,6 +184,8 @@ pub(crate) struct Controller<L> {
     link: L,
     mac: MacAddr,
     timeout: Duration,
+    /// Whether the link runs on the real clock, where the host's own delays move a wait.
+    real_time: bool,
     /// ReductionRatio of both CRs (the cycle is 1 ms × it).
     reduction_ratio: u16,
     station: Option<Station>,
@@ -184,12 +205,14 @@ pub(crate) struct Controller<L> {
 }
 
 impl<L: Link> Controller<L> {
-    /// A controller with Ethernet address `mac` that waits `timeout` for each answer.
-    pub(crate) fn new(link: L, mac: MacAddr, timeout: Duration) -> Controller<L> {
+    /// A controller with Ethernet address `mac` that waits `timeout` for each answer, on a link
+    /// that runs on the real clock (a network) or not (the embedded device's virtual clock).
+    pub(crate) fn new(link: L, mac: MacAddr, timeout: Duration, real_time: bool) -> Controller<L> {
         Controller {
             link,
             mac,
             timeout,
+            real_time,
             reduction_ratio: 1,
             station: None,
             ar: None,
@@ -219,6 +242,13 @@ impl<L: Link> Controller<L> {
     /// How long the device waits without output frames before it ends the AR.
     pub(crate) fn watchdog(&self) -> Duration {
         self.cycle() * u32::from(WATCHDOG_FACTOR)
+    }
+
+    /// The data hold time of the input CR (IEC 61158-6-10: DataHoldFactor × the cycle): the
+    /// longest the device may leave the controller without a new input frame, its limit for
+    /// each cycle's answer.
+    pub(crate) fn data_hold(&self) -> Duration {
+        self.cycle() * u32::from(DATA_HOLD_FACTOR)
     }
 
     /// Sets the reduction ratio of the next Connect.
@@ -335,6 +365,38 @@ impl<L: Link> Controller<L> {
         }
     }
 
+    /// A wait of the device's `limit` from now.
+    fn wait(&self, limit: Duration) -> Wait {
+        Wait::new(self.link.now(), limit, self.real_time)
+    }
+
+    /// [`Controller::pump`] until `wait` is over.
+    fn pump_within(
+        &mut self,
+        wait: &Wait,
+        want: &dyn Fn(&[u8]) -> bool,
+        call: Option<Uuid>,
+    ) -> Result<Option<Got>, PnioError> {
+        loop {
+            let now = self.link.now();
+            if wait.passed(now) {
+                return Ok(None);
+            }
+            if let Some(got) = self.pump(wait.end(now), want, call)? {
+                return Ok(Some(got));
+            }
+        }
+    }
+
+    /// `wait` for `what` passed.
+    fn no_reply(&self, what: &'static str, wait: &Wait) -> PnioError {
+        PnioError::NoReply {
+            what,
+            limit: wait.limit(),
+            waited: wait.waited(self.link.now()),
+        }
+    }
+
     /// Lets `d` pass with the cycle running and returns the LLDP frames that came in that time
     /// (their number, the last one's payload).
     pub(crate) fn lldp_for(&mut self, d: Duration) -> Result<(u64, Option<Vec<u8>>), PnioError> {
@@ -352,7 +414,9 @@ impl<L: Link> Controller<L> {
 
     /// One cycle of the exchange: the output frame now, then the first input frame that left
     /// the device after that frame reached it, which carries the device's answer to it.
-    /// `false` when none came within three cycles and [`LATE`].
+    /// `false` when none came within the data hold time ([`Controller::data_hold`]): a device
+    /// that provides its inputs every cycle answers within a cycle or two, and one the host
+    /// held back for a moment is not taken for silent.
     ///
     /// The output goes out at once rather than on the controller's own clock: a run of
     /// cycles then follows the device's send clock (each output right after the input before
@@ -362,13 +426,15 @@ impl<L: Link> Controller<L> {
         let Some(input_id) = self.ar.as_ref().map(|a| a.input_frame_id) else {
             return Err(PnioError::NotConnected);
         };
-        let deadline = self.link.now() + self.cycle() * 3 + LATE;
+        let wait = self.wait(self.data_hold());
         self.send_now()?;
         // When the output left: on the link's clock, and on the real-time clock the kernel
         // stamps received frames with.
         let (sent_at, sent_wall) = (self.link.now(), wall_clock());
         let is_input = move |p: &[u8]| frame_id(p).is_some_and(|id| id.0 == input_id);
-        while let Some(Got::Frame { payload, stamp, .. }) = self.pump(deadline, &is_input, None)? {
+        while let Some(Got::Frame { payload, stamp, .. }) =
+            self.pump_within(&wait, &is_input, None)?
+        {
             self.cyclic_or_alarm(&payload)?;
             let fresh = match stamp {
                 Some(at) => at >= sent_wall + FRESH,
@@ -504,6 +570,11 @@ impl<L: Link> Controller<L> {
 
     /// DCP Identify (all, or by name): every station that answers within the window.
     pub(crate) fn identify(&mut self, name: Option<&str>) -> Result<Vec<Station>, PnioError> {
+        self.identify_within(name).map(|(stations, _)| stations)
+    }
+
+    /// [`Controller::identify`], and the window it waited.
+    fn identify_within(&mut self, name: Option<&str>) -> Result<(Vec<Station>, Wait), PnioError> {
         let xid = self.next_xid();
         let req = match name {
             Some(n) => DcpRepr::identify_name(xid, 1, n),
@@ -512,7 +583,7 @@ impl<L: Link> Controller<L> {
         let bytes = emit_dcp(&req)?;
         let frame = self.ethernet(MULTICAST_DCP_IDENTIFY, &bytes);
         self.link.send(&frame)?;
-        let deadline = self.link.now() + IDENTIFY_WINDOW.min(self.timeout);
+        let wait = self.wait(IDENTIFY_WINDOW.min(self.timeout));
         let mut stations = Vec::new();
         let mut first = Vec::new();
         // Every Identify response frame carrying the request's Xid, parsed or not: a station
@@ -522,7 +593,9 @@ impl<L: Link> Controller<L> {
                 && p.get(4..8).is_some_and(|x| x == xid.to_be_bytes())
         };
         let mut broken = None;
-        while let Some(Got::Frame { src, payload, .. }) = self.pump(deadline, &is_answer, None)? {
+        while let Some(Got::Frame { src, payload, .. }) =
+            self.pump_within(&wait, &is_answer, None)?
+        {
             if first.is_empty() {
                 first = payload.clone();
             }
@@ -557,19 +630,17 @@ impl<L: Link> Controller<L> {
                 what: "DCP Identify response",
                 error,
             }),
-            _ => Ok(stations),
+            _ => Ok((stations, wait)),
         }
     }
 
     /// Finds the device (by name, or the only one that answers) and keeps it as the target.
     pub(crate) fn locate(&mut self, name: Option<&str>) -> Result<Station, PnioError> {
-        let found = self.identify(name)?;
+        let (found, wait) = self.identify_within(name)?;
         let station = match (name, found.len()) {
-            (_, 0) => {
-                return Err(PnioError::NotFound(
-                    name.map_or(String::new(), |n| format!(" by the name {n:?}")),
-                ))
-            }
+            // The device to test, by its name, missed the window.
+            (Some(_), 0) => return Err(self.no_reply("DCP Identify response", &wait)),
+            (None, 0) => return Err(PnioError::NotFound(String::new())),
             (None, n) if n > 1 => {
                 return Err(PnioError::NotFound(format!(
                     ": {n} devices answered; name the one to test (pnio://IFACE/NAME)"
@@ -593,16 +664,13 @@ impl<L: Link> Controller<L> {
         let bytes = emit_dcp(&req)?;
         let frame = self.ethernet(dst, &bytes);
         self.link.send(&frame)?;
-        let deadline = self.link.now() + self.timeout;
+        let wait = self.wait(self.timeout);
         let is_answer = move |p: &[u8]| {
             DcpRepr::parse(p).is_ok_and(|r| r.xid == xid && r.service_type.is_response())
         };
-        let Some(Got::Frame { payload, .. }) = self.pump(deadline, &is_answer, None)? else {
+        let Some(Got::Frame { payload, .. }) = self.pump_within(&wait, &is_answer, None)? else {
             self.record(&bytes, dcp_text(&req), &[], "(nothing)".into());
-            return Err(PnioError::NoReply {
-                what: "DCP response",
-                waited: self.timeout,
-            });
+            return Err(self.no_reply("DCP response", &wait));
         };
         let res = DcpRepr::parse(&payload).map_err(malformed("DCP response"))?;
         self.record(&bytes, dcp_text(&req), &payload, format!("{:?}", res.data));
@@ -648,10 +716,10 @@ impl<L: Link> Controller<L> {
         let dst = self.target()?.mac;
         let frame = self.ethernet(dst, payload);
         self.link.send(&frame)?;
-        let deadline = self.link.now() + self.timeout.min(IDENTIFY_WINDOW);
+        let wait = self.wait(self.timeout.min(IDENTIFY_WINDOW));
         let is_answer =
             |p: &[u8]| frame_id(p).is_some_and(|id| matches!(id.kind(), FrameKind::Dcp));
-        let got = match self.pump(deadline, &is_answer, None)? {
+        let got = match self.pump_within(&wait, &is_answer, None)? {
             Some(Got::Frame { payload, .. }) => Some(payload),
             _ => None,
         };
@@ -701,13 +769,10 @@ impl<L: Link> Controller<L> {
         );
         let bytes = req.emit().map_err(malformed("RPC request"))?;
         self.link.send_udp(&bytes)?;
-        let deadline = self.link.now() + self.timeout;
-        let Some(Got::Answer(res)) = self.pump(deadline, &|_| false, Some(activity))? else {
+        let wait = self.wait(self.timeout);
+        let Some(Got::Answer(res)) = self.pump_within(&wait, &|_| false, Some(activity))? else {
             self.record(&bytes, what, &[], "(nothing)".into());
-            return Err(PnioError::NoReply {
-                what: "RPC answer",
-                waited: self.timeout,
-            });
+            return Err(self.no_reply("RPC answer", &wait));
         };
         let res_bytes = res.emit().unwrap_or_default();
         match res.packet_type {
@@ -777,7 +842,7 @@ impl<L: Link> Controller<L> {
                 phase: 1,
                 frame_send_offset: 0xFFFF_FFFF,
                 watchdog_factor: WATCHDOG_FACTOR,
-                data_hold_factor: WATCHDOG_FACTOR,
+                data_hold_factor: DATA_HOLD_FACTOR,
                 tag_header: 0xC000,
                 apis: vec![layout.api.clone()],
                 ..IocrBlockReq::default()
@@ -866,9 +931,9 @@ impl<L: Link> Controller<L> {
             "Control PrmEnd".into(),
         )?;
         // The device calls ApplicationReady; the pump answers it.
-        let deadline = self.link.now() + self.timeout;
-        while !self.connected() && self.link.now() < deadline {
-            let slice = (self.link.now() + self.cycle()).min(deadline);
+        let wait = self.wait(self.timeout);
+        while !self.connected() && !wait.passed(self.link.now()) {
+            let slice = (self.link.now() + self.cycle()).min(wait.end(self.link.now()));
             self.pump(slice, &|_| false, None)?;
         }
         Ok(Connected {
@@ -1037,9 +1102,9 @@ impl<L: Link> Controller<L> {
         &mut self,
         wait: Duration,
     ) -> Result<Option<AlarmNotification>, PnioError> {
-        let deadline = self.link.now() + wait;
-        while self.alarms.is_empty() && self.link.now() < deadline {
-            let slice = (self.link.now() + self.cycle()).min(deadline);
+        let wait = self.wait(wait);
+        while self.alarms.is_empty() && !wait.passed(self.link.now()) {
+            let slice = (self.link.now() + self.cycle()).min(wait.end(self.link.now()));
             self.pump(slice, &|_| false, None)?;
         }
         let Some(n) = self.alarms.pop_front() else {
@@ -1109,9 +1174,6 @@ pub(crate) struct Connected {
 /// How long after an output frame an input frame must arrive to carry the device's answer to
 /// it: the frame's way to the device and its handling there.
 const FRESH: Duration = Duration::from_micros(100);
-/// How much later than three cycles an input frame may come on a loaded host before the cycle
-/// counts as unanswered.
-const LATE: Duration = Duration::from_millis(20);
 
 /// The real-time clock as a duration since the Unix epoch (what receive stamps are on).
 fn wall_clock() -> Duration {

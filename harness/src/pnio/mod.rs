@@ -104,7 +104,9 @@ fn open<L: Link + 'static>(
     timeout: Duration,
     target: Target,
 ) -> Result<Box<dyn Binding>, OpenError> {
-    let mut ctl = Controller::new(link, mac, timeout);
+    // A device on the network runs on the real clock, the embedded one on a virtual clock.
+    let real_time = target.persistent;
+    let mut ctl = Controller::new(link, mac, timeout, real_time);
     ctl.set_reduction_ratio(target.reduction_ratio);
     Ok(Box::new(PnioBinding::open(
         ctl,

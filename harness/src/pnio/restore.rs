@@ -8,7 +8,6 @@
 //! its cyclic data, the parameters go back through the records.
 
 use std::fmt;
-use std::time::Duration;
 
 use proto::nord::{ArrayElement, Inverter, ParamNumber, ParamSet, Product};
 use proto::pnio::dcp::{BlockError, BlockQualifier, BlockValue, DcpBlock, IpParameter};
@@ -178,10 +177,7 @@ impl<L: Link> Cycling for Settling<'_, L> {
 
     fn status_word(&mut self, fi: Inverter) -> Result<u16, PnioError> {
         let slot = self.slot(fi)?;
-        let no_input = || PnioError::NoReply {
-            what: "input frame",
-            waited: Duration::ZERO,
-        };
+        let no_input = || PnioError::NoInput;
         let t = module_ppo(self.ctl, self.product, slot).ok_or_else(no_input)?;
         let (data, _) = self.ctl.input(slot).ok_or_else(no_input)?;
         let pzd = module_pzd(t, &data).ok_or_else(no_input)?;

@@ -20,6 +20,10 @@
 //! together with another socket, and a record read must not wait for the next poll. The
 //! device is shared under a mutex, and the time handed to it is read with the lock held, so
 //! it never goes backwards.
+//!
+//! With a reply delay (`--reply-delay MS`) the device's RPC answers and DCP responses leave
+//! that much later than the device made them (the UDP thread waits before it answers; the raw
+//! thread holds DCP responses back while the cyclic frames go on).
 
 use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -33,6 +37,7 @@ use proto::nord::Protocol;
 use proto::pnio::RPC_PORT;
 use sim::pnio::{IoConfig, IoDevice, Out, POLL_PERIOD};
 
+use crate::net::held::Held;
 use crate::net::serve_args::RawServeArgs;
 use crate::net::udp::{ipv4_of, transient};
 use crate::net::workers::{serve_for, Workers};
@@ -54,16 +59,21 @@ pub struct ServeOptions {
     pub name: String,
     /// Inverters behind the interface (`--inverters`; default the product's maximum).
     pub inverters: Option<u8>,
+    /// How much later than made RPC answers and DCP responses leave (`--reply-delay`; none by
+    /// default).
+    pub reply_delay: Duration,
 }
 
 impl ServeOptions {
-    /// `iface` with the defaults: SK 550P without a name, the product's maximum of inverters.
+    /// `iface` with the defaults: SK 550P without a name, the product's maximum of inverters,
+    /// answers at once.
     pub fn new(iface: &str) -> ServeOptions {
         ServeOptions {
             iface: iface.into(),
             profile: "sk550p".into(),
             name: String::new(),
             inverters: None,
+            reply_delay: Duration::ZERO,
         }
     }
 }
@@ -240,7 +250,9 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         reply,
         counters: counters.clone(),
         stop: stop.clone(),
+        dcp: Held::new(opts.reply_delay),
     };
+    let delay = opts.reply_delay;
     served
         .workers
         .spawn(format!("pnio-device-{}", opts.iface), move || raw.run())
@@ -249,7 +261,7 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         served
             .workers
             .spawn(format!("pnio-rpc-{}", opts.iface), move || {
-                run_udp(socket, addr, &device, &counters, &stop)
+                run_udp(socket, addr, &device, &counters, &stop, delay)
             })
             .map_err(thread)?;
     }
@@ -281,6 +293,8 @@ struct Raw {
     reply: Option<(SocketAddr, UdpSocket)>,
     counters: Arc<Counters>,
     stop: Arc<AtomicBool>,
+    /// DCP responses held back by the reply delay.
+    dcp: Held<Vec<u8>>,
 }
 
 impl Raw {
@@ -288,6 +302,9 @@ impl Raw {
         let mut buf = vec![0u8; MAX_FRAME];
         let mut next_poll = Duration::ZERO;
         while !self.stop.load(Ordering::Relaxed) {
+            while let Some(f) = self.dcp.due() {
+                self.frame(&f)?;
+            }
             if self.device.start.elapsed() >= next_poll {
                 let (out, now) = {
                     let (mut io, now) = self.device.lock()?;
@@ -301,7 +318,10 @@ impl Raw {
                     next_poll + POLL_PERIOD
                 };
             }
-            let until = self.device.start + next_poll;
+            let mut until = self.device.start + next_poll;
+            if let Some(next) = self.dcp.next() {
+                until = until.min(next);
+            }
             let received = match self.link.recv(&mut buf, until) {
                 Ok(r) => r,
                 Err(e) if e.is_link_down() => {
@@ -324,11 +344,8 @@ impl Raw {
     fn send(&mut self, out: Vec<Out>) -> Result<(), ServeError> {
         for o in out {
             match o {
-                Out::Frame(f) => match self.link.send(&f) {
-                    Ok(()) => bump(&self.counters.frames_out),
-                    Err(e) if e.is_link_down() => {}
-                    Err(e) => return Err(e.into()),
-                },
+                Out::Frame(f) if is_dcp(&f) => self.dcp.hold(f),
+                Out::Frame(f) => self.frame(&f)?,
                 Out::Datagram { to, bytes } => {
                     let Some((addr, socket)) = &self.reply else {
                         continue;
@@ -348,15 +365,38 @@ impl Raw {
         }
         Ok(())
     }
+
+    /// One frame out on the link.
+    fn frame(&mut self, f: &[u8]) -> Result<(), ServeError> {
+        match self.link.send(f) {
+            Ok(()) => bump(&self.counters.frames_out),
+            Err(e) if e.is_link_down() => {}
+            Err(e) => return Err(e.into()),
+        }
+        Ok(())
+    }
 }
 
-/// The UDP thread: RPC calls in, the device's answers back to their sender.
+/// Whether an Ethernet frame of the device is DCP (its responses).
+fn is_dcp(frame: &[u8]) -> bool {
+    proto::eth::EthernetFrame::new_checked(frame).is_ok_and(|eth| {
+        let p = eth.inner_payload();
+        p.len() >= 2
+            && matches!(
+                proto::pnio::FrameId(u16::from_be_bytes([p[0], p[1]])).kind(),
+                proto::pnio::FrameKind::Dcp
+            )
+    })
+}
+
+/// The UDP thread: RPC calls in, the device's answers back to their sender `delay` later.
 fn run_udp(
     socket: UdpSocket,
     addr: SocketAddr,
     device: &Shared,
     counters: &Counters,
     stop: &AtomicBool,
+    delay: Duration,
 ) -> Result<(), ServeError> {
     let mut buf = [0u8; 2048];
     while !stop.load(Ordering::Relaxed) {
@@ -370,6 +410,9 @@ fn run_udp(
             let (mut io, now) = device.lock()?;
             io.call(from, &buf[..len], now)
         };
+        if !out.is_empty() {
+            thread::sleep(delay);
+        }
         for o in out {
             let Out::Datagram { to, bytes } = o else {
                 continue;
@@ -439,6 +482,7 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         profile: a.common.profile,
         name: a.name,
         inverters: a.common.inverters,
+        reply_delay: Duration::from_millis(a.common.reply_delay),
     };
     serve(&opts, a.common.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
     Ok(crate::cli::EXIT_PASS)

@@ -6,12 +6,35 @@
 //! Any byte can be requested, also no state at all (the harness tests refusals); the typed
 //! [`Master::set_state`] turns a refusal into [`Refusal::Al`].
 
+use std::time::Duration;
+
 use proto::ecat::al::{AlControl, AlStatus, AlStatusCode, EcState};
 use proto::ecat::register::{AL_CONTROL, AL_STATUS};
 
 use super::engine::Master;
 use super::error::{AlRefused, Awaited, ProtocolError, Refusal, Result};
 use super::segment::Segment;
+
+/// How long a slave may take for an AL state change: the ESI's `StateMachine/Timeout`, by
+/// ETG.2000's defaults (BU 0620 and the SK 550P's device description print no others).
+/// Init → PreOp or Bootstrap.
+const PREOP_TIMEOUT: Duration = Duration::from_millis(3000);
+/// PreOp → SafeOp, SafeOp → Op.
+const SAFEOP_OP_TIMEOUT: Duration = Duration::from_millis(10_000);
+/// Back to Init, or SafeOp/Op back to PreOp.
+const BACK_TO_INIT_TIMEOUT: Duration = Duration::from_millis(5000);
+
+/// The limit of a request for the state bits `requested`. The master does not read the state
+/// the slave is in first, so a request that can be two transitions takes the longer limit
+/// (PreOp: up from Init 3000 ms or back 5000 ms; SafeOp: up 10 000 ms or back from Op
+/// 200 ms); bits that name no state, which a slave refuses, take the longest of all.
+pub(crate) fn al_limit(requested: u8) -> Duration {
+    match EcState::from_code(requested) {
+        Some(EcState::Bootstrap) => PREOP_TIMEOUT,
+        Some(EcState::Init | EcState::PreOperational) => BACK_TO_INIT_TIMEOUT,
+        Some(EcState::SafeOperational | EcState::Operational) | None => SAFEOP_OP_TIMEOUT,
+    }
+}
 
 /// AL status (0130h) and AL status code (0134h) as read at once.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -54,14 +77,13 @@ impl<S: Segment> Master<S> {
 
     /// Writes `control` to AL control of `station` (any value: state bits, acknowledge, ID
     /// request) and reads AL status until it shows the requested state bits or the error
-    /// indication; returns that status. A slave that shows neither within
-    /// [`super::MasterConfig::al_timeout`] is a timeout. The process data keep running while
-    /// the master waits.
+    /// indication; returns that status. A slave that shows neither within the transition's
+    /// limit ([`al_limit`]) is a timeout. The process data keep running while the master
+    /// waits.
     pub(crate) fn request_state(&mut self, station: u16, control: u16) -> Result<AlReading> {
         self.write_register(station, AL_CONTROL, &control.to_le_bytes())?;
         let want = (control & 0x0F) as u8;
-        let timeout = self.config.al_timeout;
-        self.poll(timeout, Awaited::AlState, |m| {
+        self.poll(al_limit(want), Awaited::AlState, |m| {
             let s = m.al_status(station)?;
             Ok((s.state_bits() == want || s.error()).then_some(s))
         })
@@ -107,8 +129,9 @@ impl<S: Segment> Master<S> {
             ..AlControl::default()
         };
         self.write_register(station, AL_CONTROL, &control.emit())?;
-        let timeout = self.config.al_timeout;
-        let s = self.poll(timeout, Awaited::AlState, |m| {
+        // ETG.1020 prints no limit for loading the ID: a harness limit, that of a change to
+        // Init or PreOp.
+        let s = self.poll(BACK_TO_INIT_TIMEOUT, Awaited::AlState, |m| {
             let s = m.al_status(station)?;
             Ok((s.id_loaded() || s.error()).then_some(s))
         })?;

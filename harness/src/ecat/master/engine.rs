@@ -4,9 +4,11 @@
 //!
 //! Blocking calls over a [`Segment`]: the protocol logic reads no clock but the segment's and
 //! sleeps through the segment, so the same master runs instantly on the embedded segment's
-//! virtual clock and in real time on a network. Every wait has a deadline; every polling loop
-//! lets at least [`MasterConfig::poll_interval`] pass per round, so no loop outlives its
-//! timeout on either clock.
+//! virtual clock and in real time on a network. Every wait for the slave is its limit
+//! ([`crate::net::wait::Wait`]: on the real clock moved by the time the host lost meanwhile);
+//! every polling loop lets at least [`MasterConfig::poll_interval`] pass per round, so no loop
+//! outlives its limit on either clock. A limit that passes is [`LinkFailure::Timeout`] with
+//! the limit and the time waited, which the binding reports as the slave being late.
 
 use std::time::Duration;
 
@@ -22,16 +24,22 @@ use proto::ecat::coe::Emergency;
 use proto::ecat::sii::{SiiRepr, SiiSm, SmType};
 use proto::ecat::{Command, DatagramRepr};
 
-/// How the master works; the defaults suit a network segment (1 ms cycle).
+/// How the master works; the defaults suit a network segment (1 ms cycle). The limits of the
+/// AL state changes are the transitions' own (`super::al`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct MasterConfig {
-    /// How long a frame may take to come back.
+    /// How long a frame may take to come back: a harness limit (ETG.1000 prints none; an ESC
+    /// forwards a frame within microseconds, a slave served by a process on a shared host
+    /// within a few milliseconds).
     pub(crate) frame_timeout: Duration,
-    /// How long a mailbox message may wait for room (SM0) and for its reply (SM1).
-    pub(crate) mailbox_timeout: Duration,
-    /// How long a slave may take to show a requested AL state (or refuse it).
-    pub(crate) al_timeout: Duration,
-    /// How long the SII EEPROM interface may stay busy.
+    /// How long a mailbox message may wait for room in the receive mailbox (SM0): the ESI's
+    /// `Mailbox/Timeout/RequestTimeout`, 100 ms by ETG.2000's default (BU 0620 prints none).
+    pub(crate) mailbox_request: Duration,
+    /// How long the reply may take to show in the send mailbox (SM1): the ESI's
+    /// `Mailbox/Timeout/ResponseTimeout`, 2000 ms by ETG.2000's default.
+    pub(crate) mailbox_response: Duration,
+    /// How long the SII EEPROM interface may stay busy: a harness limit (ETG.1000.4 prints
+    /// none; an EEPROM read of 8 bytes takes well under a millisecond).
     pub(crate) eeprom_timeout: Duration,
     /// Pause between two polls of a register.
     pub(crate) poll_interval: Duration,
@@ -47,8 +55,8 @@ impl Default for MasterConfig {
     fn default() -> Self {
         MasterConfig {
             frame_timeout: Duration::from_millis(50),
-            mailbox_timeout: Duration::from_secs(1),
-            al_timeout: Duration::from_secs(3),
+            mailbox_request: Duration::from_millis(100),
+            mailbox_response: Duration::from_secs(2),
             eeprom_timeout: Duration::from_millis(100),
             poll_interval: Duration::from_micros(200),
             cycle: Duration::from_millis(1),
@@ -209,6 +217,11 @@ impl<S: Segment> Master<S> {
         self.port.now()
     }
 
+    /// Whether the segment runs on the real clock (a network), not a virtual one.
+    pub(crate) fn real_time(&self) -> bool {
+        self.port.real_time()
+    }
+
     /// Frame counters.
     #[cfg(test)]
     pub(crate) fn port_stats(&self) -> PortStats {
@@ -361,17 +374,14 @@ impl<S: Segment> Master<S> {
         awaited: Awaited,
         mut probe: impl FnMut(&mut Self) -> Result<Option<T>>,
     ) -> Result<T> {
-        let deadline = self.now() + timeout;
+        let wait = self.port.wait(timeout);
         loop {
             if let Some(v) = probe(self)? {
                 return Ok(v);
             }
-            if self.now() >= deadline {
-                return Err(LinkFailure::Timeout {
-                    awaited,
-                    after: timeout,
-                }
-                .into());
+            let now = self.now();
+            if wait.passed(now) {
+                return Err(LinkFailure::timeout(awaited, &wait, now).into());
             }
             self.pause();
         }

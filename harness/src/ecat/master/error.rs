@@ -291,18 +291,35 @@ pub(crate) enum LinkFailure {
     /// The segment (network link) failed.
     #[error("link: {0}")]
     Segment(#[from] SegmentError),
-    /// Nothing came in time.
-    #[error("no answer: waited {after:?} for {awaited}")]
+    /// Nothing came within the slave's limit.
+    #[error(
+        "{awaited}: no answer within the device's limit of {} (waited {})",
+        crate::timing::ms(*limit),
+        crate::timing::ms(*waited)
+    )]
     Timeout {
         /// What was awaited.
         awaited: Awaited,
-        /// How long.
-        after: Duration,
+        /// The slave's limit.
+        limit: Duration,
+        /// How long the master waited (on the real clock, the host's lost time included).
+        waited: Duration,
     },
     /// Frames come back, but no slave processed them: the frame returned unchanged (a looped
     /// cable or a segment without slaves) or with every working counter 0.
     #[error("no slave answered: {0}")]
     NoSlave(NoSlave),
+}
+
+impl LinkFailure {
+    /// `wait` for `awaited` passed at `now`.
+    pub(crate) fn timeout(awaited: Awaited, wait: &crate::net::wait::Wait, now: Duration) -> Self {
+        LinkFailure::Timeout {
+            awaited,
+            limit: wait.limit(),
+            waited: wait.waited(now),
+        }
+    }
 }
 
 /// How a frame showed that no slave answered.

@@ -205,12 +205,7 @@ impl<S: Segment> Master<S> {
         let msg = MailboxRepr::new(kind, counter, data)
             .emit()
             .map_err(UsageError::Mailbox)?;
-        let reply = self
-            .mailbox_transfer(station, &msg)?
-            .ok_or(LinkFailure::Timeout {
-                awaited: Awaited::MailboxReply,
-                after: self.config.mailbox_timeout,
-            })?;
+        let reply = self.mailbox_transfer(station, &msg)?;
         let m = MailboxRepr::parse_bytes(&reply).map_err(ProtocolError::Mailbox)?;
         if m.kind == MailboxType::ERR {
             let e = MailboxError::parse(&m.data).map_err(ProtocolError::Mailbox)?;
@@ -221,7 +216,7 @@ impl<S: Segment> Master<S> {
 
     /// Writes `bytes` (a mailbox message as given, maybe malformed) into the receive mailbox
     /// of `station` and returns the reply in the send mailbox (emergencies set aside), or
-    /// `None` when none came within [`super::MasterConfig::mailbox_timeout`]. A counter in
+    /// `None` when none came within [`super::MasterConfig::mailbox_response`]. A counter in
     /// the message's header (1..7) becomes the station's last: the master's next message
     /// counts on from it, so the slave does not take it for a repeat (ETG.1000.6 §5.6.1).
     pub(crate) fn mailbox_raw(&mut self, station: u16, bytes: &[u8]) -> Result<Option<Vec<u8>>> {
@@ -230,11 +225,18 @@ impl<S: Segment> Master<S> {
         if let (Some(c), Some(s)) = (counter, self.slave_mut(station)) {
             s.counter = c;
         }
-        reply
+        match reply {
+            Ok(reply) => Ok(Some(reply)),
+            Err(MasterError::Link(LinkFailure::Timeout {
+                awaited: Awaited::MailboxReply,
+                ..
+            })) => Ok(None),
+            Err(e) => Err(e),
+        }
     }
 
     /// The mailbox exchange: write `msg` (padded to SM0's length), wait for the reply.
-    fn mailbox_transfer(&mut self, station: u16, msg: &[u8]) -> Result<Option<Vec<u8>>> {
+    fn mailbox_transfer(&mut self, station: u16, msg: &[u8]) -> Result<Vec<u8>> {
         let (out, inn) = self.mailboxes(station)?;
         if msg.len() > usize::from(out.len) {
             return Err(UsageError::TooLong {
@@ -260,7 +262,7 @@ impl<S: Segment> Master<S> {
         }
         if r[1].wkc == 0 {
             // The receive mailbox is still full: wait for room.
-            let timeout = self.config.mailbox_timeout;
+            let timeout = self.config.mailbox_request;
             self.poll(timeout, Awaited::MailboxRoom, |m| {
                 let r = m.one(write.clone())?;
                 Ok((r.wkc == 1).then_some(()))
@@ -269,13 +271,13 @@ impl<S: Segment> Master<S> {
             check_wkc(&access, &r[1], 1)?;
             if r[2].wkc == 1 {
                 if let Some(reply) = self.keep_reply(&r[2].data) {
-                    return Ok(Some(reply));
+                    return Ok(reply);
                 }
             }
         }
-        let timeout = self.config.mailbox_timeout;
+        let timeout = self.config.mailbox_response;
         let status = register::sm(1) + 5;
-        let got = self.poll(timeout, Awaited::MailboxReply, |m| {
+        self.poll(timeout, Awaited::MailboxReply, |m| {
             let s = m.one(wire::read(Command::FPRD, station, status, 1))?;
             if s.wkc != 1 || s.data[0] & sm_status::MAILBOX_FULL == 0 {
                 return Ok(None);
@@ -285,15 +287,7 @@ impl<S: Segment> Master<S> {
                 return Ok(None);
             }
             Ok(m.keep_reply(&r.data))
-        });
-        match got {
-            Ok(reply) => Ok(Some(reply)),
-            Err(MasterError::Link(LinkFailure::Timeout {
-                awaited: Awaited::MailboxReply,
-                ..
-            })) => Ok(None),
-            Err(e) => Err(e),
-        }
+        })
     }
 
     /// A message read from SM1 while looking for a reply: an emergency is set aside (`None`),

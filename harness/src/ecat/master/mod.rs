@@ -23,8 +23,10 @@ mod sii;
 mod tests;
 mod wire;
 
+#[cfg(test)]
+pub(crate) use al::al_limit;
 pub(crate) use engine::{Master, MasterConfig};
-pub(crate) use error::{AlRefused, ErrorKind, MasterError, ProtocolError, Refusal};
+pub(crate) use error::{AlRefused, ErrorKind, LinkFailure, MasterError, ProtocolError, Refusal};
 pub(crate) use segment::{Arrival, EmbeddedSegment, NetSegment, Segment, SegmentError};
 #[cfg(test)]
 pub(crate) use segment::{Fault, Faulty};

@@ -216,6 +216,22 @@ impl<S: Segment> Master<S> {
         Ok(())
     }
 
+    /// Runs cycles one period apart, as [`Master::run_cycles`], until `end` on the segment's
+    /// clock; returns how many ran. A run behind its schedule (slow round trips, a loaded
+    /// host) ends on time with fewer cycles: a step "for" a time stands for that time, which
+    /// the slave's drive model runs on, not for a number of cycles.
+    pub(crate) fn run_cycles_until(&mut self, end: Duration) -> Result<u64> {
+        let mut due = self.cyclic.next.max(self.now());
+        let mut n = 0;
+        while due < end && self.now() < end {
+            self.port.wait_until(due);
+            self.cycle()?;
+            n += 1;
+            due += self.config.cycle;
+        }
+        Ok(n)
+    }
+
     /// Runs the cycle for `time` (not recorded); returns the counters of those cycles.
     #[cfg(test)]
     pub(crate) fn run_for(&mut self, time: Duration) -> CyclicStats {

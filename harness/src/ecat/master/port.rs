@@ -19,6 +19,7 @@ use super::error::{Awaited, LinkFailure, MasterError, NoSlave, ProtocolError, Re
 use super::record::Recorder;
 use super::segment::Segment;
 use super::wire;
+use crate::net::wait::Wait;
 use proto::ecat::DatagramRepr;
 
 /// The master's source address: a unicast address with the locally administered bit clear, so
@@ -100,6 +101,29 @@ impl<S: Segment> Port<S> {
         self.segment.wait_until(t)
     }
 
+    /// Whether the segment runs on the real clock.
+    pub(crate) fn real_time(&self) -> bool {
+        self.segment.real_time()
+    }
+
+    /// A wait of the slave's `limit` from now, on the segment's clock.
+    pub(crate) fn wait(&self, limit: Duration) -> Wait {
+        Wait::new(self.segment.now(), limit, self.segment.real_time())
+    }
+
+    /// The next frame that came back within `wait` (`None`: none by its end).
+    fn recv(&mut self, wait: &Wait) -> Result<Option<super::segment::Arrival>> {
+        loop {
+            let now = self.segment.now();
+            if let Some(a) = self.segment.recv(&mut self.rx, wait.end(now))? {
+                return Ok(Some(a));
+            }
+            if wait.passed(self.segment.now()) {
+                return Ok(None);
+            }
+        }
+    }
+
     /// The kernel's receive stamp of the last frame matched (network segments).
     pub(crate) fn last_stamp(&self) -> Option<Duration> {
         self.last_stamp
@@ -120,10 +144,10 @@ impl<S: Segment> Port<S> {
         let sent_line = wire::describe_sent(datagrams);
         self.segment.send(&frame)?;
         self.stats.sent += 1;
-        let deadline = self.segment.now() + self.timeout;
+        let wait = self.wait(self.timeout);
         let mut malformed: Option<ProtocolError> = None;
         loop {
-            let Some(arrival) = self.segment.recv(&mut self.rx, deadline)? else {
+            let Some(arrival) = self.recv(&wait)? else {
                 self.stats.timeouts += 1;
                 let line = match &malformed {
                     Some(m) => format!("only a frame that is not the answer: {m}"),
@@ -132,11 +156,7 @@ impl<S: Segment> Port<S> {
                 self.recorder.push(&frame, sent_line, &[], line);
                 return Err(match malformed {
                     Some(m) => m.into(),
-                    None => LinkFailure::Timeout {
-                        awaited: Awaited::Frame,
-                        after: self.timeout,
-                    }
-                    .into(),
+                    None => LinkFailure::timeout(Awaited::Frame, &wait, self.segment.now()).into(),
                 });
             };
             let got = &self.rx[..arrival.len];
@@ -194,9 +214,9 @@ impl<S: Segment> Port<S> {
         let sent_line = format!("raw EtherCAT frame, {} bytes", payload.len());
         self.segment.send(&frame)?;
         self.stats.sent += 1;
-        let deadline = self.segment.now() + self.timeout;
+        let wait = self.wait(self.timeout);
         loop {
-            let Some(arrival) = self.segment.recv(&mut self.rx, deadline)? else {
+            let Some(arrival) = self.recv(&wait)? else {
                 self.recorder.push(
                     &frame,
                     sent_line,

@@ -46,6 +46,10 @@ pub(crate) trait Segment {
     /// Time since the segment was opened (virtual on the embedded segment).
     fn now(&self) -> Duration;
 
+    /// Whether [`Segment::now`] is the real clock, on which the host's own delays move a wait
+    /// for the slave (`crate::net::wait`); the virtual clock has none.
+    fn real_time(&self) -> bool;
+
     /// Sends one Ethernet II frame (header first, no frame check sequence) as it is.
     fn send(&mut self, frame: &[u8]) -> Result<(), SegmentError>;
 
@@ -63,6 +67,9 @@ pub(crate) trait Segment {
 impl<S: Segment + ?Sized> Segment for Box<S> {
     fn now(&self) -> Duration {
         (**self).now()
+    }
+    fn real_time(&self) -> bool {
+        (**self).real_time()
     }
     fn send(&mut self, frame: &[u8]) -> Result<(), SegmentError> {
         (**self).send(frame)
@@ -166,6 +173,10 @@ impl Segment for EmbeddedSegment {
         self.clock.now()
     }
 
+    fn real_time(&self) -> bool {
+        false
+    }
+
     fn send(&mut self, frame: &[u8]) -> Result<(), SegmentError> {
         let t = self.clock.now() + EMBEDDED_ROUND_TRIP / 2;
         self.advance_to(t);
@@ -224,6 +235,10 @@ impl NetSegment {
 impl Segment for NetSegment {
     fn now(&self) -> Duration {
         self.start.elapsed()
+    }
+
+    fn real_time(&self) -> bool {
+        true
     }
 
     fn send(&mut self, frame: &[u8]) -> Result<(), SegmentError> {
@@ -346,6 +361,10 @@ fn garbage(frame: &[u8]) -> Vec<u8> {
 impl<S: Segment> Segment for Faulty<S> {
     fn now(&self) -> Duration {
         self.inner.now()
+    }
+
+    fn real_time(&self) -> bool {
+        self.inner.real_time()
     }
 
     fn send(&mut self, frame: &[u8]) -> Result<(), SegmentError> {

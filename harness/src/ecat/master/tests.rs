@@ -396,6 +396,9 @@ impl Segment for Corrupting {
     fn now(&self) -> Duration {
         self.inner.now()
     }
+    fn real_time(&self) -> bool {
+        false
+    }
     fn send(&mut self, frame: &[u8]) -> Result<(), SegmentError> {
         self.inner.send(frame)
     }
