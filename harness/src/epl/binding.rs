@@ -77,10 +77,21 @@ fn abort(code: u32) -> Observation {
     )
 }
 
+/// The step error of the MN's: a node silent past its limit is late (a failure, unless the
+/// runner finds the host was late meanwhile), not a broken link.
 fn step_error(e: MnError) -> StepError {
     match e {
         MnError::Link(l) => StepError::Link(l.to_string()),
-        e @ MnError::NoReply { .. } => StepError::Link(e.to_string()),
+        MnError::NoReply {
+            node,
+            what,
+            limit,
+            waited,
+        } => StepError::Late {
+            what: format!("node {node}, {what}"),
+            limit,
+            waited,
+        },
         e @ MnError::Malformed { .. } => StepError::Garbage(e.to_string()),
         e @ MnError::State { .. } => StepError::Refused(e.to_string()),
         MnError::Abort(code) => StepError::Refused(format!("SDO abort {code:08X}h")),
@@ -731,7 +742,7 @@ mod tests {
         assert_eq!(id.product_code.as_deref(), Some("00002203h"));
     }
 
-    use super::super::mn::link::{EmbeddedLink, EMBEDDED_PEER};
+    use super::super::mn::link::{EmbeddedLink, NetLink, EMBEDDED_PEER};
     use super::super::mn::{Manager, MnConfig};
     use super::*;
     use crate::net::LinkError;
@@ -825,6 +836,48 @@ mod tests {
         })
     }
 
+    /// The served node (`harness serve epl`) on one end of a veth pair, its SDO answers 100 ms
+    /// late (`--reply-delay 100`); the MN on the other end. Within the MN's SDO limit the read
+    /// passes; past it the step fails, naming the node's limit and the time waited.
+    #[test]
+    fn a_served_node_late_past_its_sdo_limit_fails_naming_both_times() {
+        use crate::epl::serve::{start, ServeOptions};
+        let Some(v) = crate::net::veth::Veth::new("d") else {
+            return;
+        };
+        let served = start(&ServeOptions {
+            reply_delay: Duration::from_millis(100),
+            ..ServeOptions::new(&v.0)
+        })
+        .expect("serve");
+        let open = |sdo: Duration| {
+            let peer = SocketAddr::from((def::ip_address(1), proto::epl::SDO_UDP_PORT));
+            let link = NetLink::open(&v.1, proto::eth::ETHERTYPE_POWERLINK, peer, 0).unwrap();
+            let mac = MacAddr(link.mac());
+            let config = MnConfig {
+                sdo,
+                ..MnConfig::default()
+            };
+            let mn = Manager::new(link, config, mac);
+            EplBinding::open(mn, Product::Sk550p, "served".into(), false).expect("open")
+        };
+        let mut b = open(Duration::from_secs(1));
+        let r = b.perform(&read_p102());
+        assert!(r.as_ref().is_ok_and(|o| o.refusal.is_none()), "{r:?}");
+        drop(b);
+        let mut b = open(Duration::from_millis(40));
+        let e = b.perform(&read_p102()).unwrap_err();
+        assert_eq!(e.verdict(), Verdict::Fail, "{e}");
+        assert!(
+            matches!(&e, StepError::Late { limit, waited, .. }
+                if *limit == Duration::from_millis(40) && *waited >= *limit),
+            "{e:?}"
+        );
+        let text = e.to_string();
+        assert!(text.contains("limit of 40 ms (waited 4"), "{text}");
+        served.stop().expect("served to the end");
+    }
+
     #[test]
     fn a_silent_or_garbage_sending_node_is_an_error_within_the_time_out() {
         // Silent from the start: the node cannot be opened, within the MN's few cycles.
@@ -833,10 +886,10 @@ mod tests {
             binding(fault),
             Err(OpenError::Unreachable(e)) if e.contains("no reply")
         ));
-        // Silent or garbage after a good start: the step ends in an error verdict, on the
-        // virtual clock within the SDO time-out (200 cycles).
+        // Silent after a good start: the node is late, a failure that names its limit (the
+        // SDO time, 200 ms on the virtual clock) and the time waited; garbage is an error.
         for (f, verdict) in [
-            (Fault::Silent, Verdict::Error),
+            (Fault::Silent, Verdict::Fail),
             (Fault::Garbage, Verdict::Error),
         ] {
             let fault = Rc::new(Cell::new(Fault::None));
@@ -847,6 +900,16 @@ mod tests {
             let e = b.perform(&read_p102()).unwrap_err();
             assert_eq!(e.verdict(), verdict, "{f:?}: {e}");
             assert!(b.mn.now() - start <= Duration::from_millis(250), "{f:?}");
+            if f == Fault::Silent {
+                assert!(
+                    matches!(&e, StepError::Late { limit, waited, .. }
+                        if *limit == Duration::from_millis(200) && *waited >= *limit),
+                    "{e:?}"
+                );
+                let text = e.to_string();
+                assert!(text.starts_with("node 1, SDO"), "{text}");
+                assert!(text.contains("limit of 200 ms (waited 20"), "{text}");
+            }
         }
     }
 }

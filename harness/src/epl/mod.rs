@@ -111,7 +111,8 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
     };
     let mut config = MnConfig {
         node,
-        sdo_cycles: (n.timeout.as_millis() as u32).clamp(50, 5000),
+        sdo: n.timeout,
+        asked: n.timeout,
         ..MnConfig::default()
     };
     for pair in query.split('&').filter(|p| !p.is_empty()) {

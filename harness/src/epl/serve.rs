@@ -18,14 +18,22 @@
 //! waited on together with another socket, and a UDP request must not wait for the next frame.
 //! The node is shared under a mutex, and the time handed to it (since start) is read with the
 //! lock held, so it never goes backwards.
+//!
+//! `--reply-delay MS` makes the node late on purpose: its SDO answers (ASnd and UDP) leave MS
+//! late, held back without stopping either loop. Its IdentResponse and StatusResponse do not:
+//! they carry the state of the moment they are asked, and one held back would show a state
+//! the node has left (a wrong answer, not a late one; nothing in them tells the MN which
+//! request they answer). Its PRes stay in their cycle: they are the isochronous phase, whose
+//! timing the cyclic steps check.
 
+use std::collections::VecDeque;
 use std::net::{IpAddr, SocketAddr, UdpSocket};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use proto::epl::{NmtState, SDO_UDP_PORT};
+use proto::epl::{MessageType, NmtState, ServiceId, SDO_UDP_PORT};
 use proto::eth::ETHERTYPE_POWERLINK;
 use proto::nord::epl as def;
 use proto::nord::Protocol;
@@ -55,6 +63,9 @@ pub struct ServeOptions {
     pub node_id: u8,
     /// Inverters behind the interface (`--inverters`; default the product's maximum).
     pub inverters: Option<u8>,
+    /// How late the node's SDO answers leave, over ASnd and UDP (`--reply-delay`, default
+    /// none).
+    pub reply_delay: Duration,
 }
 
 impl ServeOptions {
@@ -65,6 +76,7 @@ impl ServeOptions {
             profile: "sk550p".into(),
             node_id: 1,
             inverters: None,
+            reply_delay: Duration::ZERO,
         }
     }
 }
@@ -242,6 +254,7 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         counters: counters.clone(),
         stop: stop.clone(),
         start,
+        reply_delay: opts.reply_delay,
     };
     served
         .workers
@@ -255,6 +268,7 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
             counters,
             stop,
             start,
+            reply_delay: opts.reply_delay,
         };
         served
             .workers
@@ -277,6 +291,14 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
         Some(a) => format!(", SDO over UDP on {a}"),
         None => String::new(),
     };
+    let late = if opts.reply_delay.is_zero() {
+        String::new()
+    } else {
+        format!(
+            ", SDO answers {} late",
+            crate::timing::ms(opts.reply_delay)
+        )
+    };
     outln!(
         "serving POWERLINK node {} ({}, {} inverters) on {} (node MAC {:02x}:{:02x}:{:02x}:{:02x}:{:02x}:{:02x}){udp}",
         opts.node_id,
@@ -290,6 +312,9 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
         m[4],
         m[5]
     );
+    if !late.is_empty() {
+        outln!("the node is late on purpose{late} (--reply-delay)");
+    }
     match served.udp_addr() {
         None => eprintln!(
             "note: {} has no IPv4 address: serving raw Ethernet only (SDO over ASnd); give it \
@@ -354,6 +379,7 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         profile: a.common.profile,
         node_id: a.node_id,
         inverters: a.common.inverters,
+        reply_delay: Duration::from_millis(a.common.reply_delay),
     };
     serve(&opts, a.common.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
     Ok(crate::cli::EXIT_PASS)
@@ -380,6 +406,7 @@ struct Shared {
     counters: Arc<Counters>,
     stop: Arc<AtomicBool>,
     start: Instant,
+    reply_delay: Duration,
 }
 
 impl Shared {
@@ -402,7 +429,19 @@ fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
     let c = &shared.counters;
     let mut buf = vec![0u8; MAX_FRAME];
     let mut next_poll = Duration::ZERO;
+    let mut late = Delayed::<Vec<u8>>::new(shared.reply_delay);
+    let send = |link: &mut RawLink, f: &[u8]| match link.send(f) {
+        Ok(()) => {
+            bump(&c.frames_out);
+            Ok(())
+        }
+        Err(e) if e.is_link_down() => Ok(()),
+        Err(e) => Err(ServeError::from(e)),
+    };
     while !shared.stopped() {
+        for f in late.due() {
+            send(&mut link, &f)?;
+        }
         if shared.start.elapsed() >= next_poll {
             let (mut node, now) = shared.node()?;
             node.poll(now);
@@ -410,6 +449,7 @@ fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
         }
         let wait = next_poll
             .saturating_sub(shared.start.elapsed())
+            .min(late.next_in())
             .min(STOP_CHECK);
         let received = match link.recv(&mut buf, Instant::now() + wait) {
             Ok(r) => r,
@@ -428,10 +468,8 @@ fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
             node.receive(&buf[..r.len], now)
         };
         for f in out {
-            match link.send(&f) {
-                Ok(()) => bump(&c.frames_out),
-                Err(e) if e.is_link_down() => {}
-                Err(e) => return Err(e.into()),
+            if let Some(f) = if is_sdo(&f) { late.hold(f) } else { Some(f) } {
+                send(&mut link, &f)?;
             }
         }
     }
@@ -442,7 +480,26 @@ fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
 fn run_udp(socket: UdpSocket, addr: SocketAddr, shared: &Shared) -> Result<(), ServeError> {
     let c = &shared.counters;
     let mut buf = [0u8; 2048];
+    let mut late = Delayed::<(Vec<u8>, SocketAddr)>::new(shared.reply_delay);
+    let send = |d: &[u8], to: SocketAddr| match socket.send_to(d, to) {
+        Ok(_) => {
+            bump(&c.datagrams_out);
+            Ok(())
+        }
+        Err(e) if transient(&e) => Ok(()),
+        Err(source) => Err(ServeError::Udp { addr, source }),
+    };
     while !shared.stopped() {
+        for (d, to) in late.due() {
+            send(&d, to)?;
+        }
+        if !shared.reply_delay.is_zero() {
+            // A zero time-out would block for ever: wake for the next held answer.
+            let wait = late.next_in().clamp(Duration::from_micros(100), STOP_CHECK);
+            socket
+                .set_read_timeout(Some(wait))
+                .map_err(|source| ServeError::Udp { addr, source })?;
+        }
         let (len, from) = match socket.recv_from(&mut buf) {
             Ok(r) => r,
             Err(e) if transient(&e) => continue,
@@ -454,14 +511,57 @@ fn run_udp(socket: UdpSocket, addr: SocketAddr, shared: &Shared) -> Result<(), S
             node.udp(from, &buf[..len], now)
         };
         for d in out {
-            match socket.send_to(&d, from) {
-                Ok(_) => bump(&c.datagrams_out),
-                Err(e) if transient(&e) => {}
-                Err(source) => return Err(ServeError::Udp { addr, source }),
+            if let Some((d, to)) = late.hold((d, from)) {
+                send(&d, to)?;
             }
         }
     }
     Ok(())
+}
+
+/// Whether a frame of the node is an ASnd carrying SDO: after the 14-byte Ethernet header,
+/// message type 06h, destination, source, service id 05h (DS 301 §4.6.1.1.6).
+fn is_sdo(frame: &[u8]) -> bool {
+    frame.get(14).map(|t| MessageType(t & 0x7F)) == Some(MessageType::ASND)
+        && frame.get(17).copied().map(ServiceId) == Some(ServiceId::SDO)
+}
+
+/// Answers held back by `--reply-delay`, in the order they are due.
+struct Delayed<T> {
+    delay: Duration,
+    held: VecDeque<(Instant, T)>,
+}
+
+impl<T> Delayed<T> {
+    fn new(delay: Duration) -> Delayed<T> {
+        Delayed {
+            delay,
+            held: VecDeque::new(),
+        }
+    }
+
+    /// Holds `answer` back for the delay; without one, gives it back to be sent at once.
+    fn hold(&mut self, answer: T) -> Option<T> {
+        if self.delay.is_zero() {
+            return Some(answer);
+        }
+        self.held.push_back((Instant::now() + self.delay, answer));
+        None
+    }
+
+    /// The answers due now.
+    fn due(&mut self) -> Vec<T> {
+        let now = Instant::now();
+        let n = self.held.iter().take_while(|(t, _)| *t <= now).count();
+        self.held.drain(..n).map(|(_, a)| a).collect()
+    }
+
+    /// How long until the next held answer is due (the longest wait when none is held).
+    fn next_in(&self) -> Duration {
+        self.held.front().map_or(STOP_CHECK, |(t, _)| {
+            t.saturating_duration_since(Instant::now())
+        })
+    }
 }
 
 #[cfg(test)]

@@ -28,6 +28,7 @@ use link::Link;
 use crate::net::LinkError;
 use crate::outcome::Exchange;
 use crate::runner::hex;
+use crate::timing::Deadline;
 
 /// How the MN carries SDO.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,8 +58,17 @@ pub(crate) struct MnConfig {
     pub(crate) cycle: Duration,
     /// How long a PRes or an asked-for ASnd may take after its request.
     pub(crate) reply: Duration,
-    /// Cycles an SDO request may take to be answered.
-    pub(crate) sdo_cycles: u32,
+    /// How long the node may take to answer an SDO request, over ASnd or UDP. Neither manual
+    /// prints a time (BU 0620 §2.4.6, BU 2200 §6.4: the processing "depends on the PLC"; their
+    /// abort 05040000h is the interface's own time-out towards the inverter), and DS 301's
+    /// SDO_SequLayerTimeout_U32 (1300h) bounds a connection's silence, not one answer: the
+    /// limit is the harness's, `--timeout` on the network (default 2 s).
+    pub(crate) sdo: Duration,
+    /// How long the node may take to send an ASnd the MN asks for (IdentResponse,
+    /// StatusResponse), the MN asking again each cycle: DS 301 has the CN answer in the
+    /// asynchronous phase of the cycle whose SoA asks, but a node on a network shares its
+    /// host, so the limit is the harness's, `--timeout` there too.
+    pub(crate) asked: Duration,
     /// Default SDO transport.
     pub(crate) via: Via,
 }
@@ -69,7 +79,8 @@ impl Default for MnConfig {
             node: 1,
             cycle: Duration::from_millis(1),
             reply: Duration::from_micros(500),
-            sdo_cycles: 200,
+            sdo: Duration::from_millis(200),
+            asked: Duration::from_millis(20),
             via: Via::Asnd,
         }
     }
@@ -81,14 +92,21 @@ pub(crate) enum MnError {
     /// The link failed.
     #[error(transparent)]
     Link(#[from] LinkError),
-    /// The node did not answer in time.
-    #[error("no reply from node {node} to {what} within {waited:?}")]
+    /// The node did not answer within its limit (the wait moved by the time the host lost
+    /// meanwhile, see [`Wait`]).
+    #[error(
+        "no reply from node {node} to {what} within its limit of {} (waited {})",
+        crate::timing::ms(*limit),
+        crate::timing::ms(*waited)
+    )]
     NoReply {
         /// The node.
         node: u8,
         /// The request.
         what: String,
-        /// How long the MN waited.
+        /// The node's limit.
+        limit: Duration,
+        /// How long the MN waited, the host's lost time included.
         waited: Duration,
     },
     /// The node answered with frames that break POWERLINK.
@@ -131,6 +149,15 @@ enum Phase {
 struct Connection {
     sent: u8,
     received: u8,
+}
+
+/// One wait of the MN for its node: a [`Deadline`] (the node's limit from when the request
+/// left, moved by the time the host lost meanwhile) on the link's clock.
+#[derive(Debug, Clone, Copy)]
+struct Wait {
+    deadline: Deadline,
+    /// The link's time when the request left.
+    from: Duration,
 }
 
 /// A frame the node sent, as the MN got it.
@@ -190,9 +217,6 @@ pub(crate) struct Manager<L> {
     udp_link: Option<Connection>,
     transaction: u8,
 }
-
-/// Cycles the MN asks a node for its IdentResponse or StatusResponse before it gives up.
-const ASK_CYCLES: u32 = 20;
 
 /// Frames the MN takes from the link in one wait at most, whatever they are.
 const MAX_SKIPPED: usize = 256;
@@ -357,6 +381,63 @@ impl<L: Link> Manager<L> {
         Ok(bytes)
     }
 
+    /// A wait of `limit` for the node from now: made as the request leaves.
+    fn wait(&self, limit: Duration) -> Wait {
+        Wait {
+            deadline: Deadline::after(limit),
+            from: self.link.now(),
+        }
+    }
+
+    /// Whether the link runs on the embedded node's virtual clock, which the host's load does
+    /// not reach: there a wait ends at its limit, the same in every run.
+    fn is_virtual(&mut self) -> bool {
+        self.link.device().is_some()
+    }
+
+    /// When `w` ends on the link's clock, as far as is known now.
+    fn end(&mut self, w: &Wait) -> Duration {
+        if self.is_virtual() {
+            w.from + w.deadline.limit()
+        } else {
+            self.link.now() + w.deadline.remaining()
+        }
+    }
+
+    /// Whether `w` is over.
+    fn passed(&mut self, w: &Wait) -> bool {
+        self.link.now() >= self.end(w)
+    }
+
+    /// The node's time-out on `w`, waiting for an answer to `what`.
+    fn timed_out(&mut self, w: &Wait, what: impl Into<String>) -> MnError {
+        let waited = if self.is_virtual() {
+            self.link.now().saturating_sub(w.from)
+        } else {
+            w.deadline.waited()
+        };
+        MnError::NoReply {
+            node: self.config.node,
+            what: what.into(),
+            limit: w.deadline.limit(),
+            waited,
+        }
+    }
+
+    /// The next frame of the node within `w`; while the host's lost time moves its end, the
+    /// wait goes on.
+    fn receive_within(&mut self, w: &Wait) -> Result<Option<Received>, MnError> {
+        loop {
+            let end = self.end(w);
+            if let Some(r) = self.receive(end)? {
+                return Ok(Some(r));
+            }
+            if self.passed(w) {
+                return Ok(None);
+            }
+        }
+    }
+
     /// The next frame of the node until `deadline`; frames of others are skipped.
     pub(crate) fn receive(&mut self, deadline: Duration) -> Result<Option<Received>, MnError> {
         // A link flooded with frames of no interest must not hold the MN past its cycle.
@@ -442,8 +523,8 @@ impl<L: Link> Manager<L> {
                     ..Preq::default()
                 }),
             })?;
-            let deadline = self.link.now() + self.config.reply;
-            let pres = self.wait_for(deadline, |r| matches!(r.body, Body::Pres(_)))?;
+            let w = self.wait(self.config.reply);
+            let pres = self.wait_for(&w, |r| matches!(r.body, Body::Pres(_)))?;
             self.in_time = pres.is_some();
             match &pres {
                 Some(p) => {
@@ -486,8 +567,9 @@ impl<L: Link> Manager<L> {
         let answer = if expects {
             // The asynchronous phase lasts until the next SoC: the asked node may answer
             // until then (at least the reply time).
-            let deadline = (self.link.now() + self.config.reply).max(self.next_cycle);
-            self.wait_for(deadline, |r| matches!(r.body, Body::Asnd(_)))?
+            let phase = self.next_cycle.saturating_sub(self.link.now());
+            let w = self.wait(self.config.reply.max(phase));
+            self.wait_for(&w, |r| matches!(r.body, Body::Asnd(_)))?
         } else {
             None
         };
@@ -515,10 +597,10 @@ impl<L: Link> Manager<L> {
     /// client, others dropped.
     fn wait_for(
         &mut self,
-        deadline: Duration,
+        w: &Wait,
         want: impl Fn(&EplRepr) -> bool,
     ) -> Result<Option<Received>, MnError> {
-        while let Some(r) = self.receive(deadline)? {
+        while let Some(r) = self.receive_within(w)? {
             match &r.repr {
                 Some(repr) if want(repr) => return Ok(Some(r)),
                 // A frame of the node that is not POWERLINK at all: the caller decides.
@@ -546,14 +628,11 @@ impl<L: Link> Manager<L> {
         self.next_cycle = until;
     }
 
-    /// Asks the node for `service` once per cycle until it answers with an ASnd of `id`.
-    fn ask(
-        &mut self,
-        service: RequestedService,
-        id: ServiceId,
-        cycles: u32,
-    ) -> Result<Vec<u8>, MnError> {
-        for _ in 0..cycles {
+    /// Asks the node for `service` once per cycle until it answers with an ASnd of `id`, within
+    /// the limit of [`MnConfig::asked`].
+    fn ask(&mut self, service: RequestedService, id: ServiceId) -> Result<Vec<u8>, MnError> {
+        let w = self.wait(self.config.asked);
+        loop {
             if let Some(r) = self.cycle(service)? {
                 match r.repr {
                     Some(EplRepr {
@@ -570,12 +649,10 @@ impl<L: Link> Manager<L> {
                     }
                 }
             }
+            if self.passed(&w) {
+                return Err(self.timed_out(&w, format!("SoA {service}")));
+            }
         }
-        Err(MnError::NoReply {
-            node: self.config.node,
-            what: format!("SoA {service}"),
-            waited: self.config.cycle * cycles,
-        })
     }
 
     /// The node's IdentResponse.
@@ -583,7 +660,6 @@ impl<L: Link> Manager<L> {
         let p = self.ask(
             RequestedService::IDENT_REQUEST,
             ServiceId::IDENT_RESPONSE,
-            ASK_CYCLES,
         )?;
         let id = IdentResponse::parse(&p).map_err(|e| self.malformed("IdentRequest", e))?;
         self.node_state = Some(id.state);
@@ -595,9 +671,9 @@ impl<L: Link> Manager<L> {
     pub(crate) fn peek_status(&mut self) -> Result<StatusResponse, MnError> {
         let node = self.config.node;
         let sent = self.soa(RequestedService::STATUS_REQUEST, node)?;
-        let deadline = self.link.now() + self.config.reply.max(self.config.cycle);
+        let w = self.wait(self.config.reply.max(self.config.cycle));
         let got = self.wait_for(
-            deadline,
+            &w,
             |r| matches!(&r.body, Body::Asnd(a) if a.service == ServiceId::STATUS_RESPONSE),
         )?;
         self.record(&sent, got.as_ref());
@@ -610,11 +686,7 @@ impl<L: Link> Manager<L> {
             ..
         }) = got
         else {
-            return Err(MnError::NoReply {
-                node,
-                what: "SoA StatusRequest".into(),
-                waited: self.config.reply.max(self.config.cycle),
-            });
+            return Err(self.timed_out(&w, "SoA StatusRequest"));
         };
         let s =
             StatusResponse::parse(&a.payload).map_err(|e| self.malformed("StatusRequest", e))?;
@@ -627,7 +699,6 @@ impl<L: Link> Manager<L> {
         let p = self.ask(
             RequestedService::STATUS_REQUEST,
             ServiceId::STATUS_RESPONSE,
-            ASK_CYCLES,
         )?;
         let s = StatusResponse::parse(&p).map_err(|e| self.malformed("StatusRequest", e))?;
         self.node_state = Some(s.state);
@@ -768,7 +839,9 @@ impl<L: Link> Manager<L> {
             Via::Udp => {
                 let mut d = proto::epl::sdo::UDP_PREFIX.to_vec();
                 d.extend(bytes);
-                self.udp_exchange(&d, false)
+                let w = self.wait(self.config.sdo);
+                // Raw bytes belong to no transfer: the first answer is theirs.
+                self.udp_exchange(&d, &w, |_| true)
             }
             Via::Asnd => {
                 self.queued.push_back((ServiceId::SDO, bytes.to_vec()));
@@ -792,20 +865,25 @@ impl<L: Link> Manager<L> {
         }
     }
 
+    /// Sends a datagram and gathers the node's answers until one that `ends` the exchange
+    /// (it is complete: waiting on for one more would cost the reply time on every request,
+    /// rounded up to whole jiffies by SO_RCVTIMEO) or until `w` is over.
     fn udp_exchange(
         &mut self,
         datagram: &[u8],
-        until_complete: bool,
+        w: &Wait,
+        ends: impl Fn(&[u8]) -> bool,
     ) -> Result<Vec<Vec<u8>>, MnError> {
         self.link.send_udp(datagram)?;
-        let wait = self.config.cycle * self.config.sdo_cycles.min(50);
-        let deadline = self.link.now() + wait;
         let mut out = Vec::new();
-        while let Some(d) = self.link.recv_udp(if out.is_empty() {
-            deadline
-        } else {
-            self.link.now() + self.config.reply
-        })? {
+        loop {
+            let end = self.end(w);
+            let Some(d) = self.link.recv_udp(end)? else {
+                if self.passed(w) {
+                    break;
+                }
+                continue;
+            };
             let got = Received {
                 repr: None,
                 bytes: d.clone(),
@@ -824,12 +902,9 @@ impl<L: Link> Manager<L> {
                 .get(proto::epl::sdo::UDP_PREFIX.len()..)
                 .unwrap_or_default()
                 .to_vec();
-            let more = more_follows(&payload);
+            let done = ends(&payload);
             out.push(payload);
-            // A datagram that ends the transfer ends the wait: waiting on for one more would
-            // cost the reply time on every request, rounded up to whole jiffies by SO_RCVTIMEO
-            // (a 500 µs wait takes 8 ms at HZ=250).
-            if until_complete && !more {
+            if done {
                 break;
             }
         }
@@ -868,7 +943,8 @@ impl<L: Link> Manager<L> {
             .emit()
             .map_err(|e| self.malformed("an SDO request", e))?;
         let tid = command.transaction;
-        let answers = self.exchange(via, &bytes, &what(), |f| {
+        let w = self.wait(self.config.sdo);
+        let answers = self.exchange(via, &bytes, &what(), &w, |f| {
             f.seq.rcon == Con::ErrorOrAckRequest
                 || f.command
                     .as_ref()
@@ -905,11 +981,7 @@ impl<L: Link> Manager<L> {
         }
         self.set_connection(via, Some(conn));
         if !done {
-            return Err(MnError::NoReply {
-                node: self.config.node,
-                what: what(),
-                waited: self.config.cycle * self.config.sdo_cycles,
-            });
+            return Err(self.timed_out(&w, what()));
         }
         Ok(data)
     }
@@ -965,7 +1037,8 @@ impl<L: Link> Manager<L> {
         let bytes = frame
             .emit()
             .map_err(|e| self.malformed("an SDO connection", e))?;
-        let answers = self.exchange(via, &bytes, "SDO initialisation", |f| {
+        let w = self.wait(self.config.sdo);
+        let answers = self.exchange(via, &bytes, "SDO initialisation", &w, |f| {
             f.seq.rcon == Con::Init
         })?;
         for a in answers {
@@ -979,41 +1052,36 @@ impl<L: Link> Manager<L> {
                 return Ok(c);
             }
         }
-        Err(MnError::NoReply {
-            node: self.config.node,
-            what: "SDO initialisation".into(),
-            waited: self.config.cycle * self.config.sdo_cycles,
-        })
+        Err(self.timed_out(&w, "SDO initialisation"))
     }
 
-    /// Sends SDO bytes and gathers the node's SDO frames: over ASnd, invited cycle after
-    /// cycle until one answers (then the further segments); over UDP, the datagrams.
+    /// Sends SDO bytes and gathers the node's SDO frames that `answers` accepts, within `w`
+    /// (an answer the node completes ends the wait): over ASnd, invited cycle after cycle
+    /// until one answers (then the further segments); over UDP, the datagrams. Frames of
+    /// earlier transfers that come late are passed over.
     fn exchange(
         &mut self,
         via: Via,
         bytes: &[u8],
         what: &str,
+        w: &Wait,
         answers: impl Fn(&SdoFrame) -> bool,
     ) -> Result<Vec<Vec<u8>>, MnError> {
         let ours = |b: &[u8]| SdoFrame::parse(b).is_ok_and(|f| answers(&f));
         if via == Via::Udp {
             let mut d = proto::epl::sdo::UDP_PREFIX.to_vec();
             d.extend(bytes);
-            let mut out = self.udp_exchange(&d, true)?;
+            let mut out = self.udp_exchange(&d, w, |p| ours(p) && !more_follows(p))?;
             out.retain(|b| ours(b));
             if out.is_empty() {
-                return Err(MnError::NoReply {
-                    node: self.config.node,
-                    what: what.into(),
-                    waited: self.config.cycle * self.config.sdo_cycles.min(50),
-                });
+                return Err(self.timed_out(w, what));
             }
             return Ok(out);
         }
         self.queued.push_back((ServiceId::SDO, bytes.to_vec()));
         self.cycle(RequestedService::NO_SERVICE)?;
         let mut out = Vec::new();
-        for _ in 0..self.config.sdo_cycles {
+        while !self.passed(w) {
             let late = self.asnd.pop_front();
             let got = match late {
                 Some(r) => Some(r),
@@ -1051,11 +1119,7 @@ impl<L: Link> Manager<L> {
             }
         }
         if out.is_empty() {
-            return Err(MnError::NoReply {
-                node: self.config.node,
-                what: what.into(),
-                waited: self.config.cycle * self.config.sdo_cycles,
-            });
+            return Err(self.timed_out(w, what));
         }
         Ok(out)
     }
@@ -1068,11 +1132,10 @@ impl<L: Link> Manager<L> {
         let now = self.link.now();
         while self.receive(now)?.is_some() {}
         self.send_raw(bytes)?;
-        let deadline =
-            self.link.now() + self.config.reply.max(self.config.cycle) * RAW_ANSWER_CYCLES;
+        let w = self.wait(self.config.reply.max(self.config.cycle) * RAW_ANSWER_CYCLES);
         let sent = bytes.first().map(|b| MessageType(b & 0x7F));
         let mut answer = None;
-        while let Some(r) = self.receive(deadline)? {
+        while let Some(r) = self.receive_within(&w)? {
             if can_answer(sent, &r) {
                 answer = Some(r);
                 break;
