@@ -58,7 +58,11 @@ fn hung_closing_and_garbage_targets_are_error_verdicts() {
     // check: one error naming the cause, and the run stops. One that answers garbage passes it
     // (it answers) and every case that reaches it is an error.
     for (kind, says, cases_run) in [
-        (Target::Silent, "no reply to ListIdentity within 0.3 s", 0),
+        (
+            Target::Silent,
+            "no reply to ListIdentity within 1500 ms (5 times the limit of one request)",
+            0,
+        ),
         (Target::Closing, "link error", 0),
         (Target::Garbage, "does not speak the protocol", 4),
     ] {
@@ -110,7 +114,70 @@ fn hung_closing_and_garbage_targets_are_error_verdicts() {
     }
 }
 
-/// Where the served simulator listens (other tests take 127.0.0.2, .3, .5–.9 and .11).
+/// A served adapter whose every reply leaves 500 ms late (`--reply-delay`), against a run
+/// whose limit for one request is 200 ms: the connection check finds it (it answers, late,
+/// and the identity says so) and every case that reaches it fails, naming the limit and how
+/// long the harness waited; none is an error or inconclusive.
+#[test]
+fn a_device_that_answers_past_the_limit_fails_the_cases_that_reach_it() {
+    const LATE: &str = "127.0.0.13:44818";
+    let mut server = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["serve", "enip", "--listen", LATE, "--profile", "tu3-eip"])
+        .args(["--reply-delay", "500", "--seconds", "120"])
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("harness serve starts");
+    common::wait_listening(LATE, Duration::from_secs(10));
+    let out_dir = std::env::temp_dir().join(format!("harness-late-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["run", "--profile", "tu3-eip", "--timeout", "0.2"])
+        .args(["--filter", "bu2100/enip-io/t"])
+        .args(["--dut", &format!("enip://{LATE}")])
+        .args(["--allow-motion", "--max-eeprom-writes", "100"])
+        // Its own UDP 2222 for T→O data, whatever else runs on this host.
+        .args(["--local", "127.0.0.20"])
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .expect("harness runs");
+    let _ = server.kill();
+    let _ = server.wait();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    let run: Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
+    let source = run["meta"]["identities"]["tu3-eip@enip"]["source"]
+        .as_str()
+        .unwrap_or_else(|| panic!("no identity: {}", run["meta"]));
+    assert!(
+        source.starts_with("ListIdentity, answered after ")
+            && source.ends_with("past the limit of 200 ms"),
+        "{source}"
+    );
+    let reached: Vec<&Value> = run["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["verdict"] != "not_applicable")
+        .collect();
+    assert!(reached.len() >= 2, "{stdout}");
+    for c in reached {
+        assert_eq!(c["verdict"], "fail", "{c}");
+        let message = c["message"].as_str().unwrap();
+        let (_, waited) = message
+            .split_once("no answer within the device's limit of 200 ms (waited ")
+            .unwrap_or_else(|| panic!("{message}"));
+        let ms: u64 = waited
+            .split(' ')
+            .next()
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{message}"));
+        assert!((200..500).contains(&ms), "{message}");
+    }
+    let _ = std::fs::remove_dir_all(&out_dir);
+}
+
+/// Where the served simulator listens (other tests take 127.0.0.2, .3, .5–.9, .11 and .13).
 const SERVED: &str = "127.0.0.12:44818";
 
 /// One encapsulation message and its reply (header: command, length, session, status,

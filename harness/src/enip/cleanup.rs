@@ -38,7 +38,7 @@
 //! attribute before its first write, marked as such in the transcript; everything else happens
 //! after the last step and shows as the case's cleanup step.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use proto::enip::cip::{class, GeneralStatus, MrRequest, MrResponse, Service};
 use proto::enip::cm::{ext, ConnectionKey, ForwardClose, ForwardOpen};
@@ -54,6 +54,7 @@ use crate::ledger::{self, Account, Problem};
 use crate::outcome::Exchange;
 use crate::runner::hex;
 use crate::suite::{OrderSpec, Target};
+use crate::timing::Deadline;
 
 /// Cycles the stop of step 1 runs on the case's connection.
 const STOP_CYCLES: u32 = 5;
@@ -196,8 +197,8 @@ pub(super) fn may_have_taken_effect(resp: Result<&MrResponse, &StepError>) -> bo
 impl Scanner {
     /// Before a Set_Attribute_Single of `path`: the first in the case reads the value to put
     /// back (a network target only). Returns the path to pass to [`Scanner::after_set`]; a
-    /// link error of the read, for a target that does not answer it would not answer the
-    /// write either.
+    /// link error or time-out of the read, for a target that does not answer it would not
+    /// answer the write either.
     pub(super) fn before_set(&mut self, path: &EPath) -> Result<Option<EPath>, StepError> {
         let Some(ledger) = self.ledger.as_ref() else {
             return Ok(None);
@@ -206,7 +207,7 @@ impl Scanner {
             return Ok(Some(path.clone()));
         }
         // The session first, unmarked: the write would register it anyway.
-        if let Err(e @ StepError::Link(_)) = self.session(1) {
+        if let Err(e @ (StepError::Link(_) | StepError::Late { .. })) = self.session(1) {
             return Err(e);
         }
         let first = self.exchanges.len();
@@ -221,7 +222,7 @@ impl Scanner {
             "[cleanup: the value before the write]",
         );
         let before = match read {
-            Err(e @ StepError::Link(_)) => return Err(e),
+            Err(e @ (StepError::Link(_) | StepError::Late { .. })) => return Err(e),
             Err(e) => Err(e.to_string()),
             Ok(r) => match r.general {
                 0 => Ok(r.data),
@@ -458,7 +459,7 @@ impl Scanner {
             ..OrderSpec::read(Target::Interface, number)
         };
         let first = self.exchanges.len();
-        let deadline = Instant::now() + QUIET_TIME;
+        let deadline = Deadline::after(QUIET_TIME);
         let outcome = loop {
             let v = match self.read(&spec) {
                 Ok(v) => v.fields,
@@ -466,7 +467,7 @@ impl Scanner {
             };
             match v.get("value").and_then(Value::as_i64) {
                 Some(w) if w & CYCLIC == 0 => break Ok(()),
-                Some(w) if Instant::now() >= deadline => {
+                Some(w) if deadline.passed() => {
                     break Err(Problem::other(format!(
                         "{} still shows cyclic communication (bit 1) {QUIET_TIME:?} after the \
                          connections closed: {w:04X}h",
@@ -492,7 +493,8 @@ impl Scanner {
                 ..EncapRepr::default()
             };
             let Ok(bytes) = bye.emit() else { continue };
-            let reply = self.link.request(client, &bytes);
+            let wait = self.wait();
+            let reply = self.link.request(client, &bytes, &wait);
             let client_note = if client == 1 {
                 String::new()
             } else {
@@ -703,10 +705,15 @@ mod tests {
             "the embedded adapter, losing replies".into()
         }
 
-        fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, LinkError> {
+        fn request(
+            &mut self,
+            client: u8,
+            msg: &[u8],
+            wait: &Deadline,
+        ) -> Result<Option<Vec<u8>>, LinkError> {
             let reply = match self.hung.get() {
                 true => Ok(None),
-                false => self.inner.request(client, msg),
+                false => self.inner.request(client, msg, wait),
             };
             let service = routed(msg).and_then(|r| r.first().copied());
             let lost = service.is_some_and(|s| self.lose.borrow().contains(&s));

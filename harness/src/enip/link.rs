@@ -16,6 +16,7 @@ use sim::enip::{Adapter, Framer};
 use crate::binding::StepError;
 use crate::pcap::SharedTap;
 use crate::poll::{PollingStream, REPLY_POLL};
+use crate::timing::Deadline;
 
 /// Why a link to an EtherNet/IP target failed: the link or the host, never the protocol (a
 /// reply that breaks the protocol is the scanner's to judge). Every variant is an error
@@ -79,9 +80,16 @@ pub(crate) trait EnipLink {
     /// What is reached.
     fn describe(&self) -> String;
     /// Sends one encapsulation message on the TCP connection of `client` (1 = the scanner's
-    /// own; others are opened on first use); returns the reply, or `None` if none came in
-    /// time. A connection the target closed stays closed: every later request is an error.
-    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, LinkError>;
+    /// own; others are opened on first use); returns the reply, or `None` if none came by
+    /// the end of `wait` (made as the message leaves; the embedded adapter answers at once or
+    /// not at all). A connection the target closed stays closed: every later request is an
+    /// error.
+    fn request(
+        &mut self,
+        client: u8,
+        msg: &[u8],
+        wait: &Deadline,
+    ) -> Result<Option<Vec<u8>>, LinkError>;
     /// Sends one O→T datagram (if any), lets `rpi` pass, and returns the T→O datagrams that
     /// arrived meanwhile.
     fn io_cycle(
@@ -287,7 +295,12 @@ impl EnipLink for Embedded {
         )
     }
 
-    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, LinkError> {
+    fn request(
+        &mut self,
+        client: u8,
+        msg: &[u8],
+        _wait: &Deadline,
+    ) -> Result<Option<Vec<u8>>, LinkError> {
         let now = self.clock.now();
         if let Some(r) = &self.recorder {
             let server = self.server;
@@ -395,6 +408,10 @@ pub(crate) struct Network {
 struct Stream {
     tcp: Option<PollingStream>,
     buf: Vec<u8>,
+    /// The sender contexts of requests whose reply did not come in time, latest last (at
+    /// most [`STALE`]): a reply that comes after all carries its request's context (CIP Vol 2
+    /// §2-3.2), and is dropped rather than taken for the reply to a later request.
+    stale: Vec<[u8; 8]>,
     /// Its record: bytes as they were sent and as they arrived, with the real addresses.
     recorded: Option<Connection>,
 }
@@ -415,6 +432,7 @@ impl Stream {
         let mut stream = Stream {
             tcp: Some(tcp),
             buf: Vec::new(),
+            stale: Vec::new(),
             recorded: None,
         };
         if let Some(r) = recorder {
@@ -445,24 +463,45 @@ impl Stream {
         Ok(())
     }
 
-    /// Sends `msg`, waits up to `timeout` for one whole reply.
-    fn request(&mut self, msg: &[u8], timeout: Duration) -> Result<Option<Vec<u8>>, LinkError> {
+    /// Sends `msg`, waits until the end of `wait` for one whole reply (a late reply to an
+    /// earlier request dropped).
+    fn request(&mut self, msg: &[u8], wait: &Deadline) -> Result<Option<Vec<u8>>, LinkError> {
         let tcp = self.tcp.as_mut().ok_or(LinkError::CLOSED)?;
-        tcp.write_all(msg, timeout)
+        tcp.write_all(msg, wait.remaining())
             .map_err(LinkError::io("TCP send failed"))?;
         if let Some(c) = &self.recorded {
             c.tcp(true, msg);
         }
-        let deadline = Instant::now() + timeout;
+        let context = sender_context(msg);
         let mut chunk = [0u8; 4096];
         loop {
-            if let Some(n) = frame_len(&self.buf) {
-                if self.buf.len() >= n {
-                    return Ok(Some(self.buf.drain(..n).collect()));
+            if let Some(n) = frame_len(&self.buf).filter(|n| self.buf.len() >= *n) {
+                let frame: Vec<u8> = self.buf.drain(..n).collect();
+                let late = sender_context(&frame)
+                    .filter(|c| Some(*c) != context)
+                    .and_then(|c| self.stale.iter().position(|s| *s == c));
+                match late {
+                    Some(i) => {
+                        self.stale.remove(i);
+                        continue;
+                    }
+                    None => return Ok(Some(frame)),
                 }
             }
-            let left = deadline.saturating_duration_since(Instant::now());
+            let left = wait.remaining();
             if left.is_zero() {
+                if self.buf.len() >= HEADER_LEN {
+                    return Err(LinkError::Incomplete {
+                        announced: frame_len(&self.buf).unwrap_or(0),
+                        arrived: self.buf.len(),
+                    });
+                }
+                if let Some(c) = context {
+                    if self.stale.len() == STALE {
+                        self.stale.remove(0);
+                    }
+                    self.stale.push(c);
+                }
                 return Ok(None);
             }
             match tcp.read(&mut chunk, left) {
@@ -482,15 +521,8 @@ impl Stream {
                     }
                     self.buf.extend_from_slice(&chunk[..n]);
                 }
-                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {
-                    if self.buf.len() >= HEADER_LEN {
-                        return Err(LinkError::Incomplete {
-                            announced: frame_len(&self.buf).unwrap_or(0),
-                            arrived: self.buf.len(),
-                        });
-                    }
-                    return Ok(None);
-                }
+                // The wait may have moved meanwhile (the host was late): looked at again.
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
                 Err(e) => {
                     // A reset, most likely: the capture has no way to show it and stops here.
                     self.tcp = None;
@@ -500,6 +532,15 @@ impl Stream {
             }
         }
     }
+}
+
+/// Requests without a reply in time whose replies a stream still recognises as late.
+const STALE: usize = 16;
+
+/// The sender context of an encapsulation message (bytes 12..20 of its header), if it has a
+/// whole header.
+fn sender_context(msg: &[u8]) -> Option<[u8; 8]> {
+    msg.get(12..20)?.try_into().ok()
 }
 
 /// A TCP connection to `target`, from `local` (any port) when given, else from the address
@@ -581,7 +622,12 @@ impl EnipLink for Network {
         Some(self.timeout)
     }
 
-    fn request(&mut self, client: u8, msg: &[u8]) -> Result<Option<Vec<u8>>, LinkError> {
+    fn request(
+        &mut self,
+        client: u8,
+        msg: &[u8],
+        wait: &Deadline,
+    ) -> Result<Option<Vec<u8>>, LinkError> {
         let stream = if client == 1 {
             &mut self.tcp
         } else {
@@ -595,7 +641,7 @@ impl EnipLink for Network {
                 )?),
             }
         };
-        stream.request(msg, self.timeout)
+        stream.request(msg, wait)
     }
 
     fn io_cycle(

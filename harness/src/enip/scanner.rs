@@ -36,6 +36,7 @@ use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::runner::{cycles_for, hex};
 use crate::suite::{Action, OrderSpec, Target};
+use crate::timing::Deadline;
 
 /// RPI of the harness's I/O connection.
 pub(super) const RPI: Duration = Duration::from_millis(4);
@@ -47,6 +48,10 @@ pub(super) const EMBEDDED_ADDR: SocketAddrV4 =
     SocketAddrV4::new(Ipv4Addr::new(192, 168, 1, 100), 44818);
 
 static SERIAL: std::sync::atomic::AtomicU16 = std::sync::atomic::AtomicU16::new(1);
+
+/// How many times the limit of one request the connection check waits for the device's
+/// identity (see [`Scanner::list_identity`]).
+const REACH: u32 = 5;
 
 /// An open I/O connection.
 pub(super) struct IoConn {
@@ -62,6 +67,9 @@ pub(super) struct IoConn {
     pub(super) run_idle: bool,
     pub(super) sequence: u32,
     pub(super) count: u16,
+    /// The scanner's limit as consumer of the T→O data: the connection's timeout, RPI × the
+    /// timeout multiplier of the Forward_Open (CIP Vol 1 §3-5.4.1.4, `4 << multiplier`).
+    pub(super) timeout: Duration,
 }
 
 /// The scanner.
@@ -145,23 +153,46 @@ impl Scanner {
         }
     }
 
-    /// A request that got no reply: within the link's timeout on the network.
-    fn no_reply(&self, what: &str) -> StepError {
-        StepError::Link(match self.link.timeout() {
-            Some(t) => format!("no reply to {what} within {} s", t.as_secs_f64()),
-            None => format!("no reply to {what}"),
-        })
+    /// The wait for the reply to a request about to leave: on the network `--timeout`, the
+    /// user's limit for one request (moved by the host's lateness); the embedded adapter
+    /// answers at once or not at all.
+    pub(super) fn wait(&self) -> Deadline {
+        Deadline::after(self.link.timeout().unwrap_or_default())
     }
 
-    /// One encapsulation message of `client` and its reply, recorded.
+    /// `what` got no reply within `wait`: on the network the device's time-out, with both
+    /// times; the embedded adapter's silence a link error.
+    fn no_reply(&self, what: &str, wait: &Deadline) -> StepError {
+        match self.link.timeout() {
+            Some(_) => wait.missed(what),
+            None => StepError::Link(format!("no reply to {what}")),
+        }
+    }
+
+    /// One encapsulation message of `client` and its reply, recorded; `what` for the
+    /// transcript, `short` for a time-out.
     pub(super) fn send(
         &mut self,
         client: u8,
         msg: EncapRepr,
         what: String,
+        short: &str,
+    ) -> Result<EncapRepr, StepError> {
+        let wait = self.wait();
+        self.send_within(client, msg, what, &wait)?
+            .ok_or_else(|| self.no_reply(short, &wait))
+    }
+
+    /// [`Scanner::send`] with a wait of its own; `None` when no reply came within it.
+    fn send_within(
+        &mut self,
+        client: u8,
+        msg: EncapRepr,
+        what: String,
+        wait: &Deadline,
     ) -> Result<Option<EncapRepr>, StepError> {
         let bytes = msg.emit().map_err(|e| StepError::Suite(e.to_string()))?;
-        let reply = self.send_bytes(client, &bytes, what)?;
+        let reply = self.send_bytes(client, &bytes, what, wait)?;
         match reply {
             Some(r) if r.command != msg.command => Err(StepError::Garbage(format!(
                 "the reply to {} is command {:04X}h",
@@ -172,13 +203,15 @@ impl Scanner {
         }
     }
 
+    /// Raw bytes of `client` and their reply, if one came within `wait`, recorded.
     pub(super) fn send_bytes(
         &mut self,
         client: u8,
         bytes: &[u8],
         what: String,
+        wait: &Deadline,
     ) -> Result<Option<EncapRepr>, StepError> {
-        let reply = self.link.request(client, bytes);
+        let reply = self.link.request(client, bytes, wait);
         let what = if client == 1 {
             what
         } else {
@@ -227,9 +260,7 @@ impl Scanner {
             data: RegisterSession::V1.emit(),
             ..EncapRepr::default()
         };
-        let reply = self
-            .send(client, msg, "RegisterSession".into())?
-            .ok_or_else(|| self.no_reply("RegisterSession"))?;
+        let reply = self.send(client, msg, "RegisterSession".into(), "RegisterSession")?;
         if reply.status != 0 || reply.session == 0 {
             return Err(StepError::Protocol(format!(
                 "RegisterSession refused: {}",
@@ -277,9 +308,7 @@ impl Scanner {
             data,
             ..EncapRepr::default()
         };
-        let reply = self
-            .send(client, msg, what)?
-            .ok_or_else(|| self.no_reply(&Service(service).to_string()))?;
+        let reply = self.send(client, msg, what, &Service(service).to_string())?;
         if reply.status != 0 {
             return Err(StepError::Protocol(format!(
                 "SendRRData answered with encapsulation status {}",
@@ -420,6 +449,8 @@ impl Scanner {
         s: &ForwardOpenSpec,
     ) -> Result<(MrResponse, Option<ForwardOpenReply>), StepError> {
         self.link.prepare_io().map_err(StepError::from)?;
+        // The session first: a Forward_Open that never left opened nothing to close.
+        self.session(1)?;
         self.serial = SERIAL
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
             .max(1);
@@ -474,6 +505,8 @@ impl Scanner {
                 run_idle: s.run_idle,
                 sequence: 0,
                 count: 0,
+                // One RPI both ways: the O→T timeout is the T→O one.
+                timeout: Duration::from_micros(fo.timeout_us()),
             });
         }
         Ok((resp, Some(reply)))
@@ -560,6 +593,12 @@ impl Scanner {
 
     /// `cycles` I/O cycles, or with a `deadline` as many as it takes to pass it (at least
     /// one); the status word and actual values of `inverter` last received.
+    ///
+    /// On a network target the cycles go on until a T→O frame came, for as long as the
+    /// device may take: the connection's timeout from the step's first O→T frame (moved by
+    /// the host's lateness). A T→O frame that misses one RPI says nothing of the device (the
+    /// host may have held either side back); one that misses the connection's timeout is the
+    /// device's time-out.
     pub(super) fn run_process_until(
         &mut self,
         inverter: Inverter,
@@ -567,20 +606,35 @@ impl Scanner {
         deadline: Option<std::time::Instant>,
     ) -> Result<Value, StepError> {
         let first = self.exchanges.len();
+        if self.io.is_none() {
+            self.own_forward_open()?;
+        }
+        let first_frame = match (self.link.timeout(), &self.io) {
+            (Some(_), Some(io)) => Some(Deadline::after(io.timeout)),
+            _ => None,
+        };
         let mut last = None;
         let mut n = 0;
-        while deadline.map_or(n < cycles, |t| n == 0 || std::time::Instant::now() < t) {
+        while deadline.map_or(n < cycles, |t| n == 0 || std::time::Instant::now() < t)
+            || (last.is_none() && first_frame.is_some_and(|d| !d.passed()))
+        {
             n += 1;
             if let Some(d) = self.io_cycle()? {
                 last = Some(d);
             }
         }
         compact(&mut self.exchanges, first);
-        let data = last.ok_or(StepError::Silent { cycles: n })?;
         let io = self
             .io
             .as_ref()
             .ok_or_else(|| StepError::Suite("no I/O connection".into()))?;
+        let data = last.ok_or_else(|| match first_frame {
+            Some(d) => d.missed(format!(
+                "T→O data of I/O connection {:08X}h after {n} O→T frames",
+                io.t_o_id
+            )),
+            None => StepError::Silent { cycles: n },
+        })?;
         let off = io.t_o.and_then(|a| a.offset(inverter)).ok_or_else(|| {
             StepError::Suite(format!(
                 "{inverter} is not in the input assembly of the connection"
@@ -612,7 +666,9 @@ impl Scanner {
                     let s = self.session(*client)?;
                     b[4..8].copy_from_slice(&s.to_le_bytes());
                 }
-                let reply = self.send_bytes(*client, &b, format!("raw {} bytes", b.len()));
+                let wait = self.wait();
+                let what = format!("raw {} bytes", b.len());
+                let reply = self.send_bytes(*client, &b, what, &wait);
                 Ok(match reply {
                     Ok(None) => json!({ "reply": false, "closed": false }),
                     Ok(Some(r)) => reply_fields(&r),
@@ -860,16 +916,35 @@ impl Drop for Scanner {
 }
 
 impl Scanner {
-    /// ListIdentity on the scanner's own connection: the identity item of the reply.
+    /// ListIdentity on the scanner's own connection, for the run's connection check: the
+    /// identity item of the reply. It waits [`REACH`] times the limit of one request: a
+    /// device that answers, if late, is reachable and says who it is, and its lateness is for
+    /// the cases to judge, each against its own limit, with both times (the identity notes
+    /// it); one silent for all that time does not answer.
     fn list_identity(&mut self) -> Result<Identity, StepError> {
         let msg = EncapRepr {
             command: Command::LIST_IDENTITY.0,
             context: self.context(),
             ..EncapRepr::default()
         };
+        let on_time = self.wait();
+        let reach = Deadline::after(on_time.limit() * REACH);
         let reply = self
-            .send(1, msg, "ListIdentity".into())?
-            .ok_or_else(|| self.no_reply("ListIdentity"))?;
+            .send_within(1, msg, "ListIdentity".into(), &reach)?
+            .ok_or_else(|| match self.link.timeout() {
+                Some(_) => StepError::Link(format!(
+                    "no reply to ListIdentity within {} ({REACH} times the limit of one request)",
+                    crate::timing::ms(reach.limit())
+                )),
+                None => self.no_reply("ListIdentity", &reach),
+            })?;
+        let late = (self.link.timeout().is_some() && on_time.passed()).then(|| {
+            format!(
+                ", answered after {}, past the limit of {}",
+                crate::timing::ms(on_time.waited()),
+                crate::timing::ms(on_time.limit())
+            )
+        });
         let malformed = |e: proto::enip::WireError| {
             StepError::Protocol(format!("malformed ListIdentity reply: {e}"))
         };
@@ -891,7 +966,7 @@ impl Scanner {
         let (id, _) =
             proto::enip::identity::Identity::parse_list_identity_item(data).map_err(malformed)?;
         Ok(Identity {
-            source: "ListIdentity".into(),
+            source: format!("ListIdentity{}", late.unwrap_or_default()),
             vendor: Some(format!("vendor id {}", id.vendor)),
             product_code: Some(format!(
                 "device type {}, product code {}",

@@ -6,8 +6,13 @@
 //! class-1 I/O (receiving O→T, producing T→O on the adapter's schedule) share the sans-IO
 //! [`Adapter`] behind a mutex; time is the real clock since start. A client whose message
 //! stays incomplete for [`STALL`] is disconnected, so a hung peer holds nothing.
+//!
+//! `--reply-delay MS` makes the adapter late on purpose: the adapter acts on each request at
+//! once, and its encapsulation reply (TCP, and UDP ListIdentity) leaves MS later, so that a
+//! run against it shows how the harness judges a device that answers past its limit.
 
 use std::net::{IpAddr, SocketAddr, TcpListener, UdpSocket};
+use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex, OnceLock};
 use std::thread::{self, Thread};
 use std::time::{Duration, Instant};
@@ -48,6 +53,8 @@ pub(super) struct Shared {
     start: Instant,
     /// The I/O producer thread, to wake when something becomes due earlier.
     producer: OnceLock<Thread>,
+    /// How long after its request an encapsulation reply leaves (`--reply-delay`).
+    pub(super) reply_delay: Duration,
 }
 
 impl Shared {
@@ -101,11 +108,12 @@ pub(crate) struct Served {
 /// Binds the sockets and starts the adapter's threads, then returns; they serve until the
 /// process ends. The process's soft limit of open files is raised to its hard limit first,
 /// and the TCP clients served at once are as many as `limits` says and that limit leaves room
-/// for.
+/// for. Every encapsulation reply leaves `reply_delay` after its request.
 pub(crate) fn start_enip(
     listen: SocketAddr,
     config: DeviceConfig,
     limits: Limits,
+    reply_delay: Duration,
 ) -> Result<Served, String> {
     let SocketAddr::V4(v4) = listen else {
         return Err("EtherNet/IP needs an IPv4 listen address".into());
@@ -122,6 +130,7 @@ pub(crate) fn start_enip(
         adapter: Mutex::new(adapter),
         start: Instant::now(),
         producer: OnceLock::new(),
+        reply_delay,
     });
     let io_tx = io.try_clone().map_err(|e| format!("UDP {io_addr}: {e}"))?;
     {
@@ -134,9 +143,10 @@ pub(crate) fn start_enip(
         thread::spawn(move || io_receive(io, s));
     }
     super::serve_tcp::start(tcp, shared.clone(), connections)?;
+    let late = late_sender(&udp, reply_delay)?;
     {
         let s = shared.clone();
-        thread::spawn(move || discovery(udp, s));
+        thread::spawn(move || discovery(udp, s, late));
     }
     Ok(Served {
         listen,
@@ -199,6 +209,11 @@ struct ServeArgs {
     /// memory" and closed.
     #[arg(long, default_value_t = MAX_CONNECTIONS, value_parser = at_least_one)]
     max_connections: usize,
+    /// Answer every encapsulation request (TCP, and UDP ListIdentity) this many milliseconds
+    /// late: a device late on purpose, to test that the harness fails it (and does not blame
+    /// its own host).
+    #[arg(long, value_name = "MS", default_value_t = 0)]
+    reply_delay: u64,
 }
 
 /// A limit of 1 or more.
@@ -235,6 +250,7 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         parse_addr(&a.listen)?,
         config,
         limits,
+        Duration::from_millis(a.reply_delay),
         a.seconds.map(Duration::from_secs),
     )?;
     Ok(crate::cli::EXIT_PASS)
@@ -245,13 +261,19 @@ pub(crate) fn serve_enip(
     listen: SocketAddr,
     config: DeviceConfig,
     limits: Limits,
+    reply_delay: Duration,
     duration: Option<Duration>,
 ) -> Result<(), String> {
     let product = config.product;
     let inverters = config.inverters;
-    let served = start_enip(listen, config, limits)?;
+    let served = start_enip(listen, config, limits, reply_delay)?;
+    let late = if reply_delay.is_zero() {
+        String::new()
+    } else {
+        format!("; every reply {} ms late", reply_delay.as_millis())
+    };
     outln!(
-        "serving EtherNet/IP adapter ({}, {inverters} inverters) on {} (TCP, UDP) and {} (class-1 I/O); at most {} sessions, {} TCP connections",
+        "serving EtherNet/IP adapter ({}, {inverters} inverters) on {} (TCP, UDP) and {} (class-1 I/O); at most {} sessions, {} TCP connections{late}",
         product.name(),
         served.listen,
         served.io,
@@ -267,17 +289,44 @@ pub(crate) fn serve_enip(
     Ok(())
 }
 
-fn discovery(udp: UdpSocket, shared: Arc<Shared>) {
+fn discovery(udp: UdpSocket, shared: Arc<Shared>, late: Option<Sender<LateReply>>) {
     let mut buf = [0u8; 2048];
     loop {
         let Ok((n, from)) = udp.recv_from(&mut buf) else {
             continue;
         };
         let reply = shared.lock().handle_udp(&buf[..n]);
-        if let Some(r) = reply {
-            let _ = udp.send_to(&r, from);
+        match (reply, &late) {
+            (Some(r), None) => {
+                let _ = udp.send_to(&r, from);
+            }
+            (Some(r), Some(late)) => {
+                let _ = late.send((Instant::now() + shared.reply_delay, r, from));
+            }
+            (None, _) => {}
         }
     }
+}
+
+/// A UDP reply held back: when it leaves, its bytes, where to.
+type LateReply = (Instant, Vec<u8>, SocketAddr);
+
+/// With a reply delay, a thread that sends each UDP reply handed to it when it is due (in the
+/// order handed over: with one delay for all, the order they fall due), so that the discovery
+/// thread goes on receiving meanwhile; none without a delay.
+fn late_sender(udp: &UdpSocket, delay: Duration) -> Result<Option<Sender<LateReply>>, String> {
+    if delay.is_zero() {
+        return Ok(None);
+    }
+    let udp = udp.try_clone().map_err(|e| format!("UDP: {e}"))?;
+    let (tx, rx) = std::sync::mpsc::channel::<LateReply>();
+    thread::spawn(move || {
+        for (due, reply, to) in rx {
+            thread::sleep(due.saturating_duration_since(Instant::now()));
+            let _ = udp.send_to(&reply, to);
+        }
+    });
+    Ok(Some(tx))
 }
 
 /// Receives O→T datagrams. Production runs apart, so it keeps its own schedule.

@@ -246,9 +246,12 @@ async fn client(mut stream: TcpStream, peer: SocketAddr, slot: Slot) {
                 }
                 Read::Messages(messages) => {
                     last = Instant::now();
+                    // `--reply-delay`: the adapter acts at once, its replies leave late.
+                    let due = last + slot.l.shared.reply_delay;
                     for m in messages {
                         let r = handle(&slot, peer, &m);
                         if let Some(reply) = r.reply {
+                            sleep_until(due).await;
                             match timeout(STALL, stream.write_all(&reply)).await {
                                 Ok(Ok(())) => {}
                                 _ => return,

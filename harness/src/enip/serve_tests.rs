@@ -1,7 +1,7 @@
 //! `harness serve enip` over real sockets on loopback: the inactivity timeout on the real
 //! clock, the session, connection and Forward_Open limits answered with the protocols' own
 //! refusals, and idle clients that cost no thread. Each test serves its own adapter on an
-//! address of its own (127.0.7.21–.27; other tests and the benches take 127.0.0.x).
+//! address of its own (127.0.7.21–.28; other tests and the benches take 127.0.0.x).
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::{Ipv4Addr, SocketAddr, TcpStream};
@@ -21,8 +21,13 @@ use super::serve::{start_enip, Limits};
 const REPLY: Duration = Duration::from_secs(3);
 
 fn serve(last_octet: u8, limits: Limits) -> SocketAddr {
+    serve_late(last_octet, limits, Duration::ZERO)
+}
+
+/// An adapter whose replies leave `delay` late (`--reply-delay`).
+fn serve_late(last_octet: u8, limits: Limits, delay: Duration) -> SocketAddr {
     let listen = SocketAddr::from((Ipv4Addr::new(127, 0, 7, last_octet), 44818));
-    start_enip(listen, DeviceConfig::new(Product::Tu3Eip), limits)
+    start_enip(listen, DeviceConfig::new(Product::Tu3Eip), limits, delay)
         .expect("serve on a loopback address of its own")
         .listen
 }
@@ -346,4 +351,61 @@ fn idle_clients_cost_no_thread() {
     );
     let mut c = Client::registered(at);
     assert_eq!(c.inactivity_timeout(), 120, "still served");
+}
+
+#[test]
+fn with_a_reply_delay_every_encapsulation_reply_leaves_late_and_the_request_acts_at_once() {
+    let delay = Duration::from_millis(150);
+    let at = serve_late(28, Limits::default(), delay);
+    let mut c = Client::connect(at);
+    let sent = Instant::now();
+    assert_eq!(EncapStatus(c.register().status), EncapStatus::SUCCESS);
+    assert!(
+        sent.elapsed() >= delay,
+        "RegisterSession after {:?}",
+        sent.elapsed()
+    );
+    // The request took effect before its reply left: a second client, sent off while the
+    // first waits for its reply, finds the inactivity timeout already changed.
+    let path = EPath::attribute(class::TCP_IP, 1, 13);
+    let req = MrRequest {
+        service: Service::SET_ATTRIBUTE_SINGLE.0,
+        path,
+        data: 0u16.to_le_bytes().to_vec(),
+    };
+    let sd = SendData {
+        interface: 0,
+        timeout: 0,
+        cpf: Cpf::new(vec![Item::Null, Item::UnconnectedData(req.emit())]),
+    };
+    let set = EncapRepr {
+        command: Command::SEND_RR_DATA.0,
+        session: c.session,
+        data: sd.emit().unwrap(),
+        ..EncapRepr::default()
+    };
+    c.tcp.write_all(&set.emit().unwrap()).unwrap();
+    let mut other = Client::registered(at);
+    assert_eq!(other.inactivity_timeout(), 0);
+    assert!(c.receive().unwrap().is_some());
+    // ListIdentity over UDP leaves late too.
+    let udp = std::net::UdpSocket::bind("127.0.7.28:0").unwrap();
+    udp.set_read_timeout(Some(REPLY)).unwrap();
+    let list = EncapRepr {
+        command: Command::LIST_IDENTITY.0,
+        ..EncapRepr::default()
+    };
+    let sent = Instant::now();
+    udp.send_to(&list.emit().unwrap(), at).unwrap();
+    let mut buf = [0u8; 1500];
+    let (n, _) = udp.recv_from(&mut buf).expect("a ListIdentity reply");
+    assert!(
+        sent.elapsed() >= delay,
+        "ListIdentity after {:?}",
+        sent.elapsed()
+    );
+    assert_eq!(
+        EncapRepr::parse(&buf[..n]).unwrap().command,
+        Command::LIST_IDENTITY.0
+    );
 }
