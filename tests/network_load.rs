@@ -64,7 +64,7 @@ fn run(ns: Option<&Netns>, profile: &str, dut: &str, seed: u64, out: &Path) -> V
     .expect("run.json parses");
     assert_eq!(report["meta"]["shuffle"], seed, "{profile}: the seed is recorded");
     eprintln!(
-        "{profile} seed {seed}: {} ({} attempts discarded, host late)",
+        "{profile} seed {seed}: {} (attempts discarded for a late host: {})",
         String::from_utf8_lossy(&done.stdout).trim(),
         report["meta"]["discarded_attempts"]
     );

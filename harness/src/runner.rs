@@ -435,14 +435,14 @@ fn run_steps(
         label(opts, || {
             format!("{p} {id} step {n}: {}", describe(&step.action))
         });
-        let (r, limit, window) = run_step(step, profile, channel.as_mut());
+        let (r, timed, window) = run_step(step, profile, channel.as_mut());
         let verdict = r.verdict;
         let message = r.message.clone();
         steps.push(r);
         if verdict != Verdict::Pass {
-            let excuse = limit
+            let excuse = timed
                 .filter(|_| opts.real_time())
-                .and_then(|limit| excuse(n, limit, window));
+                .and_then(|timed| excuse(n, timed, window));
             return (result(case, profile, verdict, message, steps, start), excuse);
         }
     }
@@ -450,21 +450,27 @@ fn run_steps(
     (r, None)
 }
 
-/// Why step `n`, which timed out waiting on a device's `limit` over `window`, says nothing of
-/// the device: the host lost a large part of the limit meanwhile ([`crate::timing::excuses`]).
-fn excuse(n: usize, limit: Duration, window: (Instant, Instant)) -> Option<String> {
+/// The time a step's outcome depended on the host keeping.
+#[derive(Debug, Clone, Copy)]
+enum Timed {
+    /// It timed out waiting on the device's limit (zero where the binding does not know it).
+    Limit(Duration),
+    /// It ran process data this long against the drive's own clock.
+    Run(Duration),
+}
+
+/// Why step `n`, whose outcome depended on the host over `window`, says nothing of the device:
+/// the host lost a large part of that time meanwhile ([`crate::timing::excuses`]).
+fn excuse(n: usize, timed: Timed, window: (Instant, Instant)) -> Option<String> {
     let lost = crate::timing::host_lost(window.0, window.1);
-    crate::timing::excuses(lost, limit).then(|| {
-        let limit = if limit.is_zero() {
-            String::new()
-        } else {
-            format!(", against the device's limit of {}", crate::timing::ms(limit))
-        };
-        format!(
-            "host late by {} in step {n}{limit}",
-            crate::timing::ms(lost)
-        )
-    })
+    let ms = crate::timing::ms;
+    let (time, against) = match timed {
+        Timed::Limit(l) if l.is_zero() => (l, String::new()),
+        Timed::Limit(l) => (l, format!(", against the device's limit of {}", ms(l))),
+        Timed::Run(d) => (d, format!(", of its {} of process data", ms(d))),
+    };
+    crate::timing::excuses(lost, time)
+        .then(|| format!("host late by {} in step {n}{against}", ms(lost)))
 }
 
 /// What every case with a DUT ends with, whatever its verdict: the binding leaves the DUT as
@@ -562,13 +568,15 @@ pub(crate) fn hex(bytes: &[u8]) -> String {
     String::from_utf8(s).unwrap_or_default()
 }
 
-/// One step: its result, and, when it timed out waiting on the device, the device's limit (zero
-/// where the binding does not know it) and when the step ran.
+/// One step: its result, and when the step ran; with them, for a step whose outcome depends on
+/// the host running on time, the time it depended on: the device's limit for a step that timed
+/// out waiting on it (zero where the binding does not know it), the step's own duration for
+/// process data run against the drive's clock.
 fn run_step(
     step: &Step,
     profile: &Profile,
     channel: Option<&mut Box<dyn Binding>>,
-) -> (StepResult, Option<Duration>, (Instant, Instant)) {
+) -> (StepResult, Option<Timed>, (Instant, Instant)) {
     let line = describe(&step.action);
     let began = Instant::now();
     let (outcome, exchanges) = match (&step.action, channel) {
@@ -609,9 +617,14 @@ fn run_step(
         ),
     };
     let window = (began, Instant::now());
-    let limit = match &outcome {
-        Err(StepError::Late { limit, .. }) => Some(*limit),
-        Err(StepError::Silent { .. } | StepError::Unanswered { .. }) => Some(Duration::ZERO),
+    let limit = match (&outcome, &step.action) {
+        (Err(StepError::Late { limit, .. }), _) => Some(Timed::Limit(*limit)),
+        (Err(StepError::Silent { .. } | StepError::Unanswered { .. }), _) => {
+            Some(Timed::Limit(Duration::ZERO))
+        }
+        // Process data run for a time is judged on what the drive did meanwhile, on its own
+        // clock: a host that lost much of that time sent and read it late.
+        (Ok(_), Action::Process { .. } | Action::Wait(_)) => Some(Timed::Run(window.1 - window.0)),
         _ => None,
     };
     let (verdict, observed, refusal, message) = match outcome {
@@ -1104,6 +1117,10 @@ cases:
             if !self.host_late.is_zero() {
                 crate::timing::pretend_host_late(self.host_late);
             }
+            if matches!(action, Action::Process { .. }) {
+                // The drive, seen late, still "switch-on disabled".
+                return Ok(crate::binding::process_fields(0x0B40, &[0, 0, 0]).into());
+            }
             Err(StepError::Late {
                 what: "read P102".into(),
                 limit: Duration::from_millis(20),
@@ -1134,8 +1151,16 @@ cases:
     /// time out, the host late by `host_late` meanwhile. The connection check opens it once
     /// before (SK 550P: nothing to read, no step).
     fn run_late(late: usize, host_late: Duration, real_time: bool) -> CaseResult {
+        run_late_case("read", late, host_late, real_time)
+    }
+
+    /// [`run_late`] for case `id`.
+    fn run_late_case(id: &str, late: usize, host_late: Duration, real_time: bool) -> CaseResult {
+        let _one = crate::timing::TESTS
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
         let opts = RunOptions {
-            filter: Some("read".into()),
+            filter: Some(id.into()),
             limits: real_time.then_some(crate::safety::Limits {
                 allow_motion: true,
                 max_eeprom_writes: 20,
@@ -1166,6 +1191,19 @@ cases:
         assert!(t.contains("\nattempt 1 discarded: host late by "), "{t}");
         assert!(t.contains("\nattempt 1, step 1: read P102"), "{t}");
         assert!(t.contains("\nattempt 2 (counted):\n\nstep 1: read P102"), "{t}");
+    }
+
+    #[test]
+    fn process_data_judged_while_the_host_was_late_is_run_again() {
+        let c = run_late_case("process", 1, Duration::from_millis(40), true);
+        assert_eq!(c.verdict, Verdict::Pass, "{}", c.message);
+        let why = &c.discarded[0].why;
+        assert!(why.starts_with("host late by "), "{why}");
+        assert!(why.contains(" in step 1, of its "), "{why}");
+        assert!(why.ends_with(" of process data; the case runs again"), "{why}");
+        // With the host on time the drive's answer stands.
+        let c = run_late_case("process", 1, Duration::ZERO, true);
+        assert_eq!(c.verdict, Verdict::Fail, "{}", c.message);
     }
 
     #[test]
