@@ -12,8 +12,9 @@
 //! a network moved by the time the host lost meanwhile): an RPC answer and a DCP response
 //! within the harness's `--timeout` (IEC 61158-6-10 leaves the controller's RPC and DCP
 //! time-outs to it), a by-name Identify within [`IDENTIFY_WINDOW`], each cycle's input within
-//! the input CR's data hold time ([`Controller::data_hold`]). A limit that passes is [`PnioError::NoReply`] with the limit
-//! and the time waited, which the binding reports as the device being late.
+//! the input CR's data hold time ([`Controller::data_hold`]). A limit that passes is
+//! [`PnioError::NoReply`] with the limit and the time waited, which the binding reports as the
+//! device being late.
 
 use std::collections::VecDeque;
 use std::net::SocketAddr;
