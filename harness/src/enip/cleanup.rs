@@ -11,7 +11,11 @@
 //!    (BU 0620 §6.1.2.1, BU 2100 §6.2.2: bit 1 = 0 switches the output voltage off, "Switch-on
 //!    block");
 //! 2. writes back every attribute the case set (parameters first of all), with the value read
-//!    before its first write in the case, in the reverse order of the first writes;
+//!    before its first write in the case, in the reverse order of the first writes; when the
+//!    case made an Identity Reset (type 0, the emulated power cycle that reads the addressing
+//!    parameters in: BU 0620 §4.2.2, BU 2100 §7.1.2), one more after the write-backs, so that
+//!    what the device uses (the TCP/IP object's gateway of P852, the mask P876 shows) is again
+//!    what the restored parameters say, not what the case set;
 //! 3. closes every connection the case opened and did not close (Forward_Close; one already
 //!    gone, by its time-out or with its owner, counts as closed);
 //! 4. if the case ran I/O, brings every inverter it commanded, and every one in fault, back to
@@ -30,9 +34,6 @@
 //! connection (one the target never opened answers "connection not found", which counts as
 //! closed). Once the target stops answering the cleanup stops too, at its first link error,
 //! and names what it did not attempt: every further request would only wait out its time-out.
-//!
-//! A case's Identity Reset is not repeated: the cases that make one need `readdressing`, which
-//! a target on the network never offers, and a real device's reset drops the TCP connection.
 //!
 //! A case's own observations are unchanged: the one exchange inside a step is the read of an
 //! attribute before its first write, marked as such in the transcript; everything else happens
@@ -93,6 +94,9 @@ pub(super) struct Ledger {
     /// An I/O (class 1) connection was opened: the drive may have moved, or faulted when the
     /// connection timed out.
     io: bool,
+    /// An Identity Reset was made, or may have been: parameters written before it were read
+    /// in.
+    reset: bool,
 }
 
 impl Ledger {
@@ -141,6 +145,8 @@ pub(super) enum Noted {
     Open(Box<ForwardOpen>),
     /// Forward_Close of this connection.
     Close(ConnectionKey),
+    /// Identity Reset of type 0.
+    Reset,
 }
 
 impl Noted {
@@ -157,9 +163,19 @@ impl Noted {
             Service::FORWARD_CLOSE => {
                 Some(Noted::Close(ForwardClose::parse(&req.data).ok()?.key()))
             }
+            Service::RESET
+                if req.path == identity() && matches!(req.data.as_slice(), [] | [0]) =>
+            {
+                Some(Noted::Reset)
+            }
             _ => None,
         }
     }
+}
+
+/// The Identity object's instance 1, which an Identity Reset addresses.
+fn identity() -> EPath {
+    EPath::object(class::IDENTITY, 1)
 }
 
 /// Marks the exchanges from `first` on with `tag`.
@@ -272,6 +288,7 @@ impl Scanner {
             Noted::Set(path) => ledger.wrote(&path, may_have_taken_effect(resp)),
             Noted::Open(fo) if may_have_taken_effect(resp) => ledger.opened(&fo),
             Noted::Close(key) if resp.is_ok_and(|r| r.general == 0) => ledger.closed(key),
+            Noted::Reset if may_have_taken_effect(resp) => ledger.reset = true,
             _ => {}
         }
     }
@@ -306,6 +323,13 @@ impl Scanner {
         ledger
             .written
             .restore(&mut account, |path, before| self.put_back(path, before));
+        if ledger.reset
+            && ledger.written.restores().next().is_some()
+            && account.attempt(|| "the Identity Reset that reads the restored values in".into())
+        {
+            let outcome = self.identity_reset();
+            account.note(outcome);
+        }
         self.io = None;
         self.close_each(&ledger.opened, &mut account);
         if drive {
@@ -352,6 +376,23 @@ impl Scanner {
         match resp.general {
             0 => Ok(()),
             g => Err(Problem::other(format!("{}: {}", what(), GeneralStatus(g)))),
+        }
+    }
+
+    /// Step 2, last: an Identity Reset of type 0 (its connections end with it: those the case
+    /// left open are then found gone in step 3).
+    fn identity_reset(&mut self) -> Result<(), Problem> {
+        let what = "the restored values not read in by an Identity Reset";
+        let resp = self
+            .explicit(&MrRequest {
+                service: Service::RESET.0,
+                path: identity(),
+                data: Vec::new(),
+            })
+            .map_err(|e| Problem::step(what, e))?;
+        match resp.general {
+            0 => Ok(()),
+            g => Err(Problem::other(format!("{what}: {}", GeneralStatus(g)))),
         }
     }
 
@@ -642,9 +683,14 @@ mod tests {
         let mut bytes = vec![0x4E, 0x02, 0x20, 0x06, 0x24, 0x01];
         bytes.extend(fc.emit());
         assert_eq!(Noted::of(&bytes), Some(Noted::Close(fo.key())));
-        // A Get, an Identity Reset, a reset of another object, a malformed request: nothing to
-        // note.
-        assert_eq!(Noted::of(&[0x05, 0x02, 0x20, 0x01, 0x24, 0x01]), None);
+        // An Identity Reset of type 0, as the P852 read-in case makes it; one of type 1 (the
+        // harness never sends it), a Get, a reset of another object, a malformed request:
+        // nothing to note.
+        assert_eq!(
+            Noted::of(&[0x05, 0x02, 0x20, 0x01, 0x24, 0x01]),
+            Some(Noted::Reset)
+        );
+        assert_eq!(Noted::of(&[0x05, 0x02, 0x20, 0x01, 0x24, 0x01, 0x01]), None);
         assert_eq!(
             Noted::of(&[0x0E, 0x03, 0x20, 0x01, 0x24, 0x01, 0x30, 0x01]),
             None
@@ -871,6 +917,43 @@ mod tests {
              102, closing connection 0007h, UnRegisterSession"
         );
         assert!(r.scanner.sessions.is_empty());
+    }
+
+    #[test]
+    fn a_case_that_reset_the_device_resets_it_again_after_its_write_backs() {
+        use super::super::step::EnipStep;
+        let mut r = Rig::new(&[]);
+        // The P852 read-in case: the SK 550P's gateway P852 [-01] set, read in by a Reset.
+        let p852 = OrderSpec {
+            element: ArrayElement::new(1).ok(),
+            value: Some(192),
+            ..OrderSpec::read(Target::Interface, ParamNumber::new(852).unwrap())
+        };
+        r.scanner.write(&p852).unwrap();
+        let reset = EnipStep::Request {
+            service: Service::RESET.0,
+            path: vec![0x20, 0x01, 0x24, 0x01],
+            data: Vec::new(),
+            client: 1,
+        };
+        r.scanner.enip_step(&reset).unwrap();
+        // The TCP/IP object's gateway, asked by `client` (the cleanup ends the scanner's own
+        // session).
+        let gateway = |r: &mut Rig, client| {
+            let get = MrRequest {
+                service: Service::GET_ATTRIBUTE_SINGLE.0,
+                path: EPath::attribute(class::TCP_IP, 1, 5),
+                data: Vec::new(),
+            };
+            let resp = r.scanner.unconnected(client, get.emit(), "gateway".into());
+            resp.unwrap().data[8..12].to_vec()
+        };
+        // 192.0.0.0 as a UDINT, little-endian.
+        assert_eq!(gateway(&mut r, 1), [0, 0, 0, 192]);
+        r.scanner.restore().unwrap();
+        assert_eq!(r.routed(Service::RESET).len(), 2);
+        let read_in = gateway(&mut r, 2);
+        assert_eq!(read_in, [0, 0, 0, 0], "read in again after the write-back");
     }
 
     #[test]
