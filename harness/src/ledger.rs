@@ -147,10 +147,11 @@ pub(crate) struct Problem {
 }
 
 impl Problem {
-    /// `e` of a request made for `what`: a link problem for [`StepError::Link`].
+    /// `e` of a request made for `what`: a link problem for [`StepError::Link`] and for a
+    /// device past its limit ([`StepError::Late`]): each further request would wait as long.
     pub(crate) fn step(what: impl fmt::Display, e: StepError) -> Problem {
         Problem {
-            link: matches!(e, StepError::Link(_)),
+            link: matches!(e, StepError::Link(_) | StepError::Late { .. }),
             text: format!("{what}: {e}"),
         }
     }
