@@ -28,6 +28,8 @@ const MEMORY: Duration = Duration::from_secs(120);
 /// The least host lateness that excuses a timed-out step, whatever its limit: below it, the
 /// wait's own extension covers the host (see [`Deadline`]).
 const EXCUSE_MIN: Duration = Duration::from_millis(5);
+/// The least a wait moves for the host's lost time, however short its limit (a PRes's 500 µs).
+const MIN_ROOM: Duration = Duration::from_millis(50);
 /// Of a limit, the share the host must have lost to excuse a time-out: a device given at least
 /// three quarters of its time with the host on time and still silent is late.
 const EXCUSE_SHARE: u32 = 4;
@@ -160,9 +162,14 @@ impl Deadline {
         self.start.elapsed()
     }
 
-    /// When the wait ends, as far as is known now: the limit plus the host's lost time so far.
+    /// When the wait ends, as far as is known now: the limit plus the host's lost time so far,
+    /// that by the limit again at most (and [`MIN_ROOM`]). A host that loses more is late
+    /// whatever the harness waits, and a wait that chased it would stretch without end on a
+    /// starved host; the time-out that follows is the host's, and the runner, which measures
+    /// it too, runs the case again.
     pub(crate) fn end(&self) -> Instant {
-        self.start + self.limit + host_lost(self.start, Instant::now())
+        let room = self.limit.max(MIN_ROOM);
+        self.start + self.limit + host_lost(self.start, Instant::now()).min(room)
     }
 
     /// What is left of the wait (zero once it is over).
@@ -221,6 +228,8 @@ mod tests {
         assert!(lost >= Duration::from_millis(30), "lost {lost:?}");
         assert!(d.end() >= before + Duration::from_millis(30));
         assert!(excuses(lost, d.limit()));
+        // By no more than the limit again, and 50 ms however short the limit.
+        assert!(d.end() <= d.start + d.limit + MIN_ROOM);
     }
 
     #[test]

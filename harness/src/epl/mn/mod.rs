@@ -218,9 +218,6 @@ pub(crate) struct Manager<L> {
     transaction: u8,
 }
 
-/// The least a wait moves for the host's lost time, however short its limit (a PRes's 500 µs).
-const MIN_LATE_ROOM: Duration = Duration::from_millis(50);
-
 /// Frames the MN takes from the link in one wait at most, whatever they are.
 const MAX_SKIPPED: usize = 256;
 
@@ -398,18 +395,13 @@ impl<L: Link> Manager<L> {
         self.link.device().is_some()
     }
 
-    /// When `w` ends on the link's clock, as far as is known now. The host's lost time moves
-    /// it by the limit at most (and [`MIN_LATE_ROOM`]): a host that loses more is late whatever
-    /// the MN waits, and a wait that chased it would stretch without end on a starved host
-    /// (the MN's own spinning starves the watch). The time-out that follows is the host's,
-    /// and the runner, which sees it, runs the case again.
+    /// When `w` ends on the link's clock, as far as is known now: on the real clock moved by
+    /// the host's lost time, within the bound [`Deadline::end`] keeps.
     fn end(&mut self, w: &Wait) -> Duration {
-        let limit = w.deadline.limit();
         if self.is_virtual() {
-            return w.from + limit;
+            return w.from + w.deadline.limit();
         }
-        let latest = w.from + limit + limit.max(MIN_LATE_ROOM);
-        (self.link.now() + w.deadline.remaining()).min(latest)
+        self.link.now() + w.deadline.remaining()
     }
 
     /// Whether `w` is over.
