@@ -69,6 +69,24 @@ impl RunOptions {
 /// verdict is inconclusive.
 const ATTEMPTS: usize = 3;
 
+/// What a profile's DUT offers, as its binding says: its description and capabilities. Learnt
+/// at the connection check, so that a case needing what the DUT does not offer is not
+/// applicable without opening it (a connection opened and closed for nothing, per case).
+#[derive(Debug, Clone)]
+struct Offer {
+    describe: String,
+    capabilities: Vec<Capability>,
+}
+
+impl Offer {
+    fn of(dut: &dyn Binding) -> Offer {
+        Offer {
+            describe: dut.describe(),
+            capabilities: dut.capabilities().to_vec(),
+        }
+    }
+}
+
 /// Opens a DUT for a profile; called once per case so every case starts from a known state.
 pub(crate) trait DutFactory {
     /// What is tested, for reports.
@@ -102,7 +120,8 @@ pub(crate) fn run_shard(
         crate::timing::start_watch();
     }
     let mut rng = opts.shuffle.map(fastrand::Rng::with_seed);
-    match connection_check(loaded, opts, factory, &selected) {
+    let mut offers = BTreeMap::new();
+    match connection_check(loaded, opts, factory, &selected, &mut offers) {
         Ok(identities) => {
             meta.identities = identities;
             let all = opts.profiles.len() * loaded.cases.iter().filter(selected).count();
@@ -124,7 +143,14 @@ pub(crate) fn run_shard(
                         );
                         let r = CaseResult {
                             seq,
-                            ..run_case(case, profile, opts, &mut guard, factory)
+                            ..run_case(
+                                case,
+                                profile,
+                                opts,
+                                &mut guard,
+                                factory,
+                                offers.get(profile.name()),
+                            )
                         };
                         opts.progress.borrow_mut().end(&r);
                         cases.push(r);
@@ -174,6 +200,7 @@ fn connection_check(
     opts: &RunOptions,
     factory: &mut dyn DutFactory,
     selected: &dyn Fn(&&Case) -> bool,
+    offers: &mut BTreeMap<String, Offer>,
 ) -> Result<BTreeMap<String, Identity>, CaseResult> {
     let start = Instant::now();
     let mut identities = BTreeMap::new();
@@ -212,6 +239,7 @@ fn connection_check(
             Err(e @ OpenError::Unreachable(_)) => return Err(unreachable(e.to_string())),
             Err(_) => continue,
         };
+        offers.insert(profile.name().to_string(), Offer::of(dut.as_ref()));
         match crate::identity::identify(dut.as_mut(), profile) {
             Ok(id) => {
                 identities.insert(profile.name().to_string(), id);
@@ -263,7 +291,7 @@ pub(crate) fn not_applicable_before_opening(case: &Case, profile: &Profile) -> O
 }
 
 /// Why a case does not apply to a profile, if it does not.
-fn not_applicable(case: &Case, profile: &Profile, dut: Option<&dyn Binding>) -> Option<String> {
+fn not_applicable(case: &Case, profile: &Profile, dut: Option<&Offer>) -> Option<String> {
     if profile.product.is_none() {
         if let Some(s) = case
             .steps
@@ -306,10 +334,10 @@ fn not_applicable(case: &Case, profile: &Profile, dut: Option<&dyn Binding>) -> 
     }
     let dut = dut?;
     for cap in needed() {
-        if !dut.capabilities().contains(&cap) {
+        if !dut.capabilities.contains(&cap) {
             return Some(format!(
                 "needs `{cap}`, which {} does not offer",
-                dut.describe()
+                dut.describe
             ));
         }
     }
@@ -326,12 +354,13 @@ fn run_case(
     opts: &RunOptions,
     guard: &mut Option<Guard>,
     factory: &mut dyn DutFactory,
+    offer: Option<&Offer>,
 ) -> CaseResult {
     let start = Instant::now();
     // What a device on the network allows is decided from the whole case before anything is
     // sent, opening included: no case half-runs.
     let refused = || guard.as_ref().and_then(|g| g.refuse(case));
-    if let Some(why) = not_applicable(case, profile, None).or_else(refused) {
+    if let Some(why) = not_applicable(case, profile, offer).or_else(refused) {
         return result(
             case,
             profile,
@@ -382,7 +411,7 @@ fn attempt(
     let mut channel = if needs_dut(case) {
         match factory.open(profile, opts.retries) {
             Ok(dut) => {
-                if let Some(why) = not_applicable(case, profile, Some(dut.as_ref())) {
+                if let Some(why) = not_applicable(case, profile, Some(&Offer::of(dut.as_ref()))) {
                     let r = result(
                         case,
                         profile,
