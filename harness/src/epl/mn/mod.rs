@@ -218,6 +218,10 @@ pub(crate) struct Manager<L> {
     transaction: u8,
 }
 
+/// The least a wait moves for the host's lost time, however short its limit (a PRes's 500 µs),
+/// as [`Deadline::end`] allows.
+const MIN_LATE_ROOM: Duration = Duration::from_millis(50);
+
 /// Frames the MN takes from the link in one wait at most, whatever they are.
 const MAX_SKIPPED: usize = 256;
 
@@ -396,12 +400,16 @@ impl<L: Link> Manager<L> {
     }
 
     /// When `w` ends on the link's clock, as far as is known now: on the real clock moved by
-    /// the host's lost time, within the bound [`Deadline::end`] keeps.
+    /// the host's lost time (within the bound [`Deadline::end`] keeps), and never past that
+    /// bound on the link's own clock: the MN's spinning can starve the watch, and a wait that
+    /// chased it would not end.
     fn end(&mut self, w: &Wait) -> Duration {
+        let limit = w.deadline.limit();
         if self.is_virtual() {
-            return w.from + w.deadline.limit();
+            return w.from + limit;
         }
-        self.link.now() + w.deadline.remaining()
+        let latest = w.from + limit + limit.max(MIN_LATE_ROOM);
+        (self.link.now() + w.deadline.remaining()).min(latest)
     }
 
     /// Whether `w` is over.
