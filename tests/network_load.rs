@@ -53,16 +53,18 @@ fn run(ns: Option<&Netns>, profile: &str, dut: &str, seed: u64, out: &Path) -> V
         cmd.args(["--local", ENIP_LOCAL]);
     }
     let done = cmd.output().expect("harness run starts");
-    let report: Value = serde_json::from_slice(
-        &std::fs::read(out.join("run.json")).unwrap_or_else(|e| {
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap_or_else(|e| {
             panic!(
                 "{profile} seed {seed}: no run.json ({e}): {}",
                 String::from_utf8_lossy(&done.stderr)
             )
-        }),
-    )
-    .expect("run.json parses");
-    assert_eq!(report["meta"]["shuffle"], seed, "{profile}: the seed is recorded");
+        }))
+        .expect("run.json parses");
+    assert_eq!(
+        report["meta"]["shuffle"], seed,
+        "{profile}: the seed is recorded"
+    );
     eprintln!(
         "{profile} seed {seed}: {} (attempts discarded for a late host: {})",
         String::from_utf8_lossy(&done.stdout).trim(),
@@ -89,7 +91,10 @@ fn five_runs(ns: Option<&Netns>, profile: &str, dut: &str, base: u64) -> Vec<Str
     let runs: Vec<(u64, Verdicts)> = (0..RUNS)
         .map(|i| {
             let seed = base + i;
-            (seed, run(ns, profile, dut, seed, &dir.join(seed.to_string())))
+            (
+                seed,
+                run(ns, profile, dut, seed, &dir.join(seed.to_string())),
+            )
         })
         .collect();
     let mut wrong = Vec::new();
@@ -139,10 +144,9 @@ fn five_shuffled_runs_per_bus_under_load_give_the_same_verdicts() {
         });
         let ecat = s.spawn(|| {
             let ns = Netns::new("loadecat");
-            let served = harness::ecat_serve::start(&harness::ecat_serve::ServeOptions::new(
-                ns.root_if(),
-            ))
-            .expect("serve ecat");
+            let served =
+                harness::ecat_serve::start(&harness::ecat_serve::ServeOptions::new(ns.root_if()))
+                    .expect("serve ecat");
             let wrong = five_runs(
                 Some(&ns),
                 "sk550p@ecat",

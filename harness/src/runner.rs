@@ -472,7 +472,10 @@ fn run_steps(
             let excuse = timed
                 .filter(|_| opts.real_time())
                 .and_then(|timed| excuse(n, timed, window));
-            return (result(case, profile, verdict, message, steps, start), excuse);
+            return (
+                result(case, profile, verdict, message, steps, start),
+                excuse,
+            );
         }
     }
     let r = result(case, profile, Verdict::Pass, String::new(), steps, start);
@@ -1211,15 +1214,19 @@ cases:
         assert_eq!(c.discarded.len(), 1);
         let why = &c.discarded[0].why;
         assert!(
-            why.starts_with("host late by ") && why.ends_with(
-                " in step 1, against the device's limit of 20 ms; the case runs again"
-            ),
+            why.starts_with("host late by ")
+                && why.ends_with(
+                    " in step 1, against the device's limit of 20 ms; the case runs again"
+                ),
             "{why}"
         );
         let t = crate::report::transcript_for_tests(&c);
         assert!(t.contains("\nattempt 1 discarded: host late by "), "{t}");
         assert!(t.contains("\nattempt 1, step 1: read P102"), "{t}");
-        assert!(t.contains("\nattempt 2 (counted):\n\nstep 1: read P102"), "{t}");
+        assert!(
+            t.contains("\nattempt 2 (counted):\n\nstep 1: read P102"),
+            "{t}"
+        );
     }
 
     #[test]
@@ -1229,7 +1236,10 @@ cases:
         let why = &c.discarded[0].why;
         assert!(why.starts_with("host late by "), "{why}");
         assert!(why.contains(" in step 1, of its "), "{why}");
-        assert!(why.ends_with(" of process data; the case runs again"), "{why}");
+        assert!(
+            why.ends_with(" of process data; the case runs again"),
+            "{why}"
+        );
         // With the host on time the drive's answer stands.
         let c = run_late_case("process", 1, Duration::ZERO, true);
         assert_eq!(c.verdict, Verdict::Fail, "{}", c.message);
@@ -1241,7 +1251,8 @@ cases:
         assert_eq!(c.verdict, Verdict::Inconclusive, "{}", c.message);
         assert!(c.message.starts_with("host late by "), "{}", c.message);
         assert!(
-            c.message.contains("in each of 3 attempts: no attempt ran on time"),
+            c.message
+                .contains("in each of 3 attempts: no attempt ran on time"),
             "{}",
             c.message
         );
@@ -1254,8 +1265,9 @@ cases:
         assert_eq!(c.verdict, Verdict::Fail);
         assert!(c.discarded.is_empty());
         assert!(
-            c.message
-                .starts_with("read P102: no answer within the device's limit of 20 ms (waited 21 ms)"),
+            c.message.starts_with(
+                "read P102: no answer within the device's limit of 20 ms (waited 21 ms)"
+            ),
             "{}",
             c.message
         );

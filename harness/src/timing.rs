@@ -64,7 +64,10 @@ pub(crate) fn start_watch() {
                 let woke = Instant::now();
                 let by = woke.saturating_duration_since(asked);
                 if by > FLOOR {
-                    record(Late { woke, by: by - FLOOR });
+                    record(Late {
+                        woke,
+                        by: by - FLOOR,
+                    });
                 }
                 asked = woke + TICK;
             }
@@ -218,7 +221,10 @@ mod tests {
         // 50 ms the way a loaded host holds it back (SIGSTOP, then SIGCONT from a child).
         let pid = std::process::id().to_string();
         let mut stopper = std::process::Command::new("sh")
-            .args(["-c", &format!("kill -STOP {pid}; sleep 0.05; kill -CONT {pid}")])
+            .args([
+                "-c",
+                &format!("kill -STOP {pid}; sleep 0.05; kill -CONT {pid}"),
+            ])
             .spawn()
             .expect("sh starts");
         stopper.wait().expect("the child ends");

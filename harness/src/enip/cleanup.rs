@@ -163,9 +163,7 @@ impl Noted {
             Service::FORWARD_CLOSE => {
                 Some(Noted::Close(ForwardClose::parse(&req.data).ok()?.key()))
             }
-            Service::RESET
-                if req.path == identity() && matches!(req.data.as_slice(), [] | [0]) =>
-            {
+            Service::RESET if req.path == identity() && matches!(req.data.as_slice(), [] | [0]) => {
                 Some(Noted::Reset)
             }
             _ => None,

@@ -294,10 +294,7 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
     let late = if opts.reply_delay.is_zero() {
         String::new()
     } else {
-        format!(
-            ", SDO answers {} late",
-            crate::timing::ms(opts.reply_delay)
-        )
+        format!(", SDO answers {} late", crate::timing::ms(opts.reply_delay))
     };
     outln!(
         "serving POWERLINK node {} ({}, {} inverters) on {} (node MAC {:02x}:{:02x}:{:02x}:{:02x}:{:02x}:{:02x}){udp}",

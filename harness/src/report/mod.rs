@@ -31,6 +31,6 @@ pub(crate) use read::{read, run_json};
 pub(crate) use snapshot::{apply_snapshots, SnapshotMode};
 pub(crate) use statements::text_table as statements_table;
 pub(crate) use summary::terminal;
-pub(crate) use write::write_all;
 #[cfg(test)]
 pub(crate) use transcript::render as transcript_for_tests;
+pub(crate) use write::write_all;

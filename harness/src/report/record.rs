@@ -82,7 +82,9 @@ pub(super) fn lines(run: &RunResult) -> Vec<(String, String)> {
             "host timing".into(),
             match m.discarded_attempts {
                 0 => "on time: no attempt discarded".into(),
-                n => format!("late: {n} attempts discarded and run again (each case's transcript says why)"),
+                n => format!(
+                    "late: {n} attempts discarded and run again (each case's transcript says why)"
+                ),
             },
         ));
     }

@@ -665,10 +665,7 @@ impl<L: Link> Manager<L> {
 
     /// The node's IdentResponse.
     pub(crate) fn ident(&mut self) -> Result<IdentResponse, MnError> {
-        let p = self.ask(
-            RequestedService::IDENT_REQUEST,
-            ServiceId::IDENT_RESPONSE,
-        )?;
+        let p = self.ask(RequestedService::IDENT_REQUEST, ServiceId::IDENT_RESPONSE)?;
         let id = IdentResponse::parse(&p).map_err(|e| self.malformed("IdentRequest", e))?;
         self.node_state = Some(id.state);
         Ok(id)
@@ -704,10 +701,7 @@ impl<L: Link> Manager<L> {
 
     /// The node's StatusResponse.
     pub(crate) fn status(&mut self) -> Result<StatusResponse, MnError> {
-        let p = self.ask(
-            RequestedService::STATUS_REQUEST,
-            ServiceId::STATUS_RESPONSE,
-        )?;
+        let p = self.ask(RequestedService::STATUS_REQUEST, ServiceId::STATUS_RESPONSE)?;
         let s = StatusResponse::parse(&p).map_err(|e| self.malformed("StatusRequest", e))?;
         self.node_state = Some(s.state);
         Ok(s)
