@@ -60,6 +60,20 @@ pub(crate) fn process_fields(status: u16, actuals: &[u16]) -> Value {
     serde_json::json!({ "status": status, "actuals": common, "actuals_4_5": extra })
 }
 
+/// How long a process-data step runs on a real clock: a step "for" a time (`process: … for`,
+/// `wait:`) lasts that time, however many cycles fit; `None` on a virtual clock, where the
+/// cycles [`process_run`] counts all fit, and for a step of a number of cycles.
+pub(crate) fn process_time(action: &Action, real_time: bool) -> Option<Duration> {
+    match action {
+        Action::Process {
+            run: crate::suite::Run::For(d),
+            ..
+        }
+        | Action::Wait(d) => Some(*d).filter(|_| real_time),
+        _ => None,
+    }
+}
+
 /// The process-data run a `process` or `wait` step asks of a bus with six words per inverter:
 /// the inverter, its output words (control word, setpoints 1..5; none for `wait`, which runs
 /// FI 1's as they are) and the cycles at `cycle`.

@@ -130,6 +130,37 @@ pub(crate) fn run_cycles<C: Cycling>(
     Ok(())
 }
 
+/// A cycle that runs on a clock of its own (the segment's, the link's): a step "for" a time
+/// runs cycles until that time has passed on it.
+pub(crate) trait Clocked: Cycling {
+    /// The clock's time now.
+    fn now(&self) -> Duration;
+    /// Runs cycles one period apart until `end` on the clock; returns how many ran. A run
+    /// behind its schedule (slow round trips, a loaded host) ends on time with fewer cycles:
+    /// the time stands for what the drive model runs on, not a number of cycles.
+    fn run_cycles_until(&mut self, end: Duration) -> Result<u64, Self::Error>;
+}
+
+/// Runs cycles of `c` for `d` on its clock and one more, the transcript compacted as
+/// [`run_cycles`] compacts it: the first two cycles, the number left out, the last.
+pub(crate) fn run_cycles_for<C: Clocked>(
+    c: &mut C,
+    pending: &mut Vec<Exchange>,
+    d: Duration,
+) -> Result<(), C::Error> {
+    let end = c.now() + d;
+    c.run_cycles(2)?;
+    pending.extend(c.take_exchanges());
+    c.set_recording(false);
+    let middle = c.run_cycles_until(end);
+    c.set_recording(true);
+    match middle? {
+        0 => {}
+        n => pending.push(cycles_left_out(n)),
+    }
+    c.run_cycles(1)
+}
+
 /// Every inverter of a device on its way back.
 #[derive(Debug, Clone)]
 pub(crate) struct Drives {
@@ -184,7 +215,6 @@ impl Drives {
     ) -> Result<(), Problem> {
         pending.extend(c.take_exchanges());
         let from = pending.len();
-        let mut outcome = Err(self.stuck(period * SETTLE_CYCLES));
         for n in 0..SETTLE_CYCLES {
             for (fi, control) in self.controls(n) {
                 let mut words = [0; 6];
@@ -197,10 +227,14 @@ impl Drives {
                 self.observe(fi, status);
             }
             if self.done() {
-                outcome = Ok(());
                 break;
             }
         }
+        let outcome = if self.done() {
+            Ok(())
+        } else {
+            Err(self.stuck(period * SETTLE_CYCLES))
+        };
         pending.extend(c.take_exchanges());
         compact(pending, from);
         outcome

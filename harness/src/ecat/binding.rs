@@ -31,12 +31,12 @@ use super::step::{state_name, EcatStep};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
-use crate::binding::{process_run, Binding, CleanupError, Observation, StepError};
+use crate::binding::{process_run, process_time, Binding, CleanupError, Observation, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Identity};
 use crate::profile::Capability;
 use crate::runner::hex;
-use crate::suite::{Action, OrderSpec, Run};
+use crate::suite::{Action, OrderSpec};
 
 /// A segment the binding can run on: the embedded one also hands out the simulated slave,
 /// for `inject` and `observe`.
@@ -544,22 +544,13 @@ impl<S: DutSegment> EcatBinding<S> {
         settle::run_cycles(&mut c, &mut self.pending, n)
     }
 
-    /// Runs cycles for `d` on the segment's clock and one more, the transcript compacted as
-    /// [`settle::run_cycles`] compacts it: the first two cycles, the number left out, the last.
+    /// Runs cycles for `d` on the segment's clock and one more, the transcript compacted.
     fn cycles_for(&mut self, d: Duration) -> Result<(), MasterError> {
-        let end = self.master.now() + d;
-        self.master.run_cycles(2)?;
-        self.pending.extend(self.master.take_exchanges());
-        self.master.set_recording(false);
-        let middle = self.master.run_cycles_until(end);
-        self.master.set_recording(true);
-        match middle? {
-            0 => {}
-            n => self
-                .pending
-                .push(crate::binding::channel::cycles_left_out(n)),
-        }
-        self.master.run_cycles(1)
+        let mut c = SlaveCycle {
+            master: &mut self.master,
+            station: self.station,
+        };
+        settle::run_cycles_for(&mut c, &mut self.pending, d)
     }
 
     /// Cycles the drives back to "Switch-on block".
@@ -675,15 +666,7 @@ impl<S: DutSegment> Binding for EcatBinding<S> {
             }
             Action::Process { .. } | Action::Wait(_) => {
                 let (fi, words, cycles) = process_run(action, self.master.config().cycle)?;
-                // On the real clock a step "for" a time lasts that time, however many cycles
-                // fit (on the virtual clock they all do).
-                let time = match action {
-                    Action::Process {
-                        run: Run::For(d), ..
-                    }
-                    | Action::Wait(d) => Some(*d).filter(|_| self.master.real_time()),
-                    _ => None,
-                };
+                let time = process_time(action, self.master.real_time());
                 self.process(fi, words, cycles, time)?
             }
             Action::Inject { inverter, error } => {
@@ -737,6 +720,15 @@ impl<S: DutSegment> Cycling for SlaveCycle<'_, S> {
     }
     fn status_word(&mut self, fi: Inverter) -> Result<u16, MasterError> {
         self.master.input_word(self.station, fi.get(), 0)
+    }
+}
+
+impl<S: DutSegment> settle::Clocked for SlaveCycle<'_, S> {
+    fn now(&self) -> Duration {
+        self.master.now()
+    }
+    fn run_cycles_until(&mut self, end: Duration) -> Result<u64, MasterError> {
+        self.master.run_cycles_until(end)
     }
 }
 

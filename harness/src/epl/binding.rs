@@ -17,7 +17,7 @@
 use std::time::Duration;
 
 use proto::epl::sdo::Command;
-use proto::epl::NmtState;
+use proto::epl::{MessageType, NmtCommand, NmtState};
 use proto::nord::epl::{self as def, Slot};
 use proto::nord::errors::SdoAbort;
 use proto::nord::params;
@@ -30,7 +30,9 @@ use super::step::EplStep;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
-use crate::binding::{process_run, Binding, CleanupError, Observation, OpenError, StepError};
+use crate::binding::{
+    process_run, process_time, Binding, CleanupError, Observation, OpenError, StepError,
+};
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
@@ -59,6 +61,11 @@ pub(crate) struct EplBinding<L> {
     pending: Vec<Exchange>,
     commanded: Vec<Inverter>,
     via: Via,
+    /// The node id it was opened with.
+    node: u8,
+    /// The case restarted the node, which then read in its addressing parameters (P160,
+    /// P164; P850…P852): settings the cleanup puts back are read in only by another restart.
+    restarted: bool,
 }
 
 /// The refusal of an SDO abort code, with the manual's words for it.
@@ -148,6 +155,7 @@ impl<L: Link> EplBinding<L> {
         mn.set_recording(true);
         let outputs = 2 * def::process_map(product, true).len();
         mn.set_outputs(vec![0; outputs], false);
+        let node = mn.config().node;
         Ok(EplBinding {
             mn,
             product,
@@ -161,6 +169,8 @@ impl<L: Link> EplBinding<L> {
             pending: Vec::new(),
             commanded: Vec::new(),
             via,
+            node,
+            restarted: false,
         })
     }
 
@@ -258,15 +268,16 @@ impl<L: Link> EplBinding<L> {
         })
     }
 
+    /// Process data for `cycles`, or for `time` on the link's clock when given.
     fn process(
         &mut self,
         inverter: Inverter,
         words: Option<[u16; 6]>,
         cycles: u32,
+        time: Option<Duration>,
     ) -> Result<Value, StepError> {
         self.operational()?;
-        let out = self.mn.outputs_mut().clone();
-        self.mn.set_outputs(out, true);
+        self.mn.set_ready(true);
         if let Some(w) = words {
             if !self.commanded.contains(&inverter) {
                 self.commanded.push(inverter);
@@ -275,7 +286,15 @@ impl<L: Link> EplBinding<L> {
         }
         // The PRes of a cycle carries what the node had before that cycle's PReq: one more
         // cycle brings the inverter's answer to the last of them.
-        self.cycles(u64::from(cycles) + 1).map_err(step_error)?;
+        let mut c = NodeCycle {
+            mn: &mut self.mn,
+            product: self.product,
+        };
+        match time {
+            Some(d) => settle::run_cycles_for(&mut c, &mut self.pending, d),
+            None => settle::run_cycles(&mut c, &mut self.pending, u64::from(cycles) + 1),
+        }
+        .map_err(step_error)?;
         // A PRes that missed its reply time (a node on a loaded host) leaves the inputs of the
         // cycle before it: the status is read from one that came in time, a few cycles on at
         // most. The transcript shows the PReq that got no answer.
@@ -301,11 +320,14 @@ impl<L: Link> EplBinding<L> {
     /// An `epl:` step, as written.
     fn epl_step(&mut self, step: &EplStep) -> Result<Observation, StepError> {
         let fields = match step {
-            EplStep::Nmt(c) => match self.mn.nmt(*c).map_err(step_error)? {
-                Some(state) => self.state_fields(state),
-                // A reset: the node restarts; the MN asks nothing that would move it on.
-                None => self.seen_fields(),
-            },
+            EplStep::Nmt(c) => {
+                self.restarted |= reads_in(*c);
+                match self.mn.nmt(*c).map_err(step_error)? {
+                    Some(state) => self.state_fields(state),
+                    // A reset: the node restarts; the MN asks nothing that would move it on.
+                    None => self.seen_fields(),
+                }
+            }
             EplStep::State(s) => {
                 let state = self.mn.boot(*s).map_err(step_error)?;
                 self.state_fields(state)
@@ -387,6 +409,13 @@ impl<L: Link> EplBinding<L> {
                 return self.download(obj, data, via.unwrap_or(self.via));
             }
             EplStep::Frame(bytes) => {
+                if bytes.first().map(|t| MessageType(t & 0x7F)) == Some(MessageType::PREQ) {
+                    // A PReq as written carries control words the binding does not read: every
+                    // inverter counts as commanded, and the cleanup takes each one back.
+                    self.commanded = (1..=self.product.max_inverters())
+                        .filter_map(|n| Inverter::new(n.into()).ok())
+                        .collect();
+                }
                 let got = self.mn.raw_exchange(bytes).map_err(step_error)?;
                 let state = self.mn.node_state();
                 let mut f = json!({
@@ -520,6 +549,18 @@ impl<L: Link> EplBinding<L> {
                 .map(|_| ())
                 .map_err(|e| Problem::step(format!("setting back {obj}"), step_error(e)))
         });
+        let restored = ledger.restores().next().is_some();
+        if self.restarted
+            && restored
+            && account.attempt(|| "restarting the node to read the settings back in".into())
+        {
+            let r = self.mn.nmt(NmtCommand::SW_RESET);
+            self.mn.set_node(self.node);
+            account.note(
+                r.map(|_| ())
+                    .map_err(|e| Problem::step("restarting the node (NMTSwReset)", step_error(e))),
+            );
+        }
         if account.attempt(|| "back to PRE_OPERATIONAL_2".into()) {
             let r = self.mn.boot(NmtState::PRE_OPERATIONAL_2);
             account.note(
@@ -532,6 +573,7 @@ impl<L: Link> EplBinding<L> {
         }
         self.ledger = Some(Ledger::default());
         self.commanded.clear();
+        self.restarted = false;
         account.into_result()
     }
 
@@ -568,6 +610,8 @@ impl<L: Link> EplBinding<L> {
     fn settle(&mut self) -> Result<(), Problem> {
         let what = |e: MnError| Problem::step("settling the drives", step_error(e));
         self.mn.boot(NmtState::OPERATIONAL).map_err(what)?;
+        // A case whose control words came in PReq frames as written may not have set RD.
+        self.mn.set_ready(true);
         let period = self.mn.config().cycle;
         let mut drives = Drives::new(self.product.max_inverters(), &self.commanded);
         let mut c = NodeCycle {
@@ -576,6 +620,16 @@ impl<L: Link> EplBinding<L> {
         };
         drives.settle(&mut c, &mut self.pending, period, what)
     }
+}
+
+/// Whether the node reads its settings in again after `c`: every reset but that of the
+/// communication profile alone (DS 301 NMT_GS_RESET_APPLICATION and _CONFIGURATION; "so that
+/// the parameter settings are read in", BU 0620 §3.7.3, BU 2200 §5.2.5).
+fn reads_in(c: NmtCommand) -> bool {
+    matches!(
+        c,
+        NmtCommand::SW_RESET | NmtCommand::RESET_NODE | NmtCommand::RESET_CONFIGURATION
+    )
 }
 
 /// Puts FI `fi`'s six words into the PReq payload where the product's process map has them.
@@ -627,6 +681,15 @@ impl<L: Link> Cycling for NodeCycle<'_, L> {
     }
     fn status_word(&mut self, fi: Inverter) -> Result<u16, MnError> {
         Ok(inputs_of(self.mn, self.product, fi)[0])
+    }
+}
+
+impl<L: Link> settle::Clocked for NodeCycle<'_, L> {
+    fn now(&self) -> Duration {
+        self.mn.now()
+    }
+    fn run_cycles_until(&mut self, end: Duration) -> Result<u64, MnError> {
+        self.mn.run_cycles_until(end)
     }
 }
 
@@ -688,7 +751,8 @@ impl<L: Link> Binding for EplBinding<L> {
             }
             Action::Process { .. } | Action::Wait(_) => {
                 let (fi, words, cycles) = process_run(action, self.mn.config().cycle)?;
-                self.process(fi, words, cycles)?
+                let time = process_time(action, self.mn.link_mut().device().is_none());
+                self.process(fi, words, cycles, time)?
             }
             Action::Inject { inverter, error } => {
                 let (node, _) = self.simulated()?;

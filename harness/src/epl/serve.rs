@@ -11,13 +11,13 @@
 //!   address to give the interface. Without an IPv4 address only raw Ethernet is served, and a
 //!   line on stderr says so.
 //!
-//! One thread owns the raw link: each frame goes to [`Node::receive`] and what it returns is sent
-//! at once (a PRes within the PReq's cycle), and [`Node::poll`] runs at least every
-//! [`POLL_PERIOD`] (the Basic Ethernet timeout, the loss of the SoC, the drive model). A second
-//! thread owns the UDP socket and passes datagrams to [`Node::udp`]: the raw link cannot be
-//! waited on together with another socket, and a UDP request must not wait for the next frame.
-//! The node is shared under a mutex, and the time handed to it (since start) is read with the
-//! lock held, so it never goes backwards.
+//! One thread serves both, frames first: each frame goes to [`Node::receive`] and what it
+//! returns is sent at once (a PRes within the PReq's cycle), a datagram to [`Node::udp`] once
+//! no frame that came before it is left, and [`Node::poll`] runs at least every
+//! [`POLL_PERIOD`] (the Basic Ethernet timeout, the loss of the SoC, the drive model). With a
+//! thread each, a datagram sent right after a ResetCommunication frame was answered before the
+//! frame was taken, under load. The node is kept under a mutex for [`Served::state`], and the
+//! time handed to it (since start) is read with the lock held, so it never goes backwards.
 //!
 //! `--reply-delay MS` makes the node late on purpose: its SDO answers (ASnd and UDP) leave MS
 //! late, held back without stopping either loop. Its IdentResponse and StatusResponse do not:
@@ -28,6 +28,7 @@
 
 use std::collections::VecDeque;
 use std::net::{IpAddr, SocketAddr, UdpSocket};
+use std::os::fd::AsFd;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread;
@@ -43,7 +44,7 @@ use crate::net::serve_args::RawServeArgs;
 use crate::net::udp::{ipv4_of, transient};
 use crate::net::workers::{serve_for, Workers};
 pub use crate::net::LinkError;
-use crate::net::{RawLink, MAX_FRAME};
+use crate::net::{RawLink, Ready, MAX_FRAME};
 
 /// How long the raw thread polls the socket after a frame before it sleeps: the next frame of
 /// a cycle (SoA after PReq) is taken without a thread wake-up.
@@ -228,8 +229,9 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
             let addr = SocketAddr::from((ip, SDO_UDP_PORT));
             let socket =
                 UdpSocket::bind(addr).map_err(|source| ServeError::Udp { addr, source })?;
+            // Read only when ready (RawLink::recv_or): a spurious wake-up must not block.
             socket
-                .set_read_timeout(Some(STOP_CHECK))
+                .set_nonblocking(true)
                 .map_err(|source| ServeError::Udp { addr, source })?;
             Some((addr, socket))
         }
@@ -250,33 +252,18 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let stop = served.workers.stop_flag();
     let thread = |e: std::io::Error| ServeError::Panicked(format!("cannot start a thread: {e}"));
     let shared = Shared {
-        node: node.clone(),
-        counters: counters.clone(),
-        stop: stop.clone(),
+        node,
+        counters,
+        stop,
         start,
         reply_delay: opts.reply_delay,
     };
     served
         .workers
         .spawn(format!("epl-node-{}", opts.iface), move || {
-            run_raw(link, &shared)
+            run(link, udp.map(|(a, s)| (s, a)), &shared)
         })
         .map_err(thread)?;
-    if let Some((addr, socket)) = udp {
-        let shared = Shared {
-            node,
-            counters,
-            stop,
-            start,
-            reply_delay: opts.reply_delay,
-        };
-        served
-            .workers
-            .spawn(format!("epl-udp-{}", opts.iface), move || {
-                run_udp(socket, addr, &shared)
-            })
-            .map_err(thread)?;
-    }
     Ok(served)
 }
 
@@ -421,12 +408,21 @@ impl Shared {
     }
 }
 
-/// The raw Ethernet loop: frames in, the node's frames out; its timers between them.
-fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
+/// The node's one loop: frames in and the node's frames out, SDO datagrams in and its answers
+/// back to their sender, its timers between them. One thread takes both, frames first
+/// ([`RawLink::recv_or`]), so the node sees them in the order they came on the wire: a
+/// datagram sent after a ResetCommunication frame finds the node reset, as on a device.
+fn run(
+    mut link: RawLink,
+    udp: Option<(UdpSocket, SocketAddr)>,
+    shared: &Shared,
+) -> Result<(), ServeError> {
     let c = &shared.counters;
     let mut buf = vec![0u8; MAX_FRAME];
+    let mut dgram = [0u8; 2048];
     let mut next_poll = Duration::ZERO;
     let mut late = Delayed::<Vec<u8>>::new(shared.reply_delay);
+    let mut late_udp = Delayed::<(Vec<u8>, SocketAddr)>::new(shared.reply_delay);
     let send = |link: &mut RawLink, f: &[u8]| match link.send(f) {
         Ok(()) => {
             bump(&c.frames_out);
@@ -435,9 +431,27 @@ fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
         Err(e) if e.is_link_down() => Ok(()),
         Err(e) => Err(ServeError::from(e)),
     };
+    let send_udp = |(socket, addr): &(UdpSocket, SocketAddr), d: &[u8], to: SocketAddr| match socket
+        .send_to(d, to)
+    {
+        Ok(_) => {
+            bump(&c.datagrams_out);
+            Ok(())
+        }
+        Err(e) if transient(&e) => Ok(()),
+        Err(source) => Err(ServeError::Udp {
+            addr: *addr,
+            source,
+        }),
+    };
     while !shared.stopped() {
         for f in late.due() {
             send(&mut link, &f)?;
+        }
+        if let Some(u) = &udp {
+            for (d, to) in late_udp.due() {
+                send_udp(u, &d, to)?;
+            }
         }
         if shared.start.elapsed() >= next_poll {
             let (mut node, now) = shared.node()?;
@@ -447,8 +461,10 @@ fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
         let wait = next_poll
             .saturating_sub(shared.start.elapsed())
             .min(late.next_in())
+            .min(late_udp.next_in())
             .min(STOP_CHECK);
-        let received = match link.recv(&mut buf, Instant::now() + wait) {
+        let other = udp.as_ref().map(|(s, _)| s.as_fd());
+        let ready = match link.recv_or(&mut buf, Instant::now() + wait, other) {
             Ok(r) => r,
             Err(e) if e.is_link_down() => {
                 // The cable is out: the node sees no frames, its timers still run.
@@ -458,58 +474,37 @@ fn run_raw(mut link: RawLink, shared: &Shared) -> Result<(), ServeError> {
             Err(e) => return Err(e.into()),
         };
         c.oversized.store(link.oversized(), Ordering::Relaxed);
-        let Some(r) = received else { continue };
-        bump(&c.frames_in);
-        let out = {
-            let (mut node, now) = shared.node()?;
-            node.receive(&buf[..r.len], now)
-        };
-        for f in out {
-            if let Some(f) = if is_sdo(&f) { late.hold(f) } else { Some(f) } {
-                send(&mut link, &f)?;
+        match ready {
+            Ready::Nothing => {}
+            Ready::Frame(r) => {
+                bump(&c.frames_in);
+                let out = {
+                    let (mut node, now) = shared.node()?;
+                    node.receive(&buf[..r.len], now)
+                };
+                for f in out {
+                    if let Some(f) = if is_sdo(&f) { late.hold(f) } else { Some(f) } {
+                        send(&mut link, &f)?;
+                    }
+                }
             }
-        }
-    }
-    Ok(())
-}
-
-/// The UDP loop: SDO datagrams in, the node's answers back to their sender.
-fn run_udp(socket: UdpSocket, addr: SocketAddr, shared: &Shared) -> Result<(), ServeError> {
-    let c = &shared.counters;
-    let mut buf = [0u8; 2048];
-    let mut late = Delayed::<(Vec<u8>, SocketAddr)>::new(shared.reply_delay);
-    let send = |d: &[u8], to: SocketAddr| match socket.send_to(d, to) {
-        Ok(_) => {
-            bump(&c.datagrams_out);
-            Ok(())
-        }
-        Err(e) if transient(&e) => Ok(()),
-        Err(source) => Err(ServeError::Udp { addr, source }),
-    };
-    while !shared.stopped() {
-        for (d, to) in late.due() {
-            send(&d, to)?;
-        }
-        if !shared.reply_delay.is_zero() {
-            // A zero time-out would block for ever: wake for the next held answer.
-            let wait = late.next_in().clamp(Duration::from_micros(100), STOP_CHECK);
-            socket
-                .set_read_timeout(Some(wait))
-                .map_err(|source| ServeError::Udp { addr, source })?;
-        }
-        let (len, from) = match socket.recv_from(&mut buf) {
-            Ok(r) => r,
-            Err(e) if transient(&e) => continue,
-            Err(source) => return Err(ServeError::Udp { addr, source }),
-        };
-        bump(&c.datagrams_in);
-        let out = {
-            let (mut node, now) = shared.node()?;
-            node.udp(from, &buf[..len], now)
-        };
-        for d in out {
-            if let Some((d, to)) = late.hold((d, from)) {
-                send(&d, to)?;
+            Ready::Other => {
+                let Some(u) = &udp else { continue };
+                let (len, from) = match u.0.recv_from(&mut dgram) {
+                    Ok(r) => r,
+                    Err(e) if transient(&e) => continue,
+                    Err(source) => return Err(ServeError::Udp { addr: u.1, source }),
+                };
+                bump(&c.datagrams_in);
+                let out = {
+                    let (mut node, now) = shared.node()?;
+                    node.udp(from, &dgram[..len], now)
+                };
+                for d in out {
+                    if let Some((d, to)) = late_udp.hold((d, from)) {
+                        send_udp(u, &d, to)?;
+                    }
+                }
             }
         }
     }

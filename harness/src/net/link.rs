@@ -16,7 +16,7 @@
 //! packet type.
 
 use std::io::IoSliceMut;
-use std::os::fd::{AsFd, IntoRawFd, OwnedFd};
+use std::os::fd::{AsFd, BorrowedFd, IntoRawFd, OwnedFd};
 use std::time::{Duration, Instant};
 
 use nix::errno::Errno;
@@ -53,6 +53,17 @@ pub(crate) struct Received {
     /// the Unix epoch; compare stamps with each other, not with [`Instant`]). `None` when the
     /// kernel gave none.
     pub(crate) stamp: Option<Duration>,
+}
+
+/// What [`RawLink::recv_or`] found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Ready {
+    /// A frame of the link, in the caller's buffer.
+    Frame(Received),
+    /// The other socket is readable, and no frame of the link is queued.
+    Other,
+    /// Nothing by the deadline.
+    Nothing,
 }
 
 /// An open raw Ethernet link: frames of one EtherType (or all) on one interface.
@@ -176,24 +187,61 @@ impl RawLink {
         buf: &mut [u8],
         deadline: Instant,
     ) -> Result<Option<Received>, LinkError> {
+        Ok(match self.recv_or(buf, deadline, None)? {
+            Ready::Frame(r) => Some(r),
+            Ready::Other | Ready::Nothing => None,
+        })
+    }
+
+    /// As [`RawLink::recv`], and waits on `other` (a socket of the same host) as well: a frame
+    /// queued on the link comes first, [`Ready::Other`] only when none is. A device served on
+    /// the link and on a UDP socket by one thread so takes a datagram after every frame that
+    /// came before it on the wire: the kernel hands a frame to packet sockets before it
+    /// delivers it to its UDP socket, so those frames are queued here by then.
+    pub(crate) fn recv_or(
+        &mut self,
+        buf: &mut [u8],
+        deadline: Instant,
+        other: Option<BorrowedFd<'_>>,
+    ) -> Result<Ready, LinkError> {
         let spin_until = Instant::now() + self.spin;
         loop {
             if let Some(r) = self.try_recv(buf)? {
-                return Ok(Some(r));
+                return Ok(Ready::Frame(r));
             }
             let now = Instant::now();
-            if now >= deadline {
-                return Ok(None);
-            }
-            if now < spin_until {
+            let glance = now >= deadline || now < spin_until;
+            let wait = if glance {
+                TimeSpec::from_duration(Duration::ZERO)
+            } else {
+                TimeSpec::from_duration(deadline - now)
+            };
+            if glance && other.is_none() {
+                if now >= deadline {
+                    return Ok(Ready::Nothing);
+                }
                 std::thread::yield_now();
                 continue;
             }
-            let wait = TimeSpec::from_duration(deadline - now);
-            let mut fds = [PollFd::new(self.socket.as_fd(), PollFlags::POLLIN)];
+            let mut fds = vec![PollFd::new(self.socket.as_fd(), PollFlags::POLLIN)];
+            fds.extend(other.map(|o| PollFd::new(o, PollFlags::POLLIN)));
             match ppoll(&mut fds, Some(wait), None) {
                 Ok(_) | Err(Errno::EINTR) => {}
                 Err(e) => return Err(self.error("wait for a frame", e)),
+            }
+            let other_ready = fds
+                .get(1)
+                .and_then(PollFd::revents)
+                .is_some_and(|r| !r.is_empty());
+            let frame_ready = fds[0].revents().is_some_and(|r| !r.is_empty());
+            if other_ready && !frame_ready {
+                return Ok(Ready::Other);
+            }
+            if glance && !frame_ready {
+                if now >= deadline {
+                    return Ok(Ready::Nothing);
+                }
+                std::thread::yield_now();
             }
         }
     }

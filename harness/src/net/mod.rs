@@ -19,4 +19,4 @@ pub use error::LinkError;
 #[allow(unused_imports)] // the module's API, not all of it used yet
 pub(crate) use iface::{interface, Interface, Mac};
 #[allow(unused_imports)]
-pub(crate) use link::{RawLink, Received, MAX_FRAME};
+pub(crate) use link::{RawLink, Ready, Received, MAX_FRAME};

@@ -329,6 +329,11 @@ impl<L: Link> Manager<L> {
         self.ready = ready;
     }
 
+    /// Sets the PReq's RD flag: the payload is valid, the node takes it (DS 301 §4.6.1.1.3).
+    pub(crate) fn set_ready(&mut self, ready: bool) {
+        self.ready = ready;
+    }
+
     pub(crate) fn outputs_mut(&mut self) -> &mut Vec<u8> {
         &mut self.outputs
     }
@@ -626,6 +631,24 @@ impl<L: Link> Manager<L> {
             self.cycle(RequestedService::NO_SERVICE)?;
         }
         Ok(())
+    }
+
+    /// Runs cycles one period apart on a fixed grid until `end` on the link's clock; returns
+    /// how many ran. A cycle that starts late does not move the ones after it (a cycle is
+    /// isochronous, DS 301 §4.2.4.1), and a run behind its schedule ends on time with fewer
+    /// cycles: with the next cycle always one period after the last one started, a thousand
+    /// cycles of 1 ms lasted 1.3 s and more on a loaded host, and the node's drive ramped for
+    /// that long.
+    pub(crate) fn run_cycles_until(&mut self, end: Duration) -> Result<u64, MnError> {
+        let mut due = self.next_cycle.max(self.link.now());
+        let mut n = 0;
+        while due < end && self.link.now() < end {
+            self.next_cycle = due;
+            self.cycle(RequestedService::NO_SERVICE)?;
+            n += 1;
+            due += self.config.cycle;
+        }
+        Ok(n)
     }
 
     /// Lets `d` pass without sending anything (the MN "fails", the cable is cut); the next
