@@ -409,9 +409,11 @@ impl<L: Link> EplBinding<L> {
                 return self.download(obj, data, via.unwrap_or(self.via));
             }
             EplStep::Frame(bytes) => {
-                if bytes.first().map(|t| MessageType(t & 0x7F)) == Some(MessageType::PREQ) {
-                    // A PReq as written carries control words the binding does not read: every
-                    // inverter counts as commanded, and the cleanup takes each one back.
+                let preq = bytes.first().map(|t| MessageType(t & 0x7F)) == Some(MessageType::PREQ);
+                if preq && bytes.get(4).is_some_and(|f| f & RD != 0) {
+                    // A PReq as written, its payload valid (RD), carries control words the
+                    // binding does not read: every inverter counts as commanded, and the
+                    // cleanup takes each one back.
                     self.commanded = (1..=self.product.max_inverters())
                         .filter_map(|n| Inverter::new(n.into()).ok())
                         .collect();
@@ -542,6 +544,9 @@ impl<L: Link> EplBinding<L> {
         if drove && account.attempt(|| "settling the drives".into()) {
             account.note(self.settle());
         }
+        // SDO first needs a state that serves it, and a PDO mapping is written back only in
+        // PRE_OPERATIONAL_2 (08000022h in OPERATIONAL, DS 301 §6.4.9).
+        self.pre_operational_2(&mut account);
         let via = self.via;
         ledger.restore(&mut account, |obj, before| {
             self.mn
@@ -560,13 +565,7 @@ impl<L: Link> EplBinding<L> {
                 r.map(|_| ())
                     .map_err(|e| Problem::step("restarting the node (NMTSwReset)", step_error(e))),
             );
-        }
-        if account.attempt(|| "back to PRE_OPERATIONAL_2".into()) {
-            let r = self.mn.boot(NmtState::PRE_OPERATIONAL_2);
-            account.note(
-                r.map(|_| ())
-                    .map_err(|e| Problem::step("back to PRE_OPERATIONAL_2", step_error(e))),
-            );
+            self.pre_operational_2(&mut account);
         }
         if drove && account.attempt(|| "waiting for the end of cyclic communication".into()) {
             account.note(self.quiet());
@@ -575,6 +574,17 @@ impl<L: Link> EplBinding<L> {
         self.commanded.clear();
         self.restarted = false;
         account.into_result()
+    }
+
+    /// Boots the node back to PRE_OPERATIONAL_2, under `account`.
+    fn pre_operational_2(&mut self, account: &mut Account) {
+        if account.attempt(|| "back to PRE_OPERATIONAL_2".into()) {
+            let r = self.mn.boot(NmtState::PRE_OPERATIONAL_2);
+            account.note(
+                r.map(|_| ())
+                    .map_err(|e| Problem::step("back to PRE_OPERATIONAL_2", step_error(e))),
+            );
+        }
     }
 
     /// Waits until the interface no longer shows cyclic process data (SK 550P P872 bit 1,
@@ -621,6 +631,9 @@ impl<L: Link> EplBinding<L> {
         drives.settle(&mut c, &mut self.pending, period, what)
     }
 }
+
+/// The PReq's "ready" flag in its byte 4 (DS 301 §4.6.1.1.3): the payload is valid.
+const RD: u8 = 0x01;
 
 /// Whether the node reads its settings in again after `c`: every reset but that of the
 /// communication profile alone (DS 301 NMT_GS_RESET_APPLICATION and _CONFIGURATION; "so that
