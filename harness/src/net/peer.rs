@@ -312,7 +312,9 @@ impl<D> Link for NetLink<D> {
             }
             match self.udp.recv_from(&mut buf) {
                 Ok((n, from)) if from == self.peer => return Ok(Some(buf[..n].to_vec())),
+                // A signal (a stopped and continued process, a debugger) is no link error.
                 Ok(_) => continue,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
                 Err(e)
                     if matches!(
                         e.kind(),
