@@ -133,102 +133,118 @@ fn every_powerlink_suite_passes_against_the_served_node_over_a_veth_pair() {
     if !require_root_or_skip(why) || !require_tshark(why) {
         return;
     }
-    for product in ["sk550p", "tu3-pol", "tu4-pol", "cu4-pol"] {
-        let ns = Netns::new("eplsuites");
-        ns.add_ipv4("192.168.100.1/24", "192.168.100.240/24");
-        let mut options = ServeOptions::new(ns.root_if());
-        options.profile = product.to_string();
-        let served = start(&options).expect("serve epl");
-        let run = SuiteRun::new(
-            &ns,
-            "epl",
-            &format!("{product}@epl"),
-            &format!("epl://{}", ns.ns_if()),
-        );
-        let stats = served.stop().expect("the node served to the end");
-        let manual = if product == "sk550p" {
-            "bu0620"
-        } else {
-            "bu2200"
-        };
-        run.assert_passed(&[
-            (format!("{manual}/epl-nmt/"), 3),
-            (format!("{manual}/epl-sdo-abort/"), 5),
-            (format!("{manual}/epl-pdo-mapping/"), 3),
-            (format!("{manual}/drive-words/"), 1),
-            ("epl/bad-input/".to_string(), 30),
-        ]);
-        assert!(stats.frames_in > 5_000, "{product}: {stats:?}");
-        assert!(
-            stats.datagrams_in > 0,
-            "{product}: SDO over UDP ran: {stats:?}"
-        );
-
-        // Both captures dissect as POWERLINK; the wire's has SDO over UDP too.
-        let run_d = dissect(&run.run_pcap);
-        let wire_d = dissect(&run.wire_pcap);
-        let count = |d: &Dissected, stack: &str| {
-            d.stacks
-                .iter()
-                .filter(|(s, _)| s.contains(stack))
-                .map(|(_, n)| *n)
-                .sum::<usize>()
-        };
-        assert!(
-            count(&run_d, "eth:ethertype:epl") > 1000,
-            "{:?}",
-            run_d.stacks
-        );
-        assert!(
-            count(&wire_d, "eth:ethertype:epl") > 1000,
-            "{:?}",
-            wire_d.stacks
-        );
-        assert!(count(&wire_d, "udp:epl") > 10, "{:?}", wire_d.stacks);
-
-        // Malformed frames and expert warnings only in steps that send bytes as written.
-        let wrong: Vec<String> = run_d
-            .flagged
-            .iter()
-            .filter(|(_, label)| !label.as_deref().is_some_and(on_purpose))
-            .map(|(n, label)| format!("run.pcapng frame {n}: {label:?}"))
+    // The four products side by side, each on a pair of its own (the served nodes all have
+    // 192.168.100.1, each tied to its interface): their runs mostly wait on the drives'
+    // real-time steps, and one after another they took seven minutes of CI.
+    let failed: Vec<&str> = std::thread::scope(|s| {
+        let runs: Vec<_> = ["sk550p", "tu3-pol", "tu4-pol", "cu4-pol"]
+            .into_iter()
+            .map(|product| (product, s.spawn(move || check_product(product))))
             .collect();
-        assert!(
-            wrong.is_empty(),
-            "{product}: flagged outside the bad-input steps:\n{}",
-            wrong.join("\n")
-        );
-        // The wire's capture has no labels: it may flag no more frames than the run's, which
-        // has every frame and datagram the wire has.
-        assert!(
-            !run_d.flagged.is_empty() && wire_d.flagged.len() <= run_d.flagged.len(),
-            "{product}: the wire shows {} flagged frames, the run's capture {}",
-            wire_d.flagged.len(),
-            run_d.flagged.len()
-        );
+        runs.into_iter()
+            .filter_map(|(product, run)| run.join().err().map(|_| product))
+            .collect()
+    });
+    assert!(failed.is_empty(), "failed: {}", failed.join(", "));
+}
 
-        // The node's NMT states, as tshark decodes them from its frames, move only as the CN
-        // state machine allows, and the boot sequence is there.
-        let mut moves = HashSet::new();
-        for w in wire_d.states.windows(2) {
-            if w[0] != w[1] {
-                moves.insert((w[0], w[1]));
-            }
-        }
-        let illegal: Vec<String> = moves
+/// Serves `product`'s node on a pair of its own, runs every suite against it and checks the run
+/// and both captures; panics with what is wrong.
+fn check_product(product: &str) {
+    let ns = Netns::new(&format!("epl-{product}"));
+    ns.add_ipv4("192.168.100.1/24", "192.168.100.240/24");
+    let mut options = ServeOptions::new(ns.root_if());
+    options.profile = product.to_string();
+    let served = start(&options).expect("serve epl");
+    let run = SuiteRun::new(
+        &ns,
+        "epl",
+        &format!("{product}@epl"),
+        &format!("epl://{}", ns.ns_if()),
+    );
+    let stats = served.stop().expect("the node served to the end");
+    let manual = if product == "sk550p" {
+        "bu0620"
+    } else {
+        "bu2200"
+    };
+    run.assert_passed(&[
+        (format!("{manual}/epl-nmt/"), 3),
+        (format!("{manual}/epl-sdo-abort/"), 5),
+        (format!("{manual}/epl-pdo-mapping/"), 3),
+        (format!("{manual}/drive-words/"), 1),
+        ("epl/bad-input/".to_string(), 30),
+    ]);
+    assert!(stats.frames_in > 5_000, "{product}: {stats:?}");
+    assert!(
+        stats.datagrams_in > 0,
+        "{product}: SDO over UDP ran: {stats:?}"
+    );
+
+    // Both captures dissect as POWERLINK; the wire's has SDO over UDP too.
+    let run_d = dissect(&run.run_pcap);
+    let wire_d = dissect(&run.wire_pcap);
+    let count = |d: &Dissected, stack: &str| {
+        d.stacks
             .iter()
-            .filter(|(a, b)| !allowed(*a, *b))
-            .map(|(a, b)| format!("{a:02X}h → {b:02X}h"))
-            .collect();
-        assert!(illegal.is_empty(), "{product}: {}", illegal.join(", "));
-        for m in [(0x1D, 0x5D), (0x5D, 0x6D), (0x6D, 0xFD)] {
-            assert!(
-                moves.contains(&m),
-                "{product}: no {:02X}h → {:02X}h in {moves:?}",
-                m.0,
-                m.1
-            );
+            .filter(|(s, _)| s.contains(stack))
+            .map(|(_, n)| *n)
+            .sum::<usize>()
+    };
+    assert!(
+        count(&run_d, "eth:ethertype:epl") > 1000,
+        "{:?}",
+        run_d.stacks
+    );
+    assert!(
+        count(&wire_d, "eth:ethertype:epl") > 1000,
+        "{:?}",
+        wire_d.stacks
+    );
+    assert!(count(&wire_d, "udp:epl") > 10, "{:?}", wire_d.stacks);
+
+    // Malformed frames and expert warnings only in steps that send bytes as written.
+    let wrong: Vec<String> = run_d
+        .flagged
+        .iter()
+        .filter(|(_, label)| !label.as_deref().is_some_and(on_purpose))
+        .map(|(n, label)| format!("run.pcapng frame {n}: {label:?}"))
+        .collect();
+    assert!(
+        wrong.is_empty(),
+        "{product}: flagged outside the bad-input steps:\n{}",
+        wrong.join("\n")
+    );
+    // The wire's capture has no labels: it may flag no more frames than the run's, which
+    // has every frame and datagram the wire has.
+    assert!(
+        !run_d.flagged.is_empty() && wire_d.flagged.len() <= run_d.flagged.len(),
+        "{product}: the wire shows {} flagged frames, the run's capture {}",
+        wire_d.flagged.len(),
+        run_d.flagged.len()
+    );
+
+    // The node's NMT states, as tshark decodes them from its frames, move only as the CN
+    // state machine allows, and the boot sequence is there.
+    let mut moves = HashSet::new();
+    for w in wire_d.states.windows(2) {
+        if w[0] != w[1] {
+            moves.insert((w[0], w[1]));
         }
-        run.finish();
     }
+    let illegal: Vec<String> = moves
+        .iter()
+        .filter(|(a, b)| !allowed(*a, *b))
+        .map(|(a, b)| format!("{a:02X}h → {b:02X}h"))
+        .collect();
+    assert!(illegal.is_empty(), "{product}: {}", illegal.join(", "));
+    for m in [(0x1D, 0x5D), (0x5D, 0x6D), (0x6D, 0xFD)] {
+        assert!(
+            moves.contains(&m),
+            "{product}: no {:02X}h → {:02X}h in {moves:?}",
+            m.0,
+            m.1
+        );
+    }
+    run.finish();
 }

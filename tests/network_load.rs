@@ -124,9 +124,6 @@ fn five_runs(ns: Option<&Netns>, profile: &str, dut: &str, base: u64) -> Vec<Str
 }
 
 #[test]
-#[ignore = "not green yet: POWERLINK cases inherit what earlier ones left (error history, \
-            a 5605 configuration error, a drive left in 0931h), and a served simulator starved \
-            by the load answers late though the harness was on time; run it with --ignored"]
 fn five_shuffled_runs_per_bus_under_load_give_the_same_verdicts() {
     let why = "five shuffled --dut runs per bus on a loaded host";
     if !require_root_or_skip(why) {

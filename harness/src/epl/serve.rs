@@ -227,11 +227,7 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let udp = match ipv4_of(&opts.iface) {
         Some((ip, _)) => {
             let addr = SocketAddr::from((ip, SDO_UDP_PORT));
-            let socket =
-                UdpSocket::bind(addr).map_err(|source| ServeError::Udp { addr, source })?;
-            // Read only when ready (RawLink::recv_or): a spurious wake-up must not block.
-            socket
-                .set_nonblocking(true)
+            let socket = udp_socket(addr, &opts.iface)
                 .map_err(|source| ServeError::Udp { addr, source })?;
             Some((addr, socket))
         }
@@ -265,6 +261,19 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         })
         .map_err(thread)?;
     Ok(served)
+}
+
+/// The node's UDP socket on `addr`, tied to `iface`: its answers leave there whatever the
+/// routes say, and nodes served on several interfaces of one host can all have the address
+/// the manuals give (192.168.100.N, BU 0620 §3.7.3), each on its own interface. Read only when
+/// ready ([`RawLink::recv_or`]): non-blocking, so a spurious wake-up cannot block.
+fn udp_socket(addr: SocketAddr, iface: &str) -> std::io::Result<UdpSocket> {
+    use socket2::{Domain, Protocol, Socket, Type};
+    let s = Socket::new(Domain::for_address(addr), Type::DGRAM, Some(Protocol::UDP))?;
+    s.bind_device(Some(iface.as_bytes()))?;
+    s.bind(&addr.into())?;
+    s.set_nonblocking(true)?;
+    Ok(s.into())
 }
 
 /// Serves until `duration` has passed (forever when `None`), after a line on stdout that says
