@@ -227,8 +227,8 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let udp = match ipv4_of(&opts.iface) {
         Some((ip, _)) => {
             let addr = SocketAddr::from((ip, SDO_UDP_PORT));
-            let socket = udp_socket(addr, &opts.iface)
-                .map_err(|source| ServeError::Udp { addr, source })?;
+            let socket =
+                udp_socket(addr, &opts.iface).map_err(|source| ServeError::Udp { addr, source })?;
             Some((addr, socket))
         }
         None => None,
