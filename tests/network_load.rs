@@ -124,6 +124,9 @@ fn five_runs(ns: Option<&Netns>, profile: &str, dut: &str, base: u64) -> Vec<Str
 }
 
 #[test]
+#[ignore = "eleven minutes of its own, which would take .ci/run past its 30 (the four buses \
+            already run side by side; five runs of the slowest take that long): run it with \
+            --ignored before a release"]
 fn five_shuffled_runs_per_bus_under_load_give_the_same_verdicts() {
     let why = "five shuffled --dut runs per bus on a loaded host";
     if !require_root_or_skip(why) {
