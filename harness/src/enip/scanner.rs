@@ -576,6 +576,16 @@ impl Scanner {
         inverter: Inverter,
         cycles: u32,
     ) -> Result<Value, StepError> {
+        // A device on the network produces its T→O frames on its own timer: the one that comes
+        // within a cycle may have left before the device took that cycle's O→T frame. One
+        // more cycle brings its answer to the last of them, as the PRes and the EtherCAT
+        // inputs come a cycle later (a loaded host showed 0940h where 047Eh had been sent
+        // for one cycle).
+        let cycles = if self.link.timeout().is_some() {
+            cycles + 1
+        } else {
+            cycles
+        };
         self.run_process_until(inverter, cycles, None)
     }
 
