@@ -286,13 +286,9 @@ impl<L: Link> EplBinding<L> {
         }
         // The PRes of a cycle carries what the node had before that cycle's PReq: one more
         // cycle brings the inverter's answer to the last of them.
-        let mut c = NodeCycle {
-            mn: &mut self.mn,
-            product: self.product,
-        };
         match time {
-            Some(d) => settle::run_cycles_for(&mut c, &mut self.pending, d),
-            None => settle::run_cycles(&mut c, &mut self.pending, u64::from(cycles) + 1),
+            Some(d) => self.cycles_for(d),
+            None => self.cycles(u64::from(cycles) + 1),
         }
         .map_err(step_error)?;
         // A PRes that missed its reply time (a node on a loaded host) leaves the inputs of the
@@ -315,6 +311,15 @@ impl<L: Link> EplBinding<L> {
             product: self.product,
         };
         settle::run_cycles(&mut c, &mut self.pending, n)
+    }
+
+    /// Runs cycles for `d` on the link's clock and one more, the transcript compacted.
+    fn cycles_for(&mut self, d: Duration) -> Result<(), MnError> {
+        let mut c = NodeCycle {
+            mn: &mut self.mn,
+            product: self.product,
+        };
+        settle::run_cycles_for(&mut c, &mut self.pending, d)
     }
 
     /// An `epl:` step, as written.
