@@ -177,8 +177,13 @@ fn a_device_that_answers_past_the_limit_fails_the_cases_that_reach_it() {
     let _ = std::fs::remove_dir_all(&out_dir);
 }
 
-/// Where the served simulator listens (other tests take 127.0.0.2, .3, .5–.9, .11 and .13).
-const SERVED: &str = "127.0.0.12:44818";
+/// The served simulators of the full runs: product, profile, where it listens and the
+/// scanner's own address (its UDP 2222 for T→O data, whatever else runs on this host). Other
+/// tests take 127.0.0.2, .3, .5–.9, .11, .13, .14, .17, .18, .20–.22 and .24.
+const SERVED: [(&str, &str, &str, &str); 2] = [
+    ("tu4-eip", "tu4-eip@enip", "127.0.0.12:44818", "127.0.0.19"),
+    ("sk550p", "sk550p@enip", "127.0.0.25:44818", "127.0.0.26"),
+];
 
 /// One encapsulation message and its reply (header: command, length, session, status,
 /// context, options; CIP Vol 2 §2-3.2).
@@ -200,8 +205,8 @@ fn encap(s: &mut TcpStream, command: u16, session: u32, data: &[u8]) -> Vec<u8> 
 
 /// P102 of FI 1 (class 101, instance 0 = parameter set 1, attribute 102: BU 2100 §6.3,
 /// BU 0620 §2.3.5), read by a client of the test's own, apart from the harness.
-fn read_p102() -> u16 {
-    let mut s = TcpStream::connect(SERVED).expect("connect to the served simulator");
+fn read_p102(served: &str) -> u16 {
+    let mut s = TcpStream::connect(served).expect("connect to the served simulator");
     s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
     // RegisterSession (0065h): protocol version 1, options 0.
     let reply = encap(&mut s, 0x65, 0, &[1, 0, 0, 0]);
@@ -233,69 +238,87 @@ fn transcript(out: &std::path::Path, profile: &str, case: &str) -> String {
 }
 
 /// Takes about 100 s of real time per profile: the suites run their drive for seconds at a
-/// time, and a device on the network runs on its own clock.
+/// time, and a device on the network runs on its own clock. The two profiles run side by side,
+/// each against a device of its own.
 #[test]
 fn network_runs_leave_the_device_as_each_case_found_it() {
     // On a loaded host when `.ci/run` asks (NORD_TEST_HOG): the verdicts must hold there too.
     let _hog = common::hog::Hog::if_asked();
-    for (served, profile) in [("tu4-eip", "tu4-eip@enip"), ("sk550p", "sk550p@enip")] {
-        let _server = serve(SERVED, served, 900);
-        let p102 = read_p102();
-        let out_dir =
-            std::env::temp_dir().join(format!("harness-network-{}-{served}", std::process::id()));
-        let out = Command::new(env!("CARGO_BIN_EXE_harness"))
-            .args(["run", "--profile", profile])
-            .arg("--dut")
-            .arg(format!("enip://{SERVED}"))
-            // The served simulator has no motor to turn and no EEPROM to wear.
-            .args(["--allow-motion", "--max-eeprom-writes", "10000"])
-            // Its own UDP 2222 for T→O data, whatever else runs on this host.
-            .args(["--local", "127.0.0.19"])
-            .arg("--out")
-            .arg(&out_dir)
-            .output()
-            .expect("harness runs");
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        let run: Value =
-            serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
-        let cases = run["cases"].as_array().unwrap();
-        let bad: Vec<String> = cases
-            .iter()
-            .filter(|c| c["verdict"] == "fail" || c["verdict"] == "error")
-            .map(|c| format!("{} {}: {}", c["verdict"], c["id"], c["message"]))
+    let failed: Vec<&str> = std::thread::scope(|s| {
+        let runs: Vec<_> = SERVED
+            .into_iter()
+            .map(|(served, profile, listen, local)| {
+                (
+                    profile,
+                    s.spawn(move || check_full_run(served, profile, listen, local)),
+                )
+            })
             .collect();
-        assert!(bad.is_empty(), "{profile}:\n{}", bad.join("\n"));
-        assert_eq!(out.status.code(), Some(0), "{stdout}");
-        let verdict = |id: &str| {
-            let c = cases.iter().find(|c| c["id"] == id).unwrap();
-            (
-                c["verdict"].as_str().unwrap(),
-                c["message"].as_str().unwrap(),
-            )
-        };
-        let passed = cases.iter().filter(|c| c["verdict"] == "pass").count();
-        assert!(passed > 150, "{profile}: only {passed} cases passed");
+        runs.into_iter()
+            .filter_map(|(profile, run)| run.join().err().map(|_| profile))
+            .collect()
+    });
+    assert!(failed.is_empty(), "failed: {}", failed.join(", "));
+}
 
-        // A case that writes P102 (99.99 s) passes and sets it back in its cleanup: the
-        // device shows the run-up time it had before the run.
-        let case = "bu0620/pkw-dut/resolution-99-99-s";
-        assert_eq!(verdict(case), ("pass", ""));
-        let text = transcript(&out_dir, profile, case);
-        let cleanup = text
-            .split("cleanup: leave the DUT as the case found it")
-            .nth(1)
-            .unwrap_or_else(|| panic!("no cleanup step:\n{text}"));
-        assert!(
-            cleanup.contains("Set_Attribute_Single class 101 / instance 0 / attribute 102"),
-            "{text}"
-        );
-        assert_eq!(read_p102(), p102, "{profile}: P102 after the run");
-        assert_ne!(p102, 9999);
+/// Serves `served` on `listen`, runs every suite of `profile` against it from `local` and
+/// checks that each case left the device as it found it; panics with what is wrong.
+fn check_full_run(served: &str, profile: &str, listen: &str, local: &str) {
+    let _server = serve(listen, served, 900);
+    let p102 = read_p102(listen);
+    let out_dir =
+        std::env::temp_dir().join(format!("harness-network-{}-{served}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["run", "--profile", profile])
+        .arg("--dut")
+        .arg(format!("enip://{listen}"))
+        // The served simulator has no motor to turn and no EEPROM to wear.
+        .args(["--allow-motion", "--max-eeprom-writes", "10000"])
+        .args(["--local", local])
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .expect("harness runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let run: Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
+    let cases = run["cases"].as_array().unwrap();
+    let bad: Vec<String> = cases
+        .iter()
+        .filter(|c| c["verdict"] == "fail" || c["verdict"] == "error")
+        .map(|c| format!("{} {}: {}", c["verdict"], c["id"], c["message"]))
+        .collect();
+    assert!(bad.is_empty(), "{profile}:\n{}", bad.join("\n"));
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let verdict = |id: &str| {
+        let c = cases.iter().find(|c| c["id"] == id).unwrap();
+        (
+            c["verdict"].as_str().unwrap(),
+            c["message"].as_str().unwrap(),
+        )
+    };
+    let passed = cases.iter().filter(|c| c["verdict"] == "pass").count();
+    assert!(passed > 150, "{profile}: only {passed} cases passed");
 
-        // What needs a freshly powered-on device is not applicable, and says so.
-        let (v, why) = verdict("bu0620/drive-switching/actual-position-words");
-        assert_eq!(v, "not_applicable");
-        assert!(why.contains("needs `power-on`"), "{why}");
-        let _ = std::fs::remove_dir_all(&out_dir);
-    }
+    // A case that writes P102 (99.99 s) passes and sets it back in its cleanup: the
+    // device shows the run-up time it had before the run.
+    let case = "bu0620/pkw-dut/resolution-99-99-s";
+    assert_eq!(verdict(case), ("pass", ""));
+    let text = transcript(&out_dir, profile, case);
+    let cleanup = text
+        .split("cleanup: leave the DUT as the case found it")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no cleanup step:\n{text}"));
+    assert!(
+        cleanup.contains("Set_Attribute_Single class 101 / instance 0 / attribute 102"),
+        "{text}"
+    );
+    assert_eq!(read_p102(listen), p102, "{profile}: P102 after the run");
+    assert_ne!(p102, 9999);
+
+    // What needs a freshly powered-on device is not applicable, and says so.
+    let (v, why) = verdict("bu0620/drive-switching/actual-position-words");
+    assert_eq!(v, "not_applicable");
+    assert!(why.contains("needs `power-on`"), "{why}");
+    let _ = std::fs::remove_dir_all(&out_dir);
 }

@@ -7,8 +7,13 @@
 //! inherits what an earlier one left). The four buses run side by side: their runs mostly wait
 //! on the drive's real-time steps, and the load is the point.
 //!
-//! Needs root (network namespaces, raw sockets); without it the test says so and skips on a
-//! developer's machine, and fails when `CI` is set.
+//! The first EtherCAT and PROFINET runs are also those buses' full runs over the wire, with
+//! tshark capturing: what their captures must show is checked as `network_ecat` and
+//! `network_pnio` would ([`common::ecat_wire`], [`common::pnio_wire`]), so CI makes each
+//! run once.
+//!
+//! Needs root (network namespaces, raw sockets) and tshark (`.ci/interop-setup`); without them
+//! the test says so and skips on a developer's machine, and fails when `CI` is set.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -21,6 +26,8 @@ use serde_json::Value;
 mod common;
 use common::hog::Hog;
 use common::netns::{require_root_or_skip, Netns};
+use common::peer::require_tshark;
+use common::suite_run::SuiteRun;
 
 /// Runs per bus.
 const RUNS: u64 = 5;
@@ -81,8 +88,15 @@ fn run(ns: Option<&Netns>, profile: &str, dut: &str, seed: u64, out: &Path) -> V
         .collect()
 }
 
-/// Five shuffled runs of `profile` against one served device; what went wrong, if anything.
-fn five_runs(ns: Option<&Netns>, profile: &str, dut: &str, base: u64) -> Vec<String> {
+/// Five shuffled runs of `profile` against one served device, from seed `base` on; `first`, when
+/// given, holds the verdicts of the first run, already made. What went wrong, if anything.
+fn five_runs(
+    ns: Option<&Netns>,
+    profile: &str,
+    dut: &str,
+    base: u64,
+    mut first: Option<Verdicts>,
+) -> Vec<String> {
     let dir = std::env::temp_dir().join(format!(
         "harness-load-{}-{}",
         std::process::id(),
@@ -91,10 +105,11 @@ fn five_runs(ns: Option<&Netns>, profile: &str, dut: &str, base: u64) -> Vec<Str
     let runs: Vec<(u64, Verdicts)> = (0..RUNS)
         .map(|i| {
             let seed = base + i;
-            (
-                seed,
-                run(ns, profile, dut, seed, &dir.join(seed.to_string())),
-            )
+            let verdicts = match first.take() {
+                Some(made) => made,
+                None => run(ns, profile, dut, seed, &dir.join(seed.to_string())),
+            };
+            (seed, verdicts)
         })
         .collect();
     let mut wrong = Vec::new();
@@ -124,12 +139,9 @@ fn five_runs(ns: Option<&Netns>, profile: &str, dut: &str, base: u64) -> Vec<Str
 }
 
 #[test]
-#[ignore = "eleven minutes of its own, which would take .ci/run past its 30 (the four buses \
-            already run side by side; five runs of the slowest take that long): run it with \
-            --ignored before a release"]
 fn five_shuffled_runs_per_bus_under_load_give_the_same_verdicts() {
     let why = "five shuffled --dut runs per bus on a loaded host";
-    if !require_root_or_skip(why) {
+    if !require_root_or_skip(why) || !require_tshark(why) {
         return;
     }
     // Seeds from the clock, printed with every run: a failure names the seed to run again.
@@ -140,20 +152,25 @@ fn five_shuffled_runs_per_bus_under_load_give_the_same_verdicts() {
     let wrong: Vec<String> = std::thread::scope(|s| {
         let enip = s.spawn(|| {
             let _served = common::serve(ENIP_SERVED, "tu3-eip", 1800);
-            five_runs(None, "tu3-eip@enip", &format!("enip://{ENIP_SERVED}"), base)
+            five_runs(
+                None,
+                "tu3-eip@enip",
+                &format!("enip://{ENIP_SERVED}"),
+                base,
+                None,
+            )
         });
         let ecat = s.spawn(|| {
             let ns = Netns::new("loadecat");
             let served =
                 harness::ecat_serve::start(&harness::ecat_serve::ServeOptions::new(ns.root_if()))
                     .expect("serve ecat");
-            let wrong = five_runs(
-                Some(&ns),
-                "sk550p@ecat",
-                &format!("ecat://{}", ns.ns_if()),
-                base,
-            );
-            served.stop().expect("the slave served to the end");
+            let (profile, dut) = ("sk550p@ecat", format!("ecat://{}", ns.ns_if()));
+            let wire = SuiteRun::shuffled(&ns, "load-ecat", profile, &dut, base);
+            let wrong = five_runs(Some(&ns), profile, &dut, base, Some(wire.verdicts()));
+            let stats = served.stop().expect("the slave served to the end");
+            common::ecat_wire::check(&wire, &stats);
+            wire.finish();
             wrong
         });
         let epl = s.spawn(|| {
@@ -167,6 +184,7 @@ fn five_shuffled_runs_per_bus_under_load_give_the_same_verdicts() {
                 "tu4-pol@epl",
                 &format!("epl://{}", ns.ns_if()),
                 base,
+                None,
             );
             served.stop().expect("the node served to the end");
             wrong
@@ -177,13 +195,12 @@ fn five_shuffled_runs_per_bus_under_load_give_the_same_verdicts() {
             let mut options = harness::pnio_serve::ServeOptions::new(ns.root_if());
             options.name = PNIO_NAME.into();
             let served = harness::pnio_serve::start(&options).expect("serve pnio");
-            let wrong = five_runs(
-                Some(&ns),
-                "sk550p@pnio",
-                &format!("pnio://{}/{PNIO_NAME}", ns.ns_if()),
-                base,
-            );
-            served.stop().expect("the device served to the end");
+            let (profile, dut) = ("sk550p@pnio", format!("pnio://{}/{PNIO_NAME}", ns.ns_if()));
+            let wire = SuiteRun::shuffled(&ns, "load-pnio", profile, &dut, base);
+            let wrong = five_runs(Some(&ns), profile, &dut, base, Some(wire.verdicts()));
+            let stats = served.stop().expect("the device served to the end");
+            common::pnio_wire::check(&wire, "sk550p", &stats);
+            wire.finish();
             wrong
         });
         [enip, ecat, epl, pnio]

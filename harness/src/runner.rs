@@ -116,6 +116,8 @@ pub(crate) fn run_shard(
     let mut cases = Vec::new();
     let mut seq = 0;
     let mut guard = opts.limits.map(Guard::new);
+    // Whether the last cleanup failed: the next case brings the drives back first.
+    let mut unsettled = false;
     if opts.real_time() {
         crate::timing::start_watch();
     }
@@ -148,6 +150,7 @@ pub(crate) fn run_shard(
                                 profile,
                                 opts,
                                 &mut guard,
+                                &mut unsettled,
                                 factory,
                                 offers.get(profile.name()),
                             )
@@ -192,7 +195,8 @@ pub(crate) const CONNECTION_CHECK: &str = "harness/connection-check";
 
 /// Opens the DUT once for every profile a selected case needs it under and reads its
 /// identity. A DUT that cannot be reached or does not answer is the `Err`: one error result
-/// naming the profile and the cause, after which the run stops. Other failures (a profile the
+/// naming the profile and the cause, after which the run stops; one that answers only past its
+/// limits ([`OpenError::Late`]) is the same, a fail naming both times. Other failures (a profile the
 /// DUT does not fit, an identity answer the harness cannot read) leave the identity out and
 /// the cases say the rest.
 fn connection_check(
@@ -214,7 +218,7 @@ fn connection_check(
             continue;
         }
         label(opts, || format!("{} connection check", profile.name()));
-        let unreachable = |why: String| CaseResult {
+        let unreachable = |why: String, verdict: Verdict| CaseResult {
             id: CONNECTION_CHECK.into(),
             title: "the DUT can be reached and says who it is".into(),
             profile: profile.name().to_string(),
@@ -226,7 +230,7 @@ fn connection_check(
                 quote: None,
             },
             kind: CaseKind::Device,
-            verdict: Verdict::Error,
+            verdict,
             message: format!("{why}; the run stopped before its cases"),
             steps: Vec::new(),
             duration: start.elapsed(),
@@ -236,7 +240,9 @@ fn connection_check(
         };
         let mut dut = match factory.open(profile, opts.retries) {
             Ok(dut) => dut,
-            Err(e @ OpenError::Unreachable(_)) => return Err(unreachable(e.to_string())),
+            Err(e @ (OpenError::Unreachable(_) | OpenError::Late(_))) => {
+                return Err(unreachable(e.to_string(), e.verdict()))
+            }
             Err(_) => continue,
         };
         offers.insert(profile.name().to_string(), Offer::of(dut.as_ref()));
@@ -245,7 +251,10 @@ fn connection_check(
                 identities.insert(profile.name().to_string(), id);
             }
             Err(e @ (StepError::Link(_) | StepError::Silent { .. } | StepError::Late { .. })) => {
-                return Err(unreachable(format!("the DUT does not answer: {e}")))
+                return Err(unreachable(
+                    format!("the DUT does not answer: {e}"),
+                    Verdict::Error,
+                ))
             }
             Err(_) => {}
         }
@@ -353,6 +362,7 @@ fn run_case(
     profile: &Profile,
     opts: &RunOptions,
     guard: &mut Option<Guard>,
+    unsettled: &mut bool,
     factory: &mut dyn DutFactory,
     offer: Option<&Offer>,
 ) -> CaseResult {
@@ -372,7 +382,7 @@ fn run_case(
     }
     let mut discarded = Vec::new();
     loop {
-        let (mut r, excuse) = attempt(case, profile, opts, guard, factory, start);
+        let (mut r, excuse) = attempt(case, profile, opts, guard, unsettled, factory, start);
         match excuse {
             Some(why) if discarded.len() + 1 < ATTEMPTS => {
                 discarded.push(Discarded {
@@ -398,12 +408,15 @@ fn run_case(
 }
 
 /// One attempt at a case: the DUT opened, the steps, the cleanup. With the result comes why it
-/// does not count, if it does not: its deciding step timed out while the host was late.
+/// does not count, if it does not: its deciding step timed out while the host was late. When
+/// the last cleanup failed (`unsettled`), the drives are brought back before the steps
+/// ([`recover`]); a cleanup that fails leaves `unsettled` for the next case.
 fn attempt(
     case: &Case,
     profile: &Profile,
     opts: &RunOptions,
     guard: &mut Option<Guard>,
+    unsettled: &mut bool,
     factory: &mut dyn DutFactory,
     start: Instant,
 ) -> (CaseResult, Option<String>) {
@@ -428,7 +441,7 @@ fn attempt(
                 let r = result(
                     case,
                     profile,
-                    Verdict::Error,
+                    e.verdict(),
                     format!("cannot open the DUT: {e}"),
                     Vec::new(),
                     start,
@@ -439,14 +452,76 @@ fn attempt(
     } else {
         None
     };
+    let recovery = match channel.as_mut() {
+        Some(dut) if *unsettled => {
+            let step = recover(dut.as_mut(), profile, opts);
+            if step.verdict != Verdict::Pass {
+                let message = step.message.clone();
+                let r = result(case, profile, Verdict::Error, message, vec![step], start);
+                return (r, None);
+            }
+            *unsettled = false;
+            Some(step)
+        }
+        _ => None,
+    };
     let (mut r, excuse) = run_steps(case, profile, opts, &mut channel, start);
     if let Some(g) = guard.as_mut() {
         g.ran(case, r.steps.len());
     }
+    if let Some(step) = recovery {
+        r.steps.insert(0, step);
+    }
     if let Some(dut) = channel.as_mut() {
-        finish(&mut r, dut.as_mut(), opts);
+        *unsettled = !finish(&mut r, dut.as_mut(), opts);
     }
     (r, excuse)
+}
+
+/// Before a case after one whose cleanup failed (a link that broke, a time-out): every
+/// inverter of the profile is sent "disable voltage" (0400h: control data valid, nothing else)
+/// for one cycle, so the binding counts it as driven, and the binding's cleanup then brings
+/// each back to "switch-on disabled", acknowledging faults, with no I/O connection left open:
+/// the state every case starts from. What the failed cleanup did not put back (a parameter
+/// written) its case's error named; this cannot know it.
+fn recover(dut: &mut dyn Binding, profile: &Profile, opts: &RunOptions) -> StepResult {
+    label(opts, || format!("{} recovery", profile.name()));
+    let mut outcome = Ok(());
+    if dut.capabilities().contains(&Capability::ProcessData) {
+        for n in 1..=profile.inverters {
+            let Ok(inverter) = proto::nord::Inverter::new(n.into()) else {
+                continue;
+            };
+            let stop = Action::Process {
+                inverter,
+                control: 0x0400,
+                setpoints: Vec::new(),
+                run: crate::suite::Run::Cycles(1),
+            };
+            if let Err(e) = dut.perform(&stop) {
+                outcome = Err(format!("disable voltage to FI {n}: {e}"));
+                break;
+            }
+        }
+    }
+    let outcome = outcome.and_then(|()| dut.finish().map_err(|e| e.to_string()));
+    let (verdict, message) = match outcome {
+        Ok(()) => (Verdict::Pass, String::new()),
+        Err(e) => (
+            Verdict::Error,
+            format!(
+                "the drives could not be brought back after the last case's cleanup failed: {e}"
+            ),
+        ),
+    };
+    StepResult {
+        step: "recovery: bring the drives back, the last case's cleanup having failed".into(),
+        verdict,
+        observed: Value::Null,
+        refusal: None,
+        message,
+        exchanges: dut.take_exchanges(),
+    }
 }
 
 /// The case's steps in order, up to the first that does not pass; with it, why that step's
@@ -509,13 +584,13 @@ fn excuse(n: usize, timed: Timed, window: (Instant, Instant)) -> Option<String> 
 /// the case found it (see [`Binding::finish`]). What it exchanged is a last step, marked as the
 /// cleanup, when it did anything; a restore that fails turns a passing case into an error that
 /// names what could not be restored (a failed or inconclusive case keeps its verdict, and its
-/// message says so too).
-fn finish(r: &mut CaseResult, dut: &mut dyn Binding, opts: &RunOptions) {
+/// message says so too). Whether the cleanup succeeded.
+fn finish(r: &mut CaseResult, dut: &mut dyn Binding, opts: &RunOptions) -> bool {
     label(opts, || format!("{} {} cleanup", r.profile, r.id));
     let outcome = dut.finish();
     let exchanges = dut.take_exchanges();
     if outcome.is_ok() && exchanges.is_empty() {
-        return;
+        return true;
     }
     let (verdict, message) = match outcome {
         Ok(()) => (Verdict::Pass, String::new()),
@@ -540,6 +615,7 @@ fn finish(r: &mut CaseResult, dut: &mut dyn Binding, opts: &RunOptions) {
             r.message = format!("{}; {message}", r.message);
         }
     }
+    verdict == Verdict::Pass
 }
 
 /// Labels the run's capture, if there is one, with `text` (made only then).
@@ -843,15 +919,15 @@ cases:
         }
     }
 
-    /// A DUT nobody can reach.
-    struct Unreachable;
+    /// A DUT that cannot be opened: behind a pulled cable, or answering past its limits.
+    struct Unopened(fn() -> OpenError);
 
-    impl DutFactory for Unreachable {
+    impl DutFactory for Unopened {
         fn describe(&self) -> String {
-            "a DUT behind a pulled cable".into()
+            "a DUT that cannot be opened".into()
         }
         fn open(&mut self, _: &Profile, _: u32) -> Result<Box<dyn Binding>, OpenError> {
-            Err(OpenError::Unreachable("connection refused".into()))
+            Err(self.0())
         }
     }
 
@@ -860,7 +936,7 @@ cases:
         let r = run(
             &load_text_for_tests(SUITE),
             &sk550p_options(),
-            &mut Unreachable,
+            &mut Unopened(|| OpenError::Unreachable("connection refused".into())),
         );
         let v = verdicts(&r);
         assert_eq!(
@@ -868,6 +944,30 @@ cases:
             [(
                 Verdict::Error,
                 "cannot reach the DUT: connection refused; the run stopped before its cases"
+            )]
+        );
+        assert_eq!(r.cases[0].id, CONNECTION_CHECK);
+    }
+
+    #[test]
+    fn a_dut_that_comes_up_only_past_its_limits_fails_the_connection_check() {
+        let late = || {
+            OpenError::Late(
+                "a frame back: no answer within the device's limit of 50 ms (waited 51 ms)".into(),
+            )
+        };
+        let r = run(
+            &load_text_for_tests(SUITE),
+            &sk550p_options(),
+            &mut Unopened(late),
+        );
+        assert_eq!(
+            verdicts(&r),
+            [(
+                Verdict::Fail,
+                "the DUT answers late: a frame back: no answer within the device's limit of 50 \
+                 ms (waited 51 ms); given 5 times its limits, it came up; the run stopped \
+                 before its cases"
             )]
         );
         assert_eq!(r.cases[0].id, CONNECTION_CHECK);
@@ -1055,7 +1155,14 @@ cases:
         }
     }
 
-    struct RestoringFactory(Result<(), CleanupError>, bool);
+    /// Bindings whose cleanup returns `outcome` (those opened for the cases whose numbers,
+    /// from 0, `failing` holds; the others' succeed), and whether it exchanged anything.
+    struct RestoringFactory {
+        outcome: Result<(), CleanupError>,
+        exchanged: bool,
+        failing: &'static [usize],
+        opened: usize,
+    }
 
     impl DutFactory for RestoringFactory {
         fn describe(&self) -> String {
@@ -1063,31 +1170,45 @@ cases:
         }
         fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
             let inner = EmbeddedFactory::default().open(profile, retries)?;
+            // The connection check opens one first.
+            let case = self.opened.checked_sub(1);
+            self.opened += 1;
+            let fails = case.is_some_and(|n| self.failing.contains(&n));
             Ok(Box::new(Restoring {
                 inner,
-                outcome: self.0.clone(),
-                exchanged: self.1,
+                outcome: if fails { self.outcome.clone() } else { Ok(()) },
+                exchanged: self.exchanged,
                 finished: false,
             }))
         }
     }
 
-    fn run_restoring(outcome: Result<(), CleanupError>, exchanged: bool) -> RunResult {
+    fn run_restoring(
+        outcome: Result<(), CleanupError>,
+        exchanged: bool,
+        failing: &'static [usize],
+    ) -> RunResult {
         let loaded = load_text_for_tests(SUITE);
         let opts = sk550p_options();
-        run(&loaded, &opts, &mut RestoringFactory(outcome, exchanged))
+        let mut factory = RestoringFactory {
+            outcome,
+            exchanged,
+            failing,
+            opened: 0,
+        };
+        run(&loaded, &opts, &mut factory)
     }
 
     #[test]
     fn a_cleanup_that_does_nothing_adds_no_step() {
-        let r = run_restoring(Ok(()), false);
+        let r = run_restoring(Ok(()), false, &[]);
         assert_eq!(r.cases[0].verdict, Verdict::Pass);
         assert_eq!(r.cases[0].steps.len(), 1);
     }
 
     #[test]
     fn a_cleanup_shows_as_a_last_step_marked_as_such() {
-        let r = run_restoring(Ok(()), true);
+        let r = run_restoring(Ok(()), true, &[]);
         let c = &r.cases[0];
         assert_eq!(c.verdict, Verdict::Pass, "{}", c.message);
         let last = c.steps.last().unwrap();
@@ -1103,6 +1224,7 @@ cases:
         let r = run_restoring(
             Err(CleanupError("P102 not set back to [C8 00]: 0Eh".into())),
             false,
+            &[0, 2],
         );
         let c = &r.cases[0];
         assert_eq!(c.verdict, Verdict::Error);
@@ -1120,6 +1242,41 @@ cases:
             "{}",
             c.message
         );
+    }
+
+    #[test]
+    fn after_a_failed_cleanup_the_next_case_brings_the_drives_back_first() {
+        let failed = || Err(CleanupError("link error: no answer".into()));
+        let recovery = "recovery: bring the drives back, the last case's cleanup having failed";
+        let r = run_restoring(failed(), false, &[0]);
+        assert_eq!(r.cases[0].verdict, Verdict::Error);
+        // The next case starts with the recovery: "disable voltage" to the inverter, then
+        // the binding's cleanup; then its own steps, which pass.
+        let c = &r.cases[1];
+        assert_eq!(c.verdict, Verdict::Pass, "{}", c.message);
+        assert_eq!(c.steps[0].step, recovery);
+        assert_eq!(c.steps[0].verdict, Verdict::Pass);
+        assert!(!c.steps[0].exchanges.is_empty());
+        assert!(
+            c.steps[1].step.starts_with("process"),
+            "{}",
+            c.steps[1].step
+        );
+        // Once recovered, the case after it has none.
+        assert!(r.cases[2].steps.iter().all(|s| s.step != recovery));
+
+        // A recovery that fails is the case's error, and the next case tries again.
+        let r = run_restoring(failed(), false, &[0, 1]);
+        let c = &r.cases[1];
+        assert_eq!(c.verdict, Verdict::Error);
+        assert_eq!(c.steps.len(), 1);
+        assert_eq!(
+            c.message,
+            "the drives could not be brought back after the last case's cleanup failed: link \
+             error: no answer"
+        );
+        assert_eq!(r.cases[2].steps[0].step, recovery);
+        assert_eq!(r.cases[2].steps[0].verdict, Verdict::Pass);
     }
 
     /// The embedded simulator behind a binding whose first `late` steps time out against a

@@ -5,9 +5,11 @@ use std::net::{SocketAddr, TcpStream};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+pub(crate) mod ecat_wire;
 pub(crate) mod hog;
 pub(crate) mod netns;
 pub(crate) mod peer;
+pub(crate) mod pnio_wire;
 pub(crate) mod suite_run;
 pub(crate) mod tshark;
 

@@ -1,8 +1,10 @@
 //! The run the raw-Ethernet network tests (EtherCAT, POWERLINK, PROFINET IO) share: in a
 //! scratch folder, `harness run --profile P --dut URL` from inside the namespace with its own
 //! `--pcap`, while tshark captures the wire there; the run must end with no case failed or in
-//! error. What each bus then checks of the captures stays in its own test.
+//! error. What each bus then checks of the captures stays in its own test, or in a module of
+//! its own when the load test makes the same run (`ecat_wire`, `pnio_wire`).
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use serde_json::Value;
@@ -28,6 +30,15 @@ impl SuiteRun {
     /// failed or in error, exit 0. The served simulator must be up; `tag` names the scratch
     /// folder.
     pub(crate) fn new(ns: &Netns, tag: &str, profile: &str, dut: &str) -> SuiteRun {
+        SuiteRun::with_args(ns, tag, profile, dut, &[])
+    }
+
+    /// [`SuiteRun::new`] with the cases in the order of `--shuffle seed`.
+    pub(crate) fn shuffled(ns: &Netns, tag: &str, profile: &str, dut: &str, seed: u64) -> SuiteRun {
+        SuiteRun::with_args(ns, tag, profile, dut, &["--shuffle", &seed.to_string()])
+    }
+
+    fn with_args(ns: &Netns, tag: &str, profile: &str, dut: &str, extra: &[&str]) -> SuiteRun {
         let dir = std::env::temp_dir().join(format!(
             "harness-network-{tag}-{}-{profile}",
             std::process::id()
@@ -52,6 +63,7 @@ impl SuiteRun {
             .arg(&out)
             .arg("--pcap")
             .arg(&run_pcap)
+            .args(extra)
             .output()
             .expect("harness run starts");
         capture.stop();
@@ -95,6 +107,17 @@ impl SuiteRun {
                 self.stdout
             );
         }
+    }
+
+    /// Each case's verdict and message, by id.
+    pub(crate) fn verdicts(&self) -> BTreeMap<String, (String, String)> {
+        self.cases
+            .iter()
+            .map(|c| {
+                let s = |k: &str| c[k].as_str().unwrap_or_default().to_string();
+                (s("id"), (s("verdict"), s("message")))
+            })
+            .collect()
     }
 
     /// Removes the scratch folder; a failing test keeps it to look at.

@@ -123,6 +123,24 @@ pub(crate) enum OpenError {
     /// The host does not allow it (raw sockets need root or CAP_NET_RAW).
     #[error("not permitted here: {0}")]
     NotPermitted(String),
+    /// The DUT answers, but past its limits: a wait of the bring-up passed with the host on
+    /// time, and given [`crate::net::wait::REACH`] times its limits the device came up. A fail,
+    /// as a late answer to a step is.
+    #[error(
+        "the DUT answers late: {0}; given {reach} times its limits, it came up",
+        reach = crate::net::wait::REACH
+    )]
+    Late(String),
+}
+
+impl OpenError {
+    /// The verdict of a case that could not open the DUT for this.
+    pub(crate) fn verdict(&self) -> crate::outcome::Verdict {
+        match self {
+            OpenError::Late(_) => crate::outcome::Verdict::Fail,
+            _ => crate::outcome::Verdict::Error,
+        }
+    }
 }
 
 /// What a cleanup could not put back, by name.

@@ -33,6 +33,7 @@ use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
 use crate::binding::{process_run, process_time, Binding, CleanupError, Observation, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
+use crate::net::wait::BringUpError;
 use crate::outcome::{Exchange, Identity};
 use crate::profile::Capability;
 use crate::runner::hex;
@@ -93,18 +94,26 @@ impl<S: DutSegment> EcatBinding<S> {
         product: Product,
         what: String,
         persistent: bool,
-    ) -> Result<EcatBinding<S>, MasterError> {
+    ) -> Result<EcatBinding<S>, crate::binding::OpenError> {
         let mut master = Master::new(segment, MasterConfig::default());
         master.set_recording(false);
         crate::net::wait::bring_up(
-            || master.bring_up(EcState::PreOperational),
+            |patience| {
+                master.set_patience(patience);
+                master.bring_up(EcState::PreOperational)
+            },
             |e| match e {
                 MasterError::Link(LinkFailure::Timeout { limit, waited, .. }) => {
                     Some((*limit, *waited))
                 }
                 _ => None,
             },
-        )?;
+        )
+        .map_err(|e| match e {
+            BringUpError::Failed(e) => open_error(e),
+            BringUpError::Late(e) => crate::binding::OpenError::Late(e.to_string()),
+        })?;
+        master.set_patience(1);
         let slave = &master.slaves()[0];
         let station = slave.station;
         let what = format!(

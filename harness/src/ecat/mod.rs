@@ -76,7 +76,7 @@ fn open<S: DutSegment + 'static>(
     what: String,
     persistent: bool,
 ) -> Result<Box<dyn Binding>, OpenError> {
-    let b = EcatBinding::open(segment, product, what, persistent).map_err(binding::open_error)?;
+    let b = EcatBinding::open(segment, product, what, persistent)?;
     binding::check_vendor(&b)?;
     Ok(Box::new(b))
 }

@@ -49,10 +49,6 @@ pub(super) const EMBEDDED_ADDR: SocketAddrV4 =
 
 static SERIAL: std::sync::atomic::AtomicU16 = std::sync::atomic::AtomicU16::new(1);
 
-/// How many times the limit of one request the connection check waits for the device's
-/// identity (see [`Scanner::list_identity`]).
-const REACH: u32 = 5;
-
 /// An open I/O connection.
 pub(super) struct IoConn {
     /// Its key and connection path, for its Forward_Close.
@@ -927,7 +923,7 @@ impl Drop for Scanner {
 
 impl Scanner {
     /// ListIdentity on the scanner's own connection, for the run's connection check: the
-    /// identity item of the reply. It waits [`REACH`] times the limit of one request: a
+    /// identity item of the reply. It waits [`REACH`](crate::net::wait::REACH) times the limit of one request: a
     /// device that answers, if late, is reachable and says who it is, and its lateness is for
     /// the cases to judge, each against its own limit, with both times (the identity notes
     /// it); one silent for all that time does not answer.
@@ -938,13 +934,14 @@ impl Scanner {
             ..EncapRepr::default()
         };
         let on_time = self.wait();
-        let reach = Deadline::after(on_time.limit() * REACH);
+        let reach = Deadline::after(on_time.limit() * crate::net::wait::REACH);
         let reply = self
             .send_within(1, msg, "ListIdentity".into(), &reach)?
             .ok_or_else(|| match self.link.timeout() {
                 Some(_) => StepError::Link(format!(
-                    "no reply to ListIdentity within {} ({REACH} times the limit of one request)",
-                    crate::timing::ms(reach.limit())
+                    "no reply to ListIdentity within {} ({} times the limit of one request)",
+                    crate::timing::ms(reach.limit()),
+                    crate::net::wait::REACH
                 )),
                 None => self.no_reply("ListIdentity", &reach),
             })?;

@@ -14,6 +14,21 @@ use crate::timing::Deadline;
 /// case (`crate::runner`).
 const BRING_UP_ATTEMPTS: usize = 3;
 
+/// How many times its limits a device is given to show that it answers at all, after it let
+/// one pass with the host on time: a late device is reached, one silent for all that time is
+/// not (the EtherNet/IP connection check's ListIdentity, the second look of [`bring_up`]).
+pub(crate) const REACH: u32 = 5;
+
+/// Why a bring-up failed.
+#[derive(Debug)]
+pub(crate) enum BringUpError<E> {
+    /// It failed, and not by answering late.
+    Failed(E),
+    /// A wait passed its limit with the host on time, and given [`REACH`] times its limits the
+    /// device came up: it answers, late. The error is that of the wait that passed.
+    Late(E),
+}
+
 /// A wait of a device's limit, from when the request left, on a link's clock.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Wait {
@@ -63,18 +78,30 @@ impl Wait {
 /// Runs `attempt`, a bring-up (opening a device: many waits, none of them a case's step),
 /// again while it fails by a wait that passed as the host lost a large part of the device's
 /// limit (`crate::timing::excuses`), [`BRING_UP_ATTEMPTS`] times in all; `late` gives such a
-/// failure's limit and time waited. A device late while the host was on time fails at once.
+/// failure's limit and time waited. `attempt` takes the factor its waits' limits are
+/// multiplied by: 1, but [`REACH`] for a second look at a device whose wait passed while the
+/// host was on time, which tells a late device ([`BringUpError::Late`]) from an absent one.
 pub(crate) fn bring_up<T, E>(
-    mut attempt: impl FnMut() -> Result<T, E>,
+    mut attempt: impl FnMut(u32) -> Result<T, E>,
     late: impl Fn(&E) -> Option<(Duration, Duration)>,
-) -> Result<T, E> {
+) -> Result<T, BringUpError<E>> {
+    let mut last = attempt(1);
     for _ in 1..BRING_UP_ATTEMPTS {
-        match attempt() {
-            Err(e) if late(&e).is_some_and(|(limit, waited)| host_was_late(limit, waited)) => {}
-            r => return r,
+        match &last {
+            Err(e) if late(e).is_some_and(|(limit, waited)| host_was_late(limit, waited)) => {
+                last = attempt(1);
+            }
+            _ => break,
         }
     }
-    attempt()
+    match last {
+        Ok(t) => Ok(t),
+        Err(e) if late(&e).is_some() => match attempt(REACH) {
+            Ok(_) => Err(BringUpError::Late(e)),
+            Err(_) => Err(BringUpError::Failed(e)),
+        },
+        Err(e) => Err(BringUpError::Failed(e)),
+    }
 }
 
 /// Whether the host lost enough of a wait of `limit` that ended now after `waited` to excuse
@@ -97,6 +124,52 @@ mod tests {
         assert!(!w.passed(ms(149)));
         assert!(w.passed(ms(150)));
         assert_eq!((w.limit(), w.waited(ms(150))), (ms(50), ms(50)));
+    }
+
+    /// A bring-up whose waits pass after `answers_after`, with the host on time.
+    fn device(answers_after: Duration) -> impl FnMut(u32) -> Result<u32, (Duration, Duration)> {
+        let limit = Duration::from_millis(50);
+        let mut tries = 0;
+        move |patience| {
+            tries += 1;
+            if answers_after <= limit * patience {
+                Ok(tries)
+            } else {
+                Err((limit, limit))
+            }
+        }
+    }
+
+    #[test]
+    fn a_device_late_with_the_host_on_time_is_told_from_an_absent_one() {
+        let ms = Duration::from_millis;
+        let late = |e: &(Duration, Duration)| Some(*e);
+        // On time: the first attempt.
+        assert_eq!(bring_up(device(ms(10)), late).unwrap(), 1);
+        // 80 ms against a limit of 50: not again at the same limits (the host was on time),
+        // but it comes up given five times them.
+        match bring_up(device(ms(80)), late) {
+            Err(BringUpError::Late((limit, waited))) => {
+                assert_eq!((limit, waited), (ms(50), ms(50)))
+            }
+            other => panic!("{other:?}"),
+        }
+        // Silent past five times its limits: absent.
+        assert!(matches!(
+            bring_up(device(ms(300)), late),
+            Err(BringUpError::Failed(_))
+        ));
+        // A failure that is no wait is not looked at again.
+        let mut tries = 0;
+        let r: Result<(), _> = bring_up(
+            |_| {
+                tries += 1;
+                Err("refused")
+            },
+            |_| None,
+        );
+        assert!(matches!(r, Err(BringUpError::Failed("refused"))));
+        assert_eq!(tries, 1);
     }
 
     #[test]

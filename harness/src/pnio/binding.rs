@@ -39,6 +39,7 @@ use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::settle::{self, Drives};
 use crate::binding::{Binding, CleanupError, Dut, DutError, Observation, OpenError, StepError};
 use crate::ledger::{self, Account, Ledger, Problem};
+use crate::net::wait::BringUpError;
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::runner::hex;
@@ -122,6 +123,19 @@ fn step_error(e: PnioError) -> StepError {
         e @ PnioError::Malformed { .. } => StepError::Garbage(e.to_string()),
         e @ (PnioError::Nca { .. } | PnioError::NotConnected) => StepError::Refused(e.to_string()),
     }
+}
+
+/// [`crate::net::wait::bring_up`] of a part of the opening: again while the host was late, and
+/// a second look at a device whose answer missed its limit with the host on time.
+fn bring_up<T>(attempt: impl FnMut(u32) -> Result<T, PnioError>) -> Result<T, OpenError> {
+    crate::net::wait::bring_up(attempt, |e| match e {
+        PnioError::NoReply { limit, waited, .. } => Some((*limit, *waited)),
+        _ => None,
+    })
+    .map_err(|e| match e {
+        BringUpError::Failed(e) => open_error(e),
+        BringUpError::Late(e) => OpenError::Late(e.to_string()),
+    })
 }
 
 /// Why the device could not be opened.
@@ -238,7 +252,10 @@ impl<L: Link + 'static> PnioBinding<L> {
         persistent: bool,
     ) -> Result<PnioBinding<L>, OpenError> {
         ctl.set_recording(false);
-        let station = ctl.locate(name.as_deref()).map_err(open_error)?;
+        let station = bring_up(|patience| {
+            ctl.set_patience(patience);
+            ctl.locate(name.as_deref())
+        })?;
         if station.vendor_id != def::VENDOR_ID {
             return Err(OpenError::BringUp(format!(
                 "{:?} has vendor id {:04X}h, not NORD's {:04X}h",
@@ -256,7 +273,11 @@ impl<L: Link + 'static> PnioBinding<L> {
             station.mac
         );
         let subs = expected(product, inverters, &[]).map_err(OpenError::Profile)?;
-        let c = up(&mut ctl, &subs).map_err(open_error)?;
+        let c = bring_up(|patience| {
+            ctl.set_patience(patience);
+            up(&mut ctl, &subs)
+        })?;
+        ctl.set_patience(1);
         if !c.ready {
             return Err(OpenError::BringUp(format!("the AR did not come up: {c:?}")));
         }

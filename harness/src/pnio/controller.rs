@@ -185,6 +185,8 @@ pub(crate) struct Controller<L> {
     link: L,
     mac: MacAddr,
     timeout: Duration,
+    /// What every wait's limit is multiplied by ([`Controller::set_patience`]).
+    patience: u32,
     /// Whether the link runs on the real clock, where the host's own delays move a wait.
     real_time: bool,
     /// ReductionRatio of both CRs (the cycle is 1 ms × it).
@@ -213,6 +215,7 @@ impl<L: Link> Controller<L> {
             link,
             mac,
             timeout,
+            patience: 1,
             real_time,
             reduction_ratio: 1,
             station: None,
@@ -368,7 +371,14 @@ impl<L: Link> Controller<L> {
 
     /// A wait of the device's `limit` from now.
     fn wait(&self, limit: Duration) -> Wait {
-        Wait::new(self.link.now(), limit, self.real_time)
+        Wait::new(self.link.now(), limit * self.patience, self.real_time)
+    }
+
+    /// Multiplies the limit of every wait from now on by `factor` (1: the device's own
+    /// limits): a second look at a device that let a limit pass, to tell a late one from an
+    /// absent one (`crate::net::wait::bring_up`).
+    pub(crate) fn set_patience(&mut self, factor: u32) {
+        self.patience = factor.max(1);
     }
 
     /// [`Controller::pump`] until `wait` is over.

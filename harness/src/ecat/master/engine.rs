@@ -185,6 +185,12 @@ impl<S: Segment> Master<S> {
         }
     }
 
+    /// Multiplies the limit of every wait from now on by `factor` (1: the slave's own limits;
+    /// see [`Port::set_patience`]).
+    pub(crate) fn set_patience(&mut self, factor: u32) {
+        self.port.set_patience(factor);
+    }
+
     /// The configuration.
     pub(crate) fn config(&self) -> &MasterConfig {
         &self.config

@@ -52,6 +52,8 @@ pub(crate) struct Port<S> {
     index: u8,
     mac: [u8; 6],
     timeout: Duration,
+    /// What every wait's limit is multiplied by ([`Port::set_patience`]).
+    patience: u32,
     rx: Vec<u8>,
     pub(crate) recorder: Recorder,
     stats: PortStats,
@@ -67,6 +69,7 @@ impl<S: Segment> Port<S> {
             index: 0,
             mac: MASTER_MAC,
             timeout,
+            patience: 1,
             rx: vec![0; MAX_FRAME + 4],
             recorder: Recorder::new(),
             stats: PortStats::default(),
@@ -106,9 +109,20 @@ impl<S: Segment> Port<S> {
         self.segment.real_time()
     }
 
+    /// Multiplies the limit of every wait from now on by `factor` (1: the slave's own limits):
+    /// a second look at a slave that let a limit pass, to tell a late one from an absent one
+    /// (`crate::net::wait::bring_up`).
+    pub(crate) fn set_patience(&mut self, factor: u32) {
+        self.patience = factor.max(1);
+    }
+
     /// A wait of the slave's `limit` from now, on the segment's clock.
     pub(crate) fn wait(&self, limit: Duration) -> Wait {
-        Wait::new(self.segment.now(), limit, self.segment.real_time())
+        Wait::new(
+            self.segment.now(),
+            limit * self.patience,
+            self.segment.real_time(),
+        )
     }
 
     /// The next frame that came back within `wait` (`None`: none by its end).
