@@ -467,7 +467,8 @@ fn attempt(
     };
     let (mut r, excuse) = run_steps(case, profile, opts, &mut channel, start);
     if let Some(g) = guard.as_mut() {
-        g.ran(case, r.steps.len());
+        let taken: Vec<bool> = r.steps.iter().map(|s| s.refusal.is_none()).collect();
+        g.ran(case, &taken);
     }
     if let Some(step) = recovery {
         r.steps.insert(0, step);

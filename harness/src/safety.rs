@@ -310,9 +310,14 @@ impl Guard {
         })
     }
 
-    /// The first `ran` steps of `case` were sent: their EEPROM writes, and the cleanup's, count.
-    pub(crate) fn ran(&mut self, case: &Case, ran: usize) {
-        let effect = of_steps(case.steps.iter().take(ran));
+    /// The first steps of `case` were sent, one for each of `taken`, which says whether the
+    /// device took the step (it did not refuse it: no SDO abort, no CIP error status, no PKW
+    /// error answer). The EEPROM writes of the steps it took, and their restores by the
+    /// cleanup, count; a refused write wrote nothing and needs no restore. A step left without
+    /// an answer counts: the device may have taken it.
+    pub(crate) fn ran(&mut self, case: &Case, taken: &[bool]) {
+        let steps = case.steps.iter().zip(taken).filter(|(_, t)| **t);
+        let effect = of_steps(steps.map(|(s, _)| s));
         self.eeprom_writes = self
             .eeprom_writes
             .saturating_add(effect.eeprom_writes.saturating_mul(WITH_RESTORE));
@@ -459,7 +464,10 @@ cases:
         );
         // Two writes and their two restores: 4 of 6; the next such case would need 8.
         assert_eq!(g.refuse(writes), None);
-        g.ran(writes, 2);
+        // Two writes the device refused wrote nothing.
+        g.ran(writes, &[false, false]);
+        assert_eq!(g.eeprom_writes(), 0);
+        g.ran(writes, &[true, true]);
         assert_eq!(g.eeprom_writes(), 4);
         let why = g.refuse(writes).unwrap();
         assert!(
@@ -468,7 +476,7 @@ cases:
         );
         // RAM only costs nothing; a case stopped after its first step counts that one.
         assert_eq!(g.refuse(ram), None);
-        g.ran(writes, 1);
+        g.ran(writes, &[true]);
         assert_eq!(g.eeprom_writes(), 6);
         let g = Guard::new(Limits {
             allow_motion: true,

@@ -1213,9 +1213,10 @@ def main(argv):
                    help="ARProperties StartupMode (default legacy)")
     p.add_argument("--activity-timeout", default="1000",
                    help="CMInitiatorActivityTimeoutFactor, 100 ms units (default 1000)")
-    p.add_argument("--input-frame-id", default="0x8001", help="input CR FrameID (default 8001h)")
-    p.add_argument("--output-frame-id", default="0x8000",
-                   help="output CR FrameID (default 8000h)")
+    # RT_CLASS_1 (its IOCRProperties) takes frame ids C000h-F7FFh (IEC 61158-6-10 FrameID table).
+    p.add_argument("--input-frame-id", default="0xC000", help="input CR FrameID (default C000h)")
+    p.add_argument("--output-frame-id", default="0xC001",
+                   help="output CR FrameID (default C001h)")
     p.add_argument("--send-clock-factor", default="32", help="SendClockFactor (default 32 = 1 ms)")
     p.add_argument("--reduction-ratio", default="32", help="ReductionRatio (default 32)")
     p.add_argument("--watchdog-factor", default="10", help="WatchdogFactor (default 10)")

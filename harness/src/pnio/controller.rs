@@ -45,10 +45,12 @@ use crate::runner::hex;
 
 /// The controller's alarm reference.
 const ALARM_REF: u16 = 0x0003;
-/// The output CR's frame id the controller proposes (RT class 1/2 range).
-const OUTPUT_FRAME_ID: u16 = 0xC001;
-/// The input CR's frame id the controller proposes; the device may answer another.
-const INPUT_FRAME_ID: u16 = 0xC000;
+/// The frame ids of the controller's CRs, which declare RT_CLASS_2 in their IOCRProperties:
+/// unicast RT_CLASS_2 ids, 8000h–BBFFh (IEC 61158-6-10, the FrameID table; C000h–F7FFh would
+/// be RT_CLASS_1's, which a device refuses under RT_CLASS_2). The input CR's is the one its
+/// frames come with; the output CR's is proposed, and the device's IOCRBlockRes says which.
+const INPUT_FRAME_ID: u16 = 0x8000;
+const OUTPUT_FRAME_ID: u16 = 0x8001;
 /// SendClockFactor 32: a 1 ms send clock.
 const SEND_CLOCK_FACTOR: u16 = 32;
 /// WatchdogFactor: cycles without output frames before the device gives the AR up. 100 (100 ms
@@ -159,6 +161,7 @@ struct Ar {
     session_key: u16,
     plan: Plan,
     input_frame_id: u16,
+    output_frame_id: u16,
     device_alarm_ref: u16,
     /// The output C_SDU sent every cycle.
     outputs: Vec<u8>,
@@ -500,7 +503,7 @@ impl<L: Link> Controller<L> {
         };
         let now = self.link.now();
         let rt = RtRepr {
-            frame_id: FrameId(OUTPUT_FRAME_ID),
+            frame_id: FrameId(ar.output_frame_id),
             data: ar.outputs.clone(),
             cycle_counter: (now.as_nanos() / 31_250) as u16,
             data_status: DataStatus::GOOD,
@@ -899,14 +902,18 @@ impl<L: Link> Controller<L> {
                 ready: false,
             });
         }
-        let input_frame_id = answer
-            .blocks
-            .iter()
-            .find_map(|b| match b {
-                Block::IocrRes(r) if r.iocr_type == IocrType::INPUT => Some(r.frame_id),
-                _ => None,
-            })
-            .unwrap_or(INPUT_FRAME_ID);
+        let frame_id = |iocr_type, proposed| {
+            answer
+                .blocks
+                .iter()
+                .find_map(|b| match b {
+                    Block::IocrRes(r) if r.iocr_type == iocr_type => Some(r.frame_id),
+                    _ => None,
+                })
+                .unwrap_or(proposed)
+        };
+        let input_frame_id = frame_id(IocrType::INPUT, INPUT_FRAME_ID);
+        let output_frame_id = frame_id(IocrType::OUTPUT, OUTPUT_FRAME_ID);
         let device_alarm_ref = answer
             .blocks
             .iter()
@@ -928,6 +935,7 @@ impl<L: Link> Controller<L> {
             session_key: self.session_key,
             plan,
             input_frame_id,
+            output_frame_id,
             device_alarm_ref,
             outputs,
             inputs: None,

@@ -117,8 +117,8 @@ mod tests {
 
     #[test]
     fn raw_frames() {
-        assert_eq!(frame(&[0xC0, 0x01, 0x00]), Effect::NONE);
-        assert!(frame(&[0xC0, 0x01, 0x7F, 0x04, 0x80]).motion.is_some());
+        assert_eq!(frame(&[0x80, 0x01, 0x00]), Effect::NONE);
+        assert!(frame(&[0x80, 0x01, 0x7F, 0x04, 0x80]).motion.is_some());
         // DCP Get, and Set.
         assert_eq!(frame(&[0xFE, 0xFD, 3, 0]), Effect::NONE);
         assert_eq!(frame(&[0xFE, 0xFD, 4, 0]), Effect::eeprom(1));

@@ -214,14 +214,22 @@ impl IoDevice {
             ));
         }
         let (submodules, diff) = self.plug(&expected);
-        let input_frame_id = 0xC000 | u16::from(self.mac.0[5]);
-        let input_cr = check_iocr(input, input_frame_id, &submodules).map_err(|field| {
+        // The consumer's frame ids: the controller's for the input CR; for the output CR the
+        // controller's, or the device's choice where it left it open (FFFFh).
+        let faulty = |field| {
             (
                 PnioStatus::cm(cm::CONNECT, cm::FAULTY_IOCR_BLOCK, field),
                 Vec::new(),
             )
-        })?;
-        let output_cr = check_iocr(output, output.frame_id, &submodules).map_err(|field| {
+        };
+        let input_cr = check_iocr(input, input.frame_id, &submodules).map_err(faulty)?;
+        let output_frame_id = match output.frame_id {
+            FRAME_ID_OPEN => frame_ids(output.properties)
+                .and_then(|mut ids| ids.find(|id| *id != input.frame_id))
+                .ok_or_else(|| faulty(7))?,
+            id => id,
+        };
+        let output_cr = check_iocr(output, output_frame_id, &submodules).map_err(|field| {
             (
                 PnioStatus::cm(cm::CONNECT, cm::FAULTY_IOCR_BLOCK, field),
                 Vec::new(),
@@ -612,29 +620,38 @@ fn dap_submodule(subslot: u16, ident: u32) -> bool {
     }
 }
 
+/// The FrameID an IOCRBlockReq leaves for the device to choose.
+const FRAME_ID_OPEN: u16 = 0xFFFF;
+
+/// The unicast frame ids of the RT class an IOCRProperties declares, for the classes the
+/// device runs (IEC 61158-6-10, the FrameID table): RT_CLASS_1 (the legacy value) C000h–F7FFh,
+/// RT_CLASS_2 8000h–BBFFh. `None` for RT_CLASS_3, RT_CLASS_UDP and reserved values.
+fn frame_ids(properties: u32) -> Option<std::ops::RangeInclusive<u16>> {
+    match properties & iocr_properties::RT_CLASS_MASK {
+        iocr_properties::RT_CLASS_1 => Some(proto::pnio::FrameId::RT_CLASS_1_UNICAST),
+        iocr_properties::RT_CLASS_2 => Some(proto::pnio::FrameId::RT_CLASS_2_UNICAST),
+        _ => None,
+    }
+}
+
 /// An IO CR the device can run, or the field (its position in the IOCRBlockReq, BlockType =
-/// 0) that it cannot: 6 LT, 7 IOCRProperties (RT class 1 frames only), 8 DataLength (40…1440 and
-/// room for every entry), 9 FrameID, 10 SendClockFactor, 11 ReductionRatio, 15
-/// WatchdogFactor.
+/// 0) that it cannot: 6 LT, 7 IOCRProperties (RT_CLASS_1 or RT_CLASS_2 only), 8 DataLength
+/// (40…1440 and room for every entry), 9 FrameID (in the range of the declared RT class:
+/// C000h–F7FFh for RT_CLASS_1, 8000h–BBFFh for RT_CLASS_2, as IEC 61158-6-10 assigns them; a
+/// frame id of the other class is refused, as p-net refuses it), 10 SendClockFactor, 11
+/// ReductionRatio, 15 WatchdogFactor.
 fn check_iocr(req: &IocrBlockReq, frame_id: u16, subs: &[Submodule]) -> Result<Cr, u8> {
     if req.lt != proto::eth::ETHERTYPE_PROFINET {
         return Err(6);
     }
-    // RT_CLASS_1 frames are announced as RT_CLASS_1 (legacy) or RT_CLASS_2 (current
-    // editions, what controllers send).
-    if !matches!(
-        req.properties & iocr_properties::RT_CLASS_MASK,
-        iocr_properties::RT_CLASS_1 | iocr_properties::RT_CLASS_2
-    ) {
+    let Some(ids) = frame_ids(req.properties) else {
         return Err(7);
-    }
+    };
     let len = usize::from(req.data_length);
     if !(proto::pnio::rt::MIN_C_SDU..=proto::pnio::rt::MAX_C_SDU).contains(&len) {
         return Err(8);
     }
-    if !proto::pnio::FrameId::RT_CLASS_1.contains(&frame_id)
-        && !proto::pnio::FrameId::RT_CLASS_2.contains(&frame_id)
-    {
+    if !ids.contains(&frame_id) {
         return Err(9);
     }
     if !(1..=128).contains(&req.send_clock_factor) || !req.send_clock_factor.is_power_of_two() {

@@ -147,8 +147,8 @@ fn connect_blocks(product: Product, modules: &[(u16, ModuleKind)]) -> (Vec<Block
             udp_rt_port: ETHERTYPE_PROFINET,
             station_name: b"plc".to_vec(),
         }),
-        iocr(IocrType::INPUT, &plan.input, 0xC000),
-        iocr(IocrType::OUTPUT, &plan.output, 0xC001),
+        iocr(IocrType::INPUT, &plan.input, 0x8000),
+        iocr(IocrType::OUTPUT, &plan.output, 0x8001),
         Block::AlarmCrReq(AlarmCrBlockReq {
             alarm_cr_type: AlarmCrType::ALARM_CR,
             lt: ETHERTYPE_PROFINET,
@@ -213,7 +213,7 @@ fn output(plan: &Plan, slot: u16, ppo: &[u8], cycle: u16) -> Vec<u8> {
         c_sdu[p.offset] = Iox::GOOD.0;
     }
     let rt = RtRepr {
-        frame_id: FrameId(0xC001),
+        frame_id: FrameId(0x8001),
         data: c_sdu,
         cycle_counter: cycle,
         data_status: DataStatus::GOOD,
@@ -538,7 +538,7 @@ fn garbage_is_dropped_and_the_device_keeps_answering() {
         // DCP Set whose DCPDataLength (FFFFh) runs past the frame.
         &[0xFE, 0xFD, 0x04, 0x00, 0, 0, 0, 1, 0, 0, 0xFF, 0xFF],
         // RT and alarm frames without an AR.
-        &[0xC0, 0x01, 1, 2, 3],
+        &[0x80, 0x01, 1, 2, 3],
         &[0xFC, 0x01, 0, 1],
     ];
     for junk in junk {
@@ -640,6 +640,68 @@ fn impossible_iocr_sizes_are_refused_naming_data_length() {
         assert!(!io.in_data_exchange());
     }
     run_ar(&mut io, &[(3, ppo6)]);
+}
+
+/// The frame ids of an IOCR belong to the RT class its IOCRProperties declare (IEC 61158-6-10,
+/// the FrameID table): RT_CLASS_2 takes 8000h–BBFFh, RT_CLASS_1 (the legacy value)
+/// C000h–F7FFh. A mismatch is refused naming the IOCRBlockReq's field 9, FrameID, as p-net
+/// refuses it; an output CR left open (FFFFh) gets a frame id of its class from the device.
+#[test]
+fn frame_ids_must_be_those_of_the_declared_rt_class() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let ppo3 = ModuleKind::Ppo(PpoType::TYPE_3);
+    let faulty_frame_id = PnioStatus::cm(
+        proto::pnio::status::cm::CONNECT,
+        proto::pnio::status::cm::FAULTY_IOCR_BLOCK,
+        9,
+    );
+    let connect = |io: &mut IoDevice, class: u32, input: u16, output: u16| {
+        let (mut blocks, _) = connect_blocks(Product::Sk550p, &[(3, ppo3)]);
+        for b in &mut blocks {
+            if let Block::IocrReq(c) = b {
+                c.properties = class;
+                c.frame_id = if c.iocr_type == IocrType::INPUT {
+                    input
+                } else {
+                    output
+                };
+            }
+        }
+        let (status, res, _) = call(io, Opnum::CONNECT, &blocks, Duration::ZERO);
+        let ids: Vec<(IocrType, u16)> = res
+            .iter()
+            .filter_map(|b| match b {
+                Block::IocrRes(r) => Some((r.iocr_type, r.frame_id)),
+                _ => None,
+            })
+            .collect();
+        (status, ids)
+    };
+    let (rt1, rt2) = (iocr_properties::RT_CLASS_1, iocr_properties::RT_CLASS_2);
+    // RT_CLASS_2 with RT_CLASS_1's ids, and the other way round, on either CR.
+    for (class, input, output) in [
+        (rt2, 0xC000, 0x8001),
+        (rt2, 0x8000, 0xC001),
+        (rt1, 0x8000, 0xC001),
+        (rt1, 0xC000, 0x8001),
+        (rt2, 0xBC00, 0x8001),
+    ] {
+        let (status, _) = connect(&mut io, class, input, output);
+        assert_eq!(
+            status, faulty_frame_id,
+            "{class} {input:04X}h {output:04X}h"
+        );
+        assert!(!io.in_data_exchange());
+    }
+    // Matching ids are taken as proposed.
+    let (status, ids) = connect(&mut io, rt1, 0xC000, 0xC001);
+    assert!(status.is_ok(), "{status:?}");
+    assert_eq!(ids, [(IocrType::INPUT, 0xC000), (IocrType::OUTPUT, 0xC001)]);
+    let mut io = self::io(Product::Sk550p, "sk550p-1");
+    // An output CR left open gets an id of its class, not the input's.
+    let (status, ids) = connect(&mut io, rt2, 0x8000, 0xFFFF);
+    assert!(status.is_ok(), "{status:?}");
+    assert_eq!(ids, [(IocrType::INPUT, 0x8000), (IocrType::OUTPUT, 0x8001)]);
 }
 
 #[test]
