@@ -44,8 +44,8 @@ pub(crate) struct Bus {
     pub(crate) name: &'static str,
     /// As people write it (`EtherNet/IP`).
     pub(crate) title: &'static str,
-    /// Its built-in profiles: the NORD products speaking it, and generic ones (any maker's
-    /// device, no product) that only run against a DUT given with `--dut`.
+    /// Its NORD profiles: the products speaking it. Its generic profile (`any@<bus>`, any
+    /// maker's device, `--dut` only) is added by [`Profile`].
     pub(crate) profiles: fn() -> Vec<Profile>,
     /// Parses a suite step written under the bus's key; the error says what is wrong.
     pub(crate) parse_step: fn(&Value) -> Result<Box<dyn BusStep>, String>,

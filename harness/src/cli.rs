@@ -330,9 +330,15 @@ fn run(a: RunArgs) -> Result<i32, String> {
     }
     if a.dut.is_some() && a.profiles.is_empty() {
         return Err(
-            "`--dut` needs `--profile`: the product behind the address (e.g. `--profile tu3-eip`, or `cip` for any maker's adapter); every profile against one device would test it as products it is not"
+            "`--dut` needs `--profile`: the product behind the address (e.g. `--profile tu3-eip`, or `any` for any maker's device); every profile against one device would test it as products it is not"
                 .into(),
         );
+    }
+    if let (None, Some(p)) = (&a.dut, profiles.iter().find(|p| p.product.is_none())) {
+        return Err(format!(
+            "profile `{}` stands for any maker's device: give the device with `--dut URL`",
+            p.name()
+        ));
     }
     let dir = suites_dir(a.suites);
     let loaded = suite::load_dir(&dir).map_err(|e| e.to_string())?;
@@ -482,11 +488,16 @@ fn list(a: ListArgs) -> Result<i32, String> {
         return Ok(EXIT_PASS);
     }
     let loaded = suite::load_dir(&suites_dir(a.suites)).map_err(|e| e.to_string())?;
-    let chosen: Vec<Profile> = a
-        .profiles
-        .iter()
-        .map(|n| Profile::by_name(n))
-        .collect::<Result<_, _>>()?;
+    let mut chosen: Vec<Profile> = Vec::new();
+    for n in &a.profiles {
+        let p = Profile::by_name(n)?;
+        // `any` names no bus until `--dut` does: listed, it is every bus's generic profile.
+        if p.product.is_none() && p.bus.is_none() {
+            chosen.extend(crate::bus::BUSES.iter().filter_map(|b| p.over(b.name)));
+        } else {
+            chosen.push(p);
+        }
+    }
     let (mut listed, mut case_runs) = (0, 0);
     for c in loaded
         .cases

@@ -98,11 +98,15 @@ impl fmt::Display for Capability {
     }
 }
 
+/// The name of the generic profiles: `any`, and `any@<bus>` once the bus is known.
+pub(crate) const ANY: &str = "any";
+
 /// A device profile: the product, how many inverters sit behind it, and the bus its cases run
 /// over.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Profile {
-    /// `sk550p` (the PPO link), `sk550p@ecat` (a bus), or a generic profile's name (`cip`).
+    /// `sk550p` (the PPO link), `sk550p@ecat` (a bus), a generic profile of a bus
+    /// (`any@ecat`), or `any` before `--dut` names the bus.
     name: String,
     /// The NORD product; `None` for a generic profile, any maker's device of a bus, against
     /// which only the bus's own cases run.
@@ -152,8 +156,12 @@ impl Profile {
             .collect()
     }
 
+    /// Every bus's NORD profiles, then its generic one (`any@<bus>`).
     fn of_buses() -> impl Iterator<Item = Profile> {
-        crate::bus::BUSES.iter().flat_map(|b| (b.profiles)())
+        crate::bus::BUSES.iter().flat_map(|b| {
+            let generic = Profile::generic(&format!("{ANY}@{}", b.name), b.name);
+            (b.profiles)().into_iter().chain([generic])
+        })
     }
 
     /// The NORD product, or why a generic profile has none.
@@ -166,13 +174,27 @@ impl Profile {
         })
     }
 
-    /// Profile name (`sk550p`, `tu3-eip@enip`, `sk550p@ecat`, `cip`).
+    /// Profile name (`sk550p`, `tu3-eip@enip`, `sk550p@ecat`, `any@enip`).
     pub(crate) fn name(&self) -> &str {
         &self.name
     }
 
-    /// Looks a built-in profile up by name; the error lists the valid names.
+    /// Looks a built-in profile up by name; the error lists the valid names. `any` is any
+    /// maker's device of the bus `--dut` names ([`Profile::over`] makes it `any@<bus>`);
+    /// `cip` is `any@enip`, its name before every bus had a generic profile.
     pub(crate) fn by_name(name: &str) -> Result<Profile, String> {
+        match name {
+            ANY => {
+                return Ok(Profile {
+                    name: ANY.to_string(),
+                    product: None,
+                    inverters: 0,
+                    bus: None,
+                })
+            }
+            "cip" => return Profile::by_name("any@enip"),
+            _ => {}
+        }
         let known = || {
             Product::ALL
                 .into_iter()
@@ -182,22 +204,20 @@ impl Profile {
         known().find(|p| p.name() == name).ok_or_else(|| {
             let names: Vec<String> = known().map(|p| p.name).collect();
             format!(
-                "unknown profile `{name}` (built-in profiles: {})",
+                "unknown profile `{name}` (built-in profiles: {}; `{ANY}` with `--dut`)",
                 names.join(", ")
             )
         })
     }
 
-    /// This profile's product over `bus`, if the product speaks it; a generic profile of
-    /// that bus stays as it is.
+    /// This profile's product over `bus`, if the product speaks it; `any` is the bus's
+    /// generic profile, and a generic profile of another bus is none.
     pub(crate) fn over(&self, bus: &'static str) -> Option<Profile> {
-        let found = Profile::of_buses().find(|p| {
-            p.bus == Some(bus)
-                && match self.product {
-                    Some(product) => p.product == Some(product),
-                    None => p.name == self.name,
-                }
-        })?;
+        if self.product.is_none() && self.bus.is_some_and(|b| b != bus) {
+            return None;
+        }
+        let found = Profile::of_buses()
+            .find(|p| p.bus == Some(bus) && p.product == self.product)?;
         Some(Profile {
             inverters: if found.product.is_some() {
                 self.inverters
@@ -225,5 +245,21 @@ mod tests {
         );
         assert_eq!(Capability::from_name("powered-on"), None);
         assert_eq!(Capability::from_name("ecat"), Some(Capability::Bus("ecat")));
+    }
+
+    #[test]
+    fn any_is_the_generic_profile_of_the_bus_the_dut_names() {
+        let any = Profile::by_name("any").unwrap();
+        for bus in crate::bus::BUSES {
+            let p = any.over(bus.name).unwrap();
+            assert_eq!(p.name(), format!("any@{}", bus.name));
+            assert_eq!((p.product, p.bus), (None, Some(bus.name)));
+            assert_eq!(Profile::by_name(p.name()).unwrap(), p);
+        }
+        assert_eq!(Profile::by_name("cip").unwrap().name(), "any@enip");
+        assert_eq!(Profile::by_name("any@ecat").unwrap().over("enip"), None);
+        let nord = Profile::by_name("sk550p").unwrap().over("ecat").unwrap();
+        assert_eq!(nord.name(), "sk550p@ecat");
+        assert!(!Profile::all().iter().any(|p| p.product.is_none()));
     }
 }

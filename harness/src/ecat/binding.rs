@@ -74,7 +74,8 @@ const CYCLIC: u8 = 1 << 1;
 /// The harness as master of one EtherCAT slave.
 pub(crate) struct EcatBinding<S> {
     master: Master<S>,
-    product: Product,
+    /// The NORD product; `None` for any maker's slave (profile `any@ecat`).
+    product: Option<Product>,
     station: u16,
     what: String,
     capabilities: &'static [Capability],
@@ -91,7 +92,7 @@ impl<S: DutSegment> EcatBinding<S> {
     /// device on the network (a ledger, a cleanup).
     pub(crate) fn open(
         segment: S,
-        product: Product,
+        product: Option<Product>,
         what: String,
         persistent: bool,
     ) -> Result<EcatBinding<S>, crate::binding::OpenError> {
@@ -145,20 +146,28 @@ impl<S: DutSegment> EcatBinding<S> {
         self.master.slaves()[0].vendor()
     }
 
+    /// The NORD product, for what only NORD's slave has (its parameter objects).
+    fn nord(&self) -> Result<Product, StepError> {
+        self.product.ok_or_else(|| {
+            StepError::NotApplicable("any maker's slave has no NORD parameter objects".into())
+        })
+    }
+
     /// The CoE object of a `read`/`write` step (§2.2.7: 2000h + 800h·(FI−1) + P; the SK
     /// 550P's interface parameters are FI 1's) and the parameter's definition.
     fn object(
         &self,
         o: &OrderSpec,
     ) -> Result<(Object, Option<&'static params::ParamDef>), StepError> {
-        let a = objects::address(self.product, o)?;
+        let product = self.nord()?;
+        let a = objects::address(product, o)?;
         let Unit::Inverter(inverter) = a.unit else {
             return Err(StepError::Suite(
                 "the SK 550P has no module parameters".into(),
             ));
         };
         let coe = addr::coe(
-            self.product,
+            product,
             ParamAddress {
                 inverter,
                 number: o.number,
@@ -578,7 +587,7 @@ impl<S: DutSegment> EcatBinding<S> {
     /// Waits until P872 no longer shows cyclic process data (bit 1).
     fn quiet(&mut self) -> Result<(), Problem> {
         let p872 = addr::coe(
-            self.product,
+            self.nord().map_err(|e| Problem::step("reading P872", e))?,
             ParamAddress {
                 inverter: Inverter::new(1).map_err(|e| Problem::other(e.to_string()))?,
                 number: proto::nord::ParamNumber::new(872)
@@ -861,11 +870,13 @@ pub(crate) fn open_error(e: MasterError) -> crate::binding::OpenError {
     }
 }
 
-/// Whether the slave found is NORD's (vendor 538h, BU 0620 §2.2.7.1 object 1018h).
+/// Whether the slave found is NORD's (vendor 538h, BU 0620 §2.2.7.1 object 1018h), for a
+/// NORD product's profile; any maker's slave is what it is.
 pub(crate) fn check_vendor<S: DutSegment>(
     b: &EcatBinding<S>,
 ) -> Result<(), crate::binding::OpenError> {
     match b.vendor() {
+        _ if b.product.is_none() => Ok(()),
         VENDOR_ID => Ok(()),
         other => Err(crate::binding::OpenError::BringUp(format!(
             "the slave's vendor ID is {other:08X}h, not NORD's {VENDOR_ID:08X}h"
@@ -904,7 +915,7 @@ mod tests {
     fn binding() -> EcatBinding<Faulty<EmbeddedSegment>> {
         let device = Device::new(DeviceConfig::new(Product::Sk550p));
         let segment = Faulty::new(EmbeddedSegment::new(Slave::new(device).unwrap()));
-        EcatBinding::open(segment, Product::Sk550p, "test".into(), false).unwrap()
+        EcatBinding::open(segment, Some(Product::Sk550p), "test".into(), false).unwrap()
     }
 
     fn read_p102() -> Action {

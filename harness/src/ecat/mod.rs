@@ -59,7 +59,7 @@ fn profiles() -> Vec<Profile> {
 
 /// The simulated slave of the profile's product on a segment of its own, behind the master.
 fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
-    let product = profile.nord().map_err(OpenError::Profile)?;
+    let product = Some(profile.nord().map_err(OpenError::Profile)?);
     let device = Device::new(device_config(profile)?);
     let slave = Slave::new(device).map_err(|e| OpenError::Profile(e.to_string()))?;
     let segment = EmbeddedSegment::new(slave);
@@ -72,7 +72,7 @@ fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, O
 
 fn open<S: DutSegment + 'static>(
     segment: S,
-    product: Product,
+    product: Option<Product>,
     what: String,
     persistent: bool,
 ) -> Result<Box<dyn Binding>, OpenError> {
@@ -101,7 +101,7 @@ impl DutFactory for NetworkFactory {
     }
 
     fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
-        let product = profile.nord().map_err(OpenError::Profile)?;
+        let product = profile.product;
         let segment = NetSegment::open(&self.iface).map_err(|e| match e {
             SegmentError::Link(LinkError::NeedsRoot { .. }) => {
                 OpenError::NotPermitted(e.to_string())

@@ -42,14 +42,12 @@ pub(crate) const BUS: Bus = Bus {
     }],
 };
 
-/// Every NORD product with an EtherNet/IP interface, and `cip`: any maker's adapter, against
-/// which the suites' EtherNet/IP cases run (`run --dut` only).
+/// Every NORD product with an EtherNet/IP interface.
 fn profiles() -> Vec<Profile> {
     Product::ALL
         .into_iter()
         .filter(|p| proto::nord::eip::identity(*p).is_some())
         .map(|p| Profile::on_bus(p, "enip"))
-        .chain([Profile::generic("cip", "enip")])
         .collect()
 }
 

@@ -54,7 +54,8 @@ const LATE_CYCLES: u32 = 20;
 /// The harness as MN of one controlled node.
 pub(crate) struct EplBinding<L> {
     mn: Manager<L>,
-    product: Product,
+    /// The NORD product; `None` for any maker's node (profile `any@epl`).
+    product: Option<Product>,
     what: String,
     capabilities: &'static [Capability],
     ledger: Option<Ledger<Object>>,
@@ -125,7 +126,7 @@ impl<L: Link> EplBinding<L> {
     /// a device on the network.
     pub(crate) fn open(
         mut mn: Manager<L>,
-        product: Product,
+        product: Option<Product>,
         what: String,
         persistent: bool,
     ) -> Result<EplBinding<L>, OpenError> {
@@ -134,7 +135,7 @@ impl<L: Link> EplBinding<L> {
         mn.boot(NmtState::PRE_OPERATIONAL_2).map_err(open_error)?;
         mn.close_sdo().map_err(open_error)?;
         let id = mn.ident().map_err(open_error)?;
-        if id.vendor_id != def::VENDOR_ID {
+        if product.is_some() && id.vendor_id != def::VENDOR_ID {
             return Err(OpenError::BringUp(format!(
                 "node {} has vendor id {:08X}h, not NORD's {:08X}h",
                 mn.config().node,
@@ -153,7 +154,7 @@ impl<L: Link> EplBinding<L> {
         );
         mn.take_exchanges();
         mn.set_recording(true);
-        let outputs = 2 * def::process_map(product, true).len();
+        let outputs = 2 * process_map(product, true).len();
         mn.set_outputs(vec![0; outputs], false);
         let node = mn.config().node;
         Ok(EplBinding {
@@ -181,12 +182,15 @@ impl<L: Link> EplBinding<L> {
         &self,
         o: &OrderSpec,
     ) -> Result<(Object, Option<&'static params::ParamDef>), StepError> {
-        let a = objects::address(self.product, o)?;
+        let product = self.product.ok_or_else(|| {
+            StepError::NotApplicable("any maker's node has no NORD parameter objects".into())
+        })?;
+        let a = objects::address(product, o)?;
         let index = match a.unit {
             Unit::Interface => 0x2000 + o.number.get(),
             Unit::Inverter(inverter) => {
                 addr::powerlink(
-                    self.product,
+                    product,
                     ParamAddress {
                         inverter,
                         number: o.number,
@@ -419,7 +423,7 @@ impl<L: Link> EplBinding<L> {
                     // A PReq as written, its payload valid (RD), carries control words the
                     // binding does not read: every inverter counts as commanded, and the
                     // cleanup takes each one back.
-                    self.commanded = (1..=self.product.max_inverters())
+                    self.commanded = (1..=self.product.map_or(0, Product::max_inverters))
                         .filter_map(|n| Inverter::new(n.into()).ok())
                         .collect();
                 }
@@ -595,7 +599,7 @@ impl<L: Link> EplBinding<L> {
     /// Waits until the interface no longer shows cyclic process data (SK 550P P872 bit 1,
     /// BU 0620 §4.3; the modules' P173 [-01] bit 1, BU 2200 §7.1.3), as the case found it.
     fn quiet(&mut self) -> Result<(), Problem> {
-        let (number, sub) = if self.product == Product::Sk550p {
+        let (number, sub) = if self.product == Some(Product::Sk550p) {
             (872, 0)
         } else {
             (173, 1)
@@ -628,7 +632,10 @@ impl<L: Link> EplBinding<L> {
         // A case whose control words came in PReq frames as written may not have set RD.
         self.mn.set_ready(true);
         let period = self.mn.config().cycle;
-        let mut drives = Drives::new(self.product.max_inverters(), &self.commanded);
+        let mut drives = Drives::new(
+            self.product.map_or(0, Product::max_inverters),
+            &self.commanded,
+        );
         let mut c = NodeCycle {
             mn: &mut self.mn,
             product: self.product,
@@ -650,10 +657,21 @@ fn reads_in(c: NmtCommand) -> bool {
     )
 }
 
+/// The words of a NORD product's process map (BU 0620 §2.4.5, BU 2200 §6.3); any maker's
+/// node has none the harness knows of.
+fn process_map(product: Option<Product>, outputs: bool) -> Vec<def::MappedWord> {
+    product.map_or_else(Vec::new, |p| def::process_map(p, outputs))
+}
+
 /// Puts FI `fi`'s six words into the PReq payload where the product's process map has them.
-fn set_words<L: Link>(mn: &mut Manager<L>, product: Product, fi: Inverter, words: [u16; 6]) {
+fn set_words<L: Link>(
+    mn: &mut Manager<L>,
+    product: Option<Product>,
+    fi: Inverter,
+    words: [u16; 6],
+) {
     let out = mn.outputs_mut();
-    for (i, m) in def::process_map(product, true).iter().enumerate() {
+    for (i, m) in process_map(product, true).iter().enumerate() {
         if let Slot::Inverter { fi: f, word } = m.slot {
             if let (true, Some(b)) = (f == fi.get(), out.get_mut(2 * i..2 * i + 2)) {
                 b.copy_from_slice(&words[usize::from(word)].to_le_bytes());
@@ -663,10 +681,10 @@ fn set_words<L: Link>(mn: &mut Manager<L>, product: Product, fi: Inverter, words
 }
 
 /// FI `fi`'s six words from the last PRes.
-fn inputs_of<L: Link>(mn: &Manager<L>, product: Product, fi: Inverter) -> [u16; 6] {
+fn inputs_of<L: Link>(mn: &Manager<L>, product: Option<Product>, fi: Inverter) -> [u16; 6] {
     let mut w = [0u16; 6];
     let inputs = mn.inputs();
-    for (i, m) in def::process_map(product, false).iter().enumerate() {
+    for (i, m) in process_map(product, false).iter().enumerate() {
         if let Slot::Inverter { fi: f, word } = m.slot {
             if let (true, Some(b)) = (f == fi.get(), inputs.get(2 * i..2 * i + 2)) {
                 w[usize::from(word)] = u16::from_le_bytes([b[0], b[1]]);
@@ -679,7 +697,7 @@ fn inputs_of<L: Link>(mn: &Manager<L>, product: Product, fi: Inverter) -> [u16; 
 /// The MN's cycle with the node's process data, as the shared loops run it.
 struct NodeCycle<'a, L> {
     mn: &'a mut Manager<L>,
-    product: Product,
+    product: Option<Product>,
 }
 
 impl<L: Link> Cycling for NodeCycle<'_, L> {
@@ -902,7 +920,7 @@ mod tests {
             fault,
         };
         let mn = Manager::new(link, MnConfig::default(), MacAddr([2, 0, 0, 0, 0, 0xF0]));
-        EplBinding::open(mn, Product::Sk550p, "test".into(), false)
+        EplBinding::open(mn, Some(Product::Sk550p), "test".into(), false)
     }
 
     fn read_p102() -> Action {
@@ -941,7 +959,7 @@ mod tests {
                 ..MnConfig::default()
             };
             let mn = Manager::new(link, config, mac);
-            EplBinding::open(mn, Product::Sk550p, "served".into(), false).expect("open")
+            EplBinding::open(mn, Some(Product::Sk550p), "served".into(), false).expect("open")
         };
         let mut b = open(Duration::from_secs(1));
         let r = b.perform(&read_p102());

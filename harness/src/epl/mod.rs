@@ -64,7 +64,7 @@ const EMBEDDED_MN_MAC: MacAddr = MacAddr([0x02, 0x00, 0x00, 0x00, 0x00, 0xF0]);
 
 /// The simulated node of the profile's product (node 1) behind the MN.
 fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
-    let product = profile.nord().map_err(OpenError::Profile)?;
+    let product = Some(profile.nord().map_err(OpenError::Profile)?);
     let device = Device::new(device_config(profile)?);
     let node =
         Node::new(device, NodeConfig::new(1)).map_err(|e| OpenError::Profile(e.to_string()))?;
@@ -85,7 +85,7 @@ fn open<L: Link + 'static>(
     link: L,
     config: MnConfig,
     mac: MacAddr,
-    product: Product,
+    product: Option<Product>,
     what: String,
     persistent: bool,
 ) -> Result<Box<dyn Binding>, OpenError> {
@@ -153,7 +153,7 @@ impl DutFactory for NetworkFactory {
     }
 
     fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
-        let product = profile.nord().map_err(OpenError::Profile)?;
+        let product = profile.product;
         let peer = SocketAddr::from((def::ip_address(self.config.node), proto::epl::SDO_UDP_PORT));
         let link =
             NetLink::open(&self.iface, proto::eth::ETHERTYPE_POWERLINK, peer, 0).map_err(|e| {
