@@ -85,6 +85,8 @@ pub(crate) struct Network {
     pub(crate) timeout: Duration,
     /// Where `--pcap` collects the run's frames.
     pub(crate) tap: Option<SharedTap>,
+    /// The device's own description (`--description`), one of this bus's.
+    pub(crate) description: Option<crate::description::Description>,
 }
 
 /// A step in a bus's own terms (an encapsulation message, a datagram, an SDO), carried by the

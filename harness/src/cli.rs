@@ -126,6 +126,11 @@ struct RunArgs {
     /// behind a network interface, the harness its managing node).
     #[arg(long)]
     dut: Option<String>,
+    /// The DUT's own device description: its EDS, ESI, XDD or GSDML (told by content). The
+    /// harness plans from it what it cannot know of another maker's device: the connection
+    /// to open, the modules to connect, the process-data sizes.
+    #[arg(long, value_name = "FILE")]
+    description: Option<PathBuf>,
     /// Seconds a network DUT may take to answer one request.
     #[arg(long, default_value_t = 2.0)]
     timeout: f64,
@@ -334,6 +339,12 @@ fn run(a: RunArgs) -> Result<i32, String> {
                 .into(),
         );
     }
+    if let (None, Some(f)) = (&a.dut, &a.description) {
+        return Err(format!(
+            "`--description {}` describes a device on the network: give it with `--dut URL`",
+            f.display()
+        ));
+    }
     if let (None, Some(p)) = (&a.dut, profiles.iter().find(|p| p.product.is_none())) {
         return Err(format!(
             "profile `{}` stands for any maker's device: give the device with `--dut URL`",
@@ -409,7 +420,16 @@ fn run(a: RunArgs) -> Result<i32, String> {
             if opts.profiles.is_empty() {
                 return Err(format!("none of the profiles speaks {}", bus.title));
             }
+            let description = match &a.description {
+                None => None,
+                Some(path) => Some(
+                    crate::description::Description::read(path)
+                        .and_then(|d| d.for_bus(bus.name, &path.display().to_string()))
+                        .map_err(|e| e.to_string())?,
+                ),
+            };
             let mut factory = (bus.network)(&crate::bus::Network {
+                description,
                 target: with_options(target, a.node_id, a.sdo.as_deref()),
                 local: a.local,
                 timeout: std::time::Duration::from_secs_f64(a.timeout),

@@ -21,6 +21,7 @@ mod bus;
 pub mod cli;
 mod cli_reports;
 mod cli_tools;
+mod description;
 mod ecat;
 /// What the EtherCAT speed bench (`harness/benches/ecat/`) needs of the library.
 pub use ecat::bench_support as ecat_bench;

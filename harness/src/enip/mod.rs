@@ -71,6 +71,10 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
         timeout: n.timeout,
         tap: n.tap.clone(),
         clock: Rc::new(sim::clock::RealClock::new()),
+        declared: match &n.description {
+            Some(crate::description::Description::Eds(e)) => e.owner().cloned(),
+            _ => None,
+        },
     }))
 }
 

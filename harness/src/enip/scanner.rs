@@ -86,6 +86,9 @@ pub(crate) struct Scanner {
     /// What the case changed on a network target, to put back when it ends; `None` for the
     /// embedded adapter, made afresh for every case.
     pub(super) ledger: Option<cleanup::Ledger>,
+    /// The owner connection the adapter's EDS declares (`--description`, or for a NORD
+    /// product the EDS the harness writes for it).
+    pub(super) declared: Option<crate::description::eds::Connection>,
 }
 
 impl Scanner {
@@ -146,6 +149,7 @@ impl Scanner {
             process: Default::default(),
             exchanges: Vec::new(),
             ledger: None,
+            declared: product.and_then(own_connection),
         }
     }
 
@@ -440,10 +444,41 @@ impl Scanner {
         }
     }
 
+    /// A `forward_open: declared` step made concrete from the device's EDS.
+    fn as_declared(&self, s: &ForwardOpenSpec) -> Result<ForwardOpenSpec, StepError> {
+        let Some((o_t_delta, t_o_delta)) = s.declared else {
+            return Ok(s.clone());
+        };
+        let c = self.declared.as_ref().ok_or_else(|| {
+            StepError::NotApplicable(
+                "needs the connection the adapter declares: give its EDS with `--description`"
+                    .into(),
+            )
+        })?;
+        let size = |data: u16, header: u16, delta: i32| -> Result<u16, StepError> {
+            u16::try_from(i32::from(data) + i32::from(header) + delta).map_err(|_| {
+                StepError::Suite(format!("a size change of {delta} leaves no size"))
+            })
+        };
+        // Network sizes: the 2-byte sequence count, and O→T the run/idle header.
+        let run_idle = if c.run_idle { 4 } else { 0 };
+        Ok(ForwardOpenSpec {
+            config_point: c.config,
+            o_t_point: c.o_t,
+            t_o_point: c.t_o,
+            o_t_size: size(c.o_t_size, 2 + run_idle, o_t_delta)?,
+            t_o_size: size(c.t_o_size, 2, t_o_delta)?,
+            run_idle: c.run_idle,
+            declared: None,
+            ..s.clone()
+        })
+    }
+
     pub(super) fn forward_open(
         &mut self,
         s: &ForwardOpenSpec,
     ) -> Result<(MrResponse, Option<ForwardOpenReply>), StepError> {
+        let s = &self.as_declared(s)?;
         self.link.prepare_io().map_err(StepError::from)?;
         // The session first: a Forward_Open that never left opened nothing to close.
         self.session(1)?;
@@ -466,7 +501,7 @@ impl Scanner {
             t_o_rpi: s.rpi_us,
             t_o: np(s.t_o_size, kind::POINT_TO_POINT),
             transport: Transport(s.transport),
-            path: EPath::io_connection(s.o_t_point, s.t_o_point),
+            path: EPath::io_connection_configured(s.config_point, s.o_t_point, s.t_o_point),
         };
         let service = if s.large {
             Service::LARGE_FORWARD_OPEN
@@ -769,6 +804,9 @@ pub(crate) struct NetworkFactory {
     pub(crate) tap: Option<crate::pcap::SharedTap>,
     /// The run's clock: captured packets are stamped with the time since the run started.
     pub(crate) clock: std::rc::Rc<sim::clock::RealClock>,
+    /// The owner connection of the device's EDS (`--description`), which replaces the one of
+    /// the profile's own.
+    pub(crate) declared: Option<crate::description::eds::Connection>,
 }
 
 impl crate::runner::DutFactory for NetworkFactory {
@@ -783,6 +821,9 @@ impl crate::runner::DutFactory for NetworkFactory {
     ) -> Result<Box<dyn Binding>, OpenError> {
         let mut scanner = Scanner::network(self.target, self.local, profile.product, self.timeout)
             .map_err(|e| OpenError::Unreachable(e.to_string()))?;
+        if self.declared.is_some() {
+            scanner.declared = self.declared.clone();
+        }
         if let Some(tap) = &self.tap {
             scanner
                 .link
@@ -793,9 +834,25 @@ impl crate::runner::DutFactory for NetworkFactory {
     }
 }
 
+/// The owner connection of the EDS the harness writes for a NORD product, read back by the
+/// planner that reads another maker's.
+fn own_connection(product: Product) -> Option<crate::description::eds::Connection> {
+    let text = super::eds::eds(product, product.max_inverters()).ok()?;
+    match crate::description::Description::parse(&text, "own EDS").ok()? {
+        crate::description::Description::Eds(e) => e.owner().cloned(),
+        _ => None,
+    }
+}
+
 /// Parameters of a Forward_Open step.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct ForwardOpenSpec {
+    /// The configuration instance of the path.
+    pub(crate) config_point: u16,
+    /// Points, sizes, configuration instance and run/idle header come from the connection
+    /// the device's EDS declares for an owner, each size changed by its delta (bytes) — for
+    /// any maker's adapter as for NORD's, whose own EDS the harness reads the same way.
+    pub(crate) declared: Option<(i32, i32)>,
     /// O→T connection point (assembly, or 255 listen only).
     pub(crate) o_t_point: u16,
     /// T→O connection point.
@@ -819,6 +876,8 @@ pub(crate) struct ForwardOpenSpec {
 impl Default for ForwardOpenSpec {
     fn default() -> Self {
         ForwardOpenSpec {
+            config_point: 1,
+            declared: None,
             o_t_point: 100,
             t_o_point: 101,
             o_t_size: 0,

@@ -94,6 +94,15 @@ fn describe(e: &EnipStep) -> String {
             hex(data),
             on(*client)
         ),
+        EnipStep::ForwardOpen(f) if f.declared.is_some() => {
+            let (o, t) = f.declared.unwrap_or_default();
+            format!(
+                "{} on the connection the EDS declares, sizes {o:+}/{t:+} bytes, RPI {} µs, transport {:02X}h",
+                if f.large { "Large_Forward_Open" } else { "Forward_Open" },
+                f.rpi_us,
+                f.transport
+            )
+        }
         EnipStep::ForwardOpen(f) => format!(
             "{} {} -> {}, sizes {}/{}, RPI {} µs, transport {:02X}h, multiplier {}{}",
             if f.large {
@@ -184,6 +193,8 @@ fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
                 "multiplier",
                 "large",
                 "run_idle",
+                "o_t_size_delta",
+                "t_o_size_delta",
             ],
         )?;
         let d = ForwardOpenSpec::default();
@@ -201,6 +212,22 @@ fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
             .int("rpi_us")?
             .map(|v| u32::try_from(v).map_err(|_| format!("`enip.rpi_us`: {v} is not 32-bit")))
             .transpose()?;
+        // `forward_open: declared`: the connection of the device's EDS, its sizes changed by
+        // `o_t_size_delta` / `t_o_size_delta` bytes.
+        if f.text("forward_open").ok().flatten().as_deref() == Some("declared") {
+            let delta = |k: &str| -> Result<i32, String> {
+                f.int(k)?.map_or(Ok(0), |v| {
+                    i32::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is too big"))
+                })
+            };
+            return Ok(EnipStep::ForwardOpen(ForwardOpenSpec {
+                declared: Some((delta("o_t_size_delta")?, delta("t_o_size_delta")?)),
+                rpi_us: rpi.unwrap_or(d.rpi_us),
+                transport: byte("transport")?.unwrap_or(d.transport),
+                large: f.bool("large")?.unwrap_or(false),
+                ..d
+            }));
+        }
         return Ok(EnipStep::ForwardOpen(ForwardOpenSpec {
             o_t_point: small("o_t")?.unwrap_or(d.o_t_point),
             t_o_point: small("t_o")?.unwrap_or(d.t_o_point),
@@ -211,6 +238,7 @@ fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
             multiplier: byte("multiplier")?.unwrap_or(d.multiplier),
             large: f.bool("large")?.unwrap_or(false),
             run_idle: f.bool("run_idle")?.unwrap_or(d.run_idle),
+            ..d
         }));
     }
     if m.contains_key("stop_io") {

@@ -738,6 +738,14 @@ impl SdoResponse {
         match h.service {
             CoeService::SDO_RESPONSE => SdoResponse::parse(rest),
             CoeService::SDO_REQUEST if rest.first() == Some(&ABORT) => SdoResponse::parse(rest),
+            // An abort whose bits 0–4 are set: CiA 301 §7.2.4.3.17 has them "not used, always
+            // 0"; named as such, not as a service that does not exist.
+            CoeService::SDO_REQUEST if rest.first().is_some_and(|c| c & 0xE0 == ABORT) => {
+                Err(Error::Unknown {
+                    field: "SDO abort command byte, bits 0–4 set (CiA 301 §7.2.4.3.17: always 0)",
+                    value: u32::from(rest[0]),
+                })
+            }
             s => Err(Error::Unknown {
                 field: "CoE service (SDO response expected)",
                 value: u32::from(s.0),
@@ -1514,6 +1522,20 @@ mod tests {
         assert_eq!(normal_capacity(10), 0);
         assert!(check_fits(122, 128).is_ok());
         assert!(check_fits(123, 128).is_err());
+    }
+
+    #[test]
+    fn an_abort_with_reserved_bits_is_named_as_such() {
+        // CoE header service 2, then 8Bh: abort (cs 4) with bits 0–4 of a request copied in.
+        let mut data = CoeHeader::new(CoeService::SDO_REQUEST).emit().to_vec();
+        data.extend([0x8B, 0x18, 0x10, 0x05, 0x11, 0x00, 0x09, 0x06]);
+        let e = SdoResponse::parse_coe(&data).unwrap_err().to_string();
+        assert!(e.contains("bits 0–4 set") && e.contains("0x8B"), "{e}");
+        data[2] = 0x80;
+        assert!(matches!(
+            SdoResponse::parse_coe(&data),
+            Ok(SdoResponse::Abort { code: SdoAbortCode(0x0609_0011), .. })
+        ));
     }
 
     #[test]

@@ -102,10 +102,16 @@ impl EPath {
     /// `t_o`: Assembly class, configuration instance 1 (no configuration data), the two
     /// points (`20 04 24 01 2C o_t 2C t_o`).
     pub fn io_connection(o_t: u16, t_o: u16) -> EPath {
+        EPath::io_connection_configured(1, o_t, t_o)
+    }
+
+    /// The same with configuration instance `config` (`20 04 24 config 2C o_t 2C t_o`): an
+    /// adapter may name its own in its EDS connection path.
+    pub fn io_connection_configured(config: u16, o_t: u16, t_o: u16) -> EPath {
         EPath {
             segments: vec![
                 Segment::Class(crate::enip::cip::class::ASSEMBLY),
-                Segment::Instance(1),
+                Segment::Instance(u32::from(config)),
                 Segment::ConnectionPoint(o_t),
                 Segment::ConnectionPoint(t_o),
             ],

@@ -29,6 +29,7 @@ impl<S: Segment> Master<S> {
         if r.wkc == 0 {
             return Err(LinkFailure::NoSlave(NoSlave::NoneCounted).into());
         }
+        self.port.set_slaves_seen();
         Ok(r.wkc)
     }
 
