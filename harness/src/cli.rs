@@ -417,16 +417,29 @@ fn run(a: RunArgs) -> Result<i32, String> {
                 }),
                 ..opts
             };
+            let generic = opts.profiles.is_empty()
+                && a.profiles
+                    .iter()
+                    .any(|n| Profile::by_name(n).is_ok_and(|p| p.product.is_none()));
+            if generic && !bus.generic {
+                return Err(format!(
+                    "{} has no generic profile yet: its binding connects NORD's modules only; give a NORD profile",
+                    bus.title
+                ));
+            }
             if opts.profiles.is_empty() {
                 return Err(format!("none of the profiles speaks {}", bus.title));
             }
             let description = match &a.description {
                 None => None,
-                Some(path) => Some(
-                    crate::description::Description::read(path)
-                        .and_then(|d| d.for_bus(bus.name, &path.display().to_string()))
-                        .map_err(|e| e.to_string())?,
-                ),
+                Some(path) => {
+                    let file = path.display().to_string();
+                    let d = crate::description::Description::read(path)
+                        .and_then(|d| d.for_bus(bus.name, &file))
+                        .map_err(|e| e.to_string())?;
+                    outln!("description: {file}, {} of {}", d.format(), d.identity());
+                    Some(d)
+                }
             };
             let mut factory = (bus.network)(&crate::bus::Network {
                 description,

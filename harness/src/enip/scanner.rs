@@ -914,6 +914,8 @@ fn mr_fields(resp: &MrResponse) -> Value {
         "service": resp.service,
         "cip_status": resp.general,
         "extended": resp.extended,
+        // The first extended word alone: the table's code, whatever follows it (a size).
+        "extended_status": resp.extended.first(),
         "status_name": GeneralStatus(resp.general).name(),
         "data": hex(&resp.data),
     })

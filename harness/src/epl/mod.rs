@@ -35,6 +35,7 @@ pub(crate) const BUS: Bus = Bus {
     name: "epl",
     title: "POWERLINK",
     profiles,
+    generic: true,
     parse_step: step::parse,
     embedded,
     network,

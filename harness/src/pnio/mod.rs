@@ -36,6 +36,7 @@ pub(crate) const BUS: Bus = Bus {
     name: "pnio",
     title: "PROFINET IO",
     profiles,
+    generic: false,
     parse_step: step::parse,
     embedded,
     network,
