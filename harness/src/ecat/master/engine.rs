@@ -293,12 +293,14 @@ impl<S: Segment> Master<S> {
 
     /// Sends `datagrams` as given (any command, address and length) in one frame and returns
     /// what came back for each, working counters as they are; `None` when no frame came back
-    /// within the frame timeout. A frame that comes back unprocessed is still an error.
+    /// within the frame timeout. A frame that comes back unprocessed is an error before a
+    /// scan counted slaves, and the slaves' answer after.
     pub(crate) fn raw_datagrams(
         &mut self,
         datagrams: &[DatagramRepr],
     ) -> Result<Option<Vec<DatagramRepr>>> {
-        match self.exchange(datagrams) {
+        self.keep_cycle();
+        match self.port.exchange_as_given(datagrams) {
             Ok(r) => Ok(Some(r)),
             Err(MasterError::Link(LinkFailure::Timeout { .. })) => Ok(None),
             Err(e) => Err(e),

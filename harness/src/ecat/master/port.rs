@@ -59,12 +59,16 @@ pub(crate) struct Port<S> {
     stats: PortStats,
     /// The receive stamp of the last frame matched.
     last_stamp: Option<Duration>,
-    /// A scan counted slaves on the segment: a frame that comes back as it was sent is then
-    /// one that no slave changed (a NOP, a datagram for no one), not a looped cable. Marking
-    /// a returned frame (bit 1 of the source address's first octet) is what Beckhoff's ESCs
-    /// do (ESC datasheet, section I, "frame processing"); ETG.1000.4 does not require it, and
-    /// an emulated ESC (KickCAT's) returns frames unmarked.
+    /// A scan counted slaves on the segment: a frame of a suite's own (datagrams as given, a
+    /// raw frame) that comes back as it was sent is then one that no slave changed (a NOP, a
+    /// datagram for no one), not a looped cable. Marking a returned frame (bit 1 of the
+    /// source address's first octet) is what Beckhoff's ESCs do (ESC datasheet, section I,
+    /// "frame processing"); ETG.1000.4 does not require it, and an emulated ESC (KickCAT's)
+    /// returns frames unmarked. The master's own frames, which a slave always processes, still
+    /// call an unchanged return a looped segment.
     slaves_seen: bool,
+    /// The exchange under way is a suite's frame as given.
+    as_given: bool,
 }
 
 impl<S: Segment> Port<S> {
@@ -81,6 +85,7 @@ impl<S: Segment> Port<S> {
             stats: PortStats::default(),
             last_stamp: None,
             slaves_seen: false,
+            as_given: false,
         }
     }
 
@@ -186,7 +191,7 @@ impl<S: Segment> Port<S> {
                 });
             };
             let got = &self.rx[..arrival.len];
-            if got == frame.as_slice() && !self.slaves_seen {
+            if got == frame.as_slice() && !(self.slaves_seen && self.as_given) {
                 self.recorder
                     .push(&frame, sent_line, got, "came back unprocessed".into());
                 return Err(LinkFailure::NoSlave(NoSlave::Unprocessed).into());
@@ -211,6 +216,17 @@ impl<S: Segment> Port<S> {
                 }
             }
         }
+    }
+
+    /// [`Port::exchange`] of datagrams a suite gave as they are (see `slaves_seen`).
+    pub(crate) fn exchange_as_given(
+        &mut self,
+        datagrams: &[DatagramRepr],
+    ) -> Result<Vec<DatagramRepr>> {
+        self.as_given = true;
+        let r = self.exchange(datagrams);
+        self.as_given = false;
+        r
     }
 
     /// Sends one datagram and returns what came back.
