@@ -47,9 +47,7 @@ pub(crate) struct Bus {
     /// Its NORD profiles: the products speaking it. Its generic profile (`any@<bus>`, any
     /// maker's device, `--dut` only) is added by [`Profile`].
     pub(crate) profiles: fn() -> Vec<Profile>,
-    /// Its binding can open any maker's device, so `any@<bus>` exists. Not yet for PROFINET:
-    /// its binding connects NORD's module layout and runs NORD's parameter channel; a
-    /// Connect planned from another maker's GSDML is not built yet.
+    /// Its binding can open any maker's device, so `any@<bus>` exists.
     pub(crate) generic: bool,
     /// Parses a suite step written under the bus's key; the error says what is wrong.
     pub(crate) parse_step: fn(&Value) -> Result<Box<dyn BusStep>, String>,

@@ -438,14 +438,17 @@ fn attempt(
                 Some(dut)
             }
             Err(e) => {
-                let r = result(
-                    case,
-                    profile,
-                    e.verdict(),
-                    format!("cannot open the DUT: {e}"),
-                    Vec::new(),
-                    start,
-                );
+                let (verdict, message) = match &e {
+                    // The run's connection check reached this device: one that cannot be
+                    // reached now went away during the run (the case before it, which saw it
+                    // go, has the verdict); this case is not judged.
+                    OpenError::Unreachable(_) if opts.real_time() => (
+                        Verdict::Inconclusive,
+                        format!("not judged: the device stopped answering during the run (it answered the connection check): {e}"),
+                    ),
+                    _ => (e.verdict(), format!("cannot open the DUT: {e}")),
+                };
+                let r = result(case, profile, verdict, message, Vec::new(), start);
                 return (r, None);
             }
         }

@@ -4,7 +4,7 @@
 //! master configured from this file finds the device it describes (BU 0620 §3.4, §3.6.1:
 //! vendor ID, product code and revision identify it in a bus scan).
 
-use proto::nord::ecat::{self as def, EntryAccess, Object, Pdo, SmRole, Value};
+use proto::nord::ecat::{self as def, EntryAccess, Object, Pdo, PdoMapping, SmRole, Value};
 use quick_xml::events::{BytesDecl, Event};
 use quick_xml::Writer;
 use std::io::Cursor;
@@ -75,10 +75,19 @@ fn device(w: &mut W, inverters: u8) -> std::io::Result<()> {
             w.create_element("Profile").write_inner_content(|w| {
                 text(w, "ProfileNo", "5001")?;
                 text(w, "AddInfo", "0")?;
+                let od = def::object_dictionary(inverters);
                 w.create_element("Dictionary").write_inner_content(|w| {
+                    // ETG.2000 DictionaryType: DataTypes, then Objects. Every type an object
+                    // names is defined here, from the same objects.
+                    w.create_element("DataTypes").write_inner_content(|w| {
+                        for t in data_types(&od) {
+                            data_type(w, &t)?;
+                        }
+                        Ok(())
+                    })?;
                     w.create_element("Objects").write_inner_content(|w| {
-                        for o in def::object_dictionary(inverters) {
-                            object(w, &o)?;
+                        for o in &od {
+                            object(w, o)?;
                         }
                         Ok(())
                     })?;
@@ -146,17 +155,208 @@ fn device(w: &mut W, inverters: u8) -> std::io::Result<()> {
     Ok(())
 }
 
+/// The `<Type>` an object names: its entry's base type for a VAR, `DT1018` and the like (the
+/// `<DataType>` [`data_types`] defines) for an ARRAY or RECORD.
+fn type_name(o: &Object) -> String {
+    match (o.code, o.entries.first()) {
+        (def::ObjectCode::Var, Some(e)) => e.data_type.esi_name(),
+        _ => format!("DT{:04X}", o.index),
+    }
+}
+
+/// Where an object's entries sit in its complete-access image (ETG.2000 `BitOffs`, as ESIs
+/// write them): sub-index 0 at bit 0, padded to a word, so sub-index 1 starts at bit 16;
+/// entries of 16 bits and more on word boundaries, bytes on byte boundaries. `offsets` runs
+/// parallel to `Object::entries`; `bit_size` is the object's (and its type's) `BitSize`.
+struct Layout {
+    offsets: Vec<u16>,
+    bit_size: u16,
+}
+
+fn layout(o: &Object) -> Layout {
+    if o.code == def::ObjectCode::Var {
+        let bits = o.entries.first().map_or(0, |e| e.data_type.bits());
+        return Layout {
+            offsets: vec![0; o.entries.len()],
+            bit_size: bits,
+        };
+    }
+    let align = |at: u16, to: u16| at.div_ceil(to) * to;
+    let (mut offsets, mut at) = (Vec::with_capacity(o.entries.len()), 0u16);
+    for (i, e) in o.entries.iter().enumerate() {
+        let bits = e.data_type.bits();
+        let to = match bits {
+            16.. => 16,
+            b if b % 8 == 0 => 8,
+            _ => 1,
+        };
+        at = align(at, to);
+        offsets.push(at);
+        at += bits;
+        if i == 0 {
+            at = align(at, 16);
+        }
+    }
+    Layout {
+        offsets,
+        bit_size: at,
+    }
+}
+
+/// One `<SubItem>` of a RECORD's (or ARRAY's) `<DataType>`.
+struct SubItem {
+    /// `None` for an ARRAY's elements (one SubItem of the `…ARR` type).
+    sub: Option<u8>,
+    name: String,
+    type_name: String,
+    bits: u16,
+    offset: u16,
+    access: EntryAccess,
+    pdo: PdoMapping,
+}
+
+/// One `<DataType>` of the dictionary.
+enum DataType {
+    /// A base type (`USINT`, `STRING(18)`, …): name and size only.
+    Base { name: String, bits: u16 },
+    /// The elements of an ARRAY (`DT1C12ARR`): base type, size and count, lower bound 1.
+    Array {
+        name: String,
+        base: String,
+        bits: u16,
+        elements: u16,
+    },
+    /// An ARRAY's or RECORD's type (`DT1018`): its SubItems.
+    Compound {
+        name: String,
+        bits: u16,
+        items: Vec<SubItem>,
+    },
+}
+
+impl DataType {
+    fn name(&self) -> &str {
+        match self {
+            DataType::Base { name, .. }
+            | DataType::Array { name, .. }
+            | DataType::Compound { name, .. } => name,
+        }
+    }
+}
+
+/// The `<DataTypes>` of the dictionary `od`: every base type its entries use (in order of
+/// first use), then per ARRAY its `…ARR` element type and per ARRAY and RECORD its own type,
+/// with the sizes and offsets of [`layout`] — the ones its `<Object>` states.
+fn data_types(od: &[Object]) -> Vec<DataType> {
+    let mut out: Vec<DataType> = Vec::new();
+    for e in od.iter().flat_map(|o| &o.entries) {
+        let name = e.data_type.esi_name();
+        if !out.iter().any(|t| t.name() == name) {
+            out.push(DataType::Base {
+                name,
+                bits: e.data_type.bits(),
+            });
+        }
+    }
+    for o in od.iter().filter(|o| o.code != def::ObjectCode::Var) {
+        let name = type_name(o);
+        let Layout { offsets, bit_size } = layout(o);
+        let item = |e: &def::Entry, offset: u16| SubItem {
+            sub: Some(e.sub),
+            name: e.name.clone(),
+            type_name: e.data_type.esi_name(),
+            bits: e.data_type.bits(),
+            offset,
+            access: e.access,
+            pdo: e.pdo,
+        };
+        let mut items: Vec<SubItem> = Vec::new();
+        let mut parts = o.entries.iter().zip(offsets);
+        if o.code == def::ObjectCode::Array {
+            // Sub-index 0, then one SubItem for all elements (ETG.2000: an ARRAY's type is
+            // sub-index 0 and an array of the element type, lower bound 1).
+            items.extend(parts.next().map(|(e, at)| item(e, at)));
+            let elements: Vec<(&def::Entry, u16)> = parts.collect();
+            let base = elements.first().map(|(e, _)| e.data_type);
+            let at = elements.first().map_or(16, |(_, at)| *at);
+            let bits = bit_size - at;
+            let array = format!("{name}ARR");
+            out.push(DataType::Array {
+                name: array.clone(),
+                // An empty array (1C10h, 1C11h: no PDO on a mailbox SM) has no element type
+                // of its own: it counts UNSIGNED16 PDO indices like 1C12h.
+                base: base.map_or_else(|| "UINT".into(), |t| t.esi_name()),
+                bits,
+                elements: elements.len() as u16,
+            });
+            let first = elements.first().map(|(e, _)| *e);
+            items.push(SubItem {
+                sub: None,
+                name: "Elements".into(),
+                type_name: array,
+                bits,
+                offset: at,
+                access: first.map_or(EntryAccess::Ro, |e| e.access),
+                pdo: first.map_or(PdoMapping::None, |e| e.pdo),
+            });
+        } else {
+            items.extend(parts.map(|(e, at)| item(e, at)));
+        }
+        out.push(DataType::Compound {
+            name,
+            bits: bit_size,
+            items,
+        });
+    }
+    out
+}
+
+fn data_type(w: &mut W, t: &DataType) -> std::io::Result<()> {
+    w.create_element("DataType").write_inner_content(|w| {
+        text(w, "Name", t.name())?;
+        match t {
+            DataType::Base { bits, .. } => text(w, "BitSize", &bits.to_string())?,
+            DataType::Array {
+                base,
+                bits,
+                elements,
+                ..
+            } => {
+                text(w, "BaseType", base)?;
+                text(w, "BitSize", &bits.to_string())?;
+                w.create_element("ArrayInfo").write_inner_content(|w| {
+                    text(w, "LBound", "1")?;
+                    text(w, "Elements", &elements.to_string())
+                })?;
+            }
+            DataType::Compound { bits, items, .. } => {
+                text(w, "BitSize", &bits.to_string())?;
+                for i in items {
+                    w.create_element("SubItem").write_inner_content(|w| {
+                        if let Some(sub) = i.sub {
+                            text(w, "SubIdx", &sub.to_string())?;
+                        }
+                        text(w, "Name", &i.name)?;
+                        text(w, "Type", &i.type_name)?;
+                        text(w, "BitSize", &i.bits.to_string())?;
+                        text(w, "BitOffs", &i.offset.to_string())?;
+                        flags_mapped(w, i.access, i.pdo)
+                    })?;
+                }
+            }
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
 fn object(w: &mut W, o: &Object) -> std::io::Result<()> {
     w.create_element("Object").write_inner_content(|w| {
         text(w, "Index", &hex(u32::from(o.index), 4))?;
         text(w, "Name", &o.name)?;
         let first = o.entries.first();
-        let bits: u16 = o.entries.iter().map(|e| e.data_type.bits()).sum();
-        match (o.code, first) {
-            (def::ObjectCode::Var, Some(e)) => text(w, "Type", &e.data_type.esi_name())?,
-            _ => text(w, "Type", &format!("DT{:04X}", o.index))?,
-        }
-        text(w, "BitSize", &bits.to_string())?;
+        text(w, "Type", &type_name(o))?;
+        text(w, "BitSize", &layout(o).bit_size.to_string())?;
         if o.code == def::ObjectCode::Var {
             if let Some(e) = first {
                 default_data(w, e)?;
@@ -193,6 +393,11 @@ fn default_data(w: &mut W, e: &def::Entry) -> std::io::Result<()> {
 }
 
 fn flags(w: &mut W, access: EntryAccess) -> std::io::Result<()> {
+    flags_mapped(w, access, PdoMapping::None)
+}
+
+/// `<Flags>`: SDO access and, for a mappable entry, `<PdoMapping>` R (RxPDO) or T (TxPDO).
+fn flags_mapped(w: &mut W, access: EntryAccess, pdo: PdoMapping) -> std::io::Result<()> {
     w.create_element("Flags").write_inner_content(|w| {
         text(
             w,
@@ -201,7 +406,12 @@ fn flags(w: &mut W, access: EntryAccess) -> std::io::Result<()> {
                 EntryAccess::Ro => "ro",
                 EntryAccess::Rw => "rw",
             },
-        )
+        )?;
+        match pdo {
+            PdoMapping::None => Ok(()),
+            PdoMapping::Rx => text(w, "PdoMapping", "R"),
+            PdoMapping::Tx => text(w, "PdoMapping", "T"),
+        }
     })?;
     Ok(())
 }
@@ -233,6 +443,7 @@ fn pdo(w: &mut W, element: &str, p: &Pdo) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::description::xml::{self, Element};
     use quick_xml::events::Event;
     use quick_xml::Reader;
     use sim::device::{Device, DeviceConfig};
@@ -284,6 +495,182 @@ mod tests {
         assert!(xml.contains(&format!("ProductCode=\"{}\"", hex(word32(&sii, 0x0A), 8))));
         assert!(xml.contains(&format!("RevisionNo=\"{}\"", hex(word32(&sii, 0x0C), 8))));
         assert_eq!(texts(&xml, "Id"), ["#x00000538"]);
+    }
+
+    /// ESI base types (ETG.2000): they need no `<DataType>` of their own, though this ESI
+    /// lists the ones it uses.
+    fn is_base(t: &str) -> bool {
+        matches!(
+            t,
+            "BOOL"
+                | "BYTE"
+                | "WORD"
+                | "DWORD"
+                | "SINT"
+                | "INT"
+                | "DINT"
+                | "LINT"
+                | "USINT"
+                | "UINT"
+                | "UDINT"
+                | "ULINT"
+                | "REAL"
+                | "LREAL"
+        ) || (t.starts_with("STRING(") && t.ends_with(')'))
+    }
+
+    fn child<'a>(e: &'a Element, name: &str) -> &'a Element {
+        e.child(name)
+            .unwrap_or_else(|| panic!("<{}> without <{name}>", e.name))
+    }
+
+    fn child_text<'a>(e: &'a Element, name: &str) -> &'a str {
+        child(e, name).text.trim()
+    }
+
+    fn child_number(e: &Element, name: &str) -> u64 {
+        let t = child_text(e, name);
+        xml::number(t).unwrap_or_else(|| panic!("<{name}>{t}</{name}> is no number"))
+    }
+
+    /// The `<Dictionary>` of the ESI for `inverters` inverters and its data types by name.
+    fn dictionary(inverters: u8) -> (Element, Vec<Element>) {
+        let root = xml::parse(&esi(inverters).unwrap(), "sk550p.xml").unwrap();
+        let dictionary = root.find("Dictionary").expect("a <Dictionary>").clone();
+        let types: Vec<Element> = child(&dictionary, "DataTypes")
+            .children("DataType")
+            .cloned()
+            .collect();
+        (dictionary, types)
+    }
+
+    fn find<'a>(types: &'a [Element], name: &str) -> Option<&'a Element> {
+        types.iter().find(|t| child_text(t, "Name") == name)
+    }
+
+    /// KickCAT (issue 21) refuses an object whose `<Type>` no `<DataType>` defines: every type
+    /// an object, a SubItem or an array names is defined, once, with the size it is used with.
+    #[test]
+    fn every_object_type_is_a_data_type_of_its_bit_size() {
+        for inverters in 1..=def::MAX_INVERTERS {
+            let (dictionary, types) = dictionary(inverters);
+            // DictionaryType: DataTypes first, then Objects.
+            let order: Vec<&str> = dictionary
+                .children
+                .iter()
+                .map(|c| c.name.as_str())
+                .collect();
+            assert_eq!(order, ["DataTypes", "Objects"]);
+            for (i, t) in types.iter().enumerate() {
+                let name = child_text(t, "Name");
+                assert!(
+                    types[..i].iter().all(|u| child_text(u, "Name") != name),
+                    "DataType {name} twice"
+                );
+            }
+            let objects: Vec<&Element> = child(&dictionary, "Objects").children("Object").collect();
+            assert_eq!(objects.len(), def::object_dictionary(inverters).len());
+            for o in objects {
+                let (index, ty) = (child_text(o, "Index"), child_text(o, "Type"));
+                let bits = child_number(o, "BitSize");
+                match find(&types, ty) {
+                    Some(dt) => assert_eq!(
+                        child_number(dt, "BitSize"),
+                        bits,
+                        "object {index}: BitSize {bits}, its type {ty} another"
+                    ),
+                    None => assert!(is_base(ty), "object {index}: no <DataType> {ty}"),
+                }
+                assert!(
+                    find(&types, ty).is_some(),
+                    "object {index}: {ty} not listed"
+                );
+            }
+            for dt in &types {
+                let (name, size) = (child_text(dt, "Name"), child_number(dt, "BitSize"));
+                let mut end = 0;
+                for si in dt.children("SubItem") {
+                    let ty = child_text(si, "Type");
+                    let (bits, at) = (child_number(si, "BitSize"), child_number(si, "BitOffs"));
+                    let st = find(&types, ty).unwrap_or_else(|| panic!("{name}: no type {ty}"));
+                    assert_eq!(child_number(st, "BitSize"), bits, "{name}: SubItem of {ty}");
+                    assert!(at >= end, "{name}: SubItems overlap at bit {at}");
+                    end = at + bits;
+                }
+                assert!(end <= size, "{name}: SubItems end at {end}, beyond {size}");
+                if let Some(array) = dt.child("ArrayInfo") {
+                    let base = child_text(dt, "BaseType");
+                    let bt = find(&types, base).unwrap_or_else(|| panic!("{name}: no {base}"));
+                    assert_eq!(child_number(array, "LBound"), 1);
+                    assert_eq!(
+                        child_number(bt, "BitSize") * child_number(array, "Elements"),
+                        size,
+                        "{name}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The types say what the dictionary holds: a RECORD's SubItems are its sub-indices, an
+    /// ARRAY's element count is its sub-index 0, and each `<Object>` lists as many SubItems.
+    #[test]
+    fn data_types_follow_the_dictionary() {
+        let (dictionary, types) = dictionary(def::MAX_INVERTERS);
+        let od = def::object_dictionary(def::MAX_INVERTERS);
+        let objects: Vec<&Element> = child(&dictionary, "Objects").children("Object").collect();
+        for (o, x) in od.iter().zip(objects) {
+            assert_eq!(child_number(x, "Index"), u64::from(o.index));
+            let Some(dt) = find(&types, &type_name(o)) else {
+                continue;
+            };
+            let items: Vec<&Element> = dt.children("SubItem").collect();
+            match o.code {
+                def::ObjectCode::Var => assert!(items.is_empty()),
+                def::ObjectCode::Record => {
+                    let subs: Vec<u64> = items.iter().map(|i| child_number(i, "SubIdx")).collect();
+                    let want: Vec<u64> = o.entries.iter().map(|e| u64::from(e.sub)).collect();
+                    assert_eq!(subs, want, "{:04X}", o.index);
+                }
+                def::ObjectCode::Array => {
+                    assert_eq!(
+                        items.len(),
+                        2,
+                        "{:04X}: sub-index 0 and the elements",
+                        o.index
+                    );
+                    let elements = &o.entries[1..];
+                    assert!(elements
+                        .windows(2)
+                        .all(|p| p[0].data_type == p[1].data_type));
+                    let arr = find(&types, child_text(items[1], "Type")).unwrap();
+                    let count = child_number(child(arr, "ArrayInfo"), "Elements");
+                    assert_eq!(count, elements.len() as u64, "{:04X}", o.index);
+                }
+            }
+            if o.code != def::ObjectCode::Var {
+                let info = child(x, "Info").children("SubItem").count();
+                assert_eq!(info, o.entries.len(), "{:04X}", o.index);
+            }
+        }
+        // As the ETG's own ESIs write them: sub-index 0 padded to a word.
+        let dt1018 = find(&types, "DT1018").unwrap();
+        assert_eq!(child_number(dt1018, "BitSize"), 144);
+        let offs: Vec<u64> = dt1018
+            .children("SubItem")
+            .map(|i| child_number(i, "BitOffs"))
+            .collect();
+        assert_eq!(offs, [0, 16, 48, 80, 112]);
+        // Process data entries are mappable: outputs into RxPDOs, inputs into TxPDOs.
+        for (ty, mapping) in [("DT7000", "R"), ("DT6000", "T")] {
+            let dt = find(&types, ty).unwrap();
+            let mapped: Vec<&str> = dt
+                .children("SubItem")
+                .filter_map(|i| child(i, "Flags").child("PdoMapping"))
+                .map(|m| m.text.trim())
+                .collect();
+            assert_eq!(mapped, [mapping; 6], "{ty}");
+        }
     }
 
     #[test]

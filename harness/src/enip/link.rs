@@ -13,6 +13,7 @@ use proto::enip::io::IO_PORT;
 use sim::clock::{Clock, RealClock, VirtualClock};
 use sim::enip::{Adapter, Framer};
 
+use super::step::Split;
 use crate::binding::StepError;
 use crate::pcap::SharedTap;
 use crate::poll::{PollingStream, REPLY_POLL};
@@ -49,6 +50,9 @@ pub(crate) enum LinkError {
     /// The link cannot be recorded as asked (`--pcap`).
     #[error("{0}")]
     Record(String),
+    /// The link cannot send a message as the step asks (in two segments).
+    #[error("{0}")]
+    Unsupported(String),
 }
 
 fn pending_text(pending: &Option<usize>) -> String {
@@ -90,6 +94,18 @@ pub(crate) trait EnipLink {
         msg: &[u8],
         wait: &Deadline,
     ) -> Result<Option<Vec<u8>>, LinkError>;
+    /// The next message [`EnipLink::request`] sends (of any client) leaves in two TCP
+    /// segments: its first `split.at` bytes, then, `split.gap` later, the rest — on the
+    /// network two writes with TCP_NODELAY set, so each goes out as a segment of its own; the
+    /// embedded adapter gets the two parts in that order. A message of `split.at` bytes or
+    /// fewer goes whole.
+    fn split_next(&mut self, split: Split) -> Result<(), LinkError> {
+        let _ = split;
+        Err(LinkError::Unsupported(format!(
+            "{} cannot send a message in two segments",
+            self.describe()
+        )))
+    }
     /// Sends one O→T datagram (if any), lets `rpi` pass, and returns the T→O datagrams that
     /// arrived meanwhile.
     fn io_cycle(
@@ -122,6 +138,17 @@ pub(crate) trait EnipLink {
 
 /// How often a network I/O cycle looks for T→O datagrams.
 const IO_POLL: Duration = Duration::from_micros(250);
+
+/// `msg` as it leaves: whole, or in the two parts of `split` when it has bytes on both sides.
+fn parts(msg: &[u8], split: Option<Split>) -> (Vec<&[u8]>, Duration) {
+    match split {
+        Some(s) if s.at > 0 && s.at < msg.len() => {
+            let (a, b) = msg.split_at(s.at);
+            (vec![a, b], s.gap)
+        }
+        _ => (vec![msg], Duration::ZERO),
+    }
+}
 
 /// The peer address the embedded adapter sees (the scanner's).
 const SCANNER_V4: SocketAddrV4 =
@@ -247,6 +274,8 @@ pub(crate) struct Embedded {
     /// Per client, its recorded connection (the scanner's own from the start, the others
     /// from their first message).
     recorded: BTreeMap<u8, Connection>,
+    /// How the next message leaves ([`EnipLink::split_next`]).
+    split: Option<Split>,
 }
 
 impl Embedded {
@@ -264,6 +293,7 @@ impl Embedded {
             clients: BTreeMap::new(),
             recorder,
             recorded,
+            split: None,
         }
     }
 
@@ -301,39 +331,53 @@ impl EnipLink for Embedded {
         msg: &[u8],
         _wait: &Deadline,
     ) -> Result<Option<Vec<u8>>, LinkError> {
-        let now = self.clock.now();
-        if let Some(r) = &self.recorder {
-            let server = self.server;
-            self.recorded
-                .entry(client)
-                .or_insert_with(|| r.connect(r.embedded_client(), server))
-                .tcp(true, msg);
-        }
-        let slot = self
-            .clients
-            .entry(client)
-            .or_insert_with(|| Some(Framer::new()));
-        let Some(framer) = slot else {
-            return Err(LinkError::CLOSED);
-        };
-        // The served adapter drops a client whose message exceeds the framer's limit.
-        let (messages, mut close) = match framer.push(msg) {
-            Ok(m) => (m, false),
-            Err(_) => (Vec::new(), true),
-        };
+        let (parts, gap) = parts(msg, self.split.take());
         let id = u64::from(client);
         let peer = SocketAddr::V4(SocketAddrV4::new(
             *SCANNER_V4.ip(),
             SCANNER_V4.port() + u16::from(client),
         ));
         let mut reply = None;
-        for m in messages {
-            let r = self.adapter.handle_tcp(id, peer, &m, now);
-            if r.reply.is_some() {
-                reply = r.reply;
+        let mut close = false;
+        for (i, part) in parts.iter().enumerate() {
+            if i > 0 {
+                // The second segment, `gap` after the first, on the virtual clock.
+                self.clock.advance(gap);
             }
-            if r.close {
-                close = true;
+            let now = self.clock.now();
+            if let Some(r) = &self.recorder {
+                let server = self.server;
+                self.recorded
+                    .entry(client)
+                    .or_insert_with(|| r.connect(r.embedded_client(), server))
+                    .tcp(true, part);
+            }
+            let slot = self
+                .clients
+                .entry(client)
+                .or_insert_with(|| Some(Framer::new()));
+            let Some(framer) = slot else {
+                return Err(LinkError::CLOSED);
+            };
+            // The served adapter drops a client whose message exceeds the framer's limit.
+            let messages = match framer.push(part) {
+                Ok(m) => m,
+                Err(_) => {
+                    close = true;
+                    Vec::new()
+                }
+            };
+            for m in messages {
+                let r = self.adapter.handle_tcp(id, peer, &m, now);
+                if r.reply.is_some() {
+                    reply = r.reply;
+                }
+                if r.close {
+                    close = true;
+                    break;
+                }
+            }
+            if close {
                 break;
             }
         }
@@ -344,13 +388,18 @@ impl EnipLink for Embedded {
             if let Some(c) = self.recorded.get_mut(&client) {
                 c.close(true);
             }
-            *slot = None;
+            self.clients.insert(client, None);
             self.adapter.client_closed(id);
             if reply.is_none() {
                 return Err(LinkError::CLOSED);
             }
         }
         Ok(reply)
+    }
+
+    fn split_next(&mut self, split: Split) -> Result<(), LinkError> {
+        self.split = Some(split);
+        Ok(())
     }
 
     fn io_cycle(
@@ -402,6 +451,8 @@ pub(crate) struct Network {
     timeout: Duration,
     /// Where the traffic is recorded, once [`EnipLink::record`] was called.
     recorder: Option<Recorder>,
+    /// How the next message leaves ([`EnipLink::split_next`]).
+    split: Option<Split>,
 }
 
 /// One TCP connection and the bytes received beyond the last reply.
@@ -463,15 +514,29 @@ impl Stream {
         Ok(())
     }
 
-    /// Sends `msg`, waits until the end of `wait` for one whole reply (a late reply to an
-    /// earlier request dropped).
-    fn request(&mut self, msg: &[u8], wait: &Deadline) -> Result<Option<Vec<u8>>, LinkError> {
-        let tcp = self.tcp.as_mut().ok_or(LinkError::CLOSED)?;
-        tcp.write_all(msg, wait.remaining())
-            .map_err(LinkError::io("TCP send failed"))?;
-        if let Some(c) = &self.recorded {
-            c.tcp(true, msg);
+    /// Sends `msg` (in the two segments of `split`, if given), waits until the end of `wait`
+    /// for one whole reply (a late reply to an earlier request dropped).
+    fn request(
+        &mut self,
+        msg: &[u8],
+        split: Option<Split>,
+        wait: &Deadline,
+    ) -> Result<Option<Vec<u8>>, LinkError> {
+        let (parts, gap) = parts(msg, split);
+        for (i, part) in parts.iter().enumerate() {
+            if i > 0 {
+                // TCP_NODELAY is set (`connect`): the first part left as a segment of its own
+                // and the second leaves as another.
+                std::thread::sleep(gap);
+            }
+            let tcp = self.tcp.as_mut().ok_or(LinkError::CLOSED)?;
+            tcp.write_all(part, wait.remaining())
+                .map_err(LinkError::io("TCP send failed"))?;
+            if let Some(c) = &self.recorded {
+                c.tcp(true, part);
+            }
         }
+        let tcp = self.tcp.as_mut().ok_or(LinkError::CLOSED)?;
         let context = sender_context(msg);
         let mut chunk = [0u8; 4096];
         loop {
@@ -595,6 +660,7 @@ impl Network {
             udp: None,
             timeout,
             recorder: None,
+            split: None,
         })
     }
 }
@@ -628,6 +694,7 @@ impl EnipLink for Network {
         msg: &[u8],
         wait: &Deadline,
     ) -> Result<Option<Vec<u8>>, LinkError> {
+        let split = self.split.take();
         let stream = if client == 1 {
             &mut self.tcp
         } else {
@@ -641,7 +708,12 @@ impl EnipLink for Network {
                 )?),
             }
         };
-        stream.request(msg, wait)
+        stream.request(msg, split, wait)
+    }
+
+    fn split_next(&mut self, split: Split) -> Result<(), LinkError> {
+        self.split = Some(split);
+        Ok(())
     }
 
     fn io_cycle(
@@ -718,7 +790,84 @@ impl EnipLink for Network {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::io::{Read, Write};
     use std::net::{Ipv4Addr, TcpListener};
+
+    /// ListIdentity, sender context "SPLIT-ME": 24 bytes, a header alone.
+    const LIST_IDENTITY: [u8; 24] = [
+        0x63, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, b'S', b'P', b'L', b'I', b'T', b'-', b'M', b'E', 0,
+        0, 0, 0,
+    ];
+
+    #[test]
+    fn the_embedded_adapter_gets_a_split_message_in_order() {
+        use sim::device::{Device, DeviceConfig};
+        let server = SocketAddrV4::new(Ipv4Addr::new(192, 168, 1, 20), 44818);
+        let adapter = Adapter::new(
+            Device::new(DeviceConfig::new(proto::nord::Product::Sk550p)),
+            server,
+        );
+        let mut link = Embedded::new(adapter, server, None);
+        let wait = Deadline::after(Duration::ZERO);
+        link.split_next(Split {
+            at: 10,
+            gap: Duration::from_millis(50),
+        })
+        .unwrap();
+        let reply = link.request(1, &LIST_IDENTITY, &wait).unwrap().unwrap();
+        assert_eq!(&reply[..2], &[0x63, 0]);
+        assert_eq!(&reply[12..20], &LIST_IDENTITY[12..20]);
+        // The second part came 50 ms after the first, on the virtual clock; the split was
+        // for that message only.
+        assert_eq!(link.clock.now(), Duration::from_millis(50));
+        assert!(link.split.is_none());
+        assert!(link.request(1, &LIST_IDENTITY, &wait).unwrap().is_some());
+    }
+
+    #[test]
+    fn a_network_link_sends_a_split_message_as_two_segments() {
+        let listener = TcpListener::bind("127.0.0.14:0").unwrap();
+        let target = listener.local_addr().unwrap();
+        let gap = Duration::from_millis(50);
+        let server = std::thread::spawn(move || {
+            let (mut tcp, _) = listener.accept().unwrap();
+            let mut buf = [0u8; 64];
+            // Loopback and TCP_NODELAY: the first write arrives alone.
+            let first = tcp.read(&mut buf).unwrap();
+            let start = Instant::now();
+            let mut got = buf[..first].to_vec();
+            while got.len() < LIST_IDENTITY.len() {
+                let n = tcp.read(&mut buf).unwrap();
+                assert!(n > 0, "closed after {} bytes", got.len());
+                got.extend_from_slice(&buf[..n]);
+            }
+            let apart = start.elapsed();
+            // The reply: the request's header back, status 0, no data.
+            tcp.write_all(&got).unwrap();
+            (first, got, apart)
+        });
+        let mut link = Network::connect(target, None, Duration::from_secs(2)).unwrap();
+        link.split_next(Split { at: 10, gap }).unwrap();
+        let reply = link
+            .request(1, &LIST_IDENTITY, &Deadline::after(Duration::from_secs(2)))
+            .unwrap();
+        let (first, got, apart) = server.join().unwrap();
+        assert_eq!(first, 10);
+        assert_eq!(got, LIST_IDENTITY);
+        assert!(apart >= gap - Duration::from_millis(5), "{apart:?} apart");
+        assert_eq!(reply.as_deref(), Some(&LIST_IDENTITY[..]));
+        assert!(link.split.is_none());
+    }
+
+    #[test]
+    fn a_split_that_leaves_a_side_empty_sends_the_message_whole() {
+        let gap = Duration::from_millis(50);
+        let whole = parts(&LIST_IDENTITY, Some(Split { at: 24, gap }));
+        assert_eq!(whole, (vec![&LIST_IDENTITY[..]], Duration::ZERO));
+        let (two, g) = parts(&LIST_IDENTITY, Some(Split { at: 10, gap }));
+        assert_eq!(two, vec![&LIST_IDENTITY[..10], &LIST_IDENTITY[10..]]);
+        assert_eq!(g, gap);
+    }
 
     #[test]
     fn a_network_link_connects_from_its_local_address_and_takes_its_io_port() {

@@ -701,6 +701,7 @@ impl Scanner {
                 bytes,
                 session,
                 client,
+                split,
             } => {
                 let mut b = bytes.clone();
                 if *session && b.len() >= 8 {
@@ -708,7 +709,17 @@ impl Scanner {
                     b[4..8].copy_from_slice(&s.to_le_bytes());
                 }
                 let wait = self.wait();
-                let what = format!("raw {} bytes", b.len());
+                let mut what = format!("raw {} bytes", b.len());
+                // After the session's registration: only the step's own message is split.
+                if let Some(p) = split {
+                    self.link.split_next(*p).map_err(StepError::from)?;
+                    what = format!(
+                        "{what} in two TCP segments: {} + {} bytes, {:?} apart",
+                        p.at,
+                        b.len().saturating_sub(p.at),
+                        p.gap
+                    );
+                }
                 let reply = self.send_bytes(*client, &b, what, &wait);
                 Ok(match reply {
                     Ok(None) => json!({ "reply": false, "closed": false }),
@@ -909,6 +920,25 @@ fn refused(resp: &MrResponse) -> Observation {
     )
 }
 
+/// A request step's fields, as a refusal when the reply's general status is not 00h: the
+/// request was not carried out (a refused Set wrote nothing, so counts no EEPROM write).
+fn status_refusal(fields: Value) -> Observation {
+    match fields["cip_status"].as_u64() {
+        Some(code) if code != 0 => {
+            let text = GeneralStatus(code as u8).to_string();
+            Observation::refused(
+                fields,
+                Refusal {
+                    kind: "CIP general status".into(),
+                    code: code as u32,
+                    text,
+                },
+            )
+        }
+        _ => fields.into(),
+    }
+}
+
 fn mr_fields(resp: &MrResponse) -> Value {
     json!({
         "service": resp.service,
@@ -1102,7 +1132,7 @@ impl Binding for Scanner {
             }
             Action::Bus(step) => {
                 let step = crate::bus::own_step::<EnipStep>(step.as_ref(), "EtherNet/IP")?;
-                self.enip_step(step)
+                return self.enip_step(step).map(status_refusal);
             }
         };
         fields.map(Observation::from)

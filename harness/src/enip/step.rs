@@ -11,17 +11,33 @@ use crate::runner::hex;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 
+/// How a raw message leaves in two TCP segments (`split: N`, `gap: 50ms`): its first `at`
+/// bytes, then, `gap` later, the rest. TCP is a byte stream, so a target must put an
+/// encapsulation message together from however many segments it arrives in (CIP Vol 2
+/// §2-3: the header's length field, not the segment, tells where a message ends).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Split {
+    /// Bytes in the first segment: at least 1, fewer than the message has.
+    pub(crate) at: usize,
+    /// The pause before the second segment.
+    pub(crate) gap: Duration,
+}
+
+/// The pause between the two segments of a split message unless `gap` says otherwise.
+const DEFAULT_GAP: Duration = Duration::from_millis(50);
+
 /// An `enip:` step. `client` picks the TCP connection: 1 is the scanner's own, 2.. are other
 /// clients of the same target (each with its own session), to show a target keeps serving
 /// others after one client misbehaved.
 #[derive(Debug, Clone)]
 pub(crate) enum EnipStep {
     /// Encapsulation bytes as written; `session` puts the client's session handle in bytes
-    /// 4..8 (registering one first).
+    /// 4..8 (registering one first); `split` sends them in two TCP segments.
     Raw {
         bytes: Vec<u8>,
         session: bool,
         client: u8,
+        split: Option<Split>,
     },
     /// A message-router request as written (service, path size, path, data; may be malformed)
     /// in a SendRRData of the client's session.
@@ -76,9 +92,19 @@ fn describe(e: &EnipStep) -> String {
             bytes,
             session,
             client,
+            split,
         } => {
             let s = if *session { ", session filled in" } else { "" };
-            format!("raw {}{s}{}", hex(bytes), on(*client))
+            let parts = match split {
+                Some(p) => format!(
+                    ", in two TCP segments: {} bytes, then {} more {:?} later",
+                    p.at,
+                    bytes.len().saturating_sub(p.at),
+                    p.gap
+                ),
+                None => String::new(),
+            };
+            format!("raw {}{s}{parts}{}", hex(bytes), on(*client))
         }
         EnipStep::Mr { bytes, client } => {
             format!("message-router request {}{}", hex(bytes), on(*client))
@@ -144,6 +170,28 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
     Ok(Box::new(enip_step(m)?))
 }
 
+/// `split: N` and `gap: T` of a raw message of `len` bytes: N must leave bytes on both sides;
+/// `gap` alone is an error (there is nothing to pause between).
+fn split(f: &Fields, len: usize) -> Result<Option<Split>, String> {
+    let gap = f.text("gap")?.map(|g| parse_duration(&g)).transpose()?;
+    let Some(at) = f.int("split")? else {
+        return match gap {
+            Some(_) => Err("`enip.gap` needs `split` (the bytes of the first segment)".into()),
+            None => Ok(None),
+        };
+    };
+    match usize::try_from(at) {
+        Ok(at) if at >= 1 && at < len => Ok(Some(Split {
+            at,
+            gap: gap.unwrap_or(DEFAULT_GAP),
+        })),
+        _ => Err(format!(
+            "`enip.split`: {at} does not split a message of {len} bytes (1..={})",
+            len.saturating_sub(1)
+        )),
+    }
+}
+
 fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
     let client = |f: &Fields| -> Result<u8, String> {
         match f.int("client")? {
@@ -153,11 +201,14 @@ fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
         }
     };
     if m.contains_key("raw") {
-        let f = Fields::new("enip", m, &["raw", "session", "client"])?;
+        let f = Fields::new("enip", m, &["raw", "session", "client", "split", "gap"])?;
+        let bytes = hex_bytes("enip.raw", &f.text("raw")?.unwrap_or_default())?;
+        let split = split(&f, bytes.len())?;
         return Ok(EnipStep::Raw {
-            bytes: hex_bytes("enip.raw", &f.text("raw")?.unwrap_or_default())?,
+            bytes,
             session: f.bool("session")?.unwrap_or(false),
             client: client(&f)?,
+            split,
         });
     }
     if m.contains_key("mr") {
@@ -253,4 +304,62 @@ fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
         return Ok(EnipStep::Run(f.bool("run")?.unwrap_or(true)));
     }
     Err("`enip` needs one of `raw`, `mr`, `service`, `forward_open`, `stop_io`, `run`".into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    const LIST_IDENTITY: &str = "6300 0000 00000000 00000000 0000000000000000 00000000";
+
+    /// A raw step with these fields beside `raw`.
+    fn raw(extra: Value) -> Result<EnipStep, String> {
+        let mut m = extra.as_object().cloned().unwrap_or_default();
+        m.insert("raw".into(), json!(LIST_IDENTITY));
+        enip_step(&m)
+    }
+
+    fn split_of(step: Result<EnipStep, String>) -> Option<Split> {
+        match step {
+            Ok(EnipStep::Raw { bytes, split, .. }) => {
+                assert_eq!(bytes.len(), 24);
+                split
+            }
+            other => panic!("not a raw step: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_raw_message_splits_in_two_segments() {
+        assert_eq!(
+            split_of(raw(json!({ "split": 10, "gap": "20ms" }))),
+            Some(Split {
+                at: 10,
+                gap: Duration::from_millis(20)
+            })
+        );
+        // The gap defaults to 50 ms; without `split` the message goes whole.
+        assert_eq!(
+            split_of(raw(json!({ "split": 23 }))),
+            Some(Split {
+                at: 23,
+                gap: DEFAULT_GAP
+            })
+        );
+        assert_eq!(split_of(raw(json!({}))), None);
+        // A split that leaves one side empty, a gap without a split, a gap that is no
+        // duration: each a load error.
+        for bad in [
+            json!({ "split": 0 }),
+            json!({ "split": 24 }),
+            json!({ "split": -1 }),
+            json!({ "gap": "50ms" }),
+            json!({ "split": 4, "gap": "5" }),
+        ] {
+            assert!(raw(bad.clone()).is_err(), "{bad} loaded");
+        }
+        let e = raw(json!({ "split": 24 })).unwrap_err();
+        assert!(e.contains("does not split a message of 24 bytes"), "{e}");
+    }
 }

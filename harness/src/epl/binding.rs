@@ -64,6 +64,9 @@ pub(crate) struct EplBinding<L> {
     via: Via,
     /// The node id it was opened with.
     node: u8,
+    /// NMT_FeatureFlags_U32 (1F82h) as the node's IdentResponse gives them: bit 1 "SDO by
+    /// UDP/IP" decides whether the UDP cases apply (DS 301 §7.3.3.2.1, feature flags).
+    feature_flags: u32,
     /// The case restarted the node, which then read in its addressing parameters (P160,
     /// P164; P850…P852): settings the cleanup puts back are read in only by another restart.
     restarted: bool,
@@ -171,6 +174,7 @@ impl<L: Link> EplBinding<L> {
             commanded: Vec::new(),
             via,
             node,
+            feature_flags: id.feature_flags,
             restarted: false,
         })
     }
@@ -326,6 +330,19 @@ impl<L: Link> EplBinding<L> {
         settle::run_cycles_for(&mut c, &mut self.pending, d)
     }
 
+    /// The way of an SDO step: as it asks, else the run's; UDP only for a node whose feature
+    /// flags declare SDO by UDP/IP (1F82h bit 1).
+    fn via(&self, asked: Option<Via>) -> Result<Via, StepError> {
+        let via = asked.unwrap_or(self.via);
+        if via == Via::Udp && self.feature_flags & UDP_SDO == 0 {
+            return Err(StepError::NotApplicable(format!(
+                "node {} declares no SDO over UDP/IP (feature flags 1F82h = {:08X}h, bit 1 clear)",
+                self.node, self.feature_flags
+            )));
+        }
+        Ok(via)
+    }
+
     /// An `epl:` step, as written.
     fn epl_step(&mut self, step: &EplStep) -> Result<Observation, StepError> {
         let fields = match step {
@@ -389,7 +406,7 @@ impl<L: Link> EplBinding<L> {
                 })
             }
             EplStep::Upload { index, sub, via } => {
-                let via = via.unwrap_or(self.via);
+                let via = self.via(*via)?;
                 match self.mn.sdo(via, Command::read_by_index(0, *index, *sub)) {
                     Ok(d) => {
                         let mut f =
@@ -415,7 +432,7 @@ impl<L: Link> EplBinding<L> {
                     index: *index,
                     sub: *sub,
                 };
-                return self.download(obj, data, via.unwrap_or(self.via));
+                return self.download(obj, data, self.via(*via)?);
             }
             EplStep::Frame(bytes) => {
                 let preq = bytes.first().map(|t| MessageType(t & 0x7F)) == Some(MessageType::PREQ);
@@ -450,7 +467,7 @@ impl<L: Link> EplBinding<L> {
             EplStep::Sdo { bytes, via } => {
                 let answers = self
                     .mn
-                    .sdo_raw(via.unwrap_or(self.via), bytes)
+                    .sdo_raw(self.via(*via)?, bytes)
                     .map_err(step_error)?;
                 let mut f = json!({
                     "answered": !answers.is_empty(),
@@ -643,6 +660,9 @@ impl<L: Link> EplBinding<L> {
         drives.settle(&mut c, &mut self.pending, period, what)
     }
 }
+
+/// NMT_FeatureFlags_U32 bit 1: SDO by UDP/IP (DS 301).
+const UDP_SDO: u32 = 1 << 1;
 
 /// The PReq's "ready" flag in its byte 4 (DS 301 §4.6.1.1.3): the payload is valid.
 const RD: u8 = 0x01;

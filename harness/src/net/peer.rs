@@ -54,6 +54,12 @@ pub(crate) trait Link {
     ) -> Result<Option<(Vec<u8>, Option<Duration>)>, LinkError>;
     /// Sends a UDP datagram to the device's port.
     fn send_udp(&mut self, datagram: &[u8]) -> Result<(), LinkError>;
+    /// Sends a UDP datagram back to where the device's last one came from: the answer to a
+    /// call the device made as client, maybe from a port of its own (p-net's ApplicationReady
+    /// comes from another port than its RPC server's).
+    fn send_udp_reply(&mut self, datagram: &[u8]) -> Result<(), LinkError> {
+        self.send_udp(datagram)
+    }
     /// The next datagram from the device, waiting until `deadline` at most.
     fn recv_udp(&mut self, deadline: Duration) -> Result<Option<Vec<u8>>, LinkError>;
     /// Lets time pass until `until` (the embedded link runs the device's timers).
@@ -204,8 +210,13 @@ const MIN_UDP_WAIT: Duration = Duration::from_millis(5);
 /// A device behind a network interface: raw frames of one EtherType and UDP to `peer`.
 pub(crate) struct NetLink<D> {
     raw: RawLink,
+    /// Not connected: the device may send from any of its ports.
     udp: UdpSocket,
     peer: SocketAddr,
+    /// The host's address toward the peer (for captures).
+    local_ip: std::net::IpAddr,
+    /// Where the device's last datagram came from.
+    last_from: Option<SocketAddr>,
     /// The UDP port the socket is bound to (0: any).
     local_port: u16,
     start: Instant,
@@ -220,6 +231,16 @@ impl<D> std::fmt::Debug for NetLink<D> {
             .field("peer", &self.peer)
             .finish()
     }
+}
+
+/// The host's own address on the route to `peer`: what a socket connected to it would send
+/// from (a throwaway socket; connecting a UDP socket sends nothing).
+fn local_toward(peer: SocketAddr) -> Result<std::net::IpAddr, LinkError> {
+    let what = peer.to_string();
+    let io = |e| LinkError::io("find the route to the device", &what, e);
+    let probe = UdpSocket::bind(("0.0.0.0", 0)).map_err(io)?;
+    probe.connect(peer).map_err(io)?;
+    Ok(probe.local_addr().map_err(io)?.ip())
 }
 
 impl<D> NetLink<D> {
@@ -240,13 +261,11 @@ impl<D> NetLink<D> {
         raw.set_spin(Duration::from_micros(200));
         let udp = UdpSocket::bind(("0.0.0.0", local_port))
             .map_err(|e| LinkError::io("bind a UDP socket", iface, e))?;
-        // Connected, the socket knows its own address (for captures) and takes datagrams of
-        // the device only.
-        udp.connect(peer)
-            .map_err(|e| LinkError::io("reach the device over UDP", iface, e))?;
         Ok(NetLink {
             raw,
             udp,
+            local_ip: local_toward(peer)?,
+            last_from: None,
             peer,
             local_port,
             start: Instant::now(),
@@ -311,7 +330,11 @@ impl<D> Link for NetLink<D> {
                     .map_err(|e| LinkError::io("set a UDP timeout", &peer, e))?;
             }
             match self.udp.recv_from(&mut buf) {
-                Ok((n, from)) if from == self.peer => return Ok(Some(buf[..n].to_vec())),
+                // The device's datagrams, from whichever of its ports.
+                Ok((n, from)) if from.ip() == self.peer.ip() => {
+                    self.last_from = Some(from);
+                    return Ok(Some(buf[..n].to_vec()));
+                }
                 // A signal (a stopped and continued process, a debugger) is no link error.
                 Ok(_) => continue,
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
@@ -336,27 +359,22 @@ impl<D> Link for NetLink<D> {
     }
 
     fn udp_ends(&mut self) -> (SocketAddr, SocketAddr) {
-        let local = self
-            .udp
-            .local_addr()
-            .unwrap_or(SocketAddr::from(([0, 0, 0, 0], 0)));
-        (self.peer, local)
+        let port = self.udp.local_addr().map_or(self.local_port, |a| a.port());
+        (self.peer, SocketAddr::new(self.local_ip, port))
+    }
+
+    fn send_udp_reply(&mut self, datagram: &[u8]) -> Result<(), LinkError> {
+        let to = self.last_from.unwrap_or(self.peer);
+        self.udp
+            .send_to(datagram, to)
+            .map(|_| ())
+            .map_err(|e| LinkError::io("send a UDP datagram", &to.to_string(), e))
     }
 
     fn set_udp_peer(&mut self, peer: SocketAddr) -> Result<(), LinkError> {
-        if peer == self.peer {
-            return Ok(());
-        }
-        // A connected socket keeps the source address of its first peer's route: a new one
-        // on the same port, the old one closed first.
-        let what = peer.to_string();
-        let io = |e| LinkError::io("reach the device over UDP", &what, e);
-        let spare = UdpSocket::bind(("0.0.0.0", 0)).map_err(io)?;
-        drop(std::mem::replace(&mut self.udp, spare));
-        let udp = UdpSocket::bind(("0.0.0.0", self.local_port)).map_err(io)?;
-        udp.connect(peer).map_err(io)?;
-        self.udp = udp;
+        self.local_ip = local_toward(peer)?;
         self.peer = peer;
+        self.last_from = None;
         Ok(())
     }
 
@@ -435,6 +453,11 @@ impl<L: Link> Link for Tapped<L> {
     fn send_udp(&mut self, datagram: &[u8]) -> Result<(), LinkError> {
         self.record_udp(datagram, true);
         self.inner.send_udp(datagram)
+    }
+
+    fn send_udp_reply(&mut self, datagram: &[u8]) -> Result<(), LinkError> {
+        self.record_udp(datagram, true);
+        self.inner.send_udp_reply(datagram)
     }
 
     fn recv_udp(&mut self, deadline: Duration) -> Result<Option<Vec<u8>>, LinkError> {

@@ -74,6 +74,8 @@ pub(crate) struct PnioBinding<L> {
     inverters: u8,
     what: String,
     capabilities: &'static [Capability],
+    /// The name of station the device was found by when the case began.
+    own_name: String,
     /// A device on the network: what the case wrote, the drives it ran, and the device as the
     /// run found it, to put back when the case ends.
     persistent: Option<Persistent>,
@@ -106,7 +108,7 @@ fn status_hex(s: PnioStatus) -> String {
     )
 }
 
-fn step_error(e: PnioError) -> StepError {
+pub(super) fn step_error(e: PnioError) -> StepError {
     match e {
         PnioError::Link(l) => StepError::Link(l.to_string()),
         // The device's limit passed: late unless the host was (the runner judges that).
@@ -120,14 +122,17 @@ fn step_error(e: PnioError) -> StepError {
             waited,
         },
         e @ (PnioError::NoInput | PnioError::NotFound(_)) => StepError::Link(e.to_string()),
-        e @ PnioError::Malformed { .. } => StepError::Garbage(e.to_string()),
+        // A PROFINET answer that breaks its own rules (an RPC response without its PNIO
+        // status) is the device's departure, judged; open_error keeps garbage at bring-up an
+        // error.
+        e @ PnioError::Malformed { .. } => StepError::Protocol(e.to_string()),
         e @ (PnioError::Nca { .. } | PnioError::NotConnected) => StepError::Refused(e.to_string()),
     }
 }
 
 /// [`crate::net::wait::bring_up`] of a part of the opening: again while the host was late, and
 /// a second look at a device whose answer missed its limit with the host on time.
-fn bring_up<T>(attempt: impl FnMut(u32) -> Result<T, PnioError>) -> Result<T, OpenError> {
+pub(super) fn bring_up<T>(attempt: impl FnMut(u32) -> Result<T, PnioError>) -> Result<T, OpenError> {
     crate::net::wait::bring_up(attempt, |e| match e {
         PnioError::NoReply { limit, waited, .. } => Some((*limit, *waited)),
         _ => None,
@@ -191,7 +196,7 @@ fn default_ppo(product: Product) -> PpoType {
 /// Connect with `subs`; a device still holding the AR of an earlier case (which ended without
 /// releasing it) refuses with "out of AR resources" until its watchdog ends that AR: once
 /// more after it.
-fn up<L: Link>(ctl: &mut Controller<L>, subs: &[ExpectedSub]) -> Result<Connected, PnioError> {
+pub(super) fn up<L: Link>(ctl: &mut Controller<L>, subs: &[ExpectedSub]) -> Result<Connected, PnioError> {
     let c = ctl.connect(subs)?;
     let out_of_ar = PnioStatus::cm(cm::CONNECT, cm::CMRPC, cm::CMRPC_OUT_OF_AR);
     if c.status != out_of_ar {
@@ -297,6 +302,7 @@ impl<L: Link + 'static> PnioBinding<L> {
             } else {
                 &EMBEDDED_CAPABILITIES
             },
+            own_name: station.name.clone(),
             ctl,
             product,
             inverters,
@@ -310,189 +316,17 @@ impl<L: Link + 'static> PnioBinding<L> {
     }
 
     fn pnio_step(&mut self, step: &PnioStep) -> Result<Observation, StepError> {
-        let mut ctl = self.ctl.borrow_mut();
-        Ok(match step {
-            PnioStep::Identify(name) => {
-                let found = ctl.identify(name.as_deref()).map_err(step_error)?;
-                let stations: Vec<Value> = found
-                    .iter()
-                    .map(|s| {
-                        json!({
-                            "name": s.name,
-                            "mac": s.mac.to_string(),
-                            "ip": s.ip.map(|i| i.ip.to_string()),
-                            "mask": s.ip.map(|i| i.mask.to_string()),
-                            "gateway": s.ip.map(|i| i.gateway.to_string()),
-                            "vendor": s.vendor_id,
-                            "device": s.device_id,
-                            "type": s.type_of_station,
-                        })
-                    })
-                    .collect();
-                let first = stations.first().cloned().unwrap_or(Value::Null);
-                json!({ "count": stations.len(), "stations": stations, "station": first }).into()
-            }
-            PnioStep::SetName { name, permanent } => {
-                let block = DcpBlock::set(
-                    qualifier(*permanent),
-                    BlockValue::NameOfStation(name.clone()),
-                );
-                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
-            }
-            PnioStep::SetIp {
-                ip,
-                mask,
-                gateway,
-                permanent,
-            } => {
-                let block = DcpBlock::set(
-                    qualifier(*permanent),
-                    BlockValue::IpParameter(IpParameter {
-                        ip: *ip,
-                        mask: *mask,
-                        gateway: *gateway,
-                    }),
-                );
-                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
-            }
-            PnioStep::Signal => {
-                let block = DcpBlock::set(
-                    BlockQualifier::TEMPORARY,
-                    BlockValue::Signal(proto::pnio::dcp::SIGNAL_FLASH_ONCE),
-                );
-                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
-            }
-            PnioStep::ResetFactory => {
-                let block =
-                    DcpBlock::set(BlockQualifier::RESET_ALL_DATA, BlockValue::ResetToFactory);
-                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
-            }
-            PnioStep::Connect {
-                modules,
-                reduction_ratio,
-            } => {
-                ctl.set_reduction_ratio(*reduction_ratio);
-                let subs =
-                    expected(self.product, self.inverters, modules).map_err(StepError::Suite)?;
-                connect_result(ctl.connect(&subs).map_err(step_error)?)
-            }
-            PnioStep::Release => {
-                let status = ctl.release().map_err(step_error)?;
-                status_result(status, json!({}))
-            }
-            PnioStep::Read {
-                index,
-                slot,
-                subslot,
-            } => {
-                let (slot, subslot) = self.place(*slot, *subslot);
-                let (status, data) = ctl
-                    .read_record(slot, subslot, *index, format!("IODRead record {index}"))
-                    .map_err(step_error)?;
-                status_result(status, json!({ "data": hex(&data), "length": data.len() }))
-            }
-            PnioStep::Write {
-                index,
-                slot,
-                subslot,
-                data,
-            } => {
-                let (slot, subslot) = self.place(*slot, *subslot);
-                let status = ctl
-                    .write_record(
-                        slot,
-                        subslot,
-                        *index,
-                        data,
-                        format!("IODWrite record {index}"),
-                    )
-                    .map_err(step_error)?;
-                status_result(status, json!({}))
-            }
-            PnioStep::Alarm(wait) => match ctl.acknowledge_alarm(*wait).map_err(step_error)? {
-                None => json!({ "alarm": null }).into(),
-                Some(n) => {
-                    let errors: Vec<u16> = n
-                        .items
-                        .iter()
-                        .filter_map(|i| match i {
-                            AlarmItem::ChannelDiagnosis(c) => Some(c.error_type),
-                            AlarmItem::ExtChannelDiagnosis(e) => Some(e.channel.error_type),
-                            _ => None,
-                        })
-                        .collect();
-                    json!({
-                        "alarm": n.alarm_type.0,
-                        "type": n.alarm_type.name(),
-                        "slot": n.slot,
-                        "subslot": n.subslot,
-                        "module": n.module_ident,
-                        "number": errors.first(),
-                        "error": errors.first().and_then(|e| def::alarm_error_number(*e)),
-                    })
-                    .into()
-                }
-            },
-            PnioStep::Silence(d) => {
-                ctl.silence(*d).map_err(step_error)?;
-                json!({}).into()
-            }
-            PnioStep::Lldp(d) => {
-                let (frames, last) = ctl.lldp_for(*d).map_err(step_error)?;
-                let du = last.as_deref().map(proto::lldp::Lldpdu::parse);
-                let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
-                match du {
-                    Some(Err(e)) => return Err(StepError::Protocol(format!("LLDP: {e}"))),
-                    Some(Ok(du)) => json!({
-                        "frames": frames,
-                        "chassis": text(&du.chassis.1),
-                        "chassis_subtype": du.chassis.0,
-                        "port": text(&du.port.1),
-                        "port_subtype": du.port.0,
-                        "ttl": du.ttl,
-                    }),
-                    None => json!({ "frames": frames, "chassis": null }),
-                }
-                .into()
-            }
-            PnioStep::Cycles(n) => {
-                let d = ctl.cycle() * (*n as u32);
-                ctl.run_for(d).map_err(step_error)?;
-                let status = ctl.input_status().map(|s| s.0);
-                json!({ "connected": ctl.connected(), "data_status": status }).into()
-            }
-            PnioStep::Frame(bytes) => {
-                let answer = ctl.raw_frame(bytes).map_err(step_error)?;
-                json!({ "answered": answer.is_some(), "answer": answer.as_deref().map(hex) }).into()
-            }
-            PnioStep::Rpc {
-                opnum,
-                body,
-                interface,
-            } => {
-                let interface = match interface {
-                    None => Uuid::PNIO_DEVICE_INTERFACE,
-                    Some(text) => text.parse().map_err(|e| StepError::Suite(format!("{e}")))?,
-                };
-                match ctl.call(
-                    Opnum(*opnum),
-                    body.clone(),
-                    interface,
-                    format!("RPC opnum {opnum}"),
-                ) {
-                    Ok(a) => status_result(a.status, json!({ "nca": null })),
-                    Err(PnioError::Nca { packet, status }) => Observation::refused(
-                        json!({ "nca": status.0, "packet": packet }),
-                        Refusal {
-                            kind: "RPC reject".into(),
-                            code: status.0,
-                            text: format!("{packet} {status}"),
-                        },
-                    ),
-                    Err(e) => return Err(step_error(e)),
-                }
-            }
-        })
+        let (product, inverters) = (self.product, self.inverters);
+        let fi1 = Inverter::new(1)
+            .ok()
+            .and_then(|fi| def::inverter_slot(product, fi).ok());
+        let plan = StepPlan {
+            connect: &move |m: &[Module]| expected(product, inverters, m),
+            place: (fi1.unwrap_or(0), def::IO_SUBSLOT),
+            nord: true,
+            own_name: &self.own_name,
+        };
+        bus_step(&mut self.ctl.borrow_mut(), step, &plan)
     }
 
     /// A parameter write on a persistent device, through the ledger: the value before is read
@@ -626,17 +460,6 @@ impl<L: Link + 'static> PnioBinding<L> {
         self.channel.perform(step)
     }
 
-    /// The slot and subslot of a record step: as given, else FI 1's module.
-    fn place(&self, slot: Option<u16>, subslot: Option<u16>) -> (u16, u16) {
-        let fi1 = Inverter::new(1)
-            .ok()
-            .and_then(|fi| def::inverter_slot(self.product, fi).ok());
-        (
-            slot.or(fi1).unwrap_or(0),
-            subslot.unwrap_or(def::IO_SUBSLOT),
-        )
-    }
-
     /// The cyclic traffic of the last step as one transcript line.
     fn cycles_exchange(&mut self) -> Option<Exchange> {
         let log = self.ctl.borrow_mut().take_cycles();
@@ -648,6 +471,252 @@ impl<L: Link + 'static> PnioBinding<L> {
         })
     }
 }
+
+/// What a `pnio:` step needs of the binding it runs on.
+pub(super) struct StepPlan<'a> {
+    /// The submodules a Connect expects beside the DAP's, for the modules a step names
+    /// (none: the binding's own layout).
+    pub(super) connect: &'a dyn Fn(&[Module]) -> Result<Vec<ExpectedSub>, String>,
+    /// Slot and subslot of a record step that names none.
+    pub(super) place: (u16, u16),
+    /// Alarms carry NORD's error numbers (a NORD product).
+    pub(super) nord: bool,
+    /// The name of station the binding found the device by (`identify: own`).
+    pub(super) own_name: &'a str,
+}
+
+/// A `pnio:` step, as written, on the controller.
+pub(super) fn bus_step<L: Link>(
+    ctl: &mut Controller<L>,
+    step: &PnioStep,
+    plan: &StepPlan<'_>,
+) -> Result<Observation, StepError> {
+        Ok(match step {
+            PnioStep::Identify(_) | PnioStep::IdentifyOwn => {
+                let name = match step {
+                    PnioStep::Identify(name) => name.clone(),
+                    _ => Some(plan.own_name.to_string()),
+                };
+                let found = ctl.identify(name.as_deref()).map_err(step_error)?;
+                let stations: Vec<Value> = found
+                    .iter()
+                    .map(|s| {
+                        json!({
+                            "name": s.name,
+                            "mac": s.mac.to_string(),
+                            "ip": s.ip.map(|i| i.ip.to_string()),
+                            "mask": s.ip.map(|i| i.mask.to_string()),
+                            "gateway": s.ip.map(|i| i.gateway.to_string()),
+                            "vendor": s.vendor_id,
+                            "device": s.device_id,
+                            "type": s.type_of_station,
+                        })
+                    })
+                    .collect();
+                let first = stations.first().cloned().unwrap_or(Value::Null);
+                json!({ "count": stations.len(), "stations": stations, "station": first }).into()
+            }
+            PnioStep::SetName { name, permanent } => {
+                let block = DcpBlock::set(
+                    qualifier(*permanent),
+                    BlockValue::NameOfStation(name.clone()),
+                );
+                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+            }
+            PnioStep::SetIp {
+                ip,
+                mask,
+                gateway,
+                permanent,
+            } => {
+                let block = DcpBlock::set(
+                    qualifier(*permanent),
+                    BlockValue::IpParameter(IpParameter {
+                        ip: *ip,
+                        mask: *mask,
+                        gateway: *gateway,
+                    }),
+                );
+                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+            }
+            PnioStep::Signal => {
+                let block = DcpBlock::set(
+                    BlockQualifier::TEMPORARY,
+                    BlockValue::Signal(proto::pnio::dcp::SIGNAL_FLASH_ONCE),
+                );
+                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+            }
+            PnioStep::ResetFactory => {
+                let block =
+                    DcpBlock::set(BlockQualifier::RESET_ALL_DATA, BlockValue::ResetToFactory);
+                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+            }
+            PnioStep::Connect {
+                modules,
+                reduction_ratio,
+            } => {
+                ctl.set_reduction_ratio(*reduction_ratio);
+                let subs = (plan.connect)(modules).map_err(StepError::Suite)?;
+                connect_result(ctl.connect(&subs).map_err(step_error)?)
+            }
+            PnioStep::Release => {
+                let status = ctl.release().map_err(step_error)?;
+                status_result(status, json!({}))
+            }
+            PnioStep::Read {
+                index,
+                slot,
+                subslot,
+            } => {
+                let (slot, subslot) = (slot.unwrap_or(plan.place.0), subslot.unwrap_or(plan.place.1));
+                let (status, data) = ctl
+                    .read_record(slot, subslot, *index, format!("IODRead record {index}"))
+                    .map_err(step_error)?;
+                status_result(status, json!({ "data": hex(&data), "length": data.len() }))
+            }
+            PnioStep::Write {
+                index,
+                slot,
+                subslot,
+                data,
+            } => {
+                let (slot, subslot) = (slot.unwrap_or(plan.place.0), subslot.unwrap_or(plan.place.1));
+                let status = ctl
+                    .write_record(
+                        slot,
+                        subslot,
+                        *index,
+                        data,
+                        format!("IODWrite record {index}"),
+                    )
+                    .map_err(step_error)?;
+                status_result(status, json!({}))
+            }
+            PnioStep::Alarm(wait) => match ctl.acknowledge_alarm(*wait).map_err(step_error)? {
+                None => json!({ "alarm": null }).into(),
+                Some(n) => {
+                    let errors: Vec<u16> = n
+                        .items
+                        .iter()
+                        .filter_map(|i| match i {
+                            AlarmItem::ChannelDiagnosis(c) => Some(c.error_type),
+                            AlarmItem::ExtChannelDiagnosis(e) => Some(e.channel.error_type),
+                            _ => None,
+                        })
+                        .collect();
+                    json!({
+                        "alarm": n.alarm_type.0,
+                        "type": n.alarm_type.name(),
+                        "slot": n.slot,
+                        "subslot": n.subslot,
+                        "module": n.module_ident,
+                        "number": errors.first(),
+                        "error": errors
+                            .first()
+                            .filter(|_| plan.nord)
+                            .and_then(|e| def::alarm_error_number(*e)),
+                    })
+                    .into()
+                }
+            },
+            PnioStep::Silence(d) => {
+                ctl.silence(*d).map_err(step_error)?;
+                json!({}).into()
+            }
+            PnioStep::Lldp(d) => {
+                let (frames, last) = ctl.lldp_for(*d).map_err(step_error)?;
+                let du = last.as_deref().map(proto::lldp::Lldpdu::parse);
+                let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+                match du {
+                    Some(Err(e)) => return Err(StepError::Protocol(format!("LLDP: {e}"))),
+                    Some(Ok(du)) => json!({
+                        "frames": frames,
+                        "chassis": text(&du.chassis.1),
+                        "chassis_subtype": du.chassis.0,
+                        "port": text(&du.port.1),
+                        "port_subtype": du.port.0,
+                        "ttl": du.ttl,
+                    }),
+                    None => json!({ "frames": frames, "chassis": null }),
+                }
+                .into()
+            }
+            PnioStep::Cycles(n) => {
+                let d = ctl.cycle() * (*n as u32);
+                ctl.run_for(d).map_err(step_error)?;
+                let status = ctl.input_status().map(|s| s.0);
+                json!({ "connected": ctl.connected(), "data_status": status }).into()
+            }
+            PnioStep::Frame(bytes) => {
+                let answer = ctl.raw_frame(bytes).map_err(step_error)?;
+                json!({ "answered": answer.is_some(), "answer": answer.as_deref().map(hex) }).into()
+            }
+            PnioStep::Rpc {
+                opnum,
+                body,
+                interface,
+            } => {
+                let interface = match interface {
+                    None => Uuid::PNIO_DEVICE_INTERFACE,
+                    Some(text) => text.parse().map_err(|e| StepError::Suite(format!("{e}")))?,
+                };
+                match ctl.call(
+                    Opnum(*opnum),
+                    body.clone(),
+                    interface,
+                    format!("RPC opnum {opnum}"),
+                ) {
+                    Ok(a) => status_result(a.status, json!({ "nca": null })),
+                    Err(PnioError::Nca { packet, status }) => Observation::refused(
+                        json!({ "nca": status.0, "packet": packet }),
+                        Refusal {
+                            kind: "RPC reject".into(),
+                            code: status.0,
+                            text: format!("{packet} {status}"),
+                        },
+                    ),
+                    Err(e) => return Err(step_error(e)),
+                }
+            }
+        })
+    }
+
+
+/// The device's identity: the DCP Identify answer the binding found it by (DeviceID
+/// block: vendor and device id; NameOfStation) and its I&M0 record (order id, serial
+/// number, software revision; BU 0620 §2.5.3 lists I&M among every conformance class's
+/// functions; IEC 61158-6-10 makes I&M0 mandatory). A device that refuses I&M0 keeps the DCP
+/// fields, and the source says so.
+pub(super) fn identity_of<L: Link>(ctl: &mut Controller<L>) -> Option<Result<Identity, StepError>> {
+        let station = ctl.station()?.clone();
+        let mut id = Identity {
+            source: format!("DCP Identify of station {:?}", station.name),
+            vendor: Some(format!("vendor id {:04X}h", station.vendor_id)),
+            product_code: Some(format!("device id {:04X}h", station.device_id)),
+            product_name: Some(station.type_of_station.clone()),
+            revision: None,
+            serial: None,
+        };
+        let read = ctl.read_record(0, 1, proto::pnio::im0::INDEX, "read I&M0".into());
+        ctl.take_exchanges();
+        match read {
+            Ok((status, data)) if status.is_ok() => match proto::pnio::im0::Im0Repr::parse(&data) {
+                Ok(im) => {
+                    id.source += " and I&M0";
+                    id.product_code = Some(format!(
+                        "device id {:04X}h, order id {:?}",
+                        station.device_id, im.order_id
+                    ));
+                    id.revision = Some(im.software_revision.to_string());
+                    id.serial = Some(im.serial);
+                }
+                Err(e) => return Some(Err(StepError::Protocol(format!("malformed I&M0: {e}")))),
+            },
+            Ok((status, _)) => id.source += &format!(" (I&M0 refused: {})", status_hex(status)),
+            Err(e) => return Some(Err(step_error(e))),
+        }
+        Some(Ok(id))
+    }
 
 fn qualifier(permanent: bool) -> BlockQualifier {
     if permanent {
@@ -711,40 +780,9 @@ fn connect_result(c: Connected) -> Observation {
 }
 
 impl<L: Link + 'static> Binding for PnioBinding<L> {
-    /// The device's identity: the DCP Identify answer the binding found it by (DeviceID
-    /// block: vendor and device id; NameOfStation) and its I&M0 record (order id, serial
-    /// number, software revision; BU 0620 §2.5.3 lists I&M among every conformance class's
-    /// functions). A device that refuses I&M0 keeps the DCP fields, and the source says so.
+    /// [`identity_of`] the device found.
     fn identity(&mut self) -> Option<Result<Identity, StepError>> {
-        let mut ctl = self.ctl.borrow_mut();
-        let station = ctl.station()?.clone();
-        let mut id = Identity {
-            source: format!("DCP Identify of station {:?}", station.name),
-            vendor: Some(format!("vendor id {:04X}h", station.vendor_id)),
-            product_code: Some(format!("device id {:04X}h", station.device_id)),
-            product_name: Some(station.type_of_station.clone()),
-            revision: None,
-            serial: None,
-        };
-        let read = ctl.read_record(0, 1, proto::pnio::im0::INDEX, "read I&M0".into());
-        ctl.take_exchanges();
-        match read {
-            Ok((status, data)) if status.is_ok() => match proto::pnio::im0::Im0Repr::parse(&data) {
-                Ok(im) => {
-                    id.source += " and I&M0";
-                    id.product_code = Some(format!(
-                        "device id {:04X}h, order id {:?}",
-                        station.device_id, im.order_id
-                    ));
-                    id.revision = Some(im.software_revision.to_string());
-                    id.serial = Some(im.serial);
-                }
-                Err(e) => return Some(Err(StepError::Protocol(format!("malformed I&M0: {e}")))),
-            },
-            Ok((status, _)) => id.source += &format!(" (I&M0 refused: {})", status_hex(status)),
-            Err(e) => return Some(Err(step_error(e))),
-        }
-        Some(Ok(id))
+        identity_of(&mut self.ctl.borrow_mut())
     }
 
     fn describe(&self) -> String {

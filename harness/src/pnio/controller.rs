@@ -208,7 +208,17 @@ pub(crate) struct Controller<L> {
     /// The last LLDP frame's payload (BU 0620 §2.5.3 topology detection) and how many came.
     lldp: Option<Vec<u8>>,
     lldp_frames: u64,
+    /// The DAP's submodules a Connect expects: NORD's, or those of another maker's GSDML.
+    dap: Vec<ExpectedSub>,
+    /// The DCE RPC activity of this controller's calls, each with the next sequence number
+    /// (DCE RPC's client activity). A device may tie the AR to the activity of its Connect:
+    /// p-net raises its PrmEnd event only for a DControl of the Connect's activity, so a
+    /// fresh activity per call left its application waiting (docs/interop.md).
+    activity: Uuid,
 }
+
+/// Controllers made so far in this process: each gets an activity of its own.
+static CONTROLLERS: std::sync::atomic::AtomicU16 = std::sync::atomic::AtomicU16::new(0);
 
 impl<L: Link> Controller<L> {
     /// A controller with Ethernet address `mac` that waits `timeout` for each answer, on a link
@@ -233,7 +243,19 @@ impl<L: Link> Controller<L> {
             recording: true,
             lldp: None,
             lldp_frames: 0,
+            dap: proto::nord::pnio::expected_dap(),
+            activity: Uuid::of_sender(
+                0x4E52_4450,
+                CONTROLLERS.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+                mac,
+                0,
+            ),
         }
+    }
+
+    /// The DAP's submodules a Connect expects from now on.
+    pub(crate) fn set_dap(&mut self, dap: Vec<ExpectedSub>) {
+        self.dap = dap;
     }
 
     /// The link, for the embedded device behind it.
@@ -560,7 +582,7 @@ impl<L: Link> Controller<L> {
             .reply(PacketType::RESPONSE, body.emit(req.drep))
             .emit()
             .map_err(malformed("ApplicationReady answer"))?;
-        self.link.send_udp(&answer)?;
+        self.link.send_udp_reply(&answer)?;
         if let Some(ar) = self.ar.as_mut().filter(|_| ok) {
             ar.ready = true;
         }
@@ -771,7 +793,7 @@ impl<L: Link> Controller<L> {
     ) -> Result<Answer, PnioError> {
         let station = self.target()?.clone();
         self.calls += 1;
-        let activity = Uuid::of_sender(0x4E52_4450, 0, self.mac, self.calls as u16);
+        let activity = self.activity;
         let body = NdrRequest::new(ARGS_MAXIMUM, data).map_err(malformed("NDR request"))?;
         let req = RpcRepr::request(
             Uuid::pnio_object(1, station.device_id, station.vendor_id),
@@ -836,7 +858,7 @@ impl<L: Link> Controller<L> {
     /// Connect's answer (with the ModuleDiffBlock if any). A refused Connect leaves no AR.
     pub(crate) fn connect(&mut self, modules: &[ExpectedSub]) -> Result<Connected, PnioError> {
         self.ar = None;
-        let mut subs = proto::nord::pnio::expected_dap();
+        let mut subs = self.dap.clone();
         subs.extend_from_slice(modules);
         let plan = Plan::new(&subs).map_err(malformed("expected submodules"))?;
         self.session_key = self.session_key.wrapping_add(1);

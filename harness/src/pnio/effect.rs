@@ -27,6 +27,7 @@ const DCP: std::ops::RangeInclusive<u16> = 0xFEFC..=0xFEFF;
 pub(super) fn of(step: &PnioStep) -> Effect {
     match step {
         PnioStep::Identify(_)
+        | PnioStep::IdentifyOwn
         | PnioStep::Signal
         | PnioStep::Connect { .. }
         | PnioStep::Release

@@ -6,6 +6,7 @@ pub mod bench_support;
 mod binding;
 mod controller;
 mod effect;
+mod generic;
 mod gsdml;
 mod link;
 mod restore;
@@ -36,7 +37,7 @@ pub(crate) const BUS: Bus = Bus {
     name: "pnio",
     title: "PROFINET IO",
     profiles,
-    generic: false,
+    generic: true,
     parse_step: step::parse,
     embedded,
     network,
@@ -80,7 +81,7 @@ fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, O
         .map_err(|e| OpenError::Profile(e.to_string()))?;
     let link = EmbeddedLink::new(io, EMBEDDED_PEER);
     let target = Target {
-        product,
+        device: Kind::Nord(product),
         inverters: profile.inverters,
         name: Some(EMBEDDED_NAME.to_string()),
         what: "embedded PROFINET IO device".to_string(),
@@ -109,19 +110,35 @@ fn open<L: Link + 'static>(
     let real_time = target.persistent;
     let mut ctl = Controller::new(link, mac, timeout, real_time);
     ctl.set_reduction_ratio(target.reduction_ratio);
-    Ok(Box::new(PnioBinding::open(
-        ctl,
-        target.product,
-        target.inverters,
-        target.name,
-        target.what,
-        target.persistent,
-    )?))
+    match target.device {
+        Kind::Nord(product) => Ok(Box::new(PnioBinding::open(
+            ctl,
+            product,
+            target.inverters,
+            target.name,
+            target.what,
+            target.persistent,
+        )?)),
+        Kind::Any(layout) => Ok(Box::new(generic::GenericPnio::open(
+            ctl,
+            layout,
+            target.name,
+            target.what,
+        )?)),
+    }
+}
+
+/// The device a binding opens.
+enum Kind {
+    /// A NORD product: its modules, its parameter channel.
+    Nord(Product),
+    /// Any maker's device, with the layout its GSDML plans.
+    Any(generic::Layout),
 }
 
 /// What a binding is opened on.
 struct Target {
-    product: Product,
+    device: Kind,
     inverters: u8,
     /// The name of station to find (`None`: the only device that answers).
     name: Option<String>,
@@ -158,7 +175,15 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
             _ => return Err(url(format!("`{pair}`: the option is rr=N"))),
         }
     }
+    let layout = match &n.description {
+        Some(crate::description::Description::Gsdml(g)) => Some(generic::Layout {
+            dap: g.dap.clone(),
+            modules: g.modules.clone(),
+        }),
+        _ => None,
+    };
     Ok(Box::new(NetworkFactory {
+        layout,
         iface,
         name,
         reduction_ratio,
@@ -169,6 +194,8 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
 
 /// Opens the link behind an interface for each case (one device for the whole run).
 struct NetworkFactory {
+    /// The layout of the device's GSDML (`--description`), for any maker's device.
+    layout: Option<generic::Layout>,
     iface: String,
     name: Option<String>,
     reduction_ratio: u16,
@@ -185,7 +212,15 @@ impl DutFactory for NetworkFactory {
     }
 
     fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
-        let product = profile.nord().map_err(OpenError::Profile)?;
+        let device = match (profile.product, &self.layout) {
+            (Some(product), _) => Kind::Nord(product),
+            (None, Some(layout)) => Kind::Any(layout.clone()),
+            (None, None) => {
+                return Err(OpenError::Profile(
+                    "any maker's PROFINET device is connected as its GSDML says: give it with `--description`".into(),
+                ))
+            }
+        };
         // The device's address comes with DCP Identify; until then the socket points nowhere.
         let nowhere = SocketAddr::from((std::net::Ipv4Addr::LOCALHOST, proto::pnio::RPC_PORT));
         let mut link = NetLink::open(
@@ -202,7 +237,7 @@ impl DutFactory for NetworkFactory {
         link.also_take(proto::eth::ETHERTYPE_LLDP);
         let mac = MacAddr(link.mac());
         let target = Target {
-            product,
+            device,
             inverters: profile.inverters,
             name: self.name.clone(),
             what: format!("PROFINET IO on {}", self.iface),

@@ -30,6 +30,9 @@ pub(crate) enum Module {
 pub(crate) enum PnioStep {
     /// DCP Identify: all stations, or the one of this name.
     Identify(Option<String>),
+    /// DCP Identify by the name the run found the device by (`identify: own`): the device's
+    /// own name, whoever made it.
+    IdentifyOwn,
     /// DCP Set NameOfStation, kept over a power cycle (`permanent`) or not.
     SetName { name: String, permanent: bool },
     /// DCP Set IP parameter.
@@ -106,6 +109,7 @@ impl BusStep for PnioStep {
         match self {
             PnioStep::Identify(None) => "DCP Identify all".into(),
             PnioStep::Identify(Some(n)) => format!("DCP Identify {n:?}"),
+            PnioStep::IdentifyOwn => "DCP Identify by the device's own name".into(),
             PnioStep::SetName { name, permanent } => {
                 format!("DCP Set NameOfStation {name:?} ({})", keep(permanent))
             }
@@ -226,6 +230,7 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
         match &m["identify"] {
             Value::Bool(true) => PnioStep::Identify(None),
             Value::String(s) if s == "all" => PnioStep::Identify(None),
+            Value::String(s) if s == "own" => PnioStep::IdentifyOwn,
             _ => PnioStep::Identify(f.text("identify")?),
         }
     } else if has("set-name") {
@@ -339,6 +344,7 @@ mod tests {
     #[test]
     fn steps_parse() {
         assert_eq!(step(json!({ "identify": "all" })), PnioStep::Identify(None));
+        assert_eq!(step(json!({ "identify": "own" })), PnioStep::IdentifyOwn);
         assert_eq!(
             step(json!({ "identify": "sk550p-1" })),
             PnioStep::Identify(Some("sk550p-1".into()))
