@@ -47,8 +47,6 @@ pub(crate) struct Bus {
     /// Its NORD profiles: the products speaking it. Its generic profile (`any@<bus>`, any
     /// maker's device, `--dut` only) is added by [`Profile`].
     pub(crate) profiles: fn() -> Vec<Profile>,
-    /// Its binding can open any maker's device, so `any@<bus>` exists.
-    pub(crate) generic: bool,
     /// Parses a suite step written under the bus's key; the error says what is wrong.
     pub(crate) parse_step: fn(&Value) -> Result<Box<dyn BusStep>, String>,
     /// Opens the embedded simulator for one case, behind the bus's binding.

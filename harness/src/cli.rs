@@ -417,16 +417,6 @@ fn run(a: RunArgs) -> Result<i32, String> {
                 }),
                 ..opts
             };
-            let generic = opts.profiles.is_empty()
-                && a.profiles
-                    .iter()
-                    .any(|n| Profile::by_name(n).is_ok_and(|p| p.product.is_none()));
-            if generic && !bus.generic {
-                return Err(format!(
-                    "{} has no generic profile yet: its binding connects NORD's modules only; give a NORD profile",
-                    bus.title
-                ));
-            }
             if opts.profiles.is_empty() {
                 return Err(format!("none of the profiles speaks {}", bus.title));
             }

@@ -29,7 +29,6 @@ pub(crate) const BUS: Bus = Bus {
     name: "ecat",
     title: "EtherCAT",
     profiles,
-    generic: true,
     parse_step: step::parse,
     embedded,
     network,

@@ -32,7 +32,6 @@ pub(crate) const BUS: Bus = Bus {
     name: "enip",
     title: "EtherNet/IP",
     profiles,
-    generic: true,
     parse_step: step::parse,
     embedded,
     network,

@@ -35,7 +35,6 @@ pub(crate) const BUS: Bus = Bus {
     name: "epl",
     title: "POWERLINK",
     profiles,
-    generic: true,
     parse_step: step::parse,
     embedded,
     network,

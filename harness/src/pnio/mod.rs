@@ -37,7 +37,6 @@ pub(crate) const BUS: Bus = Bus {
     name: "pnio",
     title: "PROFINET IO",
     profiles,
-    generic: true,
     parse_step: step::parse,
     embedded,
     network,
