@@ -151,7 +151,10 @@ impl Problem {
     /// device past its limit ([`StepError::Late`]): each further request would wait as long.
     pub(crate) fn step(what: impl fmt::Display, e: StepError) -> Problem {
         Problem {
-            link: matches!(e, StepError::Link(_) | StepError::Late { .. }),
+            link: matches!(
+                e,
+                StepError::Link(_) | StepError::Closed(_) | StepError::Late { .. }
+            ),
             text: format!("{what}: {e}"),
         }
     }

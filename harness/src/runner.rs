@@ -250,7 +250,12 @@ fn connection_check(
             Ok(id) => {
                 identities.insert(profile.name().to_string(), id);
             }
-            Err(e @ (StepError::Link(_) | StepError::Silent { .. } | StepError::Late { .. })) => {
+            Err(
+                e @ (StepError::Link(_)
+                | StepError::Closed(_)
+                | StepError::Silent { .. }
+                | StepError::Late { .. }),
+            ) => {
                 return Err(unreachable(
                     format!("the DUT does not answer: {e}"),
                     Verdict::Error,

@@ -46,6 +46,10 @@ pub(crate) enum StepError {
     /// The link to the DUT broke or a request went unanswered (a hung, closing or silent DUT).
     #[error("link error: {0}")]
     Link(String),
+    /// The device closed (or reset) a connection it had accepted, in the middle of a request:
+    /// a departure of the device's, judged (a device that never accepts one is unreachable).
+    #[error("the device closed the connection: {0}")]
+    Closed(String),
     /// The device did not answer within its limit (the manual's or the standard's), the wait
     /// moved by the time the host lost meanwhile (`crate::timing::Deadline`).
     #[error(
@@ -73,9 +77,10 @@ impl StepError {
     /// The verdict this error stands for.
     pub(crate) fn verdict(&self) -> Verdict {
         match self {
-            StepError::Unanswered { .. } | StepError::Protocol(_) | StepError::Late { .. } => {
-                Verdict::Fail
-            }
+            StepError::Unanswered { .. }
+            | StepError::Protocol(_)
+            | StepError::Late { .. }
+            | StepError::Closed(_) => Verdict::Fail,
             StepError::Silent { .. }
             | StepError::Refused(_)
             | StepError::Suite(_)

@@ -221,7 +221,9 @@ impl Scanner {
             return Ok(Some(path.clone()));
         }
         // The session first, unmarked: the write would register it anyway.
-        if let Err(e @ (StepError::Link(_) | StepError::Late { .. })) = self.session(1) {
+        if let Err(e @ (StepError::Link(_) | StepError::Closed(_) | StepError::Late { .. })) =
+            self.session(1)
+        {
             return Err(e);
         }
         let first = self.exchanges.len();
@@ -236,7 +238,9 @@ impl Scanner {
             "[cleanup: the value before the write]",
         );
         let before = match read {
-            Err(e @ (StepError::Link(_) | StepError::Late { .. })) => return Err(e),
+            Err(e @ (StepError::Link(_) | StepError::Closed(_) | StepError::Late { .. })) => {
+                return Err(e)
+            }
             Err(e) => Err(e.to_string()),
             Ok(r) => match r.general {
                 0 => Ok(r.data),

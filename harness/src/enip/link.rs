@@ -61,10 +61,23 @@ fn pending_text(pending: &Option<usize>) -> String {
     })
 }
 
-/// A link error is an error verdict for the step ([`StepError::Link`]).
+/// A link error is an error verdict for the step ([`StepError::Link`]); a connection the
+/// target closed or reset is the target's departure ([`StepError::Closed`]).
 impl From<LinkError> for StepError {
     fn from(e: LinkError) -> StepError {
-        StepError::Link(e.to_string())
+        let reset = |s: &std::io::Error| {
+            matches!(
+                s.kind(),
+                std::io::ErrorKind::ConnectionReset
+                    | std::io::ErrorKind::ConnectionAborted
+                    | std::io::ErrorKind::BrokenPipe
+            )
+        };
+        match &e {
+            LinkError::Closed { .. } => StepError::Closed(e.to_string()),
+            LinkError::Io { source, .. } if reset(source) => StepError::Closed(e.to_string()),
+            _ => StepError::Link(e.to_string()),
+        }
     }
 }
 

@@ -724,7 +724,9 @@ impl Scanner {
                 Ok(match reply {
                     Ok(None) => json!({ "reply": false, "closed": false }),
                     Ok(Some(r)) => reply_fields(&r),
-                    Err(StepError::Link(e)) => json!({ "reply": false, "closed": true, "link": e }),
+                    Err(StepError::Link(e) | StepError::Closed(e)) => {
+                        json!({ "reply": false, "closed": true, "link": e })
+                    }
                     Err(StepError::Protocol(e)) => json!({ "reply": true, "malformed": e }),
                     Err(e) => return Err(e),
                 })

@@ -422,15 +422,17 @@ impl IoDevice {
             return refuse(cm::CMRPC, cm::CMRPC_UNKNOWN_BLOCKS);
         };
         if c.block_type != BlockType::PRM_END_REQ || c.command != ControlCommand::PRM_END {
-            // Field 6: ControlCommand.
-            return refuse(cm::FAULTY_CONTROL_BLOCK, 6);
+            // Field 8: ControlCommand (the checking rules of ControlBlockConnect number the
+            // fields BlockType 0 … Padding 4, ARUUID 5, SessionKey 6, Padding 7,
+            // ControlCommand 8, ControlBlockProperties 9; p-net and Wireshark agree).
+            return refuse(cm::FAULTY_CONTROL_BLOCK, 8);
         }
         let Some(ar) = self.ar.as_mut().filter(|a| a.uuid == c.ar_uuid) else {
             return refuse(cm::CMRPC, cm::CMRPC_AR_UNKNOWN);
         };
         if c.session_key != ar.session_key {
-            // Field 5: SessionKey.
-            return refuse(cm::FAULTY_CONTROL_BLOCK, 5);
+            // Field 6: SessionKey.
+            return refuse(cm::FAULTY_CONTROL_BLOCK, 6);
         }
         if !matches!(ar.state, ArState::AwaitPrmEnd) {
             return refuse(cm::CMRPC, cm::CMRPC_STATE_CONFLICT);
