@@ -63,7 +63,7 @@ fn hung_closing_and_garbage_targets_are_error_verdicts() {
             "no reply to ListIdentity within 1500 ms (5 times the limit of one request)",
             0,
         ),
-        (Target::Closing, "link error", 0),
+        (Target::Closing, "the device closed the connection", 0),
         (Target::Garbage, "does not speak the protocol", 4),
     ] {
         let port = fake(kind);
