@@ -216,8 +216,8 @@ impl Profile {
         if self.product.is_none() && self.bus.is_some_and(|b| b != bus) {
             return None;
         }
-        let found = Profile::of_buses()
-            .find(|p| p.bus == Some(bus) && p.product == self.product)?;
+        let found =
+            Profile::of_buses().find(|p| p.bus == Some(bus) && p.product == self.product)?;
         Some(Profile {
             inverters: if found.product.is_some() {
                 self.inverters

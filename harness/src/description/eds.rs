@@ -148,7 +148,8 @@ pub(crate) fn parse(text: &str, file: &str) -> Result<Eds, DescriptionError> {
     let mut assemblies = BTreeMap::new();
     for (key, f) in s.get("Assembly").into_iter().flatten() {
         let (Some(n), Some(size)) = (
-            key.strip_prefix("Assem").and_then(|n| n.parse::<u16>().ok()),
+            key.strip_prefix("Assem")
+                .and_then(|n| n.parse::<u16>().ok()),
             f.get(2).and_then(|v| number(v)),
         ) else {
             continue;
@@ -267,7 +268,10 @@ mod tests {
     fn a_connection_without_two_points_is_an_error_naming_it() {
         let text = SAMPLE.replace("2C 96 2C 64", "2C 96");
         let e = parse(&text, "s.eds").unwrap_err().to_string();
-        assert!(e.contains("Connection1") && e.contains("two connection points"), "{e}");
+        assert!(
+            e.contains("Connection1") && e.contains("two connection points"),
+            "{e}"
+        );
         assert!(!is_eds("<?xml version=\"1.0\"?>"));
     }
 }

@@ -29,7 +29,9 @@ pub(crate) fn parse(root: &Element, file: &str) -> Result<Esi, DescriptionError>
         .and_then(|v| v.child("Id"))
         .and_then(|i| number(&i.text))
         .map(|v| v as u32);
-    let device = root.find("Device").ok_or_else(|| missing(file, "Devices/Device"))?;
+    let device = root
+        .find("Device")
+        .ok_or_else(|| missing(file, "Devices/Device"))?;
     let ty = device
         .child("Type")
         .ok_or_else(|| missing(file, "Device/Type"))?;

@@ -72,7 +72,8 @@ pub(crate) fn parse(root: &Element, file: &str) -> Result<Gsdml, DescriptionErro
         .find("DeviceAccessPointItem")
         .ok_or_else(|| missing(file, "DeviceAccessPointItem"))?;
     let dap_slot = dap.attr("FixedInSlots").and_then(first_slot).unwrap_or(0);
-    let dap_ident = ident(dap, "ModuleIdentNumber").ok_or_else(|| missing(file, "the DAP's ModuleIdentNumber"))?;
+    let dap_ident = ident(dap, "ModuleIdentNumber")
+        .ok_or_else(|| missing(file, "the DAP's ModuleIdentNumber"))?;
     let sub = |subslot: u16, ident: u32, lens: (u16, u16)| ExpectedSub {
         slot: dap_slot,
         module_ident: dap_ident,
@@ -84,12 +85,20 @@ pub(crate) fn parse(root: &Element, file: &str) -> Result<Gsdml, DescriptionErro
     let mut subs = Vec::new();
     for v in dap.descendants("VirtualSubmoduleItem") {
         let subslot = v.attr("FixedInSubslots").and_then(first_slot).unwrap_or(1);
-        subs.push(sub(subslot, ident(v, "SubmoduleIdentNumber").unwrap_or(0), io_lengths(v)));
+        subs.push(sub(
+            subslot,
+            ident(v, "SubmoduleIdentNumber").unwrap_or(0),
+            io_lengths(v),
+        ));
     }
     for kind in ["InterfaceSubmoduleItem", "PortSubmoduleItem"] {
         for s in dap.descendants(kind) {
             let subslot = s.attr("SubslotNumber").and_then(number).unwrap_or(0) as u16;
-            subs.push(sub(subslot, ident(s, "SubmoduleIdentNumber").unwrap_or(0), (0, 0)));
+            subs.push(sub(
+                subslot,
+                ident(s, "SubmoduleIdentNumber").unwrap_or(0),
+                (0, 0),
+            ));
         }
     }
     let items = root.descendants("ModuleItem");
@@ -159,7 +168,10 @@ mod tests {
           </ModuleList></ApplicationProcess></ProfileBody></ISO15745Profile>"#;
         let root = crate::description::xml::parse(text, "g").unwrap();
         let g = parse(&root, "g").unwrap();
-        assert_eq!((g.identity.vendor, g.identity.product), (Some(0x493), Some(2)));
+        assert_eq!(
+            (g.identity.vendor, g.identity.product),
+            (Some(0x493), Some(2))
+        );
         let subslots: Vec<u16> = g.dap.iter().map(|s| s.subslot).collect();
         assert_eq!(subslots, [1, 0x8000, 0x8001]);
         assert!(g.dap.iter().all(|s| s.slot == 0 && s.module_ident == 1));

@@ -33,7 +33,9 @@ pub(crate) enum DescriptionError {
     Missing { file: String, what: String },
     #[error("{file}: {what}")]
     Bad { file: String, what: String },
-    #[error("{file} is an {format}, which describes a device of {found}://, and `--dut` is {bus}://")]
+    #[error(
+        "{file} is an {format}, which describes a device of {found}://, and `--dut` is {bus}://"
+    )]
     WrongBus {
         file: String,
         format: &'static str,
@@ -145,7 +147,11 @@ impl Description {
     }
 
     /// The description, if it is one of `bus`'s devices.
-    pub(crate) fn for_bus(self, bus: &'static str, file: &str) -> Result<Description, DescriptionError> {
+    pub(crate) fn for_bus(
+        self,
+        bus: &'static str,
+        file: &str,
+    ) -> Result<Description, DescriptionError> {
         if self.bus() == bus {
             Ok(self)
         } else {
@@ -191,13 +197,20 @@ mod tests {
 
     #[test]
     fn other_content_is_refused_by_name() {
-        let e = Description::parse("hello", "x.txt").unwrap_err().to_string();
+        let e = Description::parse("hello", "x.txt")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("x.txt is none of EDS"), "{e}");
         let e = Description::parse("<a/>", "x.xml").unwrap_err().to_string();
         assert!(e.contains("none of"), "{e}");
         let eds = "[File]\n[Device]\nVendCode = 1;\n";
         let d = Description::parse(eds, "x.eds").unwrap();
         let e = d.for_bus("ecat", "x.eds").unwrap_err().to_string();
-        assert!(e.contains("x.eds is an EDS, which describes a device of enip://, and `--dut` is ecat://"), "{e}");
+        assert!(
+            e.contains(
+                "x.eds is an EDS, which describes a device of enip://, and `--dut` is ecat://"
+            ),
+            "{e}"
+        );
     }
 }

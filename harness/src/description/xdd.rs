@@ -37,8 +37,15 @@ fn object<'a>(objects: &'a [&'a Element], index: u16) -> Option<&'a Element> {
 fn mapped_bytes(o: Option<&Element>) -> u16 {
     let Some(o) = o else { return 0 };
     let subs: Vec<&Element> = o.children("SubObject").collect();
-    let sub = |e: &&Element| e.attr("subIndex").and_then(|s| u8::from_str_radix(s, 16).ok());
-    let count = subs.iter().find(|e| sub(e) == Some(0)).and_then(|e| value(e)).unwrap_or(0);
+    let sub = |e: &&Element| {
+        e.attr("subIndex")
+            .and_then(|s| u8::from_str_radix(s, 16).ok())
+    };
+    let count = subs
+        .iter()
+        .find(|e| sub(e) == Some(0))
+        .and_then(|e| value(e))
+        .unwrap_or(0);
     let bits = subs
         .iter()
         .filter(|e| sub(e).is_some_and(|s| s >= 1 && u64::from(s) <= count))
@@ -56,8 +63,14 @@ pub(crate) fn parse(root: &Element, file: &str) -> Result<Xdd, DescriptionError>
         .ok_or_else(|| missing(file, "DeviceIdentity"))?;
     let text = |name: &str| id.child(name).map(|e| e.text.trim().to_string());
     let identity = Identity {
-        vendor: text("vendorID").as_deref().and_then(number).map(|v| v as u32),
-        product: text("productID").as_deref().and_then(number).map(|v| v as u32),
+        vendor: text("vendorID")
+            .as_deref()
+            .and_then(number)
+            .map(|v| v as u32),
+        product: text("productID")
+            .as_deref()
+            .and_then(number)
+            .map(|v| v as u32),
         revision: id
             .child("version")
             .map(|e| e.text.trim().to_string())

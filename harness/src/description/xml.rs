@@ -159,7 +159,10 @@ mod tests {
         assert_eq!(root.children("B").count(), 2);
         assert_eq!(root.child("B").unwrap().text, "t");
         assert_eq!(root.descendants("B").len(), 3);
-        assert_eq!(root.find("C").unwrap().child("B").unwrap().attr("z"), Some("3"));
+        assert_eq!(
+            root.find("C").unwrap().child("B").unwrap().attr("z"),
+            Some("3")
+        );
     }
 
     #[test]

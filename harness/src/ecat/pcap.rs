@@ -96,7 +96,8 @@ mod tests {
                 EmbeddedSegment::new(Slave::new(device).unwrap()),
                 tap.clone(),
             );
-            let mut b = EcatBinding::open(segment, Some(Product::Sk550p), "t".into(), false).unwrap();
+            let mut b =
+                EcatBinding::open(segment, Some(Product::Sk550p), "t".into(), false).unwrap();
             let process = Action::Process {
                 inverter: Inverter::new(1).unwrap(),
                 control: 0x047E,

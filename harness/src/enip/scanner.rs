@@ -456,9 +456,8 @@ impl Scanner {
             )
         })?;
         let size = |data: u16, header: u16, delta: i32| -> Result<u16, StepError> {
-            u16::try_from(i32::from(data) + i32::from(header) + delta).map_err(|_| {
-                StepError::Suite(format!("a size change of {delta} leaves no size"))
-            })
+            u16::try_from(i32::from(data) + i32::from(header) + delta)
+                .map_err(|_| StepError::Suite(format!("a size change of {delta} leaves no size")))
         };
         // Network sizes: the 2-byte sequence count, and O→T the run/idle header.
         let run_idle = if c.run_idle { 4 } else { 0 };

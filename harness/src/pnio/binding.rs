@@ -132,7 +132,7 @@ pub(super) fn step_error(e: PnioError) -> StepError {
 
 /// [`crate::net::wait::bring_up`] of a part of the opening: again while the host was late, and
 /// a second look at a device whose answer missed its limit with the host on time.
-pub(super) fn bring_up<T>(attempt: impl FnMut(u32) -> Result<T, PnioError>) -> Result<T, OpenError> {
+fn bring_up<T>(attempt: impl FnMut(u32) -> Result<T, PnioError>) -> Result<T, OpenError> {
     crate::net::wait::bring_up(attempt, |e| match e {
         PnioError::NoReply { limit, waited, .. } => Some((*limit, *waited)),
         _ => None,
@@ -193,10 +193,48 @@ fn default_ppo(product: Product) -> PpoType {
         .unwrap_or(PpoType::TYPE_2)
 }
 
+/// Opening, first part: the device found by DCP (`name`, or the only one), the transcript
+/// paused until the AR runs; the device and the binding's description of it.
+pub(super) fn find<L: Link>(
+    ctl: &mut Controller<L>,
+    name: Option<&str>,
+    what: &str,
+) -> Result<(Station, String), OpenError> {
+    ctl.set_recording(false);
+    let station = bring_up(|patience| {
+        ctl.set_patience(patience);
+        ctl.locate(name)
+    })?;
+    let what = format!(
+        "{what}: {:?} ({}, vendor {:04X}h, device {:04X}h, {})",
+        station.name, station.type_of_station, station.vendor_id, station.device_id, station.mac
+    );
+    Ok((station, what))
+}
+
+/// Opening, second part: an AR with the DAP and `subs` in data exchange, the transcript on.
+pub(super) fn bring_to_data_exchange<L: Link>(
+    ctl: &mut Controller<L>,
+    subs: &[ExpectedSub],
+) -> Result<(), OpenError> {
+    let c = bring_up(|patience| {
+        ctl.set_patience(patience);
+        up(ctl, subs)
+    })?;
+    ctl.set_patience(1);
+    if !c.ready {
+        return Err(OpenError::BringUp(format!("the AR did not come up: {c:?}")));
+    }
+    ctl.take_exchanges();
+    ctl.take_cycles();
+    ctl.set_recording(true);
+    Ok(())
+}
+
 /// Connect with `subs`; a device still holding the AR of an earlier case (which ended without
 /// releasing it) refuses with "out of AR resources" until its watchdog ends that AR: once
 /// more after it.
-pub(super) fn up<L: Link>(ctl: &mut Controller<L>, subs: &[ExpectedSub]) -> Result<Connected, PnioError> {
+fn up<L: Link>(ctl: &mut Controller<L>, subs: &[ExpectedSub]) -> Result<Connected, PnioError> {
     let c = ctl.connect(subs)?;
     let out_of_ar = PnioStatus::cm(cm::CONNECT, cm::CMRPC, cm::CMRPC_OUT_OF_AR);
     if c.status != out_of_ar {
@@ -256,11 +294,7 @@ impl<L: Link + 'static> PnioBinding<L> {
         what: String,
         persistent: bool,
     ) -> Result<PnioBinding<L>, OpenError> {
-        ctl.set_recording(false);
-        let station = bring_up(|patience| {
-            ctl.set_patience(patience);
-            ctl.locate(name.as_deref())
-        })?;
+        let (station, what) = find(&mut ctl, name.as_deref(), &what)?;
         if station.vendor_id != def::VENDOR_ID {
             return Err(OpenError::BringUp(format!(
                 "{:?} has vendor id {:04X}h, not NORD's {:04X}h",
@@ -269,26 +303,8 @@ impl<L: Link + 'static> PnioBinding<L> {
                 def::VENDOR_ID
             )));
         }
-        let what = format!(
-            "{what}: {:?} ({}, vendor {:04X}h, device {:04X}h, {})",
-            station.name,
-            station.type_of_station,
-            station.vendor_id,
-            station.device_id,
-            station.mac
-        );
         let subs = expected(product, inverters, &[]).map_err(OpenError::Profile)?;
-        let c = bring_up(|patience| {
-            ctl.set_patience(patience);
-            up(&mut ctl, &subs)
-        })?;
-        ctl.set_patience(1);
-        if !c.ready {
-            return Err(OpenError::BringUp(format!("the AR did not come up: {c:?}")));
-        }
-        ctl.take_exchanges();
-        ctl.take_cycles();
-        ctl.set_recording(true);
+        bring_to_data_exchange(&mut ctl, &subs)?;
         let ctl = Rc::new(RefCell::new(ctl));
         let dut = PnioDut {
             ctl: ctl.clone(),
@@ -491,196 +507,200 @@ pub(super) fn bus_step<L: Link>(
     step: &PnioStep,
     plan: &StepPlan<'_>,
 ) -> Result<Observation, StepError> {
-        Ok(match step {
-            PnioStep::Identify(_) | PnioStep::IdentifyOwn => {
-                let name = match step {
-                    PnioStep::Identify(name) => name.clone(),
-                    _ => Some(plan.own_name.to_string()),
-                };
-                let found = ctl.identify(name.as_deref()).map_err(step_error)?;
-                let stations: Vec<Value> = found
+    Ok(match step {
+        PnioStep::Identify(_) | PnioStep::IdentifyOwn => {
+            let name = match step {
+                PnioStep::Identify(name) => name.clone(),
+                _ => Some(plan.own_name.to_string()),
+            };
+            let found = ctl.identify(name.as_deref()).map_err(step_error)?;
+            let stations: Vec<Value> = found
+                .iter()
+                .map(|s| {
+                    json!({
+                        "name": s.name,
+                        "mac": s.mac.to_string(),
+                        "ip": s.ip.map(|i| i.ip.to_string()),
+                        "mask": s.ip.map(|i| i.mask.to_string()),
+                        "gateway": s.ip.map(|i| i.gateway.to_string()),
+                        "vendor": s.vendor_id,
+                        "device": s.device_id,
+                        "type": s.type_of_station,
+                    })
+                })
+                .collect();
+            let first = stations.first().cloned().unwrap_or(Value::Null);
+            json!({ "count": stations.len(), "stations": stations, "station": first }).into()
+        }
+        PnioStep::SetName { name, permanent } => {
+            let block = DcpBlock::set(
+                qualifier(*permanent),
+                BlockValue::NameOfStation(name.clone()),
+            );
+            dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+        }
+        PnioStep::SetIp {
+            ip,
+            mask,
+            gateway,
+            permanent,
+        } => {
+            let block = DcpBlock::set(
+                qualifier(*permanent),
+                BlockValue::IpParameter(IpParameter {
+                    ip: *ip,
+                    mask: *mask,
+                    gateway: *gateway,
+                }),
+            );
+            dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+        }
+        PnioStep::Signal => {
+            let block = DcpBlock::set(
+                BlockQualifier::TEMPORARY,
+                BlockValue::Signal(proto::pnio::dcp::SIGNAL_FLASH_ONCE),
+            );
+            dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+        }
+        PnioStep::ResetFactory => {
+            let block = DcpBlock::set(BlockQualifier::RESET_ALL_DATA, BlockValue::ResetToFactory);
+            dcp_result(ctl.dcp_set(block).map_err(step_error)?)
+        }
+        PnioStep::Connect {
+            modules,
+            reduction_ratio,
+        } => {
+            ctl.set_reduction_ratio(*reduction_ratio);
+            let subs = (plan.connect)(modules).map_err(StepError::Suite)?;
+            connect_result(ctl.connect(&subs).map_err(step_error)?)
+        }
+        PnioStep::Release => {
+            let status = ctl.release().map_err(step_error)?;
+            status_result(status, json!({}))
+        }
+        PnioStep::Read {
+            index,
+            slot,
+            subslot,
+        } => {
+            let (slot, subslot) = (
+                slot.unwrap_or(plan.place.0),
+                subslot.unwrap_or(plan.place.1),
+            );
+            let (status, data) = ctl
+                .read_record(slot, subslot, *index, format!("IODRead record {index}"))
+                .map_err(step_error)?;
+            status_result(status, json!({ "data": hex(&data), "length": data.len() }))
+        }
+        PnioStep::Write {
+            index,
+            slot,
+            subslot,
+            data,
+        } => {
+            let (slot, subslot) = (
+                slot.unwrap_or(plan.place.0),
+                subslot.unwrap_or(plan.place.1),
+            );
+            let status = ctl
+                .write_record(
+                    slot,
+                    subslot,
+                    *index,
+                    data,
+                    format!("IODWrite record {index}"),
+                )
+                .map_err(step_error)?;
+            status_result(status, json!({}))
+        }
+        PnioStep::Alarm(wait) => match ctl.acknowledge_alarm(*wait).map_err(step_error)? {
+            None => json!({ "alarm": null }).into(),
+            Some(n) => {
+                let errors: Vec<u16> = n
+                    .items
                     .iter()
-                    .map(|s| {
-                        json!({
-                            "name": s.name,
-                            "mac": s.mac.to_string(),
-                            "ip": s.ip.map(|i| i.ip.to_string()),
-                            "mask": s.ip.map(|i| i.mask.to_string()),
-                            "gateway": s.ip.map(|i| i.gateway.to_string()),
-                            "vendor": s.vendor_id,
-                            "device": s.device_id,
-                            "type": s.type_of_station,
-                        })
+                    .filter_map(|i| match i {
+                        AlarmItem::ChannelDiagnosis(c) => Some(c.error_type),
+                        AlarmItem::ExtChannelDiagnosis(e) => Some(e.channel.error_type),
+                        _ => None,
                     })
                     .collect();
-                let first = stations.first().cloned().unwrap_or(Value::Null);
-                json!({ "count": stations.len(), "stations": stations, "station": first }).into()
-            }
-            PnioStep::SetName { name, permanent } => {
-                let block = DcpBlock::set(
-                    qualifier(*permanent),
-                    BlockValue::NameOfStation(name.clone()),
-                );
-                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
-            }
-            PnioStep::SetIp {
-                ip,
-                mask,
-                gateway,
-                permanent,
-            } => {
-                let block = DcpBlock::set(
-                    qualifier(*permanent),
-                    BlockValue::IpParameter(IpParameter {
-                        ip: *ip,
-                        mask: *mask,
-                        gateway: *gateway,
-                    }),
-                );
-                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
-            }
-            PnioStep::Signal => {
-                let block = DcpBlock::set(
-                    BlockQualifier::TEMPORARY,
-                    BlockValue::Signal(proto::pnio::dcp::SIGNAL_FLASH_ONCE),
-                );
-                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
-            }
-            PnioStep::ResetFactory => {
-                let block =
-                    DcpBlock::set(BlockQualifier::RESET_ALL_DATA, BlockValue::ResetToFactory);
-                dcp_result(ctl.dcp_set(block).map_err(step_error)?)
-            }
-            PnioStep::Connect {
-                modules,
-                reduction_ratio,
-            } => {
-                ctl.set_reduction_ratio(*reduction_ratio);
-                let subs = (plan.connect)(modules).map_err(StepError::Suite)?;
-                connect_result(ctl.connect(&subs).map_err(step_error)?)
-            }
-            PnioStep::Release => {
-                let status = ctl.release().map_err(step_error)?;
-                status_result(status, json!({}))
-            }
-            PnioStep::Read {
-                index,
-                slot,
-                subslot,
-            } => {
-                let (slot, subslot) = (slot.unwrap_or(plan.place.0), subslot.unwrap_or(plan.place.1));
-                let (status, data) = ctl
-                    .read_record(slot, subslot, *index, format!("IODRead record {index}"))
-                    .map_err(step_error)?;
-                status_result(status, json!({ "data": hex(&data), "length": data.len() }))
-            }
-            PnioStep::Write {
-                index,
-                slot,
-                subslot,
-                data,
-            } => {
-                let (slot, subslot) = (slot.unwrap_or(plan.place.0), subslot.unwrap_or(plan.place.1));
-                let status = ctl
-                    .write_record(
-                        slot,
-                        subslot,
-                        *index,
-                        data,
-                        format!("IODWrite record {index}"),
-                    )
-                    .map_err(step_error)?;
-                status_result(status, json!({}))
-            }
-            PnioStep::Alarm(wait) => match ctl.acknowledge_alarm(*wait).map_err(step_error)? {
-                None => json!({ "alarm": null }).into(),
-                Some(n) => {
-                    let errors: Vec<u16> = n
-                        .items
-                        .iter()
-                        .filter_map(|i| match i {
-                            AlarmItem::ChannelDiagnosis(c) => Some(c.error_type),
-                            AlarmItem::ExtChannelDiagnosis(e) => Some(e.channel.error_type),
-                            _ => None,
-                        })
-                        .collect();
-                    json!({
-                        "alarm": n.alarm_type.0,
-                        "type": n.alarm_type.name(),
-                        "slot": n.slot,
-                        "subslot": n.subslot,
-                        "module": n.module_ident,
-                        "number": errors.first(),
-                        "error": errors
-                            .first()
-                            .filter(|_| plan.nord)
-                            .and_then(|e| def::alarm_error_number(*e)),
-                    })
-                    .into()
-                }
-            },
-            PnioStep::Silence(d) => {
-                ctl.silence(*d).map_err(step_error)?;
-                json!({}).into()
-            }
-            PnioStep::Lldp(d) => {
-                let (frames, last) = ctl.lldp_for(*d).map_err(step_error)?;
-                let du = last.as_deref().map(proto::lldp::Lldpdu::parse);
-                let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
-                match du {
-                    Some(Err(e)) => return Err(StepError::Protocol(format!("LLDP: {e}"))),
-                    Some(Ok(du)) => json!({
-                        "frames": frames,
-                        "chassis": text(&du.chassis.1),
-                        "chassis_subtype": du.chassis.0,
-                        "port": text(&du.port.1),
-                        "port_subtype": du.port.0,
-                        "ttl": du.ttl,
-                    }),
-                    None => json!({ "frames": frames, "chassis": null }),
-                }
+                json!({
+                    "alarm": n.alarm_type.0,
+                    "type": n.alarm_type.name(),
+                    "slot": n.slot,
+                    "subslot": n.subslot,
+                    "module": n.module_ident,
+                    "number": errors.first(),
+                    "error": errors
+                        .first()
+                        .filter(|_| plan.nord)
+                        .and_then(|e| def::alarm_error_number(*e)),
+                })
                 .into()
             }
-            PnioStep::Cycles(n) => {
-                let d = ctl.cycle() * (*n as u32);
-                ctl.run_for(d).map_err(step_error)?;
-                let status = ctl.input_status().map(|s| s.0);
-                json!({ "connected": ctl.connected(), "data_status": status }).into()
+        },
+        PnioStep::Silence(d) => {
+            ctl.silence(*d).map_err(step_error)?;
+            json!({}).into()
+        }
+        PnioStep::Lldp(d) => {
+            let (frames, last) = ctl.lldp_for(*d).map_err(step_error)?;
+            let du = last.as_deref().map(proto::lldp::Lldpdu::parse);
+            let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+            match du {
+                Some(Err(e)) => return Err(StepError::Protocol(format!("LLDP: {e}"))),
+                Some(Ok(du)) => json!({
+                    "frames": frames,
+                    "chassis": text(&du.chassis.1),
+                    "chassis_subtype": du.chassis.0,
+                    "port": text(&du.port.1),
+                    "port_subtype": du.port.0,
+                    "ttl": du.ttl,
+                }),
+                None => json!({ "frames": frames, "chassis": null }),
             }
-            PnioStep::Frame(bytes) => {
-                let answer = ctl.raw_frame(bytes).map_err(step_error)?;
-                json!({ "answered": answer.is_some(), "answer": answer.as_deref().map(hex) }).into()
-            }
-            PnioStep::Rpc {
-                opnum,
-                body,
+            .into()
+        }
+        PnioStep::Cycles(n) => {
+            let d = ctl.cycle() * (*n as u32);
+            ctl.run_for(d).map_err(step_error)?;
+            let status = ctl.input_status().map(|s| s.0);
+            json!({ "connected": ctl.connected(), "data_status": status }).into()
+        }
+        PnioStep::Frame(bytes) => {
+            let answer = ctl.raw_frame(bytes).map_err(step_error)?;
+            json!({ "answered": answer.is_some(), "answer": answer.as_deref().map(hex) }).into()
+        }
+        PnioStep::Rpc {
+            opnum,
+            body,
+            interface,
+        } => {
+            let interface = match interface {
+                None => Uuid::PNIO_DEVICE_INTERFACE,
+                Some(text) => text.parse().map_err(|e| StepError::Suite(format!("{e}")))?,
+            };
+            match ctl.call(
+                Opnum(*opnum),
+                body.clone(),
                 interface,
-            } => {
-                let interface = match interface {
-                    None => Uuid::PNIO_DEVICE_INTERFACE,
-                    Some(text) => text.parse().map_err(|e| StepError::Suite(format!("{e}")))?,
-                };
-                match ctl.call(
-                    Opnum(*opnum),
-                    body.clone(),
-                    interface,
-                    format!("RPC opnum {opnum}"),
-                ) {
-                    Ok(a) => status_result(a.status, json!({ "nca": null })),
-                    Err(PnioError::Nca { packet, status }) => Observation::refused(
-                        json!({ "nca": status.0, "packet": packet }),
-                        Refusal {
-                            kind: "RPC reject".into(),
-                            code: status.0,
-                            text: format!("{packet} {status}"),
-                        },
-                    ),
-                    Err(e) => return Err(step_error(e)),
-                }
+                format!("RPC opnum {opnum}"),
+            ) {
+                Ok(a) => status_result(a.status, json!({ "nca": null })),
+                Err(PnioError::Nca { packet, status }) => Observation::refused(
+                    json!({ "nca": status.0, "packet": packet }),
+                    Refusal {
+                        kind: "RPC reject".into(),
+                        code: status.0,
+                        text: format!("{packet} {status}"),
+                    },
+                ),
+                Err(e) => return Err(step_error(e)),
             }
-        })
-    }
-
+        }
+    })
+}
 
 /// The device's identity: the DCP Identify answer the binding found it by (DeviceID
 /// block: vendor and device id; NameOfStation) and its I&M0 record (order id, serial
@@ -688,35 +708,35 @@ pub(super) fn bus_step<L: Link>(
 /// functions; IEC 61158-6-10 makes I&M0 mandatory). A device that refuses I&M0 keeps the DCP
 /// fields, and the source says so.
 pub(super) fn identity_of<L: Link>(ctl: &mut Controller<L>) -> Option<Result<Identity, StepError>> {
-        let station = ctl.station()?.clone();
-        let mut id = Identity {
-            source: format!("DCP Identify of station {:?}", station.name),
-            vendor: Some(format!("vendor id {:04X}h", station.vendor_id)),
-            product_code: Some(format!("device id {:04X}h", station.device_id)),
-            product_name: Some(station.type_of_station.clone()),
-            revision: None,
-            serial: None,
-        };
-        let read = ctl.read_record(0, 1, proto::pnio::im0::INDEX, "read I&M0".into());
-        ctl.take_exchanges();
-        match read {
-            Ok((status, data)) if status.is_ok() => match proto::pnio::im0::Im0Repr::parse(&data) {
-                Ok(im) => {
-                    id.source += " and I&M0";
-                    id.product_code = Some(format!(
-                        "device id {:04X}h, order id {:?}",
-                        station.device_id, im.order_id
-                    ));
-                    id.revision = Some(im.software_revision.to_string());
-                    id.serial = Some(im.serial);
-                }
-                Err(e) => return Some(Err(StepError::Protocol(format!("malformed I&M0: {e}")))),
-            },
-            Ok((status, _)) => id.source += &format!(" (I&M0 refused: {})", status_hex(status)),
-            Err(e) => return Some(Err(step_error(e))),
-        }
-        Some(Ok(id))
+    let station = ctl.station()?.clone();
+    let mut id = Identity {
+        source: format!("DCP Identify of station {:?}", station.name),
+        vendor: Some(format!("vendor id {:04X}h", station.vendor_id)),
+        product_code: Some(format!("device id {:04X}h", station.device_id)),
+        product_name: Some(station.type_of_station.clone()),
+        revision: None,
+        serial: None,
+    };
+    let read = ctl.read_record(0, 1, proto::pnio::im0::INDEX, "read I&M0".into());
+    ctl.take_exchanges();
+    match read {
+        Ok((status, data)) if status.is_ok() => match proto::pnio::im0::Im0Repr::parse(&data) {
+            Ok(im) => {
+                id.source += " and I&M0";
+                id.product_code = Some(format!(
+                    "device id {:04X}h, order id {:?}",
+                    station.device_id, im.order_id
+                ));
+                id.revision = Some(im.software_revision.to_string());
+                id.serial = Some(im.serial);
+            }
+            Err(e) => return Some(Err(StepError::Protocol(format!("malformed I&M0: {e}")))),
+        },
+        Ok((status, _)) => id.source += &format!(" (I&M0 refused: {})", status_hex(status)),
+        Err(e) => return Some(Err(step_error(e))),
     }
+    Some(Ok(id))
+}
 
 fn qualifier(permanent: bool) -> BlockQualifier {
     if permanent {

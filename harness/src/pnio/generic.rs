@@ -7,7 +7,7 @@
 
 use proto::pnio::plan::ExpectedSub;
 
-use super::binding::{bring_up, bus_step, identity_of, step_error, up, StepPlan};
+use super::binding::{bring_to_data_exchange, bus_step, find, identity_of, step_error, StepPlan};
 use super::controller::{Controller, Station};
 use super::link::Link;
 use super::restore;
@@ -45,30 +45,9 @@ impl<L: Link + 'static> GenericPnio<L> {
         name: Option<String>,
         what: String,
     ) -> Result<GenericPnio<L>, OpenError> {
-        ctl.set_recording(false);
-        let found = bring_up(|patience| {
-            ctl.set_patience(patience);
-            ctl.locate(name.as_deref())
-        })?;
-        let what = format!(
-            "{what}: {:?} ({}, vendor {:04X}h, device {:04X}h, {})",
-            found.name, found.type_of_station, found.vendor_id, found.device_id, found.mac
-        );
+        let (found, what) = find(&mut ctl, name.as_deref(), &what)?;
         ctl.set_dap(layout.dap.clone());
-        let c = bring_up(|patience| {
-            ctl.set_patience(patience);
-            up(&mut ctl, &layout.modules)
-        })?;
-        ctl.set_patience(1);
-        if !c.ready {
-            return Err(OpenError::BringUp(format!(
-                "the AR of the GSDML's layout did not come up: {}",
-                c.status
-            )));
-        }
-        ctl.take_exchanges();
-        ctl.take_cycles();
-        ctl.set_recording(true);
+        bring_to_data_exchange(&mut ctl, &layout.modules)?;
         Ok(GenericPnio {
             ctl,
             layout,
@@ -105,7 +84,10 @@ impl<L: Link + 'static> Binding for GenericPnio<L> {
                 if named.is_empty() {
                     Ok(modules.clone())
                 } else {
-                    Err("a Connect naming NORD's modules; any maker's device connects its GSDML's".into())
+                    Err(
+                        "a Connect naming NORD's modules; any maker's device connects its GSDML's"
+                            .into(),
+                    )
                 }
             },
             place,

@@ -1534,7 +1534,10 @@ mod tests {
         data[2] = 0x80;
         assert!(matches!(
             SdoResponse::parse_coe(&data),
-            Ok(SdoResponse::Abort { code: SdoAbortCode(0x0609_0011), .. })
+            Ok(SdoResponse::Abort {
+                code: SdoAbortCode(0x0609_0011),
+                ..
+            })
         ));
     }
 
