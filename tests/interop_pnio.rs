@@ -387,6 +387,20 @@ fn scapy_connects_reads_and_writes_records_and_releases() {
             args.push(P102_ORDER.into());
         }
         args.extend(strings(&["release", "read", "101", s, "1"]));
+        // As an engineering tool: a DeviceAccess AR, I&M0 of the DAP read in it, Release;
+        // then I&M0 by ReadImplicit, without any AR.
+        args.extend(strings(&[
+            "device-access",
+            "read",
+            "0xAFF0",
+            "0",
+            "1",
+            "release",
+            "read-implicit",
+            "0xAFF0",
+            "0",
+            "1",
+        ]));
         let r = peer(&rig.ns, &py, "scapy_pnio_peer.py", &args, 90);
         let mut r = r.iter();
         let mut next = |op: &str| take(&mut r, op, p);
@@ -545,6 +559,22 @@ fn scapy_connects_reads_and_writes_records_and_releases() {
         assert_eq!(fields(l)["ControlCommand_Done"], 1, "{p}: {l}");
         let l = next("read");
         assert_eq!(l["pnio_status"], "DE814005", "{p}: {l}");
+
+        // The DeviceAccess AR (IOSAR, ARProperties.DeviceAccess): the ARBlockRes alone, as
+        // scapy parses it; I&M0 (block 0020h, 56 bytes after type and length, vendor 0538h)
+        // read in it; Release with Done. ReadImplicit then reads the same record.
+        let l = next("device-access");
+        assert_eq!(l["ok"], true, "{p}: {l}");
+        assert_eq!(l["block_types"], serde_json::json!(["8101"]), "{p}: {l}");
+        for op in ["read", "release", "read-implicit"] {
+            let l = next(op);
+            assert_eq!(l["ok"], true, "{p}: {op}: {l}");
+            if op != "release" {
+                let data = l["data"].as_str().unwrap_or_default().to_ascii_lowercase();
+                assert!(data.starts_with("002000380100"), "{p}: {op}: {l}");
+                assert_eq!(l["record_length"], 60, "{p}: {op}: {l}");
+            }
+        }
         drop(next);
         assert!(r.next().is_none(), "{p}: more lines than operations");
 

@@ -19,6 +19,10 @@ Operations, run in order, one JSON line each on stdout:
                                 AlarmCRBlockReq, ExpectedSubmoduleBlockReq per slot, from the
                                 --submodule list; parses ARBlockRes, IOCRBlockRes, AlarmCRBlockRes,
                                 ModuleDiffBlock, ARServerBlock
+  device-access                 Connect (opnum 0) of a DeviceAccess AR, as engineering tools
+                                read records without I/O: the ARBlockReq alone, ARType 0006h
+                                (IOSAR) with ARProperties_DeviceAccess 1; expects the ARBlockRes
+                                alone. read/write/release then go in it
   prm-end                       Control (opnum 4) with IODControlReq PrmEnd
   appl-ready                    waits for the device's own ApplicationReady call (Control,
                                 opnum 4, to this controller's UDP --cm-port, bound from the
@@ -646,6 +650,35 @@ class Controller:
             self.input_frame_id = line["frame_ids"].get("input")
         return line
 
+    def device_access(self, line):
+        a = self.a
+        block = R.ARBlockReq(ARType=6, ARUUID=self.ar_uuid, SessionKey=self.session_key,
+                             CMInitiatorMacAdd=self.local_mac(),
+                             CMInitiatorObjectUUID=INITIATOR_OBJECT,
+                             ARProperties_State=1, ARProperties_DeviceAccess=1,
+                             CMInitiatorActivityTimeoutFactor=a.activity_timeout,
+                             CMInitiatorUDPRTPort=ETHER_TYPE,
+                             CMInitiatorStationName=a.controller_name.encode("latin-1"))
+        line.update(ar_uuid=str(self.ar_uuid), session_key=self.session_key)
+        raw = self.call(OPNUM["connect"], [block], line)
+        if raw is None:
+            return line
+        r = self.reply(raw, line)
+        if r is None:
+            return line
+        res, _args = r
+        got = self.blocks_of(res, line)
+        line["block_types"] = [b["type"] for b in got]
+        if line.get("pnio_status") == "00000000":
+            if line["block_types"] != ["8101"]:
+                line["_issues"].append(f"blocks {line['block_types']}, not the ARBlockRes alone")
+            elif got[0]["fields"]["ARType"] != 6:
+                line["_issues"].append("the ARBlockRes names another ARType")
+        self.finish(line)
+        if line["ok"]:
+            self.connected = True
+        return line
+
     def record_header(self, cls, index, slot, subslot, length, ar=None):
         self.record_seq += 1
         return cls(seqNum=self.record_seq - 1, ARUUID=self.ar_uuid if ar is None else ar, API=0,
@@ -1099,7 +1132,7 @@ def odd_pad(dcp, block_bytes):
 
 # --- command line -----------------------------------------------------------------------------
 
-ARITY = {"connect": 0, "prm-end": 0, "appl-ready": 0, "write": 4, "read": (3, 4), "read-implicit": (3, 4),
+ARITY = {"connect": 0, "device-access": 0, "prm-end": 0, "appl-ready": 0, "write": 4, "read": (3, 4), "read-implicit": (3, 4),
          "release": 0, "bench-read": (4, 5), "dcp-identify": (0, 1), "dcp-set-name": 2,
          "dcp-set-ip": 4}
 
@@ -1151,6 +1184,8 @@ def run_op(c, name, args):
     try:
         if name == "connect":
             return c.connect(line)
+        if name == "device-access":
+            return c.device_access(line)
         if name == "prm-end":
             return c.control(line)
         if name == "appl-ready":

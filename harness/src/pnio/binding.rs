@@ -341,6 +341,8 @@ impl<L: Link + 'static> PnioBinding<L> {
             place: (fi1.unwrap_or(0), def::IO_SUBSLOT),
             nord: true,
             own_name: &self.own_name,
+            // Our GSDML declares DeviceAccessSupported (the simulated device keeps one).
+            device_access: true,
         };
         bus_step(&mut self.ctl.borrow_mut(), step, &plan)
     }
@@ -447,6 +449,13 @@ impl<L: Link + 'static> PnioBinding<L> {
             let r = ctl.release().map(|_| ()).map_err(link("releasing the AR"));
             account.note(r);
         }
+        if ctl.holds_access() && account.attempt(|| "releasing the DeviceAccess AR".into()) {
+            let r = ctl
+                .release()
+                .map(|_| ())
+                .map_err(link("releasing the DeviceAccess AR"));
+            account.note(r);
+        }
         if account.attempt(|| "the name and address as found".into()) {
             account.note(restore::station(&mut ctl, &p.found).map_err(Problem::other));
         }
@@ -499,6 +508,8 @@ pub(super) struct StepPlan<'a> {
     pub(super) nord: bool,
     /// The name of station the binding found the device by (`identify: own`).
     pub(super) own_name: &'a str,
+    /// The device's description declares a DeviceAccess AR (GSDML DeviceAccessSupported).
+    pub(super) device_access: bool,
 }
 
 /// A `pnio:` step, as written, on the controller.
@@ -576,6 +587,14 @@ pub(super) fn bus_step<L: Link>(
         }
         PnioStep::Release => {
             let status = ctl.release().map_err(step_error)?;
+            status_result(status, json!({}))
+        }
+        PnioStep::DeviceAccess if !plan.device_access => return Err(StepError::NotApplicable(
+            "the GSDML's DAP declares no DeviceAccess AR (DeviceAccessSupported is not \"true\")"
+                .into(),
+        )),
+        PnioStep::DeviceAccess => {
+            let status = ctl.open_access().map_err(step_error)?;
             status_result(status, json!({}))
         }
         PnioStep::Read {

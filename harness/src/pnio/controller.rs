@@ -196,6 +196,9 @@ pub(crate) struct Controller<L> {
     reduction_ratio: u16,
     station: Option<Station>,
     ar: Option<Ar>,
+    /// The DeviceAccess AR this controller holds as an engineering tool would (its UUID and
+    /// session key): record access without I/O.
+    access: Option<(Uuid, u16)>,
     next_send: Duration,
     xid: u32,
     calls: u32,
@@ -233,6 +236,7 @@ impl<L: Link> Controller<L> {
             reduction_ratio: 1,
             station: None,
             ar: None,
+            access: None,
             next_send: Duration::ZERO,
             xid: 0x4E52_0000,
             calls: 0,
@@ -985,21 +989,67 @@ impl<L: Link> Controller<L> {
         })
     }
 
-    /// Release: the AR ends.
-    pub(crate) fn release(&mut self) -> Result<PnioStatus, PnioError> {
-        let ar = self.ar.as_ref().ok_or(PnioError::NotConnected)?;
-        let block = Block::Control(IodControl::release(ar.uuid, ar.session_key));
-        let answer = self.call_blocks(Opnum::RELEASE, &[block], "Release".into())?;
+    /// Opens a DeviceAccess AR, as engineering tools do to read records without I/O
+    /// (IEC 61158-6-10: ARType IOSAR, ARProperties.DeviceAccess, the ARBlockReq alone): the
+    /// Connect's PNIO status. Record calls go to it while no IO AR is up.
+    pub(crate) fn open_access(&mut self) -> Result<PnioStatus, PnioError> {
+        self.access = None;
+        self.session_key = self.session_key.wrapping_add(1);
+        self.calls += 1;
+        let uuid = Uuid::of_sender(0x4E52_4441, self.session_key, self.mac, self.calls as u16);
+        let req = Block::ArReq(ArBlockReq {
+            ar_type: ArType::IOS_AR,
+            ar_uuid: uuid,
+            session_key: self.session_key,
+            initiator_mac: self.mac,
+            initiator_object: Uuid::pnio_object(1, 0x0001, proto::nord::pnio::VENDOR_ID),
+            properties: ar_properties::STATE_ACTIVE | ar_properties::DEVICE_ACCESS,
+            activity_timeout_factor: 100,
+            udp_rt_port: ETHERTYPE_PROFINET,
+            station_name: b"nord-harness".to_vec(),
+        });
+        let answer = self.call_blocks(Opnum::CONNECT, &[req], "Connect DeviceAccess AR".into())?;
         if answer.status.is_ok() {
-            self.ar = None;
+            self.access = Some((uuid, self.session_key));
         }
         Ok(answer.status)
+    }
+
+    /// Release: the IO AR ends, or else the DeviceAccess AR.
+    pub(crate) fn release(&mut self) -> Result<PnioStatus, PnioError> {
+        let (uuid, key, access) = match (&self.ar, self.access) {
+            (Some(ar), _) => (ar.uuid, ar.session_key, false),
+            (None, Some((uuid, key))) => (uuid, key, true),
+            (None, None) => return Err(PnioError::NotConnected),
+        };
+        let block = Block::Control(IodControl::release(uuid, key));
+        let answer = self.call_blocks(Opnum::RELEASE, &[block], "Release".into())?;
+        if answer.status.is_ok() {
+            match access {
+                true => self.access = None,
+                false => self.ar = None,
+            }
+        }
+        Ok(answer.status)
+    }
+
+    /// Whether a DeviceAccess AR is held (a case's cleanup releases it).
+    pub(crate) fn holds_access(&self) -> bool {
+        self.access.is_some()
+    }
+
+    /// The AR record calls go in: the IO AR, else the DeviceAccess AR.
+    fn record_ar(&self) -> Option<Uuid> {
+        self.ar
+            .as_ref()
+            .map(|a| a.uuid)
+            .or(self.access.map(|a| a.0))
     }
 
     fn address(&self, slot: u16, subslot: u16, index: u16) -> RecordAddress {
         RecordAddress {
             seq_number: self.calls as u16,
-            ar_uuid: self.ar.as_ref().map(|a| a.uuid).unwrap_or_default(),
+            ar_uuid: self.record_ar().unwrap_or_default(),
             api: 0,
             slot,
             subslot,
@@ -1024,7 +1074,7 @@ impl<L: Link> Controller<L> {
         Ok(answer.status)
     }
 
-    /// IODRead of a record (in the AR, or implicit without one): the PNIO status and data.
+    /// IODRead of a record (in an AR, or implicit without one): the PNIO status and data.
     pub(crate) fn read_record(
         &mut self,
         slot: u16,
@@ -1032,7 +1082,7 @@ impl<L: Link> Controller<L> {
         index: u16,
         what: String,
     ) -> Result<(PnioStatus, Vec<u8>), PnioError> {
-        let opnum = if self.ar.is_some() {
+        let opnum = if self.record_ar().is_some() {
             Opnum::READ
         } else {
             Opnum::READ_IMPLICIT

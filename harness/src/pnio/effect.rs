@@ -31,6 +31,7 @@ pub(super) fn of(step: &PnioStep) -> Effect {
         | PnioStep::Signal
         | PnioStep::Connect { .. }
         | PnioStep::Release
+        | PnioStep::DeviceAccess
         | PnioStep::Read { .. }
         | PnioStep::Alarm(_)
         | PnioStep::Silence(_)

@@ -25,6 +25,8 @@ const CAPABILITIES: [Capability; 1] = [Capability::Bus("pnio")];
 pub(super) struct Layout {
     pub(super) dap: Vec<ExpectedSub>,
     pub(super) modules: Vec<ExpectedSub>,
+    /// The DAP declares DeviceAccessSupported.
+    pub(super) device_access: bool,
 }
 
 /// The harness as IO controller of any maker's device.
@@ -93,6 +95,7 @@ impl<L: Link + 'static> Binding for GenericPnio<L> {
             place,
             nord: false,
             own_name: &self.found.name,
+            device_access: self.layout.device_access,
         };
         bus_step(&mut self.ctl, step, &plan)
     }
@@ -103,6 +106,11 @@ impl<L: Link + 'static> Binding for GenericPnio<L> {
         if self.ctl.connected() {
             if let Err(e) = self.ctl.release() {
                 problems.push(format!("releasing the AR: {}", step_error(e)));
+            }
+        }
+        if self.ctl.holds_access() {
+            if let Err(e) = self.ctl.release() {
+                problems.push(format!("releasing the DeviceAccess AR: {}", step_error(e)));
             }
         }
         if let Err(e) = restore::station(&mut self.ctl, &self.found) {

@@ -631,7 +631,7 @@ impl Model {
                 ("DNS_CompatibleName", dns.as_str()),
                 ("FixedInSlots", def::DAP_SLOT.to_string().as_str()),
                 ("ObjectUUID_LocalIndex", "1"),
-                ("DeviceAccessSupported", "false"),
+                ("DeviceAccessSupported", "true"),
                 ("NameOfStationNotTransferable", "false"),
             ])
             .write_inner_content(|w| {

@@ -178,6 +178,7 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
         Some(crate::description::Description::Gsdml(g)) => Some(generic::Layout {
             dap: g.dap.clone(),
             modules: g.modules.clone(),
+            device_access: g.device_access,
         }),
         _ => None,
     };

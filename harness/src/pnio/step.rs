@@ -53,8 +53,11 @@ pub(crate) enum PnioStep {
         modules: Vec<Module>,
         reduction_ratio: u16,
     },
-    /// Release of the application relation.
+    /// Release of the application relation (the IO AR, else the DeviceAccess AR).
     Release,
+    /// Connect of a DeviceAccess AR, as engineering tools read records without I/O (ARType
+    /// IOSAR with ARProperties.DeviceAccess; the ARBlockReq alone).
+    DeviceAccess,
     /// IODRead of a record.
     Read {
         index: u16,
@@ -140,6 +143,7 @@ impl BusStep for PnioStep {
                 format!("Connect{with} at {rr} ms, PrmEnd, ApplicationReady")
             }
             PnioStep::Release => "Release".into(),
+            PnioStep::DeviceAccess => "Connect a DeviceAccess AR (IOSAR, no I/O)".into(),
             PnioStep::Read {
                 index,
                 slot,
@@ -277,6 +281,9 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
     } else if has("release") {
         Fields::new("pnio", m, &["release"])?;
         PnioStep::Release
+    } else if has("device-access") {
+        Fields::new("pnio", m, &["device-access"])?;
+        PnioStep::DeviceAccess
     } else if has("read") {
         let f = Fields::new("pnio", m, &["read", "slot", "subslot"])?;
         PnioStep::Read {
@@ -323,7 +330,7 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
     } else {
         return Err(
             "`pnio` needs one of `identify`, `set-name`, `set-ip`, `signal`, \
-                    `reset-factory`, `connect`, `release`, `read`, `write`, `alarm`, \
+                    `reset-factory`, `connect`, `release`, `device-access`, `read`, `write`, `alarm`, \
                     `silence`, `lldp`, `cycles`, `frame`, `rpc`"
                 .into(),
         );
@@ -384,6 +391,10 @@ mod tests {
                 gateway: Ipv4Addr::UNSPECIFIED,
                 permanent: true
             }
+        );
+        assert_eq!(
+            step(json!({ "device-access": true })),
+            PnioStep::DeviceAccess
         );
         assert_eq!(
             step(json!({ "silence": "300ms" })),

@@ -8,6 +8,9 @@
 //! do; a malformed request is refused with the PNIO status naming the block and field. Then
 //! PrmEnd, and the device's own ApplicationReady call to the controller; once it is
 //! confirmed the AR runs. A second controller gets "out of AR resources".
+//!
+//! Beside it the device keeps one DeviceAccess AR ([`Access`]): what engineering tools open
+//! to read and write records without I/O. Reads outside any AR are ReadImplicit.
 
 use std::net::SocketAddr;
 use std::time::Duration;
@@ -15,7 +18,7 @@ use std::time::Duration;
 use proto::eth::MacAddr;
 use proto::nord::pnio::{self as def, ModuleKind, SlotRole};
 use proto::nord::Inverter;
-use proto::pnio::block::{iocr_properties, BlockType, ControlCommand};
+use proto::pnio::block::{ar_properties, iocr_properties, ArBlockReq, BlockType, ControlCommand};
 use proto::pnio::block::{
     AlarmCrBlockRes, ArBlockRes, ArType, Block, DiffApi, DiffModule, DiffSubmodule,
     ExpectedSubmoduleBlockReq, IocrBlockReq, IocrBlockRes, IocrType, IodControl, IodReadRes,
@@ -108,6 +111,30 @@ impl Ar {
     }
 }
 
+/// A DeviceAccess AR (IEC 61158-6-10: ARType IOSAR with ARProperties.DeviceAccess set): record
+/// access without IO CRs, alarm CR or expected submodules, usable right after its Connect (no
+/// PrmEnd). It ends with Release, or when its initiator has made no call for
+/// CMInitiatorActivityTimeoutFactor × 100 ms, so a tool that vanished does not hold it.
+#[derive(Debug)]
+pub(super) struct Access {
+    uuid: Uuid,
+    session_key: u16,
+    /// The initiator's last call.
+    last: Duration,
+    /// CMInitiatorActivityTimeoutFactor × 100 ms.
+    timeout: Duration,
+}
+
+impl Access {
+    /// Whether the initiator has been silent for longer than its activity time-out.
+    pub(super) fn expired(&self, now: Duration) -> bool {
+        now.saturating_sub(self.last) > self.timeout
+    }
+}
+
+/// CMInitiatorActivityTimeoutFactor: 1…1000 (× 100 ms), IEC 61158-6-10.
+const ACTIVITY_TIMEOUT_FACTORS: std::ops::RangeInclusive<u16> = 1..=1000;
+
 /// A refused call: the PNIO status.
 type Refusal = PnioStatus;
 
@@ -138,11 +165,11 @@ impl IoDevice {
             return reply(req.reject(NcaStatus::PROTO_ERROR));
         };
         let answer = match req.opnum {
-            Opnum::CONNECT => self.connect(&ndr, from),
+            Opnum::CONNECT => self.connect(&ndr, from, now),
             Opnum::CONTROL => self.control(&ndr, from),
             Opnum::RELEASE => self.release(&ndr),
-            Opnum::READ | Opnum::READ_IMPLICIT => self.read(&ndr, req.opnum),
-            Opnum::WRITE => self.write(&ndr),
+            Opnum::READ | Opnum::READ_IMPLICIT => self.read(&ndr, req.opnum, now),
+            Opnum::WRITE => self.write(&ndr, now),
             _ => return reply(req.reject(NcaStatus::OP_RNG_ERROR)),
         };
         let (status, blocks) = match answer {
@@ -165,6 +192,7 @@ impl IoDevice {
         &mut self,
         ndr: &NdrRequest,
         from: SocketAddr,
+        now: Duration,
     ) -> Result<Vec<Block>, (Refusal, Vec<Block>)> {
         let refuse = |code1, code2| Err((PnioStatus::cm(cm::CONNECT, code1, code2), Vec::new()));
         let Ok(blocks) = Block::parse_all(&ndr.data) else {
@@ -184,9 +212,20 @@ impl IoDevice {
         let Some(ar_req) = ar_req else {
             return refuse(cm::FAULTY_AR_BLOCK, 0);
         };
-        if ar_req.ar_type != ArType::IOC_AR_SINGLE {
-            // Field 4: ARType.
-            return refuse(cm::FAULTY_AR_BLOCK, 4);
+        let device_access = ar_req.properties & ar_properties::DEVICE_ACCESS != 0;
+        match (ar_req.ar_type, device_access) {
+            (ArType::IOS_AR, true) => {
+                // Only the ARBlockReq: a DeviceAccess AR has no CRs and expects no modules.
+                if !(iocrs.is_empty() && alarms.is_empty() && expected.is_empty()) {
+                    return refuse(cm::CMRPC, cm::CMRPC_UNKNOWN_BLOCKS);
+                }
+                return self.connect_access(&ar_req, now);
+            }
+            (ArType::IOC_AR_SINGLE, false) => {}
+            // Field 9: ARProperties — DeviceAccess is for an IOSAR only.
+            (_, true) => return refuse(cm::FAULTY_AR_BLOCK, 9),
+            // Field 4: ARType — an IOCARSingle, or an IOSAR for device access.
+            _ => return refuse(cm::FAULTY_AR_BLOCK, 4),
         }
         if let Some(ar) = &self.ar {
             if ar.uuid != ar_req.ar_uuid {
@@ -279,6 +318,53 @@ impl IoDevice {
         self.ar = Some(ar);
         self.lost = false;
         Ok(answer)
+    }
+
+    /// Connect of a DeviceAccess AR: the ARBlockRes alone. The device holds one; another
+    /// initiator's gets "out of AR resources" until it is released or times out.
+    fn connect_access(
+        &mut self,
+        req: &ArBlockReq,
+        now: Duration,
+    ) -> Result<Vec<Block>, (Refusal, Vec<Block>)> {
+        if !ACTIVITY_TIMEOUT_FACTORS.contains(&req.activity_timeout_factor) {
+            // Field 10: CMInitiatorActivityTimeoutFactor.
+            return Err((
+                PnioStatus::cm(cm::CONNECT, cm::FAULTY_AR_BLOCK, 10),
+                Vec::new(),
+            ));
+        }
+        if let Some(held) = self.access.as_ref().filter(|a| !a.expired(now)) {
+            if held.uuid != req.ar_uuid {
+                return Err((
+                    PnioStatus::cm(cm::CONNECT, cm::CMRPC, cm::CMRPC_OUT_OF_AR),
+                    Vec::new(),
+                ));
+            }
+        }
+        self.access = Some(Access {
+            uuid: req.ar_uuid,
+            session_key: req.session_key,
+            last: now,
+            timeout: Duration::from_millis(100) * u32::from(req.activity_timeout_factor),
+        });
+        Ok(vec![Block::ArRes(ArBlockRes {
+            ar_type: req.ar_type,
+            ar_uuid: req.ar_uuid,
+            session_key: req.session_key,
+            responder_mac: self.mac,
+            udp_rt_port: proto::eth::ETHERTYPE_PROFINET,
+        })])
+    }
+
+    /// Whether `uuid` names an AR the device holds (the IO AR or the DeviceAccess AR); a
+    /// call in the DeviceAccess AR keeps it alive.
+    fn holds(&mut self, uuid: Uuid, now: Duration) -> bool {
+        if let Some(access) = self.access.as_mut().filter(|a| a.uuid == uuid) {
+            access.last = now;
+            return true;
+        }
+        self.ar.as_ref().is_some_and(|a| a.uuid == uuid)
     }
 
     /// The expected submodules against the product's slots: what is plugged, and the
@@ -523,20 +609,34 @@ impl IoDevice {
         let Some(Block::Control(c)) = blocks.into_iter().next() else {
             return refuse(cm::CMRPC, cm::CMRPC_UNKNOWN_BLOCKS);
         };
+        // The release block is numbered as the control block: ControlCommand field 8,
+        // SessionKey field 6.
         if c.block_type != BlockType::RELEASE_REQ || c.command != ControlCommand::RELEASE {
-            return refuse(cm::FAULTY_RELEASE_BLOCK, 6);
+            return refuse(cm::FAULTY_RELEASE_BLOCK, 8);
+        }
+        if let Some(access) = self.access.as_ref().filter(|a| a.uuid == c.ar_uuid) {
+            if access.session_key != c.session_key {
+                return refuse(cm::FAULTY_RELEASE_BLOCK, 6);
+            }
+            self.access = None;
+            return Ok(vec![Block::Control(c.done())]);
         }
         match &self.ar {
             Some(ar) if ar.uuid == c.ar_uuid && ar.session_key == c.session_key => {}
-            Some(ar) if ar.uuid == c.ar_uuid => return refuse(cm::FAULTY_RELEASE_BLOCK, 5),
+            Some(ar) if ar.uuid == c.ar_uuid => return refuse(cm::FAULTY_RELEASE_BLOCK, 6),
             _ => return refuse(cm::CMRPC, cm::CMRPC_AR_UNKNOWN),
         }
         self.ar = None;
         Ok(vec![Block::Control(c.done())])
     }
 
-    /// IODRead (in the AR, or implicit without one).
-    fn read(&mut self, ndr: &NdrRequest, op: Opnum) -> Result<Vec<Block>, (Refusal, Vec<Block>)> {
+    /// IODRead (in an AR, or implicit without one).
+    fn read(
+        &mut self,
+        ndr: &NdrRequest,
+        op: Opnum,
+        now: Duration,
+    ) -> Result<Vec<Block>, (Refusal, Vec<Block>)> {
         let read_error = PnioStatus::record(false, proto::pnio::status::pniorw::READ_ERROR);
         let Ok(blocks) = Block::parse_all(&ndr.data) else {
             return Err((read_error, Vec::new()));
@@ -545,7 +645,7 @@ impl IoDevice {
             return Err((read_error, Vec::new()));
         };
         let implicit = op == Opnum::READ_IMPLICIT;
-        if !implicit && self.ar.as_ref().map(|a| a.uuid) != Some(r.addr.ar_uuid) {
+        if !implicit && !self.holds(r.addr.ar_uuid, now) {
             return Err((
                 PnioStatus::cm(0xDE, cm::CMRPC, cm::CMRPC_AR_UNKNOWN),
                 Vec::new(),
@@ -572,8 +672,12 @@ impl IoDevice {
         }
     }
 
-    /// IODWrite in the AR.
-    fn write(&mut self, ndr: &NdrRequest) -> Result<Vec<Block>, (Refusal, Vec<Block>)> {
+    /// IODWrite in an AR.
+    fn write(
+        &mut self,
+        ndr: &NdrRequest,
+        now: Duration,
+    ) -> Result<Vec<Block>, (Refusal, Vec<Block>)> {
         let write_error = PnioStatus::record(true, proto::pnio::status::pniorw::WRITE_ERROR);
         let Ok(blocks) = Block::parse_all(&ndr.data) else {
             return Err((write_error, Vec::new()));
@@ -581,7 +685,7 @@ impl IoDevice {
         let Some(Block::WriteReq(w)) = blocks.into_iter().next() else {
             return Err((write_error, Vec::new()));
         };
-        if self.ar.as_ref().map(|a| a.uuid) != Some(w.addr.ar_uuid) {
+        if !self.holds(w.addr.ar_uuid, now) {
             return Err((
                 PnioStatus::cm(0xDF, cm::CMRPC, cm::CMRPC_AR_UNKNOWN),
                 Vec::new(),

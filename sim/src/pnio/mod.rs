@@ -4,7 +4,7 @@
 //!
 //! - [`station`]: the name of station and IP suite, and the DCP services on them;
 //! - [`ar`]: the application relation: Connect (the expected modules against the product's
-//!   slots), PrmEnd, ApplicationReady, Release, record read/write;
+//!   slots), PrmEnd, ApplicationReady, Release, record read/write; the DeviceAccess AR;
 //! - [`cyclic`]: the IO CRs' layout, the RT frames both ways, the watchdog;
 //! - [`alarms`]: diagnosis alarms over the alarm CR and their acknowledgement;
 //! - [`records`]: the parameter channel in data records 47 and 100…108.
@@ -31,7 +31,7 @@ use proto::nord::{Product, Protocol};
 use proto::pnio::{FrameId, FrameKind, RPC_PORT};
 
 use crate::device::Device;
-use ar::Ar;
+use ar::{Access, Ar};
 use records::Records;
 use station::Station;
 
@@ -100,6 +100,8 @@ pub struct IoDevice {
     mac: MacAddr,
     station: Station,
     ar: Option<Ar>,
+    /// The DeviceAccess AR of an engineering tool, beside the IO AR.
+    access: Option<Access>,
     records: Records,
     /// The last AR ended by its watchdog (the controller was lost) and none came since.
     lost: bool,
@@ -147,6 +149,7 @@ impl IoDevice {
             mac: config.mac,
             station: Station::new(config.name, ip),
             ar: None,
+            access: None,
             records: Records::default(),
             lost: false,
             signal_until: None,
@@ -286,6 +289,9 @@ impl IoDevice {
         if self.ar.as_ref().is_some_and(|ar| ar.gave_up(now)) {
             // No ApplicationReady confirmation after every retry: the AR is abandoned.
             self.ar = None;
+        }
+        if self.access.as_ref().is_some_and(|a| a.expired(now)) {
+            self.access = None;
         }
         self.fault_alarms();
         self.test_alarms();

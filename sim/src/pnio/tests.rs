@@ -531,6 +531,116 @@ fn release_ends_the_ar_and_a_wrong_session_key_is_refused() {
     assert!(!io.in_data_exchange());
 }
 
+/// The ARBlockReq of a DeviceAccess AR (IOSAR, ARProperties.DeviceAccess), as engineering
+/// tools open it.
+fn access_req(uuid: Uuid, ar_type: ArType, properties: u32, timeout_factor: u16) -> Block {
+    Block::ArReq(ArBlockReq {
+        ar_type,
+        ar_uuid: uuid,
+        session_key: 7,
+        initiator_mac: PLC_MAC,
+        initiator_object: Uuid([0xC0; 16]),
+        properties,
+        activity_timeout_factor: timeout_factor,
+        udp_rt_port: ETHERTYPE_PROFINET,
+        station_name: b"tool".to_vec(),
+    })
+}
+
+/// IEC 61158-6-10: a DeviceAccess AR is an IOSAR with ARProperties.DeviceAccess, its Connect
+/// the ARBlockReq alone, answered by the ARBlockRes alone; records are read and written in it
+/// beside a running IO AR, Release ends it, and a silent initiator loses it after its
+/// activity time-out. ReadImplicit needs no AR.
+#[test]
+fn a_device_access_ar_reads_records_without_io() {
+    use proto::pnio::block::ar_properties::{DEVICE_ACCESS, STATE_ACTIVE};
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    run_ar(&mut io, &[(3, ModuleKind::Ppo(PpoType::TYPE_1))]);
+    let tool = Uuid([0xDA; 16]);
+    let props = STATE_ACTIVE | DEVICE_ACCESS;
+    let im0 = |uuid| {
+        Block::ReadReq(IodReadReq {
+            addr: RecordAddress {
+                seq_number: 1,
+                ar_uuid: uuid,
+                api: 0,
+                slot: 0,
+                subslot: 1,
+                index: proto::pnio::im0::INDEX,
+            },
+            record_data_length: 64,
+            target_ar_uuid: Uuid::default(),
+        })
+    };
+    let read_im0 = |io: &mut IoDevice, op, uuid, ms| {
+        let (status, res, _) = call(io, op, &[im0(uuid)], Duration::from_millis(ms));
+        let data = res.into_iter().find_map(|b| match b {
+            Block::ReadRes(r) => Some(r.data),
+            _ => None,
+        });
+        (status, data)
+    };
+
+    // Not an IOSAR, or an IOSAR with CRs: refused naming ARProperties (field 9) or the blocks.
+    let wrong = access_req(tool, ArType::IOC_AR_SINGLE, props, 10);
+    let (status, _, _) = call(&mut io, Opnum::CONNECT, &[wrong], Duration::ZERO);
+    assert_eq!(status.to_bytes(), [0xDB, 0x81, 0x01, 9]);
+    let (mut with_crs, _) = connect_blocks(Product::Sk550p, &[]);
+    with_crs[0] = access_req(tool, ArType::IOS_AR, props, 10);
+    let (status, _, _) = call(&mut io, Opnum::CONNECT, &with_crs, Duration::ZERO);
+    assert_eq!(status.to_bytes(), [0xDB, 0x81, 0x40, 1]);
+    // A supervisor AR without DeviceAccess is not offered: ARType refused (field 4).
+    let supervisor = access_req(tool, ArType::IOS_AR, STATE_ACTIVE, 10);
+    let (status, _, _) = call(&mut io, Opnum::CONNECT, &[supervisor], Duration::ZERO);
+    assert_eq!(status.to_bytes(), [0xDB, 0x81, 0x01, 4]);
+
+    // The DeviceAccess AR: the ARBlockRes alone, then I&M0 read in it.
+    let req = access_req(tool, ArType::IOS_AR, props, 10);
+    let (status, blocks, _) = call(&mut io, Opnum::CONNECT, &[req], Duration::ZERO);
+    assert!(status.is_ok(), "{status:?}");
+    assert!(
+        matches!(blocks.as_slice(), [Block::ArRes(r)] if r.ar_uuid == tool && r.ar_type == ArType::IOS_AR)
+    );
+    let (status, data) = read_im0(&mut io, Opnum::READ, tool, 0);
+    assert!(status.is_ok(), "{status:?}");
+    assert_eq!(
+        &data.unwrap()[..8],
+        &[0x00, 0x20, 0x00, 0x38, 0x01, 0x00, 0x05, 0x38]
+    );
+    assert!(io.in_data_exchange(), "the IO AR runs on beside it");
+    // A second tool is out of AR resources while the first holds it.
+    let other = access_req(Uuid([0xDB; 16]), ArType::IOS_AR, props, 10);
+    let (status, _, _) = call(
+        &mut io,
+        Opnum::CONNECT,
+        &[other.clone()],
+        Duration::from_millis(600),
+    );
+    assert_eq!(status.to_bytes(), [0xDB, 0x81, 0x40, 4]);
+    // Release ends it: a read under its UUID is then an unknown AR.
+    let (status, _, _) = call(
+        &mut io,
+        Opnum::RELEASE,
+        &[Block::Control(IodControl::release(tool, 7))],
+        Duration::from_millis(700),
+    );
+    assert!(status.is_ok(), "{status:?}");
+    let (status, _) = read_im0(&mut io, Opnum::READ, tool, 800);
+    assert_eq!(status.to_bytes(), [0xDE, 0x81, 0x40, 5]);
+
+    // The second tool's AR (1 s activity time-out) is lost after 1 s without a call.
+    let (status, _, _) = call(&mut io, Opnum::CONNECT, &[other], Duration::from_secs(1));
+    assert!(status.is_ok(), "{status:?}");
+    io.poll(Duration::from_millis(2100));
+    let (status, _) = read_im0(&mut io, Opnum::READ, Uuid([0xDB; 16]), 2100);
+    assert_eq!(status.to_bytes(), [0xDE, 0x81, 0x40, 5]);
+
+    // ReadImplicit: no AR at all.
+    let (status, data) = read_im0(&mut io, Opnum::READ_IMPLICIT, Uuid::default(), 2200);
+    assert!(status.is_ok(), "{status:?}");
+    assert_eq!(data.unwrap().len(), 60);
+}
+
 #[test]
 fn garbage_is_dropped_and_the_device_keeps_answering() {
     let mut io = io(Product::Sk550p, "sk550p-1");
