@@ -323,7 +323,7 @@ impl Node {
             self.dropped += 1;
             return Vec::new();
         };
-        self.sdo_frames(Peer::Udp(from), &frame)
+        self.sdo_frames(Peer::Udp(from), &frame, now)
             .into_iter()
             .filter_map(|f| f.emit_udp().ok())
             .collect()
@@ -364,7 +364,7 @@ impl Node {
                     self.dropped += 1;
                     return;
                 };
-                for f in self.sdo_frames(Peer::Asnd(MN_NODE_ID), &frame) {
+                for f in self.sdo_frames(Peer::Asnd(MN_NODE_ID), &frame, now) {
                     if let Ok(b) = f.emit() {
                         self.queued.push_back(b);
                     }
@@ -374,13 +374,18 @@ impl Node {
         }
     }
 
-    fn sdo_frames(&mut self, peer: Peer, frame: &SdoFrame) -> Vec<SdoFrame> {
+    /// One SDO frame of `peer`, and the device's monitoring at once: what a parameter write
+    /// sets off (P899's protocol change) has happened before the next frame, whenever the
+    /// next poll comes.
+    fn sdo_frames(&mut self, peer: Peer, frame: &SdoFrame, now: Duration) -> Vec<SdoFrame> {
         let mut cx = Context {
             device: &mut self.device,
             words: &self.words,
             vars: &mut self.vars,
         };
-        self.sdo.handle(peer, frame, &self.od, &mut cx)
+        let answers = self.sdo.handle(peer, frame, &self.od, &mut cx);
+        self.device.tick(now);
+        answers
     }
 
     /// Enters `to`: resets pass through to NOT_ACTIVE (DS 301 NMT_GT2…GT8: the node

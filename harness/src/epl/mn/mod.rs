@@ -1048,36 +1048,60 @@ impl<L: Link> Manager<L> {
         self.udp_link = None;
     }
 
-    /// Opens an SDO connection: SendCon "initialisation", the node answers the same.
+    /// Opens an SDO connection in the four frames of DS 301's connection set-up before any
+    /// command: SendCon "initialisation"; the node answers ReceiveCon and SendCon
+    /// "initialisation"; the MN confirms with SendCon "valid", ReceiveCon "initialisation"; the
+    /// node answers "valid" both ways. A command in the third frame is lost on a server that
+    /// takes that frame for the confirmation alone (openPOWERLINK's, docs/interop.md).
     fn open(&mut self, via: Via) -> Result<Connection, MnError> {
-        let frame = SdoFrame {
-            seq: Seq {
-                rsnr: 0,
-                rcon: Con::None,
-                ssnr: 0,
-                scon: Con::Init,
-            },
-            command: None,
+        let w = self.wait(self.config.sdo);
+        let request = Seq {
+            rsnr: 0,
+            rcon: Con::None,
+            ssnr: 0,
+            scon: Con::Init,
         };
+        let ack = self.handshake(via, request, "SDO initialisation", &w, |s| {
+            s.rcon == Con::Init
+        })?;
+        let confirm = Seq {
+            rsnr: ack.ssnr,
+            rcon: Con::Init,
+            ssnr: 0,
+            scon: Con::Valid,
+        };
+        let valid = self.handshake(via, confirm, "SDO connection confirmation", &w, |s| {
+            s.rcon == Con::Valid && s.scon == Con::Valid
+        })?;
+        let c = Connection {
+            sent: 0,
+            received: valid.ssnr,
+        };
+        self.set_connection(via, Some(c));
+        Ok(c)
+    }
+
+    /// One frame of the connection set-up, and the node's answer that `accepts` takes.
+    fn handshake(
+        &mut self,
+        via: Via,
+        seq: Seq,
+        what: &str,
+        w: &Wait,
+        accepts: impl Fn(&Seq) -> bool,
+    ) -> Result<Seq, MnError> {
+        let frame = SdoFrame { seq, command: None };
         let bytes = frame
             .emit()
             .map_err(|e| self.malformed("an SDO connection", e))?;
-        let w = self.wait(self.config.sdo);
-        let answers = self.exchange(via, &bytes, "SDO initialisation", &w, |f| {
-            f.seq.rcon == Con::Init
-        })?;
+        let answers = self.exchange(via, &bytes, what, w, |f| accepts(&f.seq))?;
         for a in answers {
-            let f = SdoFrame::parse(&a).map_err(|e| self.malformed("an SDO initialisation", e))?;
-            if f.seq.rcon == Con::Init {
-                let c = Connection {
-                    sent: 0,
-                    received: f.seq.ssnr,
-                };
-                self.set_connection(via, Some(c));
-                return Ok(c);
+            let f = SdoFrame::parse(&a).map_err(|e| self.malformed("an SDO connection", e))?;
+            if accepts(&f.seq) {
+                return Ok(f.seq);
             }
         }
-        Err(self.timed_out(&w, "SDO initialisation"))
+        Err(self.timed_out(w, what))
     }
 
     /// Sends SDO bytes and gathers the node's SDO frames that `answers` accepts, within `w`
