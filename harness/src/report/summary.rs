@@ -141,6 +141,44 @@ fn coverage(s: &mut String, run: &RunResult) {
     }
 }
 
+/// `## Fails by clause`: the device's failing cases grouped by the clause each cites — the
+/// standard's for a protocol case, the manual's for NORD's — clauses in numeric order: what an
+/// implementer has to fix, rule by rule.
+fn fails_by_clause(s: &mut String, run: &RunResult) {
+    let mut by: BTreeMap<(&str, Vec<(u64, &str)>, &str), Vec<&CaseResult>> = BTreeMap::new();
+    for c in run
+        .cases
+        .iter()
+        .filter(|c| c.kind == CaseKind::Device && c.verdict == Verdict::Fail)
+    {
+        let m = &c.manual;
+        by.entry((m.doc.as_str(), section_key(&m.section), m.section.as_str()))
+            .or_default()
+            .push(c);
+    }
+    if by.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "\n## Fails by clause\n\nThe device's failing cases under the clause each cites: what to fix, rule by rule.\n\n| doc | clause | fails | cases |\n|---|---|---:|---|"
+    );
+    for ((doc, _, section), cases) in by {
+        let ids: Vec<String> = cases
+            .iter()
+            .map(|c| format!("`{}` [{}]", c.id.replace('`', "'"), c.profile))
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} |",
+            cell(doc),
+            cell(section),
+            cases.len(),
+            cell(&ids.join(", "))
+        );
+    }
+}
+
 fn errata(s: &mut String, run: &RunResult) {
     let _ = writeln!(
         s,
@@ -246,6 +284,7 @@ pub(super) fn markdown(run: &RunResult) -> String {
         );
         verdict_table(&mut s, run, CaseKind::Model);
     }
+    fails_by_clause(&mut s, run);
     let mut bad = not_passed(run).peekable();
     if bad.peek().is_some() {
         let _ = writeln!(s, "\n## Failed, errored and inconclusive cases\n");
@@ -433,6 +472,11 @@ mod tests {
             "{md}"
         );
         assert!(!md.contains("did not load"), "{md}");
+        // The one device fail, under the clause it cites.
+        assert!(
+            md.contains("## Fails by clause\n\nThe device's failing cases under the clause each cites: what to fix, rule by rule.\n\n| doc | clause | fails | cases |\n|---|---|---:|---|\n| BU 0620 | 2.2.7 | 1 | `bu0620/addressing/coe-p102` [sk550p] |\n"),
+            "{md}"
+        );
     }
 
     #[test]
