@@ -536,6 +536,14 @@ impl<L: Link> Manager<L> {
                     ..Preq::default()
                 }),
             })?;
+            // A STOPPED node sends no PRes (DS 301 NMT_CS_STOPPED). Waiting for one put the
+            // SoA late, and openPOWERLINK's CN took the late SoA for a lost one and left
+            // STOPPED: the SoA follows at once. A node not yet stopped that still answers is
+            // passed over next cycle as a late frame.
+            if self.node_state == Some(NmtState::STOPPED) {
+                self.record(&sent, None);
+                return self.asynchronous(service, node);
+            }
             let w = self.wait(self.config.reply);
             let pres = self.wait_for(&w, |r| matches!(r.body, Body::Pres(_)))?;
             self.in_time = pres.is_some();
@@ -561,6 +569,16 @@ impl<L: Link> Manager<L> {
             }
             self.record(&sent, pres.as_ref());
         }
+        self.asynchronous(service, node)
+    }
+
+    /// The asynchronous phase of a cycle: the SoA inviting the MN itself to send what is
+    /// queued, or asking `node` for `service`, and its answer.
+    fn asynchronous(
+        &mut self,
+        service: RequestedService,
+        node: u8,
+    ) -> Result<Option<Received>, MnError> {
         if let Some((service_id, payload)) = self.queued.pop_front() {
             let soa = self.soa(RequestedService::UNSPECIFIED_INVITE, MN_NODE_ID)?;
             self.record(&soa, None);
@@ -762,10 +780,12 @@ impl<L: Link> Manager<L> {
             self.drop_connections();
             return Ok(None);
         }
-        // The MN follows its node (DS 301: the MN enters RTO/OP with its nodes).
+        // The MN follows its node (DS 301: the MN enters RTO/OP with its nodes), and polls a
+        // node it stopped no more; the state read below corrects it if the node did not stop.
         match command {
             NmtCommand::ENABLE_READY_TO_OPERATE => self.mn_state = NmtState::READY_TO_OPERATE,
             NmtCommand::START_NODE => self.mn_state = NmtState::OPERATIONAL,
+            NmtCommand::STOP_NODE => self.node_state = Some(NmtState::STOPPED),
             _ => {}
         }
         // The node acts on the command within a few cycles (at once, if it runs as fast as
