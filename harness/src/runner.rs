@@ -443,18 +443,10 @@ fn attempt(
                 Some(dut)
             }
             Err(e) => {
-                let (verdict, message) = match &e {
-                    // The run's connection check reached this device: one that cannot be
-                    // reached now went away during the run (the case before it, which saw it
-                    // go, has the verdict); this case is not judged.
-                    OpenError::Unreachable(_) if opts.real_time() => (
-                        Verdict::Inconclusive,
-                        format!("not judged: the device stopped answering during the run (it answered the connection check): {e}"),
-                    ),
-                    _ => (e.verdict(), format!("cannot open the DUT: {e}")),
-                };
-                let r = result(case, profile, verdict, message, Vec::new(), start);
-                return (r, None);
+                return (
+                    open_failed(case, profile, opts, &e, Vec::new(), start),
+                    None,
+                )
             }
         }
     } else {
@@ -473,6 +465,19 @@ fn attempt(
         }
         _ => None,
     };
+    let reopen = channel.as_ref().is_some_and(|d| d.finish_closes());
+    if let (Some(step), true) = (&recovery, reopen) {
+        // The recovery's cleanup also closed what the opening set up (a PROFINET AR): the
+        // case starts from an opening of its own.
+        drop(channel.take());
+        match factory.open(profile, opts.retries) {
+            Ok(dut) => channel = Some(dut),
+            Err(e) => {
+                let r = open_failed(case, profile, opts, &e, vec![step.clone()], start);
+                return (r, None);
+            }
+        }
+    }
     let (mut r, excuse) = run_steps(case, profile, opts, &mut channel, start);
     if let Some(g) = guard.as_mut() {
         let taken: Vec<bool> = r.steps.iter().map(|s| s.refusal.is_none()).collect();
@@ -485,6 +490,27 @@ fn attempt(
         *unsettled = !finish(&mut r, dut.as_mut(), opts);
     }
     (r, excuse)
+}
+
+/// A case whose DUT did not open. The run's connection check reached this device: one that
+/// cannot be reached now went away during the run (the case before it, which saw it go, has
+/// the verdict), so this case is not judged.
+fn open_failed(
+    case: &Case,
+    profile: &Profile,
+    opts: &RunOptions,
+    e: &OpenError,
+    steps: Vec<StepResult>,
+    start: Instant,
+) -> CaseResult {
+    let (verdict, message) = match e {
+        OpenError::Unreachable(_) if opts.real_time() => (
+            Verdict::Inconclusive,
+            format!("not judged: the device stopped answering during the run (it answered the connection check): {e}"),
+        ),
+        _ => (e.verdict(), format!("cannot open the DUT: {e}")),
+    };
+    result(case, profile, verdict, message, steps, start)
 }
 
 /// Before a case after one whose cleanup failed (a link that broke, a time-out): every

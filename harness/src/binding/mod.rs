@@ -178,6 +178,12 @@ pub(crate) trait Binding {
     fn finish(&mut self) -> Result<(), CleanupError> {
         Ok(())
     }
+    /// Whether [`Binding::finish`] also undoes what opening set up, as a PROFINET binding
+    /// releases the AR its opening brought to data exchange: a case whose recovery ran the
+    /// cleanup then needs the binding opened again.
+    fn finish_closes(&self) -> bool {
+        false
+    }
     /// The device's identity as it reports it over the bus (ListIdentity, SII and 1018h,
     /// IdentResponse, DCP and I&M0), for the run's record and its connection check. `None`
     /// where the link has no identity service of its own: the runner then asks the NORD

@@ -892,6 +892,10 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
         self.restore().map_err(CleanupError)
     }
 
+    fn finish_closes(&self) -> bool {
+        true
+    }
+
     fn take_exchanges(&mut self) -> Vec<Exchange> {
         // The channel's view is the PPO it meant; the controller's is what went on the wire.
         self.channel.take_exchanges();

@@ -61,6 +61,16 @@ const WATCHDOG_FACTOR: u16 = 100;
 /// DataHoldFactor of both CRs: cycles a consumer keeps the last valid data before it counts
 /// them lost; the same 100 cycles as the watchdog, for the same reason.
 const DATA_HOLD_FACTOR: u16 = WATCHDOG_FACTOR;
+/// The longest watchdog and data hold time of an RT CR, in send clocks of 1 ms: IEC
+/// 61158-6-10 bounds factor × ReductionRatio × SendClockFactor × 31.25 µs by 1.92 s (p-net
+/// refused 100 cycles at ReductionRatio 128 with DB 81 02 10, docs/interop.md).
+const MAX_HOLD_CLOCKS: u16 = 1920;
+
+/// A watchdog or data hold factor at reduction ratio `rr`: `factor` cycles, fewer where that
+/// would pass the standard's 1.92 s.
+fn bounded(factor: u16, rr: u16) -> u16 {
+    factor.min(MAX_HOLD_CLOCKS / rr.max(1)).max(1)
+}
 /// ArgsMaximum the controller offers for answers.
 const ARGS_MAXIMUM: u32 = 4096;
 /// The longest a DCP Identify collects answers on a network (the embedded device answers at
@@ -199,6 +209,9 @@ pub(crate) struct Controller<L> {
     /// The DeviceAccess AR this controller holds as an engineering tool would (its UUID and
     /// session key): record access without I/O.
     access: Option<(Uuid, u16)>,
+    /// A DCP Set since [`Controller::take_unsure`] was last called may have changed the
+    /// device's name or address unseen.
+    unsure: bool,
     next_send: Duration,
     xid: u32,
     calls: u32,
@@ -237,6 +250,7 @@ impl<L: Link> Controller<L> {
             station: None,
             ar: None,
             access: None,
+            unsure: false,
             next_send: Duration::ZERO,
             xid: 0x4E52_0000,
             calls: 0,
@@ -274,14 +288,14 @@ impl<L: Link> Controller<L> {
 
     /// How long the device waits without output frames before it ends the AR.
     pub(crate) fn watchdog(&self) -> Duration {
-        self.cycle() * u32::from(WATCHDOG_FACTOR)
+        self.cycle() * u32::from(bounded(WATCHDOG_FACTOR, self.reduction_ratio))
     }
 
     /// The data hold time of the input CR (IEC 61158-6-10: DataHoldFactor × the cycle): the
     /// longest the device may leave the controller without a new input frame, its limit for
     /// each cycle's answer.
     pub(crate) fn data_hold(&self) -> Duration {
-        self.cycle() * u32::from(DATA_HOLD_FACTOR)
+        self.cycle() * u32::from(bounded(DATA_HOLD_FACTOR, self.reduction_ratio))
     }
 
     /// Sets the reduction ratio of the next Connect.
@@ -734,6 +748,15 @@ impl<L: Link> Controller<L> {
                 what: "DCP Set response",
                 error: format!("no Control/Response block for option {option:?}"),
             })?;
+        // A name or address taken is followed below; anything else may have changed them
+        // unseen: a refusal the device acted on all the same, a reset to factory.
+        let followed = matches!(
+            value,
+            BlockValue::NameOfStation(_) | BlockValue::IpParameter(_)
+        );
+        if error != BlockError::OK || !followed {
+            self.unsure = true;
+        }
         if let (Some(s), BlockError::OK) = (self.station.as_mut(), error) {
             match value {
                 BlockValue::NameOfStation(n) => s.name = n,
@@ -748,6 +771,13 @@ impl<L: Link> Controller<L> {
             }
         }
         Ok(error)
+    }
+
+    /// Whether a DCP Set since the last call may have changed the device's name or address
+    /// without the controller following: a refusal the device acted on all the same (p-net
+    /// does), a reset to factory. Its view is then to be checked.
+    pub(crate) fn take_unsure(&mut self) -> bool {
+        std::mem::take(&mut self.unsure)
     }
 
     /// A frame from its frame id on, as given, to the device; the first PROFINET frame that
@@ -881,8 +911,8 @@ impl<L: Link> Controller<L> {
                 reduction_ratio: rr,
                 phase: 1,
                 frame_send_offset: 0xFFFF_FFFF,
-                watchdog_factor: WATCHDOG_FACTOR,
-                data_hold_factor: DATA_HOLD_FACTOR,
+                watchdog_factor: bounded(WATCHDOG_FACTOR, rr),
+                data_hold_factor: bounded(DATA_HOLD_FACTOR, rr),
                 tag_header: 0xC000,
                 apis: vec![layout.api.clone()],
                 ..IocrBlockReq::default()

@@ -125,4 +125,8 @@ impl<L: Link + 'static> Binding for GenericPnio<L> {
     fn take_exchanges(&mut self) -> Vec<Exchange> {
         self.ctl.take_exchanges()
     }
+
+    fn finish_closes(&self) -> bool {
+        true
+    }
 }

@@ -92,7 +92,17 @@ pub(super) fn value_of(bytes: &[u8]) -> i64 {
 /// DCP Sets back the name of station and IP suite the device had when the run found it, where
 /// they differ now (the AR released: a device in operation refuses them).
 pub(super) fn station<L: Link>(ctl: &mut Controller<L>, was: &Station) -> Result<(), String> {
-    let Some(now) = ctl.station().cloned() else {
+    // After a DCP Set the controller did not follow the device is asked as it is now (DCP
+    // Identify): its view may be stale, as when a device takes an IP suite it answered with a
+    // refusal (p-net, docs/interop.md) or was reset to factory.
+    let seen = match ctl.take_unsure() {
+        true => ctl
+            .identify(None)
+            .ok()
+            .and_then(|all| all.into_iter().find(|s| s.mac == was.mac)),
+        false => None,
+    };
+    let Some(now) = seen.or_else(|| ctl.station().cloned()) else {
         return Ok(());
     };
     let mut problems = Vec::new();

@@ -726,6 +726,9 @@ fn dap_submodule(subslot: u16, ident: u32) -> bool {
     }
 }
 
+/// The longest watchdog and data hold time of an RT class 1/2 CR, in µs (1.92 s).
+const MAX_HOLD_US: u64 = 1_920_000;
+
 /// The FrameID an IOCRBlockReq leaves for the device to choose.
 const FRAME_ID_OPEN: u16 = 0xFFFF;
 
@@ -745,7 +748,7 @@ fn frame_ids(properties: u32) -> Option<std::ops::RangeInclusive<u16>> {
 /// (40…1440 and room for every entry), 9 FrameID (in the range of the declared RT class:
 /// C000h–F7FFh for RT_CLASS_1, 8000h–BBFFh for RT_CLASS_2, as IEC 61158-6-10 assigns them; a
 /// frame id of the other class is refused, as p-net refuses it), 10 SendClockFactor, 11
-/// ReductionRatio, 15 WatchdogFactor.
+/// ReductionRatio, 15 WatchdogFactor, 16 DataHoldFactor (its time at most 1.92 s).
 fn check_iocr(req: &IocrBlockReq, frame_id: u16, subs: &[Submodule]) -> Result<Cr, u8> {
     if req.lt != proto::eth::ETHERTYPE_PROFINET {
         return Err(6);
@@ -768,6 +771,17 @@ fn check_iocr(req: &IocrBlockReq, frame_id: u16, subs: &[Submodule]) -> Result<C
     }
     if !(1..=7680).contains(&req.watchdog_factor) {
         return Err(15);
+    }
+    // The data hold time, DataHoldFactor × ReductionRatio × SendClockFactor × 31.25 µs, is at
+    // most 1.92 s for RT classes 1 and 2 (IEC 61158-6-10; p-net checks the same).
+    // (WatchdogFactor, the legacy field, has no such bound here, nor in p-net.)
+    let hold_us = u64::from(req.data_hold_factor)
+        * u64::from(req.reduction_ratio)
+        * u64::from(req.send_clock_factor)
+        * 3125
+        / 100;
+    if !(1..=7680).contains(&req.data_hold_factor) || hold_us > MAX_HOLD_US {
+        return Err(16);
     }
     Cr::new(req, frame_id, subs).ok_or(8)
 }

@@ -752,6 +752,30 @@ fn impossible_iocr_sizes_are_refused_naming_data_length() {
     run_ar(&mut io, &[(3, ppo6)]);
 }
 
+/// A data hold time past 1.92 s (DataHoldFactor × ReductionRatio × 1 ms here, IEC
+/// 61158-6-10) is refused naming the IOCRBlockReq's field 16, DataHoldFactor, as p-net
+/// refuses it; 1.92 s itself is taken.
+#[test]
+fn a_data_hold_time_past_1_92_s_is_refused() {
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    let ppo3 = ModuleKind::Ppo(PpoType::TYPE_3);
+    for (rr, factor, ok) in [(128u16, 16u16, false), (128, 15, true)] {
+        let (mut blocks, _) = connect_blocks(Product::Sk550p, &[(3, ppo3)]);
+        for b in &mut blocks {
+            if let Block::IocrReq(c) = b {
+                c.reduction_ratio = rr;
+                c.data_hold_factor = factor;
+            }
+        }
+        let (status, _, _) = call(&mut io, Opnum::CONNECT, &blocks, Duration::ZERO);
+        if ok {
+            assert!(status.is_ok(), "{status:?}");
+        } else {
+            assert_eq!(status.to_bytes(), [0xDB, 0x81, 0x02, 16], "factor {factor}");
+        }
+    }
+}
+
 /// The frame ids of an IOCR belong to the RT class its IOCRProperties declare (IEC 61158-6-10,
 /// the FrameID table): RT_CLASS_2 takes 8000h–BBFFh, RT_CLASS_1 (the legacy value)
 /// C000h–F7FFh. A mismatch is refused naming the IOCRBlockReq's field 9, FrameID, as p-net
