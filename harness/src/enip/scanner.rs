@@ -462,6 +462,7 @@ impl Scanner {
         // Network sizes: the 2-byte sequence count, and O→T the run/idle header.
         let run_idle = if c.run_idle { 4 } else { 0 };
         Ok(ForwardOpenSpec {
+            rpi_us: planned_rpi(s, c.rpi_us),
             config_point: c.config,
             o_t_point: c.o_t,
             t_o_point: c.t_o,
@@ -875,6 +876,9 @@ pub(crate) struct ForwardOpenSpec {
     pub(crate) t_o_size: u16,
     /// RPI both ways, µs.
     pub(crate) rpi_us: u32,
+    /// The step gave the RPI; otherwise a declared connection's is the default moved into
+    /// the RPI range the EDS declares.
+    pub(crate) rpi_given: bool,
     /// Transport type/trigger byte.
     pub(crate) transport: u8,
     /// Timeout multiplier.
@@ -895,6 +899,7 @@ impl Default for ForwardOpenSpec {
             o_t_size: 0,
             t_o_size: 0,
             rpi_us: RPI.as_micros() as u32,
+            rpi_given: false,
             transport: Transport::CLASS1_CYCLIC.0,
             multiplier: 2,
             large: false,
@@ -1171,4 +1176,36 @@ fn observe(
         v["ns"] = json!(ns);
     }
     Ok(v)
+}
+
+/// The RPI of a declared connection: the step's own, or the default moved into the range the
+/// EDS declares (min, max in µs), so the device is asked for an interval it says it takes.
+fn planned_rpi(s: &ForwardOpenSpec, declared: Option<(u32, u32)>) -> u32 {
+    match declared {
+        Some((min, max)) if !s.rpi_given && min <= max => s.rpi_us.clamp(min, max),
+        _ => s.rpi_us,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_declared_connection_takes_an_rpi_in_the_eds_range_unless_the_step_gives_one() {
+        let default = ForwardOpenSpec::default();
+        let rpi = default.rpi_us;
+        // Within the range: kept; outside: moved to its nearer end; no range: kept.
+        assert_eq!(planned_rpi(&default, Some((rpi / 2, rpi * 2))), rpi);
+        assert_eq!(planned_rpi(&default, Some((rpi * 4, rpi * 8))), rpi * 4);
+        assert_eq!(planned_rpi(&default, Some((1, rpi / 10))), rpi / 10);
+        assert_eq!(planned_rpi(&default, None), rpi);
+        // A step that gives the RPI gets it, in range or not.
+        let given = ForwardOpenSpec {
+            rpi_us: 7,
+            rpi_given: true,
+            ..ForwardOpenSpec::default()
+        };
+        assert_eq!(planned_rpi(&given, Some((rpi, rpi * 2))), 7);
+    }
 }

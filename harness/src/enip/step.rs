@@ -274,6 +274,7 @@ fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
             return Ok(EnipStep::ForwardOpen(ForwardOpenSpec {
                 declared: Some((delta("o_t_size_delta")?, delta("t_o_size_delta")?)),
                 rpi_us: rpi.unwrap_or(d.rpi_us),
+                rpi_given: rpi.is_some(),
                 transport: byte("transport")?.unwrap_or(d.transport),
                 large: f.bool("large")?.unwrap_or(false),
                 ..d
