@@ -550,6 +550,18 @@ class Controller:
         line.pop("_why", None)
         return line
 
+    def answer_blocks(self, opnum, blocks, line):
+        """Sends the call and parses the answer's blocks; None when there was none to parse
+        (the line then says why)."""
+        raw = self.call(opnum, blocks, line)
+        if raw is None:
+            return None
+        r = self.reply(raw, line)
+        if r is None:
+            return None
+        res, _args = r
+        return self.blocks_of(res, line)
+
     def blocks_of(self, res, line):
         issues = line["_issues"]
         out = [describe_block(b, issues) for b in res.blocks]
@@ -614,14 +626,9 @@ class Controller:
         line.update(ar_uuid=str(self.ar_uuid), session_key=self.session_key,
                     object_uuid=str(self.object), initiator_mac=self.local_mac(),
                     input_length=in_len, output_length=out_len)
-        raw = self.call(OPNUM["connect"], blocks, line)
-        if raw is None:
+        got = self.answer_blocks(OPNUM["connect"], blocks, line)
+        if got is None:
             return line
-        r = self.reply(raw, line)
-        if r is None:
-            return line
-        res, _args = r
-        got = self.blocks_of(res, line)
         issues = line["_issues"]
         by = {}
         for b in got:
@@ -660,14 +667,9 @@ class Controller:
                              CMInitiatorUDPRTPort=ETHER_TYPE,
                              CMInitiatorStationName=a.controller_name.encode("latin-1"))
         line.update(ar_uuid=str(self.ar_uuid), session_key=self.session_key)
-        raw = self.call(OPNUM["connect"], [block], line)
-        if raw is None:
+        got = self.answer_blocks(OPNUM["connect"], [block], line)
+        if got is None:
             return line
-        r = self.reply(raw, line)
-        if r is None:
-            return line
-        res, _args = r
-        got = self.blocks_of(res, line)
         line["block_types"] = [b["type"] for b in got]
         if line.get("pnio_status") == "00000000":
             if line["block_types"] != ["8101"]:
@@ -688,14 +690,9 @@ class Controller:
     def write(self, line, index, slot, subslot, data):
         line.update(index=index, slot=slot, subslot=subslot, length=len(data))
         req = self.record_header(R.IODWriteReq, index, slot, subslot, len(data)) / Raw(data)
-        raw = self.call(OPNUM["write"], [req], line)
-        if raw is None:
+        got = self.answer_blocks(OPNUM["write"], [req], line)
+        if got is None:
             return line
-        r = self.reply(raw, line)
-        if r is None:
-            return line
-        res, _args = r
-        got = self.blocks_of(res, line)
         hdr = [b for b in got if b["type"] == "8008"]
         ok = True
         if hdr:
@@ -754,14 +751,9 @@ class Controller:
                               ControlCommand_PrmEnd=0 if release else 1,
                               ControlCommand_Release=1 if release else 0)
         line.update(ar_uuid=str(self.ar_uuid))
-        raw = self.call(OPNUM["release" if release else "control"], [req], line)
-        if raw is None:
+        got = self.answer_blocks(OPNUM["release" if release else "control"], [req], line)
+        if got is None:
             return line
-        r = self.reply(raw, line)
-        if r is None:
-            return line
-        res, _args = r
-        got = self.blocks_of(res, line)
         want = "8114" if release else "8110"
         ok = True
         if line.get("pnio_status") == "00000000":
