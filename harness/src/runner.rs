@@ -1160,6 +1160,8 @@ cases:
         outcome: Result<(), CleanupError>,
         exchanged: bool,
         finished: bool,
+        /// Its cleanup undoes its opening (as a PROFINET binding's releases the AR).
+        closes: bool,
     }
 
     impl Binding for Restoring {
@@ -1188,6 +1190,9 @@ cases:
             self.finished = true;
             self.outcome.clone()
         }
+        fn finish_closes(&self) -> bool {
+            self.closes
+        }
     }
 
     /// Bindings whose cleanup returns `outcome` (those opened for the cases whose numbers,
@@ -1197,6 +1202,7 @@ cases:
         exchanged: bool,
         failing: &'static [usize],
         opened: usize,
+        closes: bool,
     }
 
     impl DutFactory for RestoringFactory {
@@ -1214,6 +1220,7 @@ cases:
                 outcome: if fails { self.outcome.clone() } else { Ok(()) },
                 exchanged: self.exchanged,
                 finished: false,
+                closes: self.closes,
             }))
         }
     }
@@ -1230,8 +1237,31 @@ cases:
             exchanged,
             failing,
             opened: 0,
+            closes: false,
         };
         run(&loaded, &opts, &mut factory)
+    }
+
+    #[test]
+    fn a_binding_whose_cleanup_closes_its_opening_is_opened_again_after_the_recovery() {
+        let loaded = load_text_for_tests(SUITE);
+        let opts = sk550p_options();
+        let opens = |closes| {
+            let mut factory = RestoringFactory {
+                outcome: Err(CleanupError("link error: no answer".into())),
+                exchanged: false,
+                failing: &[0],
+                opened: 0,
+                closes,
+            };
+            let r = run(&loaded, &opts, &mut factory);
+            assert_eq!(r.cases[1].verdict, Verdict::Pass, "{}", r.cases[1].message);
+            factory.opened
+        };
+        // The connection check and one opening per case; one more for the case that
+        // recovered, when the recovery's cleanup closed what its opening set up.
+        let plain = opens(false);
+        assert_eq!(opens(true), plain + 1);
     }
 
     #[test]
