@@ -512,6 +512,16 @@ pub(super) struct StepPlan<'a> {
     pub(super) device_access: bool,
 }
 
+impl StepPlan<'_> {
+    /// Slot and subslot of a record step: as it names them, else the binding's place.
+    fn at(&self, slot: Option<u16>, subslot: Option<u16>) -> (u16, u16) {
+        (
+            slot.unwrap_or(self.place.0),
+            subslot.unwrap_or(self.place.1),
+        )
+    }
+}
+
 /// A `pnio:` step, as written, on the controller.
 pub(super) fn bus_step<L: Link>(
     ctl: &mut Controller<L>,
@@ -602,10 +612,7 @@ pub(super) fn bus_step<L: Link>(
             slot,
             subslot,
         } => {
-            let (slot, subslot) = (
-                slot.unwrap_or(plan.place.0),
-                subslot.unwrap_or(plan.place.1),
-            );
+            let (slot, subslot) = plan.at(*slot, *subslot);
             let (status, data) = ctl
                 .read_record(slot, subslot, *index, format!("IODRead record {index}"))
                 .map_err(step_error)?;
@@ -617,10 +624,7 @@ pub(super) fn bus_step<L: Link>(
             subslot,
             data,
         } => {
-            let (slot, subslot) = (
-                slot.unwrap_or(plan.place.0),
-                subslot.unwrap_or(plan.place.1),
-            );
+            let (slot, subslot) = plan.at(*slot, *subslot);
             let status = ctl
                 .write_record(
                     slot,
