@@ -158,19 +158,18 @@ fn suite_files_with_upper_case_extensions_load() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Where the served adapter of the clash test listens (other tests take .2–.24).
-const CLASH: &str = "127.0.0.31";
-
 #[test]
 fn a_udp_port_clash_with_the_adapter_is_diagnosed_once_at_start() {
-    let _server = common::serve(&format!("{CLASH}:44818"), "tu3-eip", 60);
+    // The scanner's `--local` is the served adapter's own address: its UDP 2222 is taken.
+    let clash = common::addr::free_loopback();
+    let _server = common::serve(&format!("{clash}:44818"), "tu3-eip", 60);
     let out = scratch("clash");
     let o = harness(&[
         "run",
         "--dut",
-        &format!("enip://{CLASH}"),
+        &format!("enip://{clash}"),
         "--local",
-        CLASH,
+        &clash.to_string(),
         "--profile",
         "tu3-eip",
         "--out",
@@ -180,7 +179,7 @@ fn a_udp_port_clash_with_the_adapter_is_diagnosed_once_at_start() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(
-        err.contains(&format!("UDP {CLASH}:2222 is in use")) && err.contains("--local"),
+        err.contains(&format!("UDP {clash}:2222 is in use")) && err.contains("--local"),
         "{err}"
     );
     assert!(!out.join("run.json").exists(), "no run took place");

@@ -2,8 +2,9 @@
 //! write NORD parameters over `harness serve enip` and get the values and CIP status codes the
 //! manuals imply (BU 2100 §6.3: class 100 + FI, instance from set/element, attribute = P-number).
 //!
-//! The clients live in a venv that `.ci/interop-setup` installs (CI always runs it). Without
-//! that venv the test says so and skips: the peers are third-party packages from PyPI.
+//! The clients live in a venv that `.ci/interop-setup` installs (`cargo xtask test` runs it).
+//! Without that venv the test says so and skips (fails in strict mode): the peers are
+//! third-party packages from PyPI.
 //!
 //! tshark (installed by the same script) judges `harness run --pcap` of full EtherNet/IP runs
 //! (every suite): the pcapng of an embedded run, and that of a run against the served simulator
@@ -25,6 +26,7 @@ use serde_json::Value;
 
 #[allow(dead_code)] // what the other network tests share
 mod common;
+use common::addr::free_loopback;
 use common::peer::{interop_python, is_root, require_or_skip, require_tshark};
 use common::{serve, wait_listening, Server};
 
@@ -59,13 +61,15 @@ fn pycomm3_and_cpppo_read_and_write_parameters_of_the_served_simulator() {
     let Some(py) = python("pycomm3 and cpppo against harness serve enip") else {
         return;
     };
-    let _server = serve("127.0.0.3:44818", "tu3-eip", 600);
+    let listen = format!("{}:44818", free_loopback());
+    let _server = serve(&listen, "tu3-eip", 600);
+    let (host, port) = listen.split_once(':').unwrap();
     // FI 1 P102 (class 101, instance 0 = set 1, attribute 102): write 1000 (10.00 s), read back.
     // FI 2 P400 [-03] set 3: instance 14 (BU 2100 §6.3 example, class 102).
     let r = client(
         &py,
         "pycomm3_client.py",
-        &["--host", "127.0.0.3", "--port", "44818"],
+        &["--host", host, "--port", port],
         &[
             "set", "101", "0", "102", "1000", "get", "101", "0", "102", "get", "102", "14", "400",
             "get", "101", "0", "998", "get", "109", "0", "102", "set", "101", "0", "102", "40000",
@@ -88,7 +92,7 @@ fn pycomm3_and_cpppo_read_and_write_parameters_of_the_served_simulator() {
     let r = client(
         &py,
         "cpppo_client.py",
-        &["127.0.0.3:44818"],
+        &[&listen],
         &[
             "get", "101", "0", "102", "set", "101", "0", "102", "250", "get", "101", "0", "102",
             "set", "101", "0", "172", "1",
@@ -759,16 +763,17 @@ fn network_run_pcap_matches_a_wire_capture_and_both_dissect_cleanly() {
     let dir = scratch("network-pcap");
     // The whole run (about 100 s of real time: the drive examples run in real time).
     let profile = "tu4-eip@enip";
-    let _server = serve("127.0.0.6:44818", "tu4-eip", 600);
+    let device = free_loopback().to_string();
+    let _server = serve(&format!("{device}:44818"), "tu4-eip", 600);
     let wire_file = dir.join("wire.pcapng");
-    let wire = WireCapture::start("host 127.0.0.6", &wire_file);
+    let wire = WireCapture::start(&format!("host {device}"), &wire_file);
     let run_file = dir.join("run.pcapng");
     let packets = run_with_pcap(
         &[
             "--dut",
-            "enip://127.0.0.6",
+            &format!("enip://{device}"),
             "--local",
-            "127.0.0.17",
+            &free_loopback().to_string(),
             "--profile",
             profile,
             // The served simulator has no motor to turn and no EEPROM to wear.
@@ -815,7 +820,7 @@ fn network_run_pcap_matches_a_wire_capture_and_both_dissect_cleanly() {
         io_from(&seen, scanner),
         "O→T datagrams"
     );
-    let (recorded_t_o, seen_t_o) = (io_from(&recorded, "127.0.0.6"), io_from(&seen, "127.0.0.6"));
+    let (recorded_t_o, seen_t_o) = (io_from(&recorded, &device), io_from(&seen, &device));
     assert!(
         !recorded_t_o.is_empty() && recorded_t_o.len() <= seen_t_o.len(),
         "T→O datagrams: {} recorded, {} on the wire",
@@ -850,14 +855,15 @@ fn generic_suite_against_cpppo_server_reports_deviations_as_failures() {
     let Some(py) = python("the cip suites against cpppo's server") else {
         return;
     };
-    let listen = "127.0.0.8:44818";
+    let device = free_loopback();
+    let listen = format!("{device}:44818");
     let server = Server(
         Command::new(&py)
             .args([
                 "-m",
                 "cpppo.server.enip",
                 "--address",
-                listen,
+                &listen,
                 "SCADA=INT[10]",
             ])
             .stdout(Stdio::null())
@@ -865,15 +871,15 @@ fn generic_suite_against_cpppo_server_reports_deviations_as_failures() {
             .spawn()
             .expect("cpppo server starts"),
     );
-    wait_listening(listen, Duration::from_secs(20));
+    wait_listening(&listen, Duration::from_secs(20));
     let out_dir = scratch("cpppo-server");
     let out = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args([
             "run",
             "--dut",
-            "enip://127.0.0.8",
+            &format!("enip://{device}"),
             "--local",
-            "127.0.0.18",
+            &free_loopback().to_string(),
             "--profile",
             "cip",
             "--timeout",

@@ -19,7 +19,7 @@
 //!
 //! Needs root (network namespaces, raw sockets) and the interop venv with pnio_dcp and scapy
 //! (`.ci/interop-setup`); without them the tests say so and skip on a developer's machine, and
-//! fail when `CI` is set.
+//! fail in strict mode.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -126,7 +126,7 @@ fn rig(tag: &str, target: &Target, subnet: u8) -> Rig {
 }
 
 /// The interop venv's python with pnio_dcp and scapy's PROFINET layers, or the test skips
-/// (fails under CI).
+/// (fails in strict mode).
 fn python(why: &str) -> Option<PathBuf> {
     interop_python(&["pnio_dcp", "scapy.contrib.pnio_rpc"], why)
 }

@@ -16,6 +16,7 @@ use serde_json::Value;
 
 #[allow(dead_code)] // what the other network tests share
 mod common;
+use common::addr::free_loopback;
 use common::serve;
 
 #[derive(Clone, Copy)]
@@ -28,9 +29,10 @@ enum Target {
     Garbage,
 }
 
-fn fake(kind: Target) -> u16 {
-    let listener = TcpListener::bind("127.0.0.9:0").expect("bind 127.0.0.9");
-    let port = listener.local_addr().unwrap().port();
+/// A fake target on a free port of a loopback address of its own; where it listens.
+fn fake(kind: Target) -> std::net::SocketAddr {
+    let listener = TcpListener::bind((free_loopback(), 0)).expect("bind a free port");
+    let at = listener.local_addr().unwrap();
     std::thread::spawn(move || {
         for stream in listener.incoming().flatten() {
             std::thread::spawn(move || {
@@ -49,7 +51,7 @@ fn fake(kind: Target) -> u16 {
             });
         }
     });
-    port
+    at
 }
 
 #[test]
@@ -66,15 +68,17 @@ fn hung_closing_and_garbage_targets_are_error_verdicts() {
         (Target::Closing, "the device closed the connection", 0),
         (Target::Garbage, "does not speak the protocol", 4),
     ] {
-        let port = fake(kind);
+        let at = fake(kind);
         let out_dir =
-            std::env::temp_dir().join(format!("harness-fake-{}-{port}", std::process::id()));
+            std::env::temp_dir().join(format!("harness-fake-{}-{}", std::process::id(), at.port()));
         let start = Instant::now();
         let out = Command::new(env!("CARGO_BIN_EXE_harness"))
             .args(["run", "--profile", "cip", "--timeout", "0.3"])
             .args(["--filter", "cip/message-router/unknown-"])
             .arg("--dut")
-            .arg(format!("enip://127.0.0.9:{port}"))
+            .arg(format!("enip://{at}"))
+            // Its own UDP 2222 for T→O data, whatever else runs on this host.
+            .args(["--local", &free_loopback().to_string()])
             .arg("--out")
             .arg(&out_dir)
             .output()
@@ -120,22 +124,22 @@ fn hung_closing_and_garbage_targets_are_error_verdicts() {
 /// long the harness waited; none is an error or inconclusive.
 #[test]
 fn a_device_that_answers_past_the_limit_fails_the_cases_that_reach_it() {
-    const LATE: &str = "127.0.0.13:44818";
+    let late = format!("{}:44818", free_loopback());
     let mut server = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(["serve", "enip", "--listen", LATE, "--profile", "tu3-eip"])
+        .args(["serve", "enip", "--listen", &late, "--profile", "tu3-eip"])
         .args(["--reply-delay", "500", "--seconds", "120"])
         .stdout(std::process::Stdio::null())
         .spawn()
         .expect("harness serve starts");
-    common::wait_listening(LATE, Duration::from_secs(10));
+    common::wait_listening(&late, Duration::from_secs(10));
     let out_dir = std::env::temp_dir().join(format!("harness-late-{}", std::process::id()));
     let out = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args(["run", "--profile", "tu3-eip", "--timeout", "0.2"])
         .args(["--filter", "bu2100/enip-io/t"])
-        .args(["--dut", &format!("enip://{LATE}")])
+        .args(["--dut", &format!("enip://{late}")])
         .args(["--allow-motion", "--max-eeprom-writes", "100"])
         // Its own UDP 2222 for T→O data, whatever else runs on this host.
-        .args(["--local", "127.0.0.20"])
+        .args(["--local", &free_loopback().to_string()])
         .arg("--out")
         .arg(&out_dir)
         .output()
@@ -177,13 +181,10 @@ fn a_device_that_answers_past_the_limit_fails_the_cases_that_reach_it() {
     let _ = std::fs::remove_dir_all(&out_dir);
 }
 
-/// The served simulators of the full runs: product, profile, where it listens and the
-/// scanner's own address (its UDP 2222 for T→O data, whatever else runs on this host). Other
-/// tests take 127.0.0.2, .3, .5–.9, .11, .13, .14, .17, .18, .20–.22 and .24.
-const SERVED: [(&str, &str, &str, &str); 2] = [
-    ("tu4-eip", "tu4-eip@enip", "127.0.0.12:44818", "127.0.0.19"),
-    ("sk550p", "sk550p@enip", "127.0.0.25:44818", "127.0.0.26"),
-];
+/// The served simulators of the full runs: product and profile. Each listens on an address of
+/// its own, and the scanner has another (its UDP 2222 for T→O data), whatever else runs on
+/// this host.
+const SERVED: [(&str, &str); 2] = [("tu4-eip", "tu4-eip@enip"), ("sk550p", "sk550p@enip")];
 
 /// One encapsulation message and its reply (header: command, length, session, status,
 /// context, options; CIP Vol 2 §2-3.2).
@@ -247,10 +248,12 @@ fn network_runs_leave_the_device_as_each_case_found_it() {
     let failed: Vec<&str> = std::thread::scope(|s| {
         let runs: Vec<_> = SERVED
             .into_iter()
-            .map(|(served, profile, listen, local)| {
+            .map(|(served, profile)| {
+                let listen = format!("{}:44818", free_loopback());
+                let local = free_loopback().to_string();
                 (
                     profile,
-                    s.spawn(move || check_full_run(served, profile, listen, local)),
+                    s.spawn(move || check_full_run(served, profile, &listen, &local)),
                 )
             })
             .collect();

@@ -5,7 +5,7 @@
 //! slave answering late.
 //!
 //! Needs root (network namespaces, raw sockets); without it the test says so and skips on a
-//! developer's machine, and fails when `CI` is set.
+//! developer's machine, and fails in strict mode.
 
 use harness::ecat_serve::{start, ServeOptions};
 

@@ -11,7 +11,7 @@
 //! run's own capture, whose packet comments name each frame's case and step.
 //!
 //! Needs root (network namespaces, raw sockets) and tshark (`.ci/interop-setup`); without
-//! them the test says so and skips on a developer's machine, and fails when `CI` is set.
+//! them the test says so and skips on a developer's machine, and fails in strict mode.
 
 use std::collections::{HashMap, HashSet};
 use std::path::Path;

@@ -13,17 +13,19 @@
 //! run once.
 //!
 //! Needs root (network namespaces, raw sockets) and tshark (`.ci/interop-setup`); without them
-//! the test says so and skips on a developer's machine, and fails when `CI` is set.
+//! the test says so and skips on a developer's machine, and fails in strict mode.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::LazyLock;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use serde_json::Value;
 
 #[allow(dead_code)] // what the other network tests share
 mod common;
+use common::addr::free_loopback;
 use common::hog::Hog;
 use common::netns::{require_root_or_skip, Netns};
 use common::peer::require_tshark;
@@ -33,10 +35,10 @@ use common::suite_run::SuiteRun;
 const RUNS: u64 = 5;
 /// The PROFINET device's name of station, as the suites address it.
 const PNIO_NAME: &str = "nord-device";
-/// Where the served EtherNet/IP adapter listens, and the scanner's own address (other tests
-/// take 127.0.0.2, .3, .5–.9, .11, .12 and .19).
-const ENIP_SERVED: &str = "127.0.0.21:44818";
-const ENIP_LOCAL: &str = "127.0.0.22";
+/// Where the served EtherNet/IP adapter listens, and the scanner's own address: each an address
+/// of its own, whatever else runs on this host.
+static ENIP_SERVED: LazyLock<String> = LazyLock::new(|| format!("{}:44818", free_loopback()));
+static ENIP_LOCAL: LazyLock<String> = LazyLock::new(|| free_loopback().to_string());
 
 /// One run's verdict per case: id → (verdict, message).
 type Verdicts = BTreeMap<String, (String, String)>;
@@ -57,7 +59,7 @@ fn run(ns: Option<&Netns>, profile: &str, dut: &str, seed: u64, out: &Path) -> V
         .arg("--out")
         .arg(out);
     if ns.is_none() {
-        cmd.args(["--local", ENIP_LOCAL]);
+        cmd.args(["--local", &ENIP_LOCAL]);
     }
     let done = cmd.output().expect("harness run starts");
     let report: Value =
@@ -151,11 +153,11 @@ fn five_shuffled_runs_per_bus_under_load_give_the_same_verdicts() {
     let _hog = Hog::start();
     let wrong: Vec<String> = std::thread::scope(|s| {
         let enip = s.spawn(|| {
-            let _served = common::serve(ENIP_SERVED, "tu3-eip", 1800);
+            let _served = common::serve(&ENIP_SERVED, "tu3-eip", 1800);
             five_runs(
                 None,
                 "tu3-eip@enip",
-                &format!("enip://{ENIP_SERVED}"),
+                &format!("enip://{}", *ENIP_SERVED),
                 base,
                 None,
             )

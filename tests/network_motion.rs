@@ -14,17 +14,19 @@ use std::collections::HashMap;
 use std::net::Ipv4Addr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::LazyLock;
 
 use serde_json::Value;
 
 #[allow(dead_code)] // what the other network tests share
 mod common;
+use common::addr::free_loopback;
 use common::{case_verdict, serve};
 
-/// Where the served simulator listens, and the harness's own address (other tests take
-/// 127.0.0.2, .3, .6, .8, .9, .12, .14, .17–.19).
-const DEVICE: Ipv4Addr = Ipv4Addr::new(127, 0, 0, 23);
-const LOCAL: &str = "127.0.0.24";
+/// Where the served simulator listens, and the harness's own address: each an address of its
+/// own, whatever else runs on this host.
+static DEVICE: LazyLock<Ipv4Addr> = LazyLock::new(free_loopback);
+static LOCAL: LazyLock<String> = LazyLock::new(|| free_loopback().to_string());
 
 /// The inverter parameters whose write can start a drive (BU 0620 §4.5, §5.2, §6.1.2.1;
 /// BU 0590 §6.3).
@@ -207,7 +209,7 @@ fn decode(pcap: &Path) -> Findings {
             Ipv4Addr::new(ip[16], ip[17], ip[18], ip[19]),
         );
         let Some(l4) = ip.get(ihl..) else { continue };
-        if dst != DEVICE || l4.len() < 8 {
+        if dst != *DEVICE || l4.len() < 8 {
             continue;
         }
         let dst_port = u16::from_be_bytes([l4[2], l4[3]]);
@@ -242,9 +244,9 @@ fn decode(pcap: &Path) -> Findings {
 fn run(dir: &Path, extra: &[&str], may_fail: bool) -> (Value, PathBuf, String) {
     let pcap = dir.join("run.pcapng");
     let out = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(["run", "--profile", "tu3-eip", "--local", LOCAL])
+        .args(["run", "--profile", "tu3-eip", "--local", &LOCAL])
         .arg("--dut")
-        .arg(format!("enip://{DEVICE}:44818"))
+        .arg(format!("enip://{}:44818", *DEVICE))
         .args(extra)
         .arg("--pcap")
         .arg(&pcap)
@@ -279,7 +281,7 @@ const SWITCHING: &str = "bu0620/drive-switching/switching-example";
 fn no_enabling_control_word_leaves_the_harness_without_allow_motion() {
     // On a loaded host when `.ci/run` asks (NORD_TEST_HOG): the verdicts must hold there too.
     let _hog = common::hog::Hog::if_asked();
-    let _server = serve(&format!("{DEVICE}:44818"), "tu3-eip", 900);
+    let _server = serve(&format!("{}:44818", *DEVICE), "tu3-eip", 900);
 
     // Without the flag.
     let dir = scratch("default");

@@ -7,7 +7,7 @@
 //! impostor and a device answering late.
 //!
 //! Needs root (network namespaces, raw sockets) and tshark (`.ci/interop-setup`); without
-//! them the test says so and skips on a developer's machine, and fails when `CI` is set.
+//! them the test says so and skips on a developer's machine, and fails in strict mode.
 
 use harness::pnio_serve::{start, ServeOptions};
 use serde_json::Value;

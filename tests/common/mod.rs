@@ -5,6 +5,7 @@ use std::net::{SocketAddr, TcpStream};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+pub(crate) mod addr;
 pub(crate) mod ecat_wire;
 pub(crate) mod hog;
 pub(crate) mod netns;
@@ -24,7 +25,8 @@ impl Drop for Server {
 }
 
 /// `harness serve enip --listen LISTEN --profile PROFILE`, bounded to `seconds` should the
-/// test die without killing it; returns once it accepts TCP connections.
+/// test die without killing it; returns once it accepts TCP connections. LISTEN is an address
+/// of the test's own ([`addr::free_loopback`]), never a fixed one another job may hold.
 pub(crate) fn serve(listen: &str, profile: &str, seconds: u32) -> Server {
     let mut child = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args(["serve", "enip", "--listen", listen, "--profile", profile])

@@ -19,8 +19,7 @@ pub(crate) use super::peer::require_or_skip;
 use super::peer::{is_root, runs};
 
 /// Whether the test can make network namespaces: root, and `ip` (iproute2) on the `PATH`.
-/// Without them it skips on a developer's machine, saying why, and fails under `CI`
-/// ([`super::peer`]).
+/// Without them it skips, saying why, and fails in strict mode (`skip.rs`).
 pub(crate) fn require_root_or_skip(why: &str) -> bool {
     require_or_skip(is_root(), "root for network namespaces", why)
         && require_or_skip(
