@@ -18,7 +18,9 @@
 # (more tags like Name@0x66/2/3=INT, Name=INT[10], or cpppo options like --delay 2).
 set -euo pipefail
 
-VENV="${INTEROP_VENV:-/tmp/nord-interop-venv}"
+# The venv .ci/interop-setup makes in the build folder, unless INTEROP_VENV names another.
+ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
+VENV="${INTEROP_VENV:-${CARGO_TARGET_DIR:-$ROOT/target}/interop-venv}"
 PY="${INTEROP_PYTHON:-$VENV/bin/python}"
 PORT=44818
 ADDR=127.0.0.1

@@ -48,7 +48,7 @@ def import_peer(name: str, *submodules: str):
             importlib.import_module(f"{name}.{sub}")
     except ImportError as e:  # pragma: no cover
         sys.stderr.write(f"{name} is not importable ({e}); run .ci/interop-setup and use "
-                         f"${{INTEROP_VENV:-/tmp/nord-interop-venv}}/bin/python\n")
+                         f"${{INTEROP_VENV:-target/interop-venv}}/bin/python\n")
         sys.exit(3)
     try:
         from importlib.metadata import version

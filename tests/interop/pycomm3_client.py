@@ -30,7 +30,7 @@ try:
     from pycomm3.packets import ListIdentityRequestPacket
 except ImportError as _e:  # pragma: no cover
     sys.stderr.write(f"pycomm3 is not importable ({_e}); run .ci/interop-setup and use "
-                     f"${{INTEROP_VENV:-/tmp/nord-interop-venv}}/bin/python\n")
+                     f"${{INTEROP_VENV:-target/interop-venv}}/bin/python\n")
     sys.exit(3)
 
 SVC_GET_ATTRIBUTES_ALL = 0x01

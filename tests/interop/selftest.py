@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Self-test of the interop peers: cpppo's server against both client scripts, on loopback.
 
-    "${INTEROP_VENV:-/tmp/nord-interop-venv}"/bin/python tests/interop/selftest.py [--timeout S]
+    "${INTEROP_VENV:-target/interop-venv}"/bin/python tests/interop/selftest.py [--timeout S]
 
 Spawns cpppo_server.sh on a free port, runs pycomm3_client.py and cpppo_client.py against it,
 checks their JSON lines, stops the server, and prints "N passed, N failed" (exit 1 on failure).
