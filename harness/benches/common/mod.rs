@@ -22,10 +22,16 @@ pub(crate) fn met(ok: bool) -> &'static str {
     }
 }
 
-/// The interop venv's Python (`${INTEROP_VENV:-/tmp/nord-interop-venv}/bin/python`, made by
-/// `.ci/interop-setup`), when it exists.
+/// The interop venv's Python (`$INTEROP_VENV/bin/python`, else that of the venv
+/// `.ci/interop-setup` makes in the build folder, `<target dir>/interop-venv`), when it exists.
 pub(crate) fn interop_python() -> Option<PathBuf> {
-    let venv = std::env::var("INTEROP_VENV").unwrap_or_else(|_| "/tmp/nord-interop-venv".into());
+    let venv = std::env::var_os("INTEROP_VENV")
+        .filter(|v| !v.is_empty())
+        .map_or_else(
+            // Cargo's scratch folder for benches is `<target dir>/tmp`.
+            || Path::new(env!("CARGO_TARGET_TMPDIR")).with_file_name("interop-venv"),
+            PathBuf::from,
+        );
     let python = Path::new(&venv).join("bin/python");
     python.exists().then_some(python)
 }
@@ -56,7 +62,7 @@ pub(crate) fn run_script(
         .unwrap_or_else(|| script.display().to_string());
     let Some(python) = python else {
         return Script::Skipped(
-            "no interop venv at ${INTEROP_VENV:-/tmp/nord-interop-venv}; run `bash .ci/interop-setup`"
+            "no interop venv at ${INTEROP_VENV:-target/interop-venv}; run `bash .ci/interop-setup`"
                 .into(),
         );
     };

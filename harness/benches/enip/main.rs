@@ -111,7 +111,7 @@ struct Settings {
 impl Settings {
     /// The figures: 3 rounds of 20,000 round trips or 2 s per client figure, 8 clients
     /// × 5,000, 10 s of I/O at RPI 1 ms, 8,000 idle connections; Python from
-    /// `${INTEROP_VENV:-/tmp/nord-interop-venv}`; the figures named on the command line.
+    /// `${INTEROP_VENV:-target/interop-venv}`; the figures named on the command line.
     fn new(script: PathBuf) -> Settings {
         Settings {
             listen: SocketAddr::new(IpAddr::V4(Ipv4Addr::new(127, 0, 0, 5)), 44818),
