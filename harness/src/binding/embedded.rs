@@ -221,4 +221,76 @@ mod tests {
     fn the_ppo_link_offers_every_general_capability() {
         assert_eq!(PPO_CAPABILITIES, Capability::GENERAL);
     }
+
+    /// One case written twice: the second runs after the first, on a simulator of its own.
+    fn twice() -> String {
+        let case = |id: &str| {
+            format!(
+                r#"
+  - id: {id}
+    title: process data, a parameter read and write, process data again
+    ref: {{ section: "6.1.3", page: 114 }}
+    steps:
+      - process: {{ control: "047Eh", for: 20ms }}
+      - read: {{ param: 102 }}
+      - write: {{ param: 102, value: 300 }}
+      - process: {{ control: "047Fh", setpoints: ["2000h"], for: 20ms }}"#
+            )
+        };
+        format!(
+            "doc: BU 0620\nedition: \"2020-03 en\"\ncases:{}{}\n",
+            case("first"),
+            case("again")
+        )
+    }
+
+    /// A case's exchanges are a function of the case alone: the identifiers the harness and
+    /// the simulated device choose (EtherNet/IP connection serial numbers and ids, PROFINET RPC
+    /// activities, session handles and keys, EtherCAT datagram indices, POWERLINK SDO sequence
+    /// numbers) start afresh in every case, so a case sends and receives the same bytes
+    /// whatever ran before it, under every profile of every bus.
+    #[test]
+    fn a_cases_exchanges_do_not_depend_on_the_cases_before_it() {
+        let loaded = crate::suite::load_text_for_tests(&twice());
+        let opts = crate::runner::RunOptions {
+            retries: 25,
+            ..crate::runner::RunOptions::new(Profile::all())
+        };
+        let run = crate::runner::run(&loaded, &opts, &mut EmbeddedFactory::default());
+        for profile in Profile::all() {
+            let cases: Vec<_> = run
+                .cases
+                .iter()
+                .filter(|c| c.profile == profile.name())
+                .collect();
+            let [first, again] = cases[..] else {
+                panic!("{}: {} cases", profile.name(), cases.len());
+            };
+            for c in [first, again] {
+                assert_eq!(
+                    c.verdict,
+                    crate::outcome::Verdict::Pass,
+                    "{} {}: {}",
+                    c.profile,
+                    c.id,
+                    c.message
+                );
+            }
+            assert_eq!(first.steps.len(), again.steps.len());
+            for (n, (a, b)) in first.steps.iter().zip(&again.steps).enumerate() {
+                assert!(!a.exchanges.is_empty(), "{} step {}", c_name(first), n + 1);
+                assert_eq!(
+                    a.exchanges,
+                    b.exchanges,
+                    "{} step {}: the second case's exchanges differ",
+                    c_name(first),
+                    n + 1
+                );
+            }
+        }
+    }
+
+    fn c_name(c: &crate::outcome::CaseResult) -> String {
+        format!("{} {}", c.profile, c.id)
+    }
 }

@@ -9,6 +9,7 @@ mod effect;
 mod link;
 mod pcap;
 mod scanner;
+mod serials;
 pub(crate) mod serve;
 mod serve_tcp;
 #[cfg(test)]

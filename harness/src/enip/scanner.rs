@@ -28,6 +28,7 @@ use sim::enip::Adapter;
 
 use super::cleanup;
 use super::link::{self, EnipLink, LinkError, Network};
+use super::serials::{self, Serials};
 use super::step::EnipStep;
 use crate::binding::channel::compact;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
@@ -46,8 +47,6 @@ pub(super) const ORIGINATOR_SERIAL: u32 = 0x4E48_5331;
 /// The embedded adapter's address.
 pub(super) const EMBEDDED_ADDR: SocketAddrV4 =
     SocketAddrV4::new(Ipv4Addr::new(192, 168, 1, 100), 44818);
-
-static SERIAL: std::sync::atomic::AtomicU16 = std::sync::atomic::AtomicU16::new(1);
 
 /// An open I/O connection.
 pub(super) struct IoConn {
@@ -77,7 +76,8 @@ pub(crate) struct Scanner {
     /// Registered sessions by client (1 = the scanner's own connection).
     pub(super) sessions: std::collections::BTreeMap<u8, u32>,
     pub(super) context: u64,
-    pub(super) serial: u16,
+    /// Where the connection serial numbers of its Forward_Opens come from.
+    pub(super) serials: Serials,
     pub(super) io: Option<IoConn>,
     /// Run (`true`) or idle in the run/idle header of O→T frames.
     pub(super) run: bool,
@@ -129,6 +129,8 @@ impl Scanner {
         };
         let mut scanner = Scanner::new(Box::new(link), product, caps);
         scanner.ledger = Some(cleanup::Ledger::default());
+        // The device outlives the case: numbered on from the scanners before.
+        scanner.serials = Serials::Shared;
         Ok(scanner)
     }
 
@@ -143,7 +145,7 @@ impl Scanner {
             caps,
             sessions: Default::default(),
             context: 0,
-            serial: 0,
+            serials: Serials::per_case(),
             io: None,
             run: true,
             process: Default::default(),
@@ -482,17 +484,15 @@ impl Scanner {
         self.link.prepare_io().map_err(StepError::from)?;
         // The session first: a Forward_Open that never left opened nothing to close.
         self.session(1)?;
-        self.serial = SERIAL
-            .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
-            .max(1);
+        let serial = self.serials.next();
         let np = NetParams::fixed;
         let fo = ForwardOpen {
             large: s.large,
             priority_tick: 0x0A,
             timeout_ticks: 0x0E,
             o_t_id: 0,
-            t_o_id: 0x5343_0000 | u32::from(self.serial),
-            serial: self.serial,
+            t_o_id: serials::t_o_id(serial),
+            serial,
             vendor: VENDOR,
             originator_serial: ORIGINATOR_SERIAL,
             timeout_multiplier: s.multiplier,

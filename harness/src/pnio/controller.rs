@@ -233,8 +233,23 @@ pub(crate) struct Controller<L> {
     activity: Uuid,
 }
 
-/// Controllers made so far in this process: each gets an activity of its own.
-static CONTROLLERS: std::sync::atomic::AtomicU16 = std::sync::atomic::AtomicU16::new(0);
+/// Controllers of a device on the network made so far in this process: each gets an activity
+/// of its own.
+static CONTROLLERS: std::sync::atomic::AtomicU16 = std::sync::atomic::AtomicU16::new(1);
+
+/// The number in the DCE RPC activity of a new controller. A device on the network (on the real
+/// clock) outlives each controller, one per case: each controller of the process takes an
+/// activity of its own, since a DCE RPC server may take calls of an activity it has served,
+/// numbered from 0 again, for ones it has answered. The embedded device is made afresh with
+/// each controller: activity 0, the same in every case, so a case's transcript does not depend
+/// on the cases before it (a sharded run merges into the unsharded one).
+fn activity_number(real_time: bool) -> u16 {
+    if real_time {
+        CONTROLLERS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    } else {
+        0
+    }
+}
 
 impl<L: Link> Controller<L> {
     /// A controller with Ethernet address `mac` that waits `timeout` for each answer, on a link
@@ -262,12 +277,7 @@ impl<L: Link> Controller<L> {
             lldp: None,
             lldp_frames: 0,
             dap: proto::nord::pnio::expected_dap(),
-            activity: Uuid::of_sender(
-                0x4E52_4450,
-                CONTROLLERS.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
-                mac,
-                0,
-            ),
+            activity: Uuid::of_sender(0x4E52_4450, activity_number(real_time), mac, 0),
         }
     }
 
