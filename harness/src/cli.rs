@@ -104,6 +104,10 @@ struct RunArgs {
     filter: Option<String>,
     /// Report folder.
     #[arg(long, default_value = "reports")]
+    /// Transcripts: `one` file (`transcripts.txt`, one section per case), or also `files`, one
+    /// per case under `transcripts/`.
+    #[arg(long, value_enum, default_value_t)]
+    transcripts: report::Transcripts,
     out: PathBuf,
     /// Inverters behind the simulated interface (default: the product's maximum, 8).
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
@@ -476,8 +480,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
         SnapshotMode::Off
     };
     let snaps = report::apply_snapshots(&mut run, &mode).map_err(|e| e.to_string())?;
-    let written = report::write_all(&run, &a.out).map_err(|e| e.to_string())?;
-    let summary = report::terminal(&run);
+    let written = report::write_all(&run, &a.out, a.transcripts).map_err(|e| e.to_string())?;
     if verbosity == Verbosity::Quiet {
         // The totals: the summary's last line.
         outln!("{}", summary.lines().last().unwrap_or_default());

@@ -66,6 +66,9 @@ fn folder(given: &Path) -> PathBuf {
 /// Reads every shard, merges them and writes the reports as `harness run` does; the exit code
 /// is the unsharded run's.
 pub(crate) fn merge(a: MergeArgs) -> Result<i32, String> {
+    /// Transcripts: `one` file, or also `files`, one per case (as `harness run`).
+    #[arg(long, value_enum, default_value_t)]
+    transcripts: report::Transcripts,
     let out = folder(&a.out.join("run.json"));
     let mut shards = Vec::with_capacity(a.shards.len());
     for s in &a.shards {
@@ -79,7 +82,7 @@ pub(crate) fn merge(a: MergeArgs) -> Result<i32, String> {
         shards.push((s.display().to_string(), run));
     }
     let run = report::merge(shards).map_err(|e| e.to_string())?;
-    let written = report::write_all(&run, &a.out).map_err(|e| e.to_string())?;
+    let written = report::write_all(&run, &a.out, a.transcripts).map_err(|e| e.to_string())?;
     let mut stdout = std::io::stdout().lock();
     let _ = write!(stdout, "{}", report::terminal(&run));
     let _ = writeln!(stdout, "{written}");

@@ -93,6 +93,12 @@ pub(crate) trait DutFactory {
     fn describe(&self) -> String;
     /// A DUT in its power-on state for the profile, behind the profile's binding.
     fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError>;
+    /// A factory of its own for another thread, when the DUTs this one opens share nothing
+    /// (the embedded simulator's): the runner then runs profiles side by side. `None` for a
+    /// device on the network, which is one device however many profiles test it.
+    fn fork(&self) -> Option<Box<dyn DutFactory + Send>> {
+        None
+    }
 }
 
 /// Runs the loaded suites: the connection check first (it reads the DUT's identity per
@@ -114,7 +120,7 @@ pub(crate) fn run_shard(
     let selected = |case: &&Case| opts.filter.as_deref().is_none_or(|f| case.id.contains(f));
     let mut meta = RunMeta::default();
     let mut cases = Vec::new();
-    let mut seq = 0;
+    let seq;
     let mut guard = opts.limits.map(Guard::new);
     // Whether the last cleanup failed: the next case brings the drives back first.
     let mut unsettled = false;
@@ -126,39 +132,39 @@ pub(crate) fn run_shard(
     match connection_check(loaded, opts, factory, &selected, &mut offers) {
         Ok(identities) => {
             meta.identities = identities;
-            let all = opts.profiles.len() * loaded.cases.iter().filter(selected).count();
-            let total = (0..all)
-                .filter(|&i| shard.is_none_or(|s| s.selects(i)))
-                .count();
-            for profile in &opts.profiles {
-                let mut order: Vec<&Case> = loaded.cases.iter().filter(selected).collect();
-                if let Some(rng) = rng.as_mut() {
-                    rng.shuffle(&mut order);
+            let plan = plan(loaded, opts, shard, &selected, &mut rng);
+            let total = plan.iter().map(Vec::len).sum();
+            seq = opts.profiles.len() * loaded.cases.iter().filter(selected).count();
+            let side_by_side = opts.limits.is_none() && opts.tap.is_none();
+            match factory.fork().filter(|_| side_by_side) {
+                Some(fork) => {
+                    cases = run_side_by_side(&plan, opts, fork, &offers, total);
                 }
-                for case in order {
-                    if shard.is_none_or(|s| s.selects(seq)) {
-                        opts.progress.borrow_mut().start(
-                            profile.name(),
-                            &case.id,
-                            cases.len(),
-                            total,
-                        );
-                        let r = CaseResult {
-                            seq,
-                            ..run_case(
-                                case,
-                                profile,
-                                opts,
-                                &mut guard,
-                                &mut unsettled,
-                                factory,
-                                offers.get(profile.name()),
-                            )
-                        };
-                        opts.progress.borrow_mut().end(&r);
-                        cases.push(r);
+                None => {
+                    for (profile, runs) in opts.profiles.iter().zip(&plan) {
+                        for &(at, case) in runs {
+                            opts.progress.borrow_mut().start(
+                                profile.name(),
+                                &case.id,
+                                cases.len(),
+                                total,
+                            );
+                            let r = CaseResult {
+                                seq: at,
+                                ..run_case(
+                                    case,
+                                    profile,
+                                    opts,
+                                    &mut guard,
+                                    &mut unsettled,
+                                    factory,
+                                    offers.get(profile.name()),
+                                )
+                            };
+                            opts.progress.borrow_mut().end(&r);
+                            cases.push(r);
+                        }
                     }
-                    seq += 1;
                 }
             }
             opts.progress.borrow_mut().finish();
@@ -188,6 +194,124 @@ pub(crate) fn run_shard(
     run.meta.shuffle = opts.shuffle;
     run.meta.discarded_attempts = run.cases.iter().map(|c| c.discarded.len()).sum();
     run
+}
+
+/// Each profile's case-runs in the order they run, each with its position `seq` in the
+/// unsharded order (profile by profile, cases as loaded): `shard`'s share, each profile's cases
+/// shuffled first when asked. Planned before any runs, so the order is the same however many
+/// threads then run it.
+fn plan<'a>(
+    loaded: &'a Loaded,
+    opts: &RunOptions,
+    shard: Option<Shard>,
+    selected: &dyn Fn(&&Case) -> bool,
+    rng: &mut Option<fastrand::Rng>,
+) -> Vec<Vec<(usize, &'a Case)>> {
+    let mut seq = 0;
+    let mut plan = Vec::with_capacity(opts.profiles.len());
+    for _ in &opts.profiles {
+        let mut order: Vec<&Case> = loaded.cases.iter().filter(selected).collect();
+        if let Some(rng) = rng.as_mut() {
+            rng.shuffle(&mut order);
+        }
+        let mut runs = Vec::with_capacity(order.len());
+        for case in order {
+            if shard.is_none_or(|s| s.selects(seq)) {
+                runs.push((seq, case));
+            }
+            seq += 1;
+        }
+        plan.push(runs);
+    }
+    plan
+}
+
+/// What a thread running profiles side by side tells the runner's thread, which shows the
+/// progress and keeps the results.
+enum Report {
+    Start(usize, usize),
+    End(usize, usize, Box<CaseResult>),
+}
+
+/// Runs the planned profiles on as many threads as the host has cores, each profile whole on
+/// one thread with a DUT factory of its own (`fork`): the embedded simulator's profiles share
+/// nothing. The results come back in the planned order, as one thread would give them.
+fn run_side_by_side(
+    plan: &[Vec<(usize, &Case)>],
+    opts: &RunOptions,
+    fork: Box<dyn DutFactory + Send>,
+    offers: &BTreeMap<String, Offer>,
+    total: usize,
+) -> Vec<CaseResult> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, usize::from)
+        .min(plan.len())
+        .max(1);
+    // Bus profiles first: they run the longest, and a long one started last ends the run late.
+    let mut queue: Vec<usize> = (0..plan.len()).collect();
+    queue.sort_by_key(|&p| opts.profiles[p].bus.is_none());
+    let queue = std::sync::Mutex::new(queue.into_iter());
+    let (filter, retries, profiles) = (opts.filter.clone(), opts.retries, &opts.profiles.clone());
+    let mut slots: Vec<Vec<Option<CaseResult>>> =
+        plan.iter().map(|runs| runs.iter().map(|_| None).collect()).collect();
+    std::thread::scope(|s| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let mut forks = vec![fork];
+        while forks.len() < threads {
+            match forks[0].fork() {
+                Some(f) => forks.push(f),
+                None => break,
+            }
+        }
+        for mut factory in forks {
+            let (tx, queue, filter) = (tx.clone(), &queue, filter.clone());
+            s.spawn(move || {
+                // This thread's options: no progress of its own, no capture, no limits.
+                let opts = RunOptions {
+                    filter,
+                    retries,
+                    ..RunOptions::new(Vec::new())
+                };
+                let (mut guard, mut unsettled) = (None, false);
+                loop {
+                    let next = queue.lock().unwrap_or_else(|e| e.into_inner()).next();
+                    let Some(p) = next else { break };
+                    let profile = &profiles[p];
+                    for (i, &(at, case)) in plan[p].iter().enumerate() {
+                        let _ = tx.send(Report::Start(p, i));
+                        let r = run_case(
+                            case,
+                            profile,
+                            &opts,
+                            &mut guard,
+                            &mut unsettled,
+                            factory.as_mut(),
+                            offers.get(profile.name()),
+                        );
+                        let _ = tx.send(Report::End(p, i, Box::new(CaseResult { seq: at, ..r })));
+                    }
+                }
+            });
+        }
+        drop(tx);
+        let mut done = 0;
+        for report in rx {
+            match report {
+                Report::Start(p, i) => opts.progress.borrow_mut().start(
+                    opts.profiles[p].name(),
+                    &plan[p][i].1.id,
+                    done,
+                    total,
+                ),
+                Report::End(p, i, r) => {
+                    opts.progress.borrow_mut().end(&r);
+                    slots[p][i] = Some(*r);
+                    done += 1;
+                }
+            }
+        }
+    });
+    slots.into_iter().flatten().flatten().collect()
 }
 
 /// Id of the case that stands for a failed connection check in the reports.

@@ -39,23 +39,62 @@ pub(crate) struct EmbeddedFactory {
 
 impl DutFactory for EmbeddedFactory {
     fn describe(&self) -> String {
-        match sim_firmware() {
-            Ok(Firmware::Next) => "embedded simulator (firmware next)".into(),
-            _ => "embedded simulator".into(),
-        }
+        describe()
+    }
+
+    fn fork(&self) -> Option<Box<dyn DutFactory + Send>> {
+        // A capture is one time line of the run's packets: one thread writes it.
+        self.context
+            .tap
+            .is_none()
+            .then(|| Box::new(Untapped) as Box<dyn DutFactory + Send>)
     }
 
     fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
-        match profile.bus {
-            None => {
-                let product = profile.nord().map_err(OpenError::Profile)?;
-                Ok(Box::new(Channel::new(ppo_dut(profile)?, product, retries)))
-            }
-            Some(name) => {
-                let bus = crate::bus::by_name(name)
-                    .ok_or_else(|| OpenError::Profile(format!("no bus `{name}`")))?;
-                (bus.embedded)(profile, &self.context)
-            }
+        open(profile, retries, &self.context)
+    }
+}
+
+/// An [`EmbeddedFactory`] without a capture, for a thread of its own.
+struct Untapped;
+
+impl DutFactory for Untapped {
+    fn describe(&self) -> String {
+        describe()
+    }
+
+    fn fork(&self) -> Option<Box<dyn DutFactory + Send>> {
+        Some(Box::new(Untapped))
+    }
+
+    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+        open(profile, retries, &crate::bus::Embedded::default())
+    }
+}
+
+/// The embedded simulator, as reports name it.
+fn describe() -> String {
+    match sim_firmware() {
+        Ok(Firmware::Next) => "embedded simulator (firmware next)".into(),
+        _ => "embedded simulator".into(),
+    }
+}
+
+/// A fresh simulator for `profile`, behind its binding.
+fn open(
+    profile: &Profile,
+    retries: u32,
+    context: &crate::bus::Embedded,
+) -> Result<Box<dyn Binding>, OpenError> {
+    match profile.bus {
+        None => {
+            let product = profile.nord().map_err(OpenError::Profile)?;
+            Ok(Box::new(Channel::new(ppo_dut(profile)?, product, retries)))
+        }
+        Some(name) => {
+            let bus = crate::bus::by_name(name)
+                .ok_or_else(|| OpenError::Profile(format!("no bus `{name}`")))?;
+            (bus.embedded)(profile, context)
         }
     }
 }

@@ -848,13 +848,22 @@ impl crate::runner::DutFactory for NetworkFactory {
 }
 
 /// The owner connection of the EDS the harness writes for a NORD product, read back by the
-/// planner that reads another maker's.
+/// planner that reads another maker's. Written and parsed once per product and process: a
+/// scanner is made for every case, and the EDS is the same each time.
 fn own_connection(product: Product) -> Option<crate::description::eds::Connection> {
-    let text = super::eds::eds(product, product.max_inverters()).ok()?;
-    match crate::description::Description::parse(&text, "own EDS").ok()? {
-        crate::description::Description::Eds(e) => e.owner().cloned(),
-        _ => None,
+    type Known = Vec<(Product, Option<crate::description::eds::Connection>)>;
+    static KNOWN: std::sync::Mutex<Known> = std::sync::Mutex::new(Vec::new());
+    let mut known = KNOWN.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some((_, c)) = known.iter().find(|(p, _)| *p == product) {
+        return c.clone();
     }
+    let text = super::eds::eds(product, product.max_inverters()).ok();
+    let owner = match text.and_then(|t| crate::description::Description::parse(&t, "own EDS").ok()) {
+        Some(crate::description::Description::Eds(e)) => e.owner().cloned(),
+        _ => None,
+    };
+    known.push((product, owner.clone()));
+    owner
 }
 
 /// Parameters of a Forward_Open step.

@@ -61,7 +61,7 @@ impl<'a> From<&'a CaseResult> for Case<'a> {
             manual: &c.manual,
             message: &c.message,
             duration: c.duration.as_secs_f64(),
-            transcript: transcript_file(c).map(|f| f.to_string_lossy().replace('\\', "/")),
+            transcript: transcript_file(c),
             seq: c.seq,
             step: c.deciding_step().map(|st| Step {
                 step: &st.step,
@@ -145,7 +145,7 @@ mod tests {
                 "manual": {"doc": "BU 0620", "edition": "2020-03 en", "section": "2.2.7", "page": 20},
                 "message": "status: expected 2865 (0B31h), got 2871 (0B37h)",
                 "duration": 0.003,
-                "transcript": "transcripts/sk550p/bu0620__addressing__coe-p102.txt",
+                "transcript": "transcripts.txt#sk550p/bu0620/addressing/coe-p102",
                 "seq": 1,
                 "step": {
                     "step": "read P102 set 3 FI 5",

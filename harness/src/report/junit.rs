@@ -116,7 +116,7 @@ fn details(c: &CaseResult, dut: &str) -> String {
         record::requirement(c),
         c.profile,
         c.kind.name(),
-        transcript_file(c).map_or("-".into(), |f| f.to_string_lossy().replace('\\', "/")),
+        transcript_file(c).unwrap_or_else(|| "-".into()),
     )
 }
 
@@ -407,7 +407,7 @@ requirement: title of bu0620/addressing/coe-p102
 profile: sk550p
 cases: device
 dut: embedded simulator
-transcript: transcripts/sk550p/bu0620__addressing__coe-p102.txt
+transcript: transcripts.txt#sk550p/bu0620/addressing/coe-p102
 </failure>"#), "{x}");
         assert!(
             x.contains(

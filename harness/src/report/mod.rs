@@ -33,4 +33,4 @@ pub(crate) use statements::text_table as statements_table;
 pub(crate) use summary::terminal;
 #[cfg(test)]
 pub(crate) use transcript::render as transcript_for_tests;
-pub(crate) use write::write_all;
+pub(crate) use write::{write_all, Transcripts};

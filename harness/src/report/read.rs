@@ -43,6 +43,79 @@ pub(crate) enum ReadError {
         /// The transcript path as written.
         file: String,
     },
+    /// A case names a section its transcripts file does not have.
+    #[error("{path}: case {case} names transcript `{named}`, which is not in that file")]
+    NoSection {
+        /// `run.json`.
+        path: PathBuf,
+        /// The case (`<profile> <id>`).
+        case: String,
+        /// The transcript as named.
+        named: String,
+    },
+}
+
+/// The transcript files of a report folder, each read once and split into its sections (a
+/// transcripts file holds every case's).
+#[derive(Default)]
+struct Files(std::collections::HashMap<PathBuf, Read>);
+
+/// A transcript file read: its text, and its sections by name.
+struct Read {
+    text: String,
+    sections: std::collections::HashMap<String, String>,
+}
+
+impl Files {
+    /// The transcript `named` of case `c` (`<file>#<section>`, or a file of its own as an older
+    /// harness or `--transcripts files` wrote it), found beside `run.json` at `path`.
+    fn transcript(
+        &mut self,
+        path: &Path,
+        base: &Path,
+        c: &Case,
+        named: &str,
+    ) -> Result<String, ReadError> {
+        let case = || format!("{} {}", c.profile, c.id);
+        let (file, section) = match named.split_once('#') {
+            Some((file, section)) => (file, Some(section)),
+            None => (named, None),
+        };
+        let rel = Path::new(file);
+        if !rel.components().all(|p| matches!(p, Component::Normal(_))) {
+            return Err(ReadError::Escapes {
+                path: path.to_path_buf(),
+                case: case(),
+                file: file.into(),
+            });
+        }
+        let at = base.join(rel);
+        if !self.0.contains_key(&at) {
+            let text = std::fs::read_to_string(&at).map_err(|source| ReadError::Io {
+                path: at.clone(),
+                source,
+            })?;
+            let sections = super::write::sections(&text)
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect();
+            self.0.insert(at.clone(), Read { text, sections });
+        }
+        let read = &self.0[&at];
+        match section {
+            None => Ok(read.text.clone()),
+            Some(section) => {
+                read.sections
+                    .get(section)
+                    .cloned()
+                    .ok_or_else(|| ReadError::NoSection {
+                        path: path.to_path_buf(),
+                        case: case(),
+                        named: named.into(),
+                    })
+            }
+        }
+    }
 }
 
 /// `run.json` as [`super::json`] writes it; what the reports do not need (counts) is left out.
@@ -121,24 +194,11 @@ pub(crate) fn read(given: &Path) -> Result<RunResult, ReadError> {
         source,
     })?;
     let mut cases = Vec::with_capacity(doc.cases.len());
+    let mut files = Files::default();
     for (n, c) in doc.cases.into_iter().enumerate() {
         let transcript = match &c.transcript {
             None => None,
-            Some(file) => {
-                let rel = Path::new(file);
-                if !rel.components().all(|p| matches!(p, Component::Normal(_))) {
-                    return Err(ReadError::Escapes {
-                        path,
-                        case: format!("{} {}", c.profile, c.id),
-                        file: file.clone(),
-                    });
-                }
-                let at = base.join(rel);
-                Some(
-                    std::fs::read_to_string(&at)
-                        .map_err(|source| ReadError::Io { path: at, source })?,
-                )
-            }
+            Some(named) => Some(files.transcript(&path, base, &c, named)?),
         };
         cases.push(CaseResult {
             duration: secs(&path, c.duration)?,
@@ -189,6 +249,7 @@ pub(crate) fn read(given: &Path) -> Result<RunResult, ReadError> {
 mod tests {
     use super::*;
     use crate::report::fixtures::{sample_run, temp_dir};
+    use crate::report::write::Transcripts;
     use crate::report::{transcript, write_all};
 
     #[test]
@@ -200,7 +261,7 @@ mod tests {
             code: 3,
             text: "wrong subindex".into(),
         });
-        write_all(&run, &first).unwrap();
+        write_all(&run, &first, Transcripts::One).unwrap();
         let back = read(&first).unwrap();
         assert_eq!(back.cases.len(), run.cases.len());
         for (b, c) in back.cases.iter().zip(&run.cases) {
@@ -220,7 +281,7 @@ mod tests {
 
         // Through run.json itself, into another folder: every file the same but for the time
         // JUnit stamps its suites with when it writes them.
-        write_all(&read(&first.join("run.json")).unwrap(), &second).unwrap();
+        write_all(&read(&first.join("run.json")).unwrap(), &second, Transcripts::One).unwrap();
         let untimed = |f: &str| {
             let text = std::fs::read_to_string(f).unwrap();
             text.split("timestamp=\"")
@@ -236,8 +297,7 @@ mod tests {
             "junit.xml",
             "summary.md",
             "index.html",
-            "transcripts/sk550p/bu0620__addressing__coe-p102.txt",
-            "transcripts/tu3-eip/bu0620__pkw-telegrams__silent.txt",
+            "transcripts.txt",
         ] {
             let (a, b) = (first.join(f), second.join(f));
             assert_eq!(
@@ -269,24 +329,47 @@ mod tests {
             "{err}"
         );
 
-        write_all(&sample_run(), &dir).unwrap();
-        let gone = dir.join("transcripts/sk550p/bu0620__addressing__coe-p102.txt");
-        std::fs::remove_file(&gone).unwrap();
+        write_all(&sample_run(), &dir, Transcripts::One).unwrap();
+        let file = dir.join("transcripts.txt");
+        let text = std::fs::read_to_string(&file).unwrap();
+        std::fs::write(&file, text.replace("=== sk550p/bu0620/addressing/coe-p102\n", "")).unwrap();
         let err = read(&dir).unwrap_err();
+        assert!(matches!(err, ReadError::NoSection { .. }), "{err:?}");
         assert!(
-            err.to_string().contains("bu0620__addressing__coe-p102.txt"),
+            err.to_string()
+                .contains("names transcript `transcripts.txt#sk550p/bu0620/addressing/coe-p102`"),
             "{err}"
         );
+        std::fs::remove_file(&file).unwrap();
+        let err = read(&dir).unwrap_err();
+        assert!(err.to_string().contains("transcripts.txt"), "{err}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_transcript_file_of_its_own_reads_back() {
+        let dir = temp_dir("read-files");
+        let run = sample_run();
+        write_all(&run, &dir, Transcripts::Files).unwrap();
+        let path = dir.join("run.json");
+        let text = std::fs::read_to_string(&path).unwrap().replacen(
+            "transcripts.txt#sk550p/bu0620/addressing/coe-p102",
+            "transcripts/sk550p/bu0620__addressing__coe-p102.txt",
+            1,
+        );
+        std::fs::write(&path, text).unwrap();
+        let back = read(&dir).unwrap();
+        assert_eq!(back.cases[1].transcript, Some(transcript::render(&run.cases[1])));
         let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
     fn a_transcript_outside_the_folder_is_refused() {
         let dir = temp_dir("read-escape");
-        write_all(&sample_run(), &dir).unwrap();
+        write_all(&sample_run(), &dir, Transcripts::One).unwrap();
         let path = dir.join("run.json");
         let text = std::fs::read_to_string(&path).unwrap().replacen(
-            "transcripts/sk550p/bu0620__addressing__coe-p102.txt",
+            "transcripts.txt#sk550p/bu0620/addressing/coe-p102",
             "../../etc/passwd",
             1,
         );

@@ -1,7 +1,10 @@
 //! Writing the reports into the output folder: file layout, typed errors, stale-file cleanup.
 //!
 //! Layout of `<out>`: `junit.xml`, `run.json`, `summary.md`, `index.html`, and
-//! `transcripts/<profile>/<case id with / as __>.txt`.
+//! `transcripts.txt`: every transcript of the run, one section each, in the run's order. A file
+//! per case (`transcripts/<profile>/<case id with / as __>.txt`) comes on request
+//! ([`Transcripts::Files`]): thousands of small files made writing the reports the slowest part of
+//! a run.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -30,6 +33,24 @@ pub(crate) enum ReportError {
     },
 }
 
+/// Where the transcripts go besides [`TRANSCRIPTS`] (`--transcripts`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub(crate) enum Transcripts {
+    /// Only the one file.
+    #[default]
+    One,
+    /// Also a file per case under `transcripts/`.
+    Files,
+}
+
+/// The file that holds every transcript of a run.
+pub(crate) const TRANSCRIPTS: &str = "transcripts.txt";
+
+/// Starts each section of [`TRANSCRIPTS`], followed by the section's name
+/// (`<profile>/<case id>`). No line of a transcript starts with it: after the header fields,
+/// each line starts with `step`, `attempt` or spaces.
+const SECTION: &str = "=== ";
+
 /// What [`write_all`] wrote.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Written {
@@ -41,10 +62,12 @@ pub(crate) struct Written {
     pub(crate) summary: PathBuf,
     /// `<out>/index.html`.
     pub(crate) html: PathBuf,
-    /// `<out>/transcripts`.
+    /// `<out>/transcripts.txt`.
     pub(crate) transcripts: PathBuf,
-    /// How many transcript files (one per case and profile).
+    /// How many transcripts (one per case and profile that applied).
     pub(crate) transcript_count: usize,
+    /// `<out>/transcripts`, when a file per case was asked for.
+    pub(crate) files: Option<PathBuf>,
 }
 
 impl fmt::Display for Written {
@@ -58,7 +81,11 @@ impl fmt::Display for Written {
             self.html.display(),
             self.transcript_count,
             self.transcripts.display()
-        )
+        )?;
+        if let Some(dir) = &self.files {
+            write!(f, " and in {}", dir.display())?;
+        }
+        Ok(())
     }
 }
 
@@ -95,45 +122,99 @@ pub(super) fn case_file(case: &CaseResult, ext: &str) -> PathBuf {
     Path::new(&component(&case.profile)).join(format!("{}.{ext}", component(&case.id)))
 }
 
-/// A case's transcript, relative to the output folder; none for a case that did not apply
-/// (it exchanged nothing, and `run.json` and `junit.xml` give the reason): most cases do not
-/// apply to most profiles, and a file each made the reports the slowest part of a run.
-pub(super) fn transcript_file(case: &CaseResult) -> Option<PathBuf> {
+/// Where a case's transcript is, as `run.json` and `junit.xml` name it:
+/// `transcripts.txt#<profile>/<case id>`, the file and its section; none for a case that did not
+/// apply (it exchanged nothing, and `run.json` and `junit.xml` give the reason).
+pub(super) fn transcript_file(case: &CaseResult) -> Option<String> {
     (case.verdict != Verdict::NotApplicable)
-        .then(|| Path::new("transcripts").join(case_file(case, "txt")))
+        .then(|| format!("{TRANSCRIPTS}#{}", section_name(case)))
 }
 
-/// Writes `junit.xml`, `run.json`, `summary.md`, `index.html` and every case's transcript into
-/// `out`, after
-/// removing the transcripts folder of an earlier run (so no stale transcript survives).
-pub(crate) fn write_all(run: &RunResult, out: &Path) -> Result<Written, ReportError> {
-    let transcripts = out.join("transcripts");
+/// A case's section name in [`TRANSCRIPTS`].
+fn section_name(case: &CaseResult) -> String {
+    format!("{}/{}", case.profile, case.id)
+}
+
+/// [`TRANSCRIPTS`]' text: each transcript after its section line.
+fn transcripts_text(run: &RunResult) -> String {
+    let mut text = String::new();
+    for case in run.cases.iter().filter(|c| c.verdict != Verdict::NotApplicable) {
+        text.push_str(SECTION);
+        text.push_str(&section_name(case));
+        text.push('\n');
+        text.push_str(&transcript::render(case));
+    }
+    text
+}
+
+/// The sections of a [`TRANSCRIPTS`] text by name, each transcript as written.
+pub(super) fn sections(text: &str) -> std::collections::HashMap<&str, &str> {
+    let mut found = std::collections::HashMap::new();
+    let mut rest = text;
+    while let Some(after) = rest.strip_prefix(SECTION) {
+        let (name, body) = after.split_once('\n').unwrap_or((after, ""));
+        let end = body
+            .match_indices(&format!("\n{SECTION}"))
+            .next()
+            .map_or(body.len(), |(i, _)| i + 1);
+        found.insert(name, &body[..end]);
+        rest = &body[end..];
+    }
+    found
+}
+
+/// Writes `junit.xml`, `run.json`, `summary.md`, `index.html` and `transcripts.txt` into `out`
+/// (and a transcript file per case with [`Transcripts::Files`]), each rendered on a thread of
+/// its own, after removing what an earlier run left that this one does not replace (so no stale
+/// transcript survives).
+pub(crate) fn write_all(
+    run: &RunResult,
+    out: &Path,
+    files: Transcripts,
+) -> Result<Written, ReportError> {
+    let per_case = out.join("transcripts");
     // `symlink_metadata` so a symlinked folder is removed as a link, never followed.
-    if std::fs::symlink_metadata(&transcripts).is_ok() {
-        std::fs::remove_dir_all(&transcripts).map_err(io(&transcripts))?;
+    if std::fs::symlink_metadata(&per_case).is_ok() {
+        std::fs::remove_dir_all(&per_case).map_err(io(&per_case))?;
     }
     let written = Written {
         junit: out.join("junit.xml"),
         run_json: out.join("run.json"),
         summary: out.join("summary.md"),
         html: out.join("index.html"),
-        transcripts,
+        transcripts: out.join(TRANSCRIPTS),
         transcript_count: run.cases.iter().filter_map(transcript_file).count(),
+        files: (files == Transcripts::Files).then_some(per_case),
     };
-    write_file(&written.junit, junit::render(run).as_bytes())?;
-    let doc = json::render(run).map_err(|source| ReportError::Json {
-        path: written.run_json.clone(),
-        source,
+    let json_doc = || {
+        json::render(run).map_err(|source| ReportError::Json {
+            path: written.run_json.clone(),
+            source,
+        })
+    };
+    std::thread::scope(|s| {
+        let jobs = [
+            s.spawn(|| write_file(&written.junit, junit::render(run).as_bytes())),
+            s.spawn(|| write_file(&written.run_json, json_doc()?.as_bytes())),
+            s.spawn(|| write_file(&written.summary, summary::markdown(run).as_bytes())),
+            s.spawn(|| write_file(&written.html, html::render(run).as_bytes())),
+            s.spawn(|| write_file(&written.transcripts, transcripts_text(run).as_bytes())),
+            s.spawn(|| per_case_files(run, written.files.as_deref())),
+        ];
+        jobs.into_iter()
+            .map(|j| j.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+            .collect::<Result<(), _>>()
     })?;
-    write_file(&written.run_json, doc.as_bytes())?;
-    write_file(&written.summary, summary::markdown(run).as_bytes())?;
-    write_file(&written.html, html::render(run).as_bytes())?;
-    for case in &run.cases {
-        if let Some(file) = transcript_file(case) {
-            write_file(&out.join(file), transcript::render(case).as_bytes())?;
-        }
-    }
     Ok(written)
+}
+
+/// A transcript file per case that applied under `dir`, if given.
+fn per_case_files(run: &RunResult, dir: Option<&Path>) -> Result<(), ReportError> {
+    let Some(dir) = dir else { return Ok(()) };
+    for case in run.cases.iter().filter(|c| c.verdict != Verdict::NotApplicable) {
+        write_file(&dir.join(case_file(case, "txt")), transcript::render(case).as_bytes())?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -142,14 +223,15 @@ mod tests {
     use crate::report::fixtures::{sample_run, temp_dir};
 
     #[test]
-    fn writes_every_report_and_removes_stale_transcripts() {
+    fn writes_every_report_and_one_transcripts_file() {
         let out = temp_dir("write-all");
         let stale = out.join("transcripts/sk550p/old-case.txt");
         write_file(&stale, b"from an earlier run").unwrap();
         let run = sample_run();
-        let w = write_all(&run, &out).unwrap();
+        let w = write_all(&run, &out, Transcripts::One).unwrap();
         assert!(!stale.exists(), "stale transcript removed");
-        for f in [&w.junit, &w.run_json, &w.summary, &w.html] {
+        assert!(!out.join("transcripts").exists(), "no file per case unless asked");
+        for f in [&w.junit, &w.run_json, &w.summary, &w.html, &w.transcripts] {
             assert!(f.is_file(), "{}", f.display());
         }
         // One case did not apply: it has no transcript.
@@ -161,14 +243,39 @@ mod tests {
             .find(|c| c.verdict == Verdict::NotApplicable)
             .unwrap();
         assert_eq!(transcript_file(na), None);
-        assert!(!out.join("transcripts").join(case_file(na, "txt")).exists());
+        let text = std::fs::read_to_string(&w.transcripts).unwrap();
+        let found = sections(&text);
+        assert_eq!(found.len(), 5);
+        for c in run.cases.iter().filter(|c| c.verdict != Verdict::NotApplicable) {
+            assert_eq!(found[section_name(c).as_str()], transcript::render(c), "{}", c.id);
+        }
+        assert!(!found.contains_key(section_name(na).as_str()));
+        assert_eq!(
+            transcript_file(&run.cases[0]).as_deref(),
+            Some("transcripts.txt#sk550p/bu0620/pkw-telegrams/p102-write")
+        );
+        assert!(w.to_string().contains("5 transcripts"), "{w}");
+        let _ = std::fs::remove_dir_all(&out);
+    }
+
+    #[test]
+    fn a_file_per_case_on_request() {
+        let out = temp_dir("write-files");
+        let run = sample_run();
+        let w = write_all(&run, &out, Transcripts::Files).unwrap();
         let t = out.join("transcripts/sk550p/bu0620__pkw-telegrams__p102-write.txt");
         let text = std::fs::read_to_string(&t).unwrap();
         assert!(
             text.starts_with("case: bu0620/pkw-telegrams/p102-write\n"),
             "{text}"
         );
-        assert!(w.to_string().contains("5 transcripts"), "{w}");
+        let files: usize = ["sk550p", "tu3-eip"]
+            .iter()
+            .map(|p| std::fs::read_dir(out.join("transcripts").join(p)).unwrap().count())
+            .sum();
+        assert_eq!(files, w.transcript_count);
+        let listed = format!("and in {}", out.join("transcripts").display());
+        assert!(w.to_string().ends_with(&listed), "{w}");
         let _ = std::fs::remove_dir_all(&out);
     }
 
@@ -177,7 +284,7 @@ mod tests {
         let base = temp_dir("write-err");
         let blocker = base.join("not-a-folder");
         write_file(&blocker, b"a file where the output folder should be").unwrap();
-        let err = write_all(&sample_run(), &blocker).unwrap_err();
+        let err = write_all(&sample_run(), &blocker, Transcripts::One).unwrap_err();
         assert!(matches!(err, ReportError::Io { .. }), "{err:?}");
         assert!(err.to_string().contains("not-a-folder"), "{err}");
         let _ = std::fs::remove_dir_all(&base);
@@ -187,10 +294,7 @@ mod tests {
     fn case_files_cannot_escape_their_folder() {
         let mut c = sample_run().cases.remove(0);
         c.id = "../..\\x/y".into();
-        assert_eq!(
-            transcript_file(&c),
-            Some(PathBuf::from("transcripts/sk550p/..__..__x__y.txt"))
-        );
+        assert_eq!(case_file(&c, "txt"), Path::new("sk550p/..__..__x__y.txt"));
         c.profile = "..".into();
         assert_eq!(case_file(&c, "snap"), Path::new("_../..__..__x__y.snap"));
     }
