@@ -1,6 +1,9 @@
 //! The full default run, end to end through the `harness` binary: every suite against the
 //! embedded simulator under every built-in profile, reports into a fresh folder.
 
+#[path = "common/transcripts.rs"]
+mod transcripts;
+
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -182,8 +185,7 @@ fn transcript_of_the_p102_write_example_is_stable() {
         "{}",
         String::from_utf8_lossy(&o.stdout)
     );
-    let path = out.join("transcripts/sk550p/bu0620__pkw-telegrams__p102-write-on-the-dut.txt");
-    let transcript = std::fs::read_to_string(&path).expect("transcript written");
+    let transcript = transcripts::transcript(&out, "sk550p", "bu0620/pkw-telegrams/p102-write-on-the-dut");
     insta::assert_snapshot!("p102_write_transcript", transcript);
     let _ = std::fs::remove_dir_all(&out);
 }

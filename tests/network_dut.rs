@@ -18,6 +18,7 @@ use serde_json::Value;
 mod common;
 use common::addr::free_loopback;
 use common::serve;
+use common::transcripts::transcript;
 
 #[derive(Clone, Copy)]
 enum Target {
@@ -227,15 +228,6 @@ fn read_p102(served: &str) -> u16 {
         "Get_Attribute_Single P102: {mr:02X?}"
     );
     u16::from_le_bytes([mr[4], mr[5]])
-}
-
-/// The transcript of `case` in a run's report folder.
-fn transcript(out: &std::path::Path, profile: &str, case: &str) -> String {
-    let file = out
-        .join("transcripts")
-        .join(profile)
-        .join(format!("{}.txt", case.replace('/', "__")));
-    std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()))
 }
 
 /// Takes about 100 s of real time per profile: the suites run their drive for seconds at a

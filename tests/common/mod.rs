@@ -12,6 +12,7 @@ pub(crate) mod netns;
 pub(crate) mod peer;
 pub(crate) mod pnio_wire;
 pub(crate) mod suite_run;
+pub(crate) mod transcripts;
 pub(crate) mod tshark;
 
 /// A child process, killed when dropped (a served simulator, a third-party server).
