@@ -71,6 +71,25 @@ fn ignores_communication_errors(store: &ParamStore) -> bool {
     store.read(P513, None, ELEMENT_ETHERNET) == Ok(-1)
 }
 
+/// A module's P171 software version as the parameter shows it, [-01] version in tenths and
+/// [-02] revision: the software of the manual's edition (its document history, §1.1.2).
+/// BU 2100 (August 2019): V 1.3 R1 SK TU3-EIP, R5 SK TU4-EIP, R4 SK CU4-EIP; BU 2200 (August
+/// 2019): V 1.3 R2 SK TU3-POL, R3 SK TU4-POL, R1 SK CU4-POL (the versions the POWERLINK
+/// IdentResponse reports, `proto::nord::epl`); BU 0590 (January 2012, its version list p. 3):
+/// V 1.0 R4 SK TU3-PNT. The SK 550P has no P171 (its interface software is P745, BU 0620).
+pub(crate) fn software_version(product: Product) -> Option<(i32, i32)> {
+    match product {
+        Product::Tu3Eip => Some((13, 1)),
+        Product::Tu4Eip => Some((13, 5)),
+        Product::Cu4Eip => Some((13, 4)),
+        Product::Tu3Pol => Some((13, 2)),
+        Product::Tu4Pol => Some((13, 3)),
+        Product::Cu4Pol => Some((13, 1)),
+        Product::Tu3Pnt => Some((10, 4)),
+        Product::Sk550p => None,
+    }
+}
+
 /// Which firmware release the simulator behaves as.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Firmware {
@@ -79,7 +98,8 @@ pub enum Firmware {
     Release,
     /// A made-up next release, so that comparing the runs of two releases (`harness diff`) can
     /// be shown and tested on the simulator. It says so where the product has a software
-    /// version (the modules' P171 [-02] revision is 1, BU 0590 §5.1.3, BU 2200 §7.1.3) and
+    /// version (the modules' P171 [-02] revision is the release's plus one, BU 2100 §7.1.3,
+    /// BU 0590 §5.1.3, BU 2200 §7.1.3) and
     /// behaves differently in one documented way: the SK 550P's "Addressing Mode" P856 leaves
     /// the factory as 2 (DHCP) instead of 1 (BOOTP, BU 0620 §4.2.2), the kind of changed
     /// default a release note lists.
@@ -377,18 +397,16 @@ impl Device {
                 interface.store.set_info(number, e, b);
             }
         }
-        // P171 "Software version" of the EtherNet/IP modules (BU 2100 §7.1.3, p. 50; the
-        // edition's software, §1.1.2): [-01] 1.3, [-02] R1 (SK TU3), R5 (SK TU4), R4 (SK CU4),
-        // [-03] 0 = standard version.
-        let revision = match config.product {
-            Product::Tu3Eip => Some(1),
-            Product::Tu4Eip => Some(5),
-            Product::Cu4Eip => Some(4),
-            _ => None,
-        };
-        if let Some(r) = revision {
-            interface.store.set_info(171, 1, 13);
-            interface.store.set_info(171, 2, r);
+        // P171 "Software version" of the modules: [-01] version (one decimal), [-02] revision,
+        // [-03] 0 = standard version (BU 2100 §7.1.3 p. 50, BU 0590 §5.1.3 p. 35, BU 2200
+        // §7.1.3 p. 53). The next firmware is the release's next revision.
+        if let Some((version, revision)) = software_version(config.product) {
+            let revision = match config.firmware {
+                Firmware::Release => revision,
+                Firmware::Next => revision + 1,
+            };
+            interface.store.set_info(171, 1, version);
+            interface.store.set_info(171, 2, revision);
         }
         if config.product == Product::Tu3Pnt {
             // [-04]…[-06]: the rest of the example address 00:0E:CF:03:60:00 (BU 0590 §5.1.4),
@@ -398,7 +416,6 @@ impl Device {
             }
         }
         if config.firmware == Firmware::Next {
-            interface.store.set_info(171, 2, 1);
             interface.store.set_info(856, 1, 2);
         }
         Device {
@@ -1060,9 +1077,42 @@ mod tests {
                 firmware,
                 ..DeviceConfig::new(Product::Tu3Pnt)
             });
-            read_interface(&mut d, 171, 2)
+            (read_interface(&mut d, 171, 1), read_interface(&mut d, 171, 2))
         };
-        assert_eq!((module(Firmware::Release), module(Firmware::Next)), (0, 1));
+        // V 1.0 R4 (BU 0590's version list), and the next revision.
+        assert_eq!(module(Firmware::Release), (10, 4));
+        assert_eq!(module(Firmware::Next), (10, 5));
+    }
+
+    #[test]
+    fn every_module_shows_its_editions_software_in_p171() {
+        for product in Product::ALL {
+            let mut d = Device::new(DeviceConfig::new(product));
+            let Some((version, revision)) = software_version(product) else {
+                assert_eq!(product, Product::Sk550p);
+                continue;
+            };
+            let shown = (
+                read_interface(&mut d, 171, 1),
+                read_interface(&mut d, 171, 2),
+                read_interface(&mut d, 171, 3),
+            );
+            assert_eq!(shown, (version, revision, 0), "{}", product.name());
+            assert!(version >= 10, "{}: no module is V 0.x", product.name());
+        }
+        // The POWERLINK modules' P171 and their IdentResponse's revision (1018h:03h, 00VVMMRRh)
+        // tell one version (BU 2200 §1.1.2).
+        for product in [Product::Tu3Pol, Product::Tu4Pol, Product::Cu4Pol] {
+            let r = proto::nord::epl::revision(product);
+            let from_epl = (((r >> 16) & 0xFF) * 10 + ((r >> 8) & 0xFF), r & 0xFF);
+            let (version, revision) = software_version(product).unwrap();
+            assert_eq!(
+                from_epl,
+                (version as u32, revision as u32),
+                "{}",
+                product.name()
+            );
+        }
     }
 
     #[test]
