@@ -148,7 +148,7 @@ fn a_firmware_change_flips_known_cases_and_the_diff_says_so() {
         "{stdout}"
     );
     assert!(
-        stdout.contains("identity tu3-pnt: firmware 0.0 R0 (from P171 software version over the parameter channel)  →  firmware 0.0 R1 (from P171 software version over the parameter channel)\n"),
+        stdout.contains("identity tu3-pnt: firmware 1.0 R4 (from P171 software version over the parameter channel)  →  firmware 1.0 R5 (from P171 software version over the parameter channel)\n"),
         "{stdout}"
     );
     // Unchanged: the P171 case under tu3-pnt, each profile's not-applicable cases.
