@@ -25,6 +25,10 @@ pub struct BitDef {
     pub when_1: &'static str,
     /// The priority column for value 0 and value 1 (control word only, 1 = highest).
     pub priority: [Option<u8>; 2],
+    /// The designation names what value 0 does: the bit is in effect at 0 (control bits 1
+    /// "Disable voltage" and 2 "Emergency stop", whose 1 is "Cancel …"; BU 0590 §4.1.2 Table 14
+    /// names them "OFF 2" and "OFF 3" at 0).
+    pub active_low: bool,
 }
 
 const fn def(
@@ -38,6 +42,20 @@ const fn def(
         when_0,
         when_1,
         priority,
+        active_low: false,
+    }
+}
+
+/// A row whose designation is the command its value 0 gives.
+const fn def_low(
+    name: &'static str,
+    when_0: &'static str,
+    when_1: &'static str,
+    priority: [Option<u8>; 2],
+) -> BitDef {
+    BitDef {
+        active_low: true,
+        ..def(name, when_0, when_1, priority)
     }
 }
 
@@ -51,13 +69,13 @@ pub const BITS: [BitDef; 16] = [
         "Set the frequency inverter to standby.",
         [Some(3), Some(5)],
     ),
-    def(
+    def_low(
         "Disable voltage",
         "Switch off the frequency inverter output voltage (the frequency inverter goes into the status \"Switch-on block\").",
         "Cancel \"Disable voltage\"",
         [Some(1), None],
     ),
-    def(
+    def_low(
         "Emergency stop",
         "Emergency stop with programmed emergency stop time. At f = 0 Hz voltage enable (the FI goes into \"Switch-on block\" status)",
         "Cancel operating condition \"Emergency stop\"",
@@ -143,12 +161,13 @@ pub(crate) fn bits(word: u16) -> Vec<u8> {
     (0..16).map(|n| u8::from(word & (1 << n) != 0)).collect()
 }
 
-/// The designations of the set bits of a word.
-pub(crate) fn set_names(word: u16, table: &[BitDef; 16]) -> Vec<&'static str> {
+/// The designations in effect in a word: each bit at 1, and each active-low bit
+/// ([`BitDef::active_low`]) at 0.
+pub(crate) fn active_names(word: u16, table: &[BitDef; 16]) -> Vec<&'static str> {
     table
         .iter()
         .enumerate()
-        .filter(|(n, _)| word & (1 << n) != 0)
+        .filter(|(n, d)| (word & (1 << n) != 0) != d.active_low)
         .map(|(_, d)| d.name)
         .collect()
 }
@@ -160,8 +179,9 @@ pub struct ControlFields {
     pub word: u16,
     /// Bits 0..15 as 0/1.
     pub bits: Vec<u8>,
-    /// Designations of the set bits (§6.1.2.1 "Designation" column).
-    pub set: Vec<&'static str>,
+    /// Designations in effect (§6.1.2.1 "Designation" column): the bits at 1, and "Disable
+    /// voltage" and "Emergency stop" when their bit is 0 (a 1 cancels them).
+    pub active: Vec<&'static str>,
     /// Control commands of the transition table (§6.1.2.3) the bits 0–7 form, highest priority
     /// first ("Shut down", "Enable operation", …; the acknowledge edge needs two words).
     pub commands: Vec<&'static str>,
@@ -242,7 +262,7 @@ impl ControlWord {
         ControlFields {
             word: self.0,
             bits: bits(self.0),
-            set: set_names(self.0, &BITS),
+            active: active_names(self.0, &BITS),
             priority: commands.first().map(|c| c.priority),
             commands: commands.iter().map(|c| c.name).collect(),
             parameter_set: self.parameter_set(),
@@ -262,10 +282,14 @@ impl fmt::Display for ControlWord {
         let c = self.fields();
         write!(
             f,
-            "control word {:04X}h ({:016b}b): {}; command {}; rotation {}; parameter set {}",
+            "control word {:04X}h ({:016b}b): in effect {}; command {}; rotation {}; parameter set {}",
             self.0,
             self.0,
-            c.set.join(", "),
+            if c.active.is_empty() {
+                "none".to_string()
+            } else {
+                c.active.join(", ")
+            },
             c.commands.first().copied().unwrap_or("none"),
             c.rotation,
             c.parameter_set
@@ -290,7 +314,8 @@ mod tests {
         assert!(c.valid() && !c.bit(0) && c.bit(1) && c.bit(2) && c.bit(3));
         assert_eq!(c.parameter_set(), 1);
         assert_eq!(c.fields().commands, ["Shut down"]);
-        assert!(c.describe().contains("Control data valid"));
+        assert!(c.describe().contains("in effect Enable operation"));
+        assert!(!c.describe().contains("Disable voltage"));
     }
 
     #[rstest]
@@ -309,6 +334,32 @@ mod tests {
         let f = ControlWord(word).fields();
         assert_eq!(f.commands, want);
         assert_eq!(f.priority, priority);
+    }
+
+    #[rstest]
+    // BU 0620 §6.1.2.1: bits 1 and 2 command "Disable voltage" / "Emergency stop" at 0, a 1
+    // cancels them; every other designation is in effect at 1.
+    #[case(0x047E, &["Enable operation", "Enable pulses", "Enable ramp", "Enable setpoint", "Control data valid"])]
+    #[case(0x0478, &["Disable voltage", "Emergency stop", "Enable operation", "Enable pulses", "Enable ramp", "Enable setpoint", "Control data valid"])]
+    #[case(0x047A, &["Emergency stop", "Enable operation", "Enable pulses", "Enable ramp", "Enable setpoint", "Control data valid"])]
+    #[case(0x047F, &["Ready for operation", "Enable operation", "Enable pulses", "Enable ramp", "Enable setpoint", "Control data valid"])]
+    #[case(0x0006, &[])]
+    fn active_low_bits_are_in_effect_at_0(#[case] word: u16, #[case] want: &[&str]) {
+        let c = ControlWord(word);
+        assert_eq!(c.fields().active, want);
+        let text = c.describe();
+        assert_eq!(
+            text.contains("Disable voltage"),
+            !c.bit(ControlWord::DISABLE_VOLTAGE),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn only_bits_1_and_2_are_active_low() {
+        let low: Vec<usize> = (0..16).filter(|&n| BITS[n].active_low).collect();
+        assert_eq!(low, [1, 2]);
+        assert!(BITS[1].when_1.starts_with("Cancel") && BITS[2].when_1.starts_with("Cancel"));
     }
 
     #[test]

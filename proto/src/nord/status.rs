@@ -8,7 +8,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-use super::control::{bits, set_names, BitDef};
+use super::control::{active_names, bits, BitDef};
 use super::state_machine::State;
 
 /// A status word.
@@ -21,6 +21,7 @@ const fn def(name: &'static str, when_0: &'static str, when_1: &'static str) -> 
         when_0,
         when_1,
         priority: [None, None],
+        active_low: false,
     }
 }
 
@@ -164,7 +165,7 @@ impl StatusWord {
         StatusFields {
             word: self.0,
             bits: bits(self.0),
-            set: set_names(self.0, &BITS),
+            set: active_names(self.0, &BITS),
             parameter_set: ((self.0 >> 14) & 3) as u8 + 1,
             state: state.map(State::name),
             letter: state.map(State::letter),
