@@ -17,7 +17,7 @@ impl Veth {
     /// strict mode it fails: a run must not pass by skipping).
     pub(crate) fn new(tag: &str) -> Option<Veth> {
         if let Err(e) = RawLink::open("lo", None) {
-            let what = format!("root for raw Ethernet ({e})");
+            let what = format!("root ({e})");
             skip::require_or_skip(false, &what, "raw Ethernet over a veth pair");
             return None;
         }
