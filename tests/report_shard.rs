@@ -1,8 +1,11 @@
 //! `harness run --shard K/N` and `harness merge`, end to end through the binary: a real suite
 //! subset run whole and as three shards; the merged reports equal the whole run's file by file,
-//! byte for byte, once what differs between any two runs is masked.
+//! byte for byte, once what differs between any two runs is masked. And snapshots accepted from
+//! the whole run hold for a filtered, a sharded and a shuffled run: a case's transcript is a
+//! function of the case alone, whatever ran before it.
 
 use regex::Regex;
+use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -53,16 +56,20 @@ cases:
       - write: { param: 856, target: interface, value: 5 }
 "#;
 
-/// `suites/bu0620` and the failing cases in `dir/suites`.
+/// [`SUITES`] in `dir/suites`, with the failing cases.
 fn suites(dir: &Path) -> PathBuf {
-    let from = Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites/bu0620");
-    let to = dir.join("suites/bu0620");
-    std::fs::create_dir_all(&to).unwrap();
-    for e in std::fs::read_dir(&from).unwrap() {
-        let p = e.unwrap().path();
-        std::fs::copy(&p, to.join(p.file_name().unwrap())).unwrap();
+    for name in SUITES {
+        let from = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../suites")
+            .join(name);
+        let to = dir.join("suites").join(name);
+        std::fs::create_dir_all(&to).unwrap();
+        for e in std::fs::read_dir(&from).unwrap() {
+            let p = e.unwrap().path();
+            std::fs::copy(&p, to.join(p.file_name().unwrap())).unwrap();
+        }
     }
-    std::fs::write(to.join("zz-failing.yaml"), FAILING).unwrap();
+    std::fs::write(dir.join("suites/bu0620/zz-failing.yaml"), FAILING).unwrap();
     dir.join("suites")
 }
 
@@ -106,14 +113,55 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// `harness run` of the selection in `suites` into `out`, with `extra` arguments; returns the
-/// exit code.
-fn run(suites: &Path, out: &Path, extra: &[&str]) -> i32 {
+/// `harness run` of the selection in `suites` into `out`, with `extra` arguments.
+fn run_output(suites: &Path, out: &Path, extra: &[&str]) -> Output {
     let mut args = vec!["run", "--suites", s(suites), "--out", s(out)];
     args.extend(SELECTION);
     args.extend(extra);
-    let o = harness(&args);
+    harness(&args)
+}
+
+/// [`run_output`]'s exit code.
+fn run(suites: &Path, out: &Path, extra: &[&str]) -> i32 {
+    let o = run_output(suites, out, extra);
     o.status.code().unwrap_or_else(|| panic!("{}", show(&o)))
+}
+
+/// `run.json` of the report folder `out`, parsed.
+fn run_json(out: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap()
+}
+
+/// Every case-run of a report's `run.json`: (profile, case id) → verdict.
+fn verdicts(json: &Value) -> BTreeMap<(String, String), String> {
+    json["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            let text = |k: &str| c[k].as_str().unwrap().to_string();
+            ((text("profile"), text("id")), text("verdict"))
+        })
+        .collect()
+}
+
+/// The profiles of [`SELECTION`].
+fn selected_profiles() -> Vec<&'static str> {
+    SELECTION.iter().skip(1).step_by(2).copied().collect()
+}
+
+/// Every selected profile passes cases that reach the device, so that the comparisons cover
+/// the exchanges of every binding.
+fn assert_every_binding_exchanged(json: &Value) {
+    for profile in selected_profiles() {
+        let passed = json["cases"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|c| c["profile"] == profile && c["kind"] == "device" && c["verdict"] == "pass")
+            .count();
+        assert!(passed > 20, "{profile}: {passed} device cases passed");
+    }
 }
 
 /// Every file below `dir`, by relative path.
@@ -195,6 +243,7 @@ fn three_shards_merge_into_the_unsharded_reports() {
     let whole = dir.0.join("whole");
     let code = run(&suites, &whole, &[]);
     assert_eq!(code, 1, "the failing cases fail");
+    assert_every_binding_exchanged(&run_json(&whole));
     let shards: Vec<PathBuf> = (1..=3).map(|k| dir.0.join(format!("shard{k}"))).collect();
     let mut counts = Vec::new();
     for (k, shard) in (1..).zip(&shards) {
@@ -203,9 +252,7 @@ fn three_shards_merge_into_the_unsharded_reports() {
             [0, 1].contains(&run(&suites, shard, &["--shard", &spec])),
             "shard {spec}"
         );
-        let run_json = std::fs::read_to_string(shard.join("run.json")).unwrap();
-        let seqs: Vec<usize> = serde_json::from_str::<serde_json::Value>(&run_json).unwrap()
-            ["cases"]
+        let seqs: Vec<usize> = run_json(shard)["cases"]
             .as_array()
             .unwrap()
             .iter()
@@ -264,8 +311,13 @@ fn merge_refuses_an_incomplete_or_doubled_set_and_shard_values_are_checked() {
     let dir = scratch("refuse");
     let suites = suites(&dir.0);
     let shards: Vec<PathBuf> = (1..=3).map(|k| dir.0.join(format!("shard{k}"))).collect();
+    // A few case-runs are shards enough for the refusals.
     for (k, shard) in (1..).zip(&shards) {
-        run(&suites, shard, &["--shard", &format!("{k}/3")]);
+        run(
+            &suites,
+            shard,
+            &["--filter", "p856", "--shard", &format!("{k}/3")],
+        );
     }
     let out = dir.0.join("merged");
     let o = harness(&["merge", "--out", s(&out), s(&shards[0]), s(&shards[1])]);
@@ -308,5 +360,58 @@ fn merge_refuses_an_incomplete_or_doubled_set_and_shard_values_are_checked() {
         let o = harness(&["run", "--out", s(&out), "--shard", bad]);
         assert_eq!(o.status.code(), Some(2), "--shard {bad}: {}", show(&o));
         assert!(show(&o).contains("1 ≤ K ≤ N"), "{}", show(&o));
+    }
+}
+
+/// Snapshots accepted from the whole run, then runs of part of it in another order: the cases a
+/// `--filter` selects (each run after fewer cases than in the whole run), one shard, and every
+/// case shuffled. No transcript changed, so every case has the whole run's verdict (a changed
+/// transcript turns a passing case into a failure).
+#[test]
+fn snapshots_of_the_whole_run_hold_for_a_filtered_sharded_or_shuffled_run() {
+    let dir = scratch("snapshots");
+    let suites = suites(&dir.0);
+    let snapshots = dir.0.join("snapshots");
+    let whole = dir.0.join("whole");
+    let accept = ["--accept", "--snapshot-dir", s(&snapshots)];
+    assert_eq!(run(&suites, &whole, &accept), 1, "the failing cases fail");
+    let want = verdicts(&run_json(&whole));
+    assert_every_binding_exchanged(&run_json(&whole));
+
+    let compare = ["--snapshots", "--snapshot-dir", s(&snapshots)];
+    // drive-switching: process data, after other process-data cases in the whole run (an
+    // EtherNet/IP I/O connection, a PROFINET AR, EtherCAT and POWERLINK PDOs).
+    let parts: [&[&str]; 3] = [
+        &["--filter", "drive-switching"],
+        &["--shard", "2/3"],
+        &["--shuffle", "7"],
+    ];
+    for (n, part) in parts.into_iter().enumerate() {
+        let out = dir.0.join(format!("part{n}"));
+        let mut args = compare.to_vec();
+        args.extend(part);
+        let o = run_output(&suites, &out, &args);
+        let text = show(&o);
+        assert!(
+            text.contains(" 0 changed,"),
+            "{part:?}: no transcript changed:\n{text}"
+        );
+        let got = verdicts(&run_json(&out));
+        assert!(got.len() > 20, "{part:?}: {} case-runs", got.len());
+        for ((profile, id), verdict) in &got {
+            assert_eq!(
+                Some(verdict),
+                want.get(&(profile.clone(), id.clone())),
+                "{part:?}: {profile} {id}"
+            );
+        }
+        if part[0] == "--filter" {
+            for profile in selected_profiles() {
+                assert!(
+                    got.iter().any(|((p, _), v)| p == profile && v == "pass"),
+                    "{part:?} passes cases under {profile}: {got:?}"
+                );
+            }
+        }
     }
 }
