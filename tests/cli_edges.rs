@@ -152,7 +152,7 @@ fn suite_files_with_upper_case_extensions_load() {
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(0), "{stdout}{}", stderr(&o));
     assert!(
-        stdout.contains("2 cases under 1 profiles: 2 pass"),
+        stdout.contains("2 cases under 1 profile: 2 pass"),
         "{stdout}"
     );
     let _ = std::fs::remove_dir_all(&dir);

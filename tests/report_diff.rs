@@ -153,7 +153,7 @@ fn a_firmware_change_flips_known_cases_and_the_diff_says_so() {
     );
     // Unchanged: the P171 case under tu3-pnt, each profile's not-applicable cases.
     assert!(
-        stdout.contains("verdict changes: 1 (regressions: 1), transcript changes: 2, new: 2, vanished: 2, unchanged: 4"),
+        stdout.contains("verdict changes: 1 (regressions: 1), new fails or errors: 1, transcript changes: 2, new: 2, vanished: 2, unchanged: 4"),
         "{stdout}"
     );
     // The flipped case, old → new, with both messages.
@@ -181,6 +181,11 @@ fn a_firmware_change_flips_known_cases_and_the_diff_says_so() {
     }
     assert!(
         stdout.contains("New cases (only in the new run):\n  sk550p bu0620/firmware/p878-manufacturer-2: pass\n"),
+        "{stdout}"
+    );
+    // What decided the exit code.
+    assert!(
+        stdout.contains("\ngate (regressions and new fails or errors): 1 case(s)\n  sk550p bu0620/firmware/p856-factory-bootp: pass → fail\n"),
         "{stdout}"
     );
     assert!(
@@ -233,7 +238,7 @@ fn no_change_exits_0_and_an_unreadable_run_is_a_usage_error_naming_the_file() {
     let (stdout, stderr) = text(&o);
     assert_eq!(o.status.code(), Some(0), "{stdout}{stderr}");
     assert!(
-        stdout.contains("verdict changes: 0 (regressions: 0), transcript changes: 0, new: 0, vanished: 0, unchanged: 8"),
+        stdout.contains("verdict changes: 0 (regressions: 0), new fails or errors: 0, transcript changes: 0, new: 0, vanished: 0, unchanged: 8"),
         "{stdout}"
     );
 
@@ -251,7 +256,9 @@ fn no_change_exits_0_and_an_unreadable_run_is_a_usage_error_naming_the_file() {
     let o = harness(&["diff", s(&old), s(&old)], None);
     assert_eq!(o.status.code(), Some(2));
     assert!(
-        text(&o).1.contains("transcripts.txt#sk550p/bu0620/firmware/p856-a-mode"),
+        text(&o)
+            .1
+            .contains("transcripts.txt#sk550p/bu0620/firmware/p856-a-mode"),
         "{:?}",
         text(&o)
     );
@@ -298,4 +305,130 @@ fn snapshots_report_the_same_change_the_same_way() {
         s(&snaps.join("sk550p/bu0620__firmware__p856-a-mode.snap"))
     );
     assert!(run_json.contains(&want), "{want}\n---\n{run_json}");
+}
+
+/// The checked-in suites, as the README's demo runs them.
+fn checked_in_suites() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites")
+}
+
+/// The README's firmware comparison on the checked-in suites, cut to the P85x cases of the
+/// SK 550P over EtherNet/IP: the next firmware's P856 factory value (2, DHCP) fails a device
+/// case, and `harness diff` exits 1 on it under either rule.
+#[test]
+fn the_readme_firmware_demo_fails_a_device_case_and_the_diff_exits_1() {
+    let dir = scratch("readme-demo");
+    let suites = checked_in_suites();
+    let (old, new) = (dir.0.join("release"), dir.0.join("next"));
+    let run = |out: &Path, filter: &str, fw| {
+        harness(
+            &[
+                "run",
+                "--suites",
+                s(&suites),
+                "--profile",
+                "sk550p@enip",
+                "--filter",
+                filter,
+                "--out",
+                s(out),
+                "-q",
+            ],
+            fw,
+        )
+    };
+    let case = "bu0620/params-catalogue/p856-factory-and-range";
+    let o = run(&old, "params-catalogue/p85", None);
+    assert_eq!(o.status.code(), Some(0), "{:?}", text(&o));
+    let o = run(&new, "params-catalogue/p85", Some("next"));
+    let (stdout, _) = text(&o);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "the next firmware fails: {stdout}"
+    );
+    // -q names the failed case, then the totals.
+    assert!(
+        stdout.starts_with(&format!(
+            "FAIL  [sk550p@enip] {case}: value: expected 1, got 2\n"
+        )),
+        "{stdout}"
+    );
+    assert_eq!(stdout.lines().count(), 2, "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(new.join("run.json")).unwrap()).unwrap();
+    let failed: Vec<(&str, &str)> = json["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["verdict"] == "fail")
+        .map(|c| (c["id"].as_str().unwrap(), c["kind"].as_str().unwrap()))
+        .collect();
+    assert_eq!(
+        failed,
+        [(case, "device")],
+        "a device case fails, no model case"
+    );
+
+    for rule in [None, Some("--regressions-only")] {
+        let mut args = vec!["diff", s(&old), s(&new)];
+        args.extend(rule);
+        let o = harness(&args, None);
+        let (stdout, stderr) = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{rule:?}: {stdout}{stderr}");
+        assert!(
+            stdout.contains(&format!("  sk550p@enip {case}: pass → fail (regression)\n")),
+            "{stdout}"
+        );
+    }
+}
+
+/// The two rules of `harness diff`: a case the old run did not select that fails in the new
+/// one gates by default, not with `--regressions-only`.
+#[test]
+fn a_new_case_that_fails_gates_unless_regressions_only() {
+    let dir = scratch("new-fail");
+    let suites = checked_in_suites();
+    let (old, new) = (dir.0.join("old"), dir.0.join("new"));
+    let run = |out: &Path, filter: &str, fw| {
+        harness(
+            &[
+                "run",
+                "--suites",
+                s(&suites),
+                "--profile",
+                "sk550p@enip",
+                "--filter",
+                filter,
+                "--out",
+                s(out),
+                "-q",
+            ],
+            fw,
+        )
+    };
+    // The old run has P853's case only; the new one P856's too, which fails on the next
+    // firmware.
+    let o = run(&old, "params-catalogue/p853", None);
+    assert_eq!(o.status.code(), Some(0), "{:?}", text(&o));
+    let o = run(&new, "params-catalogue/p85", Some("next"));
+    assert_eq!(o.status.code(), Some(1), "{:?}", text(&o));
+    let o = harness(&["diff", s(&old), s(&new)], None);
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{stdout}{stderr}");
+    assert!(
+        stdout.contains("New cases (only in the new run):\n  sk550p@enip bu0620/params-catalogue/p856-factory-and-range: fail (new failure) (value: expected 1, got 2)\n"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("gate (regressions and new fails or errors): 1 case(s)\n  sk550p@enip bu0620/params-catalogue/p856-factory-and-range: new → fail\n"),
+        "{stdout}"
+    );
+    let o = harness(&["diff", s(&old), s(&new), "--regressions-only"], None);
+    let (stdout, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{stdout}{stderr}");
+    assert!(
+        stdout.contains("gate (regressions only): 0 case(s)\n"),
+        "{stdout}"
+    );
 }

@@ -151,7 +151,8 @@ struct RunArgs {
     /// How the DUT's SDO travel, the same as the URL's `?sdo=` (POWERLINK: `asnd`, `udp`).
     #[arg(long, requires = "dut")]
     sdo: Option<String>,
-    /// Say nothing while running, and only the totals at the end.
+    /// Say nothing while running; at the end, a line per suite file that did not load and per
+    /// failed or errored case, then the totals.
     #[arg(short, long, conflicts_with = "verbose")]
     quiet: bool,
     /// A line per case-run with its verdict, on stderr.
@@ -461,7 +462,9 @@ fn run(a: RunArgs) -> Result<i32, String> {
     // What the manuals state and the suites assert (an inventory that does not load is a
     // load error, as a suite file's is).
     match crate::suite::inventory::load(&dir) {
-        Ok(inventories) => run.statements = crate::suite::inventory::coverage(&inventories),
+        Ok(inventories) => {
+            run.statements = crate::suite::inventory::coverage(&inventories, &loaded)
+        }
         Err(e) => run.load_errors.push(e.to_string()),
     }
     // Every link is closed by now, its FIN exchange recorded.
@@ -482,8 +485,8 @@ fn run(a: RunArgs) -> Result<i32, String> {
     let snaps = report::apply_snapshots(&mut run, &mode).map_err(|e| e.to_string())?;
     let written = report::write_all(&run, &a.out, a.transcripts).map_err(|e| e.to_string())?;
     if verbosity == Verbosity::Quiet {
-        // The totals: the summary's last line.
-        outln!("{}", summary.lines().last().unwrap_or_default());
+        // A line per load error and per failed or errored case, then the totals.
+        out!("{}", report::quiet(&run));
     } else {
         out!("{summary}");
         if !matches!(mode, SnapshotMode::Off) {

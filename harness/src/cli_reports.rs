@@ -19,10 +19,16 @@ pub(crate) struct DiffArgs {
     /// Also write `diff.md` and `diff.html` (one self-contained file) into this folder.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Exit 1 only for a regression (passed in OLD; fails, errs or is inconclusive in NEW),
+    /// not for a new fail or error of a case that did not pass before or is new.
+    #[arg(long)]
+    regressions_only: bool,
 }
 
 /// Prints (and writes) the comparison; exit 1 when a case regressed (passed in OLD, fails,
-/// errs or is inconclusive in NEW), 0 otherwise.
+/// errs or is inconclusive in NEW) or, unless `--regressions-only`, when NEW has a fail or an
+/// error OLD did not have (a new case, not applicable → fail, inconclusive → error); 0
+/// otherwise. The last lines name the cases that decided.
 pub(crate) fn diff(a: DiffArgs) -> Result<i32, String> {
     let old = report::read(&a.old).map_err(|e| e.to_string())?;
     let new = report::read(&a.new).map_err(|e| e.to_string())?;
@@ -32,17 +38,30 @@ pub(crate) fn diff(a: DiffArgs) -> Result<i32, String> {
         &a.new.display().to_string(),
         &new,
     );
+    let (gate, rule) = if a.regressions_only {
+        (report::Gate::RegressionsOnly, "regressions only")
+    } else {
+        (
+            report::Gate::NewFailures,
+            "regressions and new fails or errors",
+        )
+    };
+    let gated = d.gated(gate);
     let mut out = std::io::stdout().lock();
     // A closed pipe (`| head`) ends the output, not the program.
     let _ = out.write_all(report::diff_text(&d).as_bytes());
+    let _ = writeln!(out, "\ngate ({rule}): {} case(s)", gated.len());
+    for g in &gated {
+        let _ = writeln!(out, "  {g}");
+    }
     if let Some(dir) = &a.out {
         let [md, html] = report::write_diff(&d, dir).map_err(|e| e.to_string())?;
         let _ = writeln!(out, "\ndiff: {}, {}", md.display(), html.display());
     }
-    Ok(if d.regressions().next().is_some() {
-        EXIT_FAIL
-    } else {
+    Ok(if gated.is_empty() {
         EXIT_PASS
+    } else {
+        EXIT_FAIL
     })
 }
 
@@ -94,14 +113,17 @@ pub(crate) struct CoverageArgs {
     /// Suites folder (its `inventory/` holds the statement inventories).
     #[arg(long)]
     suites: Option<PathBuf>,
-    /// Also a problem: a section whose asserted share of its testable statements is below
-    /// PERCENT (the release gate is 90).
+    /// Also a problem: a section whose share of testable statements asserted by any case (on
+    /// the device or by the model) is below PERCENT (the release gate is 90); a section with
+    /// nothing testable has no share and passes.
     #[arg(long, value_name = "PERCENT", value_parser = clap::value_parser!(u8).range(0..=100))]
     min: Option<u8>,
 }
 
-/// Prints the statements per manual and section (statements, asserted, pending, untestable,
-/// open, asserted of the testable), the errata per manual by the check that found them, then
+/// Prints the statements per manual and section (statements, asserted on the device, by
+/// reference-model cases only, pending, untestable, open; the shares of the testable asserted
+/// on the device and by any case, `—` where nothing is testable), the errata per manual by the
+/// check that found them, then
 /// what keeps the inventories honest: a case id that no
 /// suite has, a case of an inventoried manual that no statement names, an asserted count below
 /// its floor. Exit 1 when any of those, 2 when an inventory or suite does not load.
@@ -121,7 +143,7 @@ pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
     }
     let floors = inventory::floors(&dir).map_err(|e| e.to_string())?;
     let mut out = std::io::stdout().lock();
-    let sections = inventory::coverage(&inventories);
+    let sections = inventory::coverage(&inventories, &loaded);
     let _ = out.write_all(report::statements_table(&sections).as_bytes());
     let _ = writeln!(out);
     let _ = out.write_all(report::errata_table(&loaded.errata).as_bytes());
@@ -130,16 +152,16 @@ pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
         problems.extend(
             sections
                 .iter()
-                .filter(|s| s.percent() < f64::from(min))
-                .map(|s| {
+                .filter_map(|s| Some((s, s.percent().filter(|p| *p < f64::from(min))?)))
+                .map(|(s, p)| {
                     format!(
-                        "{} {} §{}: {} of {} testable statements asserted ({:.0} %), below {min} %",
+                        "{} {} §{}: {} of {} testable statements asserted ({p:.0} %; {} on the device), below {min} %",
                         s.doc,
                         s.edition,
                         s.section,
+                        s.asserted + s.model_only,
+                        s.testable(),
                         s.asserted,
-                        s.asserted + s.open(),
-                        s.percent()
                     )
                 }),
         );

@@ -384,7 +384,7 @@ pub struct StatementCoverage {
     pub section: String,
     /// Statements listed.
     pub statements: usize,
-    /// Asserted by a case.
+    /// Asserted on the device: a device case (one that reaches the DUT) checks it.
     pub asserted: usize,
     /// Waiting for a bus binding.
     pub pending: usize,
@@ -393,19 +393,35 @@ pub struct StatementCoverage {
 }
 
 impl StatementCoverage {
-    /// Testable statements (neither pending nor untestable) not asserted yet.
+    /// Testable statements (neither pending nor untestable) no case asserts yet.
     pub fn open(&self) -> usize {
         self.statements
-            .saturating_sub(self.asserted + self.pending + self.untestable)
+            .saturating_sub(self.asserted + self.model_only + self.pending + self.untestable)
     }
 
-    /// Asserted of the testable ones, in per cent (100 when none is testable here).
-    pub fn percent(&self) -> f64 {
-        let testable = self.asserted + self.open();
-        if testable == 0 {
-            100.0
-        } else {
-            100.0 * self.asserted as f64 / testable as f64
+    /// Asserted by reference-model cases only (`compute` steps, which never reach the DUT).
+    #[serde(default)]
+    pub model_only: usize,
+    /// Testable statements: asserted on the device, by the model only, or open.
+    pub fn testable(&self) -> usize {
+        self.asserted + self.model_only + self.open()
+    }
+
+    /// Asserted on the device of the testable ones, in per cent; none when none is testable.
+    pub fn device_percent(&self) -> Option<f64> {
+        self.share(self.asserted)
+    }
+
+    /// Asserted by any case (on the device or by the model) of the testable ones, in per
+    /// cent; none when none is testable.
+    pub fn percent(&self) -> Option<f64> {
+        self.share(self.asserted + self.model_only)
+    }
+
+    fn share(&self, n: usize) -> Option<f64> {
+        match self.testable() {
+            0 => None,
+            t => Some(100.0 * n as f64 / t as f64),
         }
     }
 
@@ -426,6 +442,7 @@ pub struct RunResult {
     /// Who ran what, when, with which harness and suites, against which device identity.
     #[serde(default)]
     pub meta: RunMeta,
+        self.model_only += other.model_only;
     /// Profiles run, in order.
     pub profiles: Vec<String>,
     /// All case results.

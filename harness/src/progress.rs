@@ -1,7 +1,9 @@
 //! How a run shows that it is moving: a progress bar with the current profile and case on a
 //! terminal, a plain line now and then when stderr is a file or a CI log, a line per case with
-//! `-v`, nothing with `-q`. The runner reports each case-run as it starts and ends; the
-//! reports proper are written from the finished run and do not depend on this.
+//! `-v`, nothing with `-q` (whose console after the run, `report::quiet`, is a line per load
+//! error and per failed or errored case, then the totals). The runner reports each case-run as
+//! it starts and ends; the reports proper are written from the finished run and do not depend
+//! on this.
 
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
@@ -13,7 +15,7 @@ use crate::outcome::{CaseResult, Verdict};
 /// How much the run says while it runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(crate) enum Verbosity {
-    /// Nothing but the final totals (`-q`).
+    /// No progress; after the run, the failures and the totals only (`-q`).
     Quiet,
     /// A progress bar on a terminal, a line every [`PLAIN_EVERY`] otherwise.
     #[default]

@@ -8,9 +8,14 @@
 //! only the new run has and those it lost.
 //!
 //! A **regression** is a case that passed in the old run and, in the new one, still runs and
-//! fails, errs or is inconclusive. A passing case that became not applicable or vanished is
-//! listed as coverage lost but is no regression: that comes from a changed selection, suite or
-//! profile, not from the device answering differently.
+//! fails, errs or is inconclusive. A **new failure** is a fail or an error of the new run that
+//! the old run did not have: a case only the new run has that fails or errs, or one whose
+//! verdict became fail or error from anything else (not applicable → fail included). A passing
+//! case that became not applicable or vanished is listed as coverage lost but is neither: that
+//! comes from a changed selection, suite or profile, not from the device answering differently.
+//!
+//! [`Gate`] says which of them make `harness diff` exit 1: both by default (a release gate that
+//! a new case failing on the new firmware must stop), regressions only on request.
 
 use std::collections::BTreeMap;
 
@@ -224,6 +229,20 @@ pub(crate) fn compare_transcripts(old: &str, new: &str) -> Option<TranscriptDiff
     Some(TranscriptDiff { hunks })
 }
 
+/// Fail or error: what gates a release.
+fn failing(v: Verdict) -> bool {
+    matches!(v, Verdict::Fail | Verdict::Error)
+}
+
+/// Which differences make a comparison fail (`harness diff` exit 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Gate {
+    /// Regressions and new failures (the module documentation says what each is).
+    NewFailures,
+    /// Regressions only (`--regressions-only`): passed → fail, error or inconclusive.
+    RegressionsOnly,
+}
+
 /// A case as one side of a comparison has it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct CaseSide {
@@ -258,6 +277,11 @@ impl CaseChange {
                 self.new.verdict,
                 Verdict::Fail | Verdict::Error | Verdict::Inconclusive
             )
+    }
+
+    /// Fails or errs now and did not end so before.
+    pub(crate) fn new_failure(&self) -> bool {
+        failing(self.new.verdict) && self.old.verdict != self.new.verdict
     }
 
     /// Passed before and does not apply now.
@@ -326,8 +350,55 @@ impl RunDiff {
         self.changed.iter().filter(|c| c.regressed())
     }
 
-    /// One line: `verdict changes: 2 (regressions: 1), transcript changes: 3, new: 1,
-    /// vanished: 1, unchanged: 40`, and the coverage lost when there is some.
+    /// The new failures (see the module documentation): `profile id: old → new`, `new` for a
+    /// case only the new run has, in the new run's order of changes, then of new cases.
+    pub(crate) fn new_failures(&self) -> Vec<String> {
+        let changed = self
+            .changed
+            .iter()
+            .filter(|c| c.new_failure())
+            .map(|c| (c, c.old.verdict.name()));
+        let added = self
+            .added
+            .iter()
+            .filter(|c| failing(c.side.verdict))
+            .map(|c| (&c.profile, &c.id, "new", c.side.verdict));
+        changed
+            .map(|(c, old)| (&c.profile, &c.id, old, c.new.verdict))
+            .chain(added)
+            .map(|(profile, id, old, new)| format!("{profile} {id}: {old} → {}", new.name()))
+            .collect()
+    }
+
+    /// The cases that make the comparison fail under `gate`, one line each, regressions first.
+    pub(crate) fn gated(&self, gate: Gate) -> Vec<String> {
+        let mut out: Vec<String> = self
+            .regressions()
+            .map(|c| {
+                format!(
+                    "{} {}: {} → {}",
+                    c.profile,
+                    c.id,
+                    c.old.verdict.name(),
+                    c.new.verdict.name()
+                )
+            })
+            .collect();
+        if gate == Gate::NewFailures {
+            // pass → fail is both: listed once.
+            let seen: std::collections::BTreeSet<String> = out.iter().cloned().collect();
+            out.extend(
+                self.new_failures()
+                    .into_iter()
+                    .filter(|f| !seen.contains(f)),
+            );
+        }
+        out
+    }
+
+    /// One line: `verdict changes: 2 (regressions: 1), new fails or errors: 1, transcript
+    /// changes: 3, new: 1, vanished: 1, unchanged: 40`, and the coverage lost when there is
+    /// some.
     pub(crate) fn headline(&self) -> String {
         let verdicts = self
             .changed
@@ -340,6 +411,7 @@ impl RunDiff {
             .filter(|c| c.transcript.is_some())
             .count();
         let regressions = self.regressions().count();
+        let failures = self.new_failures().len();
         let lost = self.changed.iter().filter(|c| c.lost_coverage()).count()
             + self
                 .vanished
@@ -347,7 +419,7 @@ impl RunDiff {
                 .filter(|c| c.side.verdict == Verdict::Pass)
                 .count();
         let mut s = format!(
-            "verdict changes: {verdicts} (regressions: {regressions}), transcript changes: {transcripts}, new: {}, vanished: {}, unchanged: {}",
+            "verdict changes: {verdicts} (regressions: {regressions}), new fails or errors: {failures}, transcript changes: {transcripts}, new: {}, vanished: {}, unchanged: {}",
             self.added.len(),
             self.vanished.len(),
             self.unchanged
@@ -587,10 +659,73 @@ mod tests {
         assert_eq!(
             d.headline(),
             format!(
-                "verdict changes: 2 (regressions: 1), transcript changes: 2, new: 1, vanished: 1, unchanged: {}",
+                "verdict changes: 2 (regressions: 1), new fails or errors: 1, transcript changes: 2, new: 1, vanished: 1, unchanged: {}",
                 old.cases.len() - 3
             )
         );
+        let gated = ["sk550p bu0620/pkw-telegrams/p102-write: pass → fail"];
+        assert_eq!(d.gated(Gate::NewFailures), gated);
+        assert_eq!(d.gated(Gate::RegressionsOnly), gated);
+    }
+
+    #[test]
+    fn a_new_fail_or_error_gates_by_default_and_only_a_regression_gates_the_narrow_rule() {
+        let old = sample_run();
+        let verdicts: Vec<(&str, &str, Verdict)> = old
+            .cases
+            .iter()
+            .map(|c| (c.profile.as_str(), c.id.as_str(), c.verdict))
+            .collect();
+        // The fixture: sk550p pass, fail, model pass; tu3-eip not applicable, error,
+        // inconclusive.
+        assert_eq!(
+            verdicts.iter().map(|v| v.2).collect::<Vec<_>>(),
+            [
+                Verdict::Pass,
+                Verdict::Fail,
+                Verdict::NotApplicable,
+                Verdict::Error,
+                Verdict::Inconclusive,
+                Verdict::Pass
+            ],
+            "{verdicts:?}"
+        );
+        let mut new = sample_run();
+        // Not applicable → fail, inconclusive → error, the fail stays a fail, and a case
+        // only the new run has errs.
+        new.cases[2].verdict = Verdict::Fail;
+        new.cases[4].verdict = Verdict::Error;
+        let mut added = sample_run().cases.remove(3);
+        added.id = "bu0620/new/case".into();
+        new.cases.push(added);
+        let d = compare_runs("old", &old, "new", &new);
+        assert_eq!(d.regressions().count(), 0);
+        let want = [
+            "tu3-eip bu0620/addressing/coe-p102: not_applicable → fail",
+            "tu3-eip bu2100/cip/identity: inconclusive → error",
+            "tu3-eip bu0620/new/case: new → error",
+        ];
+        assert_eq!(d.new_failures(), want);
+        assert_eq!(d.gated(Gate::NewFailures), want);
+        assert!(d.gated(Gate::RegressionsOnly).is_empty());
+        assert!(
+            d.headline()
+                .contains("(regressions: 0), new fails or errors: 3,"),
+            "{}",
+            d.headline()
+        );
+        // A pass → inconclusive is a regression under both rules, and no new fail.
+        let mut new = sample_run();
+        new.cases[0].verdict = Verdict::Inconclusive;
+        let d = compare_runs("old", &old, "new", &new);
+        assert!(d.new_failures().is_empty());
+        let regression = ["sk550p bu0620/pkw-telegrams/p102-write: pass → inconclusive"];
+        assert_eq!(d.gated(Gate::NewFailures), regression);
+        assert_eq!(d.gated(Gate::RegressionsOnly), regression);
+        // The same run twice gates nothing.
+        assert!(compare_runs("old", &old, "new", &old)
+            .gated(Gate::NewFailures)
+            .is_empty());
     }
 
     #[test]

@@ -75,10 +75,27 @@ fn verdict_change(c: &CaseChange) -> String {
     let mut s = format!("{} → {}", c.old.verdict.name(), c.new.verdict.name());
     if c.regressed() {
         s.push_str(" (regression)");
+    } else if c.new_failure() {
+        s.push_str(" (new failure)");
     } else if c.lost_coverage() {
         s.push_str(" (coverage lost)");
     }
     s
+}
+
+/// A change that gates under the default rule: a regression or a new failure.
+fn gates(c: &CaseChange) -> bool {
+    c.regressed() || c.new_failure()
+}
+
+/// A lone case's verdict, marked when it is a new failure (a new case that fails or errs).
+fn lone_verdict(c: &LoneCase, added: bool) -> String {
+    let v = c.side.verdict.name();
+    if added && matches!(c.side.verdict, Verdict::Fail | Verdict::Error) {
+        format!("{v} (new failure)")
+    } else {
+        v.to_string()
+    }
 }
 
 fn verdicts_changed(d: &RunDiff) -> impl Iterator<Item = &CaseChange> {
@@ -91,10 +108,11 @@ fn transcripts_changed(d: &RunDiff) -> impl Iterator<Item = (&CaseChange, &[Hunk
         .filter_map(|c| c.transcript.as_ref().map(|t| (c, t.hunks.as_slice())))
 }
 
-fn lone_sections(d: &RunDiff) -> [(&'static str, &[LoneCase]); 2] {
+/// The new and the vanished cases, each with its title and whether it is the new run's.
+fn lone_sections(d: &RunDiff) -> [(&'static str, &[LoneCase], bool); 2] {
     [
-        ("New cases (only in the new run)", &d.added),
-        ("Vanished cases (only in the old run)", &d.vanished),
+        ("New cases (only in the new run)", &d.added, true),
+        ("Vanished cases (only in the old run)", &d.vanished, false),
     ]
 }
 
@@ -142,7 +160,7 @@ pub(crate) fn text(d: &RunDiff) -> String {
             }
         }
     }
-    for (title, cases) in lone_sections(d) {
+    for (title, cases, added) in lone_sections(d) {
         if !cases.is_empty() {
             let _ = writeln!(s, "\n{title}:");
         }
@@ -152,7 +170,7 @@ pub(crate) fn text(d: &RunDiff) -> String {
                 "  {} {}: {}{}",
                 c.profile,
                 c.id,
-                c.side.verdict.name(),
+                lone_verdict(c, added),
                 if c.side.message.is_empty() {
                     String::new()
                 } else {
@@ -205,7 +223,7 @@ pub(crate) fn markdown(d: &RunDiff) -> String {
     }
     for c in changes {
         let v = verdict_change(c);
-        let v = if c.regressed() { format!("**{v}**") } else { v };
+        let v = if gates(c) { format!("**{v}**") } else { v };
         let _ = writeln!(
             s,
             "| {} | `{}` | {} | {} | {} |",
@@ -252,7 +270,7 @@ pub(crate) fn markdown(d: &RunDiff) -> String {
             s.push('\n');
         }
     }
-    for (title, cases) in lone_sections(d) {
+    for (title, cases, added) in lone_sections(d) {
         if cases.is_empty() {
             continue;
         }
@@ -266,7 +284,7 @@ pub(crate) fn markdown(d: &RunDiff) -> String {
                 "| {} | `{}` | {} | {} |",
                 md(&c.profile),
                 md(&c.id),
-                c.side.verdict.name(),
+                lone_verdict(c, added),
                 md(&c.side.message)
             );
         }
@@ -302,7 +320,7 @@ pub(crate) fn html(d: &RunDiff) -> String {
     if changes.peek().is_some() {
         s.push_str("<h2>Verdict changes</h2>\n<table><tr><th>profile</th><th>case</th><th>verdict</th><th>old message</th><th>new message</th></tr>\n");
         for c in changes {
-            let class = if c.regressed() {
+            let class = if gates(c) {
                 " class=\"regression\""
             } else {
                 ""
@@ -360,7 +378,7 @@ pub(crate) fn html(d: &RunDiff) -> String {
             s.push_str("</table>\n");
         }
     }
-    for (title, cases) in lone_sections(d) {
+    for (title, cases, added) in lone_sections(d) {
         if cases.is_empty() {
             continue;
         }
@@ -370,12 +388,18 @@ pub(crate) fn html(d: &RunDiff) -> String {
             esc(title)
         );
         for c in cases {
+            let v = lone_verdict(c, added);
+            let class = if v.ends_with("(new failure)") {
+                " class=\"regression\""
+            } else {
+                ""
+            };
             let _ = writeln!(
                 s,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                "<tr><td>{}</td><td>{}</td><td{class}>{}</td><td>{}</td></tr>",
                 esc(&c.profile),
                 esc(&c.id),
-                c.side.verdict.name(),
+                v,
                 esc(&c.side.message)
             );
         }
@@ -402,7 +426,48 @@ mod tests {
         c.message = "pwe: expected 250, got <251> | \"x\"".into();
         c.title = "<script>alert(1)</script>".into();
         new.cases.remove(4);
+        // Not applicable → fail: a new failure, no regression.
+        new.cases[2].verdict = Verdict::Fail;
+        new.cases[2].message = "now it applies and fails".into();
+        // A case only the new run has, and it errs.
+        let mut added = sample_run().cases.remove(3);
+        added.id = "bu0620/new/errs".into();
+        new.cases.push(added);
         compare_runs("old/", &old, "new/", &new)
+    }
+
+    #[test]
+    fn new_failures_are_marked_in_all_three() {
+        let d = diff();
+        let t = text(&d);
+        assert!(
+            t.contains(
+                "  tu3-eip bu0620/addressing/coe-p102: not_applicable → fail (new failure)\n"
+            ),
+            "{t}"
+        );
+        assert!(
+            t.contains("New cases (only in the new run):\n  tu3-eip bu0620/new/errs: error (new failure) (no answer"),
+            "{t}"
+        );
+        let m = markdown(&d);
+        assert!(
+            m.contains("| tu3-eip | `bu0620/addressing/coe-p102` | **not_applicable → fail (new failure)** |"),
+            "{m}"
+        );
+        assert!(
+            m.contains("| tu3-eip | `bu0620/new/errs` | error (new failure) |"),
+            "{m}"
+        );
+        let h = html(&d);
+        assert!(
+            h.contains("<td class=\"regression\">not_applicable → fail (new failure)</td>"),
+            "{h}"
+        );
+        assert!(
+            h.contains("<td>bu0620/new/errs</td><td class=\"regression\">error (new failure)</td>"),
+            "{h}"
+        );
     }
 
     #[test]
@@ -429,7 +494,6 @@ mod tests {
             t.contains("Vanished cases (only in the old run):\n  tu3-eip bu2100/cip/identity: inconclusive (setup step 1 failed: no connection)\n"),
             "{t}"
         );
-        assert!(!t.contains("New cases"), "{t}");
     }
 
     #[test]

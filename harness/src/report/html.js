@@ -42,7 +42,9 @@
       tr.hidden = !(verdictMatches(fv, function (v) { return Number(tr.dataset[v]); }) &&
         (fm === "" || tr.dataset.doc === fm));
     });
-    all("#errata tbody tr").forEach(function (tr) { tr.hidden = !(fm === "" || tr.dataset.doc === fm); });
+    all("#errata tbody tr, #statements tbody tr, #coverage-map .map-row").forEach(function (el) {
+      el.hidden = !(fm === "" || el.dataset.doc === fm);
+    });
     var out = document.getElementById("shown");
     out.textContent = shown + " of " + cases.length + " listed cases shown";
     out.dataset.shown = String(shown);
@@ -79,6 +81,21 @@
       all("#coverage tbody tr").forEach(function (tr) { sum += Number(tr.dataset[v]); });
       if (sum !== totals[v]) { problems.push("coverage " + v + ": " + sum + ", totals " + totals[v]); }
     });
+    // The not-applicable reasons add up to the not-applicable cases.
+    var reasons = all("#not-applicable tbody tr");
+    if (reasons.length) {
+      var na = 0;
+      reasons.forEach(function (tr) { na += Number(tr.dataset.n); });
+      if (na !== totals.not_applicable) { problems.push("not applicable by reason: " + na + ", totals " + totals.not_applicable); }
+    }
+    // Each manual's coverage map holds as many statements as its row of totals says.
+    var mapped = all("#coverage-map .map-row").map(function (row) {
+      var n = 0;
+      Array.prototype.forEach.call(row.querySelectorAll("i[data-n]"), function (i) { n += Number(i.dataset.n); });
+      return n;
+    });
+    var listed = all("#statements tr.total").map(function (tr) { return Number(tr.dataset.statements); });
+    if (mapped.join(",") !== listed.join(",")) { problems.push("coverage map " + mapped.join(",") + ", statement totals " + listed.join(",")); }
     problems = problems.concat(errors);
     var out = document.getElementById("selfcheck");
     out.dataset.ok = problems.length ? "false" : "true";

@@ -1,12 +1,15 @@
 //! `index.html`: the run for a reader, one self-contained file (inline CSS and a little vanilla
 //! JavaScript, nothing loaded from anywhere, so it opens from a `file://` URL or an archive).
 //!
-//! From the top: whether motion was allowed, the run's record, load errors, verdict totals per
-//! profile (device cases, then the model group), filters (verdict, manual), every case that
-//! did not pass — observed against required, the manual clause, its transcript in a
-//! `<details>` —, coverage by manual and section, and the errata. Passing and not applicable
-//! cases are counts per section only: the default run has some 14,000 of them, and a row each
-//! would make the file slow to open for no reader's benefit.
+//! From the top: the overall verdict (by the exit code's rule), whether motion was allowed,
+//! load errors, filters (verdict, manual), every case that did not pass — observed against
+//! required, the manual clause, its transcript in a `<details>` —; then the tables: verdict
+//! totals per profile with a bar each (device cases, then the model group), the not-applicable
+//! cases by reason, the coverage map (manuals × sections, coloured by where their statements
+//! stand), coverage by manual and section, statement coverage, the errata, and the run's
+//! record. Passing and not applicable cases are counts per section only: the default run has
+//! some 14,000 of them, and a row each would make the file slow to open for no reader's
+//! benefit. The pictures are HTML and CSS, no image and no library.
 //!
 //! The filters also read the URL fragment (`#verdict=fail&manual=BU%200620`), so a link can
 //! carry a filtered view. On load the script checks that the numbers it shows agree with each
@@ -78,7 +81,7 @@ fn load_errors(s: &mut String, run: &RunResult) {
 fn totals(s: &mut String, run: &RunResult, kind: CaseKind) {
     let _ = writeln!(
         s,
-        "<h3>{}</h3>\n<table id=\"totals-{}\" class=\"totals\"><thead><tr><th>profile</th>{}</tr></thead><tbody>",
+        "<h3>{}</h3>\n<table id=\"totals-{}\" class=\"totals\"><thead><tr><th>profile</th>{}<th>ran: pass, fail, inconclusive, error</th></tr></thead><tbody>",
         text(group_title(kind)),
         kind.name(),
         header_cells()
@@ -94,15 +97,12 @@ fn totals(s: &mut String, run: &RunResult, kind: CaseKind) {
             text(p)
         );
         count_cells(s, &n, None);
-        s.push_str("</tr>\n");
+        let _ = writeln!(s, "<td>{}</td></tr>", bar(&n));
     }
     s.push_str("<tr class=\"all\"><th>all</th>");
-    count_cells(
-        s,
-        &Counts::of_kind(run, kind, None),
-        Some(&format!("total-{}", kind.name())),
-    );
-    s.push_str("</tr></tbody></table>\n");
+    let all = Counts::of_kind(run, kind, None);
+    count_cells(s, &all, Some(&format!("total-{}", kind.name())));
+    let _ = writeln!(s, "<td>{}</td></tr></tbody></table>", bar(&all));
 }
 
 fn filters(s: &mut String, run: &RunResult) {
@@ -240,6 +240,34 @@ fn errata(s: &mut String, run: &RunResult) {
     s.push_str("</tbody></table></section>\n");
 }
 
+/// A verdict bar: the case-runs that ran (not applicable ones are not in it), a segment per
+/// verdict as wide as its share; a fail, error or inconclusive segment is never too thin to see.
+fn bar(n: &Counts) -> String {
+    let ran: Vec<(Verdict, usize)> = Verdict::ALL
+        .iter()
+        .filter(|v| **v != Verdict::NotApplicable)
+        .map(|v| (*v, n.get(*v)))
+        .collect();
+    let title: Vec<String> = ran
+        .iter()
+        .map(|(v, k)| format!("{k} {}", v.name()))
+        .collect();
+    let mut s = format!(
+        "<span class=\"vbar\" title=\"{}; {} not applicable\">",
+        title.join(", "),
+        n.get(Verdict::NotApplicable)
+    );
+    for (v, k) in ran.into_iter().filter(|(_, k)| *k > 0) {
+        let _ = write!(
+            s,
+            "<i class=\"v-{}\" style=\"flex-grow:{k}\"></i>",
+            v.name()
+        );
+    }
+    s.push_str("</span>");
+    s
+}
+
 /// The whole page.
 pub(super) fn render(run: &RunResult) -> String {
     let motion = if run.meta.motion_allowed {
@@ -248,12 +276,19 @@ pub(super) fn render(run: &RunResult) -> String {
         "motion-no"
     };
     let mut s = format!(
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Harness run: {}</title>\n<style>{CSS}</style></head>\n<body>\n<p id=\"motion\" class=\"{motion}\">{}</p>\n<h1>Harness run report</h1>\n<p><output id=\"selfcheck\" data-ok=\"pending\">self-check did not run (JavaScript off?)</output></p>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Harness run: {}</title>\n<style>{CSS}</style></head>\n<body>\n",
         text(&run.dut),
-        text(record::motion_line(run)),
     );
-    record_table(&mut s, run);
+    super::signoff::html_banner(&mut s, run);
+    let _ = writeln!(
+        s,
+        "<p id=\"motion\" class=\"{motion}\">{}</p>\n<h1>Harness run report: {}</h1>\n<p><output id=\"selfcheck\" data-ok=\"pending\">self-check did not run (JavaScript off?)</output> · <a href=\"#record\">the run's record</a></p>",
+        text(record::motion_line(run)),
+        text(&run.dut),
+    );
     load_errors(&mut s, run);
+    filters(&mut s, run);
+    cases(&mut s, run);
     s.push_str("<section id=\"totals\"><h2>Verdicts per profile</h2>\n");
     totals(&mut s, run, CaseKind::Device);
     if run.cases.iter().any(|c| c.kind == CaseKind::Model) {
@@ -263,11 +298,14 @@ pub(super) fn render(run: &RunResult) -> String {
         totals(&mut s, run, CaseKind::Model);
     }
     s.push_str("</section>\n");
-    filters(&mut s, run);
-    cases(&mut s, run);
+    super::signoff::html_na(&mut s, run);
+    super::statements::html_map(&mut s, &run.statements);
     coverage(&mut s, run);
     super::statements::html(&mut s, &run.statements);
     errata(&mut s, run);
+    s.push_str("<section id=\"record-section\"><h2>Record</h2>\n");
+    record_table(&mut s, run);
+    s.push_str("</section>\n");
     let _ = write!(s, "<script>{SCRIPT}</script>\n</body></html>\n");
     s
 }
@@ -282,10 +320,32 @@ mod tests {
     }
 
     #[test]
-    fn motion_and_record_come_first() {
+    fn the_verdict_comes_first_then_motion_then_the_failures_then_the_tables() {
         let h = page();
-        let motion = h.find("<p id=\"motion\" class=\"motion-no\">Motion not allowed (--allow-motion not given)").unwrap();
-        assert!(motion < h.find("<h1>").unwrap(), "{h}");
+        let at = |needle: &str| h.find(needle).unwrap_or_else(|| panic!("{needle}\n{h}"));
+        let banner = at("<div id=\"overall\" class=\"overall-fail\" data-overall=\"FAIL\">");
+        assert_eq!(
+            banner,
+            at("<body>\n") + "<body>\n".len(),
+            "first in the body"
+        );
+        let motion = at(
+            "<p id=\"motion\" class=\"motion-no\">Motion not allowed (--allow-motion not given)",
+        );
+        let failures = at("<section id=\"cases\">");
+        let tables = at("<section id=\"totals\">");
+        assert!(banner < motion && motion < at("<h1>"), "{h}");
+        assert!(motion < failures && failures < tables, "{h}");
+        for later in [
+            "<section id=\"not-applicable\">",
+            "<section id=\"coverage-map\">",
+            "<section id=\"coverage\">",
+            "<section id=\"statements\">",
+            "<section id=\"errata\">",
+            "<table id=\"record\">",
+        ] {
+            assert!(tables < at(later), "{later}");
+        }
         assert!(
             h.contains(
                 "<tr><th>identity sk550p</th><td>NORD SK 550P, firmware V1.2 R0, serial 123456"
@@ -319,6 +379,29 @@ mod tests {
         let model = &model[..model.find("</table>").unwrap()];
         assert!(model.contains("data-profile=\"sk550p\""), "{model}");
         assert!(!model.contains("data-profile=\"tu3-eip\""), "{model}");
+    }
+
+    #[test]
+    fn each_profile_has_a_verdict_bar_of_what_ran() {
+        let h = page();
+        // tu3-eip: one error, one inconclusive, one not applicable (not in the bar).
+        assert!(
+            h.contains("<td><span class=\"vbar\" title=\"0 pass, 0 fail, 1 inconclusive, 1 error; 1 not applicable\"><i class=\"v-inconclusive\" style=\"flex-grow:1\"></i><i class=\"v-error\" style=\"flex-grow:1\"></i></span></td></tr>"),
+            "{h}"
+        );
+        // sk550p: a pass and a fail.
+        assert!(
+            h.contains("<span class=\"vbar\" title=\"1 pass, 1 fail, 0 inconclusive, 0 error; 0 not applicable\"><i class=\"v-pass\" style=\"flex-grow:1\"></i><i class=\"v-fail\" style=\"flex-grow:1\"></i></span>"),
+            "{h}"
+        );
+        // Bars carry no data-verdict: the counts stay the table cells'.
+        let bars = h.split("class=\"vbar\"").count() - 1;
+        assert_eq!(
+            bars,
+            3 + 2,
+            "device: 2 profiles and all; model: sk550p and all"
+        );
+        assert!(h.contains("<section id=\"coverage-map\">"), "{h}");
     }
 
     #[test]

@@ -25,6 +25,11 @@ pub(super) fn attr(s: &str) -> String {
         .replace('\r', "&#13;")
 }
 
+/// `n` and the noun for it: `1 profile`, `2 profiles`.
+pub(super) fn count(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -17,20 +17,21 @@ mod markup;
 mod merge;
 mod read;
 mod record;
+mod signoff;
 mod snapshot;
 mod statements;
 mod summary;
 mod transcript;
 mod write;
 
-pub(crate) use diff::compare_runs;
+pub(crate) use diff::{compare_runs, Gate};
 pub(crate) use diff_view::{text as diff_text, write_diff};
 pub(crate) use errata_counts::text_table as errata_table;
 pub(crate) use merge::merge;
 pub(crate) use read::{read, run_json};
 pub(crate) use snapshot::{apply_snapshots, SnapshotMode};
 pub(crate) use statements::text_table as statements_table;
-pub(crate) use summary::terminal;
+pub(crate) use summary::{quiet, terminal};
 #[cfg(test)]
 pub(crate) use transcript::render as transcript_for_tests;
 pub(crate) use write::{write_all, Transcripts};

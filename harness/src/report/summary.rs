@@ -6,6 +6,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
+use super::markup::count;
 use super::record;
 use crate::outcome::{CaseKind, CaseResult, RunResult, Verdict};
 
@@ -256,13 +257,15 @@ pub(super) fn not_passed(run: &RunResult) -> impl Iterator<Item = &CaseResult> {
     })
 }
 
-/// `summary.md`.
+/// `summary.md`: the overall verdict, whether motion was allowed, load errors, the cases that
+/// did not pass, then the tables (verdicts per profile, not applicable by reason, coverage,
+/// errata) and the run's record.
 pub(super) fn markdown(run: &RunResult) -> String {
-    let mut s = format!("**{}**\n\n# Run summary\n\n", record::motion_line(run));
-    for (label, value) in record::lines(run) {
-        let _ = writeln!(s, "- {label}: {}", value.replace('\n', " "));
-    }
-    s.push('\n');
+    let mut s = format!(
+        "{}\n\n**{}**\n\n# Run summary\n\n",
+        super::signoff::markdown_banner(run),
+        record::motion_line(run)
+    );
     if !run.load_errors.is_empty() {
         let _ = writeln!(
             s,
@@ -274,20 +277,9 @@ pub(super) fn markdown(run: &RunResult) -> String {
         }
         s.push('\n');
     }
-    let _ = writeln!(s, "## Verdicts per profile: device cases\n");
-    verdict_table(&mut s, run, CaseKind::Device);
-    if run.cases.iter().any(|c| c.kind == CaseKind::Model) {
-        let _ = writeln!(
-            s,
-            "\n## {}\n\nThese cases never reach the DUT: their passes are no passes of the device.\n",
-            record::group_title(CaseKind::Model)
-        );
-        verdict_table(&mut s, run, CaseKind::Model);
-    }
-    fails_by_clause(&mut s, run);
     let mut bad = not_passed(run).peekable();
     if bad.peek().is_some() {
-        let _ = writeln!(s, "\n## Failed, errored and inconclusive cases\n");
+        let _ = writeln!(s, "## Failed, errored and inconclusive cases\n");
         for c in bad {
             let model = if c.kind == CaseKind::Model {
                 ", model"
@@ -306,9 +298,25 @@ pub(super) fn markdown(run: &RunResult) -> String {
             );
         }
     }
+    fails_by_clause(&mut s, run);
+    let _ = writeln!(s, "\n## Verdicts per profile: device cases\n");
+    verdict_table(&mut s, run, CaseKind::Device);
+    if run.cases.iter().any(|c| c.kind == CaseKind::Model) {
+        let _ = writeln!(
+            s,
+            "\n## {}\n\nThese cases never reach the DUT: their passes are no passes of the device.\n",
+            record::group_title(CaseKind::Model)
+        );
+        verdict_table(&mut s, run, CaseKind::Model);
+    }
+    super::signoff::markdown_na(&mut s, run);
     coverage(&mut s, run);
     super::statements::markdown(&mut s, &run.statements);
     errata(&mut s, run);
+    let _ = writeln!(s, "\n## Record\n");
+    for (label, value) in record::lines(run) {
+        let _ = writeln!(s, "- {label}: {}", value.replace('\n', " "));
+    }
     s
 }
 
@@ -318,22 +326,8 @@ pub(crate) fn terminal(run: &RunResult) -> String {
     for e in &run.load_errors {
         let _ = writeln!(s, "LOAD ERROR {e}");
     }
-    for c in run
-        .cases
-        .iter()
-        .filter(|c| matches!(c.verdict, Verdict::Fail | Verdict::Error))
-    {
-        let name = c.verdict.name().to_uppercase();
-        let model = if c.kind == CaseKind::Model {
-            ", model"
-        } else {
-            ""
-        };
-        let _ = writeln!(
-            s,
-            "{name:<5} [{}{model}] {}: {}",
-            c.profile, c.id, c.message
-        );
+    for c in failed_or_errored(run) {
+        let _ = writeln!(s, "{}", case_line(c));
         // The statement the DUT broke, and where it stands.
         let _ = writeln!(
             s,
@@ -343,37 +337,76 @@ pub(crate) fn terminal(run: &RunResult) -> String {
             c.manual.place()
         );
     }
-    // Device counts, each followed by the model cases' count of that verdict when there are any:
-    // `210 pass (+40 model)`, so a model check is never read as a pass of the device.
-    let line = |profile: Option<&str>| {
-        let n = Counts::of_kind(run, CaseKind::Device, profile);
-        let m = Counts::of_kind(run, CaseKind::Model, profile);
-        Verdict::ALL
-            .iter()
-            .map(|v| {
-                let name = v.name().replace('_', " ");
-                match m.get(*v) {
-                    0 => format!("{} {name}", n.get(*v)),
-                    k => format!("{} {name} (+{k} model)", n.get(*v)),
-                }
-            })
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
     let width = profiles(run).iter().map(|p| p.len()).max().unwrap_or(0);
     for p in profiles(run) {
-        let _ = writeln!(s, "  {p:<width$} {}", line(Some(p)));
+        let _ = writeln!(s, "  {p:<width$} {}", counts_line(run, Some(p)));
     }
-    let _ = writeln!(
-        s,
-        "{} cases under {} profiles: {}; {} errata recorded; {} suite files did not load",
-        run.cases.len(),
-        run.profiles.len(),
-        line(None),
-        run.errata.len(),
-        run.load_errors.len()
-    );
+    s.push_str(&totals_line(run));
     s
+}
+
+/// Device counts, each followed by the model cases' count of that verdict when there are any:
+/// `210 pass (+40 model), 0 fail, …`, so a model check is never read as a pass of the device.
+/// Of one profile, or of the whole run.
+pub(super) fn counts_line(run: &RunResult, profile: Option<&str>) -> String {
+    let n = Counts::of_kind(run, CaseKind::Device, profile);
+    let m = Counts::of_kind(run, CaseKind::Model, profile);
+    Verdict::ALL
+        .iter()
+        .map(|v| {
+            let name = v.name().replace('_', " ");
+            match m.get(*v) {
+                0 => format!("{} {name}", n.get(*v)),
+                k => format!("{} {name} (+{k} model)", n.get(*v)),
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The console's last line: `22496 cases under 19 profiles: …; 134 errata recorded; 0 suite
+/// files did not load`.
+fn totals_line(run: &RunResult) -> String {
+    format!(
+        "{} under {}: {}; {} recorded; {} did not load\n",
+        count(run.cases.len(), "case", "cases"),
+        count(run.profiles.len(), "profile", "profiles"),
+        counts_line(run, None),
+        count(run.errata.len(), "erratum", "errata"),
+        count(run.load_errors.len(), "suite file", "suite files"),
+    )
+}
+
+/// The console with `-q`: a line per suite file that did not load and per failed or errored
+/// case, then the totals line.
+pub(crate) fn quiet(run: &RunResult) -> String {
+    let mut s = String::new();
+    for e in &run.load_errors {
+        let _ = writeln!(s, "LOAD ERROR {e}");
+    }
+    for c in failed_or_errored(run) {
+        let _ = writeln!(s, "{}", case_line(c));
+    }
+    s.push_str(&totals_line(run));
+    s
+}
+
+/// Failed and errored cases, the ones the console names.
+fn failed_or_errored(run: &RunResult) -> impl Iterator<Item = &CaseResult> {
+    run.cases
+        .iter()
+        .filter(|c| matches!(c.verdict, Verdict::Fail | Verdict::Error))
+}
+
+/// `FAIL  [sk550p] bu0620/addressing/coe-p102: status: expected …`.
+fn case_line(c: &CaseResult) -> String {
+    let name = c.verdict.name().to_uppercase();
+    let model = if c.kind == CaseKind::Model {
+        ", model"
+    } else {
+        ""
+    };
+    format!("{name:<5} [{}{model}] {}: {}", c.profile, c.id, c.message)
 }
 
 #[cfg(test)]
@@ -431,7 +464,11 @@ mod tests {
     #[test]
     fn summary_lists_profiles_failures_and_errata() {
         let md = markdown(&sample_run());
-        assert!(md.starts_with("**Motion not allowed (--allow-motion not given): cases that could turn a motor were not run**\n"), "{md}");
+        // The overall verdict first, then whether motion was allowed.
+        assert!(
+            md.starts_with("**FAIL: 1 failed, 1 erred (case-runs, model checks included)** — 1 pass (+1 model), 1 fail, 1 inconclusive, 1 error, 1 not applicable\n\n**Motion not allowed (--allow-motion not given): cases that could turn a motor were not run**\n"),
+            "{md}"
+        );
         assert!(
             md.contains("- identity sk550p: NORD SK 550P, firmware V1.2 R0"),
             "{md}"
@@ -456,7 +493,7 @@ mod tests {
             md[device..model].contains("| **all** | 1 | 1 | 1 | 1 | 1 |"),
             "{md}"
         );
-        let model_part = &md[model..md.find("## Failed").unwrap()];
+        let model_part = &md[model..md.find("## Not applicable, by reason").unwrap()];
         assert!(
             model_part.contains("| sk550p | 1 | 0 | 0 | 0 | 0 |"),
             "{md}"
@@ -472,6 +509,21 @@ mod tests {
             "{md}"
         );
         assert!(!md.contains("did not load"), "{md}");
+        // The failures come before the tables, the record last.
+        let failed = md
+            .find("## Failed, errored and inconclusive cases")
+            .unwrap();
+        assert!(failed < device, "{md}");
+        assert!(
+            md.find("## Record").unwrap() > md.find("## Errata").unwrap(),
+            "{md}"
+        );
+        assert!(
+            md.contains(
+                "| another product | 1 | 0 | the statement is about sk550p, this run is tu3-eip |"
+            ),
+            "{md}"
+        );
         // The one device fail, under the clause it cites.
         assert!(
             md.contains("## Fails by clause\n\nThe device's failing cases under the clause each cites: what to fix, rule by rule.\n\n| doc | clause | fails | cases |\n|---|---|---:|---|\n| BU 0620 | 2.2.7 | 1 | `bu0620/addressing/coe-p102` [sk550p] |\n"),
@@ -529,6 +581,49 @@ mod tests {
             "{t}"
         );
         assert!(t.contains("  sk550p  1 pass, 1 fail (+1 model),"), "{t}");
+    }
+
+    #[test]
+    fn nouns_agree_with_their_numbers() {
+        let mut run = sample_run();
+        run.profiles.truncate(1);
+        run.cases.truncate(1);
+        run.load_errors = vec!["x.yaml:1: bad".into()];
+        let t = terminal(&run);
+        assert!(
+            t.ends_with("1 case under 1 profile: 1 pass, 0 fail, 0 inconclusive, 0 error, 0 not applicable; 1 erratum recorded; 1 suite file did not load\n"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn quiet_names_each_failure_and_load_error_then_the_totals() {
+        let mut run = sample_run();
+        run.load_errors = vec!["suites/bu0620/x.yaml:8: unknown step `wait`".into()];
+        let q = quiet(&run);
+        let lines: Vec<&str> = q.lines().collect();
+        assert_eq!(lines.len(), 4, "{q}");
+        assert_eq!(
+            lines[0],
+            "LOAD ERROR suites/bu0620/x.yaml:8: unknown step `wait`"
+        );
+        assert!(
+            lines[1]
+                .starts_with("FAIL  [sk550p] bu0620/addressing/coe-p102: status: expected 2865"),
+            "{q}"
+        );
+        assert_eq!(
+            lines[2],
+            "ERROR [tu3-eip] bu0620/pkw-telegrams/silent: no answer from the DUT within 250 bus cycles"
+        );
+        assert!(lines[3].starts_with("6 cases under 2 profiles: "), "{q}");
+        // The same totals line as the full console's last.
+        assert_eq!(lines[3], terminal(&run).lines().last().unwrap());
+        // A clean run is the totals line alone.
+        run.load_errors.clear();
+        run.cases
+            .retain(|c| !matches!(c.verdict, Verdict::Fail | Verdict::Error));
+        assert_eq!(quiet(&run).lines().count(), 1);
     }
 
     #[test]

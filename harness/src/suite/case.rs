@@ -8,7 +8,7 @@ use super::fields::Fields;
 use super::schema::{CaseDoc, StepDoc};
 use crate::model::{self, ComputeFn};
 use crate::notation::{int_of, Matcher};
-use crate::outcome::{Erratum, ManualRef};
+use crate::outcome::{CaseKind, Erratum, ManualRef};
 use crate::profile::Capability;
 
 /// A case ready to run.
@@ -23,6 +23,19 @@ pub(crate) struct Case {
     pub(crate) requires: Vec<Capability>,
     pub(crate) errata: Vec<Erratum>,
     pub(crate) steps: Vec<Step>,
+}
+
+impl Case {
+    /// Whether the case checks the device (it requires something of the DUT, or a step reaches
+    /// it) or only the reference model (every step is a `compute`): the same rule the runner
+    /// labels results with, for reports that have the suites but no run (`harness coverage`).
+    pub(crate) fn kind(&self) -> CaseKind {
+        if !self.requires.is_empty() || self.steps.iter().any(|s| !s.needs().is_empty()) {
+            CaseKind::Device
+        } else {
+            CaseKind::Model
+        }
+    }
 }
 
 /// One step.

@@ -14,7 +14,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use super::load::{LoadError, Loaded};
-use crate::outcome::StatementCoverage;
+use crate::outcome::{CaseKind, StatementCoverage};
 
 /// The folder below the suites that holds the inventories (the suite loader skips it).
 pub(crate) const DIR: &str = "inventory";
@@ -181,8 +181,16 @@ fn section_key(s: &str) -> Vec<(u64, &str)> {
         .collect()
 }
 
-/// The statements counted per manual and section, in manual then section order.
-pub(crate) fn coverage(inventories: &[Inventory]) -> Vec<StatementCoverage> {
+/// The statements counted per manual and section, in manual then section order. A statement
+/// counts as asserted on the device when one of its cases in `loaded` reaches the DUT (see
+/// [`crate::suite::Case::kind`]); one only reference-model cases assert is model-only.
+pub(crate) fn coverage(inventories: &[Inventory], loaded: &Loaded) -> Vec<StatementCoverage> {
+    let device: BTreeSet<&str> = loaded
+        .cases
+        .iter()
+        .filter(|c| c.kind() == CaseKind::Device)
+        .map(|c| c.id.as_str())
+        .collect();
     let mut out: Vec<StatementCoverage> = Vec::new();
     for inv in inventories {
         let mut by: BTreeMap<(Vec<(u64, &str)>, &str), StatementCoverage> = BTreeMap::new();
@@ -197,7 +205,12 @@ pub(crate) fn coverage(inventories: &[Inventory]) -> Vec<StatementCoverage> {
                 });
             c.statements += 1;
             match s.status {
-                Status::Asserted(_) => c.asserted += 1,
+                Status::Asserted(ref cases)
+                    if cases.iter().any(|id| device.contains(id.as_str())) =>
+                {
+                    c.asserted += 1
+                }
+                Status::Asserted(_) => c.model_only += 1,
                 Status::Pending(_) => c.pending += 1,
                 Status::Untestable(_) => c.untestable += 1,
                 Status::Open => {}
@@ -285,6 +298,9 @@ statements:
     says: P102 reads
     cases: [test/read]
   - section: "2.5.6"
+    says: P102 counts in 0.01 s
+    cases: [test/resolution]
+  - section: "2.5.6"
     says: the LED is green
     untestable: "hardware: a colour"
   - section: "4.2.5"
@@ -303,6 +319,11 @@ cases:
     ref: { section: "2.5.6", page: 51 }
     steps:
       - read: { param: 102 }
+  - id: resolution
+    title: P102 resolution
+    ref: { section: "2.5.6", page: 51 }
+    steps:
+      - { compute: params.def, args: { param: 102 }, expect: { decimals: 2 } }
   - id: process
     title: process data
     ref: { section: "6.1.3", page: 114 }
@@ -315,40 +336,79 @@ cases:
     }
 
     #[test]
-    fn statements_are_counted_per_section() {
-        let c = coverage(&[inventory()]);
-        let sections: Vec<(&str, usize, usize, usize, usize, usize)> = c
+    fn statements_are_counted_per_section_device_and_model_apart() {
+        let c = coverage(&[inventory()], &load_text_for_tests(SUITE));
+        let sections: Vec<(&str, [usize; 6])> = c
             .iter()
             .map(|s| {
                 (
                     s.section.as_str(),
-                    s.statements,
-                    s.asserted,
-                    s.pending,
-                    s.untestable,
-                    s.open(),
+                    [
+                        s.statements,
+                        s.asserted,
+                        s.model_only,
+                        s.pending,
+                        s.untestable,
+                        s.open(),
+                    ],
                 )
             })
             .collect();
+        // §2.5.6: P102 read on the device, its resolution by the model only, the LED untestable.
         assert_eq!(
             sections,
             [
-                ("2.5.6", 2, 1, 0, 1, 0),
-                ("4.2.5", 1, 0, 1, 0, 0),
-                ("6.1.3", 1, 0, 0, 0, 1)
+                ("2.5.6", [3, 1, 1, 0, 1, 0]),
+                ("4.2.5", [1, 0, 0, 1, 0, 0]),
+                ("6.1.3", [1, 0, 0, 0, 0, 1])
             ]
         );
-        assert_eq!(c[0].percent(), 100.0);
-        assert_eq!(c[2].percent(), 0.0);
+        assert_eq!(c[0].testable(), 2);
+        assert_eq!(c[0].device_percent(), Some(50.0));
+        assert_eq!(c[0].percent(), Some(100.0));
+        // Nothing testable: no share at all, rather than 100 %.
+        assert_eq!((c[1].device_percent(), c[1].percent()), (None, None));
+        assert_eq!(c[2].percent(), Some(0.0));
+        // Without the suites no case is known to reach the device.
+        let c = coverage(&[inventory()], &Loaded::default());
+        assert_eq!((c[0].asserted, c[0].model_only), (0, 2));
+    }
+
+    #[test]
+    fn the_p856_factory_value_is_asserted_on_the_device() {
+        // The README's firmware comparison: "next" changes P856's factory value, so a device
+        // case must assert it (a model case alone let the change through).
+        let suites = Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites");
+        let loaded = crate::suite::load_dir(&suites).unwrap();
+        for inv in load(&suites).unwrap() {
+            for s in inv
+                .statements
+                .iter()
+                .filter(|s| s.section == "4.2.2" && s.says.starts_with("P856 Addressing mode"))
+            {
+                let Status::Asserted(cases) = &s.status else {
+                    panic!("{}: {} is not asserted", inv.manual(), s.says)
+                };
+                assert!(
+                    loaded
+                        .cases
+                        .iter()
+                        .any(|c| cases.contains(&c.id) && c.kind() == CaseKind::Device),
+                    "{}: {} has no device case: {cases:?}",
+                    inv.manual(),
+                    s.says
+                );
+            }
+        }
     }
 
     #[test]
     fn the_check_names_unknown_ids_unnamed_cases_and_a_fallen_floor() {
         let loaded = load_text_for_tests(SUITE);
-        let floors: BTreeMap<String, usize> = [("BU 0620 2020-03 en".to_string(), 2)].into();
+        let floors: BTreeMap<String, usize> = [("BU 0620 2020-03 en".to_string(), 3)].into();
         let problems = check(&[inventory()], &loaded, &floors);
-        // `process` cites BU 0620 and no statement names it (the 6.1.3 one is open); 1 asserted
-        // is below the floor of 2.
+        // `process` cites BU 0620 and no statement names it (the 6.1.3 one is open); 2 asserted
+        // is below the floor of 3.
         assert_eq!(problems.len(), 2, "{problems:?}");
         assert!(
             problems[0]
@@ -356,7 +416,7 @@ cases:
             "{problems:?}"
         );
         assert!(
-            problems[1].contains("fewer than the floor of 2"),
+            problems[1].contains("fewer than the floor of 3"),
             "{problems:?}"
         );
         let wrong = parse_inventory(
