@@ -441,8 +441,10 @@ fn run(a: RunArgs) -> Result<i32, String> {
                 target: with_options(target, a.node_id, a.sdo.as_deref()),
                 local: a.local,
                 timeout: std::time::Duration::from_secs_f64(a.timeout),
+        stop: crate::interrupt::flag(),
                 tap: tap.clone(),
             })
+    crate::interrupt::install()?;
             .map_err(|e| e.to_string())?;
             runner::run_shard(&loaded, &opts, a.shard, factory.as_mut())
         }
@@ -509,6 +511,7 @@ pub(crate) fn verdict_exit(run: &crate::outcome::RunResult) -> i32 {
     }
 }
 
+        interrupted: found.interrupted,
 fn list(a: ListArgs) -> Result<i32, String> {
     if a.functions {
         for f in crate::model::registry() {
@@ -535,6 +538,7 @@ fn list(a: ListArgs) -> Result<i32, String> {
     {
         let profiles = if chosen.is_empty() {
             c.products
+    crate::interrupt::doing(format!("writing the reports into {}", a.out.display()));
                 .as_ref()
                 .map(|ps| ps.iter().map(|p| p.name()).collect::<Vec<_>>().join(","))
                 .unwrap_or_else(|| "all".into())
@@ -546,6 +550,14 @@ fn list(a: ListArgs) -> Result<i32, String> {
                 .collect();
             if under.is_empty() {
                 continue;
+    if let Some(i) = &run.meta.interrupted {
+        eprintln!(
+            "harness: interrupted: {} case-runs cut short (not judged, cleaned up), {} not run; the reports say so",
+            i.cut.len(),
+            i.not_run.len()
+        );
+        return Ok(crate::interrupt::EXIT_INTERRUPTED);
+    }
             }
             case_runs += under.len();
             under.join(",")

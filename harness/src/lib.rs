@@ -40,6 +40,7 @@ mod epl;
 /// simulator served as an adapter, the harness scanner reading a parameter.
 pub use enip::bench_support as enip_bench;
 mod identity;
+mod interrupt;
 mod ledger;
 mod model;
 mod net;

@@ -370,6 +370,19 @@ pub struct RunMeta {
     /// simulator, which has no motor to turn and no EEPROM to wear (no limit applies).
     #[serde(default)]
     pub eeprom_cap: Option<u32>,
+    /// Set when a signal (Ctrl-C, SIGTERM) stopped the run before its end.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interrupted: Option<Interrupted>,
+}
+
+/// How an interrupted run ended: the case cut short (its step under way finished, its cleanup
+/// ran) and the case-runs that never started.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Interrupted {
+    /// The case-runs stopped between two steps (`<profile> <id>`), their verdict inconclusive.
+    pub cut: Vec<String>,
+    /// The case-runs that never started (`<profile> <id>`), in the planned order.
+    pub not_run: Vec<String>,
 }
 
 /// The statements of one manual section in the inventories (`suites/inventory/`), counted:

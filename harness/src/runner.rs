@@ -6,6 +6,7 @@
 //! capabilities do not fit is not applicable, with the reason.
 
 use serde_json::{json, Value};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::binding::{Binding, Observation, OpenError, StepError};
@@ -41,7 +42,13 @@ pub(crate) struct RunOptions {
     /// Runs each profile's cases in an order shuffled from this seed (`--shuffle SEED`), to
     /// find cases whose verdict depends on what ran before them.
     pub(crate) shuffle: Option<u64>,
+    /// Set to stop the run: the case under way ends after its step under way, and its cleanup
+    /// runs; no case starts after it ([`crate::interrupt`]).
+    pub(crate) stop: &'static AtomicBool,
 }
+
+/// A stop never asked for: the default [`RunOptions::stop`].
+static NEVER: AtomicBool = AtomicBool::new(false);
 
 impl RunOptions {
     /// Every case under `profiles`: no filter, 250 retries, no capture, no progress shown,
@@ -55,7 +62,13 @@ impl RunOptions {
             progress: RefCell::new(Box::new(crate::progress::Silent)),
             limits: None,
             shuffle: None,
+            stop: &NEVER,
         }
+    }
+
+    /// Whether the run is to stop.
+    fn stopping(&self) -> bool {
+        self.stop.load(Ordering::Relaxed)
     }
 
     /// Whether the DUT runs on the real clock (a device on the network): then a step that timed
@@ -141,8 +154,12 @@ pub(crate) fn run_shard(
                     cases = run_side_by_side(&plan, opts, fork, &offers, total);
                 }
                 None => {
-                    for (profile, runs) in opts.profiles.iter().zip(&plan) {
+                    'profiles: for (profile, runs) in opts.profiles.iter().zip(&plan) {
                         for &(at, case) in runs {
+                            if opts.stopping() {
+                                break 'profiles;
+                            }
+                            crate::interrupt::doing(format!("{} {}", profile.name(), case.id));
                             opts.progress.borrow_mut().start(
                                 profile.name(),
                                 &case.id,
@@ -168,6 +185,9 @@ pub(crate) fn run_shard(
                 }
             }
             opts.progress.borrow_mut().finish();
+            if opts.stopping() {
+                meta.interrupted = Some(interrupted(&plan, &opts.profiles, &cases));
+            }
         }
         // Every shard stops at the check, with the one case-run the whole run has.
         Err(unreachable) => {
@@ -226,6 +246,32 @@ fn plan<'a>(
     plan
 }
 
+/// What a stop left: the cases cut short and the planned case-runs that never started.
+fn interrupted(
+    plan: &[Vec<(usize, &Case)>],
+    profiles: &[Profile],
+    cases: &[CaseResult],
+) -> crate::outcome::Interrupted {
+    let ran: std::collections::BTreeSet<usize> = cases.iter().map(|c| c.seq).collect();
+    crate::outcome::Interrupted {
+        cut: cases
+            .iter()
+            .filter(|c| c.message.starts_with(INTERRUPTED))
+            .map(|c| format!("{} {}", c.profile, c.id))
+            .collect(),
+        not_run: profiles
+            .iter()
+            .zip(plan)
+            .flat_map(|(p, runs)| runs.iter().map(move |(at, case)| (p, at, case)))
+            .filter(|(_, at, _)| !ran.contains(at))
+            .map(|(p, _, case)| format!("{} {}", p.name(), case.id))
+            .collect(),
+    }
+}
+
+/// How the message of a case stopped between two steps begins.
+const INTERRUPTED: &str = "interrupted";
+
 /// What a thread running profiles side by side tells the runner's thread, which shows the
 /// progress and keeps the results.
 enum Report {
@@ -251,7 +297,8 @@ fn run_side_by_side(
     let mut queue: Vec<usize> = (0..plan.len()).collect();
     queue.sort_by_key(|&p| opts.profiles[p].bus.is_none());
     let queue = std::sync::Mutex::new(queue.into_iter());
-    let (filter, retries, profiles) = (opts.filter.clone(), opts.retries, &opts.profiles.clone());
+    let (filter, retries, stop) = (opts.filter.clone(), opts.retries, opts.stop);
+    let profiles = &opts.profiles.clone();
     let mut slots: Vec<Vec<Option<CaseResult>>> =
         plan.iter().map(|runs| runs.iter().map(|_| None).collect()).collect();
     std::thread::scope(|s| {
@@ -270,6 +317,7 @@ fn run_side_by_side(
                 let opts = RunOptions {
                     filter,
                     retries,
+                    stop,
                     ..RunOptions::new(Vec::new())
                 };
                 let (mut guard, mut unsettled) = (None, false);
@@ -278,6 +326,9 @@ fn run_side_by_side(
                     let Some(p) = next else { break };
                     let profile = &profiles[p];
                     for (i, &(at, case)) in plan[p].iter().enumerate() {
+                        if opts.stopping() {
+                            break;
+                        }
                         let _ = tx.send(Report::Start(p, i));
                         let r = run_case(
                             case,
@@ -297,12 +348,11 @@ fn run_side_by_side(
         let mut done = 0;
         for report in rx {
             match report {
-                Report::Start(p, i) => opts.progress.borrow_mut().start(
-                    opts.profiles[p].name(),
-                    &plan[p][i].1.id,
-                    done,
-                    total,
-                ),
+                Report::Start(p, i) => {
+                    let (profile, id) = (opts.profiles[p].name(), &plan[p][i].1.id);
+                    crate::interrupt::doing(format!("{profile} {id}"));
+                    opts.progress.borrow_mut().start(profile, id, done, total);
+                }
                 Report::End(p, i, r) => {
                     opts.progress.borrow_mut().end(&r);
                     slots[p][i] = Some(*r);
@@ -694,6 +744,14 @@ fn run_steps(
 ) -> (CaseResult, Option<String>) {
     let mut steps = Vec::new();
     for (n, step) in (1..).zip(&case.steps) {
+        if n > 1 && opts.stopping() {
+            let message = format!(
+                "{INTERRUPTED} before step {n} of {}: not judged",
+                case.steps.len()
+            );
+            let r = result(case, profile, Verdict::Inconclusive, message, steps, start);
+            return (r, None);
+        }
         let (p, id) = (profile.name(), &case.id);
         label(opts, || {
             format!("{p} {id} step {n}: {}", describe(&step.action))
@@ -1386,6 +1444,112 @@ cases:
         // recovered, when the recovery's cleanup closed what its opening set up.
         let plain = opens(false);
         assert_eq!(opens(true), plain + 1);
+    }
+
+    /// The embedded simulator behind a binding that asks for a stop (as Ctrl-C does) during
+    /// its first step, and counts its cleanups.
+    struct Interrupting {
+        inner: Box<dyn Binding>,
+        stop: &'static AtomicBool,
+        cleanups: std::rc::Rc<std::cell::Cell<usize>>,
+        /// Not the connection check's opening.
+        armed: bool,
+    }
+
+    impl Binding for Interrupting {
+        fn describe(&self) -> String {
+            self.inner.describe()
+        }
+        fn capabilities(&self) -> &[Capability] {
+            self.inner.capabilities()
+        }
+        fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+            if self.armed {
+                self.stop.store(true, Ordering::Relaxed);
+            }
+            self.inner.perform(action)
+        }
+        fn take_exchanges(&mut self) -> Vec<crate::outcome::Exchange> {
+            self.inner.take_exchanges()
+        }
+        fn finish(&mut self) -> Result<(), CleanupError> {
+            if self.armed {
+                self.cleanups.set(self.cleanups.get() + 1);
+            }
+            self.inner.finish()
+        }
+    }
+
+    struct InterruptingFactory {
+        stop: &'static AtomicBool,
+        cleanups: std::rc::Rc<std::cell::Cell<usize>>,
+        opened: usize,
+    }
+
+    impl DutFactory for InterruptingFactory {
+        fn describe(&self) -> String {
+            "interrupting simulator".into()
+        }
+        fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+            let inner = EmbeddedFactory::default().open(profile, retries)?;
+            self.opened += 1;
+            Ok(Box::new(Interrupting {
+                inner,
+                stop: self.stop,
+                cleanups: self.cleanups.clone(),
+                armed: self.opened > 1,
+            }))
+        }
+    }
+
+    #[test]
+    fn a_stop_ends_the_case_after_its_step_runs_its_cleanup_and_starts_no_other() {
+        let loaded = load_text_for_tests(
+            r#"
+doc: BU 0620
+edition: "2020-03 en"
+cases:
+  - id: two-steps
+    title: two reads
+    ref: { section: "2.5.6", page: 51 }
+    steps:
+      - read: { param: 102 }
+      - read: { param: 102 }
+  - id: never-started
+    title: a read
+    ref: { section: "2.5.6", page: 51 }
+    steps:
+      - read: { param: 102 }
+"#,
+        );
+        let stop: &'static AtomicBool = Box::leak(Box::new(AtomicBool::new(false)));
+        let opts = RunOptions {
+            stop,
+            ..sk550p_options()
+        };
+        let cleanups = std::rc::Rc::new(std::cell::Cell::new(0));
+        let mut factory = InterruptingFactory {
+            stop,
+            cleanups: cleanups.clone(),
+            opened: 0,
+        };
+        let r = run(&loaded, &opts, &mut factory);
+        assert_eq!(r.cases.len(), 1, "{:?}", verdicts(&r));
+        let c = &r.cases[0];
+        assert_eq!(c.verdict, Verdict::Inconclusive);
+        assert_eq!(c.message, "interrupted before step 2 of 2: not judged");
+        assert_eq!(c.steps.len(), 1, "the step under way finished, the next never ran");
+        assert_eq!(cleanups.get(), 1, "the cut case's cleanup ran (the check's is not counted)");
+        assert_eq!(factory.opened, 2, "the connection check and the cut case only");
+        let i = r.meta.interrupted.expect("marked interrupted");
+        let named = |n: usize| format!("sk550p {}", loaded.cases[n].id);
+        assert_eq!(i.cut, [named(0)]);
+        assert_eq!(i.not_run, [named(1)]);
+
+        // Stopped before it began: nothing runs, everything is listed.
+        let r = run(&loaded, &opts, &mut EmbeddedFactory::default());
+        assert!(r.cases.is_empty());
+        assert_eq!(r.meta.interrupted.expect("interrupted").not_run.len(), 2);
     }
 
     #[test]

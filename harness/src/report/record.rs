@@ -3,6 +3,7 @@
 //! whether motion was allowed. One list of lines, so `summary.md`, `junit.xml` and
 //! `index.html` cannot disagree about the run they describe.
 
+use super::markup::count;
 use crate::outcome::{CaseKind, CaseResult, RunResult};
 
 /// The first line of `summary.md` and the top of `index.html`: a reader must see at once
@@ -29,7 +30,11 @@ pub(super) fn or_unknown(value: &str) -> String {
 /// suites, the start, the duration, the command line and the profiles.
 pub(super) fn lines(run: &RunResult) -> Vec<(String, String)> {
     let m = &run.meta;
-    let mut out = vec![("DUT".to_string(), run.dut.clone())];
+    let mut out = Vec::new();
+    if let Some(i) = &m.interrupted {
+        out.push(("interrupted".to_string(), interrupted_line(i)));
+    }
+    out.push(("DUT".to_string(), run.dut.clone()));
     if m.identities.is_empty() {
         // One line, not one per profile, when no profile's identity was read (the embedded
         // simulator's runs; a run whose DUT never answered).
@@ -89,6 +94,22 @@ pub(super) fn lines(run: &RunResult) -> Vec<(String, String)> {
         ));
     }
     out
+}
+
+/// What a signal left of the run: its report covers the case-runs before it.
+pub(super) fn interrupted_line(i: &crate::outcome::Interrupted) -> String {
+    let cut = match i.cut.as_slice() {
+        [] => String::new(),
+        cut => format!(
+            "{} cut short between two steps, not judged, its cleanup run ({}); ",
+            count(cut.len(), "case-run", "case-runs"),
+            cut.join(", ")
+        ),
+    };
+    format!(
+        "by a signal (Ctrl-C or SIGTERM): {cut}{} not run (run.json lists them)",
+        count(i.not_run.len(), "case-run", "case-runs")
+    )
 }
 
 /// The command line as one shell-readable line: an argument with a space or a quote is
@@ -155,6 +176,23 @@ mod tests {
         assert_eq!(get("duration"), "0.015 s");
         assert_eq!(get("command line"), "harness run --filter 'a b'");
         assert_eq!(get("profiles"), "sk550p, tu3-eip");
+        assert!(l.iter().all(|(label, _)| label != "interrupted"), "{l:?}");
+    }
+
+    #[test]
+    fn an_interrupted_run_says_so_first() {
+        let mut run = sample_run();
+        run.meta.interrupted = Some(crate::outcome::Interrupted {
+            cut: vec!["sk550p bu0620/x".into()],
+            not_run: vec!["sk550p bu0620/y".into(), "tu3-eip bu0620/y".into()],
+        });
+        assert_eq!(
+            lines(&run)[0],
+            (
+                "interrupted".to_string(),
+                "by a signal (Ctrl-C or SIGTERM): 1 case-run cut short between two steps, not judged, its cleanup run (sk550p bu0620/x); 2 case-runs not run (run.json lists them)".to_string()
+            )
+        );
     }
 
     #[test]
