@@ -13,6 +13,8 @@ use crate::outcome::{CaseKind, RunResult, Verdict};
 /// The run as a whole.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Overall {
+    /// A signal stopped the run: the case-runs after it did not run (exit 130).
+    Interrupted,
     /// A suite file did not load: its cases did not run (exit 2).
     Incomplete,
     /// A case failed or erred (exit 1).
@@ -27,6 +29,7 @@ impl Overall {
     /// The banner's word.
     pub(super) fn word(self) -> &'static str {
         match self {
+            Overall::Interrupted => "INTERRUPTED",
             Overall::Incomplete => "INCOMPLETE",
             Overall::Fail => "FAIL",
             Overall::NothingChecked => "NOTHING CHECKED",
@@ -37,7 +40,7 @@ impl Overall {
     /// The CSS class of the banner.
     pub(super) fn class(self) -> &'static str {
         match self {
-            Overall::Incomplete => "overall-incomplete",
+            Overall::Interrupted | Overall::Incomplete => "overall-incomplete",
             Overall::Fail => "overall-fail",
             Overall::NothingChecked => "overall-none",
             Overall::Pass => "overall-pass",
@@ -64,7 +67,20 @@ pub(super) fn banner(run: &RunResult) -> Banner {
         .iter()
         .filter(|c| c.kind == CaseKind::Device && c.verdict != Verdict::NotApplicable)
         .count();
-    let (overall, why) = if !run.load_errors.is_empty() {
+    let (overall, why) = if let Some(i) = &run.meta.interrupted {
+        (
+            Overall::Interrupted,
+            format!(
+                "stopped by a signal, {} not run{}",
+                count(i.not_run.len(), "case-run", "case-runs"),
+                if fail + error > 0 {
+                    format!("; {fail} failed, {error} erred before")
+                } else {
+                    String::new()
+                }
+            ),
+        )
+    } else if !run.load_errors.is_empty() {
         (
             Overall::Incomplete,
             format!(
@@ -356,6 +372,20 @@ mod tests {
         run.cases[0].verdict = Verdict::NotApplicable;
         assert_eq!(banner(&run).overall, Overall::NothingChecked);
         assert!(markdown_banner(&run).starts_with("**NOTHING CHECKED: no case reached the device"));
+        // A signal stopped it: that comes first, whatever else it found.
+        let mut cut = sample_run();
+        cut.meta.interrupted = Some(crate::outcome::Interrupted {
+            cut: Vec::new(),
+            not_run: vec!["sk550p a".into(), "sk550p b".into()],
+        });
+        let b = banner(&cut);
+        assert_eq!(
+            (b.overall, b.why.as_str()),
+            (
+                Overall::Interrupted,
+                "stopped by a signal, 2 case-runs not run; 1 failed, 1 erred before"
+            )
+        );
         let mut h = String::new();
         html_banner(&mut h, &sample_run());
         assert!(
