@@ -273,7 +273,7 @@ fn coverage_gates_on_a_share_per_section_and_counts_errata_by_check() {
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(1), "{stdout}");
     assert!(
-        stdout.contains("PROBLEM BU 0620 2020-03 en §2.5.6: 1 of 2 testable statements asserted (50 %), below 90 %"),
+        stdout.contains("PROBLEM BU 0620 2020-03 en §2.5.6: 1 of 2 testable statements asserted (50 %; 1 on the device), below 90 %"),
         "{stdout}"
     );
     let _ = std::fs::remove_dir_all(&dir);
