@@ -307,9 +307,25 @@ fn snapshots_report_the_same_change_the_same_way() {
     assert!(run_json.contains(&want), "{want}\n---\n{run_json}");
 }
 
-/// The checked-in suites, as the README's demo runs them.
-fn checked_in_suites() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites")
+/// A quiet run of the checked-in suites, as the README's demo runs them, under the SK 550P
+/// over EtherNet/IP, cut to the cases `filter` selects, on `firmware`.
+fn run_checked_in(out: &Path, filter: &str, firmware: Option<&str>) -> Output {
+    let suites = Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites");
+    harness(
+        &[
+            "run",
+            "--suites",
+            s(&suites),
+            "--profile",
+            "sk550p@enip",
+            "--filter",
+            filter,
+            "--out",
+            s(out),
+            "-q",
+        ],
+        firmware,
+    )
 }
 
 /// The README's firmware comparison on the checked-in suites, cut to the P85x cases of the
@@ -318,29 +334,11 @@ fn checked_in_suites() -> PathBuf {
 #[test]
 fn the_readme_firmware_demo_fails_a_device_case_and_the_diff_exits_1() {
     let dir = scratch("readme-demo");
-    let suites = checked_in_suites();
     let (old, new) = (dir.0.join("release"), dir.0.join("next"));
-    let run = |out: &Path, filter: &str, fw| {
-        harness(
-            &[
-                "run",
-                "--suites",
-                s(&suites),
-                "--profile",
-                "sk550p@enip",
-                "--filter",
-                filter,
-                "--out",
-                s(out),
-                "-q",
-            ],
-            fw,
-        )
-    };
     let case = "bu0620/params-catalogue/p856-factory-and-range";
-    let o = run(&old, "params-catalogue/p85", None);
+    let o = run_checked_in(&old, "params-catalogue/p85", None);
     assert_eq!(o.status.code(), Some(0), "{:?}", text(&o));
-    let o = run(&new, "params-catalogue/p85", Some("next"));
+    let o = run_checked_in(&new, "params-catalogue/p85", Some("next"));
     let (stdout, _) = text(&o);
     assert_eq!(
         o.status.code(),
@@ -388,30 +386,12 @@ fn the_readme_firmware_demo_fails_a_device_case_and_the_diff_exits_1() {
 #[test]
 fn a_new_case_that_fails_gates_unless_regressions_only() {
     let dir = scratch("new-fail");
-    let suites = checked_in_suites();
     let (old, new) = (dir.0.join("old"), dir.0.join("new"));
-    let run = |out: &Path, filter: &str, fw| {
-        harness(
-            &[
-                "run",
-                "--suites",
-                s(&suites),
-                "--profile",
-                "sk550p@enip",
-                "--filter",
-                filter,
-                "--out",
-                s(out),
-                "-q",
-            ],
-            fw,
-        )
-    };
     // The old run has P853's case only; the new one P856's too, which fails on the next
     // firmware.
-    let o = run(&old, "params-catalogue/p853", None);
+    let o = run_checked_in(&old, "params-catalogue/p853", None);
     assert_eq!(o.status.code(), Some(0), "{:?}", text(&o));
-    let o = run(&new, "params-catalogue/p85", Some("next"));
+    let o = run_checked_in(&new, "params-catalogue/p85", Some("next"));
     assert_eq!(o.status.code(), Some(1), "{:?}", text(&o));
     let o = harness(&["diff", s(&old), s(&new)], None);
     let (stdout, stderr) = text(&o);

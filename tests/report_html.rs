@@ -204,6 +204,27 @@ fn html_report_loads_counts_and_filters_in_headless_chromium() {
         dom.contains("id=\"load-errors\""),
         "the load error is shown"
     );
+    // The overall verdict comes first: a suite file did not load, so the run is incomplete;
+    // then the failures, then the tables.
+    let body = dom[dom.find("<body>").unwrap() + "<body>".len()..].trim_start();
+    assert!(
+        body.starts_with(
+            "<div id=\"overall\" class=\"overall-incomplete\" data-overall=\"INCOMPLETE\">"
+        ),
+        "{}",
+        &body[..300.min(body.len())]
+    );
+    let at = |id: &str| {
+        dom.find(&format!("id=\"{id}\""))
+            .unwrap_or_else(|| panic!("#{id}"))
+    };
+    assert!(at("cases") < at("totals") && at("totals") < at("not-applicable"));
+    // The not-applicable cases by reason: sk550p's two device cases are about tu3-pnt.
+    assert!(
+        dom.contains("<tr data-reason=\"Product\" data-n=\"2\"><td>another product</td>"),
+        "{}",
+        &dom[at("not-applicable")..][..600]
+    );
     assert!(
         // The embedded simulator: no limits apply, and the line says so.
         dom.contains("<p id=\"motion\" class=\"motion-yes\">No motor, no EEPROM"),
@@ -264,6 +285,21 @@ fn html_report_loads_counts_and_filters_in_headless_chromium() {
     let (dom, _) = dump_dom(browser, &tampered, "", &profile_dir);
     assert!(
         dom.contains("data-ok=\"false\">self-check failed: device pass: profiles sum to"),
+        "{}",
+        &dom[dom.find("id=\"selfcheck\"").unwrap()..][..300]
+    );
+    // And so does one whose reasons do not add up to the not applicable cases.
+    std::fs::write(
+        &tampered,
+        html.replace(
+            "data-reason=\"Product\" data-n=\"2\"",
+            "data-reason=\"Product\" data-n=\"3\"",
+        ),
+    )
+    .unwrap();
+    let (dom, _) = dump_dom(browser, &tampered, "", &profile_dir);
+    assert!(
+        dom.contains("data-ok=\"false\">self-check failed: not applicable by reason: 3, totals 2"),
         "{}",
         &dom[dom.find("id=\"selfcheck\"").unwrap()..][..300]
     );
