@@ -73,6 +73,9 @@ pub(crate) struct MergeArgs {
     /// Report folder for the merged run (not one of the shards').
     #[arg(long, default_value = "reports")]
     out: PathBuf,
+    /// Transcripts: `one` file, or also `files`, one per case (as `harness run`).
+    #[arg(long, value_enum, default_value_t)]
+    transcripts: report::Transcripts,
 }
 
 /// The folder a report lives in, for telling two spellings of one folder apart.
@@ -85,9 +88,6 @@ fn folder(given: &Path) -> PathBuf {
 /// Reads every shard, merges them and writes the reports as `harness run` does; the exit code
 /// is the unsharded run's.
 pub(crate) fn merge(a: MergeArgs) -> Result<i32, String> {
-    /// Transcripts: `one` file, or also `files`, one per case (as `harness run`).
-    #[arg(long, value_enum, default_value_t)]
-    transcripts: report::Transcripts,
     let out = folder(&a.out.join("run.json"));
     let mut shards = Vec::with_capacity(a.shards.len());
     for s in &a.shards {

@@ -399,6 +399,9 @@ pub struct StatementCoverage {
     pub statements: usize,
     /// Asserted on the device: a device case (one that reaches the DUT) checks it.
     pub asserted: usize,
+    /// Asserted by reference-model cases only (`compute` steps, which never reach the DUT).
+    #[serde(default)]
+    pub model_only: usize,
     /// Waiting for a bus binding.
     pub pending: usize,
     /// Not testable here.
@@ -412,9 +415,6 @@ impl StatementCoverage {
             .saturating_sub(self.asserted + self.model_only + self.pending + self.untestable)
     }
 
-    /// Asserted by reference-model cases only (`compute` steps, which never reach the DUT).
-    #[serde(default)]
-    pub model_only: usize,
     /// Testable statements: asserted on the device, by the model only, or open.
     pub fn testable(&self) -> usize {
         self.asserted + self.model_only + self.open()
@@ -442,6 +442,7 @@ impl StatementCoverage {
     pub fn add(&mut self, other: &StatementCoverage) {
         self.statements += other.statements;
         self.asserted += other.asserted;
+        self.model_only += other.model_only;
         self.pending += other.pending;
         self.untestable += other.untestable;
     }
@@ -455,7 +456,6 @@ pub struct RunResult {
     /// Who ran what, when, with which harness and suites, against which device identity.
     #[serde(default)]
     pub meta: RunMeta,
-        self.model_only += other.model_only;
     /// Profiles run, in order.
     pub profiles: Vec<String>,
     /// All case results.

@@ -106,6 +106,7 @@ pub(super) fn sample_run() -> RunResult {
             discarded_attempts: 0,
             eeprom_writes: 4,
             eeprom_cap: Some(20),
+            interrupted: None,
         },
         profiles: vec!["sk550p".into(), "tu3-eip".into()],
         cases: vec![
@@ -211,11 +212,10 @@ pub(super) fn sample_run() -> RunResult {
                 section: "2.5.6.4".into(),
                 statements: 3,
                 asserted: 3,
-                pending: 0,
                 model_only: 0,
+                pending: 0,
                 untestable: 0,
             },
-        ],
             StatementCoverage {
                 doc: "BU 0620".into(),
                 edition: "2020-03 en".into(),
@@ -226,6 +226,7 @@ pub(super) fn sample_run() -> RunResult {
                 pending: 0,
                 untestable: 1,
             },
+        ],
         load_errors: vec![],
         duration: Duration::from_millis(15),
     };
