@@ -302,3 +302,210 @@ fn each_bus_served_shows_its_own_options() {
         stderr(&o)
     );
 }
+
+/// `field` of every case in the run.json in `out`, in order.
+fn cases_in(out: &Path, field: &str) -> Vec<String> {
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    run["cases"]
+        .as_array()
+        .expect("cases")
+        .iter()
+        .filter_map(|c| c[field].as_str().map(String::from))
+        .collect()
+}
+
+#[test]
+fn a_profile_given_twice_runs_once_and_the_note_says_so() {
+    let out = scratch("twice");
+    let o = harness(&[
+        "run",
+        "--profile",
+        "sk550p",
+        "--profile",
+        "tu3-eip",
+        "--profile",
+        "sk550p",
+        "--filter",
+        "first-control-command-047eh",
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("`--profile sk550p` given again: each profile runs once"),
+        "{err}"
+    );
+    // Each case once per profile: no (profile, case) twice.
+    let runs: Vec<(String, String)> = cases_in(&out, "profile")
+        .into_iter()
+        .zip(cases_in(&out, "id"))
+        .collect();
+    let mut once = runs.clone();
+    once.dedup();
+    assert_eq!(once, runs, "a case-run twice");
+    let profiles: std::collections::BTreeSet<&str> = runs.iter().map(|r| r.0.as_str()).collect();
+    assert_eq!(
+        profiles.into_iter().collect::<Vec<_>>(),
+        ["sk550p", "tu3-eip"]
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn run_help_lists_every_profile_and_every_dut_scheme() {
+    let o = harness(&["run", "--help"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let help = String::from_utf8_lossy(&o.stdout);
+    let flat = help.split_whitespace().collect::<Vec<_>>().join(" ");
+    for name in [
+        "sk550p,",
+        "cu4-pol,",
+        "tu3-pnt@pnio,",
+        "sk550p@ecat,",
+        "tu4-pol@epl,",
+        "any@enip,",
+        "any@pnio;",
+    ] {
+        assert!(flat.contains(name), "{name}: {help}");
+    }
+    for scheme in ["enip://", "ecat://", "epl://", "pnio://"] {
+        assert!(flat.contains(scheme), "{scheme}: {help}");
+    }
+}
+
+/// The harness binary run in `dir`.
+fn harness_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_harness"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("the harness binary runs")
+}
+
+#[test]
+fn run_from_another_folder_takes_its_suites_or_says_whose_it_takes() {
+    let dir = scratch("elsewhere");
+    let out = dir.join("out");
+    let args = ["run", "--profile", "sk550p", "--out", "out", "-q"];
+    // No suites/ here: the build checkout's, with a note naming them.
+    let filter = ["--filter", "first-control-command-047eh"];
+    let o = harness_in(&dir, &[&args[..], &filter[..]].concat());
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let built = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../suites")
+        .canonicalize()
+        .unwrap();
+    assert!(
+        err.contains(&format!(
+            "no `suites/` in {}: using the suites of the checkout this harness was built in, {}",
+            dir.canonicalize().unwrap().display(),
+            built.display()
+        )),
+        "{err}"
+    );
+    assert!(out.join("run.json").is_file());
+    // A suites/ here is the one run, without a note.
+    std::fs::create_dir_all(dir.join("suites/mine")).unwrap();
+    std::fs::write(
+        dir.join("suites/mine/one.yaml"),
+        r#"doc: BU 0620
+edition: "2020-03 en"
+cases:
+  - id: only-here
+    title: "A case of this folder's own"
+    ref: { section: "6.1.2.1", page: 106 }
+    steps:
+      - { compute: drive.control, args: { word: "047Eh" }, expect: { parameter_set: 1 } }
+"#,
+    )
+    .unwrap();
+    let o = harness_in(&dir, &args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(!err.contains("suites"), "{err}");
+    assert_eq!(cases_in(&out, "id"), ["mine/one/only-here"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn epl_needs_an_address_on_the_powerlink_subnet_before_any_case() {
+    if !common::netns::require_root_or_skip("the POWERLINK address checks on a veth pair") {
+        return;
+    }
+    let ns = common::netns::Netns::new("cli-epl");
+    let iface = ns.root_if().to_string();
+    let out = scratch("epl-address");
+    let run = |iface: &str| {
+        harness(&[
+            "run",
+            "--dut",
+            &format!("epl://{iface}"),
+            "--profile",
+            "tu4-pol",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    // No address: refused before any case (no run.json), naming the interface and the way out.
+    let o = run(&iface);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!(
+            "{iface} has no IPv4 address: no address on the POWERLINK subnet"
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("ip addr add 192.168.100.240/24 dev {iface}")),
+        "{err}"
+    );
+    assert!(!out.join("run.json").exists(), "no run took place");
+    // Another subnet's address: named.
+    let pid = std::process::id();
+    let other = format!("10.231.{}.{}", (pid >> 8) as u8, (pid as u8).clamp(1, 254));
+    let ok = Command::new("ip")
+        .args(["addr", "add", &format!("{other}/32"), "dev", &iface])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let o = run(&iface);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!("{iface} has {other}/32: no address")),
+        "{err}"
+    );
+    // `serve epl` on an interface without the node's 192.168.100.N: refused, naming it.
+    let o = harness(&[
+        "serve",
+        "epl",
+        "--iface",
+        &iface,
+        "--node-id",
+        "5",
+        "--seconds",
+        "1",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!(
+            "{iface} has {other}/32 but not 192.168.100.5, node 5's address"
+        )),
+        "{err}"
+    );
+    // No such interface: said so.
+    let o = run("no-such-if0");
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("no network interface `no-such-if0`"),
+        "{}",
+        stderr(&o)
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}

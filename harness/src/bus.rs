@@ -44,6 +44,8 @@ pub(crate) struct Bus {
     pub(crate) name: &'static str,
     /// As people write it (`EtherNet/IP`).
     pub(crate) title: &'static str,
+    /// How `--dut` names a device of the bus (`ecat://IFACE`), for help and messages.
+    pub(crate) url: &'static str,
     /// Its NORD profiles: the products speaking it. Its generic profile (`any@<bus>`, any
     /// maker's device, `--dut` only) is added by [`Profile`].
     pub(crate) profiles: fn() -> Vec<Profile>,
@@ -111,6 +113,15 @@ pub(crate) fn by_name(name: &str) -> Option<&'static Bus> {
 /// The bus names, for messages.
 pub(crate) fn names() -> String {
     let v: Vec<&str> = BUSES.iter().map(|b| b.name).collect();
+    v.join(", ")
+}
+
+/// Every bus's `--dut` URL with its title (`enip://HOST[:PORT] (EtherNet/IP), …`), for help.
+pub(crate) fn urls() -> String {
+    let v: Vec<String> = BUSES
+        .iter()
+        .map(|b| format!("{} ({})", b.url, b.title))
+        .collect();
     v.join(", ")
 }
 
@@ -194,6 +205,19 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn every_bus_url_starts_with_its_scheme() {
+        for bus in BUSES {
+            assert!(
+                bus.url.starts_with(&format!("{}://", bus.name)),
+                "{}",
+                bus.url
+            );
+            assert_eq!(by_url(bus.url).unwrap().0.name, bus.name);
+            assert!(urls().contains(bus.url));
         }
     }
 

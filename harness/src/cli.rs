@@ -92,9 +92,8 @@ struct ServeArgs {
 
 #[derive(ClapArgs, Debug, Default)]
 struct RunArgs {
-    /// Built-in profile(s) to run (default: all): sk550p, tu3-eip, tu4-eip, cu4-eip, tu3-pnt,
-    /// tu3-pol, tu4-pol, cu4-pol.
-    #[arg(long = "profile")]
+    // Its help lists the profile registry's names (`profiles_help`).
+    #[arg(long = "profile", value_name = "PROFILE", help = profiles_help())]
     profiles: Vec<String>,
     /// Suites folder.
     #[arg(long)]
@@ -104,11 +103,11 @@ struct RunArgs {
     filter: Option<String>,
     /// Report folder.
     #[arg(long, default_value = "reports")]
+    out: PathBuf,
     /// Transcripts: `one` file (`transcripts.txt`, one section per case), or also `files`, one
     /// per case under `transcripts/`.
     #[arg(long, value_enum, default_value_t)]
     transcripts: report::Transcripts,
-    out: PathBuf,
     /// Inverters behind the simulated interface (default: the product's maximum, 8).
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
     inverters: Option<u8>,
@@ -124,11 +123,8 @@ struct RunArgs {
     /// Snapshot folder.
     #[arg(long, default_value = "vectors/snapshots")]
     snapshot_dir: PathBuf,
-    /// The DUT: the embedded simulator (default), or a device or another implementation on
-    /// the network: `enip://HOST[:PORT]` (EtherNet/IP), `ecat://IFACE` (EtherCAT segment on a
-    /// network interface), `epl://IFACE[/NODE][?sdo=udp|asnd&cycle=TIME]` (POWERLINK node
-    /// behind a network interface, the harness its managing node).
-    #[arg(long)]
+    // Its help lists the bus registry's URLs (`dut_help`).
+    #[arg(long, value_name = "URL", help = dut_help())]
     dut: Option<String>,
     /// The DUT's own device description: its EDS, ESI, XDD or GSDML (told by content). The
     /// harness plans from it what it cannot know of another maker's device: the connection
@@ -229,16 +225,75 @@ struct ListArgs {
     profiles: Vec<String>,
 }
 
-/// The suites folder: as given, else `suites/` here, else the one beside the sources.
+/// `run --profile`'s help: every built-in profile, from the registry.
+fn profiles_help() -> String {
+    format!(
+        "Built-in profile to run, repeatable (default: every product over PPO and over each bus it speaks): {}; `{}` (any maker's device) with --dut",
+        Profile::names().join(", "),
+        crate::profile::ANY
+    )
+}
+
+/// `run --dut`'s help: every bus's URL, from the registry.
+fn dut_help() -> String {
+    format!(
+        "The DUT: the embedded simulator (default), or a device or another implementation on the network: {}",
+        crate::bus::urls()
+    )
+}
+
+/// The suites folder: as given, else `suites/` of the current directory, else the one of the
+/// checkout the harness was built in, with a note on stderr saying so (a binary run from
+/// elsewhere would otherwise test suites the user never chose, silently). When there is none,
+/// `suites`, for the caller's load error to name.
 pub(crate) fn suites_dir(given: Option<PathBuf>) -> PathBuf {
-    given.unwrap_or_else(|| {
-        let here = PathBuf::from("suites");
-        if here.is_dir() {
-            here
-        } else {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites")
-        }
+    suites_or_usage(given).unwrap_or_else(|e| {
+        eprintln!("harness: {e}");
+        PathBuf::from("suites")
     })
+}
+
+/// The suites folder or why there is none: as given; else `here` (`./suites`); else `built`
+/// (the build checkout's), with the note to print.
+fn default_suites(
+    given: Option<PathBuf>,
+    here: &Path,
+    built: &Path,
+) -> Result<(PathBuf, Option<String>), String> {
+    if let Some(dir) = given {
+        return Ok((dir, None));
+    }
+    if here.is_dir() {
+        return Ok((here.to_path_buf(), None));
+    }
+    let cwd = std::env::current_dir()
+        .map(|d| d.display().to_string())
+        .unwrap_or_else(|_| ".".into());
+    if built.is_dir() {
+        let built = built.canonicalize().unwrap_or_else(|_| built.to_path_buf());
+        return Ok((
+            built.clone(),
+            Some(format!(
+                "no `suites/` in {cwd}: using the suites of the checkout this harness was built in, {} (`--suites DIR` chooses)",
+                built.display()
+            )),
+        ));
+    }
+    Err(format!(
+        "no suites: no `suites/` in {cwd}, and the checkout this harness was built in ({}) has none; give `--suites DIR`",
+        built.display()
+    ))
+}
+
+/// The suites folder for `run` and `list`: [`default_suites`], the note printed; none is a
+/// usage error.
+fn suites_or_usage(given: Option<PathBuf>) -> Result<PathBuf, String> {
+    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites");
+    let (dir, note) = default_suites(given, Path::new("suites"), &built)?;
+    if let Some(n) = note {
+        eprintln!("harness: {n}");
+    }
+    Ok(dir)
 }
 
 /// Entry point; returns the process exit code.
@@ -317,10 +372,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
     let profiles = if a.profiles.is_empty() {
         Profile::all()
     } else {
-        a.profiles
-            .iter()
-            .map(|n| Profile::by_name(n))
-            .collect::<Result<_, _>>()?
+        chosen_profiles(&a.profiles)?
     };
     let profiles: Vec<Profile> = profiles
         .into_iter()
@@ -356,7 +408,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
             p.name()
         ));
     }
-    let dir = suites_dir(a.suites);
+    let dir = suites_or_usage(a.suites)?;
     let loaded = suite::load_dir(&dir).map_err(|e| e.to_string())?;
     let selected = loaded
         .cases
@@ -389,8 +441,10 @@ fn run(a: RunArgs) -> Result<i32, String> {
         progress: std::cell::RefCell::new(crate::progress::on_stderr(verbosity)),
         limits: None,
         shuffle: a.shuffle,
+        stop: crate::interrupt::flag(),
         ..RunOptions::new(profiles)
     };
+    crate::interrupt::install()?;
     let mut run = match &a.dut {
         None => {
             crate::binding::embedded::sim_firmware()?;
@@ -441,10 +495,8 @@ fn run(a: RunArgs) -> Result<i32, String> {
                 target: with_options(target, a.node_id, a.sdo.as_deref()),
                 local: a.local,
                 timeout: std::time::Duration::from_secs_f64(a.timeout),
-        stop: crate::interrupt::flag(),
                 tap: tap.clone(),
             })
-    crate::interrupt::install()?;
             .map_err(|e| e.to_string())?;
             runner::run_shard(&loaded, &opts, a.shard, factory.as_mut())
         }
@@ -459,6 +511,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
         shard: found.shard,
         shuffle: found.shuffle,
         discarded_attempts: found.discarded_attempts,
+        interrupted: found.interrupted,
         ..meta
     };
     // What the manuals state and the suites assert (an inventory that does not load is a
@@ -485,18 +538,40 @@ fn run(a: RunArgs) -> Result<i32, String> {
         SnapshotMode::Off
     };
     let snaps = report::apply_snapshots(&mut run, &mode).map_err(|e| e.to_string())?;
+    crate::interrupt::doing(format!("writing the reports into {}", a.out.display()));
     let written = report::write_all(&run, &a.out, a.transcripts).map_err(|e| e.to_string())?;
     if verbosity == Verbosity::Quiet {
         // A line per load error and per failed or errored case, then the totals.
         out!("{}", report::quiet(&run));
     } else {
-        out!("{summary}");
+        out!("{}", report::terminal(&run));
         if !matches!(mode, SnapshotMode::Off) {
             outln!("{snaps}");
         }
         outln!("{written}");
     }
+    if let Some(i) = &run.meta.interrupted {
+        eprintln!(
+            "harness: interrupted: {} case-runs cut short (not judged, cleaned up), {} not run; the reports say so",
+            i.cut.len(),
+            i.not_run.len()
+        );
+        return Ok(crate::interrupt::EXIT_INTERRUPTED);
+    }
     Ok(verdict_exit(&run))
+}
+
+/// The `--profile` profiles, each once in the order given; a repeated one is dropped with a
+/// note on stderr (one testsuite per profile in the reports, not two of the same).
+fn chosen_profiles(names: &[String]) -> Result<Vec<Profile>, String> {
+    let (chosen, repeated) = Profile::by_names(names)?;
+    if !repeated.is_empty() {
+        eprintln!(
+            "harness: `--profile {}` given again: each profile runs once",
+            repeated.join("`, `--profile ")
+        );
+    }
+    Ok(chosen)
 }
 
 /// A run's exit code: usage error when a suite file did not load, fail when a case failed or
@@ -511,7 +586,6 @@ pub(crate) fn verdict_exit(run: &crate::outcome::RunResult) -> i32 {
     }
 }
 
-        interrupted: found.interrupted,
 fn list(a: ListArgs) -> Result<i32, String> {
     if a.functions {
         for f in crate::model::registry() {
@@ -519,10 +593,9 @@ fn list(a: ListArgs) -> Result<i32, String> {
         }
         return Ok(EXIT_PASS);
     }
-    let loaded = suite::load_dir(&suites_dir(a.suites)).map_err(|e| e.to_string())?;
+    let loaded = suite::load_dir(&suites_or_usage(a.suites)?).map_err(|e| e.to_string())?;
     let mut chosen: Vec<Profile> = Vec::new();
-    for n in &a.profiles {
-        let p = Profile::by_name(n)?;
+    for p in chosen_profiles(&a.profiles)? {
         // `any` names no bus until `--dut` does: listed, it is every bus's generic profile.
         if p.product.is_none() && p.bus.is_none() {
             chosen.extend(crate::bus::BUSES.iter().filter_map(|b| p.over(b.name)));
@@ -538,7 +611,6 @@ fn list(a: ListArgs) -> Result<i32, String> {
     {
         let profiles = if chosen.is_empty() {
             c.products
-    crate::interrupt::doing(format!("writing the reports into {}", a.out.display()));
                 .as_ref()
                 .map(|ps| ps.iter().map(|p| p.name()).collect::<Vec<_>>().join(","))
                 .unwrap_or_else(|| "all".into())
@@ -550,14 +622,6 @@ fn list(a: ListArgs) -> Result<i32, String> {
                 .collect();
             if under.is_empty() {
                 continue;
-    if let Some(i) = &run.meta.interrupted {
-        eprintln!(
-            "harness: interrupted: {} case-runs cut short (not judged, cleaned up), {} not run; the reports say so",
-            i.cut.len(),
-            i.not_run.len()
-        );
-        return Ok(crate::interrupt::EXIT_INTERRUPTED);
-    }
             }
             case_runs += under.len();
             under.join(",")
@@ -599,7 +663,65 @@ fn list(a: ListArgs) -> Result<i32, String> {
 
 #[cfg(test)]
 mod tests {
-    use super::with_options;
+    use super::*;
+    use clap::CommandFactory;
+
+    /// `harness run --help` as clap prints it.
+    fn run_help() -> String {
+        let mut cli = Cli::command();
+        let run = cli.find_subcommand_mut("run").expect("a run command");
+        run.render_long_help().to_string()
+    }
+
+    #[test]
+    fn run_help_names_every_profile_and_every_bus_url() {
+        let help = run_help();
+        // Wrapped lines joined, so a name is found whatever the terminal width.
+        let flat = help.split_whitespace().collect::<Vec<_>>().join(" ");
+        let names = Profile::names();
+        assert!(names.len() >= 19, "{names:?}");
+        for name in &names {
+            assert!(
+                flat.contains(&format!(" {name},")) || flat.contains(&format!(" {name};")),
+                "{name} missing from run --help:\n{help}"
+            );
+        }
+        for bus in crate::bus::BUSES {
+            assert!(flat.contains(bus.url), "{} missing:\n{help}", bus.url);
+        }
+        assert!(flat.contains("pnio://IFACE"), "{help}");
+    }
+
+    #[test]
+    fn the_suites_are_the_given_then_here_then_the_build_checkouts_with_a_note() {
+        let dir = std::env::temp_dir().join(format!("suites-default-{}", std::process::id()));
+        let (here, built) = (dir.join("here"), dir.join("built"));
+        let given = Some(PathBuf::from("mine"));
+        // Neither folder exists: a usage error naming both ways out.
+        assert_eq!(
+            default_suites(given.clone(), &here, &built),
+            Ok((PathBuf::from("mine"), None))
+        );
+        let e = default_suites(None, &here, &built).unwrap_err();
+        assert!(
+            e.contains("--suites DIR") && e.contains(&built.display().to_string()),
+            "{e}"
+        );
+        std::fs::create_dir_all(&built).unwrap();
+        let (got, note) = default_suites(None, &here, &built).unwrap();
+        assert_eq!(got, built.canonicalize().unwrap());
+        let note = note.expect("a note when the build checkout's suites are used");
+        assert!(
+            note.contains("checkout this harness was built in"),
+            "{note}"
+        );
+        std::fs::create_dir_all(&here).unwrap();
+        assert_eq!(
+            default_suites(None, &here, &built),
+            Ok((here.clone(), None))
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn node_id_and_sdo_go_into_the_target_as_the_url_spells_them() {

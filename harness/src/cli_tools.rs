@@ -277,6 +277,37 @@ mod tests {
     }
 
     #[test]
+    fn control_lists_disable_voltage_and_emergency_stop_when_their_bit_is_0() {
+        // 047Eh: bits 1 and 2 at 1 cancel "Disable voltage" and "Emergency stop" (BU 0620
+        // §6.1.2.1); 0478h gives both.
+        let control = |w: &str| decoded(DecodeWhat::Control { word: w.into() }).unwrap().1;
+        let v = control("047Eh");
+        let active: Vec<&str> = v["active"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(Value::as_str)
+            .collect();
+        assert_eq!(
+            active,
+            [
+                "Enable operation",
+                "Enable pulses",
+                "Enable ramp",
+                "Enable setpoint",
+                "Control data valid"
+            ]
+        );
+        let meaning = v["meaning"].as_str().unwrap();
+        assert!(!meaning.contains("Disable voltage"), "{meaning}");
+        assert!(!meaning.contains("Emergency stop"), "{meaning}");
+        let v = control("0478h");
+        assert_eq!(v["active"][0], "Disable voltage");
+        assert_eq!(v["active"][1], "Emergency stop");
+        assert_eq!(v["commands"][0], "Disable voltage");
+    }
+
+    #[test]
     fn bad_pkw_bytes_name_the_problem() {
         let bad = |t: &str| pkw_bytes(&[t.to_string()]).unwrap_err();
         assert!(

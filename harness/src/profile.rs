@@ -195,19 +195,44 @@ impl Profile {
             "cip" => return Profile::by_name("any@enip"),
             _ => {}
         }
-        let known = || {
-            Product::ALL
-                .into_iter()
-                .map(Profile::builtin)
-                .chain(Profile::of_buses())
-        };
-        known().find(|p| p.name() == name).ok_or_else(|| {
-            let names: Vec<String> = known().map(|p| p.name).collect();
+        Profile::known().find(|p| p.name() == name).ok_or_else(|| {
             format!(
                 "unknown profile `{name}` (built-in profiles: {}; `{ANY}` with `--dut`)",
-                names.join(", ")
+                Profile::names().join(", ")
             )
         })
+    }
+
+    /// Every built-in profile: each product over PPO, then each bus's NORD profiles and its
+    /// generic one.
+    fn known() -> impl Iterator<Item = Profile> {
+        Product::ALL
+            .into_iter()
+            .map(Profile::builtin)
+            .chain(Profile::of_buses())
+    }
+
+    /// The names of every built-in profile ([`Profile::by_name`] takes each), for help and
+    /// messages.
+    pub(crate) fn names() -> Vec<String> {
+        Profile::known().map(|p| p.name).collect()
+    }
+
+    /// The profiles named on the command line (`--profile`, in the order given), each once:
+    /// a name given again, or another name of one profile (`cip` and `any@enip`), is dropped
+    /// and returned apart so the caller can say so. The error lists the valid names.
+    pub(crate) fn by_names(names: &[String]) -> Result<(Vec<Profile>, Vec<String>), String> {
+        let mut chosen: Vec<Profile> = Vec::new();
+        let mut repeated = Vec::new();
+        for n in names {
+            let p = Profile::by_name(n)?;
+            if chosen.iter().any(|q| q.name == p.name) {
+                repeated.push(n.clone());
+            } else {
+                chosen.push(p);
+            }
+        }
+        Ok((chosen, repeated))
     }
 
     /// This profile's product over `bus`, if the product speaks it; `any` is the bus's
@@ -245,6 +270,24 @@ mod tests {
         );
         assert_eq!(Capability::from_name("powered-on"), None);
         assert_eq!(Capability::from_name("ecat"), Some(Capability::Bus("ecat")));
+    }
+
+    #[test]
+    fn a_profile_named_twice_is_chosen_once_in_the_order_given() {
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let (chosen, repeated) = Profile::by_names(&names(&[
+            "sk550p",
+            "tu3-eip@enip",
+            "sk550p",
+            "cip",
+            "any@enip",
+        ]))
+        .unwrap();
+        let chosen: Vec<&str> = chosen.iter().map(Profile::name).collect();
+        assert_eq!(chosen, ["sk550p", "tu3-eip@enip", "any@enip"]);
+        assert_eq!(repeated, ["sk550p", "any@enip"]);
+        let e = Profile::by_names(&names(&["sk550p", "sk999"])).unwrap_err();
+        assert!(e.contains("unknown profile `sk999`"), "{e}");
     }
 
     #[test]

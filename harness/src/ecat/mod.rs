@@ -28,6 +28,7 @@ use crate::runner::DutFactory;
 pub(crate) const BUS: Bus = Bus {
     name: "ecat",
     title: "EtherCAT",
+    url: "ecat://IFACE",
     profiles,
     parse_step: step::parse,
     embedded,

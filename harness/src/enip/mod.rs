@@ -32,6 +32,7 @@ use crate::runner::DutFactory;
 pub(crate) const BUS: Bus = Bus {
     name: "enip",
     title: "EtherNet/IP",
+    url: "enip://HOST[:PORT]",
     profiles,
     parse_step: step::parse,
     embedded,

@@ -2,6 +2,7 @@
 //! serve epl`, the XDD writer and the `epl:` steps — for the SK 550P (BU 0620 §2.4) and the
 //! modules SK TU3-POL, SK TU4-POL, SK CU4-POL (BU 2200).
 
+mod address;
 pub mod bench_support;
 mod binding;
 mod effect;
@@ -34,6 +35,7 @@ use crate::runner::DutFactory;
 pub(crate) const BUS: Bus = Bus {
     name: "epl",
     title: "POWERLINK",
+    url: "epl://IFACE[/NODE][?sdo=udp|asnd&cycle=TIME]",
     profiles,
     parse_step: step::parse,
     embedded,
@@ -132,6 +134,20 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
                 )))
             }
         }
+    }
+    // SDO over UDP/IP goes to the node's 192.168.100.N: without an address of the interface on
+    // that subnet every UDP case would err ("Connection refused"), so it is refused before
+    // any. A node whose XDD declares no SDO over UDP/IP (1F82h bit 1 clear) needs none.
+    let udp_declared = match &n.description {
+        Some(crate::description::Description::Xdd(x)) => {
+            x.feature_flags.is_none_or(|f| f & 0x2 != 0)
+        }
+        _ => true,
+    };
+    if udp_declared {
+        let have = crate::net::udp::ipv4s_of(&iface)
+            .ok_or_else(|| url(format!("no network interface `{iface}` here")))?;
+        address::check_mn(&iface, node, &have).map_err(url)?;
     }
     Ok(Box::new(NetworkFactory {
         iface,

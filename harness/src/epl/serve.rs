@@ -6,10 +6,11 @@
 //!   promiscuous: the node's frames come to its own MAC address F0-5F-5A-00-00-N, BU 0620 §4.4.2
 //!   P878, and to the POWERLINK multicast addresses 01-11-1E-00-00-01…04, DS 301 §4.6.1.1.2,
 //!   neither of which is the interface's);
-//! - UDP datagrams to port 3819 (DS 301 C_SDO_EPL_PORT) on the interface's IPv4 address; the MN
-//!   addresses the node at 192.168.100.N (BU 0620 §3.7.3, BU 2200 §5.2.5), so that is the
-//!   address to give the interface. Without an IPv4 address only raw Ethernet is served, and a
-//!   line on stderr says so.
+//! - UDP datagrams to port 3819 (DS 301 C_SDO_EPL_PORT) on the interface's 192.168.100.N, N
+//!   the node id: the MN addresses the node there (BU 0620 §3.7.3, BU 2200 §5.2.5), whatever
+//!   other addresses the interface has and in whichever order. An interface with IPv4 addresses
+//!   but not that one is refused, naming them (`super::address`); one without any IPv4 address
+//!   is served over raw Ethernet only, and a line on stderr says so.
 //!
 //! One thread serves both, frames first: each frame goes to [`Node::receive`] and what it
 //! returns is sent at once (a PRes within the PReq's cycle), a datagram to [`Node::udp`] once
@@ -27,7 +28,7 @@
 //! timing the cyclic steps check.
 
 use std::collections::VecDeque;
-use std::net::{IpAddr, SocketAddr, UdpSocket};
+use std::net::{SocketAddr, UdpSocket};
 use std::os::fd::AsFd;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -40,8 +41,9 @@ use proto::nord::epl as def;
 use proto::nord::Protocol;
 use sim::epl::{Node, NodeConfig, NodeError, POLL_PERIOD};
 
+use super::address;
 use crate::net::serve_args::RawServeArgs;
-use crate::net::udp::{ipv4_of, transient};
+use crate::net::udp::{ipv4s_of, transient};
 use crate::net::workers::{serve_for, Workers};
 pub use crate::net::LinkError;
 use crate::net::{RawLink, Ready, MAX_FRAME};
@@ -94,6 +96,9 @@ pub enum ServeError {
     /// The raw Ethernet link failed (no such interface, no root, I/O).
     #[error(transparent)]
     Link(#[from] LinkError),
+    /// The interface has IPv4 addresses, but not the node's 192.168.100.N.
+    #[error("{0}")]
+    Address(String),
     /// The UDP socket for SDO over UDP/IP could not be bound or failed.
     #[error("UDP {addr} (SDO over UDP/IP): {source}")]
     Udp {
@@ -213,7 +218,8 @@ impl Drop for Served {
     }
 }
 
-/// Opens `opts.iface` (raw Ethernet, and UDP 3819 on its IPv4 address if it has one) and
+/// Opens `opts.iface` (raw Ethernet, and UDP 3819 on its 192.168.100.N when it has IPv4
+/// addresses; refused when it has others but not that one) and
 /// serves the simulated node of `opts.profile` there in threads of this process, until the
 /// returned handle is stopped or dropped.
 pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
@@ -224,8 +230,11 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     )?;
     let mut link = RawLink::open(&opts.iface, Some(ETHERTYPE_POWERLINK))?;
     link.set_spin(FRAME_POLL);
-    let udp = match ipv4_of(&opts.iface) {
-        Some((ip, _)) => {
+    let have = ipv4s_of(&opts.iface).unwrap_or_default();
+    let udp = match address::node_address(&opts.iface, opts.node_id, &have)
+        .map_err(ServeError::Address)?
+    {
+        Some(ip) => {
             let addr = SocketAddr::from((ip, SDO_UDP_PORT));
             let socket =
                 udp_socket(addr, &opts.iface).map_err(|source| ServeError::Udp { addr, source })?;
@@ -314,13 +323,6 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
              {expected}/24 (BU 0620 §3.7.3) for SDO over UDP/IP",
             opts.iface
         ),
-        Some(a) if a.ip() != IpAddr::V4(expected) => eprintln!(
-            "note: node {} is addressed at {expected} (BU 0620 §3.7.3: 192.168.100.<node id>), \
-             but {} has {}: an MN sending SDO over UDP to {expected} will not reach it",
-            opts.node_id,
-            opts.iface,
-            a.ip()
-        ),
         Some(_) => {}
     }
     serve_for(duration, STOP_CHECK * 10, || served.is_running());
@@ -331,13 +333,14 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
 #[derive(clap::Parser, Debug)]
 #[command(
     name = "harness serve epl",
-    about = "Serve the simulator as a POWERLINK controlled node on a network interface (raw Ethernet: root or CAP_NET_RAW; SDO over UDP 3819 on the interface's IPv4 address)"
+    about = "Serve the simulator as a POWERLINK controlled node on a network interface (raw Ethernet: root or CAP_NET_RAW; SDO over UDP 3819 on the interface's 192.168.100.<node id>)"
 )]
 struct ServeArgs {
     #[command(flatten)]
     common: RawServeArgs,
-    /// The node id, 1…239 (BU 0620 §2.4.3.1; 240 is the managing node's). Give the interface
-    /// 192.168.100.<node id>/24 for SDO over UDP/IP.
+    /// The node id, 1…239 (BU 0620 §2.4.3.1; 240 is the managing node's). SDO over UDP/IP is
+    /// served on the interface's 192.168.100.<node id>; an interface with other IPv4
+    /// addresses but not that one is refused.
     #[arg(long, default_value = "1", value_parser = parse_node_id)]
     node_id: u8,
 }
@@ -742,24 +745,64 @@ mod tests {
         assert_eq!((stats.frames_in, stats.frames_out), (5, 2), "{stats:?}");
     }
 
+    /// Adds `ip`/32 to `iface`.
+    fn add_address(iface: &str, ip: std::net::Ipv4Addr) {
+        let ok = std::process::Command::new("ip")
+            .args(["addr", "add", &format!("{ip}/32"), "dev", iface])
+            .status()
+            .map(|s| s.success());
+        assert!(matches!(ok, Ok(true)), "ip addr add {ip}: {ok:?}");
+    }
+
+    /// Addresses of this process's own: another address first, then the node's
+    /// 192.168.100.N, N = `node`, each /32 (no route to the subnet in this namespace).
+    fn own_addresses() -> (std::net::Ipv4Addr, u8) {
+        let pid = std::process::id();
+        let first = std::net::Ipv4Addr::new(10, 229, (pid >> 8) as u8, (pid as u8).clamp(1, 254));
+        // 2…201: not the 192.168.100.1 and .240 other tests give their veth ends.
+        (first, (2 + pid % 200) as u8)
+    }
+
+    #[test]
+    fn an_interface_without_the_nodes_address_is_refused_naming_its_addresses() {
+        let Some(v) = Veth::new("a") else { return };
+        let (first, node) = own_addresses();
+        add_address(&v.0, first);
+        let opts = ServeOptions {
+            node_id: node,
+            ..ServeOptions::new(&v.0)
+        };
+        match start(&opts) {
+            Err(ServeError::Address(e)) => {
+                assert!(
+                    e.contains(&format!(
+                        "{} has {first}/32 but not 192.168.100.{node}",
+                        v.0
+                    )),
+                    "{e}"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
     #[test]
     fn sdo_over_udp_on_the_interfaces_address() {
         let Some(v) = Veth::new("u") else { return };
-        // An address of this process's own (the MN would use 192.168.100.1; another test
-        // binding that address and port 3819 at the same time would collide).
-        let pid = std::process::id();
-        let ip = std::net::Ipv4Addr::new(10, 229, (pid >> 8) as u8, (pid as u8).clamp(1, 254));
-        let ok = std::process::Command::new("ip")
-            .args(["addr", "add", &format!("{ip}/32"), "dev", &v.0])
-            .status()
-            .map(|s| s.success());
-        assert!(matches!(ok, Ok(true)), "ip addr add: {ok:?}");
+        // The node's address second, after another: the node serves on its own, not the
+        // interface's first. (Not 192.168.100.1: another test binding that address and port
+        // 3819 at the same time would collide.)
+        let (first, node) = own_addresses();
+        let ip = def::ip_address(node);
+        add_address(&v.0, first);
+        add_address(&v.0, ip);
         let served = start(&ServeOptions {
             profile: "tu4-pol".into(),
+            node_id: node,
             ..ServeOptions::new(&v.0)
         })
         .expect("serve");
-        let addr = served.udp_addr().expect("UDP on the interface's address");
+        let addr = served.udp_addr().expect("UDP on the node's address");
         assert_eq!(addr, SocketAddr::from((ip, SDO_UDP_PORT)));
         let client = UdpSocket::bind(("0.0.0.0", 0)).unwrap();
         // No MN: the node answers over UDP once it has left Initialisation for Basic Ethernet

@@ -36,6 +36,7 @@ use crate::runner::DutFactory;
 pub(crate) const BUS: Bus = Bus {
     name: "pnio",
     title: "PROFINET IO",
+    url: "pnio://IFACE[/NAME][?rr=N]",
     profiles,
     parse_step: step::parse,
     embedded,
