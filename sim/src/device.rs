@@ -1077,7 +1077,10 @@ mod tests {
                 firmware,
                 ..DeviceConfig::new(Product::Tu3Pnt)
             });
-            (read_interface(&mut d, 171, 1), read_interface(&mut d, 171, 2))
+            (
+                read_interface(&mut d, 171, 1),
+                read_interface(&mut d, 171, 2),
+            )
         };
         // V 1.0 R4 (BU 0590's version list), and the next revision.
         assert_eq!(module(Firmware::Release), (10, 4));
