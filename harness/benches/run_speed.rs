@@ -1,4 +1,7 @@
-//! Prints how fast the default run goes: cases per second of the full embedded run.
+//! Prints how fast the default run goes: cases per second of the full embedded run. **One
+//! operation is one case-run**: one case under one profile against the embedded simulator,
+//! opened, its steps run and judged (a model case's compute steps alone), as `harness run`
+//! counts them; no reports are written.
 //!
 //! `cargo bench -p harness --bench run_speed`. A bench, not a timed test: it prints figures and
 //! asserts nothing about time.

@@ -43,6 +43,12 @@ Operations, run in order, one JSON line each on stdout:
                                 writes HEX to the record once (when given), then N reads back
                                 to back, each request built and each reply parsed by scapy:
                                 reads per second
+  bench-access N INDEX SLOT SUBSLOT HEX
+                                N parameter accesses: each writes the PKW order HEX to the
+                                record, then reads the record until the answer carries the
+                                order's value (PNIO status 0 with 8 bytes of the order's PNU
+                                and IND, response label 1, 2, 4 or 5), a "Read Response (-)"
+                                (DE80B500) read again: accesses per second, reads per access
   dcp-identify [NAME]           DCP Identify All (or by NameOfStation) on --iface, answers
                                 collected for --timeout seconds
   dcp-set-name MAC NAME         DCP Set NameOfStation, sent as given (no name check: for the
@@ -928,6 +934,63 @@ class Controller:
             line["error"] = f"{issues_seen} replies did not parse: {first.get('first_error')}"
         return line
 
+    def bench_access(self, line, n, index, slot, subslot, order, max_reads=1000):
+        """N complete parameter accesses, each as the harness's bench makes them: the order
+        written (IODWrite), then IODRead until the answer with the value."""
+        line.update(index=index, slot=slot, subslot=subslot, accesses=n)
+        want = order[:2], order[2:4]
+
+        def pnu_of(b):
+            return int.from_bytes(b, "big") & 0x07FF
+
+        done, reads, busy, times, answer, error = 0, 0, 0, [], None, None
+        start = time.perf_counter()
+        for i in range(n):
+            t = time.perf_counter()
+            w = self.write({"op": "write"}, index, slot, subslot, order)
+            if not w.get("ok"):
+                error = f"access {i + 1}: write: {w.get('error')}"
+                break
+            got = None
+            for _ in range(max_reads):
+                sub = {"op": "read"}
+                self.read(sub, index, slot, subslot, self.a.read_max)
+                reads += 1
+                st = sub.get("pnio_status")
+                if st == "DE80B500":
+                    busy += 1
+                    continue
+                if st != "00000000" or sub.get("parse_issues"):
+                    error = f"access {i + 1}: read: {sub.get('error') or st}"
+                    break
+                got = bytes.fromhex(sub.get("data", ""))
+                break
+            if error:
+                break
+            if got is None:
+                error = f"access {i + 1}: no answer with the value after {max_reads} reads"
+                break
+            ak = got[0] >> 4 if got else None
+            if (len(got) != 8 or ak not in (1, 2, 4, 5) or pnu_of(got[:2]) != pnu_of(want[0])
+                    or got[2:4] != want[1]):
+                error = f"access {i + 1}: answer {got.hex()} is not the value of order {order.hex()}"
+                break
+            answer = answer or got.hex()
+            times.append(time.perf_counter() - t)
+            done += 1
+        secs = time.perf_counter() - start
+        times.sort()
+        line.update(done=done, reads=reads, busy=busy, seconds=round(secs, 6),
+                    accesses_per_s=round(done / secs, 1) if secs > 0 else None,
+                    p50_us=round(times[len(times) // 2] * 1e6) if times else None,
+                    p99_us=round(times[min(len(times) - 1, len(times) * 99 // 100)] * 1e6)
+                    if times else None,
+                    answer=answer)
+        line["ok"] = error is None and done == n
+        if error:
+            line["error"] = error
+        return line
+
     # -- DCP through scapy's pnio_dcp on a raw socket -------------------------------------------
     def dcp_open(self):
         if self.dcp_sock is None:
@@ -1125,7 +1188,8 @@ def odd_pad(dcp, block_bytes):
 # --- command line -----------------------------------------------------------------------------
 
 ARITY = {"connect": 0, "device-access": 0, "prm-end": 0, "appl-ready": 0, "write": 4, "read": (3, 4), "read-implicit": (3, 4),
-         "release": 0, "bench-read": (4, 5), "dcp-identify": (0, 1), "dcp-set-name": 2,
+         "release": 0, "bench-read": (4, 5), "bench-access": 5, "dcp-identify": (0, 1),
+         "dcp-set-name": 2,
          "dcp-set-ip": 4}
 
 
@@ -1158,6 +1222,12 @@ def parse_ops(tokens, read_max):
             args = [number(args[0], "N", 1, 10_000_000), number(args[1], "index", 0, 0xFFFF),
                     number(args[2], "slot", 0, 0xFFFF), number(args[3], "subslot", 0, 0xFFFF),
                     hex_bytes(args[4]) if len(args) > 4 else None]
+        elif name == "bench-access":
+            args = [number(args[0], "N", 1, 10_000_000), number(args[1], "index", 0, 0xFFFF),
+                    number(args[2], "slot", 0, 0xFFFF), number(args[3], "subslot", 0, 0xFFFF),
+                    hex_bytes(args[4])]
+            if len(args[4]) != 8:
+                raise UsageError(f"bench-access: a PKW order is 8 bytes, got {len(args[4])}")
         elif name == "dcp-set-name":
             args = [mac_arg(args[0]), args[1]]
         elif name == "dcp-set-ip":
@@ -1192,6 +1262,8 @@ def run_op(c, name, args):
             return c.read(line, *args, implicit=True)
         if name == "bench-read":
             return c.bench_read(line, *args)
+        if name == "bench-access":
+            return c.bench_access(line, *args)
         if name == "dcp-identify":
             return c.dcp_identify(line, *args)
         if name == "dcp-set-name":

@@ -1,10 +1,14 @@
 //! What the speed benches share (each bench target includes this file as its `common`
-//! module): the interop venv's Python and its bench scripts, clients run concurrently, and the
-//! wording of a target met. The figures themselves are in `harness::stats`.
+//! module): the interop venv's Python and its bench scripts, clients run concurrently, the
+//! wording of a target met, and the second network namespace the raw-Ethernet benches put
+//! their clients in (so that neither end of their veth pair has an address in the root
+//! namespace, where a test running meanwhile may use the same subnet). The figures themselves
+//! are in `harness::stats`.
 
 // Each bench uses part of this.
 #![allow(dead_code)]
 
+use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::Barrier;
@@ -171,5 +175,109 @@ pub(crate) fn concurrent<C>(
                 secs: (end - start).as_secs_f64(),
             }),
         }
+    })
+}
+
+/// Runs `ip ARGS…`; its error message when it fails.
+pub(crate) fn ip(args: &[&str]) -> Result<(), String> {
+    let out = Command::new("ip")
+        .args(args)
+        .output()
+        .map_err(|e| format!("cannot run ip: {e}"))?;
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "ip {}: {}",
+            args.join(" "),
+            String::from_utf8_lossy(&out.stderr).trim()
+        ))
+    }
+}
+
+/// The clients' namespace: the root-side end of a `tests/common/netns.rs` pair moved into a
+/// namespace of its own (named as `netns.rs` names them, so one left by a killed run is
+/// cleaned up by the next) with `addr` on it, deleted when dropped.
+pub(crate) struct ClientNs {
+    pub(crate) name: String,
+    pub(crate) iface: String,
+}
+
+impl ClientNs {
+    /// Moves `root_if` into a new namespace named after `tag` and gives it `addr` (`A.B.C.D/N`).
+    pub(crate) fn new(root_if: &str, tag: &str, addr: &str) -> Result<ClientNs, String> {
+        let name = format!("nord-test-{}-99-{tag}", std::process::id());
+        ip(&["netns", "add", &name])?;
+        let ns = ClientNs {
+            name,
+            iface: root_if.to_string(),
+        };
+        ip(&["link", "set", "dev", &ns.iface, "netns", &ns.name])?;
+        ip(&["-n", &ns.name, "link", "set", "lo", "up"])?;
+        // Moved, the end has its new namespace's defaults: IPv6 off again (no router
+        // solicitations or MLD reports on the wire).
+        let _ = Command::new("ip")
+            .args(["netns", "exec", &ns.name, "sh", "-c"])
+            .arg(format!(
+                "echo 1 > /proc/sys/net/ipv6/conf/{}/disable_ipv6",
+                ns.iface
+            ))
+            .stderr(Stdio::null())
+            .status();
+        ip(&["-n", &ns.name, "addr", "add", addr, "dev", &ns.iface])?;
+        ip(&["-n", &ns.name, "link", "set", &ns.iface, "up"])?;
+        Ok(ns)
+    }
+
+    /// Runs `f` in a thread of this namespace ([`in_netns`]).
+    pub(crate) fn run<T: Send>(&self, f: impl FnOnce() -> T + Send) -> Result<T, String> {
+        in_netns(&self.name, f)
+    }
+}
+
+impl Drop for ClientNs {
+    fn drop(&mut self) {
+        let _ = Command::new("ip")
+            .args(["netns", "del", &self.name])
+            .stderr(Stdio::null())
+            .status();
+    }
+}
+
+/// Waits (5 s at most) until `ip -n NS link show dev IFACE` says the link is up with its
+/// queueing discipline attached.
+pub(crate) fn wait_carrier(ns: &str, iface: &str) -> Result<(), String> {
+    let start = Instant::now();
+    loop {
+        let out = Command::new("ip")
+            .args(["-n", ns, "-o", "link", "show", "dev", iface])
+            .output()
+            .map_err(|e| format!("cannot run ip: {e}"))?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        if text.contains("state UP") && !text.contains("qdisc noop") {
+            return Ok(());
+        }
+        if start.elapsed() > Duration::from_secs(5) {
+            return Err(format!("{iface} does not come up in {ns}: {text}"));
+        }
+        thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// Runs `f` in a thread of its own inside the network namespace `ns` (`/run/netns/NS`): the
+/// sockets it opens and the processes it starts are that namespace's.
+pub(crate) fn in_netns<T: Send>(ns: &str, f: impl FnOnce() -> T + Send) -> Result<T, String> {
+    use nix::sched::{setns, CloneFlags};
+    thread::scope(|scope| {
+        scope
+            .spawn(|| {
+                let fd = File::open(format!("/run/netns/{ns}"))
+                    .map_err(|e| format!("network namespace {ns}: {e}"))?;
+                setns(&fd, CloneFlags::CLONE_NEWNET)
+                    .map_err(|e| format!("setns into {ns}: {e}"))?;
+                Ok(f())
+            })
+            .join()
+            .unwrap_or_else(|_| Err(format!("the thread in {ns} panicked")))
     })
 }

@@ -4,11 +4,13 @@
 //! there with the built `harness serve ecat` (a process of its own, as a device would be),
 //! and prints, one line per figure with its target and whether it was met:
 //!
-//! - frame round trips per second of the harness master (an FPRD of the AL status register,
-//!   one frame each);
+//! - frame round trips per second of the harness master: **one operation is one frame** sent
+//!   and back, an FPRD of the AL status register;
 //! - CoE SDO uploads per second of the harness master and of pysoem (SOEM, a subprocess in
 //!   the interop venv) of the same object (1018h:01h, the vendor id), in interleaved rounds,
-//!   and the ratio of the two (target: harness ≥ 5× pysoem);
+//!   and the ratio of the two (target: harness ≥ 5× pysoem): **one operation is one complete
+//!   SDO upload**, the request written to the slave's receive mailbox and the response with
+//!   the value read from its send mailbox (an abort ends the figure with an error);
 //! - the jitter of the harness master's 1 ms process data cycle in Operational over 10 s:
 //!   p50, p99 and maximum of |interval − cycle| between the kernel's receive stamps
 //!   (SO_TIMESTAMPNS) of consecutive returning frames (target p99 < 100 µs).

@@ -6,7 +6,10 @@
 //!
 //! - explicit-message round trips per second of the harness scanner (one client, P102 of FI 1
 //!   read with Get_Attribute_Single, class 101 instance 0 attribute 102), and of the bench's
-//!   own minimal client (encode, send, receive, decode: what the simulator and loopback allow);
+//!   own minimal client (encode, send, receive, decode: what the simulator and loopback allow):
+//!   **one operation is one complete parameter read**, the request sent and the reply with
+//!   the value and CIP status 0 received (EtherNet/IP answers a parameter read in one
+//!   exchange; another status ends the figure with an error);
 //! - the same for pycomm3 (a subprocess in the interop venv) and the ratio of the two;
 //! - the simulator's Get_Attribute_Single throughput with 8 concurrent harness scanners;
 //! - the arrival jitter of a class-1 Exclusive Owner connection (SK 550P assemblies 100/101,

@@ -5,22 +5,25 @@
 //! Ethernet, and SDO over UDP 3819 on the inner end's IPv4 address), and prints, one line per
 //! figure with its target and whether it was met:
 //!
-//! - SDO reads per second of the harness managing node (1018h:01h, the vendor id, expedited)
-//!   with the node in PRE_OPERATIONAL_2: over ASnd at the 1 ms cycle and at 400 µs (an ASnd
-//!   read takes at least two cycles: the MN's slot for the request, an invite for the answer),
-//!   and over UDP beside the running 1 ms cycle;
+//! - SDO reads per second of the harness managing node with the node in PRE_OPERATIONAL_2:
+//!   **one operation is one complete SDO read** of 1018h:01h (the vendor id, expedited): the
+//!   upload request sent, the node's answer with the value received (an SDO abort would end
+//!   the figure with an error). Over ASnd at the 1 ms cycle and at 400 µs (an ASnd read takes
+//!   at least two cycles: the MN's slot for the request, an invite for the answer), and over
+//!   UDP beside the running 1 ms cycle;
 //! - the isochronous cycle the MN sustains with the node OPERATIONAL at 1 ms (P858's factory
-//!   setting) and at 400 µs (P858's minimum, BU 0620 §4.2.3), 10 s each: PRes missed (not
-//!   within the MN's reply time) and p50, p99 and maximum of |interval − cycle| between the
-//!   kernel's receive stamps (SO_TIMESTAMPNS) of consecutive PRes (targets: p99 < 100 µs at
-//!   1 ms; no PRes missed in 10 s at 400 µs).
+//!   setting) and at 400 µs (P858's minimum, BU 0620 §4.2.3), 10 s each: **one operation is
+//!   one cycle** (SoC, PReq, the node's PRes, SoA); PRes missed (not within the MN's reply
+//!   time) and p50, p99 and maximum of |interval − cycle| between the kernel's receive stamps
+//!   (SO_TIMESTAMPNS) of consecutive PRes (targets: p99 < 100 µs at 1 ms; no PRes missed in
+//!   10 s at 400 µs).
 //!
-//! The MN runs in this (the root) namespace on the root end of the pair, as `harness run`
-//! runs it; the node in the namespace on the other, at a real-time priority (`chrt -f 10`)
-//! where it can, standing in for a device with a processor of its own. The pair gets a /30 of
-//! 10.230.0.0/16 chosen by this process's id, not the POWERLINK subnet 192.168.100.0/24
-//! (BU 0620 §3.7.3): a test running meanwhile with that subnet on a veth end of its own in
-//! this namespace would take the node's datagrams.
+//! The node runs in one network namespace on one end of the pair, at 192.168.100.1 (node 1's
+//! address, BU 0620 §3.7.3: `harness serve epl` serves SDO over UDP on the node's address), at
+//! a real-time priority (`chrt -f 10`) where it can, standing in for a device with a processor
+//! of its own; the MN runs in threads of this process inside a second namespace on the other
+//! end, at 192.168.100.240, as `harness run` runs it. Neither end is in the root namespace,
+//! where a test running meanwhile may have the POWERLINK subnet on a veth end of its own.
 //!
 //! `cargo bench -p harness --bench epl -- WORD…` runs only the figures whose key
 //! (`sdo-asnd-1ms`, `sdo-asnd-400us`, `sdo-udp`, `cycle-1ms`, `cycle-400us`) contains one of
@@ -29,7 +32,7 @@
 //! says why and exits 0.
 
 use std::io::{BufRead, BufReader};
-use std::net::{Ipv4Addr, SocketAddr};
+use std::net::SocketAddr;
 use std::process::{Child, Stdio};
 use std::sync::mpsc;
 use std::time::Duration;
@@ -46,7 +49,7 @@ mod netns;
 #[path = "../../../tests/common/peer.rs"]
 mod peer;
 
-use common::met;
+use common::{ip, met, wait_carrier, ClientNs};
 use netns::Netns;
 
 /// The p99 of |interval − cycle| of the PRes arrivals must stay below this at 1 ms.
@@ -117,24 +120,12 @@ fn cannot_run() -> Option<String> {
     None
 }
 
-/// The pair's addresses: a /30 of 10.230.0.0/16 by this process's id (root end, inner end).
-fn addresses() -> (Ipv4Addr, Ipv4Addr) {
-    let pid = std::process::id();
-    let (a, b) = (((pid >> 6) & 0xFF) as u8, ((pid & 0x3F) << 2) as u8);
-    (
-        Ipv4Addr::new(10, 230, a, b + 1),
-        Ipv4Addr::new(10, 230, a, b + 2),
-    )
-}
-
 /// The served node: `harness serve epl` inside the namespace, killed when dropped.
 struct Node(Child);
 
 impl Node {
     /// Starts `harness serve epl --iface IFACE` inside `ns` for `seconds` at most (under
     /// `chrt -f 10` when `realtime`), and waits (10 s at most) for its line saying it serves.
-    /// Its note that the interface's address is not 192.168.100.1 is expected here (see the
-    /// module's comment) and not passed on.
     fn start(ns: &Netns, seconds: u64, realtime: bool) -> Result<(Node, String), String> {
         let mut command = if realtime {
             let mut c = ns.command("chrt");
@@ -162,9 +153,7 @@ impl Node {
         let node = Node(child);
         std::thread::spawn(move || {
             for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-                if !line.starts_with("note: node 1 is addressed at 192.168.100.1") {
-                    eprintln!("harness serve epl: {line}");
-                }
+                eprintln!("harness serve epl: {line}");
             }
         });
         let (tx, rx) = mpsc::channel();
@@ -193,8 +182,20 @@ impl Drop for Node {
 /// a figure that fails prints why and the rest go on.
 fn run(s: &Settings) -> Result<(), String> {
     let ns = Netns::new("epl-bench");
-    let (root_ip, node_ip) = addresses();
-    ns.add_ipv4(&format!("{root_ip}/30"), &format!("{node_ip}/30"));
+    let node_ip = proto::nord::epl::ip_address(epl_bench::NODE);
+    let mn_ip = proto::nord::epl::ip_address(proto::epl::MN_NODE_ID);
+    ip(&[
+        "-n",
+        ns.name(),
+        "addr",
+        "add",
+        &format!("{node_ip}/24"),
+        "dev",
+        ns.ns_if(),
+    ])?;
+    let mn = ClientNs::new(ns.root_if(), "epl-bench-mn", &format!("{mn_ip}/24"))?;
+    wait_carrier(ns.name(), ns.ns_if())?;
+    wait_carrier(&mn.name, &mn.iface)?;
     // The node stands in for a device, which has a processor of its own: served at a
     // real-time priority, a busy machine does not delay its PRes by a time slice (at 400 µs a
     // served node at normal priority missed 59 of 25,000 PRes on a loaded 2-core machine, at
@@ -207,11 +208,12 @@ fn run(s: &Settings) -> Result<(), String> {
             (node, line, "normal priority")
         }
     };
-    let iface = ns.root_if().to_string();
+    let iface = mn.iface.clone();
     let udp = SocketAddr::from((node_ip, proto::epl::SDO_UDP_PORT));
     println!(
-        "POWERLINK bench: {line}, at {priority}, namespace {}; managing node on {iface} ({root_ip})",
-        ns.name()
+        "POWERLINK bench: {line}, at {priority}, namespace {}; managing node on {iface} ({mn_ip}/24) in {}",
+        ns.name(),
+        mn.name
     );
 
     for (key, via, cycle, count, what) in [
@@ -245,7 +247,7 @@ fn run(s: &Settings) -> Result<(), String> {
             epl_bench::INDEX,
             epl_bench::SUB
         );
-        match epl_bench::sdo_reads(&iface, udp, via, cycle, count, s.limit) {
+        match mn.run(|| epl_bench::sdo_reads(&iface, udp, via, cycle, count, s.limit))? {
             Ok(r) => {
                 let per_cycle = if via == Transport::Asnd {
                     format!(
@@ -270,7 +272,7 @@ fn run(s: &Settings) -> Result<(), String> {
             cycle.as_micros(),
             s.record.as_secs_f64()
         );
-        match epl_bench::cycles(&iface, udp, cycle, s.record) {
+        match mn.run(|| epl_bench::cycles(&iface, udp, cycle, s.record))? {
             Ok(c) => {
                 let sustained = c.elapsed / c.cycles.max(1);
                 let target = if cycle == MIN_CYCLE {
@@ -313,6 +315,7 @@ fn run(s: &Settings) -> Result<(), String> {
         }
     }
     drop(node);
+    drop(mn);
     drop(ns);
     Ok(())
 }

@@ -10,14 +10,17 @@
 //! started from a thread inside the controller's. It prints, one line per figure with its
 //! target and whether it was met:
 //!
-//! - record read round trips per second of the harness IO controller, in data exchange at the
-//!   1 ms send clock (the cyclic exchange running while it awaits each answer), and p50/p99 of
-//!   one read: the PKW order "read P102" written to data record 101 (FI 1) once, then IODRead
-//!   of record 101 back to back (the first answer carries the order's answer, the rest the
-//!   documented "Read Response (−)" DE 80 B5 00: no order pending; BU 0620 §2.5.6.2);
-//! - the same for scapy's PROFINET layers (`tests/interop/scapy_pnio_peer.py bench-read`, a
-//!   subprocess in the interop venv: Connect with the same submodules, then the same write
-//!   and reads in its AR), and the ratio of the two (target: harness ≥ 5× scapy);
+//! - parameter accesses per second of the harness IO controller, in data exchange at the 1 ms
+//!   send clock (the cyclic exchange running while it awaits each answer), and p50/p99 of one
+//!   access. **One operation is one complete parameter access**, what "read P102" is for a
+//!   user (BU 0620 §2.5.6.2): the PKW order "request parameter value P102" written to data
+//!   record 101 (FI 1) with IODWrite, then IODRead of record 101 until the answer carries the
+//!   value (reads before the inverter has processed the order get the documented "Read
+//!   Response (−)", DE 80 B5 00, and are read again; the reads an access took are counted);
+//! - the same accesses by scapy's PROFINET layers (`tests/interop/scapy_pnio_peer.py
+//!   bench-access`, a subprocess in the interop venv: Connect with the same submodules, then
+//!   the same write and reads until the value, in its AR), and the ratio of the two (target:
+//!   harness ≥ 5× scapy);
 //! - the jitter of the device's input CR frames at 1 ms over 10 s of data exchange: count,
 //!   mean interval, and p50, p99 and maximum of |interval − 1 ms| between the kernel's receive
 //!   stamps (SO_TIMESTAMPNS) on the controller's end of consecutive cycles (target p99
@@ -28,7 +31,6 @@
 //! not a timed test: bounded in count and time (about 15 s), nothing asserts on time, a missed
 //! target is printed, not failed. Without root (or without `ip`) it says why and exits 0.
 
-use std::fs::File;
 use std::net::Ipv4Addr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -37,7 +39,6 @@ use std::time::{Duration, Instant};
 use harness::pnio_bench::{self, Session};
 use harness::pnio_serve::{self, ServeOptions};
 use harness::stats::{jitter, percentile};
-use nix::sched::{setns, CloneFlags};
 use proto::nord::Product;
 
 #[path = "../common/mod.rs"]
@@ -49,10 +50,11 @@ mod netns;
 #[path = "../../../tests/common/peer.rs"]
 mod peer;
 
-use common::{met, run_script, Script};
+use common::{in_netns, ip, met, run_script, wait_carrier, ClientNs, Script};
 use netns::Netns;
 
-/// The harness must make at least this many record reads per read of the scapy client.
+/// The harness must make at least this many parameter accesses per access of the scapy
+/// client.
 const TARGET_RATIO: f64 = 5.0;
 /// The p99 of |interval − cycle| of the input CR's frames must stay below this.
 const TARGET_P99: Duration = Duration::from_micros(100);
@@ -67,11 +69,11 @@ const PRODUCT: Product = Product::Sk550p;
 /// What to measure, and the bounds of each figure.
 #[derive(Debug, Clone)]
 struct Settings {
-    /// Record reads of the harness, at most.
-    reads: u32,
-    /// Record reads of the scapy client, at most.
-    scapy_reads: u32,
-    /// Time limit of each read figure.
+    /// Parameter accesses of the harness, at most.
+    accesses: u32,
+    /// Parameter accesses of the scapy client, at most.
+    scapy_accesses: u32,
+    /// Time limit of each access figure.
     limit: Duration,
     /// How long the input CR's frames are stamped.
     record: Duration,
@@ -82,12 +84,12 @@ struct Settings {
 }
 
 impl Settings {
-    /// The issue's bounds: 2,000 harness reads and 1,000 scapy reads, each within 10 s; 10 s
-    /// of input frames at 1 ms.
+    /// 2,000 harness accesses and 500 scapy accesses, each within 10 s; 10 s of input frames
+    /// at 1 ms.
     fn new() -> Settings {
         Settings {
-            reads: 2_000,
-            scapy_reads: 1_000,
+            accesses: 2_000,
+            scapy_accesses: 500,
             limit: Duration::from_secs(10),
             record: Duration::from_secs(10),
             python: common::interop_python(),
@@ -120,111 +122,6 @@ fn cannot_run() -> Option<String> {
         return Some("needs `ip` (iproute2) for the network namespaces".into());
     }
     None
-}
-
-/// Runs `ip ARGS…`; its error message when it fails.
-fn ip(args: &[&str]) -> Result<(), String> {
-    let out = Command::new("ip")
-        .args(args)
-        .output()
-        .map_err(|e| format!("cannot run ip: {e}"))?;
-    if out.status.success() {
-        Ok(())
-    } else {
-        Err(format!(
-            "ip {}: {}",
-            args.join(" "),
-            String::from_utf8_lossy(&out.stderr).trim()
-        ))
-    }
-}
-
-/// The controller's namespace: the root-side end of [`Netns`]'s pair moved into a namespace of
-/// its own (named as `netns.rs` names them, so a run that was killed is cleaned up by the
-/// next), deleted when dropped.
-struct ControllerNs {
-    name: String,
-    iface: String,
-}
-
-impl ControllerNs {
-    fn new(device: &Netns) -> Result<ControllerNs, String> {
-        let name = format!("nord-test-{}-99-pnio-bench-ctl", std::process::id());
-        ip(&["netns", "add", &name])?;
-        let ns = ControllerNs {
-            name,
-            iface: device.root_if().to_string(),
-        };
-        ip(&["link", "set", "dev", &ns.iface, "netns", &ns.name])?;
-        ip(&["-n", &ns.name, "link", "set", "lo", "up"])?;
-        // Moved, the end has its new namespace's defaults: IPv6 off again (no router
-        // solicitations or MLD reports on the wire).
-        let _ = Command::new("ip")
-            .args(["netns", "exec", &ns.name, "sh", "-c"])
-            .arg(format!(
-                "echo 1 > /proc/sys/net/ipv6/conf/{}/disable_ipv6",
-                ns.iface
-            ))
-            .stderr(Stdio::null())
-            .status();
-        ip(&[
-            "-n",
-            &ns.name,
-            "addr",
-            "add",
-            &format!("{CONTROLLER_IP}/24"),
-            "dev",
-            &ns.iface,
-        ])?;
-        ip(&["-n", &ns.name, "link", "set", &ns.iface, "up"])?;
-        Ok(ns)
-    }
-}
-
-impl Drop for ControllerNs {
-    fn drop(&mut self) {
-        let _ = Command::new("ip")
-            .args(["netns", "del", &self.name])
-            .stderr(Stdio::null())
-            .status();
-    }
-}
-
-/// Waits (5 s at most) until `ip -n NS link show dev IFACE` says the link is up with its
-/// queueing discipline attached.
-fn wait_carrier(ns: &str, iface: &str) -> Result<(), String> {
-    let start = Instant::now();
-    loop {
-        let out = Command::new("ip")
-            .args(["-n", ns, "-o", "link", "show", "dev", iface])
-            .output()
-            .map_err(|e| format!("cannot run ip: {e}"))?;
-        let text = String::from_utf8_lossy(&out.stdout);
-        if text.contains("state UP") && !text.contains("qdisc noop") {
-            return Ok(());
-        }
-        if start.elapsed() > Duration::from_secs(5) {
-            return Err(format!("{iface} does not come up in {ns}: {text}"));
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-/// Runs `f` in a thread of its own inside the network namespace `ns` (`/run/netns/NS`): the
-/// sockets it opens and the processes it starts are that namespace's.
-fn in_netns<T: Send>(ns: &str, f: impl FnOnce() -> T + Send) -> Result<T, String> {
-    std::thread::scope(|scope| {
-        scope
-            .spawn(|| {
-                let fd = File::open(format!("/run/netns/{ns}"))
-                    .map_err(|e| format!("network namespace {ns}: {e}"))?;
-                setns(&fd, CloneFlags::CLONE_NEWNET)
-                    .map_err(|e| format!("setns into {ns}: {e}"))?;
-                Ok(f())
-            })
-            .join()
-            .unwrap_or_else(|_| Err(format!("the thread in {ns} panicked")))
-    })
 }
 
 /// Puts this process's device threads (`pnio-device-…`) at SCHED_FIFO 10 with `chrt`; what
@@ -261,10 +158,10 @@ fn device_realtime() -> &'static str {
     }
 }
 
-/// The harness figures: record reads, then the input frames, in one AR.
+/// The harness figures: parameter accesses, then the input frames, in one AR.
 struct Harness {
     station: String,
-    reads: Result<pnio_bench::Reads, String>,
+    accesses: Result<pnio_bench::Accesses, String>,
     frames: Result<pnio_bench::InputFrames, String>,
     release: Result<(), String>,
 }
@@ -272,19 +169,19 @@ struct Harness {
 fn harness_figures(iface: &str, s: &Settings) -> Result<Harness, String> {
     let mut session = Session::open(iface, PRODUCT, Duration::from_secs(1))?;
     let station = session.station().to_string();
-    let reads = session.record_reads(s.reads, s.limit);
+    let accesses = session.parameter_accesses(s.accesses, s.limit);
     let frames = session.input_frames(s.record);
     let release = session.release();
     Ok(Harness {
         station,
-        reads,
+        accesses,
         frames,
         release,
     })
 }
 
 /// The scapy client's arguments: the device, the same submodules as the harness, Connect,
-/// then `bench-read` (the order written once, then the reads). The client sends no PrmEnd:
+/// then `bench-access` (each access: the order written, then the reads until the value). The client sends no PrmEnd:
 /// its AR stays in parameterisation, where records are read and written as in data exchange,
 /// and no ApplicationReady (which it would not answer) ends it. It is not released: its last
 /// line is the figure, and the device stops after it.
@@ -323,8 +220,8 @@ fn scapy_args(iface: &str, s: &Settings) -> Result<Vec<String>, String> {
         .collect();
     args.extend([
         "connect".to_string(),
-        "bench-read".into(),
-        s.scapy_reads.to_string(),
+        "bench-access".into(),
+        s.scapy_accesses.to_string(),
         pnio_bench::RECORD.to_string(),
         pnio_bench::record_slot(PRODUCT)?.to_string(),
         "1".into(),
@@ -337,7 +234,11 @@ fn scapy_args(iface: &str, s: &Settings) -> Result<Vec<String>, String> {
 /// a figure that fails prints why and the rest go on.
 fn run(s: &Settings) -> Result<(), String> {
     let dev_ns = Netns::new("pnio-bench-dev");
-    let ctl_ns = ControllerNs::new(&dev_ns)?;
+    let ctl_ns = ClientNs::new(
+        dev_ns.root_if(),
+        "pnio-bench-ctl",
+        &format!("{CONTROLLER_IP}/24"),
+    )?;
     ip(&[
         "-n",
         dev_ns.name(),
@@ -368,7 +269,7 @@ fn run(s: &Settings) -> Result<(), String> {
 
     let order = pnio_bench::order();
     let what = format!(
-        "record {} (FI 1, slot {}): \"{}\" written once, then IODRead back to back",
+        "parameter accesses over record {} (FI 1, slot {}), one access = IODWrite of the order \"{}\", then IODRead until the answer with the value",
         pnio_bench::RECORD,
         pnio_bench::record_slot(PRODUCT)?,
         order.describe_order()
@@ -380,20 +281,19 @@ fn run(s: &Settings) -> Result<(), String> {
     );
 
     let head = format!("harness IO controller in data exchange at 1 ms, {what}");
-    let harness_rate = match &h.reads {
-        Ok(r) => {
-            let p = |q| percentile(&r.latencies, q).map_or(0, |d: Duration| d.as_micros());
+    let harness_rate = match &h.accesses {
+        Ok(a) => {
+            let p = |q| percentile(&a.latencies, q).map_or(0, |d: Duration| d.as_micros());
             println!(
-                "{head}: {}, p50 {} µs, p99 {} µs per read; timed answers: {} with data, {} Read Response (−), {} other; the order's answer: {}",
-                r.rate.show("reads"),
+                "{head}: {}, p50 {} µs, p99 {} µs per access; {:.2} IODReads per access ({} Read Response (−) in all); the answer: {}",
+                a.rate.show("accesses"),
                 p(50.0),
                 p(99.0),
-                r.data,
-                r.busy,
-                r.other,
-                r.answer.as_deref().unwrap_or("none")
+                a.reads as f64 / a.rate.count.max(1) as f64,
+                a.busy,
+                a.answer.as_deref().unwrap_or("none")
             );
-            Some(r.rate.per_sec())
+            Some(a.rate.per_sec())
         }
         Err(e) => {
             println!("{head}: failed ({e})");
@@ -406,7 +306,7 @@ fn run(s: &Settings) -> Result<(), String> {
     let scapy = match (&h.release, scapy_args(&ctl_ns.iface, s)) {
         (Err(e), _) => Script::Failed(format!("the harness's AR was not released: {e}")),
         (_, Err(e)) => Script::Failed(e),
-        (Ok(()), Ok(args)) => in_netns(&ctl_ns.name, || {
+        (Ok(()), Ok(args)) => ctl_ns.run(|| {
             run_script(
                 s.python.as_deref(),
                 &s.script,
@@ -420,36 +320,26 @@ fn run(s: &Settings) -> Result<(), String> {
         Script::Skipped(why) => println!("{head}: skipped ({why})"),
         Script::Failed(why) => println!("{head}: failed ({why})"),
         Script::Ran(v) => {
-            let answered = v["answered"].as_u64().unwrap_or(0);
+            let done = v["done"].as_u64().unwrap_or(0);
             let secs = v["seconds"].as_f64().unwrap_or(0.0);
-            let rate = if secs > 0.0 {
-                answered as f64 / secs
-            } else {
-                0.0
-            };
-            let write_ok = v["write"]["ok"].as_bool().unwrap_or(false);
+            let rate = if secs > 0.0 { done as f64 / secs } else { 0.0 };
             println!(
-                "{head}: {answered} reads in {secs:.3} s = {rate:.0}/s, mean {} µs per read; PNIO statuses {}; write {}{}",
-                if answered > 0 {
-                    (secs * 1e6 / answered as f64).round()
-                } else {
-                    0.0
-                },
-                v["statuses"],
-                if write_ok { "ok" } else { "NOT ok" },
-                v["error"]
-                    .as_str()
-                    .map_or(String::new(), |e| format!(" ({e})"))
+                "{head}: {done} accesses in {secs:.3} s = {rate:.0}/s, p50 {} µs, p99 {} µs per access; {:.2} IODReads per access ({} Read Response (−) in all); the answer: {}",
+                v["p50_us"],
+                v["p99_us"],
+                v["reads"].as_u64().unwrap_or(0) as f64 / done.max(1) as f64,
+                v["busy"],
+                v["answer"].as_str().unwrap_or("none")
             );
             match harness_rate {
                 Some(hr) if rate > 0.0 => {
                     let ratio = hr / rate;
                     println!(
-                        "harness/scapy record reads: {ratio:.1}x (target >= {TARGET_RATIO:.0}x: {})",
+                        "harness/scapy parameter accesses: {ratio:.1}x (target >= {TARGET_RATIO:.0}x: {})",
                         met(ratio >= TARGET_RATIO)
                     );
                 }
-                _ => println!("harness/scapy record reads: no ratio (a figure is missing)"),
+                _ => println!("harness/scapy parameter accesses: no ratio (a figure is missing)"),
             }
         }
     }

@@ -1,14 +1,19 @@
 //! What the PROFINET speed bench (`harness/benches/pnio/`, `cargo bench -p harness --bench
 //! pnio`) needs of the library, and nothing of the bench itself: the harness's own IO controller
 //! (the one `harness run --dut pnio://IFACE` drives) on a network interface, in data exchange
-//! with the device, reading a data record back to back and keeping the kernel's receive stamps
-//! of the input CR's frames. The bench's network namespaces and served device are in the bench
-//! target; its statistics in [`crate::stats`].
+//! with the device, making complete parameter accesses over a data record and keeping the
+//! kernel's receive stamps of the input CR's frames. The bench's network namespaces and served
+//! device are in the bench target; its statistics in [`crate::stats`].
 //!
 //! [`Session::open`] finds the device by DCP (the only one answering), connects with the DAP
 //! and the controller's default module (PPO 4) in FI 1's slot, and waits for the device's
 //! ApplicationReady: data exchange at the 1 ms send clock, WatchdogFactor 100. The controller
 //! records no transcript (a suite run's recording decodes every exchange).
+//!
+//! One parameter access is what a user's "read P102" over PROFINET is (BU 0620 §2.5.6.2): the
+//! PKW order written to the record (IODWrite), then the record read (IODRead) until the answer
+//! carries the value: a read before the inverter has processed the order is answered "Read
+//! Response (−)" (PNIO status DE 80 B5 00) and is read again.
 
 use std::time::{Duration, Instant};
 
@@ -29,10 +34,9 @@ use crate::stats::Rate;
 
 /// The record read: 101, FI 1's parameter channel (BU 0620 §2.5.6.2), in FI 1's slot.
 pub const RECORD: u16 = 101;
-/// The parameter whose PKW order is written to [`RECORD`] before the reads: P102 (ramp-up
-/// time), read (AK 1) at index 0.
+/// The parameter each access reads: P102 (ramp-up time), read (AK 1) at index 0.
 pub const PARAMETER: u16 = 102;
-/// The PKW order written to [`RECORD`] once before the reads: "request parameter value" of
+/// The PKW order each access writes to [`RECORD`]: "request parameter value" of
 /// [`PARAMETER`] (PNU + 1000 on PROFINET).
 pub fn order() -> PkwRepr {
     PkwRepr {
@@ -44,8 +48,23 @@ pub fn order() -> PkwRepr {
     }
 }
 
-/// Reads each figure makes before it is timed.
-const WARM_UP: u32 = 50;
+/// Accesses each figure makes before it is timed.
+const WARM_UP: u32 = 20;
+
+/// Reads of one access at most before it is given up: at 1 ms per inverter cycle and some
+/// 200 µs per read, an answer comes within a few reads.
+pub const MAX_READS: u32 = 1_000;
+
+/// Whether `answer` is the value answer to [`order`]: a response label that transfers a value
+/// (1 word, 2 double word, 4 and 5 their array forms; BU 0620 §2.5.6.3), the order's PNU and
+/// index.
+pub fn is_value_answer(answer: &PkwRepr) -> bool {
+    use proto::nord::pkw::ResponseLabel as R;
+    let o = order();
+    [R::WORD, R::DWORD, R::ARRAY_WORD, R::ARRAY_DWORD].contains(&R(answer.ak))
+        && answer.pnu == o.pnu
+        && answer.ind == o.ind
+}
 
 /// The submodules a Connect expects of `product`: the DAP's, and the default module (PPO 4,
 /// else PPO 2) in FI 1's slot: what [`Session::open`] connects with, for another client to
@@ -158,22 +177,19 @@ pub struct Session {
     station: String,
 }
 
-/// What [`Session::record_reads`] measured.
+/// What [`Session::parameter_accesses`] measured.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Reads {
-    /// Timed reads and their time.
+pub struct Accesses {
+    /// Timed accesses and their time.
     pub rate: Rate,
-    /// The round trip of each timed read, ascending.
+    /// The time of each timed access, from the IODWrite's request to the answer with the
+    /// value, ascending.
     pub latencies: Vec<Duration>,
-    /// Timed reads answered positively with data (the order's answer comes once, mostly in
-    /// the warm-up).
-    pub data: u64,
-    /// Reads answered "Read Response (−)" (DE 80 B5 00: no order pending).
+    /// IODReads of the timed accesses, the answering one included.
+    pub reads: u64,
+    /// Of those, the ones answered "Read Response (−)" (DE 80 B5 00: not processed yet).
     pub busy: u64,
-    /// Reads answered with another PNIO status.
-    pub other: u64,
-    /// The PKW answer the first positive read (warm-up or timed) carried, in the manual's
-    /// terms.
+    /// The PKW answer of the first access, in the manual's terms.
     pub answer: Option<String>,
 }
 
@@ -246,22 +262,12 @@ impl Session {
         &self.station
     }
 
-    /// Writes [`order`] to [`RECORD`] once, then reads [`RECORD`] back to back (IODRead in the
-    /// AR, the cyclic exchange running while each answer is awaited), [`WARM_UP`] untimed, then
-    /// up to `count` within `limit`, each timed. An RPC error or a missing answer ends the
-    /// figure with an error; a negative IODRead response is an answer like any other.
-    pub fn record_reads(&mut self, count: u32, limit: Duration) -> Result<Reads, String> {
-        let mut reads = Reads {
-            rate: Rate {
-                count: 0,
-                secs: 0.0,
-            },
-            latencies: Vec::with_capacity(count as usize),
-            data: 0,
-            busy: 0,
-            other: 0,
-            answer: None,
-        };
+    /// One parameter access: [`order`] written to [`RECORD`] (IODWrite in the AR), then
+    /// IODRead of [`RECORD`] (the cyclic exchange running while each answer is awaited) until
+    /// the answer carries the value ([`is_value_answer`]). Returns the reads it took, those
+    /// answered "Read Response (−)", and the answer. A refused write, another PNIO status, an
+    /// answer that is not the value's, or [`MAX_READS`] reads without one, is an error.
+    fn access(&mut self) -> Result<(u64, u64, PkwRepr), String> {
         let order = order();
         let status = self
             .ctl
@@ -279,47 +285,74 @@ impl Session {
                 order.describe_order()
             ));
         }
-        let one = |ctl: &mut Controller<Stamping>, reads: &mut Reads| -> Result<(), String> {
-            let (status, data) = ctl
+        let mut busy = 0;
+        for reads in 1..=u64::from(MAX_READS) {
+            let (status, data) = self
+                .ctl
                 .read_record(self.slot, def::IO_SUBSLOT, RECORD, String::new())
                 .map_err(|e| format!("IODRead record {RECORD}: {e}"))?;
-            if status.is_ok() {
-                reads.data += 1;
-                if reads.answer.is_none() {
-                    reads.answer = Some(match PkwRepr::parse(&data) {
-                        Ok(p) => p.describe_response(),
-                        Err(e) => format!("{data:02X?} ({e})"),
-                    });
-                }
-            } else if status == def::busy_status() {
-                reads.busy += 1;
-            } else {
-                reads.other += 1;
+            if status == def::busy_status() {
+                busy += 1;
+                continue;
             }
-            Ok(())
-        };
-        let mut warm = Reads {
-            latencies: Vec::new(),
-            ..reads.clone()
-        };
-        for i in 0..WARM_UP {
-            one(&mut self.ctl, &mut warm).map_err(|e| format!("{e} (warm-up read {})", i + 1))?;
+            if !status.is_ok() {
+                return Err(format!("IODRead record {RECORD}: {status}"));
+            }
+            let answer = PkwRepr::parse(&data)
+                .map_err(|e| format!("IODRead record {RECORD}: {data:02X?} ({e})"))?;
+            if !is_value_answer(&answer) {
+                return Err(format!(
+                    "IODRead record {RECORD} answered {}, not the value of {}",
+                    answer.describe_response(),
+                    order.describe_order()
+                ));
+            }
+            return Ok((reads, busy, answer));
         }
-        reads.answer = warm.answer;
+        Err(format!(
+            "no answer with the value after {MAX_READS} IODReads of record {RECORD}"
+        ))
+    }
+
+    /// [`WARM_UP`] parameter accesses untimed, then up to `count` within `limit`, each timed
+    /// (one access: the PKW order written, then the record read until the answer with the
+    /// value; see the module's documentation).
+    pub fn parameter_accesses(&mut self, count: u32, limit: Duration) -> Result<Accesses, String> {
+        let mut answer = None;
+        for i in 0..WARM_UP {
+            let (_, _, a) = self
+                .access()
+                .map_err(|e| format!("{e} (warm-up access {})", i + 1))?;
+            answer.get_or_insert_with(|| a.describe_response());
+        }
+        let mut got = Accesses {
+            rate: Rate {
+                count: 0,
+                secs: 0.0,
+            },
+            latencies: Vec::with_capacity(count as usize),
+            reads: 0,
+            busy: 0,
+            answer,
+        };
         let start = Instant::now();
         let mut n = 0u64;
         while n < u64::from(count) && start.elapsed() < limit {
             let t = Instant::now();
-            one(&mut self.ctl, &mut reads).map_err(|e| format!("{e} (after {n} timed reads)"))?;
-            reads.latencies.push(t.elapsed());
+            let (reads, busy, _) = self
+                .access()
+                .map_err(|e| format!("{e} (after {n} timed accesses)"))?;
+            got.latencies.push(t.elapsed());
+            got.reads += reads;
+            got.busy += busy;
             n += 1;
         }
-        reads.rate = Rate {
+        got.rate = Rate {
             count: n,
             secs: start.elapsed().as_secs_f64(),
         };
-        reads.latencies.sort_unstable();
-        Ok(reads)
+        got.latencies.sort_unstable();
+        Ok(got)
     }
 
     /// Keeps the AR in data exchange for `duration` (after 100 ms untimed), the controller's
@@ -400,5 +433,24 @@ mod tests {
             record_slot(Product::Sk550p).unwrap()
         );
         assert_eq!(order().pnu, 1102);
+    }
+
+    #[test]
+    fn only_the_value_of_the_order_ends_an_access() {
+        let value = PkwRepr {
+            ak: 1,
+            pwe: 300,
+            ..order()
+        };
+        assert!(is_value_answer(&value));
+        assert!(is_value_answer(&PkwRepr { ak: 2, ..value }));
+        // Refused (AK 7), no answer yet (AK 0), another parameter's or index's answer.
+        assert!(!is_value_answer(&PkwRepr { ak: 7, ..value }));
+        assert!(!is_value_answer(&PkwRepr { ak: 0, ..value }));
+        assert!(!is_value_answer(&PkwRepr { pnu: 1103, ..value }));
+        assert!(!is_value_answer(&PkwRepr {
+            ind: 0x0100,
+            ..value
+        }));
     }
 }
