@@ -299,8 +299,10 @@ fn run_side_by_side(
     let queue = std::sync::Mutex::new(queue.into_iter());
     let (filter, retries, stop) = (opts.filter.clone(), opts.retries, opts.stop);
     let profiles = &opts.profiles.clone();
-    let mut slots: Vec<Vec<Option<CaseResult>>> =
-        plan.iter().map(|runs| runs.iter().map(|_| None).collect()).collect();
+    let mut slots: Vec<Vec<Option<CaseResult>>> = plan
+        .iter()
+        .map(|runs| runs.iter().map(|_| None).collect())
+        .collect();
     std::thread::scope(|s| {
         let (tx, rx) = std::sync::mpsc::channel();
         let mut forks = vec![fork];
@@ -1538,9 +1540,20 @@ cases:
         let c = &r.cases[0];
         assert_eq!(c.verdict, Verdict::Inconclusive);
         assert_eq!(c.message, "interrupted before step 2 of 2: not judged");
-        assert_eq!(c.steps.len(), 1, "the step under way finished, the next never ran");
-        assert_eq!(cleanups.get(), 1, "the cut case's cleanup ran (the check's is not counted)");
-        assert_eq!(factory.opened, 2, "the connection check and the cut case only");
+        assert_eq!(
+            c.steps.len(),
+            1,
+            "the step under way finished, the next never ran"
+        );
+        assert_eq!(
+            cleanups.get(),
+            1,
+            "the cut case's cleanup ran (the check's is not counted)"
+        );
+        assert_eq!(
+            factory.opened, 2,
+            "the connection check and the cut case only"
+        );
         let i = r.meta.interrupted.expect("marked interrupted");
         let named = |n: usize| format!("sk550p {}", loaded.cases[n].id);
         assert_eq!(i.cut, [named(0)]);

@@ -8,8 +8,7 @@ use std::path::Path;
 /// The transcript of `case` under `profile` in the report folder `out`.
 pub(crate) fn transcript(out: &Path, profile: &str, case: &str) -> String {
     let file = out.join("transcripts.txt");
-    let text =
-        std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+    let text = std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
     section(&text, profile, case)
         .unwrap_or_else(|| panic!("{}: no transcript of {profile} {case}", file.display()))
 }

@@ -100,7 +100,7 @@ fn open(
 }
 
 /// The environment variable that picks the embedded simulator's firmware release: unset or
-/// `release`, or `next` ([`Firmware::Next`]: one documented change), to compare the runs of
+/// `release`, or `next` ([`Firmware::Next`]: P856's factory value and the modules' P171 revision changed), to compare the runs of
 /// two releases with `harness diff` on the simulator. A variable rather than an option: it is
 /// a demonstration and test aid, never offered for a real DUT.
 pub(crate) const FIRMWARE_VAR: &str = "NORD_SIM_FIRMWARE";

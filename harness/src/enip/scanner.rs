@@ -853,12 +853,15 @@ impl crate::runner::DutFactory for NetworkFactory {
 fn own_connection(product: Product) -> Option<crate::description::eds::Connection> {
     type Known = Vec<(Product, Option<crate::description::eds::Connection>)>;
     static KNOWN: std::sync::Mutex<Known> = std::sync::Mutex::new(Vec::new());
-    let mut known = KNOWN.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let mut known = KNOWN
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     if let Some((_, c)) = known.iter().find(|(p, _)| *p == product) {
         return c.clone();
     }
     let text = super::eds::eds(product, product.max_inverters()).ok();
-    let owner = match text.and_then(|t| crate::description::Description::parse(&t, "own EDS").ok()) {
+    let owner = match text.and_then(|t| crate::description::Description::parse(&t, "own EDS").ok())
+    {
         Some(crate::description::Description::Eds(e)) => e.owner().cloned(),
         _ => None,
     };

@@ -281,7 +281,12 @@ mod tests {
 
         // Through run.json itself, into another folder: every file the same but for the time
         // JUnit stamps its suites with when it writes them.
-        write_all(&read(&first.join("run.json")).unwrap(), &second, Transcripts::One).unwrap();
+        write_all(
+            &read(&first.join("run.json")).unwrap(),
+            &second,
+            Transcripts::One,
+        )
+        .unwrap();
         let untimed = |f: &str| {
             let text = std::fs::read_to_string(f).unwrap();
             text.split("timestamp=\"")
@@ -332,7 +337,11 @@ mod tests {
         write_all(&sample_run(), &dir, Transcripts::One).unwrap();
         let file = dir.join("transcripts.txt");
         let text = std::fs::read_to_string(&file).unwrap();
-        std::fs::write(&file, text.replace("=== sk550p/bu0620/addressing/coe-p102\n", "")).unwrap();
+        std::fs::write(
+            &file,
+            text.replace("=== sk550p/bu0620/addressing/coe-p102\n", ""),
+        )
+        .unwrap();
         let err = read(&dir).unwrap_err();
         assert!(matches!(err, ReadError::NoSection { .. }), "{err:?}");
         assert!(
@@ -359,7 +368,10 @@ mod tests {
         );
         std::fs::write(&path, text).unwrap();
         let back = read(&dir).unwrap();
-        assert_eq!(back.cases[1].transcript, Some(transcript::render(&run.cases[1])));
+        assert_eq!(
+            back.cases[1].transcript,
+            Some(transcript::render(&run.cases[1]))
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 

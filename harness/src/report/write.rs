@@ -138,7 +138,11 @@ fn section_name(case: &CaseResult) -> String {
 /// [`TRANSCRIPTS`]' text: each transcript after its section line.
 fn transcripts_text(run: &RunResult) -> String {
     let mut text = String::new();
-    for case in run.cases.iter().filter(|c| c.verdict != Verdict::NotApplicable) {
+    for case in run
+        .cases
+        .iter()
+        .filter(|c| c.verdict != Verdict::NotApplicable)
+    {
         text.push_str(SECTION);
         text.push_str(&section_name(case));
         text.push('\n');
@@ -211,8 +215,15 @@ pub(crate) fn write_all(
 /// A transcript file per case that applied under `dir`, if given.
 fn per_case_files(run: &RunResult, dir: Option<&Path>) -> Result<(), ReportError> {
     let Some(dir) = dir else { return Ok(()) };
-    for case in run.cases.iter().filter(|c| c.verdict != Verdict::NotApplicable) {
-        write_file(&dir.join(case_file(case, "txt")), transcript::render(case).as_bytes())?;
+    for case in run
+        .cases
+        .iter()
+        .filter(|c| c.verdict != Verdict::NotApplicable)
+    {
+        write_file(
+            &dir.join(case_file(case, "txt")),
+            transcript::render(case).as_bytes(),
+        )?;
     }
     Ok(())
 }
@@ -230,7 +241,10 @@ mod tests {
         let run = sample_run();
         let w = write_all(&run, &out, Transcripts::One).unwrap();
         assert!(!stale.exists(), "stale transcript removed");
-        assert!(!out.join("transcripts").exists(), "no file per case unless asked");
+        assert!(
+            !out.join("transcripts").exists(),
+            "no file per case unless asked"
+        );
         for f in [&w.junit, &w.run_json, &w.summary, &w.html, &w.transcripts] {
             assert!(f.is_file(), "{}", f.display());
         }
@@ -246,8 +260,17 @@ mod tests {
         let text = std::fs::read_to_string(&w.transcripts).unwrap();
         let found = sections(&text);
         assert_eq!(found.len(), 5);
-        for c in run.cases.iter().filter(|c| c.verdict != Verdict::NotApplicable) {
-            assert_eq!(found[section_name(c).as_str()], transcript::render(c), "{}", c.id);
+        for c in run
+            .cases
+            .iter()
+            .filter(|c| c.verdict != Verdict::NotApplicable)
+        {
+            assert_eq!(
+                found[section_name(c).as_str()],
+                transcript::render(c),
+                "{}",
+                c.id
+            );
         }
         assert!(!found.contains_key(section_name(na).as_str()));
         assert_eq!(
@@ -271,7 +294,11 @@ mod tests {
         );
         let files: usize = ["sk550p", "tu3-eip"]
             .iter()
-            .map(|p| std::fs::read_dir(out.join("transcripts").join(p)).unwrap().count())
+            .map(|p| {
+                std::fs::read_dir(out.join("transcripts").join(p))
+                    .unwrap()
+                    .count()
+            })
             .sum();
         assert_eq!(files, w.transcript_count);
         let listed = format!("and in {}", out.join("transcripts").display());
