@@ -185,7 +185,8 @@ fn transcript_of_the_p102_write_example_is_stable() {
         "{}",
         String::from_utf8_lossy(&o.stdout)
     );
-    let transcript = transcripts::transcript(&out, "sk550p", "bu0620/pkw-telegrams/p102-write-on-the-dut");
+    let transcript =
+        transcripts::transcript(&out, "sk550p", "bu0620/pkw-telegrams/p102-write-on-the-dut");
     insta::assert_snapshot!("p102_write_transcript", transcript);
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -32,7 +32,14 @@ fn ctrl_c_cleans_up_writes_interrupted_reports_and_leaves_the_device_ready() {
     // The drive cases run their process data for seconds of real time each: three seconds in,
     // one is under way and most have not started.
     let mut child = Command::new(harness)
-        .args(["run", "--dut", &dut, "--profile", "tu3-eip", "--allow-motion"])
+        .args([
+            "run",
+            "--dut",
+            &dut,
+            "--profile",
+            "tu3-eip",
+            "--allow-motion",
+        ])
         .args(["--filter", "drive-switching", "-q", "--out"])
         .arg(&out)
         .stdout(Stdio::null())
@@ -56,7 +63,10 @@ fn ctrl_c_cleans_up_writes_interrupted_reports_and_leaves_the_device_ready() {
     };
     let stderr = std::io::read_to_string(child.stderr.take().expect("stderr")).unwrap_or_default();
     assert_eq!(status.code(), Some(130), "{stderr}");
-    assert!(stderr.contains("SIGINT: stopping after the step under way"), "{stderr}");
+    assert!(
+        stderr.contains("SIGINT: stopping after the step under way"),
+        "{stderr}"
+    );
 
     let run = run_json(&out);
     let interrupted = &run["meta"]["interrupted"];
@@ -64,8 +74,15 @@ fn ctrl_c_cleans_up_writes_interrupted_reports_and_leaves_the_device_ready() {
     assert!(!not_run.is_empty(), "{interrupted}");
     let cut = interrupted["cut"].as_array().expect("cut listed");
     for c in run["cases"].as_array().expect("cases") {
-        let named = format!("{} {}", c["profile"].as_str().unwrap(), c["id"].as_str().unwrap());
-        assert!(!not_run.iter().any(|n| n == named.as_str()), "{named} ran and is listed as not run");
+        let named = format!(
+            "{} {}",
+            c["profile"].as_str().unwrap(),
+            c["id"].as_str().unwrap()
+        );
+        assert!(
+            !not_run.iter().any(|n| n == named.as_str()),
+            "{named} ran and is listed as not run"
+        );
         if cut.iter().any(|n| n == named.as_str()) {
             assert_eq!(c["verdict"], "inconclusive", "{c}");
         } else {
@@ -73,14 +90,30 @@ fn ctrl_c_cleans_up_writes_interrupted_reports_and_leaves_the_device_ready() {
         }
     }
     let summary = std::fs::read_to_string(out.join("summary.md")).expect("summary.md");
-    assert!(summary.starts_with("**INTERRUPTED: stopped by a signal"), "{}", &summary[..200.min(summary.len())]);
+    assert!(
+        summary.starts_with("**INTERRUPTED: stopped by a signal"),
+        "{}",
+        &summary[..200.min(summary.len())]
+    );
     assert!(summary.contains("interrupted"), "the record says so");
 
     // The next run finds the device as the manuals' cases expect it.
     let next = out.join("next");
     let o = Command::new(harness)
-        .args(["run", "--dut", &dut, "--profile", "tu3-eip", "--allow-motion"])
-        .args(["--filter", "shut-down-from-switched-on-transition-6", "-q", "--out"])
+        .args([
+            "run",
+            "--dut",
+            &dut,
+            "--profile",
+            "tu3-eip",
+            "--allow-motion",
+        ])
+        .args([
+            "--filter",
+            "shut-down-from-switched-on-transition-6",
+            "-q",
+            "--out",
+        ])
         .arg(&next)
         .output()
         .expect("harness run");
