@@ -46,16 +46,11 @@ const fn def(
     }
 }
 
-/// A row whose designation is the command its value 0 gives.
-const fn def_low(
-    name: &'static str,
-    when_0: &'static str,
-    when_1: &'static str,
-    priority: [Option<u8>; 2],
-) -> BitDef {
+/// `d` as a row whose designation is the command its value 0 gives.
+const fn low(d: BitDef) -> BitDef {
     BitDef {
         active_low: true,
-        ..def(name, when_0, when_1, priority)
+        ..d
     }
 }
 
@@ -69,18 +64,18 @@ pub const BITS: [BitDef; 16] = [
         "Set the frequency inverter to standby.",
         [Some(3), Some(5)],
     ),
-    def_low(
+    low(def(
         "Disable voltage",
         "Switch off the frequency inverter output voltage (the frequency inverter goes into the status \"Switch-on block\").",
         "Cancel \"Disable voltage\"",
         [Some(1), None],
-    ),
-    def_low(
+    )),
+    low(def(
         "Emergency stop",
         "Emergency stop with programmed emergency stop time. At f = 0 Hz voltage enable (the FI goes into \"Switch-on block\" status)",
         "Cancel operating condition \"Emergency stop\"",
         [Some(2), None],
-    ),
+    )),
     def(
         "Enable operation",
         "Block voltage: Switch off the frequency inverter output voltage (the frequency inverter goes into the status \"Ready for switch-on\").",
