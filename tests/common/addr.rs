@@ -48,9 +48,9 @@ mod tests {
         let ip = free_loopback();
         assert_eq!(ip.octets()[0], 127);
         assert_ne!(ip.octets()[..3], [127, 0, 0]);
-        let held = UdpSocket::bind((ip, IO)).expect("the address was free");
+        let _held = UdpSocket::bind((ip, IO)).expect("the address was free");
         assert!(!enip_ports_free(ip), "UDP {ip}:{IO} is held here");
-        drop(held);
-        assert!(enip_ports_free(ip));
+        // Not checked: that it is free again once released. Another test of the binary may
+        // hold a port on the wildcard address meanwhile, which takes it on every address.
     }
 }
