@@ -14,6 +14,23 @@ use std::time::{Duration, Instant};
 use common::addr::free_loopback;
 use common::serve;
 
+/// `harness run` of the tu3-eip profile's cases containing `filter` against `dut`, motion
+/// allowed, reports into `out`.
+fn run_against(dut: &str, filter: &str, out: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_harness"));
+    c.args([
+        "run",
+        "--dut",
+        dut,
+        "--profile",
+        "tu3-eip",
+        "--allow-motion",
+    ])
+    .args(["--filter", filter, "-q", "--out"])
+    .arg(out);
+    c
+}
+
 fn run_json(out: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(out.join("run.json")).expect("run.json written");
     serde_json::from_str(&text).expect("run.json parses")
@@ -27,21 +44,10 @@ fn ctrl_c_cleans_up_writes_interrupted_reports_and_leaves_the_device_ready() {
     let out = std::env::temp_dir().join(format!("harness-interrupt-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     let dut = format!("enip://{ip}");
-    let harness = env!("CARGO_BIN_EXE_harness");
 
     // The drive cases run their process data for seconds of real time each: three seconds in,
     // one is under way and most have not started.
-    let mut child = Command::new(harness)
-        .args([
-            "run",
-            "--dut",
-            &dut,
-            "--profile",
-            "tu3-eip",
-            "--allow-motion",
-        ])
-        .args(["--filter", "drive-switching", "-q", "--out"])
-        .arg(&out)
+    let mut child = run_against(&dut, "drive-switching", &out)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -99,22 +105,7 @@ fn ctrl_c_cleans_up_writes_interrupted_reports_and_leaves_the_device_ready() {
 
     // The next run finds the device as the manuals' cases expect it.
     let next = out.join("next");
-    let o = Command::new(harness)
-        .args([
-            "run",
-            "--dut",
-            &dut,
-            "--profile",
-            "tu3-eip",
-            "--allow-motion",
-        ])
-        .args([
-            "--filter",
-            "shut-down-from-switched-on-transition-6",
-            "-q",
-            "--out",
-        ])
-        .arg(&next)
+    let o = run_against(&dut, "shut-down-from-switched-on-transition-6", &next)
         .output()
         .expect("harness run");
     let run = run_json(&next);

@@ -60,6 +60,28 @@ pub(crate) struct Bus {
     pub(crate) serve: fn(&[String]) -> Result<i32, String>,
     /// Device descriptions it writes: `harness describe <format>`.
     pub(crate) descriptions: &'static [Description],
+    /// What in its frames a device picks anew each run, masked when transcripts are compared.
+    pub(crate) variable: Variable,
+}
+
+/// The parts of a bus's frames whose values a device picks for each session, connection or
+/// start (a session handle, a connection id, a sequence number): two runs against the same
+/// device differ there, so `--snapshots` and `harness diff` compare them masked.
+#[derive(Clone, Copy)]
+pub(crate) struct Variable {
+    /// The byte ranges of one frame (as a transcript shows it) that vary.
+    pub(crate) bytes: fn(&[u8]) -> Vec<std::ops::Range<usize>>,
+    /// One decoded line of a frame, what varies in it masked.
+    pub(crate) decoded: fn(&str) -> String,
+}
+
+impl Variable {
+    /// A bus whose frames hold nothing a device picks per run: the EtherCAT master and the
+    /// POWERLINK MN choose every index and address of a case themselves.
+    pub(crate) const NONE: Variable = Variable {
+        bytes: |_| Vec::new(),
+        decoded: str::to_string,
+    };
 }
 
 /// A device-description file a bus writes.

@@ -95,8 +95,13 @@ impl<S: DutSegment> EcatBinding<S> {
         product: Option<Product>,
         what: String,
         persistent: bool,
+        cycle: Duration,
     ) -> Result<EcatBinding<S>, crate::binding::OpenError> {
-        let mut master = Master::new(segment, MasterConfig::default());
+        let config = MasterConfig {
+            cycle,
+            ..MasterConfig::default()
+        };
+        let mut master = Master::new(segment, config);
         master.set_recording(false);
         crate::net::wait::bring_up(
             |patience| {
@@ -915,7 +920,14 @@ mod tests {
     fn binding() -> EcatBinding<Faulty<EmbeddedSegment>> {
         let device = Device::new(DeviceConfig::new(Product::Sk550p));
         let segment = Faulty::new(EmbeddedSegment::new(Slave::new(device).unwrap()));
-        EcatBinding::open(segment, Some(Product::Sk550p), "test".into(), false).unwrap()
+        EcatBinding::open(
+            segment,
+            Some(Product::Sk550p),
+            "test".into(),
+            false,
+            MasterConfig::default().cycle,
+        )
+        .unwrap()
     }
 
     fn read_p102() -> Action {

@@ -16,6 +16,7 @@ use pcap::Tapped;
 use proto::nord::{Product, Protocol};
 use sim::device::Device;
 use sim::ecat::Slave;
+use std::time::Duration;
 
 use crate::binding::embedded::device_config;
 use crate::binding::{Binding, OpenError};
@@ -38,6 +39,7 @@ pub(crate) const BUS: Bus = Bus {
         format: "esi",
         write: describe_esi,
     }],
+    variable: crate::bus::Variable::NONE,
 };
 
 /// `harness describe esi`: the products speaking EtherCAT have their ESI from
@@ -58,28 +60,59 @@ fn profiles() -> Vec<Profile> {
         .collect()
 }
 
+/// The embedded run's process-data cycle: 4 ms, as the embedded PPO binding and the
+/// EtherNet/IP scanner run. The drive model runs on time, not on cycles, so a case sees the
+/// same drive at a quarter of the frames; a network run keeps the master's 1 ms.
+const EMBEDDED_CYCLE: Duration = Duration::from_millis(4);
+
 /// The simulated slave of the profile's product on a segment of its own, behind the master.
 fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
     let product = Some(profile.nord().map_err(OpenError::Profile)?);
     let device = Device::new(device_config(profile)?);
     let slave = Slave::new(device).map_err(|e| OpenError::Profile(e.to_string()))?;
     let segment = EmbeddedSegment::new(slave);
-    let what = "embedded EtherCAT slave".to_string();
-    match &context.tap {
-        None => open(segment, product, what, false),
-        Some(tap) => open(Tapped::new(segment, tap.clone()), product, what, false),
-    }
+    let opening = Opening {
+        product,
+        what: "embedded EtherCAT slave".to_string(),
+        persistent: false,
+        cycle: EMBEDDED_CYCLE,
+    };
+    opening.open(segment, context.tap.as_ref())
 }
 
-fn open<S: DutSegment + 'static>(
-    segment: S,
+/// How the master opens a segment: for which product, named how, whether the device lives on
+/// between cases, at which cycle.
+struct Opening {
     product: Option<Product>,
     what: String,
     persistent: bool,
-) -> Result<Box<dyn Binding>, OpenError> {
-    let b = EcatBinding::open(segment, product, what, persistent)?;
-    binding::check_vendor(&b)?;
-    Ok(Box::new(b))
+    cycle: Duration,
+}
+
+impl Opening {
+    /// The binding on `segment`, its frames also to `tap` (`--pcap`) if given.
+    fn open<S: DutSegment + 'static>(
+        self,
+        segment: S,
+        tap: Option<&crate::pcap::SharedTap>,
+    ) -> Result<Box<dyn Binding>, OpenError> {
+        match tap {
+            None => self.bind(segment),
+            Some(tap) => self.bind(Tapped::new(segment, tap.clone())),
+        }
+    }
+
+    fn bind<S: DutSegment + 'static>(self, segment: S) -> Result<Box<dyn Binding>, OpenError> {
+        let b = EcatBinding::open(
+            segment,
+            self.product,
+            self.what,
+            self.persistent,
+            self.cycle,
+        )?;
+        binding::check_vendor(&b)?;
+        Ok(Box::new(b))
+    }
 }
 
 /// `--dut ecat://IFACE`: the slave on the segment behind that interface.
@@ -109,10 +142,12 @@ impl DutFactory for NetworkFactory {
             }
             other => OpenError::Unreachable(other.to_string()),
         })?;
-        let what = format!("EtherCAT segment on {}", self.iface);
-        match &self.tap {
-            None => open(segment, product, what, true),
-            Some(tap) => open(Tapped::new(segment, tap.clone()), product, what, true),
-        }
+        let opening = Opening {
+            product,
+            what: format!("EtherCAT segment on {}", self.iface),
+            persistent: true,
+            cycle: master::MasterConfig::default().cycle,
+        };
+        opening.open(segment, self.tap.as_ref())
     }
 }

@@ -96,8 +96,14 @@ mod tests {
                 EmbeddedSegment::new(Slave::new(device).unwrap()),
                 tap.clone(),
             );
-            let mut b =
-                EcatBinding::open(segment, Some(Product::Sk550p), "t".into(), false).unwrap();
+            let mut b = EcatBinding::open(
+                segment,
+                Some(Product::Sk550p),
+                "t".into(),
+                false,
+                crate::ecat::master::MasterConfig::default().cycle,
+            )
+            .unwrap();
             let process = Action::Process {
                 inverter: Inverter::new(1).unwrap(),
                 control: 0x047E,

@@ -15,6 +15,7 @@ mod serve_tcp;
 #[cfg(test)]
 mod serve_tests;
 mod step;
+mod variable;
 
 pub(crate) use scanner::{ForwardOpenSpec, Scanner};
 
@@ -42,6 +43,7 @@ pub(crate) const BUS: Bus = Bus {
         format: "eds",
         write: describe_eds,
     }],
+    variable: variable::VARIABLE,
 };
 
 /// Every NORD product with an EtherNet/IP interface.

@@ -901,6 +901,13 @@ pub(crate) struct ForwardOpenSpec {
     pub(crate) run_idle: bool,
 }
 
+/// The timeout multiplier of a Forward_Open no step sets: 4, ×64, a connection timeout of 256 ms
+/// at the 4 ms RPI. Not the ×16 (64 ms) a PLC with a real-time scheduler asks for: the harness
+/// is a process on a shared host, and being descheduled for a few tens of milliseconds is not
+/// losing the connection (with ×16 a loaded CI host lost one, and the adapter its T→O data).
+/// The steps that stop the I/O wait longer than this.
+const DEFAULT_MULTIPLIER: u8 = 4;
+
 impl Default for ForwardOpenSpec {
     fn default() -> Self {
         ForwardOpenSpec {
@@ -913,7 +920,7 @@ impl Default for ForwardOpenSpec {
             rpi_us: RPI.as_micros() as u32,
             rpi_given: false,
             transport: Transport::CLASS1_CYCLIC.0,
-            multiplier: 2,
+            multiplier: DEFAULT_MULTIPLIER,
             large: false,
             run_idle: true,
         }

@@ -45,6 +45,7 @@ pub(crate) const BUS: Bus = Bus {
         format: "xdd",
         write: describe_xdd,
     }],
+    variable: crate::bus::Variable::NONE,
 };
 
 /// `harness describe xdd`: the XDD of a POWERLINK product, from `proto::nord::epl` (the

@@ -53,23 +53,30 @@ const INPUT_FRAME_ID: u16 = 0x8000;
 const OUTPUT_FRAME_ID: u16 = 0x8001;
 /// SendClockFactor 32: a 1 ms send clock.
 const SEND_CLOCK_FACTOR: u16 = 32;
-/// WatchdogFactor: cycles without output frames before the device gives the AR up. 100 (100 ms
-/// at 1 ms), not the 3 a PLC with a real-time scheduler uses: the harness is a process on a
-/// shared host, and being descheduled for a few milliseconds is not losing the controller.
-/// The watchdog steps wait longer than this.
-const WATCHDOG_FACTOR: u16 = 100;
-/// DataHoldFactor of both CRs: cycles a consumer keeps the last valid data before it counts
-/// them lost; the same 100 cycles as the watchdog, for the same reason.
-const DATA_HOLD_FACTOR: u16 = WATCHDOG_FACTOR;
+/// The watchdog time: how long the device waits without output frames before it gives the AR
+/// up, and the data hold time of both CRs (how long a consumer keeps the last valid data). 100
+/// ms, not the 3 cycles a PLC with a real-time scheduler uses: the harness is a process on a
+/// shared host, and being descheduled for a few milliseconds is not losing the controller. A
+/// time rather than a number of cycles, so that it stays the same at any reduction ratio (the
+/// embedded run's 4 ms cycle, `?rr=N`). The watchdog steps wait longer than this.
+const HOLD_TIME_MS: u16 = 100;
+/// The fewest cycles of a watchdog or data hold factor: one late frame is not a lost AR.
+const MIN_HOLD_FACTOR: u16 = 3;
 /// The longest watchdog and data hold time of an RT CR, in send clocks of 1 ms: IEC
 /// 61158-6-10 bounds factor × ReductionRatio × SendClockFactor × 31.25 µs by 1.92 s (p-net
 /// refused 100 cycles at ReductionRatio 128 with DB 81 02 10, docs/interop.md).
 const MAX_HOLD_CLOCKS: u16 = 1920;
 
-/// A watchdog or data hold factor at reduction ratio `rr`: `factor` cycles, fewer where that
-/// would pass the standard's 1.92 s.
-fn bounded(factor: u16, rr: u16) -> u16 {
-    factor.min(MAX_HOLD_CLOCKS / rr.max(1)).max(1)
+/// The WatchdogFactor and DataHoldFactor at reduction ratio `rr`: the cycles of
+/// [`HOLD_TIME_MS`], at least [`MIN_HOLD_FACTOR`], fewer where that would pass the standard's
+/// 1.92 s.
+fn hold_factor(rr: u16) -> u16 {
+    let rr = rr.max(1);
+    HOLD_TIME_MS
+        .div_ceil(rr)
+        .max(MIN_HOLD_FACTOR)
+        .min(MAX_HOLD_CLOCKS / rr)
+        .max(1)
 }
 /// ArgsMaximum the controller offers for answers.
 const ARGS_MAXIMUM: u32 = 4096;
@@ -298,14 +305,14 @@ impl<L: Link> Controller<L> {
 
     /// How long the device waits without output frames before it ends the AR.
     pub(crate) fn watchdog(&self) -> Duration {
-        self.cycle() * u32::from(bounded(WATCHDOG_FACTOR, self.reduction_ratio))
+        self.cycle() * u32::from(hold_factor(self.reduction_ratio))
     }
 
     /// The data hold time of the input CR (IEC 61158-6-10: DataHoldFactor × the cycle): the
     /// longest the device may leave the controller without a new input frame, its limit for
     /// each cycle's answer.
     pub(crate) fn data_hold(&self) -> Duration {
-        self.cycle() * u32::from(bounded(DATA_HOLD_FACTOR, self.reduction_ratio))
+        self.cycle() * u32::from(hold_factor(self.reduction_ratio))
     }
 
     /// Sets the reduction ratio of the next Connect.
@@ -921,8 +928,8 @@ impl<L: Link> Controller<L> {
                 reduction_ratio: rr,
                 phase: 1,
                 frame_send_offset: 0xFFFF_FFFF,
-                watchdog_factor: bounded(WATCHDOG_FACTOR, rr),
-                data_hold_factor: bounded(DATA_HOLD_FACTOR, rr),
+                watchdog_factor: hold_factor(rr),
+                data_hold_factor: hold_factor(rr),
                 tag_header: 0xC000,
                 apis: vec![layout.api.clone()],
                 ..IocrBlockReq::default()

@@ -12,6 +12,7 @@ mod link;
 mod restore;
 pub mod serve;
 mod step;
+mod variable;
 
 use std::net::SocketAddr;
 use std::time::Duration;
@@ -46,6 +47,7 @@ pub(crate) const BUS: Bus = Bus {
         format: "gsdml",
         write: describe_gsdml,
     }],
+    variable: variable::VARIABLE,
 };
 
 /// `harness describe gsdml`: the GSDML of a PROFINET product, from `proto::nord::pnio` (the
@@ -69,6 +71,10 @@ const EMBEDDED_TIMEOUT: Duration = Duration::from_millis(500);
 /// The name the embedded device is given (BU 0620 §2.5.4: the controller addresses the
 /// device by its name of station).
 const EMBEDDED_NAME: &str = "nord-device";
+/// The embedded run's reduction ratio: a 4 ms cycle, as the embedded PPO binding and the
+/// EtherNet/IP scanner run (a valid RT_CLASS_1 ratio). The drive model runs on time, not on
+/// cycles, so a case sees the same drive at a quarter of the frames.
+const EMBEDDED_REDUCTION_RATIO: u16 = 4;
 
 /// The simulated IO device of the profile's product, named, behind the controller.
 fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
@@ -85,7 +91,7 @@ fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, O
         inverters: profile.inverters,
         name: Some(EMBEDDED_NAME.to_string()),
         what: "embedded PROFINET IO device".to_string(),
-        reduction_ratio: 1,
+        reduction_ratio: EMBEDDED_REDUCTION_RATIO,
         persistent: false,
     };
     match &context.tap {

@@ -19,7 +19,7 @@
 
 use std::collections::BTreeMap;
 
-use super::snapshot::redact;
+use super::redact::redact;
 use super::transcript;
 use crate::outcome::{CaseResult, RunMeta, RunResult, Verdict};
 

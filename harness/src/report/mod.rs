@@ -17,6 +17,7 @@ mod markup;
 mod merge;
 mod read;
 mod record;
+mod redact;
 mod signoff;
 mod snapshot;
 mod statements;

@@ -250,7 +250,7 @@ impl<S: Segment> Master<S> {
         padded.resize(usize::from(out.len), 0);
         let read = wire::read(Command::FPRD, station, inn.start, usize::from(inn.len));
         let write = wire::write(Command::FPWR, station, out.start, padded);
-        let access = wire::describe(&write);
+        let access = wire::Access::of(&write);
         let note = match MailboxRepr::parse_bytes(msg) {
             Ok(m) => describe(&m),
             Err(_) => format!("mailbox {} bytes as given", msg.len()),
@@ -268,7 +268,7 @@ impl<S: Segment> Master<S> {
                 Ok((r.wkc == 1).then_some(()))
             })?;
         } else {
-            check_wkc(&access, &r[1], 1)?;
+            check_wkc(access, &r[1], 1)?;
             if r[2].wkc == 1 {
                 if let Some(reply) = self.keep_reply(&r[2].data) {
                     return Ok(reply);

@@ -150,7 +150,7 @@ impl<S: Segment> Master<S> {
         let mut data = self.cyclic.outputs.clone();
         data.resize(out_len + self.cyclic.inputs.len(), 0);
         let d = DatagramRepr::logical(Command::LRW, 0, self.config.logical_base, data);
-        let access = wire::describe(&d);
+        let access = wire::Access::of(&d);
         let now = self.now();
         self.cyclic.next = now + self.config.cycle;
         let r = match self.port.one(d) {
@@ -169,7 +169,7 @@ impl<S: Segment> Master<S> {
         if r.wkc != self.cyclic.expected_wkc {
             self.cyclic.stats.wkc_errors += 1;
         }
-        check_wkc(&access, &r, self.cyclic.expected_wkc)?;
+        check_wkc(access, &r, self.cyclic.expected_wkc)?;
         Ok(r.wkc)
     }
 

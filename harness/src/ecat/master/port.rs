@@ -172,7 +172,13 @@ impl<S: Segment> Port<S> {
         let index = self.index;
         self.index = self.index.wrapping_add(1);
         let frame = wire::frame(self.mac, index, datagrams).map_err(UsageError::Frame)?;
-        let sent_line = wire::describe_sent(datagrams);
+        // Decoded lines cost more than the exchange: written only while recording.
+        let recording = self.recorder.is_on();
+        let sent_line = if recording {
+            wire::describe_sent(datagrams)
+        } else {
+            String::new()
+        };
         self.segment.send(&frame)?;
         self.stats.sent += 1;
         let wait = self.wait(self.timeout);
@@ -209,9 +215,13 @@ impl<S: Segment> Port<S> {
                 wire::Reply::Ours(returned) => {
                     self.stats.matched += 1;
                     self.last_stamp = arrival.stamp;
-                    let line = wire::describe_returned(&returned);
-                    let got = got.to_vec();
-                    self.recorder.push(&frame, sent_line, &got, line);
+                    if recording {
+                        let line = wire::describe_returned(&returned);
+                        let got = got.to_vec();
+                        self.recorder.push(&frame, sent_line, &got, line);
+                    } else {
+                        self.recorder.skip();
+                    }
                     return Ok(returned);
                 }
             }
@@ -241,9 +251,9 @@ impl<S: Segment> Port<S> {
 
     /// Sends one datagram and requires working counter `expected` (0 everywhere: no slave).
     pub(crate) fn expect(&mut self, d: DatagramRepr, expected: u16) -> Result<Vec<u8>> {
-        let access = wire::describe(&d);
+        let access = wire::Access::of(&d);
         let r = self.one(d)?;
-        check_wkc(&access, &r, expected)?;
+        check_wkc(access, &r, expected)?;
         Ok(r.data)
     }
 
@@ -292,7 +302,7 @@ impl<S: Segment> Port<S> {
 }
 
 /// Checks a working counter: 0 when more was expected is "no slave answered".
-pub(crate) fn check_wkc(access: &str, r: &DatagramRepr, expected: u16) -> Result<()> {
+pub(crate) fn check_wkc(access: wire::Access, r: &DatagramRepr, expected: u16) -> Result<()> {
     if r.wkc == expected {
         Ok(())
     } else if r.wkc == 0 {

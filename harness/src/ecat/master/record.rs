@@ -56,6 +56,11 @@ impl Recorder {
         }
     }
 
+    /// An exchange not recorded (recording is off): a note meant for it goes with it.
+    pub(crate) fn skip(&mut self) {
+        self.note = None;
+    }
+
     /// Says what the next exchange's request means one layer up ("mailbox CoE SDO upload
     /// 3066h:01h"); it prefixes that exchange's decoded request.
     pub(crate) fn note_next(&mut self, note: String) {

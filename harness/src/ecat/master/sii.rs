@@ -57,12 +57,10 @@ impl<S: Segment> Master<S> {
         let mut command = SiiControl::CMD_READ.to_le_bytes().to_vec();
         command.extend(address.to_le_bytes());
         // The command, and at once the status and the data (a fast ESC is done by then).
-        let r = self.exchange(&[
-            wire::write(Command::FPWR, station, SII_CONTROL, command),
-            wire::read(Command::FPRD, station, SII_CONTROL, 14),
-        ])?;
-        let access = format!("FPWR {station:04X}h:{SII_CONTROL:04X}h");
-        super::port::check_wkc(&access, &r[0], 1)?;
+        let write = wire::write(Command::FPWR, station, SII_CONTROL, command);
+        let access = wire::Access::of(&write);
+        let r = self.exchange(&[write, wire::read(Command::FPRD, station, SII_CONTROL, 14)])?;
+        super::port::check_wkc(access, &r[0], 1)?;
         let mut data = r[1].data.clone();
         if r[1].wkc == 1 {
             status = u16::from_le_bytes([data[0], data[1]]);

@@ -16,12 +16,37 @@ pub(crate) fn write(command: Command, adp: u16, ado: u16, data: Vec<u8>) -> Data
     DatagramRepr::physical(command, 0, adp, ado, data)
 }
 
+/// A datagram's command and address, kept to name the access in an error: written out only
+/// when one occurs (every cycle checks a working counter).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Access {
+    command: Command,
+    address: u32,
+}
+
+impl Access {
+    /// The access `d` makes.
+    pub(crate) fn of(d: &DatagramRepr) -> Access {
+        Access {
+            command: d.command,
+            address: d.address,
+        }
+    }
+}
+
 /// `FPRD 1001h:0130h` or `LRW 00010000h`.
-pub(crate) fn describe(d: &DatagramRepr) -> String {
-    if d.command.is_logical() {
-        format!("{} {:08X}h", d.command, d.address)
-    } else {
-        format!("{} {:04X}h:{:04X}h", d.command, d.adp(), d.ado())
+impl std::fmt::Display for Access {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [adp0, adp1, ado0, ado1] = self.address.to_le_bytes();
+        if self.command.is_logical() {
+            write!(f, "{} {:08X}h", self.command, self.address)
+        } else {
+            let (adp, ado) = (
+                u16::from_le_bytes([adp0, adp1]),
+                u16::from_le_bytes([ado0, ado1]),
+            );
+            write!(f, "{} {adp:04X}h:{ado:04X}h", self.command)
+        }
     }
 }
 
@@ -128,7 +153,7 @@ pub(crate) fn parse_reply(frame: &[u8], index: u8, sent: &[DatagramRepr]) -> Rep
 pub(crate) fn describe_sent(datagrams: &[DatagramRepr]) -> String {
     let v: Vec<String> = datagrams
         .iter()
-        .map(|d| format!("{} {} B", describe(d), d.data.len()))
+        .map(|d| format!("{} {} B", Access::of(d), d.data.len()))
         .collect();
     v.join(" + ")
 }
@@ -147,7 +172,7 @@ pub(crate) fn describe_returned(returned: &[DatagramRepr]) -> String {
                     r.data.len()
                 )
             };
-            format!("{} WKC {} = {data}", describe(r), r.wkc)
+            format!("{} WKC {} = {data}", Access::of(r), r.wkc)
         })
         .collect();
     v.join(" + ")
@@ -231,6 +256,6 @@ mod tests {
             frame([0; 6], 0, &big),
             Err(BuildError::TooLong { .. })
         ));
-        assert_eq!(describe(&big[0]), "FPRD 0001h:0000h");
+        assert_eq!(Access::of(&big[0]).to_string(), "FPRD 0001h:0000h");
     }
 }
