@@ -39,6 +39,7 @@ mod epl;
 /// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the
 /// simulator served as an adapter, the harness scanner reading a parameter.
 pub use enip::bench_support as enip_bench;
+mod hex;
 mod identity;
 mod interrupt;
 mod ledger;

@@ -859,7 +859,7 @@ fn describe(action: &Action) -> String {
         }
         Action::Read(o) => format!("read {}", o.describe()),
         Action::Write(o) => format!("write {} = {}", o.describe(), o.value.unwrap_or_default()),
-        Action::Pkw { inverter, bytes } => format!("pkw {inverter}: {}", hex(bytes)),
+        Action::Pkw { inverter, bytes } => format!("pkw {inverter}: {}", crate::hex::hex(bytes)),
         Action::Process {
             inverter,
             control,
@@ -877,22 +877,6 @@ fn describe(action: &Action) -> String {
         Action::Observe { what, inverter } => format!("observe {inverter}: {what}"),
         Action::Bus(step) => format!("{} {}", step.bus(), step.describe()),
     }
-}
-
-/// Bytes as `"70 66 02 00"` (one allocation: it runs for every exchange of a run).
-pub(crate) fn hex(bytes: &[u8]) -> String {
-    const DIGITS: &[u8; 16] = b"0123456789ABCDEF";
-    let mut s = Vec::with_capacity(bytes.len() * 3);
-    for b in bytes {
-        s.extend_from_slice(&[
-            DIGITS[usize::from(b >> 4)],
-            DIGITS[usize::from(b & 0x0F)],
-            b' ',
-        ]);
-    }
-    s.pop();
-    // ASCII digits and spaces only.
-    String::from_utf8(s).unwrap_or_default()
 }
 
 /// One step: its result, and when the step ran; with them, for a step whose outcome depends on
@@ -984,12 +968,6 @@ fn run_step(
         exchanges,
     };
     (r, limit, window)
-}
-
-/// Virtual duration as bus cycles (at least one).
-pub(crate) fn cycles_for(d: Duration, cycle: Duration) -> u32 {
-    let n = d.as_nanos().div_ceil(cycle.as_nanos().max(1));
-    u32::try_from(n).unwrap_or(u32::MAX).max(1)
 }
 
 #[cfg(test)]

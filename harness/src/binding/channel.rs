@@ -13,9 +13,10 @@ use serde_json::{json, Value};
 use sim::link::{LinkRepr, Unit};
 
 use super::Dut;
+use crate::hex::hex;
 use crate::outcome::{Exchange, Verdict};
-use crate::runner::{cycles_for, hex};
 use crate::suite::{Action, OrderSpec, Target};
+use crate::timing::cycles_for;
 
 /// Why a DUT step produced no observation.
 #[derive(Debug, thiserror::Error)]

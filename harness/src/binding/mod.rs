@@ -95,14 +95,14 @@ pub(crate) fn process_run(
             }
             let cycles = match run {
                 crate::suite::Run::Cycles(n) => *n,
-                crate::suite::Run::For(d) => crate::runner::cycles_for(*d, cycle),
+                crate::suite::Run::For(d) => crate::timing::cycles_for(*d, cycle),
             };
             Ok((*inverter, Some(words), cycles))
         }
         Action::Wait(d) => Ok((
             Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?,
             None,
-            crate::runner::cycles_for(*d, cycle),
+            crate::timing::cycles_for(*d, cycle),
         )),
         _ => Err(StepError::Suite("not a process-data step".into())),
     }

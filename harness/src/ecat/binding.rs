@@ -32,11 +32,11 @@ use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
 use crate::binding::{process_run, process_time, Binding, CleanupError, Observation, StepError};
+use crate::hex::hex;
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::net::wait::BringUpError;
 use crate::outcome::{Exchange, Identity};
 use crate::profile::Capability;
-use crate::runner::hex;
 use crate::suite::{Action, OrderSpec};
 
 /// A segment the binding can run on: the embedded one also hands out the simulated slave,

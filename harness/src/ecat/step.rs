@@ -7,8 +7,8 @@ use std::any::Any;
 use std::time::Duration;
 
 use crate::bus::BusStep;
+use crate::hex::hex;
 use crate::notation::int_of;
-use crate::runner::hex;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 

@@ -51,9 +51,9 @@ use serde_json::Value;
 use super::scanner::{Scanner, RPI};
 use crate::binding::settle::{Drives, DISABLE, SETTLE_CYCLES};
 use crate::binding::StepError;
+use crate::hex::hex;
 use crate::ledger::{self, Account, Problem};
 use crate::outcome::Exchange;
-use crate::runner::hex;
 use crate::suite::{OrderSpec, Target};
 use crate::timing::Deadline;
 

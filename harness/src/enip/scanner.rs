@@ -33,10 +33,11 @@ use super::step::EnipStep;
 use crate::binding::channel::compact;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
+use crate::hex::hex;
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
-use crate::runner::{cycles_for, hex};
 use crate::suite::{Action, OrderSpec, Target};
+use crate::timing::cycles_for;
 use crate::timing::Deadline;
 
 /// RPI of the harness's I/O connection.

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use super::ForwardOpenSpec;
 use crate::bus::BusStep;
-use crate::runner::hex;
+use crate::hex::hex;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 

@@ -33,10 +33,10 @@ use crate::binding::settle::{self, Cycling, Drives};
 use crate::binding::{
     process_run, process_time, Binding, CleanupError, Observation, OpenError, StepError,
 };
+use crate::hex::hex;
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
-use crate::runner::hex;
 use crate::suite::{Action, OrderSpec};
 
 /// What the embedded simulator offers (the parameters are SDO objects) and what a device on

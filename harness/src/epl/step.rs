@@ -10,8 +10,8 @@ use proto::epl::{NmtCommand, NmtState};
 
 use super::mn::Via;
 use crate::bus::BusStep;
+use crate::hex::hex;
 use crate::notation::int_of;
-use crate::runner::hex;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 

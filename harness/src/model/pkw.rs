@@ -5,7 +5,7 @@ use proto::nord::ppo::PpoType;
 use serde_json::{json, Value};
 
 use super::{Args, ComputeError, ComputeFn, Ctx};
-use crate::runner::hex;
+use crate::hex::hex;
 
 fn fields(r: &PkwRepr) -> Value {
     json!({

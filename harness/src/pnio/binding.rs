@@ -38,11 +38,11 @@ use crate::binding::channel::Channel;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::settle::{self, Drives};
 use crate::binding::{Binding, CleanupError, Dut, DutError, Observation, OpenError, StepError};
+use crate::hex::hex;
 use crate::ledger::{self, Account, Ledger, Problem};
 use crate::net::wait::BringUpError;
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
-use crate::runner::hex;
 use crate::suite::{Action, Run};
 
 /// What the embedded simulator offers: every general capability and the `pnio:` steps.

@@ -38,10 +38,10 @@ use proto::pnio::status::cm;
 use proto::pnio::{FrameId, FrameKind, PnioStatus, MULTICAST_DCP_IDENTIFY};
 
 use super::link::Link;
+use crate::hex::hex;
 use crate::net::wait::Wait;
 use crate::net::LinkError;
 use crate::outcome::Exchange;
-use crate::runner::hex;
 
 /// The controller's alarm reference.
 const ALARM_REF: u16 = 0x0003;

@@ -11,8 +11,8 @@ use std::time::Duration;
 use proto::nord::ppo::PpoType;
 
 use crate::bus::BusStep;
+use crate::hex::hex;
 use crate::notation::int_of;
-use crate::runner::hex;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 

@@ -71,7 +71,7 @@ fn describe_coe(c: &CoeMessage) -> String {
             "CoE emergency {:04X}h, register {:02X}h, {}",
             e.code,
             e.register,
-            crate::runner::hex(&e.data)
+            crate::hex::hex(&e.data)
         ),
         CoeMessage::SdoRequest(r) => match r {
             SdoRequest::Download {
@@ -82,7 +82,7 @@ fn describe_coe(c: &CoeMessage) -> String {
             } => format!(
                 "CoE SDO download request {index:04X}h:{sub:02X}h{} = {}",
                 ca(*complete_access),
-                crate::runner::hex(data.data())
+                crate::hex::hex(data.data())
             ),
             SdoRequest::DownloadSegment { toggle, last, data } => format!(
                 "CoE SDO download segment, toggle {}, {} bytes{}",
@@ -125,7 +125,7 @@ fn describe_coe(c: &CoeMessage) -> String {
             } => format!(
                 "CoE SDO upload response {index:04X}h:{sub:02X}h{} = {}",
                 ca(*complete_access),
-                crate::runner::hex(data.data())
+                crate::hex::hex(data.data())
             ),
             SdoResponse::UploadSegment { toggle, last, data } => format!(
                 "CoE SDO upload segment, toggle {}, {} bytes{}",

@@ -1,8 +1,8 @@
 //! What the master exchanged, for transcripts: each frame sent and what came back, as bytes and
 //! as one decoded line each.
 
+use crate::hex::hex;
 use crate::outcome::Exchange;
-use crate::runner::hex;
 
 /// The exchanges recorded since the caller last took them.
 #[derive(Debug, Clone, Default)]

@@ -164,13 +164,9 @@ pub(crate) fn describe_returned(returned: &[DatagramRepr]) -> String {
         .iter()
         .map(|r| {
             let data = if r.data.len() <= 16 {
-                crate::runner::hex(&r.data)
+                crate::hex::hex(&r.data)
             } else {
-                format!(
-                    "{} … ({} B)",
-                    crate::runner::hex(&r.data[..16]),
-                    r.data.len()
-                )
+                format!("{} … ({} B)", crate::hex::hex(&r.data[..16]), r.data.len())
             };
             format!("{} WKC {} = {data}", Access::of(r), r.wkc)
         })

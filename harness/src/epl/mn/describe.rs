@@ -95,11 +95,11 @@ pub(crate) fn sdo(bytes: &[u8]) -> String {
         if let Ok((index, sub, data)) = c.by_index() {
             s.push_str(&format!(" {index:04X}h/{sub:02X}h"));
             if !data.is_empty() {
-                s.push_str(&format!(" data {}", crate::runner::hex(data)));
+                s.push_str(&format!(" data {}", crate::hex::hex(data)));
             }
         }
     } else if !c.payload.is_empty() {
-        s.push_str(&format!(" data {}", crate::runner::hex(&c.payload)));
+        s.push_str(&format!(" data {}", crate::hex::hex(&c.payload)));
     }
     s
 }

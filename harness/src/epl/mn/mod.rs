@@ -25,9 +25,9 @@ use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
 pub(crate) use describe::describe;
 use link::Link;
 
+use crate::hex::hex;
 use crate::net::LinkError;
 use crate::outcome::Exchange;
-use crate::runner::hex;
 use crate::timing::Deadline;
 
 /// How the MN carries SDO.
