@@ -5,6 +5,7 @@
 //! Before, an interrupted run wrote nothing and the next one failed
 //! `shut-down-from-switched-on-transition-6` with 0B38h (fault).
 
+#[allow(dead_code)] // what the other network tests share
 mod common;
 
 use std::path::Path;

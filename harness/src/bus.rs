@@ -35,6 +35,7 @@ pub(crate) const BUSES: &[&Bus] = &[
     &crate::ecat::BUS,
     &crate::epl::BUS,
     &crate::pnio::BUS,
+    &crate::can::BUS,
 ];
 
 /// A bus: what the shared code may ask of it.
@@ -208,8 +209,8 @@ mod tests {
         let (bus, target) = by_url("ecat://veth0").unwrap();
         assert_eq!((bus.name, target), ("ecat", "veth0"));
         assert!(by_url("ecat://").unwrap_err().contains("nothing after"));
-        let e = by_url("can://x").unwrap_err();
-        assert!(e.contains("unknown scheme `can://`"), "{e}");
+        let e = by_url("lin://x").unwrap_err();
+        assert!(e.contains("unknown scheme `lin://`"), "{e}");
         assert!(e.contains("enip://, ecat://"), "{e}");
         assert!(by_url("veth0").unwrap_err().contains("give a URL"));
     }

@@ -18,6 +18,7 @@ macro_rules! outln {
 
 mod binding;
 mod bus;
+mod can;
 pub mod cli;
 mod cli_reports;
 mod cli_tools;

@@ -6,6 +6,8 @@
 //! Every parser in this crate returns `Err` on malformed input; none panics on any byte
 //! sequence.
 
+pub mod can;
+pub mod canopen;
 pub mod ecat;
 pub mod enip;
 pub mod epl;

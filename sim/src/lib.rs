@@ -6,6 +6,7 @@
 //! served.
 
 mod bus_status;
+pub mod can;
 pub mod clock;
 pub mod device;
 pub mod drive;

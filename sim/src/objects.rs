@@ -7,6 +7,7 @@
 //! is sub-index 0; a parameter with sets or elements has the count at sub-index 0 and its values
 //! from sub-index 1 (`proto::nord::ecat::parameter_subindex`).
 
+use proto::canopen::Emergency;
 use proto::nord::ecat::{parameter_data_type, parameter_subindex, DataType, ParamSub};
 use proto::nord::errors::SdoAbort;
 use proto::nord::params::{Access, ParamDef};
@@ -68,6 +69,26 @@ pub(crate) fn abort_of(e: AccessError, value: i32, def: Option<&ParamDef>) -> Sd
         },
         AccessError::OnlyResettable => abort::VALUE_RANGE,
         AccessError::BadSubIndex | AccessError::NotAnArray => abort::NO_SUBINDEX,
+    }
+}
+
+/// The emergency for an inverter error that appeared (P700 [-01] = `p700`, 0: none any more):
+/// the DS402 code of BU 0620 §5.3 for communication errors (error register 11h), else FF00h
+/// (manufacturer specific, error register 81h); bytes 3–4 the P700 value, byte 5 the FI. An
+/// error reset is code 0000h with register 0 (CiA 301 "Emergency object").
+pub(crate) fn emergency_of(p700: i32, fi: proto::nord::Inverter) -> Emergency {
+    if p700 == 0 {
+        return Emergency::default();
+    }
+    let (code, register) = proto::nord::errors::COMM_ERRORS
+        .iter()
+        .find(|c| i32::from(c.p700) == p700)
+        .map_or((0xFF00, 0x81), |c| (c.ds402, 0x11));
+    let v = (p700 as u16).to_le_bytes();
+    Emergency {
+        code,
+        register,
+        data: [v[0], v[1], fi.get(), 0, 0],
     }
 }
 

@@ -2,6 +2,9 @@
 //! emergency message and the SDO information header (ETG.1000.6 "CANopen over EtherCAT";
 //! CiA 301 "SDO protocol" for the command specifiers and "SDO abort codes";
 //! BU 0620 §2.2.7 for the SK 550P's objects and §2.2.7.2 for the abort codes it prints).
+//! What is CiA 301's — the command byte ([`crate::canopen::command`]), [`SdoAbortCode`] and
+//! [`Emergency`] — is defined in [`crate::canopen`] and re-exported here; the abort codes
+//! ETG.1000.6 adds and the BU 0620 errata stay in this module.
 //!
 //! | CoE header (u16) | |
 //! |---|---|
@@ -30,6 +33,10 @@ use std::fmt;
 use super::mailbox::{MailboxRepr, MailboxType};
 use super::wire::{fit, le16, le32, Reader};
 use super::Error;
+use crate::canopen::command::{
+    expedited_bits, expedited_len, segment_bits, segment_unused, tg, ClientCommand, ServerCommand,
+    ABORT, EXPEDITED, LAST, SIZE, TOGGLE,
+};
 
 /// CoE header length.
 pub const COE_HEADER_LEN: usize = 2;
@@ -143,87 +150,17 @@ impl CoeHeader {
     }
 }
 
-/// An SDO abort code (CiA 301 "SDO abort codes"; ETG.1000.6 adds 0601_0003h–0601_0006h; open:
-/// unknown codes are kept).
-#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
-pub struct SdoAbortCode(pub u32);
+pub use crate::canopen::SdoAbortCode;
 
-macro_rules! abort_codes {
-    ($($name:ident = $v:literal, $text:literal;)*) => {
-        impl SdoAbortCode {
-            $(
-                #[doc = concat!($text, ".")]
-                pub const $name: SdoAbortCode = SdoAbortCode($v);
-            )*
-
-            /// Every code of CiA 301 and ETG.1000.6, with its meaning.
-            pub const ALL: &'static [(SdoAbortCode, &'static str)] = &[
-                $((SdoAbortCode($v), $text),)*
-            ];
-        }
-    };
-}
-
-abort_codes! {
-    TOGGLE_BIT = 0x0503_0000, "Toggle bit not alternated";
-    TIMEOUT = 0x0504_0000, "SDO protocol timed out";
-    COMMAND_SPECIFIER = 0x0504_0001, "Client/server command specifier not valid or unknown";
-    INVALID_BLOCK_SIZE = 0x0504_0002, "Invalid block size (block mode only)";
-    INVALID_SEQUENCE = 0x0504_0003, "Invalid sequence number (block mode only)";
-    CRC_ERROR = 0x0504_0004, "CRC error (block mode only)";
-    OUT_OF_MEMORY = 0x0504_0005, "Out of memory";
-    UNSUPPORTED_ACCESS = 0x0601_0000, "Unsupported access to an object";
-    WRITE_ONLY = 0x0601_0001, "Attempt to read a write only object";
-    READ_ONLY = 0x0601_0002, "Attempt to write a read only object";
-    SUBINDEX_0_NOT_ZERO = 0x0601_0003, "Sub-index cannot be written, sub-index 0 must be 0 for write access";
-    COMPLETE_ACCESS_VARIABLE = 0x0601_0004, "SDO complete access not supported for objects of variable length";
-    OBJECT_TOO_LONG = 0x0601_0005, "Object length exceeds mailbox size";
-    MAPPED_TO_RXPDO = 0x0601_0006, "Object mapped to RxPDO, SDO download blocked";
-    NO_OBJECT = 0x0602_0000, "Object does not exist in the object dictionary";
-    NOT_MAPPABLE = 0x0604_0041, "Object cannot be mapped to the PDO";
-    PDO_TOO_LONG = 0x0604_0042, "The number and length of the objects to be mapped would exceed the PDO length";
-    PARAMETER_INCOMPATIBLE = 0x0604_0043, "General parameter incompatibility reason";
-    INTERNAL_INCOMPATIBLE = 0x0604_0047, "General internal incompatibility in the device";
-    HARDWARE_ERROR = 0x0606_0000, "Access failed due to a hardware error";
-    LENGTH_MISMATCH = 0x0607_0010, "Data type does not match, length of service parameter does not match";
-    LENGTH_TOO_HIGH = 0x0607_0012, "Data type does not match, length of service parameter too high";
-    LENGTH_TOO_LOW = 0x0607_0013, "Data type does not match, length of service parameter too low";
-    NO_SUBINDEX = 0x0609_0011, "Sub-index does not exist";
-    VALUE_RANGE = 0x0609_0030, "Invalid value for parameter (download only)";
-    VALUE_TOO_HIGH = 0x0609_0031, "Value of parameter written too high (download only)";
-    VALUE_TOO_LOW = 0x0609_0032, "Value of parameter written too low (download only)";
-    MAX_BELOW_MIN = 0x0609_0036, "Maximum value is less than minimum value";
-    NO_SDO_CONNECTION = 0x060A_0023, "Resource not available: SDO connection";
-    GENERAL = 0x0800_0000, "General error";
-    CANNOT_STORE = 0x0800_0020, "Data cannot be transferred or stored to the application";
-    LOCAL_CONTROL = 0x0800_0021, "Data cannot be transferred or stored to the application because of local control";
-    DEVICE_STATE = 0x0800_0022, "Data cannot be transferred or stored to the application because of the present device state";
-    NO_OD = 0x0800_0023, "Object dictionary dynamic generation fails or no object dictionary is present";
-    NO_DATA = 0x0800_0024, "No data available";
-}
-
-impl SdoAbortCode {
-    /// The standard's meaning, if the code is defined.
-    pub fn name(self) -> Option<&'static str> {
-        SdoAbortCode::ALL
-            .iter()
-            .find(|(c, _)| *c == self)
-            .map(|(_, n)| *n)
-    }
-}
-
-impl fmt::Display for SdoAbortCode {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.name() {
-            Some(n) => write!(f, "{:08X}h ({n})", self.0),
-            None => write!(f, "{:08X}h", self.0),
-        }
-    }
-}
-
-impl fmt::Debug for SdoAbortCode {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "SdoAbortCode({:08X}h)", self.0)
+crate::canopen::abort_codes! {
+    /// The codes ETG.1000.6 "SDO abort codes" adds to CiA 301's
+    /// ([`SdoAbortCode::CIA_301`]) for CoE, with their meanings: sub-index 0 and complete
+    /// access, the mailbox size, objects mapped to an RxPDO.
+    ETG_1000_6 {
+        SUBINDEX_0_NOT_ZERO = 0x0601_0003, "Sub-index cannot be written, sub-index 0 must be 0 for write access";
+        COMPLETE_ACCESS_VARIABLE = 0x0601_0004, "SDO complete access not supported for objects of variable length";
+        OBJECT_TOO_LONG = 0x0601_0005, "Object length exceeds mailbox size";
+        MAPPED_TO_RXPDO = 0x0601_0006, "Object mapped to RxPDO, SDO download blocked";
     }
 }
 
@@ -326,11 +263,10 @@ impl SdoData {
     /// least 8 bytes). `lenient`: as a tolerant server reads a download (see
     /// [`SdoRequest::parse_lenient`]).
     fn parse(cmd: u8, b: &[u8], lenient: bool) -> Result<SdoData, Error> {
-        let expedited = cmd & 0x02 != 0;
-        let sized = cmd & 0x01 != 0;
+        let expedited = cmd & EXPEDITED != 0;
+        let sized = cmd & SIZE != 0;
         if expedited {
-            let n = usize::from((cmd >> 2) & 0x03);
-            let len = if sized { 4 - n } else { 4 };
+            let len = expedited_len(cmd);
             Ok(SdoData::Expedited {
                 sized,
                 data: b[4..4 + len].to_vec(),
@@ -378,10 +314,9 @@ impl SdoData {
                         why: "an expedited transfer carries 1 to 4 bytes",
                     });
                 }
-                let n = (4 - data.len()) as u8;
                 let mut d = data.clone();
                 d.resize(4, 0);
-                Ok((0x03 | n << 2, d))
+                Ok((expedited_bits(data.len()), d))
             }
             SdoData::Expedited { sized: false, data } => {
                 if data.len() != 4 {
@@ -391,7 +326,7 @@ impl SdoData {
                         why: "without size indication an expedited transfer carries 4 bytes",
                     });
                 }
-                Ok((0x02, data.clone()))
+                Ok((EXPEDITED, data.clone()))
             }
             SdoData::Normal { size, data } => {
                 if data.len() as u64 > u64::from(*size) {
@@ -403,7 +338,7 @@ impl SdoData {
                 }
                 let mut d = size.to_le_bytes().to_vec();
                 d.extend_from_slice(data);
-                Ok((0x01, d))
+                Ok((SIZE, d))
             }
         }
     }
@@ -412,7 +347,7 @@ impl SdoData {
 /// Reads a segment's data: a minimal segment (7 data bytes) has n unused ones, a longer one
 /// must have n = 0.
 fn segment_data(cmd: u8, b: &[u8], lenient: bool) -> Result<Vec<u8>, Error> {
-    let n = usize::from((cmd >> 1) & 0x07);
+    let n = segment_unused(cmd);
     let carried = &b[1..];
     if carried.len() == SEGMENT_MIN_DATA {
         Ok(carried[..SEGMENT_MIN_DATA - n].to_vec())
@@ -427,16 +362,13 @@ fn segment_data(cmd: u8, b: &[u8], lenient: bool) -> Result<Vec<u8>, Error> {
     }
 }
 
-/// The command byte's n bits and the data of a segment (padded to 7 bytes).
-fn emit_segment(data: &[u8]) -> (u8, Vec<u8>) {
-    if data.len() >= SEGMENT_MIN_DATA {
-        (0, data.to_vec())
-    } else {
-        let n = (SEGMENT_MIN_DATA - data.len()) as u8;
-        let mut d = data.to_vec();
+/// The data of a segment, padded to 7 bytes (its command byte: [`segment_bits`]).
+fn emit_segment(data: &[u8]) -> Vec<u8> {
+    let mut d = data.to_vec();
+    if d.len() < SEGMENT_MIN_DATA {
         d.resize(SEGMENT_MIN_DATA, 0);
-        (n << 1, d)
     }
+    d
 }
 
 fn check_sdo_len(b: &[u8]) -> Result<(), Error> {
@@ -453,10 +385,6 @@ fn head(out: &mut Vec<u8>, cmd: u8, index: u16, sub: u8) {
 
 /// Complete access bit of initiate commands.
 const CA: u8 = 0x10;
-/// Toggle bit of segment commands.
-const TOGGLE: u8 = 0x10;
-/// Command byte of an abort.
-const ABORT: u8 = 0x80;
 
 /// An SDO request: client → server, CoE service 2 (CiA 301 "SDO protocol").
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
@@ -525,27 +453,27 @@ impl SdoRequest {
         check_sdo_len(b)?;
         let cmd = b[0];
         let (index, sub) = (le16(b, 1), b[3]);
-        Ok(match cmd >> 5 {
-            1 => SdoRequest::Download {
+        Ok(match ClientCommand::of(cmd) {
+            ClientCommand::INITIATE_DOWNLOAD => SdoRequest::Download {
                 index,
                 sub,
                 complete_access: cmd & CA != 0,
                 data: SdoData::parse(cmd, b, lenient)?,
             },
-            0 => SdoRequest::DownloadSegment {
+            ClientCommand::DOWNLOAD_SEGMENT => SdoRequest::DownloadSegment {
                 toggle: cmd & TOGGLE != 0,
-                last: cmd & 0x01 != 0,
+                last: cmd & LAST != 0,
                 data: segment_data(cmd, b, lenient)?,
             },
-            2 => SdoRequest::Upload {
+            ClientCommand::INITIATE_UPLOAD => SdoRequest::Upload {
                 index,
                 sub,
                 complete_access: cmd & CA != 0,
             },
-            3 => SdoRequest::UploadSegment {
+            ClientCommand::UPLOAD_SEGMENT => SdoRequest::UploadSegment {
                 toggle: cmd & TOGGLE != 0,
             },
-            4 => SdoRequest::Abort {
+            ClientCommand::ABORT => SdoRequest::Abort {
                 index,
                 sub,
                 code: SdoAbortCode(le32(b, 4)),
@@ -553,7 +481,7 @@ impl SdoRequest {
             ccs => {
                 return Err(Error::Unknown {
                     field: "SDO client command specifier",
-                    value: u32::from(ccs),
+                    value: u32::from(ccs.0),
                 })
             }
         })
@@ -582,24 +510,26 @@ impl SdoRequest {
                 data,
             } => {
                 let (bits, d) = data.emit()?;
-                head(&mut out, 0x20 | bits | ca(*complete_access), *index, *sub);
+                let cs = ClientCommand::INITIATE_DOWNLOAD.bits();
+                head(&mut out, cs | bits | ca(*complete_access), *index, *sub);
                 out.extend(d);
             }
             SdoRequest::DownloadSegment { toggle, last, data } => {
-                let (n, d) = emit_segment(data);
-                out.push(tg(*toggle) | n | u8::from(*last));
-                out.extend(d);
+                let cs = ClientCommand::DOWNLOAD_SEGMENT.bits();
+                out.push(cs | segment_bits(*toggle, data.len(), *last));
+                out.extend(emit_segment(data));
             }
             SdoRequest::Upload {
                 index,
                 sub,
                 complete_access,
             } => {
-                head(&mut out, 0x40 | ca(*complete_access), *index, *sub);
+                let cs = ClientCommand::INITIATE_UPLOAD.bits();
+                head(&mut out, cs | ca(*complete_access), *index, *sub);
                 out.extend([0; 4]);
             }
             SdoRequest::UploadSegment { toggle } => {
-                out.push(0x60 | tg(*toggle));
+                out.push(ClientCommand::UPLOAD_SEGMENT.bits() | tg(*toggle));
                 out.extend([0; 7]);
             }
             SdoRequest::Abort { index, sub, code } => {
@@ -630,14 +560,6 @@ impl SdoRequest {
 fn ca(on: bool) -> u8 {
     if on {
         CA
-    } else {
-        0
-    }
-}
-
-fn tg(on: bool) -> u8 {
-    if on {
-        TOGGLE
     } else {
         0
     }
@@ -697,27 +619,27 @@ impl SdoResponse {
         check_sdo_len(b)?;
         let cmd = b[0];
         let (index, sub) = (le16(b, 1), b[3]);
-        Ok(match cmd >> 5 {
-            3 => SdoResponse::Download {
+        Ok(match ServerCommand::of(cmd) {
+            ServerCommand::INITIATE_DOWNLOAD => SdoResponse::Download {
                 index,
                 sub,
                 complete_access: cmd & CA != 0,
             },
-            1 => SdoResponse::DownloadSegment {
+            ServerCommand::DOWNLOAD_SEGMENT => SdoResponse::DownloadSegment {
                 toggle: cmd & TOGGLE != 0,
             },
-            2 => SdoResponse::Upload {
+            ServerCommand::INITIATE_UPLOAD => SdoResponse::Upload {
                 index,
                 sub,
                 complete_access: cmd & CA != 0,
                 data: SdoData::parse(cmd, b, false)?,
             },
-            0 => SdoResponse::UploadSegment {
+            ServerCommand::UPLOAD_SEGMENT => SdoResponse::UploadSegment {
                 toggle: cmd & TOGGLE != 0,
-                last: cmd & 0x01 != 0,
+                last: cmd & LAST != 0,
                 data: segment_data(cmd, b, false)?,
             },
-            4 => SdoResponse::Abort {
+            ServerCommand::ABORT => SdoResponse::Abort {
                 index,
                 sub,
                 code: SdoAbortCode(le32(b, 4)),
@@ -725,7 +647,7 @@ impl SdoResponse {
             scs => {
                 return Err(Error::Unknown {
                     field: "SDO server command specifier",
-                    value: u32::from(scs),
+                    value: u32::from(scs.0),
                 })
             }
         })
@@ -762,11 +684,12 @@ impl SdoResponse {
                 sub,
                 complete_access,
             } => {
-                head(&mut out, 0x60 | ca(*complete_access), *index, *sub);
+                let cs = ServerCommand::INITIATE_DOWNLOAD.bits();
+                head(&mut out, cs | ca(*complete_access), *index, *sub);
                 out.extend([0; 4]);
             }
             SdoResponse::DownloadSegment { toggle } => {
-                out.push(0x20 | tg(*toggle));
+                out.push(ServerCommand::DOWNLOAD_SEGMENT.bits() | tg(*toggle));
                 out.extend([0; 7]);
             }
             SdoResponse::Upload {
@@ -776,13 +699,14 @@ impl SdoResponse {
                 data,
             } => {
                 let (bits, d) = data.emit()?;
-                head(&mut out, 0x40 | bits | ca(*complete_access), *index, *sub);
+                let cs = ServerCommand::INITIATE_UPLOAD.bits();
+                head(&mut out, cs | bits | ca(*complete_access), *index, *sub);
                 out.extend(d);
             }
             SdoResponse::UploadSegment { toggle, last, data } => {
-                let (n, d) = emit_segment(data);
-                out.push(tg(*toggle) | n | u8::from(*last));
-                out.extend(d);
+                let cs = ServerCommand::UPLOAD_SEGMENT.bits();
+                out.push(cs | segment_bits(*toggle, data.len(), *last));
+                out.extend(emit_segment(data));
             }
             SdoResponse::Abort { index, sub, code } => {
                 head(&mut out, ABORT, *index, *sub);
@@ -817,37 +741,13 @@ impl SdoResponse {
     }
 }
 
-/// A CoE emergency (ETG.1000.6 "Emergency"; CiA 301 "Emergency object"): CoE service 1, then the
-/// error code (u16), the error register (object 1001h) and 5 manufacturer-specific bytes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct Emergency {
-    /// Emergency error code (CiA 301 "Emergency error codes"; 0000h = error reset / no error).
-    pub code: u16,
-    /// Error register (object 1001h).
-    pub register: u8,
-    /// Manufacturer-specific error field.
-    pub data: [u8; 5],
-}
+/// The emergency message (CiA 301 "Emergency object"), which CoE carries after a header of
+/// service 1 (ETG.1000.6 "Emergency").
+pub use crate::canopen::Emergency;
 
 impl Emergency {
-    /// Length after the CoE header.
-    pub const LEN: usize = 8;
-
-    /// Parses the bytes after the CoE header (at least 8).
-    pub fn parse(b: &[u8]) -> Result<Emergency, Error> {
-        let mut r = Reader::new(b);
-        let code = r.u16("emergency error code")?;
-        let register = r.u8("emergency error register")?;
-        let mut data = [0; 5];
-        data.copy_from_slice(r.bytes(5, "emergency data")?);
-        Ok(Emergency {
-            code,
-            register,
-            data,
-        })
-    }
-
-    /// Parses mailbox data: CoE header (service 1) and the emergency.
+    /// Parses mailbox data: CoE header (service 1) and the emergency (at least 8 bytes; bytes
+    /// after them are mailbox padding).
     pub fn parse_coe(data: &[u8]) -> Result<Emergency, Error> {
         let (h, rest) = CoeHeader::split(data)?;
         if h.service != CoeService::EMERGENCY {
@@ -856,14 +756,7 @@ impl Emergency {
                 value: u32::from(h.service.0),
             });
         }
-        Emergency::parse(rest)
-    }
-
-    /// The 8 bytes after the CoE header.
-    pub fn emit(&self) -> [u8; 8] {
-        let c = self.code.to_le_bytes();
-        let d = self.data;
-        [c[0], c[1], self.register, d[0], d[1], d[2], d[3], d[4]]
+        emergency(rest)
     }
 
     /// Mailbox data: CoE header (service 1) and the emergency.
@@ -872,6 +765,14 @@ impl Emergency {
         out.extend(self.emit());
         out
     }
+}
+
+/// The emergency in the bytes after the CoE header, reporting EtherCAT [`Error`]s.
+fn emergency(rest: &[u8]) -> Result<Emergency, Error> {
+    let b = Reader::new(rest).bytes(Emergency::LEN, "emergency")?;
+    let mut bytes = [0; Emergency::LEN];
+    bytes.copy_from_slice(b);
+    Ok(Emergency::from_bytes(bytes))
 }
 
 /// An SDO information opcode (ETG.1000.6 "SDO information"; open).
@@ -997,7 +898,7 @@ impl CoeMessage {
     pub fn parse(data: &[u8]) -> Result<CoeMessage, Error> {
         let (h, rest) = CoeHeader::split(data)?;
         Ok(match h.service {
-            CoeService::EMERGENCY => CoeMessage::Emergency(Emergency::parse(rest)?),
+            CoeService::EMERGENCY => CoeMessage::Emergency(emergency(rest)?),
             CoeService::SDO_REQUEST => CoeMessage::SdoRequest(SdoRequest::parse(rest)?),
             CoeService::SDO_RESPONSE => CoeMessage::SdoResponse(SdoResponse::parse(rest)?),
             CoeService::SDO_INFO => CoeMessage::SdoInfo(SdoInfo::parse(rest)?),
@@ -1487,10 +1388,16 @@ mod tests {
             format!("{:?}", SdoAbortCode::GENERAL),
             "SdoAbortCode(08000000h)"
         );
-        let mut v: Vec<u32> = SdoAbortCode::ALL.iter().map(|(c, _)| c.0).collect();
-        let n = v.len();
-        v.dedup();
-        assert_eq!(v.len(), n);
+        // The four codes ETG.1000.6 adds are named, and CiA 301 defines none of them.
+        assert_eq!(SdoAbortCode::ETG_1000_6.len(), 4);
+        for (c, text) in SdoAbortCode::ETG_1000_6 {
+            assert_eq!(c.name(), Some(*text));
+            assert!(SdoAbortCode::CIA_301.iter().all(|(d, _)| d != c));
+        }
+        assert_eq!(
+            SdoAbortCode::OBJECT_TOO_LONG.to_string(),
+            "06010005h (Object length exceeds mailbox size)"
+        );
         // Every row of BU 0620 §2.2.7.2 maps onto a code CiA 301 / ETG.1000.6 defines; exactly
         // the two errata print codes that no standard defines.
         let rows: Vec<ManualAbort> = bu0620_aborts().collect();

@@ -10,6 +10,7 @@
 //! differ in parameter numbers (P85x vs P15x), address tables and supported order labels.
 
 pub mod addr;
+pub mod can;
 pub mod control;
 pub mod ecat;
 pub mod eip;

@@ -3,7 +3,6 @@
 use std::time::Duration;
 
 use proto::ecat::al::AlStatusCode;
-use proto::ecat::coe::Emergency;
 use proto::ecat::frame::{EcatFrame, FrameType, HEADER_LEN};
 use proto::ecat::mailbox::MailboxType;
 use proto::ecat::{Command, Datagram};
@@ -385,25 +384,14 @@ impl Slave {
         self.emergencies();
     }
 
-    /// A CoE emergency for each inverter error that appeared (P700 [-01] from 0 to a value):
-    /// the DS402 code of BU 0620 §5.3 for communication errors (error register 11h), else
-    /// FF00h (manufacturer specific, error register 81h); bytes 3–4 the P700 value, byte 5
-    /// the FI.
+    /// A CoE emergency for each inverter error that appeared (P700 [-01] from 0 to a value;
+    /// `crate::objects::emergency_of`).
     fn emergencies(&mut self) {
         for (fi, value) in self.device.fault_changes(&mut self.faults) {
             if value == 0 || self.al.state == EcState::Init {
                 continue;
             }
-            let (code, register) = proto::nord::errors::COMM_ERRORS
-                .iter()
-                .find(|c| i32::from(c.p700) == value)
-                .map_or((0xFF00, 0x81), |c| (c.ds402, 0x11));
-            let v = (value as u16).to_le_bytes();
-            let emergency = Emergency {
-                code,
-                register,
-                data: [v[0], v[1], fi.get(), 0, 0],
-            };
+            let emergency = crate::objects::emergency_of(value, fi);
             self.mailbox.send(MailboxType::COE, emergency.emit_coe());
             self.fill_mailbox();
         }

@@ -1,0 +1,324 @@
+//! `harness serve can --socketcand ADDR`: the simulated system bus (a CAN segment carrying the
+//! inverters as CANopen nodes, `sim::can`) served over socketcand's TCP protocol, the way a CAN
+//! bus on another machine is reached (a Raspberry Pi on a test bench running socketcand).
+//!
+//! As on a real bus, every client sees every other client's frames, and all see the nodes'
+//! answers: other implementations (python-can, python-canopen) join the segment as nodes or as
+//! its master. A client first gets `< hi >`, opens the channel (`< open can0 >`, another name
+//! is refused as socketcand refuses an interface it does not have) and switches to raw mode;
+//! then `< send … >` puts a frame on the bus and `< frame … >` brings each frame of the bus.
+//!
+//! Threads: one accepting clients, one per client reading its messages, one producing what
+//! the nodes send on their own schedule (heartbeats). The sans-IO segment sits behind a mutex;
+//! its clock is the real time since the start.
+
+use std::io::{Read, Write};
+use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use proto::can::socketcand::{Framed, Message, Timestamp, MAX_MESSAGE_LEN};
+use proto::can::CanFrame;
+use proto::nord::Product;
+use sim::can::Segment;
+use sim::device::DeviceConfig;
+
+/// socketcand's own default port.
+pub(crate) const DEFAULT_PORT: u16 = 29536;
+
+/// The longest the producer sleeps when no node has anything due.
+const IDLE: Duration = Duration::from_millis(20);
+
+/// `harness serve can` arguments.
+#[derive(clap::Parser, Debug)]
+#[command(
+    name = "harness serve can",
+    about = "Serve the simulated NORD system bus (CANopen on CAN) over socketcand"
+)]
+struct ServeArgs {
+    /// Listen address of the socketcand server, HOST[:PORT] (port 29536 by default).
+    #[arg(long, value_name = "ADDR")]
+    socketcand: String,
+    /// The bus name clients open (`< open NAME >`).
+    #[arg(long, default_value = "can0")]
+    channel: String,
+    /// Product profile: whose inverters are on the bus (sk550p, tu3-eip, …).
+    #[arg(long, default_value = "sk550p")]
+    profile: String,
+    /// Inverters on the bus (default: the product's maximum).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
+    inverters: Option<u8>,
+    /// Stop after this many seconds (default: serve until killed).
+    #[arg(long)]
+    seconds: Option<u64>,
+}
+
+/// `harness serve can ARGS…`; returns the exit code.
+pub(super) fn command(args: &[String]) -> Result<i32, String> {
+    let a = match crate::cli::parse_args::<ServeArgs>("harness serve can", args) {
+        Ok(a) => a,
+        Err(code) => return Ok(code),
+    };
+    let product = crate::profile::Profile::by_name(&a.profile)?.nord()?;
+    let addr = listen_addr(&a.socketcand)?;
+    let listener = TcpListener::bind(addr).map_err(|e| format!("cannot listen on {addr}: {e}"))?;
+    let served = Served::start(listener, config(product, a.inverters), a.channel)?;
+    // On stdout, once the socket is bound: what a test or a script waits for.
+    outln!(
+        "serving the system bus of {} ({} inverters, nodes {}) over socketcand on {}, channel {}",
+        product.name(),
+        served.nodes.len(),
+        served
+            .nodes
+            .iter()
+            .map(u8::to_string)
+            .collect::<Vec<_>>()
+            .join(", "),
+        served.addr,
+        served.channel
+    );
+    match a.seconds {
+        Some(s) => thread::sleep(Duration::from_secs(s)),
+        None => loop {
+            thread::park();
+        },
+    }
+    served.stop();
+    Ok(crate::cli::EXIT_PASS)
+}
+
+/// The product with `inverters` (default and ceiling: its maximum).
+fn config(product: Product, inverters: Option<u8>) -> DeviceConfig {
+    let max = product.max_inverters();
+    DeviceConfig {
+        inverters: inverters.unwrap_or(max).clamp(1, max),
+        ..DeviceConfig::new(product)
+    }
+}
+
+/// `HOST[:PORT]`, the port socketcand's when not given.
+fn listen_addr(text: &str) -> Result<SocketAddr, String> {
+    let with_port = if text.parse::<SocketAddr>().is_ok() {
+        text.to_string()
+    } else {
+        format!("{text}:{DEFAULT_PORT}")
+    };
+    with_port.parse().map_err(|_| {
+        format!("`{text}` is not HOST[:PORT] (an IP address, port {DEFAULT_PORT} by default)")
+    })
+}
+
+/// One connected client.
+struct Client {
+    id: u64,
+    stream: TcpStream,
+    /// Switched to raw mode: gets every frame of the bus.
+    raw: bool,
+}
+
+/// What the threads share: the segment and the clients.
+struct Hub {
+    segment: Mutex<Segment>,
+    clients: Mutex<Vec<Client>>,
+    start: Instant,
+    channel: String,
+    stop: AtomicBool,
+    next_id: AtomicU64,
+}
+
+impl Hub {
+    fn now(&self) -> Duration {
+        self.start.elapsed()
+    }
+
+    fn segment(&self) -> MutexGuard<'_, Segment> {
+        self.segment.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn clients(&self) -> MutexGuard<'_, Vec<Client>> {
+        self.clients.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// `frames` to every raw-mode client but `except`; a client that cannot take them is
+    /// dropped.
+    fn broadcast(&self, frames: &[CanFrame], except: Option<u64>) {
+        if frames.is_empty() {
+            return;
+        }
+        let now = self.now();
+        let time = Timestamp {
+            secs: now.as_secs(),
+            usecs: now.subsec_micros(),
+        };
+        let mut text = String::new();
+        for frame in frames {
+            let m = Message::Frame {
+                frame: frame.clone(),
+                time,
+            };
+            // A frame of the segment is a data frame of at most 8 bytes: always writable.
+            if let Ok(s) = m.emit() {
+                text.push_str(&s);
+            }
+        }
+        self.clients().retain_mut(|c| {
+            if !c.raw || Some(c.id) == except {
+                return true;
+            }
+            c.stream.write_all(text.as_bytes()).is_ok()
+        });
+    }
+
+    /// A client put `frame` on the bus: the others see it, the nodes take it and answer.
+    fn transmit(&self, from: u64, frame: &CanFrame) {
+        self.broadcast(std::slice::from_ref(frame), Some(from));
+        let answers = self.segment().receive(frame, self.now());
+        self.broadcast(&answers, None);
+    }
+}
+
+/// A segment being served.
+pub(crate) struct Served {
+    hub: Arc<Hub>,
+    /// Where it listens.
+    pub(crate) addr: SocketAddr,
+    /// The bus name clients open.
+    pub(crate) channel: String,
+    /// The CANopen node ids of the inverters.
+    pub(crate) nodes: Vec<u8>,
+}
+
+impl Served {
+    /// Serves the segment of `config` to the clients of `listener`.
+    pub(crate) fn start(
+        listener: TcpListener,
+        config: DeviceConfig,
+        channel: String,
+    ) -> Result<Served, String> {
+        let addr = listener.local_addr().map_err(|e| e.to_string())?;
+        let segment = Segment::new(config).map_err(|e| e.to_string())?;
+        let nodes = segment.nodes();
+        let hub = Arc::new(Hub {
+            segment: Mutex::new(segment),
+            clients: Mutex::new(Vec::new()),
+            start: Instant::now(),
+            channel: channel.clone(),
+            stop: AtomicBool::new(false),
+            next_id: AtomicU64::new(1),
+        });
+        let h = hub.clone();
+        thread::spawn(move || accept(&h, &listener));
+        let h = hub.clone();
+        thread::spawn(move || produce(&h));
+        Ok(Served {
+            hub,
+            addr,
+            channel,
+            nodes,
+        })
+    }
+
+    /// Stops serving: the clients are disconnected.
+    pub(crate) fn stop(&self) {
+        self.hub.stop.store(true, Ordering::Relaxed);
+        for c in self.hub.clients().drain(..) {
+            let _ = c.stream.shutdown(Shutdown::Both);
+        }
+        // Wakes the acceptor, which then sees the stop.
+        let _ = TcpStream::connect_timeout(&self.addr, Duration::from_millis(200));
+    }
+}
+
+fn accept(hub: &Arc<Hub>, listener: &TcpListener) {
+    for stream in listener.incoming() {
+        if hub.stop.load(Ordering::Relaxed) {
+            return;
+        }
+        let Ok(stream) = stream else { continue };
+        let hub = hub.clone();
+        thread::spawn(move || {
+            let _ = serve_client(&hub, stream);
+        });
+    }
+}
+
+/// The nodes' own frames (heartbeats) when due.
+fn produce(hub: &Hub) {
+    while !hub.stop.load(Ordering::Relaxed) {
+        let now = hub.now();
+        let (frames, due) = {
+            let mut s = hub.segment();
+            (s.poll(now), s.next_due())
+        };
+        hub.broadcast(&frames, None);
+        let wait = due.map_or(IDLE, |d| d.saturating_sub(hub.now()).min(IDLE));
+        thread::sleep(wait.max(Duration::from_micros(200)));
+    }
+}
+
+/// One client from `< hi >` to its disconnect; a stream that is not socketcand's protocol gets
+/// `< error … >` and is closed.
+fn serve_client(hub: &Hub, mut stream: TcpStream) -> std::io::Result<()> {
+    stream.set_nodelay(true)?;
+    stream.write_all(b"< hi >")?;
+    let id = hub.next_id.fetch_add(1, Ordering::Relaxed);
+    let mut opened = false;
+    let mut buf = Vec::new();
+    let mut chunk = [0u8; 1024];
+    loop {
+        let n = stream.read(&mut chunk)?;
+        if n == 0 {
+            break;
+        }
+        buf.extend_from_slice(&chunk[..n]);
+        loop {
+            let (message, consumed) = match Message::parse(&buf) {
+                Ok(Framed::Complete { message, consumed }) => (message, consumed),
+                Ok(Framed::Incomplete) if buf.len() <= MAX_MESSAGE_LEN => break,
+                Ok(Framed::Incomplete) => {
+                    stream.write_all(b"< error message too long >")?;
+                    return close(hub, id, &stream);
+                }
+                Err(e) => {
+                    stream.write_all(format!("< error {e} >").as_bytes())?;
+                    return close(hub, id, &stream);
+                }
+            };
+            buf.drain(..consumed);
+            match message {
+                Message::Open { channel } if !opened && channel == hub.channel => {
+                    opened = true;
+                    hub.clients().push(Client {
+                        id,
+                        stream: stream.try_clone()?,
+                        raw: false,
+                    });
+                    stream.write_all(b"< ok >")?;
+                }
+                Message::Open { .. } => {
+                    stream.write_all(b"< error could not open bus >")?;
+                    return close(hub, id, &stream);
+                }
+                Message::RawMode if opened => {
+                    // The reply first, then frames: the client reads `< ok >` before any.
+                    let mut clients = hub.clients();
+                    if let Some(c) = clients.iter_mut().find(|c| c.id == id) {
+                        c.stream.write_all(b"< ok >")?;
+                        c.raw = true;
+                    }
+                }
+                Message::Echo => stream.write_all(b"< echo >")?,
+                Message::Send { frame } if opened => hub.transmit(id, &frame),
+                _ => stream.write_all(b"< error unknown command >")?,
+            }
+        }
+    }
+    close(hub, id, &stream)
+}
+
+fn close(hub: &Hub, id: u64, stream: &TcpStream) -> std::io::Result<()> {
+    hub.clients().retain(|c| c.id != id);
+    stream.shutdown(Shutdown::Both)
+}

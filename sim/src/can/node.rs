@@ -1,0 +1,231 @@
+//! One inverter as a CANopen node: NMT state machine, boot-up and heartbeat, node guarding,
+//! the SDO server over its object dictionary, EMCY.
+
+use std::time::Duration;
+
+use proto::can::CanFrame;
+use proto::canopen::cob_id::{Cob, Function};
+use proto::canopen::nmt::{ErrorControl, NmtFrame, NmtState};
+use proto::nord::errors::SdoAbort;
+use proto::nord::params::ParamDef;
+use proto::nord::{Inverter, ParamNumber, Product};
+
+use super::sdo::{Objects, Transfer};
+use crate::device::Device;
+use crate::link::Unit;
+use crate::objects::{abort, decode_number, emergency_of, read_sub, write_sub};
+use crate::store::ParamStore;
+
+/// Communication objects (CiA 301 §7.5.2).
+const DEVICE_TYPE: u16 = 0x1000;
+const ERROR_REGISTER: u16 = 0x1001;
+const DEVICE_NAME: u16 = 0x1008;
+const HEARTBEAT_TIME: u16 = 0x1017;
+const IDENTITY: u16 = 0x1018;
+/// The parameters: P at 2000h + P (the project's EtherCAT layout, one node per inverter).
+const PARAMETERS: u16 = 0x2000;
+const LAST_PARAMETER: u16 = PARAMETERS + 999;
+
+/// One node.
+#[derive(Debug)]
+pub(super) struct Node {
+    fi: Inverter,
+    id: u8,
+    product: Product,
+    state: NmtState,
+    /// 1017h, ms (0: no heartbeat).
+    heartbeat_ms: u16,
+    /// When the next heartbeat (or, in Initialisation, the boot-up message) is due.
+    due: Option<Duration>,
+    /// The toggle bit of the next node guarding response.
+    guard_toggle: bool,
+    transfer: Transfer,
+    /// The error register (1001h) as the last EMCY set it.
+    error_register: u8,
+}
+
+impl Node {
+    pub(super) fn new(fi: Inverter, id: u8, product: Product) -> Node {
+        Node {
+            fi,
+            id,
+            product,
+            state: NmtState::Initialisation,
+            heartbeat_ms: 0,
+            due: Some(Duration::ZERO),
+            guard_toggle: false,
+            transfer: Transfer::Idle,
+            error_register: 0,
+        }
+    }
+
+    pub(super) fn id(&self) -> u8 {
+        self.id
+    }
+
+    pub(super) fn inverter(&self) -> Inverter {
+        self.fi
+    }
+
+    pub(super) fn next_due(&self) -> Option<Duration> {
+        self.due
+    }
+
+    fn frame(&self, function: Function, data: &[u8]) -> Option<CanFrame> {
+        let id = function.cob_id(self.id).ok()?;
+        CanFrame::new(id, data).ok()
+    }
+
+    /// Boot-up when initialisation ends, heartbeats when due.
+    pub(super) fn poll(&mut self, _device: &mut Device, now: Duration) -> Vec<CanFrame> {
+        let Some(due) = self.due.filter(|d| *d <= now) else {
+            return Vec::new();
+        };
+        let message = if self.state == NmtState::Initialisation {
+            self.state = NmtState::PreOperational;
+            ErrorControl::BOOT_UP
+        } else {
+            ErrorControl::heartbeat(self.state)
+        };
+        self.due = (self.heartbeat_ms > 0)
+            .then(|| due.max(now) + Duration::from_millis(u64::from(self.heartbeat_ms)));
+        self.frame(Function::ErrorControl, &message.emit())
+            .into_iter()
+            .collect()
+    }
+
+    /// An EMCY for the inverter's present error `p700` (0: the error went).
+    pub(super) fn emergency(&mut self, p700: i32) -> Option<CanFrame> {
+        let emcy = emergency_of(p700, self.fi);
+        self.error_register = emcy.register;
+        if matches!(self.state, NmtState::Stopped | NmtState::Initialisation) {
+            return None;
+        }
+        self.frame(Function::Emcy, &emcy.emit())
+    }
+
+    /// What the node answers to `frame`.
+    pub(super) fn receive(
+        &mut self,
+        frame: &CanFrame,
+        device: &mut Device,
+        now: Duration,
+    ) -> Option<CanFrame> {
+        let cob = Cob::classify(frame.id())?;
+        match cob.function {
+            Function::Nmt => {
+                let nmt = NmtFrame::parse(frame.data()).ok()?;
+                if nmt.node == 0 || nmt.node == self.id {
+                    self.command(nmt, now);
+                }
+                None
+            }
+            Function::ErrorControl if cob.node == self.id && frame.is_remote() => {
+                // Node guarding: the state with the toggle bit, alternating.
+                let mut answer = ErrorControl::heartbeat(self.state);
+                answer.toggle = self.guard_toggle;
+                self.guard_toggle = !self.guard_toggle;
+                self.frame(Function::ErrorControl, &answer.emit())
+            }
+            Function::SdoRx if cob.node == self.id => {
+                // SDO is served in Pre-operational and Operational only; an SDO frame is 8
+                // bytes, a shorter one is no SDO request (CiA 301 §7.2.4.3.1).
+                if !matches!(self.state, NmtState::PreOperational | NmtState::Operational)
+                    || frame.is_remote()
+                    || frame.data().len() != 8
+                {
+                    return None;
+                }
+                let mut od = Dictionary { node: self, device };
+                let mut transfer = std::mem::take(&mut od.node.transfer);
+                let answer = transfer.serve(frame.data(), &mut od);
+                self.transfer = transfer;
+                self.frame(Function::SdoTx, &answer?.emit())
+            }
+            _ => None,
+        }
+    }
+
+    fn command(&mut self, nmt: NmtFrame, now: Duration) {
+        let Some(to) = self.state.on_command(nmt.command) else {
+            return;
+        };
+        if to == NmtState::Initialisation {
+            // Reset node / reset communication: the communication objects return to their
+            // factory values and the node boots again.
+            self.heartbeat_ms = 0;
+            self.guard_toggle = false;
+            self.transfer = Transfer::Idle;
+            self.due = Some(now);
+        }
+        self.state = to;
+    }
+}
+
+/// The node's objects, the inverter's parameters among them.
+struct Dictionary<'a> {
+    node: &'a mut Node,
+    device: &'a mut Device,
+}
+
+impl Dictionary<'_> {
+    /// Parameter `index` − 2000h of the node's inverter: its store, number and definition.
+    #[allow(clippy::type_complexity)]
+    fn parameter(
+        &mut self,
+        index: u16,
+    ) -> Result<(&mut ParamStore, ParamNumber, &'static ParamDef), SdoAbort> {
+        let number =
+            ParamNumber::new(i64::from(index - PARAMETERS)).map_err(|_| abort::NO_OBJECT)?;
+        let store = self
+            .device
+            .store(Unit::Inverter(self.node.fi))
+            .map_err(|_| abort::NO_OBJECT)?;
+        let def = store.def(number).ok_or(abort::NO_OBJECT)?;
+        Ok((store, number, def))
+    }
+}
+
+impl Objects for Dictionary<'_> {
+    fn upload(&mut self, index: u16, sub: u8) -> Result<Vec<u8>, SdoAbort> {
+        match (index, sub) {
+            (DEVICE_TYPE, 0) => Ok(0u32.to_le_bytes().to_vec()),
+            (ERROR_REGISTER, 0) => Ok(vec![self.node.error_register]),
+            (DEVICE_NAME, 0) => Ok(self.node.product.name().as_bytes().to_vec()),
+            (HEARTBEAT_TIME, 0) => Ok(self.node.heartbeat_ms.to_le_bytes().to_vec()),
+            (IDENTITY, 0) => Ok(vec![1]),
+            (IDENTITY, 1) => Ok(proto::nord::ecat::VENDOR_ID.to_le_bytes().to_vec()),
+            (DEVICE_TYPE | ERROR_REGISTER | DEVICE_NAME | HEARTBEAT_TIME | IDENTITY, _) => {
+                Err(abort::NO_SUBINDEX)
+            }
+            (PARAMETERS..=LAST_PARAMETER, _) => {
+                let (store, number, def) = self.parameter(index)?;
+                read_sub(store, number, def, sub)
+            }
+            _ => Err(abort::NO_OBJECT),
+        }
+    }
+
+    fn download(&mut self, index: u16, sub: u8, data: &[u8]) -> Result<(), SdoAbort> {
+        match (index, sub) {
+            (HEARTBEAT_TIME, 0) => {
+                let ms = decode_number(data, proto::nord::ecat::DataType::U16)?;
+                self.node.heartbeat_ms = ms as u16;
+                // The first heartbeat at once, then one every `ms`.
+                self.node.due = (ms > 0).then_some(Duration::ZERO);
+                Ok(())
+            }
+            (DEVICE_TYPE | ERROR_REGISTER | DEVICE_NAME | IDENTITY, 0) | (IDENTITY, 1) => {
+                Err(abort::READ_ONLY)
+            }
+            (DEVICE_TYPE | ERROR_REGISTER | DEVICE_NAME | HEARTBEAT_TIME | IDENTITY, _) => {
+                Err(abort::NO_SUBINDEX)
+            }
+            (PARAMETERS..=LAST_PARAMETER, _) => {
+                let (store, number, def) = self.parameter(index)?;
+                write_sub(store, number, def, sub, data)
+            }
+            _ => Err(abort::NO_OBJECT),
+        }
+    }
+}

@@ -1,0 +1,258 @@
+//! The segment frame by frame, as a CANopen master sees it.
+
+use std::time::Duration;
+
+use proto::can::CanFrame;
+use proto::canopen::nmt::NmtCommand;
+use proto::canopen::sdo::{InitiateData, SdoResponse};
+use proto::nord::{Inverter, Product};
+
+use super::Segment;
+use crate::device::DeviceConfig;
+
+const MS: Duration = Duration::from_millis(1);
+
+fn segment() -> Segment {
+    let mut s = Segment::new(DeviceConfig::new(Product::Sk550p)).unwrap();
+    s.poll(Duration::ZERO);
+    s
+}
+
+fn frame(id: u16, data: &[u8]) -> CanFrame {
+    CanFrame::new(id, data).unwrap()
+}
+
+/// The one SDO answer of `node` to `request`.
+fn sdo(s: &mut Segment, node: u8, request: [u8; 8]) -> SdoResponse {
+    let out = s.receive(&frame(0x600 + u16::from(node), &request), MS);
+    assert_eq!(out.len(), 1, "{out:?}");
+    assert_eq!(out[0].id(), 0x580 + u16::from(node));
+    SdoResponse::parse(out[0].data()).unwrap()
+}
+
+fn upload(index: u16, sub: u8) -> [u8; 8] {
+    let i = index.to_le_bytes();
+    [0x40, i[0], i[1], sub, 0, 0, 0, 0]
+}
+
+fn abort_code(r: SdoResponse) -> u32 {
+    match r {
+        SdoResponse::Abort(a) => a.code.0,
+        other => panic!("no abort: {other:?}"),
+    }
+}
+
+#[test]
+fn every_inverter_boots_at_its_system_bus_address() {
+    let mut s = Segment::new(DeviceConfig::new(Product::Sk550p)).unwrap();
+    assert_eq!(s.nodes(), vec![32, 34, 36, 38, 40, 42, 44, 46]);
+    let boot = s.poll(Duration::ZERO);
+    let ids: Vec<u16> = boot.iter().map(CanFrame::id).collect();
+    assert_eq!(
+        ids,
+        vec![0x720, 0x722, 0x724, 0x726, 0x728, 0x72A, 0x72C, 0x72E]
+    );
+    assert!(boot.iter().all(|f| f.data() == [0x00]), "boot-up messages");
+    assert!(s.poll(MS).is_empty(), "once, and no heartbeat at 1017h = 0");
+}
+
+#[test]
+fn p102_of_fi_3_is_read_and_written_at_its_nord_object() {
+    let mut s = segment();
+    let factory = s
+        .device_mut()
+        .store(crate::link::Unit::Inverter(Inverter::new(3).unwrap()))
+        .unwrap()
+        .read(proto::nord::ParamNumber::new(102).unwrap(), None, None)
+        .unwrap();
+    // P102 has four parameter sets: sub-index 0 their count, 1..4 the sets.
+    let read = |s: &mut Segment| match sdo(s, 36, upload(0x2066, 1)) {
+        SdoResponse::InitiateUpload {
+            index: 0x2066,
+            sub: 1,
+            data: InitiateData::Expedited(e),
+        } => {
+            let mut b = [0u8; 4];
+            b[..e.data().len()].copy_from_slice(e.data());
+            i32::from_le_bytes(b)
+        }
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(read(&mut s), factory);
+    // 2.5 s in hundredths, as the P102 write example of BU 0620 writes it: 250.
+    let written = sdo(&mut s, 36, [0x2B, 0x66, 0x20, 0x01, 0xFA, 0x00, 0, 0]);
+    assert_eq!(
+        written,
+        SdoResponse::InitiateDownload {
+            index: 0x2066,
+            sub: 1
+        }
+    );
+    assert_eq!(read(&mut s), 250);
+    // FI 1 (node 32) keeps its own.
+    assert_ne!(
+        sdo(&mut s, 32, upload(0x2066, 1)),
+        sdo(&mut s, 36, upload(0x2066, 1))
+    );
+    assert_eq!(
+        abort_code(sdo(&mut s, 36, [0x2B, 0x66, 0x20, 0x00, 4, 0, 0, 0])),
+        0x0601_0002,
+        "the count of sets is read-only"
+    );
+}
+
+#[test]
+fn bad_requests_get_the_standards_abort_codes_and_the_node_serves_on() {
+    let mut s = segment();
+    assert_eq!(
+        abort_code(sdo(&mut s, 36, upload(0x3000, 0))),
+        0x0602_0000,
+        "no object"
+    );
+    assert_eq!(
+        abort_code(sdo(&mut s, 36, upload(0x1017, 5))),
+        0x0609_0011,
+        "no sub-index"
+    );
+    assert_eq!(
+        abort_code(sdo(&mut s, 36, [0xE0, 0, 0, 0, 0, 0, 0, 0])),
+        0x0504_0001,
+        "unknown command specifier"
+    );
+    assert_eq!(
+        abort_code(sdo(&mut s, 36, [0x60, 0, 0, 0, 0, 0, 0, 0])),
+        0x0504_0001,
+        "a segment with no transfer"
+    );
+    assert_eq!(
+        abort_code(sdo(&mut s, 36, [0x23, 0x18, 0x10, 0x01, 1, 0, 0, 0])),
+        0x0601_0002,
+        "identity is read-only"
+    );
+    assert_eq!(
+        abort_code(sdo(&mut s, 36, [0xC0, 0x66, 0x20, 0, 0, 0, 0, 0])),
+        0x0504_0001,
+        "block transfers are not served"
+    );
+    // A short frame is no SDO request: silence.
+    assert!(s.receive(&frame(0x624, &[0x40, 0x66, 0x20]), MS).is_empty());
+    // An abort from the client is not answered.
+    assert!(s
+        .receive(&frame(0x624, &[0x80, 0x66, 0x20, 0, 0, 0, 0, 0x08]), MS)
+        .is_empty());
+    assert!(matches!(
+        sdo(&mut s, 36, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+}
+
+#[test]
+fn the_device_name_is_uploaded_in_segments_with_the_toggle_checked() {
+    let mut s = segment();
+    match sdo(&mut s, 34, upload(0x1008, 0)) {
+        SdoResponse::InitiateUpload {
+            data: InitiateData::Segmented { size: Some(6) },
+            ..
+        } => {}
+        other => panic!("{other:?}"),
+    }
+    match sdo(&mut s, 34, [0x60, 0, 0, 0, 0, 0, 0, 0]) {
+        SdoResponse::UploadSegment {
+            toggle: false,
+            last: true,
+            data,
+        } => assert_eq!(data.data(), Product::Sk550p.name().as_bytes()),
+        other => panic!("{other:?}"),
+    }
+    sdo(&mut s, 34, upload(0x1008, 0));
+    assert_eq!(
+        abort_code(sdo(&mut s, 34, [0x70, 0, 0, 0, 0, 0, 0, 0])),
+        0x0503_0000,
+        "toggle bit not alternated"
+    );
+}
+
+#[test]
+fn a_segmented_download_is_assembled_and_checked() {
+    let mut s = segment();
+    // 1017h:00 (2 bytes) in one segment after an initiate announcing 2 bytes.
+    sdo(&mut s, 36, [0x21, 0x17, 0x10, 0x00, 2, 0, 0, 0]);
+    let done = sdo(&mut s, 36, [0x0B, 0xE8, 0x03, 0, 0, 0, 0, 0]);
+    assert_eq!(done, SdoResponse::DownloadSegment { toggle: false });
+    // The heartbeat starts: 1000 ms.
+    let beats = s.poll(2 * MS);
+    assert_eq!(beats, vec![frame(0x724, &[0x7F])]);
+    assert!(s.poll(500 * MS).is_empty());
+    assert_eq!(s.poll(1002 * MS), vec![frame(0x724, &[0x7F])]);
+    // 3 bytes announced, 2 sent: too short.
+    sdo(&mut s, 36, [0x21, 0x17, 0x10, 0x00, 3, 0, 0, 0]);
+    assert_eq!(
+        abort_code(sdo(&mut s, 36, [0x0B, 0xE8, 0x03, 0, 0, 0, 0, 0])),
+        0x0607_0013
+    );
+}
+
+#[test]
+fn nmt_commands_move_the_state_and_stopped_nodes_leave_sdo_unanswered() {
+    let mut s = segment();
+    sdo(&mut s, 36, [0x2B, 0x17, 0x10, 0x00, 0x64, 0x00, 0, 0]);
+    s.poll(2 * MS);
+    // Start all: heartbeats say 05h.
+    s.receive(&frame(0, &[NmtCommand::START.0, 0]), 3 * MS);
+    assert_eq!(s.poll(110 * MS), vec![frame(0x724, &[0x05])]);
+    // Stop node 36: no SDO answer, heartbeat 04h; the others still answer.
+    s.receive(&frame(0, &[NmtCommand::STOP.0, 36]), 111 * MS);
+    assert!(s
+        .receive(&frame(0x624, &upload(0x1000, 0)), 112 * MS)
+        .is_empty());
+    assert_eq!(s.poll(210 * MS), vec![frame(0x724, &[0x04])]);
+    assert!(matches!(
+        sdo(&mut s, 38, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+    // Reset communication: boot-up again, 1017h back to 0.
+    s.receive(
+        &frame(0, &[NmtCommand::RESET_COMMUNICATION.0, 36]),
+        220 * MS,
+    );
+    assert_eq!(s.poll(221 * MS), vec![frame(0x724, &[0x00])]);
+    assert!(s.poll(400 * MS).is_empty());
+    // An NMT frame with an unknown command changes nothing and is not answered.
+    assert!(s.receive(&frame(0, &[0x55, 36]), 401 * MS).is_empty());
+}
+
+#[test]
+fn node_guarding_answers_with_an_alternating_toggle() {
+    let mut s = segment();
+    let guard = CanFrame::remote(0x724, 1).unwrap();
+    assert_eq!(s.receive(&guard, MS), vec![frame(0x724, &[0x7F])]);
+    assert_eq!(s.receive(&guard, 2 * MS), vec![frame(0x724, &[0xFF])]);
+    assert_eq!(s.receive(&guard, 3 * MS), vec![frame(0x724, &[0x7F])]);
+}
+
+#[test]
+fn an_inverter_error_sends_an_emergency_and_sets_the_error_register() {
+    let mut s = segment();
+    s.device_mut()
+        .inject_fault(Inverter::new(3).unwrap(), "10.0")
+        .unwrap();
+    // The drive takes the error with its next cycle; the segment sees P700 change.
+    let mut emcy = Vec::new();
+    for t in 1..50 {
+        s.device_mut()
+            .process(Inverter::new(3).unwrap(), 0, &[], t * MS)
+            .unwrap();
+        emcy.extend(s.poll(t * MS).into_iter().filter(|f| f.id() == 0x0A4));
+    }
+    assert_eq!(emcy.len(), 1, "{emcy:?}");
+    let data = emcy[0].data();
+    assert_eq!(u16::from_le_bytes([data[3], data[4]]), 100, "P700 = 10.0");
+    assert_eq!(data[5], 3, "FI 3");
+    match sdo(&mut s, 36, upload(0x1001, 0)) {
+        SdoResponse::InitiateUpload {
+            data: InitiateData::Expedited(e),
+            ..
+        } => assert_ne!(e.data()[0], 0),
+        other => panic!("{other:?}"),
+    }
+}

@@ -1,0 +1,44 @@
+"""python-canopen as the master of the served NORD system bus, over socketcand (python-can's
+`socketcand` interface): reads and writes P102 of inverter 3 at its NORD object (node 36,
+object 2000h + 102 = 2066h, sub-index 1 = parameter set 1), and checks that bad requests get
+CiA 301 abort codes while the node goes on serving. Prints one JSON line of what it saw; the
+Rust test judges it.
+
+Usage: canopen_master.py HOST PORT CHANNEL
+"""
+
+import json
+import struct
+import sys
+
+import canopen
+
+host, port, channel = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+network = canopen.Network()
+network.connect(interface="socketcand", host=host, port=port, channel=channel)
+seen = {}
+try:
+    node = network.add_node(36, canopen.ObjectDictionary())
+    sdo = node.sdo
+    seen["p102_before"] = struct.unpack("<H", sdo.upload(0x2066, 1))[0]
+    sdo.download(0x2066, 1, struct.pack("<H", 250))
+    seen["p102_after"] = struct.unpack("<H", sdo.upload(0x2066, 1))[0]
+    seen["device_name"] = sdo.upload(0x1008, 0).decode("ascii")
+    aborts = {}
+    for name, call in [
+        ("absent_object", lambda: sdo.upload(0x3000, 0)),
+        ("absent_subindex", lambda: sdo.upload(0x1017, 9)),
+        ("read_only", lambda: sdo.download(0x1018, 1, b"\x00\x00\x00\x00")),
+        ("too_high", lambda: sdo.download(0x2066, 1, struct.pack("<h", 32767))),
+    ]:
+        try:
+            call()
+            aborts[name] = None
+        except canopen.SdoAbortedError as e:
+            aborts[name] = e.code
+    seen["aborts"] = aborts
+    # Still serving after the refusals.
+    seen["p102_last"] = struct.unpack("<H", sdo.upload(0x2066, 1))[0]
+finally:
+    network.disconnect()
+print(json.dumps(seen))
