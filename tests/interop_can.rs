@@ -2,7 +2,9 @@
 //! NORD system bus served over socketcand (`harness serve can --socketcand`, reached through
 //! python-can's `socketcand` interface): it reads and writes P102 of inverter 3 at its NORD
 //! object (node 36 = P515 address of FI 3, object 2000h + 102, sub-index 1 = set 1) and gets
-//! CiA 301 abort codes for bad requests, after which the node still serves.
+//! CiA 301 abort codes for bad requests, after which the node still serves. It also imports
+//! the node's EDS as `harness describe eds --bus can` writes it (CiA 306) and reads P102 there
+//! by name.
 //!
 //! The peers live in the venv `.ci/interop-setup` installs (python-can and canopen from
 //! PyPI); without it the test says so and skips (fails in strict mode).
@@ -20,7 +22,7 @@ use common::peer::interop_python;
 use common::{wait_listening, Server};
 
 #[test]
-fn python_canopen_reads_and_writes_p102_of_fi_3_and_gets_cia_301_aborts() {
+fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_and_imports_the_eds() {
     let Some(py) = interop_python(
         &["can", "canopen"],
         "python-canopen as master of the served system bus",
@@ -43,12 +45,21 @@ fn python_canopen_reads_and_writes_p102_of_fi_3_and_gets_cia_301_aborts() {
         .expect("harness serve can starts");
     let _server = Server(child);
     wait_listening(&listen, Duration::from_secs(10));
+    let eds = std::env::temp_dir().join(format!("nord-fi3-{}.eds", std::process::id()));
+    let described = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["describe", "eds", "--bus", "can", "--profile", "sk550p"])
+        .args(["--inverter", "3"])
+        .output()
+        .expect("harness describe runs");
+    assert!(described.status.success(), "{described:?}");
+    std::fs::write(&eds, &described.stdout).expect("EDS written");
     let (host, port) = listen.split_once(':').expect("HOST:PORT");
     let script =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/interop/canopen_master.py");
     let out = Command::new(&py)
         .arg(script)
         .args([host, port, "can0"])
+        .arg(&eds)
         .output()
         .expect("python runs");
     assert!(
@@ -67,4 +78,9 @@ fn python_canopen_reads_and_writes_p102_of_fi_3_and_gets_cia_301_aborts() {
     assert_eq!(aborts["read_only"], 0x0601_0002, "{seen}");
     assert_eq!(aborts["too_high"], 0x0609_0031, "{seen}");
     assert_eq!(seen["p102_last"], 250, "still serving: {seen}");
+    // The EDS: python-canopen imports it and reads P102 set 1 by name, typed INTEGER16.
+    assert_eq!(seen["eds_p102_by_name"], 250, "{seen}");
+    assert_eq!(seen["eds_p102_type"], 0x0003, "{seen}");
+    assert!(seen["eds_objects"].as_u64().unwrap_or(0) > 20, "{seen}");
+    let _ = std::fs::remove_file(&eds);
 }

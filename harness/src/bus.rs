@@ -89,8 +89,11 @@ impl Variable {
 pub(crate) struct Description {
     /// Format name on the command line (`eds`, `esi`).
     pub(crate) format: &'static str,
-    /// Writes it for a product profile of the bus with `inverters` inverters.
+    /// Writes it for a product profile of the bus with `inverters` inverters, or, for a
+    /// description of one node per inverter ([`Description::per_inverter`]), of that inverter.
     pub(crate) write: fn(&Profile, u8) -> Result<String, String>,
+    /// Describes one inverter (a node of the system bus), not the interface with all of them.
+    pub(crate) per_inverter: bool,
 }
 
 /// What opening the embedded simulator may use.
@@ -169,16 +172,25 @@ pub(crate) fn by_url(url: &str) -> Result<(&'static Bus, &str), String> {
     Ok((bus, target))
 }
 
-/// The description writer for `format`, with its bus.
-pub(crate) fn description(format: &str) -> Result<(&'static Bus, &'static Description), String> {
+/// The description writer for `format`, with its bus: of the bus `bus` names, else of the
+/// first bus that writes one (`eds`: EtherNet/IP's; `--bus can` the system bus's).
+pub(crate) fn description(
+    format: &str,
+    bus: Option<&str>,
+) -> Result<(&'static Bus, &'static Description), String> {
     BUSES
         .iter()
+        .filter(|b| bus.is_none_or(|name| b.name == name))
         .flat_map(|b| b.descriptions.iter().map(move |d| (*b, d)))
         .find(|(_, d)| d.format == format)
         .ok_or_else(|| {
-            let known: Vec<&str> = BUSES
+            let known: Vec<String> = BUSES
                 .iter()
-                .flat_map(|b| b.descriptions.iter().map(|d| d.format))
+                .flat_map(|b| {
+                    b.descriptions
+                        .iter()
+                        .map(move |d| format!("{} ({})", d.format, b.name))
+                })
                 .collect();
             format!("cannot describe `{format}` (known: {})", known.join(", "))
         })
@@ -246,8 +258,12 @@ mod tests {
 
     #[test]
     fn description_formats_are_found_by_name() {
-        assert_eq!(description("eds").unwrap().0.name, "enip");
-        assert_eq!(description("gsdml").unwrap().0.name, "pnio");
-        assert!(description("xyz").unwrap_err().contains("known: eds"));
+        assert_eq!(description("eds", None).unwrap().0.name, "enip");
+        assert_eq!(description("eds", Some("can")).unwrap().0.name, "can");
+        assert_eq!(description("gsdml", None).unwrap().0.name, "pnio");
+        let e = description("xyz", None).unwrap_err();
+        assert!(e.contains("known: eds (enip), esi (ecat)"), "{e}");
+        assert!(e.contains("eds (can)"), "{e}");
+        assert!(description("esi", Some("can")).is_err());
     }
 }

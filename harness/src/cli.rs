@@ -64,9 +64,10 @@ enum Command {
 
 #[derive(ClapArgs, Debug)]
 struct DescribeArgs {
-    /// What to describe: `eds` (EtherNet/IP electronic data sheet), `esi` (EtherCAT slave
-    /// information), `xdd` (POWERLINK XML device description), `gsdml` (PROFINET general
-    /// station description).
+    /// What to describe: `eds` (EtherNet/IP electronic data sheet; with `--bus can` the CiA
+    /// 306 EDS of an inverter on the NORD system bus), `esi` (EtherCAT slave information),
+    /// `xdd` (POWERLINK XML device description), `gsdml` (PROFINET general station
+    /// description).
     what: String,
     /// Product profile, e.g. tu3-eip, sk550p.
     #[arg(long)]
@@ -74,6 +75,13 @@ struct DescribeArgs {
     /// Inverters behind the interface (default: the product's maximum).
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
     inverters: Option<u8>,
+    /// The bus whose description it is, where two write the same format (`eds`: enip, the
+    /// default, or can for the NORD system bus).
+    #[arg(long)]
+    bus: Option<String>,
+    /// The inverter a per-node description is of (`eds --bus can`; default FI 1).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=8))]
+    inverter: Option<u8>,
 }
 
 #[derive(ClapArgs, Debug)]
@@ -350,12 +358,16 @@ pub(crate) fn parse_args<T: clap::Parser>(name: &str, args: &[String]) -> Result
 }
 
 fn describe(a: DescribeArgs) -> Result<i32, String> {
-    let (bus, description) = crate::bus::description(&a.what)?;
+    let (bus, description) = crate::bus::description(&a.what, a.bus.as_deref())?;
     let profile = Profile::by_name(&a.profile)?;
     let product = profile.nord()?;
     // The writer says so when the product has no such interface.
     let profile = profile.over(bus.name).unwrap_or(profile);
-    let text = (description.write)(&profile, a.inverters.unwrap_or(product.max_inverters()))?;
+    let units = match description.per_inverter {
+        true => a.inverter.unwrap_or(1),
+        false => a.inverters.unwrap_or(product.max_inverters()),
+    };
+    let text = (description.write)(&profile, units)?;
     // A closed pipe (`| head`) ends the output, not the program with a panic.
     let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes());
     Ok(EXIT_PASS)

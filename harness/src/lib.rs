@@ -23,6 +23,7 @@ pub mod cli;
 mod cli_reports;
 mod cli_tools;
 mod description;
+mod dictionary;
 mod ecat;
 /// What the EtherCAT speed bench (`harness/benches/ecat/`) needs of the library.
 pub use ecat::bench_support as ecat_bench;

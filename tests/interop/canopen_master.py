@@ -4,7 +4,10 @@ object 2000h + 102 = 2066h, sub-index 1 = parameter set 1), and checks that bad 
 CiA 301 abort codes while the node goes on serving. Prints one JSON line of what it saw; the
 Rust test judges it.
 
-Usage: canopen_master.py HOST PORT CHANNEL
+With an EDS (`harness describe eds --bus can --profile sk550p --inverter 3`), python-canopen
+imports it as the node's object dictionary and also reads P102 by its name there.
+
+Usage: canopen_master.py HOST PORT CHANNEL [EDS]
 """
 
 import json
@@ -18,7 +21,8 @@ network = canopen.Network()
 network.connect(interface="socketcand", host=host, port=port, channel=channel)
 seen = {}
 try:
-    node = network.add_node(36, canopen.ObjectDictionary())
+    node = canopen.RemoteNode(36, canopen.ObjectDictionary())
+    network.add_node(node)
     sdo = node.sdo
     seen["p102_before"] = struct.unpack("<H", sdo.upload(0x2066, 1))[0]
     sdo.download(0x2066, 1, struct.pack("<H", 250))
@@ -39,6 +43,12 @@ try:
     seen["aborts"] = aborts
     # Still serving after the refusals.
     seen["p102_last"] = struct.unpack("<H", sdo.upload(0x2066, 1))[0]
+    if len(sys.argv) > 4:
+        described = network.add_node(36, sys.argv[4])
+        od = described.object_dictionary
+        seen["eds_objects"] = len(od)
+        seen["eds_p102_by_name"] = described.sdo["P102 Acceleration time"]["Set 1"].raw
+        seen["eds_p102_type"] = od[0x2066][1].data_type
 finally:
     network.disconnect()
 print(json.dumps(seen))

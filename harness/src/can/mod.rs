@@ -7,12 +7,13 @@
 //! `--dut socketcand://HOST:PORT/CHANNEL`), the system-bus profiles of the default run and
 //! `can:` suite steps; each refuses with that said rather than doing something else.
 
+mod eds;
 mod serve;
 
 use serde_json::Value;
 
 use crate::binding::{Binding, OpenError};
-use crate::bus::{Bus, BusStep, Embedded, Network};
+use crate::bus::{Bus, BusStep, Description, Embedded, Network};
 use crate::profile::Profile;
 use crate::runner::DutFactory;
 
@@ -26,7 +27,11 @@ pub(crate) const BUS: Bus = Bus {
     embedded,
     network,
     serve: serve::command,
-    descriptions: &[],
+    descriptions: &[Description {
+        format: "eds",
+        write: describe_eds,
+        per_inverter: true,
+    }],
     variable: crate::bus::Variable::NONE,
 };
 
@@ -45,4 +50,12 @@ fn embedded(_: &Profile, _: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
 
 fn network(_: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
     Err(OpenError::Profile(NO_BINDING.to_string()))
+}
+
+/// `harness describe eds --bus can --profile P [--inverter N]`: the EDS of inverter N (FI 1 by
+/// default) of the product's system bus.
+fn describe_eds(profile: &Profile, fi: u8) -> Result<String, String> {
+    let product = profile.nord()?;
+    let fi = proto::nord::Inverter::new(i64::from(fi)).map_err(|e| e.to_string())?;
+    eds::eds(product, fi)
 }

@@ -155,7 +155,7 @@ impl Hub {
         let mut text = String::new();
         for frame in frames {
             let m = Message::Frame {
-                frame: frame.clone(),
+                frame: *frame,
                 time,
             };
             // A frame of the segment is a data frame of at most 8 bytes: always writable.

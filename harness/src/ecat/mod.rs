@@ -38,6 +38,7 @@ pub(crate) const BUS: Bus = Bus {
     descriptions: &[Description {
         format: "esi",
         write: describe_esi,
+        per_inverter: false,
     }],
     variable: crate::bus::Variable::NONE,
 };

@@ -42,6 +42,7 @@ pub(crate) const BUS: Bus = Bus {
     descriptions: &[Description {
         format: "eds",
         write: describe_eds,
+        per_inverter: false,
     }],
     variable: variable::VARIABLE,
 };

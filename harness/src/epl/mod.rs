@@ -44,6 +44,7 @@ pub(crate) const BUS: Bus = Bus {
     descriptions: &[Description {
         format: "xdd",
         write: describe_xdd,
+        per_inverter: false,
     }],
     variable: crate::bus::Variable::NONE,
 };

@@ -29,15 +29,14 @@
 use std::collections::BTreeSet;
 use std::io::Cursor;
 
-use proto::nord::ecat::{
-    parameter_count, parameter_data_type, parameter_subindex, DataType, Entry, EntryAccess, Object,
-    ObjectCode, ParamSub, PdoMapping, Value,
-};
+use proto::nord::ecat::{DataType, Entry, EntryAccess, Object, ObjectCode, PdoMapping, Value};
 use proto::nord::epl as def;
-use proto::nord::params::{self, Access, Owner, ParamDef};
-use proto::nord::{Family, Inverter, ParamNumber, Product, Protocol};
+use proto::nord::params::Owner;
+use proto::nord::{Family, Inverter, Product, Protocol};
 use quick_xml::events::{BytesDecl, BytesText, Event};
 use quick_xml::Writer;
+
+use crate::dictionary::{defs, inverter_parameters, parameter, ObjectDoc};
 
 type W = Writer<Cursor<Vec<u8>>>;
 
@@ -83,69 +82,9 @@ pub(crate) fn file_name(product: Product) -> &'static str {
     }
 }
 
-/// One `Object` or `SubObject` as DS 311 writes it.
-#[derive(Debug, Clone, PartialEq)]
-struct XObject {
-    /// Index (objects) or sub-index (sub-objects).
-    at: u16,
-    name: String,
-    /// 7 VAR, 8 ARRAY, 9 RECORD.
-    object_type: u8,
-    /// DS 311 data type code; on an ARRAY the elements' type, on a RECORD none.
-    data_type: Option<u16>,
-    /// `const`, `ro`, `rw` (VARs only).
-    access: Option<&'static str>,
-    /// `no`, `RPDO`, `TPDO` (VARs only).
-    pdo: Option<&'static str>,
-    default: Option<String>,
-    limits: Option<(i32, i32)>,
-    subs: Vec<XObject>,
-}
-
-impl XObject {
-    fn var(at: u16, name: impl Into<String>, data_type: u16, access: &'static str) -> XObject {
-        XObject {
-            at,
-            name: name.into(),
-            object_type: 7,
-            data_type: Some(data_type),
-            access: Some(access),
-            pdo: Some("no"),
-            default: None,
-            limits: None,
-            subs: Vec::new(),
-        }
-    }
-
-    fn default(self, v: impl Into<String>) -> XObject {
-        XObject {
-            default: Some(v.into()),
-            ..self
-        }
-    }
-
-    fn compound(at: u16, name: &str, code: ObjectCode, subs: Vec<XObject>) -> XObject {
-        let data_type = match code {
-            ObjectCode::Array => subs.iter().find(|s| s.at != 0).and_then(|s| s.data_type),
-            _ => None,
-        };
-        XObject {
-            at,
-            name: name.into(),
-            object_type: code.code(),
-            data_type,
-            access: None,
-            pdo: None,
-            default: None,
-            limits: None,
-            subs,
-        }
-    }
-}
-
 /// Every object of the node, by index.
-fn object_list(product: Product, inverters: u8) -> Result<Vec<XObject>, String> {
-    let mut list: Vec<XObject> = def::object_dictionary(product)
+fn object_list(product: Product, inverters: u8) -> Result<Vec<ObjectDoc>, String> {
+    let mut list: Vec<ObjectDoc> = def::object_dictionary(product)
         .iter()
         .map(from_dictionary)
         .collect();
@@ -162,9 +101,9 @@ fn object_list(product: Product, inverters: u8) -> Result<Vec<XObject>, String> 
 }
 
 /// An object of `proto::nord::epl`'s dictionary.
-fn from_dictionary(o: &Object) -> XObject {
+fn from_dictionary(o: &Object) -> ObjectDoc {
     let sub = |e: &Entry, at: u16| {
-        let mut x = XObject::var(at, e.name.clone(), e.data_type.code(), access(e.access));
+        let mut x = ObjectDoc::var(at, e.name.clone(), e.data_type.code(), access(e.access));
         x.pdo = Some(match e.pdo {
             PdoMapping::None => "no",
             PdoMapping::Rx => "RPDO",
@@ -175,7 +114,7 @@ fn from_dictionary(o: &Object) -> XObject {
     };
     match (o.code, o.entries.first()) {
         (ObjectCode::Var, Some(e)) => sub(e, o.index),
-        _ => XObject::compound(
+        _ => ObjectDoc::compound(
             o.index,
             &o.name,
             o.code,
@@ -207,40 +146,42 @@ fn value(e: &Entry) -> Option<String> {
 
 /// The DS 301 objects the node answers from its own state (`sim::epl`'s dictionary): their
 /// types, access and power-on values.
-fn node_objects(product: Product) -> Vec<XObject> {
+fn node_objects(product: Product) -> Vec<ObjectDoc> {
     let u8t = DataType::U8.code();
     let u32t = DataType::U32.code();
-    let count = |n: u8| XObject::var(0, "NumberOfEntries", u8t, "ro").default(n.to_string());
+    let count = |n: u8| ObjectDoc::var(0, "NumberOfEntries", u8t, "ro").default(n.to_string());
     let (lo, hi) = def::cycle_range_us(product);
     let history = std::iter::once(count(0))
-        .chain((1..=ERROR_ENTRIES as u16).map(|s| XObject::var(s, "ErrorEntry_DOM", DOMAIN, "ro")))
+        .chain(
+            (1..=ERROR_ENTRIES as u16).map(|s| ObjectDoc::var(s, "ErrorEntry_DOM", DOMAIN, "ro")),
+        )
         .collect();
     vec![
-        XObject::var(0x1001, "ERR_ErrorRegister_U8", u8t, "ro").default("0"),
-        XObject::compound(0x1003, "ERR_History_ADOM", ObjectCode::Array, history),
-        XObject {
+        ObjectDoc::var(0x1001, "ERR_ErrorRegister_U8", u8t, "ro").default("0"),
+        ObjectDoc::compound(0x1003, "ERR_History_ADOM", ObjectCode::Array, history),
+        ObjectDoc {
             limits: Some((lo as i32, hi as i32)),
-            ..XObject::var(0x1006, "NMT_CycleLen_U32", u32t, "rw")
+            ..ObjectDoc::var(0x1006, "NMT_CycleLen_U32", u32t, "rw")
                 .default(def::DEFAULT_CYCLE_US.to_string())
         },
-        XObject::var(0x1F8C, "NMT_CurrNMTState_U8", u8t, "ro"),
-        XObject::compound(
+        ObjectDoc::var(0x1F8C, "NMT_CurrNMTState_U8", u8t, "ro"),
+        ObjectDoc::compound(
             0x1F93,
             "NMT_EPLNodeID_REC",
             ObjectCode::Record,
             vec![
                 count(2),
-                XObject::var(1, "NodeID_U8", u8t, "ro"),
-                XObject::var(2, "NodeIDByHW_BOOL", BOOLEAN, "ro").default("false"),
+                ObjectDoc::var(1, "NodeID_U8", u8t, "ro"),
+                ObjectDoc::var(2, "NodeIDByHW_BOOL", BOOLEAN, "ro").default("false"),
             ],
         ),
-        XObject::var(0x1F99, "NMT_CNBasicEthernetTimeout_U32", u32t, "rw")
+        ObjectDoc::var(0x1F99, "NMT_CNBasicEthernetTimeout_U32", u32t, "rw")
             .default(def::BASIC_ETHERNET_TIMEOUT_US.to_string()),
     ]
 }
 
 /// The parameter objects of FI 1…`inverters` (and of a module itself).
-fn parameter_objects(product: Product, inverters: u8) -> Vec<XObject> {
+fn parameter_objects(product: Product, inverters: u8) -> Vec<ObjectDoc> {
     let mut out = Vec::new();
     if product.family() == Family::Module {
         for d in defs(product, Owner::Interface) {
@@ -253,63 +194,10 @@ fn parameter_objects(product: Product, inverters: u8) -> Vec<XObject> {
         };
         let base = def::device_id(product, fi);
         let prefix = format!("FI {n} ");
-        let mut ds = defs(product, Owner::Inverter);
-        if n == 1 && product.family() == Family::Integrated {
-            // The SK 550P's interface is built into FI 1: its parameters answer there.
-            let iface = defs(product, Owner::Interface);
-            ds.retain(|d| !iface.iter().any(|i| i.number == d.number));
-            ds.extend(iface);
-            ds.sort_by_key(|d| d.number);
-        }
+        let ds = inverter_parameters(product, fi);
         out.extend(ds.into_iter().map(|d| parameter(base, &prefix, d)));
     }
     out
-}
-
-/// The parameters a unit of `product` has (as its parameter store looks them up), by number.
-fn defs(product: Product, owner: Owner) -> Vec<&'static ParamDef> {
-    let numbers: BTreeSet<u16> = params::CATALOGUE.iter().map(|d| d.number).collect();
-    numbers
-        .into_iter()
-        .filter_map(|n| ParamNumber::new(i64::from(n)).ok())
-        .filter_map(|n| params::lookup(product, owner, n))
-        .collect()
-}
-
-/// Parameter `d` at `base` + its number: a VAR, or an ARRAY of its sets and elements.
-fn parameter(base: u16, prefix: &str, d: &ParamDef) -> XObject {
-    let index = base + d.number;
-    let name = format!("{prefix}P{:03} {}", d.number, d.name);
-    let ty = parameter_data_type(d).code();
-    let rw = match d.access {
-        Access::ReadOnly => "ro",
-        Access::ReadWrite | Access::ResetOnly => "rw",
-    };
-    let var = |at: u16, name: String, default: i32| XObject {
-        limits: Some((d.min, d.max)),
-        ..XObject::var(at, name, ty, rw).default(default.to_string())
-    };
-    let Some(count) = parameter_count(d.set_dependent, d.array) else {
-        return var(index, name, d.default);
-    };
-    let mut subs = vec![
-        XObject::var(0, "NumberOfEntries", DataType::U8.code(), "ro").default(count.to_string()),
-    ];
-    for s in 1..=count {
-        let Some(ParamSub::Value(set, element)) = parameter_subindex(s, d.set_dependent, d.array)
-        else {
-            continue;
-        };
-        let default = element.map_or(d.default, |e| params::element_default(d, e.get()));
-        let label = match (set, element) {
-            (Some(p), Some(e)) => format!("[-{:02}] set {}", e.get(), p.get()),
-            (Some(p), None) => format!("Set {}", p.get()),
-            (None, Some(e)) => format!("[-{:02}]", e.get()),
-            (None, None) => format!("Sub-index {s}"),
-        };
-        subs.push(var(u16::from(s), label, default));
-    }
-    XObject::compound(index, &name, ObjectCode::Array, subs)
 }
 
 /// The DS 311 element name of a data type (`defType`).
@@ -354,7 +242,7 @@ fn header(w: &mut W, id: &str, name: &str, class: &str) -> std::io::Result<()> {
     Ok(())
 }
 
-fn write(product: Product, objects: &[XObject]) -> std::io::Result<String> {
+fn write(product: Product, objects: &[ObjectDoc]) -> std::io::Result<String> {
     let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
     let vendor = format!("0x{:08X}", def::VENDOR_ID);
@@ -439,7 +327,7 @@ fn write(product: Product, objects: &[XObject]) -> std::io::Result<String> {
 }
 
 /// `DataTypeList`: the types the objects use.
-fn data_types(w: &mut W, objects: &[XObject]) -> std::io::Result<()> {
+fn data_types(w: &mut W, objects: &[ObjectDoc]) -> std::io::Result<()> {
     let mut used = BTreeSet::new();
     for o in objects {
         used.extend(o.data_type);
@@ -460,7 +348,7 @@ fn data_types(w: &mut W, objects: &[XObject]) -> std::io::Result<()> {
 }
 
 /// One `Object` (index in 4 hex digits) or `SubObject` (sub-index in 2).
-fn object(w: &mut W, o: &XObject, element: &str) -> std::io::Result<()> {
+fn object(w: &mut W, o: &ObjectDoc, element: &str) -> std::io::Result<()> {
     let (key, at) = if element == "Object" {
         ("index", format!("{:04X}", o.at))
     } else {

@@ -46,6 +46,7 @@ pub(crate) const BUS: Bus = Bus {
     descriptions: &[Description {
         format: "gsdml",
         write: describe_gsdml,
+        per_inverter: false,
     }],
     variable: variable::VARIABLE,
 };

@@ -8,7 +8,7 @@ use proto::canopen::cob_id::{Cob, Function};
 use proto::canopen::nmt::{ErrorControl, NmtFrame, NmtState};
 use proto::nord::errors::SdoAbort;
 use proto::nord::params::ParamDef;
-use proto::nord::{Inverter, ParamNumber, Product};
+use proto::nord::{Family, Inverter, ParamNumber, Product};
 
 use super::sdo::{Objects, Transfer};
 use crate::device::Device;
@@ -169,7 +169,8 @@ struct Dictionary<'a> {
 }
 
 impl Dictionary<'_> {
-    /// Parameter `index` − 2000h of the node's inverter: its store, number and definition.
+    /// Parameter `index` − 2000h of the node's inverter (of the SK 550P's interface, for its
+    /// own parameters at FI 1): its store, number and definition.
     #[allow(clippy::type_complexity)]
     fn parameter(
         &mut self,
@@ -177,10 +178,18 @@ impl Dictionary<'_> {
     ) -> Result<(&mut ParamStore, ParamNumber, &'static ParamDef), SdoAbort> {
         let number =
             ParamNumber::new(i64::from(index - PARAMETERS)).map_err(|_| abort::NO_OBJECT)?;
-        let store = self
+        // The SK 550P's interface is built into FI 1: its P85x–P89x answer there.
+        let integrated =
+            self.node.fi.get() == 1 && self.node.product.family() == Family::Integrated;
+        let interface = self
             .device
-            .store(Unit::Inverter(self.node.fi))
-            .map_err(|_| abort::NO_OBJECT)?;
+            .store(Unit::Interface)
+            .is_ok_and(|s| s.def(number).is_some());
+        let unit = match integrated && interface {
+            true => Unit::Interface,
+            false => Unit::Inverter(self.node.fi),
+        };
+        let store = self.device.store(unit).map_err(|_| abort::NO_OBJECT)?;
         let def = store.def(number).ok_or(abort::NO_OBJECT)?;
         Ok((store, number, def))
     }
