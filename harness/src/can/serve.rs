@@ -79,6 +79,15 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         served.addr,
         served.channel
     );
+    let (inverters, cycle) = (
+        served.nodes.len() as u8,
+        bus_time(product, served.nodes.len()),
+    );
+    outln!(
+        "a process-data cycle of the {inverters} inverters takes up to {:.2} ms of the bus at 250 kBaud (worst-case bit stuffing; the manuals allow cycles from {} ms)",
+        f64::from(cycle) / 1000.0,
+        proto::nord::can::MIN_CYCLE_US / 1000
+    );
     match a.seconds {
         Some(s) => thread::sleep(Duration::from_secs(s)),
         None => loop {
@@ -96,6 +105,16 @@ fn config(product: Product, inverters: Option<u8>) -> DeviceConfig {
         inverters: inverters.unwrap_or(max).clamp(1, max),
         ..DeviceConfig::new(product)
     }
+}
+
+/// The bus time of one process-data cycle of `inverters` of `product`'s series with the most
+/// process values (`proto::nord::can::cycle_bus_time_us`), µs.
+fn bus_time(product: Product, inverters: usize) -> u32 {
+    proto::nord::can::inverter_series(product)
+        .iter()
+        .map(|s| proto::nord::can::cycle_bus_time_us(*s, inverters as u8))
+        .max()
+        .unwrap_or(0)
 }
 
 /// `HOST[:PORT]`, the port socketcand's when not given.

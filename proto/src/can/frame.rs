@@ -13,6 +13,13 @@ pub const MAX_ID: u16 = 0x7FF;
 /// The largest data length of a classical CAN frame.
 pub const MAX_LEN: usize = 8;
 
+/// The most bits a base-format data frame of `len` bytes (a remote frame: 0) takes on the
+/// wire, interframe space and worst-case stuffing included (see [`CanFrame::max_bits`]).
+pub fn max_bits(len: usize) -> u32 {
+    let n = 8 * len.min(MAX_LEN) as u32;
+    47 + n + (34 + n - 1) / 4
+}
+
 /// A CAN 2.0A data or remote frame. The constructors check the identifier (≤ 7FFh) and the
 /// length (≤ 8), so every value of this type can go on the bus.
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
@@ -66,6 +73,19 @@ impl CanFrame {
         self.dlc
     }
 
+    /// The frame's length on the wire in bits at the most: start of frame to the end of the
+    /// interframe space (47 bits of a base frame plus 8 per data byte), with the most stuff
+    /// bits its 34 + 8·n stuffed bits can need, ⌊(34 + 8·n − 1) / 4⌋ (ISO 11898-1 bit
+    /// stuffing: one after five equal bits, and a stuff bit starts the next run). What a bus
+    /// load calculation must assume, as the data decides the stuffing.
+    pub fn max_bits(&self) -> u32 {
+        max_bits(if self.remote {
+            0
+        } else {
+            usize::from(self.dlc)
+        })
+    }
+
     /// The data bytes (none for a remote frame).
     pub fn data(&self) -> &[u8] {
         if self.remote {
@@ -108,6 +128,15 @@ pub(crate) fn check_len(len: usize) -> Result<u8, Error> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn the_longest_frames_with_worst_case_stuffing() {
+        // 8 data bytes: 111 bits and 24 stuff bits; SYNC (no data): 47 and 8.
+        assert_eq!(CanFrame::new(0x181, &[0; 8]).unwrap().max_bits(), 135);
+        assert_eq!(CanFrame::new(0x080, &[]).unwrap().max_bits(), 55);
+        assert_eq!(CanFrame::remote(0x724, 1).unwrap().max_bits(), 55);
+    }
+
     use super::*;
 
     #[test]

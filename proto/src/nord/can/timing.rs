@@ -35,6 +35,25 @@ pub fn update_cycle(product: Product, inverters: u8) -> Result<UpdateCycle, CanE
     })
 }
 
+/// One bit at the system bus's 250 kBaud (P514, BU 0620 §2.6), ns.
+pub const BIT_TIME_NS: u32 = 1_000_000_000 / super::BAUD_RATE;
+
+/// The bus time one process-data cycle of `inverters` inverters of `series` takes at the most,
+/// µs: a SYNC, and for each inverter its RPDOs and TPDOs ([`super::pdo_words`]: 2 bytes a
+/// word), each frame at its worst-case length with bit stuffing
+/// ([`crate::can::frame::max_bits`]). The physical floor of the update cycle: a cycle shorter
+/// than this cannot carry the process data, whatever the manuals allow.
+pub fn cycle_bus_time_us(series: super::InverterSeries, inverters: u8) -> u32 {
+    use crate::canopen::cob_id::Function;
+    let per_inverter: u32 = (1..=4u8)
+        .flat_map(|number| [Function::Rpdo { number }, Function::Tpdo { number }])
+        .filter_map(|f| super::pdo_words(f, series))
+        .map(|(_, words)| crate::can::frame::max_bits(2 * usize::from(words)))
+        .sum();
+    let bits = crate::can::frame::max_bits(0) + u32::from(inverters) * per_inverter;
+    (u64::from(bits) * u64::from(BIT_TIME_NS)).div_ceil(1000) as u32
+}
+
 /// P153 "Min. system bus cycle", ms: range 0…250, [-01] "TxSDO Inhibit Time" {10}, [-02]
 /// "TxPDO Inhibit Time" {5}; "the pause time for the system bus in order to reduce the bus
 /// load"; SK CU4/TU4 only (BU 2100 §7.1.1 p. 46, BU 2200 §7.1.1 p. 49).
@@ -68,6 +87,20 @@ pub fn p153_inhibit_time(ms: i64) -> Result<u16, RangeError> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn eight_inverters_do_not_fit_a_5_ms_cycle_at_250_kbaud() {
+        use super::super::InverterSeries::*;
+        // Three values (SK 500E…535E): one 8-byte PDO each way, 270 bits = 1.08 ms per
+        // inverter, near BU 2100 §4.3's 1.25 ms per inverter of the SK TU3-EIP.
+        assert_eq!(cycle_bus_time_us(Sk500To535e, 1), 220 + 1080);
+        // Five values (SK 54xE, SK 5x0P): a second PDO of 4 bytes each way, 1.84 ms each;
+        // eight of them need 14.94 ms, three times the 5 ms the manuals allow as the least.
+        assert_eq!(cycle_bus_time_us(Sk5x0p, 8), 220 + 8 * 1840);
+        assert!(cycle_bus_time_us(Sk5x0p, 8) > 2 * MIN_CYCLE_US);
+        assert!(cycle_bus_time_us(Sk54xe, 2) < MIN_CYCLE_US);
+    }
+
     use super::*;
 
     #[test]
