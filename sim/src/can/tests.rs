@@ -256,3 +256,178 @@ fn an_inverter_error_sends_an_emergency_and_sets_the_error_register() {
         other => panic!("{other:?}"),
     }
 }
+
+/// CiA 301's answers to malformed and misplaced requests, each followed by a request the node
+/// still serves.
+#[test]
+fn bad_input_is_refused_by_the_standards_code_or_silence_and_the_node_serves_on() {
+    let mut s = segment();
+    let serves = |s: &mut Segment| {
+        assert!(
+            matches!(
+                sdo(s, 36, upload(0x1000, 0)),
+                SdoResponse::InitiateUpload { .. }
+            ),
+            "node 36 still serves"
+        )
+    };
+    let aborted = |s: &mut Segment, request: [u8; 8], code: u32, why: &str| {
+        assert_eq!(abort_code(sdo(s, 36, request)), code, "{why}");
+        serves(s);
+    };
+    let silent = |s: &mut Segment, frame: CanFrame, why: &str| {
+        assert!(s.receive(&frame, MS).is_empty(), "{why}");
+        serves(s);
+    };
+    // Wrong lengths of an SDO frame: no SDO request, no answer.
+    for len in [0, 1, 4, 7] {
+        silent(
+            &mut s,
+            frame(0x624, &upload(0x1000, 0)[..len]),
+            "short SDO frame",
+        );
+    }
+    // A remote frame on the SDO channel.
+    silent(&mut s, CanFrame::remote(0x624, 8).unwrap(), "RTR on 624h");
+    // Command specifier 7 and block transfers.
+    aborted(&mut s, [0xE0, 0, 0x10, 0, 0, 0, 0, 0], 0x0504_0001, "ccs 7");
+    aborted(
+        &mut s,
+        [0xA0, 0x00, 0x10, 0, 0, 0, 0, 0],
+        0x0504_0001,
+        "block upload",
+    );
+    aborted(
+        &mut s,
+        [0xC6, 0x17, 0x10, 0, 2, 0, 0, 0],
+        0x0504_0001,
+        "block download",
+    );
+    // Segments outside a transfer.
+    aborted(
+        &mut s,
+        [0x00, 1, 2, 3, 4, 5, 6, 7],
+        0x0504_0001,
+        "download segment",
+    );
+    aborted(
+        &mut s,
+        [0x70, 0, 0, 0, 0, 0, 0, 0],
+        0x0504_0001,
+        "upload segment, toggle 1",
+    );
+    // Objects and sub-indices that are not there.
+    aborted(
+        &mut s,
+        upload(0x2000, 0),
+        0x0602_0000,
+        "P000 does not exist",
+    );
+    aborted(
+        &mut s,
+        upload(0x23E7, 0),
+        0x0602_0000,
+        "P999 does not exist",
+    );
+    aborted(&mut s, upload(0x5FFF, 0), 0x0602_0000, "manufacturer area");
+    aborted(&mut s, upload(0x2066, 5), 0x0609_0011, "P102 has 4 sets");
+    aborted(&mut s, upload(0x1018, 2), 0x0609_0011, "1018h:02");
+    aborted(&mut s, upload(0x1001, 1), 0x0609_0011, "1001h:01");
+    // Writes the object refuses.
+    aborted(
+        &mut s,
+        [0x23, 0x00, 0x10, 0, 1, 0, 0, 0],
+        0x0601_0002,
+        "1000h is read-only",
+    );
+    aborted(
+        &mut s,
+        [0x2F, 0x01, 0x10, 0, 1, 0, 0, 0],
+        0x0601_0002,
+        "1001h is read-only",
+    );
+    aborted(
+        &mut s,
+        [0x2B, 0x17, 0x10, 1, 1, 0, 0, 0],
+        0x0609_0011,
+        "1017h:01",
+    );
+    aborted(
+        &mut s,
+        [0x2F, 0x17, 0x10, 0, 1, 0, 0, 0],
+        0x0607_0013,
+        "1 byte to a UNSIGNED16",
+    );
+    aborted(
+        &mut s,
+        [0x23, 0x17, 0x10, 0, 1, 0, 0, 0],
+        0x0607_0012,
+        "4 bytes to a UNSIGNED16",
+    );
+    aborted(
+        &mut s,
+        [0x2B, 0x66, 0x20, 1, 0x01, 0x7D, 0, 0],
+        0x0609_0031,
+        "P102 above 320.00 s",
+    );
+    aborted(
+        &mut s,
+        [0x2B, 0x66, 0x20, 1, 0xFF, 0xFF, 0, 0],
+        0x0609_0032,
+        "P102 below 0",
+    );
+    // A segmented download announcing more than the server takes.
+    aborted(
+        &mut s,
+        [0x21, 0x17, 0x10, 0, 0, 4, 0, 0],
+        0x0504_0005,
+        "1024 bytes announced",
+    );
+    // A toggle error in a download: the transfer ends, the next request is served.
+    sdo(&mut s, 36, [0x21, 0x17, 0x10, 0x00, 2, 0, 0, 0]);
+    aborted(
+        &mut s,
+        [0x1B, 0xE8, 0x03, 0, 0, 0, 0, 0],
+        0x0503_0000,
+        "first segment toggle 1",
+    );
+    // Two segments where the size said one: too long.
+    sdo(&mut s, 36, [0x21, 0x17, 0x10, 0x00, 2, 0, 0, 0]);
+    sdo(&mut s, 36, [0x0A, 0xE8, 0x03, 0, 0, 0, 0, 0]);
+    aborted(
+        &mut s,
+        [0x1D, 0x01, 0, 0, 0, 0, 0, 0],
+        0x0607_0012,
+        "3 bytes for 2",
+    );
+    // The client aborts a transfer: no answer, and a new one starts clean.
+    sdo(&mut s, 36, upload(0x1008, 0));
+    silent(
+        &mut s,
+        frame(0x624, &[0x80, 0x08, 0x10, 0, 0, 0, 0x04, 0x05]),
+        "abort from the client",
+    );
+    aborted(
+        &mut s,
+        [0x60, 0, 0, 0, 0, 0, 0, 0],
+        0x0504_0001,
+        "no upload after the abort",
+    );
+    // NMT to nodes not on the segment, with a bad length or an unknown command.
+    silent(
+        &mut s,
+        frame(0, &[0x02, 0x33]),
+        "stop node 51: no such node",
+    );
+    silent(&mut s, frame(0, &[0x02]), "NMT of 1 byte");
+    silent(&mut s, frame(0, &[0x02, 36, 0]), "NMT of 3 bytes");
+    silent(&mut s, frame(0, &[0x03, 36]), "NMT command 03h");
+    silent(&mut s, frame(0, &[0x02, 0x80]), "NMT node 128");
+    // Frames of no object of the pre-defined set, and a babbling node's heartbeat.
+    silent(&mut s, frame(0x7E5, &[0x04, 0, 0, 0, 0, 0, 0, 0]), "LSS");
+    silent(&mut s, frame(0x100, &[1, 2, 3, 4, 5, 6]), "TIME");
+    for _ in 0..100 {
+        assert!(s.receive(&frame(0x77F, &[0x05]), MS).is_empty());
+    }
+    serves(&mut s);
+}
