@@ -286,6 +286,7 @@ fn each_bus_served_shows_its_own_options() {
         ("ecat", "--iface"),
         ("epl", "--node-id"),
         ("pnio", "--name"),
+        ("can", "--socketcand"),
     ] {
         let o = harness(&["serve", bus, "--help"]);
         let stdout = String::from_utf8_lossy(&o.stdout);
@@ -295,9 +296,9 @@ fn each_bus_served_shows_its_own_options() {
             "{bus}: {stdout}"
         );
     }
-    let o = harness(&["serve", "can"]);
+    let o = harness(&["serve", "lin"]);
     assert!(
-        stderr(&o).contains("cannot serve `can` (buses: enip, ecat, epl, pnio)"),
+        stderr(&o).contains("cannot serve `lin` (buses: enip, ecat, epl, pnio, can)"),
         "{}",
         stderr(&o)
     );
@@ -367,11 +368,12 @@ fn run_help_lists_every_profile_and_every_dut_scheme() {
         "sk550p@ecat,",
         "tu4-pol@epl,",
         "any@enip,",
-        "any@pnio;",
+        "any@pnio,",
+        "any@can;",
     ] {
         assert!(flat.contains(name), "{name}: {help}");
     }
-    for scheme in ["enip://", "ecat://", "epl://", "pnio://"] {
+    for scheme in ["enip://", "ecat://", "epl://", "pnio://", "can://"] {
         assert!(flat.contains(scheme), "{scheme}: {help}");
     }
 }
