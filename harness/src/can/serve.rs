@@ -62,7 +62,7 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         Err(code) => return Ok(code),
     };
     let product = crate::profile::Profile::by_name(&a.profile)?.nord()?;
-    let addr = listen_addr(&a.socketcand)?;
+    let addr = crate::net::serve_args::socket_addr(&a.socketcand, DEFAULT_PORT)?;
     let listener = TcpListener::bind(addr).map_err(|e| format!("cannot listen on {addr}: {e}"))?;
     let served = Served::start(listener, config(product, a.inverters), a.channel)?;
     // On stdout, once the socket is bound: what a test or a script waits for.
@@ -115,18 +115,6 @@ fn bus_time(product: Product, inverters: usize) -> u32 {
         .map(|s| proto::nord::can::cycle_bus_time_us(*s, inverters as u8))
         .max()
         .unwrap_or(0)
-}
-
-/// `HOST[:PORT]`, the port socketcand's when not given.
-fn listen_addr(text: &str) -> Result<SocketAddr, String> {
-    let with_port = if text.parse::<SocketAddr>().is_ok() {
-        text.to_string()
-    } else {
-        format!("{text}:{DEFAULT_PORT}")
-    };
-    with_port.parse().map_err(|_| {
-        format!("`{text}` is not HOST[:PORT] (an IP address, port {DEFAULT_PORT} by default)")
-    })
 }
 
 /// One connected client.

@@ -11,7 +11,7 @@
 //! once, and its encapsulation reply (TCP, and UDP ListIdentity) leaves MS later, so that a
 //! run against it shows how the harness judges a device that answers past its limit.
 
-use std::net::{IpAddr, SocketAddr, TcpListener, UdpSocket};
+use std::net::{SocketAddr, TcpListener, UdpSocket};
 use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex, OnceLock};
 use std::thread::{self, Thread};
@@ -366,10 +366,5 @@ fn io_produce(io: UdpSocket, shared: Arc<Shared>) {
 
 /// The listen address of `--listen`: `HOST[:PORT]`, port 44818 by default.
 pub(crate) fn parse_addr(text: &str) -> Result<SocketAddr, String> {
-    if let Ok(a) = text.parse::<SocketAddr>() {
-        return Ok(a);
-    }
-    text.parse::<IpAddr>()
-        .map(|ip| SocketAddr::new(ip, proto::enip::io::ENCAP_PORT))
-        .map_err(|_| format!("`{text}` is not an address like 127.0.0.2 or 127.0.0.2:44818"))
+    crate::net::serve_args::socket_addr(text, proto::enip::io::ENCAP_PORT)
 }

@@ -2,6 +2,8 @@
 //! the interface, the product, the inverters behind it, how long — and the simulated device
 //! those name, so the three commands read and refuse them alike.
 
+use std::net::{IpAddr, SocketAddr};
+
 use proto::nord::{Product, Protocol};
 use sim::device::DeviceConfig;
 
@@ -53,6 +55,19 @@ pub(crate) fn device_config(
         inverters: inverters.unwrap_or(max).clamp(1, max),
         ..DeviceConfig::new(product)
     })
+}
+
+/// A listen or target address `HOST[:PORT]`, `default_port` where none is given (EtherNet/IP's
+/// 44818, socketcand's 29536).
+pub(crate) fn socket_addr(text: &str, default_port: u16) -> Result<SocketAddr, String> {
+    if let Ok(a) = text.parse::<SocketAddr>() {
+        return Ok(a);
+    }
+    text.parse::<IpAddr>()
+        .map(|ip| SocketAddr::new(ip, default_port))
+        .map_err(|_| {
+            format!("`{text}` is not an address like 127.0.0.2 or 127.0.0.2:{default_port}")
+        })
 }
 
 #[cfg(test)]
