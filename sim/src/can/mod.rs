@@ -94,7 +94,7 @@ impl Segment {
         self.device.tick(now);
         let mut out = Vec::new();
         for node in &mut self.nodes {
-            out.extend(node.poll(&mut self.device, now));
+            out.extend(node.poll(now));
         }
         for (fi, value) in self.device.fault_changes(&mut self.faults) {
             if let Some(node) = self.nodes.iter_mut().find(|n| n.inverter() == fi) {

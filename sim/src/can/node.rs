@@ -77,7 +77,7 @@ impl Node {
     }
 
     /// Boot-up when initialisation ends, heartbeats when due.
-    pub(super) fn poll(&mut self, _device: &mut Device, now: Duration) -> Vec<CanFrame> {
+    pub(super) fn poll(&mut self, now: Duration) -> Vec<CanFrame> {
         let Some(due) = self.due.filter(|d| *d <= now) else {
             return Vec::new();
         };
