@@ -17,7 +17,7 @@ use proto::nord::{led, Inverter, ParamNumber, Product};
 use std::time::Duration;
 
 use crate::bus_status::{self, BusFlags};
-use crate::drive::{Drive, DriveParams, FaultCode};
+use crate::drive::{Drive, DriveParams, FaultCode, CYCLE_PARAMETERS};
 use crate::link::{LinkFrameError, LinkRepr, Unit};
 use crate::pkw_server;
 use crate::store::{ParamStore, Target};
@@ -231,6 +231,8 @@ struct InverterUnit {
     /// The extended code (P700 [-04]) of an error whose cause names one row of several with
     /// the same P700 number (BU 0620 §5.3).
     extended: Option<(FaultCode, u16)>,
+    /// The drive's settings as the store held them last.
+    settings: Option<Settings>,
 }
 
 impl InverterUnit {
@@ -242,9 +244,22 @@ impl InverterUnit {
         if word.valid() {
             self.last_process = Some(now);
         }
-        let out = self
-            .drive
-            .cycle(control, setpoints, &StoreView(&self.params.store, set), now);
+        let store = StoreView(&self.params.store, set);
+        let revision = self.params.store.settings_revision();
+        let settings = match self.settings.take() {
+            Some(s) if s.revision == revision && s.set == set => s,
+            _ => Settings::read(&store, revision),
+        };
+        let out = self.drive.cycle(
+            control,
+            setpoints,
+            &Cached {
+                settings: &settings,
+                store,
+            },
+            now,
+        );
+        self.settings = Some(settings);
         // Information parameters mirror the process data and the present error
         // (BU 0620 §4.5: P740 PZD bus in, P741 PZD bus out, P700 [-01] present error), written
         // when they change (this runs every bus cycle for every inverter).
@@ -320,6 +335,41 @@ impl DriveParams for StoreView<'_> {
     }
 }
 
+/// The values of [`CYCLE_PARAMETERS`] in one parameter set at one settings revision of an
+/// inverter's store: the drive reads them on every bus cycle, and they change only when a
+/// parameter is written.
+#[derive(Debug)]
+struct Settings {
+    revision: u64,
+    set: Option<proto::nord::ParamSet>,
+    values: [Option<i32>; CYCLE_PARAMETERS.len()],
+}
+
+impl Settings {
+    fn read(store: &StoreView, revision: u64) -> Settings {
+        Settings {
+            revision,
+            set: store.1,
+            values: CYCLE_PARAMETERS.map(|(number, element)| store.get(number, element)),
+        }
+    }
+}
+
+/// The drive's view of the store with [`Settings`] in front.
+struct Cached<'a> {
+    settings: &'a Settings,
+    store: StoreView<'a>,
+}
+
+impl DriveParams for Cached<'_> {
+    fn get(&self, number: u16, element: Option<u8>) -> Option<i32> {
+        match CYCLE_PARAMETERS.iter().position(|p| *p == (number, element)) {
+            Some(i) => self.settings.values[i],
+            None => self.store.get(number, element),
+        }
+    }
+}
+
 /// The simulated interface and its inverters.
 #[derive(Debug)]
 pub struct Device {
@@ -355,6 +405,7 @@ impl Device {
                 p513_seen: (None, Duration::ZERO),
                 shown: None,
                 extended: None,
+                settings: None,
             })
             .collect();
         // The XU5 extension of the SK 550P (BU 0620 §4.5, p. 91): FI 1 carries the Industrial
@@ -742,6 +793,19 @@ impl Device {
         now: Duration,
     ) -> Result<Vec<u16>, DeviceError> {
         self.monitor(now);
+        self.process_monitored(inverter, control, setpoints, now)
+    }
+
+    /// [`Device::process`] for one of several inverters whose words one frame carries: the
+    /// caller has run the monitoring for the frame ([`Device::tick`]) once, not per inverter
+    /// (it looks at every inverter, and runs on every bus cycle).
+    pub(crate) fn process_monitored(
+        &mut self,
+        inverter: Inverter,
+        control: u16,
+        setpoints: &[u16],
+        now: Duration,
+    ) -> Result<Vec<u16>, DeviceError> {
         Ok(self
             .inverter_mut(inverter)?
             .process(control, setpoints, now))
@@ -990,6 +1054,30 @@ mod tests {
                 let _ = d.handle(&vec![b; len], ms(0));
             }
         }
+    }
+
+    #[test]
+    fn a_setting_written_between_cycles_counts_from_the_next_cycle() {
+        // The drive's settings are kept between cycles (`Settings`); a write must reach it.
+        let mut d = Device::new(DeviceConfig::new(Product::Sk550p));
+        let fi = Inverter::new(1).unwrap();
+        let actual_2 = |d: &mut Device, t| d.process(fi, 0x047E, &[0x2000], ms(t)).unwrap()[2];
+        assert_eq!(actual_2(&mut d, 40), 0, "P543 [-02] = 4 (factory) sends 0");
+        d.store(Unit::Inverter(fi))
+            .unwrap()
+            .write(
+                ParamNumber::new(543).unwrap(),
+                None,
+                proto::nord::ArrayElement::new(2).ok(),
+                8,
+                crate::store::Persist::RamOnly,
+            )
+            .unwrap();
+        assert_eq!(
+            actual_2(&mut d, 44),
+            0x2000,
+            "P543 [-02] = 8 sends the setpoint frequency"
+        );
     }
 
     #[test]

@@ -42,6 +42,30 @@ pub trait DriveParams {
     fn get(&self, number: u16, element: Option<u8>) -> Option<i32>;
 }
 
+/// The parameters [`Drive::cycle`] reads on every cycle (number, element): P105 maximum
+/// frequency, P506 auto acknowledge, P102/P103/P426 ramps, P543 and P546 [-01]…[-05] bus actual
+/// values and setpoints, P607/P608 gear ratio. A caller may keep their values while they
+/// cannot have changed (the device does, per parameter set).
+pub const CYCLE_PARAMETERS: [(u16, Option<u8>); 17] = [
+    (105, None),
+    (506, None),
+    (102, None),
+    (103, None),
+    (426, None),
+    (543, Some(1)),
+    (543, Some(2)),
+    (543, Some(3)),
+    (543, Some(4)),
+    (543, Some(5)),
+    (546, Some(1)),
+    (546, Some(2)),
+    (546, Some(3)),
+    (546, Some(4)),
+    (546, Some(5)),
+    (607, None),
+    (608, None),
+];
+
 /// How long the error reaction (state G) lasts before "Fault" (H, transition 14).
 pub const FAULT_REACTION: Duration = Duration::from_millis(20);
 /// How long after power-on the charging relay engages (transition 1).

@@ -69,6 +69,10 @@ pub struct ParamStore {
     /// Elements [-01]..[-03] of P850/P851/P852 entered under PROFINET IO and not saved yet
     /// (see [`ParamStore::write`]): (number, element index 0..2) → value.
     entered: BTreeMap<(u16, u8), i32>,
+    /// Counts changes to the parameters a user can set (all but the read-only information
+    /// parameters the device itself shows): a copy of settings taken at one revision is
+    /// current while it stays (the drive's, `device::Settings`, read on every bus cycle).
+    settings_revision: u64,
 }
 
 /// The SK 550P's IP parameters whose new value PROFINET IO saves only once element [-04] is
@@ -102,6 +106,7 @@ impl ParamStore {
             product,
             owner,
             values: BTreeMap::new(),
+            settings_revision: 0,
             eeprom_writes: 0,
             saved_ip: None,
             entered: BTreeMap::new(),
@@ -165,6 +170,7 @@ impl ParamStore {
         persist: Persist,
     ) -> Result<(), AccessError> {
         let (def, key) = self.key(number, set, element)?;
+        self.settings_revision += 1;
         // An ASCII text parameter takes 0 and its characters only (BU 2100 §7.1.2 P169).
         if !def.accepts(value) && def.text_from > 0 {
             return Err(AccessError::OutOfRange);
@@ -274,6 +280,7 @@ impl ParamStore {
     /// (see `Device::factory_setting`).
     pub fn load_factory_settings(&mut self, which: fn(u16) -> bool) {
         let (product, owner) = (self.product, self.owner);
+        self.settings_revision += 1;
         if which(160) {
             self.saved_ip = None;
         }
@@ -379,9 +386,17 @@ impl ParamStore {
             return;
         };
         let e = ArrayElement::new(i64::from(element)).ok();
-        if let Ok((_, key)) = self.key(n, None, e) {
-            self.values.insert(key, value);
+        if let Ok((def, key)) = self.key(n, None, e) {
+            if self.values.insert(key, value) != Some(value) && def.access != Access::ReadOnly {
+                self.settings_revision += 1;
+            }
         }
+    }
+
+    /// The revision of the settings: it changes whenever a parameter other than a read-only
+    /// one may have changed.
+    pub fn settings_revision(&self) -> u64 {
+        self.settings_revision
     }
 
     /// EEPROM writes so far.

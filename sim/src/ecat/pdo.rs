@@ -66,6 +66,7 @@ pub(crate) fn cycle(
     now: Duration,
 ) {
     let count = device.config().inverters;
+    device.tick(now);
     for (i, fi) in inverters(count) {
         let before = (words.outputs[i], words.inputs[i]);
         if let Some(data) = outputs {
@@ -83,7 +84,7 @@ pub(crate) fn cycle(
         } else {
             (0, &[][..])
         };
-        if let Ok(answer) = device.process(fi, control, setpoints, now) {
+        if let Ok(answer) = device.process_monitored(fi, control, setpoints, now) {
             words.inputs[i] = [0; WORDS];
             for (d, s) in words.inputs[i].iter_mut().zip(answer) {
                 *d = s;

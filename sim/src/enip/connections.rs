@@ -465,6 +465,7 @@ fn slot(n: usize) -> Option<Inverter> {
 /// Applies output data (O→T or a Set_Attribute_Single on an output assembly) to the inverters.
 fn apply_outputs(a: &mut Adapter, asm: &Assembly, data: &[u8], run: bool, now: Duration) {
     let inverters = usize::from(a.device.config().inverters);
+    a.device.tick(now);
     for n in 1..=usize::from(asm.inverters).min(inverters) {
         let Some(fi) = slot(n) else { continue };
         let Some(off) = asm.offset(fi) else { continue };
@@ -479,7 +480,7 @@ fn apply_outputs(a: &mut Adapter, asm: &Assembly, data: &[u8], run: bool, now: D
         };
         // Idle (PLC in program mode) counts as an invalid control word (bit 10 clear).
         let control = if run { control } else { 0 };
-        if let Ok(out) = a.device.process(fi, control, setpoints, now) {
+        if let Ok(out) = a.device.process_monitored(fi, control, setpoints, now) {
             // P873 / P874 (BU 0620 §4.3) show the words exchanged, as on the other buses.
             let mut sent = vec![control];
             sent.extend_from_slice(setpoints);
