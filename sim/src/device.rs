@@ -226,19 +226,21 @@ struct InverterUnit {
     last_process: Option<Duration>,
     /// Its P513 time-out as the monitor saw it last, and since when (as the module's P151).
     p513_seen: (Option<Duration>, Duration),
-    /// The words P740/P741 show, so that an unchanged cycle writes no parameter.
+    /// What P740/P741 [-01]…[-06] show, so that a cycle writes only the elements that change.
     shown: Option<([u16; 6], [u16; 6])>,
     /// The extended code (P700 [-04]) of an error whose cause names one row of several with
     /// the same P700 number (BU 0620 §5.3).
     extended: Option<(FaultCode, u16)>,
+    /// What P700 [-01] shows (only [`InverterUnit::show_fault`] writes it), once read.
+    p700: Option<i32>,
     /// The drive's settings as the store held them last.
     settings: Option<Settings>,
 }
 
 impl InverterUnit {
     /// One process-data cycle: the control word and setpoints drive the inverter, whose status
-    /// word and actual values come back (as many words as the drive produces).
-    fn process(&mut self, control: u16, setpoints: &[u16], now: Duration) -> Vec<u16> {
+    /// word and actual values come back (six words).
+    fn process(&mut self, control: u16, setpoints: &[u16], now: Duration) -> [u16; 6] {
         let word = proto::nord::control::ControlWord(control);
         let set = proto::nord::ParamSet::new(i64::from(word.parameter_set())).ok();
         if word.valid() {
@@ -261,33 +263,34 @@ impl InverterUnit {
         );
         self.settings = Some(settings);
         // Information parameters mirror the process data and the present error
-        // (BU 0620 §4.5: P740 PZD bus in, P741 PZD bus out, P700 [-01] present error), written
-        // when they change (this runs every bus cycle for every inverter).
-        let mut words = ([0u16; 6], [0u16; 6]);
-        words.0[0] = control;
-        words.1[0] = out.status;
-        for (d, w) in words.0[1..].iter_mut().zip(setpoints) {
+        // (BU 0620 §4.5: P740 PZD bus in, P741 PZD bus out, P700 [-01] present error). This
+        // runs every bus cycle for every inverter: only the elements that change are written.
+        let given = 1 + setpoints.len().min(5);
+        let mut shown = self.shown.unwrap_or_default();
+        let mut inputs = shown.0;
+        inputs[0] = control;
+        for (d, w) in inputs[1..given].iter_mut().zip(setpoints) {
             *d = *w;
         }
-        for (d, w) in words.1[1..].iter_mut().zip(&out.actuals) {
-            *d = *w;
-        }
-        if self.shown != Some(words) || setpoints.len() > 5 || out.actuals.len() > 5 {
-            let store = &mut self.params.store;
-            store.set_info(740, 1, i32::from(control));
-            for (i, w) in setpoints.iter().enumerate() {
-                store.set_info(740, i as u8 + 2, i32::from(*w));
+        let mut outputs = [out.status, 0, 0, 0, 0, 0];
+        outputs[1..].copy_from_slice(&out.actuals);
+        let first = self.shown.is_none();
+        let store = &mut self.params.store;
+        for (number, new, held) in [(740, inputs, &mut shown.0), (741, outputs, &mut shown.1)] {
+            for (e, (w, h)) in (1u8..).zip(new.iter().zip(held.iter_mut())) {
+                let written = number == 741 || usize::from(e) <= given;
+                if written && (first || w != h) {
+                    store.set_info(number, e, i32::from(*w));
+                    *h = *w;
+                }
             }
-            store.set_info(741, 1, i32::from(out.status));
-            for (i, w) in out.actuals.iter().enumerate() {
-                store.set_info(741, i as u8 + 2, i32::from(*w));
-            }
-            self.shown = Some(words);
         }
+        for (e, w) in (7u8..).zip(setpoints.iter().skip(5)) {
+            store.set_info(740, e, i32::from(*w));
+        }
+        self.shown = Some(shown);
         self.show_fault();
-        let mut pzd = vec![out.status];
-        pzd.extend(out.actuals);
-        pzd
+        outputs
     }
 
     /// P700 [-01] shows the present error as soon as it is raised, not only with the next
@@ -300,11 +303,15 @@ impl InverterUnit {
         let p700 = code.map_or(0, FaultCode::p700);
         let store = &mut self.params.store;
         let element = |e: i64| proto::nord::ArrayElement::new(e).ok();
-        let shown = store.read(P700, None, element(1)).unwrap_or(0);
+        let shown = self
+            .p700
+            .unwrap_or_else(|| store.read(P700, None, element(1)).unwrap_or(0));
         if i32::from(p700) == shown {
             // Runs every bus cycle for every inverter: nothing to do while the error stays.
+            self.p700 = Some(shown);
             return;
         }
+        self.p700 = Some(i32::from(p700));
         if p700 != 0 {
             let last: Vec<i32> = (1..=4)
                 .map(|e| store.read(P701, None, element(e)).unwrap_or(0))
@@ -390,6 +397,9 @@ pub struct Device {
     shown: Option<BusFlags>,
     /// The interface word of output assembly 110 (the SK xU4-EIP's digital outputs).
     module_outputs: u16,
+    /// Per inverter, the words the interface's display parameters show
+    /// ([`Device::show_process_data`]).
+    process_shown: Vec<Option<([u16; 6], [u16; 6])>>,
 }
 
 impl Device {
@@ -405,6 +415,7 @@ impl Device {
                 p513_seen: (None, Duration::ZERO),
                 shown: None,
                 extended: None,
+                p700: None,
                 settings: None,
             })
             .collect();
@@ -482,6 +493,7 @@ impl Device {
             config_error: false,
             shown: None,
             module_outputs: 0,
+            process_shown: vec![None; usize::from(count)],
         }
     }
 
@@ -666,7 +678,7 @@ impl Device {
                 let unit = self.inverter_mut(i)?;
                 let control = ppo.pzd.first().copied().unwrap_or(0);
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
-                let mut pzd = unit.process(control, setpoints, now);
+                let mut pzd = unit.process(control, setpoints, now).to_vec();
                 pzd.resize(ppo.pzd.len(), 0);
                 self.show_process_data(i, Some(ppo_type), &ppo.pzd, &pzd);
                 (pkw, pzd)
@@ -771,6 +783,22 @@ impl Device {
             | Product::Cu4Eip => ((176, 177), 2 + 6 * n, 6),
             Product::Sk550p => ((873, 874), 1 + 6 * n, 6),
         };
+        // Runs on every bus cycle for every inverter: the parameters are written only when
+        // the words change.
+        let mut exchanged = ([0u16; 6], [0u16; 6]);
+        for (d, w) in exchanged.0.iter_mut().zip(sent) {
+            *d = *w;
+        }
+        for (d, w) in exchanged.1.iter_mut().zip(answer) {
+            *d = *w;
+        }
+        let Some(shown) = self.process_shown.get_mut(usize::from(n)) else {
+            return;
+        };
+        if *shown == Some(exchanged) {
+            return;
+        }
+        *shown = Some(exchanged);
         let store = &mut self.interface.store;
         for (e, (i, o)) in (first..).zip(sent.iter().zip(answer)).take(words) {
             // The modules show signed values (P176/P177 −32768…32767), the SK 550P hex words.
@@ -793,7 +821,9 @@ impl Device {
         now: Duration,
     ) -> Result<Vec<u16>, DeviceError> {
         self.monitor(now);
-        self.process_monitored(inverter, control, setpoints, now)
+        Ok(self
+            .process_monitored(inverter, control, setpoints, now)?
+            .to_vec())
     }
 
     /// [`Device::process`] for one of several inverters whose words one frame carries: the
@@ -805,7 +835,7 @@ impl Device {
         control: u16,
         setpoints: &[u16],
         now: Duration,
-    ) -> Result<Vec<u16>, DeviceError> {
+    ) -> Result<[u16; 6], DeviceError> {
         Ok(self
             .inverter_mut(inverter)?
             .process(control, setpoints, now))

@@ -131,7 +131,7 @@ pub struct DriveOutput {
     /// The status word.
     pub status: u16,
     /// Actual values 1..5 per P543.
-    pub actuals: Vec<u16>,
+    pub actuals: [u16; 5],
 }
 
 /// One inverter's drive.
@@ -417,15 +417,14 @@ impl Drive {
         s
     }
 
-    fn actuals(&self, params: &dyn DriveParams, max_hz: f64) -> Vec<u16> {
+    fn actuals(&self, params: &dyn DriveParams, max_hz: f64) -> [u16; 5] {
         let hz = |f: f64| scaling::value_to_raw_saturating(f, max_hz) as u16;
         let (low, high) =
             scaling::position_words(i64::from(self.position_increments())).unwrap_or_default();
-        DEFAULT_P543
-            .iter()
-            .zip(1u8..)
-            .map(|(default, i)| {
-                let code = params.get(543, Some(i)).unwrap_or(*default);
+        let mut element = 0u8;
+        DEFAULT_P543.map(|default| {
+                element += 1;
+                let code = params.get(543, Some(element)).unwrap_or(default);
                 let transmission = scaling::actual_function(code).map(|f| f.transmission);
                 match (code, transmission) {
                     (_, Some(Transmission::PositionLow)) => low,
@@ -437,7 +436,6 @@ impl Drive {
                     _ => 0,
                 }
             })
-            .collect()
     }
 }
 

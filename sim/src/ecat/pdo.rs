@@ -68,7 +68,6 @@ pub(crate) fn cycle(
     let count = device.config().inverters;
     device.tick(now);
     for (i, fi) in inverters(count) {
-        let before = (words.outputs[i], words.inputs[i]);
         if let Some(data) = outputs {
             for (w, chunk) in data
                 .get(i * 12..(i + 1) * 12)
@@ -90,11 +89,7 @@ pub(crate) fn cycle(
                 *d = s;
             }
         }
-        // P873/P874 change only with the words (a parameter write costs a catalogue lookup,
-        // and this runs every cycle for every inverter).
-        if (words.outputs[i], words.inputs[i]) != before {
-            show(device, i, words);
-        }
+        show(device, i, words);
     }
 }
 

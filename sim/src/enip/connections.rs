@@ -469,22 +469,22 @@ fn apply_outputs(a: &mut Adapter, asm: &Assembly, data: &[u8], run: bool, now: D
     for n in 1..=usize::from(asm.inverters).min(inverters) {
         let Some(fi) = slot(n) else { continue };
         let Some(off) = asm.offset(fi) else { continue };
-        let words: Vec<u16> = data
+        let mut words: Vec<u16> = data
             .get(off..data.len().min(off + WORDS_PER_INVERTER * 2))
             .unwrap_or_default()
             .chunks_exact(2)
             .map(|w| u16::from_le_bytes([w[0], w[1]]))
             .collect();
-        let Some((&control, setpoints)) = words.split_first() else {
+        let Some(control) = words.first_mut() else {
             continue;
         };
         // Idle (PLC in program mode) counts as an invalid control word (bit 10 clear).
-        let control = if run { control } else { 0 };
-        if let Ok(out) = a.device.process_monitored(fi, control, setpoints, now) {
+        if !run {
+            *control = 0;
+        }
+        if let Ok(out) = a.device.process_monitored(fi, words[0], &words[1..], now) {
             // P873 / P874 (BU 0620 §4.3) show the words exchanged, as on the other buses.
-            let mut sent = vec![control];
-            sent.extend_from_slice(setpoints);
-            a.device.show_process_data(fi, None, &sent, &out);
+            a.device.show_process_data(fi, None, &words, &out);
             let dst = &mut a.conns.inputs[n - 1];
             *dst = [0; WORDS_PER_INVERTER];
             for (d, s) in dst.iter_mut().zip(out) {
