@@ -369,11 +369,12 @@ fn run_help_lists_every_profile_and_every_dut_scheme() {
         "tu4-pol@epl,",
         "any@enip,",
         "any@pnio,",
+        "tu3-pol@can,",
         "any@can;",
     ] {
         assert!(flat.contains(name), "{name}: {help}");
     }
-    for scheme in ["enip://", "ecat://", "epl://", "pnio://", "can://"] {
+    for scheme in ["enip://", "ecat://", "epl://", "pnio://", "socketcand://"] {
         assert!(flat.contains(scheme), "{scheme}: {help}");
     }
 }

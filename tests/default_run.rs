@@ -68,9 +68,13 @@ fn default_run_passes_every_applicable_case_and_writes_reports() {
     }
     // Every built-in profile ran (8 products over PPO, the 4 EtherNet/IP products over
     // EtherNet/IP, the SK 550P over EtherCAT, the 4 POWERLINK products over POWERLINK, the SK
-    // 550P and SK TU3-PNT over PROFINET IO), and every case ran (passed) under at least one of
-    // them.
-    assert_eq!(counts.len(), 19, "{counts:?}");
+    // 550P and SK TU3-PNT over PROFINET IO, the 8 products' inverters over the system bus), and
+    // every case ran (passed) under at least one of them.
+    assert_eq!(counts.len(), 27, "{counts:?}");
+    assert!(
+        counts["sk550p@can"]["pass"] >= 40,
+        "the system-bus cases ran over CAN: {counts:?}"
+    );
     let mut passed_somewhere = std::collections::HashSet::new();
     for c in cases.iter().filter(|c| c["verdict"] == "pass") {
         passed_somewhere.insert(c["id"].as_str().unwrap());

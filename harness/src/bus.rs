@@ -47,6 +47,9 @@ pub(crate) struct Bus {
     pub(crate) title: &'static str,
     /// How `--dut` names a device of the bus (`ecat://IFACE`), for help and messages.
     pub(crate) url: &'static str,
+    /// URL schemes besides its name that reach it (`socketcand://` the system bus through a
+    /// socketcand server).
+    pub(crate) schemes: &'static [&'static str],
     /// Its NORD profiles: the products speaking it. Its generic profile (`any@<bus>`, any
     /// maker's device, `--dut` only) is added by [`Profile`].
     pub(crate) profiles: fn() -> Vec<Profile>,
@@ -105,7 +108,9 @@ pub(crate) struct Embedded {
 
 /// A DUT on the network, as the command line gives it.
 pub(crate) struct Network {
-    /// What follows `<name>://`: a host, an interface name…
+    /// The URL's scheme: the bus's name or one of its [`Bus::schemes`].
+    pub(crate) scheme: String,
+    /// What follows `<scheme>://`: a host, an interface name…
     pub(crate) target: String,
     /// The harness's own address, where a bus sends from (`--local`).
     pub(crate) local: Option<IpAddr>,
@@ -151,16 +156,24 @@ pub(crate) fn urls() -> String {
     v.join(", ")
 }
 
-/// The bus and target of a `--dut` URL (`ecat://veth0`).
-pub(crate) fn by_url(url: &str) -> Result<(&'static Bus, &str), String> {
+/// The bus, scheme and target of a `--dut` URL (`ecat://veth0`).
+pub(crate) fn by_url(url: &str) -> Result<(&'static Bus, &str, &str), String> {
     let schemes = || {
-        let v: Vec<String> = BUSES.iter().map(|b| format!("{}://", b.name)).collect();
+        let v: Vec<String> = BUSES
+            .iter()
+            .flat_map(|b| std::iter::once(b.name).chain(b.schemes.iter().copied()))
+            .map(|s| format!("{s}://"))
+            .collect();
         v.join(", ")
     };
     let (scheme, target) = url
         .split_once("://")
         .ok_or_else(|| format!("`--dut {url}`: give a URL ({})", schemes()))?;
-    let bus = by_name(scheme).ok_or_else(|| {
+    let bus = BUSES
+        .iter()
+        .copied()
+        .find(|b| b.name == scheme || b.schemes.contains(&scheme));
+    let bus = bus.ok_or_else(|| {
         format!(
             "`--dut {url}`: unknown scheme `{scheme}://` ({})",
             schemes()
@@ -169,7 +182,7 @@ pub(crate) fn by_url(url: &str) -> Result<(&'static Bus, &str), String> {
     if target.is_empty() {
         return Err(format!("`--dut {url}`: nothing after `{scheme}://`"));
     }
-    Ok((bus, target))
+    Ok((bus, scheme, target))
 }
 
 /// The description writer for `format`, with its bus: of the bus `bus` names, else of the
@@ -218,9 +231,11 @@ mod tests {
     fn names_and_urls_resolve_through_the_registry() {
         assert_eq!(by_name("enip").map(|b| b.title), Some("EtherNet/IP"));
         assert_eq!(by_name("ecat").map(|b| b.title), Some("EtherCAT"));
-        let (bus, target) = by_url("ecat://veth0").unwrap();
+        let (bus, _, target) = by_url("ecat://veth0").unwrap();
         assert_eq!((bus.name, target), ("ecat", "veth0"));
         assert!(by_url("ecat://").unwrap_err().contains("nothing after"));
+        let (bus, scheme, target) = by_url("socketcand://127.0.0.1/can0").unwrap();
+        assert_eq!((bus.name, scheme, target), ("can", "socketcand", "127.0.0.1/can0"));
         let e = by_url("lin://x").unwrap_err();
         assert!(e.contains("unknown scheme `lin://`"), "{e}");
         assert!(e.contains("enip://, ecat://"), "{e}");
@@ -246,8 +261,9 @@ mod tests {
     #[test]
     fn every_bus_url_starts_with_its_scheme() {
         for bus in BUSES {
+            let scheme = bus.url.split("://").next().unwrap_or_default();
             assert!(
-                bus.url.starts_with(&format!("{}://", bus.name)),
+                scheme == bus.name || bus.schemes.contains(&scheme),
                 "{}",
                 bus.url
             );

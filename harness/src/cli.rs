@@ -466,7 +466,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
             runner::run_shard(&loaded, &opts, a.shard, &mut factory)
         }
         Some(url) => {
-            let (bus, target) = crate::bus::by_url(url)?;
+            let (bus, scheme, target) = crate::bus::by_url(url)?;
             if !(0.01..=60.0).contains(&a.timeout) {
                 return Err(format!(
                     "`--timeout {}`: give 0.01 to 60 seconds",
@@ -504,6 +504,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
             };
             let mut factory = (bus.network)(&crate::bus::Network {
                 description,
+                scheme: scheme.to_string(),
                 target: with_options(target, a.node_id, a.sdo.as_deref()),
                 local: a.local,
                 timeout: std::time::Duration::from_secs_f64(a.timeout),

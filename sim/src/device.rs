@@ -217,6 +217,18 @@ fn unit_is_first(unit: Unit) -> bool {
     }
 }
 
+/// The parameters of inverter `fi` at power-on: factory settings, and P515 [-01] "CAN address"
+/// the system-bus address it was commissioned with (BU 0620 §3.1 p. 61: FI 1 32, further FIs
+/// 34, 36, …), where `sim::can` puts its node.
+fn inverter_store(product: Product, fi: Inverter) -> ParamStore {
+    let mut store = ParamStore::new(product, Target::Inverter(fi));
+    if fi.get() > 1 {
+        let node = proto::nord::can::SystemBusAddress::inverter(fi).get();
+        store.set_info(515, 1, i32::from(node));
+    }
+    store
+}
+
 /// One inverter: its parameters and its drive.
 #[derive(Debug)]
 struct InverterUnit {
@@ -409,7 +421,7 @@ impl Device {
         let mut inverters: Vec<InverterUnit> = (1..=count)
             .filter_map(|n| Inverter::new(i64::from(n)).ok())
             .map(|i| InverterUnit {
-                params: ParamChannel::new(ParamStore::new(config.product, Target::Inverter(i))),
+                params: ParamChannel::new(inverter_store(config.product, i)),
                 drive: Drive::new(),
                 last_process: None,
                 p513_seen: (None, Duration::ZERO),

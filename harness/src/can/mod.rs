@@ -1,14 +1,23 @@
 //! The NORD system bus (CANopen on CAN at 250 kBaud, BU 0620 §2.6, `proto::nord::can`): the
 //! inverters as CANopen nodes on a CAN segment (`sim::can`).
 //!
-//! What runs today: `harness serve can --socketcand ADDR` serves the simulated segment over
-//! socketcand's TCP protocol, where python-can, python-canopen or another master joins it.
-//! What does not yet: a binding of the harness's own (`--dut can://IFACE`,
-//! `--dut socketcand://HOST:PORT/CHANNEL`), the system-bus profiles of the default run and
-//! `can:` suite steps; each refuses with that said rather than doing something else.
+//! What runs: the `<product>@can` profiles test each product's inverters as system-bus nodes
+//! through the harness's SDO client ([`binding`]), against the simulated segment in-process
+//! or a segment behind a socketcand server (`--dut socketcand://HOST[:PORT]/CHANNEL`);
+//! `harness serve can --socketcand ADDR` serves the simulated segment to CANopen masters such
+//! as python-canopen; `can:` steps put frames and NMT commands on the bus and observe what comes
+//! back. What does not yet: process data (PDOs, SYNC), any
+//! maker's node (`any@can`) and SocketCAN (`can://IFACE`); each refuses with that said.
 
+mod binding;
 mod eds;
+mod link;
+mod sdo;
 mod serve;
+mod step;
+
+use std::net::SocketAddr;
+use std::time::Duration;
 
 use serde_json::Value;
 
@@ -16,13 +25,15 @@ use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, BusStep, Description, Embedded, Network};
 use crate::profile::Profile;
 use crate::runner::DutFactory;
+use binding::CanBinding;
 
 /// The registry entry.
 pub(crate) const BUS: Bus = Bus {
     name: "can",
     title: "NORD system bus (CANopen)",
-    url: "can://IFACE",
-    profiles: Vec::new,
+    url: "socketcand://HOST[:PORT]/CHANNEL",
+    schemes: &["socketcand"],
+    profiles,
     parse_step,
     embedded,
     network,
@@ -35,21 +46,100 @@ pub(crate) const BUS: Bus = Bus {
     variable: crate::bus::Variable::NONE,
 };
 
-/// Why the harness cannot test over the system bus yet.
-const NO_BINDING: &str = "the harness has no system-bus binding yet: `harness serve can` serves \
-the simulated segment to CANopen masters such as python-canopen, but `--dut` and `can:` \
-steps over CAN are not built";
+/// How long an inverter node of the simulated segment may take to answer an SDO request (it
+/// answers at once on the virtual clock; the limit only bounds a node that stays silent).
+const EMBEDDED_LIMIT: Duration = Duration::from_millis(100);
 
-fn parse_step(_: &Value) -> Result<Box<dyn BusStep>, String> {
-    Err(NO_BINDING.to_string())
+/// Every product's inverters: each interface reaches its inverters over the system bus.
+fn profiles() -> Vec<Profile> {
+    proto::nord::Product::ALL
+        .into_iter()
+        .map(|p| Profile::on_bus(p, "can"))
+        .collect()
 }
 
-fn embedded(_: &Profile, _: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
-    Err(OpenError::Profile(NO_BINDING.to_string()))
+fn parse_step(v: &Value) -> Result<Box<dyn BusStep>, String> {
+    step::parse(v)
 }
 
-fn network(_: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
-    Err(OpenError::Profile(NO_BINDING.to_string()))
+/// The simulated segment of the profile's product, behind the SDO client.
+fn embedded(profile: &Profile, _: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
+    let config = crate::binding::embedded::device_config(profile)?;
+    let product = config.product;
+    let segment =
+        sim::can::Segment::new(config).map_err(|e| OpenError::Profile(e.to_string()))?;
+    let link = link::Embedded::new(segment);
+    let what = "embedded system-bus segment".to_string();
+    Ok(Box::new(CanBinding::open(
+        link,
+        EMBEDDED_LIMIT,
+        product,
+        what,
+        false,
+    )?))
+}
+
+/// `--dut socketcand://HOST[:PORT]/CHANNEL`: the inverters on the bus `CHANNEL` of a socketcand
+/// server (port 29536 unless given).
+fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
+    if n.scheme != "socketcand" {
+        return Err(OpenError::Profile(format!(
+            "`{}://{}`: SocketCAN is not built yet; reach the bus through a socketcand server \
+             (`--dut socketcand://HOST[:PORT]/CHANNEL`)",
+            n.scheme, n.target
+        )));
+    }
+    let (host, channel) = n.target.split_once('/').ok_or_else(|| {
+        OpenError::Profile(format!(
+            "`socketcand://{}`: give the bus after a slash (`socketcand://HOST[:PORT]/can0`)",
+            n.target
+        ))
+    })?;
+    if channel.is_empty() || channel.contains(char::is_whitespace) {
+        return Err(OpenError::Profile(format!(
+            "`socketcand://{}`: `{channel}` is not a bus name",
+            n.target
+        )));
+    }
+    let addr = crate::net::serve_args::socket_addr(host, serve::DEFAULT_PORT)
+        .map_err(|e| OpenError::Profile(format!("`socketcand://{}`: {e}", n.target)))?;
+    Ok(Box::new(SocketcandFactory {
+        addr,
+        channel: channel.to_string(),
+        timeout: n.timeout,
+    }))
+}
+
+/// Opens the socketcand server's bus anew for every case.
+struct SocketcandFactory {
+    addr: SocketAddr,
+    channel: String,
+    timeout: Duration,
+}
+
+impl DutFactory for SocketcandFactory {
+    fn describe(&self) -> String {
+        format!("system bus `{}` of socketcand {}", self.channel, self.addr)
+    }
+
+    fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+        let product = profile.nord().map_err(|_| {
+            OpenError::Profile(
+                "any maker's CANopen node (`any@can`) is not built yet: give a NORD product's \
+                 profile"
+                    .into(),
+            )
+        })?;
+        let link = link::Socketcand::connect(self.addr, &self.channel, self.timeout)
+            .map_err(|e| OpenError::Unreachable(e.to_string()))?;
+        Ok(Box::new(CanBinding::open(
+            link,
+            self.timeout,
+            product,
+            self.describe(),
+            true,
+        )?))
+    }
 }
 
 /// `harness describe eds --bus can --profile P [--inverter N]`: the EDS of inverter N (FI 1 by

@@ -30,6 +30,7 @@ pub(crate) const BUS: Bus = Bus {
     name: "ecat",
     title: "EtherCAT",
     url: "ecat://IFACE",
+    schemes: &[],
     profiles,
     parse_step: step::parse,
     embedded,

@@ -34,6 +34,7 @@ pub(crate) const BUS: Bus = Bus {
     name: "enip",
     title: "EtherNet/IP",
     url: "enip://HOST[:PORT]",
+    schemes: &[],
     profiles,
     parse_step: step::parse,
     embedded,

@@ -36,6 +36,7 @@ pub(crate) const BUS: Bus = Bus {
     name: "epl",
     title: "POWERLINK",
     url: "epl://IFACE[/NODE][?sdo=udp|asnd&cycle=TIME]",
+    schemes: &[],
     profiles,
     parse_step: step::parse,
     embedded,

@@ -16,6 +16,7 @@ pub(crate) mod wait;
 pub(crate) mod workers;
 
 pub use error::LinkError;
+pub(crate) use error::timed_out;
 #[allow(unused_imports)] // the module's API, not all of it used yet
 pub(crate) use iface::{interface, Interface, Mac};
 #[allow(unused_imports)]

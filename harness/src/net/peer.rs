@@ -338,14 +338,7 @@ impl<D> Link for NetLink<D> {
                 // A signal (a stopped and continued process, a debugger) is no link error.
                 Ok(_) => continue,
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                    ) =>
-                {
-                    return Ok(None)
-                }
+                Err(e) if crate::net::timed_out(&e) => return Ok(None),
                 Err(e) => return Err(LinkError::io("receive a UDP datagram", &peer, e)),
             }
         }

@@ -38,6 +38,7 @@ pub(crate) const BUS: Bus = Bus {
     name: "pnio",
     title: "PROFINET IO",
     url: "pnio://IFACE[/NAME][?rr=N]",
+    schemes: &[],
     profiles,
     parse_step: step::parse,
     embedded,

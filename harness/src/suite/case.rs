@@ -462,8 +462,15 @@ pub(super) fn case_head(
             names
                 .iter()
                 .map(|n| {
-                    Product::from_name(n)
-                        .ok_or_else(|| crate::profile::Profile::by_name(n).unwrap_err())
+                    Product::from_name(n).ok_or_else(|| match crate::profile::Profile::by_name(n) {
+                        Ok(p) => format!(
+                            "`profiles` names products; `{n}` is a profile: give `{}` and \
+                             `requires: [{}]`",
+                            p.product.map_or("a product", |p| p.name()),
+                            p.bus.unwrap_or("BUS")
+                        ),
+                        Err(e) => e,
+                    })
                 })
                 .collect::<Result<Vec<_>, _>>()
         })

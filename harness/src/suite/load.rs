@@ -363,6 +363,15 @@ cases:
     }
 
     #[test]
+    fn a_profile_where_a_product_belongs_is_refused_with_the_fix() {
+        // `profiles:` takes products; a profile name once panicked the loader.
+        let l = load(&GOOD.replace("    steps:", "    profiles: [sk550p@can]\n    steps:"));
+        assert_eq!(l.cases.len(), 0);
+        let e = &l.errors[0].message;
+        assert!(e.contains("give `sk550p` and `requires: [can]`"), "{e}");
+    }
+
+    #[test]
     fn duplicate_ids_are_refused() {
         let twice = GOOD.to_string() + &GOOD[GOOD.find("  - id").unwrap()..];
         let l = load(&twice);

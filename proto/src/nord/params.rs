@@ -249,6 +249,7 @@ pub const CATALOGUE: &[ParamDef] = &[
     integrated(ro(array(inv(744, "Configuration", 0, 0xFFFF, 0, 0, "BU 0620 §4.5 (p. 91): [-02] XU5 type: 0 no extension present, 1 reserved, 2 Industrial Ethernet present (the SK 550P's FI 1); [-01] not printed"), 2))),
     integrated(ro(array(inv(745, "Module version", 0, 99999, 0, 0, "BU 0620 §4.5 (p. 91): [-07] XU5 version, [-08] revision, [-09] special version, [-10] stack 1, [-11] stack 2; [-01]..[-06] not printed; FI 1 shows the interface software V 1.1 R1 of §1.1.2 as 11 and 1"), 11))),
     integrated(ro(array(inv(746, "Module status", 0, 0xFFFF, 0, 0, "BU 0620 §4.5 (p. 91): [-03] XU5 status: 0 not ready, 1 ready; [-01]/[-02] not printed"), 3))),
+    ro(array(inv(748, "CANopen status", 0, 0xFFFF, 0, 0, "BU 0620 §4.5 (p. 91): [-01] displays the system bus status; BU 2100 §7.2 (p. 55) and BU 2200 §7.2: the inverters' system bus status (its values are in BU 0200, not among the manuals)"), 1)),
     iface(elements(inv(850, "IP address", 0, 255, 0, 0, "BU 0620 §4.2.2: [-01]..[-04], factory 192.168.1.100"), IP_DEFAULT)),
     iface(elements(inv(851, "IP sub-net mask", 0, 255, 0, 0, "BU 0620 §4.2.2: factory 255.255.255.0"), MASK_DEFAULT)),
     iface(array(inv(852, "IP Gateway", 0, 255, 0, 0, "BU 0620 §4.2.2: factory 0.0.0.0"), 4)),

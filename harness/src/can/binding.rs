@@ -1,0 +1,394 @@
+//! The system-bus binding: the harness as CANopen SDO client of a product's inverters, each a
+//! node at its P515 address (FI n at 32 + 2·(n − 1), `proto::nord::can`).
+//!
+//! `read`/`write` are SDO transfers of parameter P at object 2000h + P of the inverter's node,
+//! its set or element the sub-index (`proto::nord::can::cia301::parameter_sdo`; not stated by
+//! the manuals, CiA 301's pre-defined connection set). A refusal is the node's SDO abort
+//! code. On the SK 550P, FI 1 also answers the interface's parameters (the interface is
+//! built into it); a bus module's own parameters are not on the system bus.
+//!
+//! `can:` steps (`step.rs`) put a frame or an NMT command on the bus and observe every frame
+//! for the step's time. Not yet: process data (PDOs and SYNC are not simulated): a case that
+//! needs it is not applicable, with that reason.
+
+use std::time::Duration;
+
+use proto::canopen::SdoAbortCode;
+use proto::nord::can::parameter_sdo;
+use proto::nord::{Inverter, ParamAddress, Product};
+use serde_json::{json, Value};
+
+use super::link::CanLink;
+use super::sdo::{describe, frame_hex, Client, SdoError};
+use super::step::CanStep;
+use proto::can::CanFrame;
+use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::objects::{self, Object, Unit};
+use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
+use crate::hex::hex;
+use crate::ledger::{self, Account, Ledger, Problem};
+use crate::outcome::{Exchange, Identity, Refusal};
+use crate::profile::Capability;
+use crate::suite::{Action, OrderSpec};
+
+/// What the embedded segment offers: parameters over SDO, and the simulator's own powers.
+/// `can` marks a case about the system bus itself (its own `can:` steps are not built yet).
+const EMBEDDED_CAPABILITIES: [Capability; 6] = [
+    Capability::ParameterAccess,
+    Capability::Bus("can"),
+    Capability::FaultInjection,
+    Capability::Observe,
+    Capability::PowerOn,
+    Capability::FactoryState,
+];
+/// What a segment on the network offers.
+const NETWORK_CAPABILITIES: [Capability; 2] = [Capability::ParameterAccess, Capability::Bus("can")];
+
+/// The frames a `can:` step takes at most (a babbling node ends the step there).
+const MAX_FRAMES_PER_STEP: usize = 1000;
+
+/// An object of one node: the ledger's key.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct NodeObject {
+    node: u8,
+    object: Object,
+}
+
+impl std::fmt::Display for NodeObject {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} of node {}", self.object, self.node)
+    }
+}
+
+/// The harness as SDO client of a product's inverters on one segment.
+pub(crate) struct CanBinding<L> {
+    client: Client<L>,
+    product: Product,
+    what: String,
+    capabilities: &'static [Capability],
+    /// On a segment on the network: what the case wrote, to be written back.
+    ledger: Option<Ledger<NodeObject>>,
+}
+
+/// The refusal of an SDO abort code.
+fn abort(code: SdoAbortCode) -> Observation {
+    Observation::refused(
+        json!({ "abort": code.0 }),
+        Refusal {
+            kind: "SDO abort code".into(),
+            code: code.0,
+            text: code.to_string(),
+        },
+    )
+}
+
+fn step_error(e: SdoError) -> StepError {
+    match e {
+        SdoError::Abort(code) => StepError::Refused(format!("SDO abort {code}")),
+        SdoError::Silent { node, what, limit } => StepError::Late {
+            what: format!("node {node}, {what}"),
+            limit,
+            waited: limit,
+        },
+        e @ SdoError::Protocol { .. } => StepError::Garbage(e.to_string()),
+        SdoError::Link(l) => StepError::Link(l.to_string()),
+    }
+}
+
+fn refused_or(e: SdoError) -> Result<Observation, StepError> {
+    match e {
+        SdoError::Abort(code) => Ok(abort(code)),
+        other => Err(step_error(other)),
+    }
+}
+
+impl<L: CanLink> CanBinding<L> {
+    /// The binding over `link`; FI 1's node must answer its identity (1018h:01, NORD's vendor
+    /// id 538h) before a case runs.
+    pub(crate) fn open(
+        link: L,
+        limit: Duration,
+        product: Product,
+        what: String,
+        persistent: bool,
+    ) -> Result<CanBinding<L>, OpenError> {
+        let mut client = Client::new(link, limit);
+        let fi1 = Inverter::new(1).map_err(|e| OpenError::Profile(e.to_string()))?;
+        let node = proto::nord::can::SystemBusAddress::for_inverter(product, fi1)
+            .map_err(|e| OpenError::Profile(e.to_string()))?
+            .get();
+        let vendor = client.upload(node, 0x1018, 1).map_err(|e| match e {
+            SdoError::Link(_) | SdoError::Silent { .. } => OpenError::Unreachable(e.to_string()),
+            _ => OpenError::BringUp(e.to_string()),
+        })?;
+        let vendor = u32::from_le_bytes(vendor.try_into().unwrap_or([0; 4]));
+        if vendor != proto::nord::ecat::VENDOR_ID {
+            return Err(OpenError::BringUp(format!(
+                "node {node} has vendor id {vendor:08X}h, not NORD's {:08X}h",
+                proto::nord::ecat::VENDOR_ID
+            )));
+        }
+        client.take_exchanges();
+        Ok(CanBinding {
+            client,
+            product,
+            what: format!("{what}: FI 1 at node {node} (vendor {vendor:08X}h)"),
+            capabilities: if persistent {
+                &NETWORK_CAPABILITIES
+            } else {
+                &EMBEDDED_CAPABILITIES
+            },
+            ledger: persistent.then(Ledger::default),
+        })
+    }
+
+    /// The node and object of a `read`/`write` step, and the parameter's definition.
+    fn object(
+        &self,
+        o: &OrderSpec,
+    ) -> Result<(NodeObject, Option<&'static proto::nord::params::ParamDef>), StepError> {
+        let a = objects::address(self.product, o)?;
+        let Unit::Inverter(inverter) = a.unit else {
+            return Err(StepError::NotApplicable(
+                "a bus module's own parameters are not on the system bus (its nodes are the \
+                 inverters)"
+                    .into(),
+            ));
+        };
+        let (node, sdo) = parameter_sdo(
+            self.product,
+            ParamAddress {
+                inverter,
+                number: o.number,
+                set: a.set,
+                element: a.element,
+            },
+        )
+        .map_err(|e| StepError::NotApplicable(e.to_string()))?;
+        Ok((
+            NodeObject {
+                node: node.get(),
+                object: Object {
+                    index: sdo.index,
+                    sub: sdo.subindex,
+                },
+            },
+            a.def,
+        ))
+    }
+
+    fn read(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
+        let (at, def) = self.object(o)?;
+        let data = match self.client.upload(at.node, at.object.index, at.object.sub) {
+            Ok(d) => d,
+            Err(e) => return refused_or(e),
+        };
+        let value = objects::value_of(at.object, &data, def)?;
+        Ok(json!({ "value": value, "data": hex(&data), "abort": null }).into())
+    }
+
+    fn write(&mut self, o: &OrderSpec) -> Result<Observation, StepError> {
+        let (at, def) = self.object(o)?;
+        let data = objects::bytes_of(o, def)?;
+        let (index, sub) = (at.object.index, at.object.sub);
+        if self.ledger.as_ref().is_some_and(|l| l.wants_original(&at)) {
+            let before = self
+                .client
+                .upload(at.node, index, sub)
+                .map_err(|e| e.to_string());
+            if let Some(l) = self.ledger.as_mut() {
+                l.original(at, before);
+            }
+        }
+        let r = self.client.download(at.node, index, sub, &data);
+        if let Some(l) = self.ledger.as_mut() {
+            let outcome = match &r {
+                Ok(()) => Ok(true),
+                Err(SdoError::Abort(_)) => Ok(false),
+                Err(e) => Err(StepError::Link(e.to_string())),
+            };
+            l.wrote(&at, ledger::may_have_taken_effect(outcome.as_ref().copied()));
+        }
+        match r {
+            Ok(()) => Ok(json!({ "abort": null, "ok": true }).into()),
+            Err(e) => refused_or(e),
+        }
+    }
+
+    /// A `can:` step: its frame on the bus, then every frame for its time.
+    fn can_step(&mut self, step: &CanStep) -> Result<Value, StepError> {
+        let sent = match &step.send {
+            Some(s) => {
+                let f = s.frame().map_err(StepError::Suite)?;
+                self.client
+                    .link
+                    .send(&f)
+                    .map_err(|e| StepError::Link(e.to_string()))?;
+                Some(f)
+            }
+            None => None,
+        };
+        let end = self.client.link.now() + step.wait;
+        let mut frames = Vec::new();
+        while frames.len() < MAX_FRAMES_PER_STEP {
+            let left = end.saturating_sub(self.client.link.now());
+            match self
+                .client
+                .link
+                .recv(left)
+                .map_err(|e| StepError::Link(e.to_string()))?
+            {
+                Some(f) => frames.push(f),
+                None => break,
+            }
+            if left.is_zero() {
+                break;
+            }
+        }
+        let abort = frames.iter().find_map(|f| {
+            let d = f.data();
+            ((0x581..=0x5FF).contains(&f.id()) && d.len() == 8 && d[0] == 0x80)
+                .then(|| u32::from_le_bytes([d[4], d[5], d[6], d[7]]))
+        });
+        let joined = |each: fn(&CanFrame) -> String| {
+            frames.iter().map(each).collect::<Vec<_>>().join("; ")
+        };
+        self.client.record(Exchange {
+            sent_hex: sent.as_ref().map(frame_hex).unwrap_or_default(),
+            sent: sent.as_ref().map_or_else(|| "(listening)".into(), describe),
+            received_hex: joined(frame_hex),
+            received: if frames.is_empty() {
+                "(nothing received)".into()
+            } else {
+                joined(describe)
+            },
+        });
+        Ok(json!({
+            "answered": !frames.is_empty(),
+            "count": frames.len(),
+            "frames": joined(frame_hex),
+            "abort": abort,
+        }))
+    }
+
+    /// FI 1's identity object 1018h (vendor, product code, revision, serial) and its device
+    /// name 1008h.
+    fn identity_object(&mut self) -> Result<Identity, StepError> {
+        let fi1 = Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?;
+        let node = proto::nord::can::SystemBusAddress::for_inverter(self.product, fi1)
+            .map_err(|e| StepError::Suite(e.to_string()))?
+            .get();
+        // CiA 301 §7.5.2.24: 1018h:00 counts the entries; only the vendor id (01h) is
+        // mandatory, product code, revision and serial number (02h–04h) are optional.
+        let count = self.client.upload(node, 0x1018, 0).map_err(step_error)?;
+        let count = count.first().copied().unwrap_or(0).min(4);
+        let mut subs = [const { None }; 4];
+        for (sub, v) in (1u8..=count).zip(subs.iter_mut()) {
+            let d = self.client.upload(node, 0x1018, sub).map_err(step_error)?;
+            let b: [u8; 4] = d.as_slice().try_into().map_err(|_| {
+                StepError::Protocol(format!("1018h:{sub:02X}h is {} bytes, not 4", d.len()))
+            })?;
+            *v = Some(format!("{:08X}h", u32::from_le_bytes(b)));
+        }
+        // 1008h is optional too (CiA 301 §7.5.2.7).
+        let name = match self.client.upload(node, 0x1008, 0) {
+            Ok(n) => Some(String::from_utf8_lossy(&n).trim_end_matches('\0').to_string()),
+            Err(SdoError::Abort(_)) => None,
+            Err(e) => return Err(step_error(e)),
+        };
+        let [vendor, product_code, revision, serial] = subs;
+        Ok(Identity {
+            source: format!("objects 1018h and 1008h of node {node} (FI 1)"),
+            vendor,
+            product_code,
+            product_name: name,
+            revision,
+            serial,
+        })
+    }
+
+    fn simulated(&mut self) -> Result<(&mut sim::can::Segment, Duration), StepError> {
+        self.client.link.segment().ok_or_else(|| {
+            StepError::NotApplicable("only the simulator can be looked into".into())
+        })
+    }
+}
+
+impl<L: CanLink> Binding for CanBinding<L> {
+    fn describe(&self) -> String {
+        self.what.clone()
+    }
+
+    fn capabilities(&self) -> &[Capability] {
+        self.capabilities
+    }
+
+    fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+        let fields: Value = match action {
+            Action::Compute { .. } => {
+                return Err(StepError::Suite("compute is not a DUT step".into()))
+            }
+            Action::Read(o) => return self.read(o),
+            Action::Write(o) => return self.write(o),
+            Action::Pkw { .. } => {
+                return Err(StepError::NotApplicable(
+                    "the system bus has no PKW parameter channel: parameters are SDO objects"
+                        .into(),
+                ))
+            }
+            Action::Process { .. } | Action::Wait(_) => {
+                return Err(StepError::NotApplicable(
+                    "process data over the system bus (PDOs, SYNC) is not built yet".into(),
+                ))
+            }
+            Action::Inject { inverter, error } => {
+                self.simulated()?
+                    .0
+                    .device_mut()
+                    .inject_fault(*inverter, error)
+                    .map_err(StepError::Refused)?;
+                json!({})
+            }
+            Action::Observe { what, inverter } => {
+                let (segment, now) = self.simulated()?;
+                match observe_device(segment.device_mut(), what, *inverter, now)
+                    .map_err(StepError::Refused)?
+                {
+                    Some(v) => v,
+                    None => {
+                        return Err(StepError::Suite(format!(
+                            "cannot observe `{what}` over the system bus (can: {OBSERVABLE})"
+                        )))
+                    }
+                }
+            }
+            Action::Bus(step) => {
+                let step = crate::bus::own_step::<CanStep>(step.as_ref(), "the system bus")?;
+                self.can_step(step)?
+            }
+        };
+        Ok(fields.into())
+    }
+
+    fn take_exchanges(&mut self) -> Vec<Exchange> {
+        self.client.take_exchanges()
+    }
+
+    fn identity(&mut self) -> Option<Result<Identity, StepError>> {
+        Some(self.identity_object())
+    }
+
+    fn finish(&mut self) -> Result<(), CleanupError> {
+        let Some(ledger) = self.ledger.take() else {
+            return Ok(());
+        };
+        let mut account = Account::default();
+        ledger.restore(&mut account, |at, before| {
+            self.client
+                .download(at.node, at.object.index, at.object.sub, before)
+                .map_err(|e| Problem::step(format!("setting back {at}"), step_error(e)))
+        });
+        self.ledger = Some(Ledger::default());
+        account.into_result().map_err(CleanupError)
+    }
+}

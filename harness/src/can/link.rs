@@ -1,0 +1,257 @@
+//! The harness's end of a CAN segment: frames out, frames in within a limit.
+//!
+//! Two links carry the same `proto::can` frames: the simulated segment in-process, on a
+//! virtual clock ([`Embedded`]), and a socketcand server over TCP ([`Socketcand`]), which
+//! reaches a real CAN bus on another machine (or `harness serve can --socketcand`).
+
+use std::collections::VecDeque;
+use std::io::{Read, Write};
+use std::net::TcpStream;
+use std::time::{Duration, Instant};
+
+use proto::can::socketcand::{Framed, Message, MAX_MESSAGE_LEN};
+use proto::can::CanFrame;
+use sim::can::Segment;
+
+/// Why a link failed.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum CanLinkError {
+    /// The socket failed.
+    #[error("socketcand {peer}: {source}")]
+    Io {
+        /// The server.
+        peer: String,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// The server said something socketcand does not, or refused.
+    #[error("socketcand {peer}: {what}")]
+    Protocol {
+        /// The server.
+        peer: String,
+        /// What went wrong.
+        what: String,
+    },
+}
+
+/// A CAN segment as the harness reaches it.
+pub(crate) trait CanLink {
+    /// Puts `frame` on the bus.
+    fn send(&mut self, frame: &CanFrame) -> Result<(), CanLinkError>;
+    /// The next frame another node put on the bus, waiting up to `limit` on the link's clock;
+    /// `None` when none came.
+    fn recv(&mut self, limit: Duration) -> Result<Option<CanFrame>, CanLinkError>;
+    /// The time on the link's clock (virtual in-process, since the connection on a network).
+    fn now(&self) -> Duration;
+    /// The simulated segment behind the link, if it is one (`inject`, `observe`), and the time
+    /// on its clock.
+    fn segment(&mut self) -> Option<(&mut Segment, Duration)> {
+        None
+    }
+}
+
+/// The simulated segment in-process: what the nodes answer is queued at once; waiting
+/// advances the virtual clock to the next frame a node sends on its own.
+pub(crate) struct Embedded {
+    segment: Segment,
+    now: Duration,
+    queue: VecDeque<CanFrame>,
+}
+
+impl Embedded {
+    /// The segment at power-on, its boot-up messages waiting.
+    pub(crate) fn new(mut segment: Segment) -> Embedded {
+        let queue = segment.poll(Duration::ZERO).into();
+        Embedded {
+            segment,
+            now: Duration::ZERO,
+            queue,
+        }
+    }
+}
+
+impl CanLink for Embedded {
+    fn send(&mut self, frame: &CanFrame) -> Result<(), CanLinkError> {
+        let answers = self.segment.receive(frame, self.now);
+        self.queue.extend(answers);
+        Ok(())
+    }
+
+    fn recv(&mut self, limit: Duration) -> Result<Option<CanFrame>, CanLinkError> {
+        let deadline = self.now + limit;
+        loop {
+            if let Some(f) = self.queue.pop_front() {
+                return Ok(Some(f));
+            }
+            match self.segment.next_due() {
+                Some(due) if due <= deadline => {
+                    // A node due now that sends nothing must not stall the clock.
+                    self.now = due.max(self.now + Duration::from_micros(1));
+                    let frames = self.segment.poll(self.now);
+                    self.queue.extend(frames);
+                }
+                _ => {
+                    self.now = deadline;
+                    return Ok(None);
+                }
+            }
+        }
+    }
+
+    fn now(&self) -> Duration {
+        self.now
+    }
+
+    fn segment(&mut self) -> Option<(&mut Segment, Duration)> {
+        Some((&mut self.segment, self.now))
+    }
+}
+
+/// A socketcand server's channel in raw mode: every frame on that bus comes to the harness.
+pub(crate) struct Socketcand {
+    peer: String,
+    stream: TcpStream,
+    buf: Vec<u8>,
+    since: Instant,
+}
+
+impl Socketcand {
+    /// Connects to `host:port`, opens `channel` and switches to raw mode, each answer
+    /// awaited for `limit`.
+    pub(crate) fn connect(
+        addr: std::net::SocketAddr,
+        channel: &str,
+        limit: Duration,
+    ) -> Result<Socketcand, CanLinkError> {
+        let peer = addr.to_string();
+        let io = |source| CanLinkError::Io {
+            peer: peer.clone(),
+            source,
+        };
+        let stream = TcpStream::connect_timeout(&addr, limit).map_err(io)?;
+        stream.set_nodelay(true).map_err(io)?;
+        let mut link = Socketcand {
+            peer: peer.clone(),
+            stream,
+            buf: Vec::new(),
+            since: Instant::now(),
+        };
+        link.expect(Message::Hi, limit, "the greeting `< hi >`")?;
+        link.write(&Message::Open {
+            channel: channel.to_string(),
+        })?;
+        link.expect(Message::Ok, limit, &format!("`< ok >` to `< open {channel} >`"))?;
+        link.write(&Message::RawMode)?;
+        link.expect(Message::Ok, limit, "`< ok >` to `< rawmode >`")?;
+        Ok(link)
+    }
+
+    fn protocol(&self, what: String) -> CanLinkError {
+        CanLinkError::Protocol {
+            peer: self.peer.clone(),
+            what,
+        }
+    }
+
+    fn write(&mut self, m: &Message) -> Result<(), CanLinkError> {
+        let text = m.emit().map_err(|e| self.protocol(e.to_string()))?;
+        self.stream
+            .write_all(text.as_bytes())
+            .map_err(|source| CanLinkError::Io {
+                peer: self.peer.clone(),
+                source,
+            })
+    }
+
+    /// The next message within `limit`.
+    fn message(&mut self, limit: Duration) -> Result<Option<Message>, CanLinkError> {
+        let deadline = Instant::now() + limit;
+        let mut chunk = [0u8; 1024];
+        loop {
+            match Message::parse(&self.buf) {
+                Ok(Framed::Complete { message, consumed }) => {
+                    self.buf.drain(..consumed);
+                    return Ok(Some(message));
+                }
+                Ok(Framed::Incomplete) if self.buf.len() <= MAX_MESSAGE_LEN => {}
+                Ok(Framed::Incomplete) => {
+                    return Err(self.protocol(format!(
+                        "no `>` within {MAX_MESSAGE_LEN} bytes"
+                    )))
+                }
+                Err(e) => return Err(self.protocol(e.to_string())),
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Ok(None);
+            }
+            let io = |source| CanLinkError::Io {
+                peer: self.peer.clone(),
+                source,
+            };
+            self.stream.set_read_timeout(Some(left)).map_err(io)?;
+            match self.stream.read(&mut chunk) {
+                Ok(0) => return Err(self.protocol("the server closed the connection".into())),
+                Ok(n) => self.buf.extend_from_slice(&chunk[..n]),
+                Err(e) if crate::net::timed_out(&e) => return Ok(None),
+                Err(e) => return Err(io(e)),
+            }
+        }
+    }
+
+    fn expect(&mut self, want: Message, limit: Duration, what: &str) -> Result<(), CanLinkError> {
+        match self.message(limit)? {
+            Some(m) if m == want => Ok(()),
+            Some(Message::Error { text }) => Err(self.protocol(format!("refused: {text}"))),
+            Some(other) => Err(self.protocol(format!("expected {what}, got {other:?}"))),
+            None => Err(self.protocol(format!("no {what} within {limit:?}"))),
+        }
+    }
+}
+
+impl CanLink for Socketcand {
+    fn now(&self) -> Duration {
+        self.since.elapsed()
+    }
+
+    fn send(&mut self, frame: &CanFrame) -> Result<(), CanLinkError> {
+        self.write(&Message::Send { frame: *frame })
+    }
+
+    fn recv(&mut self, limit: Duration) -> Result<Option<CanFrame>, CanLinkError> {
+        let deadline = Instant::now() + limit;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.message(left)? {
+                Some(Message::Frame { frame, .. }) => return Ok(Some(frame)),
+                // Error frames and replies to nothing the harness asked are not frames.
+                Some(_) => continue,
+                None => return Ok(None),
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sim::device::DeviceConfig;
+
+    #[test]
+    fn the_embedded_segment_boots_and_answers_on_its_clock() {
+        let segment = Segment::new(DeviceConfig::new(proto::nord::Product::Sk550p)).unwrap();
+        let mut link = Embedded::new(segment);
+        // Boot-up messages (700h + node, one byte 00h) of FI 1 (node 32) first.
+        let first = link.recv(Duration::ZERO).unwrap().unwrap();
+        assert_eq!((first.id(), first.data()), (0x700 + 32, &[0u8][..]));
+        while link.recv(Duration::ZERO).unwrap().is_some() {}
+        // Nothing scheduled at factory settings (1017h = 0): a wait passes the clock.
+        assert_eq!(link.recv(Duration::from_millis(50)).unwrap(), None);
+        assert_eq!(link.now, Duration::from_millis(50));
+        // An SDO upload of 1000h from node 32 is answered at once.
+        let req = CanFrame::new(0x600 + 32, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]).unwrap();
+        link.send(&req).unwrap();
+        let answer = link.recv(Duration::ZERO).unwrap().unwrap();
+        assert_eq!(answer.id(), 0x580 + 32);
+    }
+}

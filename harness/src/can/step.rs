@@ -1,0 +1,201 @@
+//! The `can:` steps of the system-bus suites: a CAN frame as written, an NMT command, or the
+//! bus listened to; what came back within the step's time is the observation.
+//!
+//! - `can: { frame: "601 40 66 20 01 00 00 00 00" }`: COB-ID (hex), then the data bytes; with
+//!   `remote: N` a remote frame of DLC N instead (no data).
+//! - `can: { nmt: start|stop|pre-operational|reset-node|reset-communication, node: N }` (node 0:
+//!   all nodes).
+//! - `can: { listen: 100ms }`: nothing sent.
+//!
+//! Each listens `wait` (default 20 ms; `listen:` its own time) and observes `answered` (a frame
+//! came), `count`, `frames` (each `ID DATA`, joined by `; `), `abort` (the code of an SDO abort
+//! among them, else null).
+
+use serde_json::Value;
+use std::any::Any;
+use std::time::Duration;
+
+use proto::can::CanFrame;
+use proto::canopen::NmtCommand;
+
+use super::sdo::frame_hex;
+use crate::bus::BusStep;
+use crate::safety::{self, Effect};
+use crate::suite::fields::{hex_bytes, Fields};
+use crate::suite::parse_duration;
+
+/// How long a step listens unless it says.
+pub(super) const DEFAULT_WAIT: Duration = Duration::from_millis(20);
+
+/// A `can:` step.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct CanStep {
+    /// What goes on the bus (`None`: nothing).
+    pub(super) send: Option<Send>,
+    /// How long the bus is listened to afterwards.
+    pub(super) wait: Duration,
+}
+
+/// What a step puts on the bus.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(super) enum Send {
+    /// A frame as written.
+    Frame(CanFrame),
+    /// An NMT command (COB-ID 000h) to `node` (0: all).
+    Nmt(NmtCommand, u8),
+}
+
+impl Send {
+    pub(super) fn frame(&self) -> Result<CanFrame, String> {
+        match self {
+            Send::Frame(f) => Ok(*f),
+            Send::Nmt(c, node) => CanFrame::new(0, &[c.0, *node]).map_err(|e| e.to_string()),
+        }
+    }
+}
+
+impl BusStep for CanStep {
+    fn bus(&self) -> &'static str {
+        "can"
+    }
+
+    fn effect(&self) -> Effect {
+        match &self.send {
+            None => Effect::NONE,
+            // Operational, a node's process data runs (CiA 301 §7.3.2.2.4).
+            Some(Send::Nmt(c, _)) if *c == NmtCommand::START => {
+                Effect::motion("NMT start node lets the node's process data run")
+            }
+            Some(Send::Nmt(..)) => Effect::NONE,
+            Some(Send::Frame(f)) => match f.id() {
+                // SDO download (ccs 1) of an object: what it writes.
+                0x601..=0x67F if f.data().first().is_some_and(|b| b >> 5 == 1) => {
+                    let d = f.data();
+                    let index = u16::from_le_bytes([d.get(1).copied().unwrap_or(0), d.get(2).copied().unwrap_or(0)]);
+                    safety::sdo_download(index, d.get(4..).unwrap_or_default())
+                }
+                // Other SDO requests read or continue a transfer; NMT, SYNC, heartbeat.
+                0x000..=0x0FF | 0x601..=0x67F | 0x700..=0x77F => Effect::NONE,
+                // A PDO (180h–57Fh) may carry a control word.
+                id => Effect::motion(format!("a frame on COB-ID {id:03X}h may be process data")),
+            },
+        }
+    }
+
+    fn describe(&self) -> String {
+        let sent = match &self.send {
+            None => "listen".to_string(),
+            Some(Send::Frame(f)) if f.is_remote() => {
+                format!("remote frame {:03X}h DLC {}", f.id(), f.dlc())
+            }
+            Some(Send::Frame(f)) => format!("frame {}", frame_hex(f)),
+            Some(Send::Nmt(c, node)) => format!("NMT {c:?} to node {node}"),
+        };
+        format!("{sent}, then {:?} on the bus", self.wait)
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+}
+
+/// Parses a `can:` step.
+pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
+    let m = v
+        .as_object()
+        .ok_or_else(|| format!("`can`: expected a map of fields, got {v}"))?;
+    let wait = |f: &Fields| -> Result<Duration, String> {
+        match f.text("wait")? {
+            None => Ok(DEFAULT_WAIT),
+            Some(t) => parse_duration(&t).map_err(|e| format!("`can.wait`: {e}")),
+        }
+    };
+    let step = if m.contains_key("frame") {
+        let f = Fields::new("can", m, &["frame", "remote", "wait"])?;
+        let text = f.text("frame")?.unwrap_or_default();
+        let (id, data) = text.trim().split_once(' ').unwrap_or((text.trim(), ""));
+        let id = u16::from_str_radix(id.trim_end_matches('h'), 16)
+            .ok()
+            .filter(|id| *id <= 0x7FF)
+            .ok_or_else(|| format!("`can.frame`: `{id}` is not an 11-bit COB-ID (000…7FF, hex)"))?;
+        let frame = match f.int("remote")? {
+            Some(dlc) => {
+                let dlc = u8::try_from(dlc).map_err(|_| format!("`can.remote`: DLC {dlc}"))?;
+                CanFrame::remote(id, dlc)
+            }
+            None => CanFrame::new(id, &hex_bytes("can.frame", data)?),
+        }
+        .map_err(|e| format!("`can.frame`: {e}"))?;
+        CanStep {
+            send: Some(Send::Frame(frame)),
+            wait: wait(&f)?,
+        }
+    } else if m.contains_key("nmt") {
+        let f = Fields::new("can", m, &["nmt", "node", "wait"])?;
+        let command = match f.text("nmt")?.unwrap_or_default().as_str() {
+            "start" => NmtCommand::START,
+            "stop" => NmtCommand::STOP,
+            "pre-operational" => NmtCommand::ENTER_PRE_OPERATIONAL,
+            "reset-node" => NmtCommand::RESET_NODE,
+            "reset-communication" => NmtCommand::RESET_COMMUNICATION,
+            other => {
+                return Err(format!(
+                    "`can.nmt`: `{other}` (start, stop, pre-operational, reset-node, \
+                     reset-communication)"
+                ))
+            }
+        };
+        let node = f.int("node")?.unwrap_or(0);
+        let node = u8::try_from(node)
+            .ok()
+            .filter(|n| *n <= 127)
+            .ok_or_else(|| format!("`can.node`: {node} is not 0 (all) or a node id 1…127"))?;
+        CanStep {
+            send: Some(Send::Nmt(command, node)),
+            wait: wait(&f)?,
+        }
+    } else if m.contains_key("listen") {
+        let f = Fields::new("can", m, &["listen"])?;
+        let t = f.text("listen")?.unwrap_or_default();
+        CanStep {
+            send: None,
+            wait: parse_duration(&t).map_err(|e| format!("`can.listen`: {e}"))?,
+        }
+    } else {
+        return Err("`can`: give `frame`, `nmt` or `listen`".into());
+    };
+    Ok(Box::new(step))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn step(v: Value) -> Result<CanStep, String> {
+        parse(&v).map(|s| s.as_any().downcast_ref::<CanStep>().unwrap().clone())
+    }
+
+    #[test]
+    fn frames_nmt_and_listening_are_read_and_bad_ones_named() {
+        let s = step(json!({ "frame": "636 40 66 20 01 00 00 00 00" })).unwrap();
+        assert_eq!(s.wait, DEFAULT_WAIT);
+        assert!(matches!(s.send, Some(Send::Frame(f)) if f.id() == 0x636 && f.dlc() == 8));
+        let r = step(json!({ "frame": "636", "remote": 8 })).unwrap();
+        assert!(matches!(r.send, Some(Send::Frame(f)) if f.is_remote()));
+        let n = step(json!({ "nmt": "reset-node", "node": 36, "wait": "50ms" })).unwrap();
+        assert_eq!(n.send, Some(Send::Nmt(NmtCommand::RESET_NODE, 36)));
+        assert_eq!(n.wait, Duration::from_millis(50));
+        assert_eq!(step(json!({ "listen": "1s" })).unwrap().wait, Duration::from_secs(1));
+        assert!(step(json!({ "frame": "800 00" })).unwrap_err().contains("11-bit"));
+        assert!(step(json!({ "frame": "601 00 00 00 00 00 00 00 00 00" })).is_err());
+        assert!(step(json!({ "nmt": "go" })).unwrap_err().contains("start, stop"));
+        assert!(step(json!({ "nmt": "start", "node": 128 })).is_err());
+        assert!(step(json!({ "hello": 1 })).unwrap_err().contains("give `frame`"));
+        // Starting a node may start process data; an SDO upload cannot move anything.
+        assert!(n.effect().motion.is_none());
+        let start = step(json!({ "nmt": "start" })).unwrap();
+        assert!(start.effect().motion.is_some());
+        assert!(s.effect().motion.is_none());
+    }
+}

@@ -1,0 +1,104 @@
+//! The harness against a system bus it reaches over the network: `harness serve can
+//! --socketcand` serves the simulated segment of an SK 550P on loopback, and `harness run --dut
+//! socketcand://HOST:PORT/can0` tests its inverters as a persistent device, with the same
+//! system-bus cases as the embedded run; what a case wrote is written back afterwards. A
+//! missing bus name and a refused channel are clear errors. Loopback only: no peer to skip for.
+
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use serde_json::Value;
+
+#[allow(dead_code)] // what the other network tests share
+mod common;
+use common::addr::free_loopback;
+use common::{wait_listening, Server};
+
+fn serve(listen: &str) -> Server {
+    let child = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["serve", "can", "--socketcand", listen, "--profile", "sk550p"])
+        .args(["--seconds", "120"])
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("harness serve can starts");
+    let server = Server(child);
+    wait_listening(listen, Duration::from_secs(10));
+    server
+}
+
+#[test]
+fn the_system_bus_cases_pass_over_socketcand_and_leave_the_parameters_as_found() {
+    let listen = format!("{}:29536", free_loopback());
+    let _server = serve(&listen);
+    let out_dir = std::env::temp_dir().join(format!("nord-can-dut-{}", std::process::id()));
+    let run = |filter: &str| {
+        Command::new(env!("CARGO_BIN_EXE_harness"))
+            .args(["run", "--profile", "sk550p", "--timeout", "2"])
+            .args(["--filter", filter])
+            .args(["--dut", &format!("socketcand://{listen}/can0")])
+            .arg("--out")
+            .arg(&out_dir)
+            .output()
+            .expect("harness runs")
+    };
+    let out = run("can/sdo/");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
+    let cases = report["cases"].as_array().unwrap();
+    let passed: Vec<&str> = cases
+        .iter()
+        .filter(|c| c["verdict"] == "pass")
+        .filter_map(|c| c["id"].as_str())
+        .collect();
+    // Every case of the file applies to a device on the network (parameters over SDO).
+    for id in [
+        "can/sdo/expedited-read-and-write",
+        "can/sdo/sets-are-sub-indices",
+        "can/sdo/absent-object",
+        "can/sdo/write-to-read-only",
+        "can/sdo/value-too-high",
+    ] {
+        assert!(passed.contains(&id), "{id} did not pass: {stdout}");
+    }
+    assert_eq!(
+        report["meta"]["identities"]["sk550p@can"]["vendor"], "00000538h",
+        "{report}"
+    );
+    // The run wrote P102 of FI 3 and set 2 of FI 1, and put both back: a second run finds the
+    // factory values again.
+    let again = run("can/sdo/expedited-read-and-write");
+    assert_eq!(
+        again.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&again.stdout)
+    );
+    let _ = std::fs::remove_dir_all(&out_dir);
+}
+
+#[test]
+fn a_socketcand_url_without_a_bus_or_with_an_unknown_one_is_a_clear_error() {
+    let listen = format!("{}:29536", free_loopback());
+    let _server = serve(&listen);
+    let no_bus = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["run", "--profile", "sk550p", "--dut", &format!("socketcand://{listen}")])
+        .output()
+        .expect("harness runs");
+    assert_eq!(no_bus.status.code(), Some(2));
+    let said = String::from_utf8_lossy(&no_bus.stderr);
+    assert!(said.contains("give the bus after a slash"), "{said}");
+    let out_dir = std::env::temp_dir().join(format!("nord-can-refused-{}", std::process::id()));
+    let refused = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["run", "--profile", "sk550p", "--filter", "can/sdo/absent-object"])
+        .args(["--dut", &format!("socketcand://{listen}/can7")])
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .expect("harness runs");
+    let said = String::from_utf8_lossy(&refused.stdout);
+    assert_ne!(refused.status.code(), Some(0), "{said}");
+    assert!(said.contains("could not open bus"), "{said}");
+    let _ = std::fs::remove_dir_all(&out_dir);
+}
