@@ -1,7 +1,6 @@
-//! The one error type of the CAN and CANopen codecs ([`crate::can`], [`crate::canopen`]):
-//! every variant names the field that is wrong, so a negative test can assert on it. A
-//! device's refusal (an SDO abort) is not an error: it parses to a message carrying its
-//! [`crate::canopen::SdoAbortCode`].
+//! The one error type of the CAN and CANopen codecs (`can`, and `canopen` above it): every
+//! variant names the field that is wrong, so a negative test can assert on it. A device's
+//! refusal (an SDO abort) is not an error: it parses to a message carrying its abort code.
 
 /// A malformed CAN frame, SocketCAN structure, socketcand message or CANopen message, or one
 /// that breaks a transfer's sequence.

@@ -1,7 +1,7 @@
 //! SDO abort codes (CiA 301 "SDO abort codes", the table of the "Abort SDO transfer"
 //! protocol): the u32 an SDO abort carries in bytes 4–7, little-endian, on CAN as in an
-//! EtherCAT mailbox (CoE, [`crate::ecat::coe`]). One code space: the codes ETG.1000.6 adds for
-//! CoE (0601_0003h–0601_0006h) are defined and explained in [`crate::ecat::coe`]
+//! EtherCAT mailbox (CoE, `ecat::coe`). One code space: the codes ETG.1000.6 adds for
+//! CoE (0601_0003h–0601_0006h) are defined and explained in `ecat::coe`
 //! (`SdoAbortCode::ETG_1000_6`), and [`SdoAbortCode::name`] knows both tables.
 
 use std::fmt;

@@ -1,6 +1,6 @@
 //! The SDO command byte (CiA 301 "SDO protocol", the protocol descriptions of "Initiate SDO
 //! download" through "End SDO block upload") and the 8-byte SDO frame that starts with it.
-//! CoE ([`crate::ecat::coe`]) carries the same command byte, so its codec uses these too.
+//! CoE (`ecat::coe`) carries the same command byte, so its codec uses these too.
 //!
 //! | bits | client (ccs) / server (scs) command byte |
 //! |---|---|

@@ -1,6 +1,6 @@
 //! The emergency object (CiA 301 "Emergency object", EMCY; on CAN at 080h + node): the error
 //! code, the error register (object 1001h) and 5 manufacturer-specific bytes. CoE carries the
-//! same 8 bytes after its header ([`crate::ecat::coe`] adds `parse_coe` / `emit_coe`).
+//! same 8 bytes after its header (`ecat::coe` adds `parse_coe` / `emit_coe`).
 //!
 //! | bytes | field |
 //! |---|---|

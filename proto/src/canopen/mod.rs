@@ -2,7 +2,7 @@
 //! on CAN 2.0A, as the NORD system bus uses it: COB-IDs of the pre-defined connection set,
 //! NMT, heartbeat and node guarding, SYNC, EMCY, and SDO (expedited, segmented, block) with
 //! its abort codes. The SDO command byte, the abort codes and the emergency message are
-//! CiA 301's wherever they travel, so CANopen over EtherCAT ([`crate::ecat::coe`]) uses these
+//! CiA 301's wherever they travel, so CANopen over EtherCAT (`ecat::coe`) uses these
 //! definitions too.
 //!
 //! - [`cob_id`]: [`Function`], [`Cob::classify`], the table [`cob_id::PREDEFINED`];
