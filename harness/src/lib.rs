@@ -29,6 +29,8 @@ mod ecat;
 pub use ecat::bench_support as ecat_bench;
 /// `harness serve ecat` in a thread of the caller (EtherCAT end-to-end tests and benches).
 pub use ecat::serve as ecat_serve;
+/// What the system-bus speed bench (`harness/benches/can/`) needs of the library.
+pub use can::bench_support as can_bench;
 pub use epl::bench_support as epl_bench;
 pub use epl::serve as epl_serve;
 /// What the PROFINET speed bench (`harness/benches/pnio/`) needs of the library: the harness

@@ -9,6 +9,7 @@
 //! back. What does not yet: process data (PDOs, SYNC), any
 //! maker's node (`any@can`) and SocketCAN (`can://IFACE`); each refuses with that said.
 
+pub mod bench_support;
 mod binding;
 mod eds;
 mod link;

@@ -1,0 +1,115 @@
+//! System-bus speed over loopback: `cargo bench -p harness --bench can`.
+//!
+//! One run serves the simulated SK 550P's system bus with the built `harness serve can
+//! --socketcand` (a process of its own, as a socketcand server on a test bench would be) and
+//! prints, one line per figure with its target and whether it was met:
+//!
+//! - SDO reads per second of the harness's own SDO client: **one operation is one complete SDO
+//!   read** of P102 set 1 of FI 3 (node 36, 2066h:01h, expedited), the upload request sent and
+//!   the node's answer with the value received, one after the other;
+//! - python-canopen's, the same operation, in the same run against the same server
+//!   (`tests/interop/canopen_bench.py` in the interop venv; said and skipped without it);
+//!   target: the harness at least 5 times as fast;
+//! - the bus time one process-data cycle of 8 inverters takes at 250 kBaud at the most
+//!   (`proto::nord::can::cycle_bus_time_us`: SYNC, each inverter's RPDOs and TPDOs at their
+//!   worst-case stuffed length), against the 8-inverter update cycle of BU 2100's table and
+//!   the 5 ms the manuals allow at least: the physical floor the simulator must respect.
+//!
+//! A bench, not a timed test: bounded in count and time (a few seconds), nothing asserts on
+//! time, a missed target is printed, not failed.
+
+use std::net::{SocketAddr, TcpStream};
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use harness::can_bench;
+use proto::nord::can::MIN_CYCLE_US;
+use harness::stats::Rate;
+
+#[path = "../common/mod.rs"]
+#[allow(dead_code)] // what the other benches share
+mod common;
+
+use common::{interop_python, met, run_script, Script};
+
+/// The harness's reads.
+const READS: u32 = 20_000;
+/// python-canopen's (slower: fewer, for the same bounded time).
+const PEER_READS: u32 = 2_000;
+/// How much faster the harness must be.
+const TARGET_RATIO: f64 = 5.0;
+
+fn main() {
+    let addr = SocketAddr::from(([127, 0, 0, 1], free_port()));
+    let mut server = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["serve", "can", "--socketcand", &addr.to_string()])
+        .args(["--profile", "sk550p", "--seconds", "120"])
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("harness serve can starts");
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while TcpStream::connect(addr).is_err() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let ours = can_bench::sdo_reads(addr, "can0", READS);
+    match &ours {
+        Ok(r) => println!("harness SDO client: {}", r.show("complete SDO reads")),
+        Err(e) => println!("harness SDO client: ERROR {e}"),
+    }
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/interop/canopen_bench.py");
+    let args = [
+        addr.ip().to_string(),
+        addr.port().to_string(),
+        "can0".to_string(),
+        PEER_READS.to_string(),
+    ];
+    let python = interop_python();
+    match run_script(python.as_deref(), &script, &args, "canopen", Duration::from_secs(60)) {
+        Script::Ran(v) => {
+            let peer = Rate {
+                count: v["reads"].as_u64().unwrap_or(0),
+                secs: v["secs"].as_f64().unwrap_or(0.0),
+            };
+            println!("python-canopen:     {}", peer.show("complete SDO reads"));
+            if let (Ok(r), true) = (&ours, peer.per_sec() > 0.0) {
+                let ratio = r.per_sec() / peer.per_sec();
+                println!(
+                    "harness / python-canopen: {ratio:.1}× (target ≥ {TARGET_RATIO}×: {})",
+                    met(ratio >= TARGET_RATIO)
+                );
+            }
+        }
+        Script::Skipped(why) => println!("python-canopen: skipped ({why})"),
+        Script::Failed(why) => println!("python-canopen: ERROR {why}"),
+    }
+    // The SK TU3-EIP's table (BU 2100 §4.3) gives the update cycle per number of inverters;
+    // the other products only "≥ 5 ms".
+    let table = match proto::nord::can::update_cycle(proto::nord::Product::Tu3Eip, 8) {
+        Ok(proto::nord::can::UpdateCycle::Table(us)) => us,
+        _ => MIN_CYCLE_US,
+    };
+    for series in [
+        proto::nord::can::InverterSeries::Sk2xxe,
+        proto::nord::can::InverterSeries::Sk5x0p,
+    ] {
+        let us = proto::nord::can::cycle_bus_time_us(series, 8);
+        println!(
+            "bus time of one process-data cycle of 8 {series:?} at 250 kBaud: at most {us} µs; \
+             fits the 8-inverter update cycle of BU 2100's table ({} ms): {}; fits 5 ms: {}",
+            f64::from(table) / 1000.0,
+            met(us <= table),
+            met(us <= MIN_CYCLE_US)
+        );
+    }
+    let _ = server.kill();
+    let _ = server.wait();
+}
+
+/// A port nobody listens on now.
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map(|a| a.port())
+        .unwrap_or(29536)
+}
