@@ -28,7 +28,6 @@ use proto::nord::can::MIN_CYCLE_US;
 use harness::stats::Rate;
 
 #[path = "../common/mod.rs"]
-#[allow(dead_code)] // what the other benches share
 mod common;
 
 use common::{interop_python, met, run_script, Script};
