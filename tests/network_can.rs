@@ -16,7 +16,14 @@ use common::{wait_listening, Server};
 
 fn serve(listen: &str) -> Server {
     let child = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(["serve", "can", "--socketcand", listen, "--profile", "sk550p"])
+        .args([
+            "serve",
+            "can",
+            "--socketcand",
+            listen,
+            "--profile",
+            "sk550p",
+        ])
         .args(["--seconds", "120"])
         .stdout(Stdio::null())
         .spawn()
@@ -83,7 +90,13 @@ fn a_socketcand_url_without_a_bus_or_with_an_unknown_one_is_a_clear_error() {
     let listen = format!("{}:29536", free_loopback());
     let _server = serve(&listen);
     let no_bus = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(["run", "--profile", "sk550p", "--dut", &format!("socketcand://{listen}")])
+        .args([
+            "run",
+            "--profile",
+            "sk550p",
+            "--dut",
+            &format!("socketcand://{listen}"),
+        ])
         .output()
         .expect("harness runs");
     assert_eq!(no_bus.status.code(), Some(2));
@@ -91,7 +104,13 @@ fn a_socketcand_url_without_a_bus_or_with_an_unknown_one_is_a_clear_error() {
     assert!(said.contains("give the bus after a slash"), "{said}");
     let out_dir = std::env::temp_dir().join(format!("nord-can-refused-{}", std::process::id()));
     let refused = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(["run", "--profile", "sk550p", "--filter", "can/sdo/absent-object"])
+        .args([
+            "run",
+            "--profile",
+            "sk550p",
+            "--filter",
+            "can/sdo/absent-object",
+        ])
         .args(["--dut", &format!("socketcand://{listen}/can7")])
         .arg("--out")
         .arg(&out_dir)

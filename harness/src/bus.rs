@@ -235,7 +235,10 @@ mod tests {
         assert_eq!((bus.name, target), ("ecat", "veth0"));
         assert!(by_url("ecat://").unwrap_err().contains("nothing after"));
         let (bus, scheme, target) = by_url("socketcand://127.0.0.1/can0").unwrap();
-        assert_eq!((bus.name, scheme, target), ("can", "socketcand", "127.0.0.1/can0"));
+        assert_eq!(
+            (bus.name, scheme, target),
+            ("can", "socketcand", "127.0.0.1/can0")
+        );
         let e = by_url("lin://x").unwrap_err();
         assert!(e.contains("unknown scheme `lin://`"), "{e}");
         assert!(e.contains("enip://, ecat://"), "{e}");

@@ -25,12 +25,12 @@ mod cli_tools;
 mod description;
 mod dictionary;
 mod ecat;
+/// What the system-bus speed bench (`harness/benches/can/`) needs of the library.
+pub use can::bench_support as can_bench;
 /// What the EtherCAT speed bench (`harness/benches/ecat/`) needs of the library.
 pub use ecat::bench_support as ecat_bench;
 /// `harness serve ecat` in a thread of the caller (EtherCAT end-to-end tests and benches).
 pub use ecat::serve as ecat_serve;
-/// What the system-bus speed bench (`harness/benches/can/`) needs of the library.
-pub use can::bench_support as can_bench;
 pub use epl::bench_support as epl_bench;
 pub use epl::serve as epl_serve;
 /// What the PROFINET speed bench (`harness/benches/pnio/`) needs of the library: the harness

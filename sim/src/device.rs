@@ -382,7 +382,10 @@ struct Cached<'a> {
 
 impl DriveParams for Cached<'_> {
     fn get(&self, number: u16, element: Option<u8>) -> Option<i32> {
-        match CYCLE_PARAMETERS.iter().position(|p| *p == (number, element)) {
+        match CYCLE_PARAMETERS
+            .iter()
+            .position(|p| *p == (number, element))
+        {
             Some(i) => self.settings.values[i],
             None => self.store.get(number, element),
         }

@@ -423,19 +423,19 @@ impl Drive {
             scaling::position_words(i64::from(self.position_increments())).unwrap_or_default();
         let mut element = 0u8;
         DEFAULT_P543.map(|default| {
-                element += 1;
-                let code = params.get(543, Some(element)).unwrap_or(default);
-                let transmission = scaling::actual_function(code).map(|f| f.transmission);
-                match (code, transmission) {
-                    (_, Some(Transmission::PositionLow)) => low,
-                    (_, Some(Transmission::PositionHigh)) => high,
-                    (1 | 21 | 23 | 24, _) => hz(self.frequency),
-                    (8 | 19, _) => hz(self.setpoint),
-                    (20, _) => hz(self.goal),
-                    (9, _) => self.fault.map_or(0, FaultCode::p700),
-                    _ => 0,
-                }
-            })
+            element += 1;
+            let code = params.get(543, Some(element)).unwrap_or(default);
+            let transmission = scaling::actual_function(code).map(|f| f.transmission);
+            match (code, transmission) {
+                (_, Some(Transmission::PositionLow)) => low,
+                (_, Some(Transmission::PositionHigh)) => high,
+                (1 | 21 | 23 | 24, _) => hz(self.frequency),
+                (8 | 19, _) => hz(self.setpoint),
+                (20, _) => hz(self.goal),
+                (9, _) => self.fault.map_or(0, FaultCode::p700),
+                _ => 0,
+            }
+        })
     }
 }
 

@@ -24,8 +24,8 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use harness::can_bench;
-use proto::nord::can::MIN_CYCLE_US;
 use harness::stats::Rate;
+use proto::nord::can::MIN_CYCLE_US;
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -64,7 +64,13 @@ fn main() {
         PEER_READS.to_string(),
     ];
     let python = interop_python();
-    match run_script(python.as_deref(), &script, &args, "canopen", Duration::from_secs(60)) {
+    match run_script(
+        python.as_deref(),
+        &script,
+        &args,
+        "canopen",
+        Duration::from_secs(60),
+    ) {
         Script::Ran(v) => {
             let peer = Rate {
                 count: v["reads"].as_u64().unwrap_or(0),

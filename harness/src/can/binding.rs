@@ -21,7 +21,6 @@ use serde_json::{json, Value};
 use super::link::CanLink;
 use super::sdo::{describe, frame_hex, Client, SdoError};
 use super::step::CanStep;
-use proto::can::CanFrame;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
@@ -30,6 +29,7 @@ use crate::ledger::{self, Account, Ledger, Problem};
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::suite::{Action, OrderSpec};
+use proto::can::CanFrame;
 
 /// What the embedded segment offers: parameters over SDO, and the simulator's own powers.
 /// `can` marks a case about the system bus itself (its own `can:` steps are not built yet).
@@ -207,7 +207,10 @@ impl<L: CanLink> CanBinding<L> {
                 Err(SdoError::Abort(_)) => Ok(false),
                 Err(e) => Err(StepError::Link(e.to_string())),
             };
-            l.wrote(&at, ledger::may_have_taken_effect(outcome.as_ref().copied()));
+            l.wrote(
+                &at,
+                ledger::may_have_taken_effect(outcome.as_ref().copied()),
+            );
         }
         match r {
             Ok(()) => Ok(json!({ "abort": null, "ok": true }).into()),
@@ -250,9 +253,8 @@ impl<L: CanLink> CanBinding<L> {
             ((0x581..=0x5FF).contains(&f.id()) && d.len() == 8 && d[0] == 0x80)
                 .then(|| u32::from_le_bytes([d[4], d[5], d[6], d[7]]))
         });
-        let joined = |each: fn(&CanFrame) -> String| {
-            frames.iter().map(each).collect::<Vec<_>>().join("; ")
-        };
+        let joined =
+            |each: fn(&CanFrame) -> String| frames.iter().map(each).collect::<Vec<_>>().join("; ");
         self.client.record(Exchange {
             sent_hex: sent.as_ref().map(frame_hex).unwrap_or_default(),
             sent: sent.as_ref().map_or_else(|| "(listening)".into(), describe),
@@ -292,7 +294,11 @@ impl<L: CanLink> CanBinding<L> {
         }
         // 1008h is optional too (CiA 301 §7.5.2.7).
         let name = match self.client.upload(node, 0x1008, 0) {
-            Ok(n) => Some(String::from_utf8_lossy(&n).trim_end_matches('\0').to_string()),
+            Ok(n) => Some(
+                String::from_utf8_lossy(&n)
+                    .trim_end_matches('\0')
+                    .to_string(),
+            ),
             Err(SdoError::Abort(_)) => None,
             Err(e) => return Err(step_error(e)),
         };
@@ -308,9 +314,10 @@ impl<L: CanLink> CanBinding<L> {
     }
 
     fn simulated(&mut self) -> Result<(&mut sim::can::Segment, Duration), StepError> {
-        self.client.link.segment().ok_or_else(|| {
-            StepError::NotApplicable("only the simulator can be looked into".into())
-        })
+        self.client
+            .link
+            .segment()
+            .ok_or_else(|| StepError::NotApplicable("only the simulator can be looked into".into()))
     }
 }
 

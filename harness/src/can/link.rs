@@ -140,7 +140,11 @@ impl Socketcand {
         link.write(&Message::Open {
             channel: channel.to_string(),
         })?;
-        link.expect(Message::Ok, limit, &format!("`< ok >` to `< open {channel} >`"))?;
+        link.expect(
+            Message::Ok,
+            limit,
+            &format!("`< ok >` to `< open {channel} >`"),
+        )?;
         link.write(&Message::RawMode)?;
         link.expect(Message::Ok, limit, "`< ok >` to `< rawmode >`")?;
         Ok(link)
@@ -175,9 +179,7 @@ impl Socketcand {
                 }
                 Ok(Framed::Incomplete) if self.buf.len() <= MAX_MESSAGE_LEN => {}
                 Ok(Framed::Incomplete) => {
-                    return Err(self.protocol(format!(
-                        "no `>` within {MAX_MESSAGE_LEN} bytes"
-                    )))
+                    return Err(self.protocol(format!("no `>` within {MAX_MESSAGE_LEN} bytes")))
                 }
                 Err(e) => return Err(self.protocol(e.to_string())),
             }

@@ -67,8 +67,7 @@ fn parse_step(v: &Value) -> Result<Box<dyn BusStep>, String> {
 fn embedded(profile: &Profile, _: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
     let config = crate::binding::embedded::device_config(profile)?;
     let product = config.product;
-    let segment =
-        sim::can::Segment::new(config).map_err(|e| OpenError::Profile(e.to_string()))?;
+    let segment = sim::can::Segment::new(config).map_err(|e| OpenError::Profile(e.to_string()))?;
     let link = link::Embedded::new(segment);
     let what = "embedded system-bus segment".to_string();
     Ok(Box::new(CanBinding::open(

@@ -5,8 +5,7 @@ use std::time::Duration;
 
 use proto::can::CanFrame;
 use proto::canopen::{
-    Expedited, Function, InitiateData, Message, SdoAbortCode, SdoRequest, SdoResponse,
-    SegmentData,
+    Expedited, Function, InitiateData, Message, SdoAbortCode, SdoRequest, SdoResponse, SegmentData,
 };
 
 use super::link::{CanLink, CanLinkError};
@@ -143,7 +142,11 @@ impl<L: CanLink> Client<L> {
                 InitiateData::Expedited(e) => return Ok(e.data().to_vec()),
                 InitiateData::Segmented { size } => size,
             },
-            other => return Err(protocol(format!("{other:?} to an upload of {index:04X}h:{sub:02X}h"))),
+            other => {
+                return Err(protocol(format!(
+                    "{other:?} to an upload of {index:04X}h:{sub:02X}h"
+                )))
+            }
         };
         let mut data = Vec::new();
         let mut toggle = false;
@@ -199,7 +202,11 @@ impl<L: CanLink> Client<L> {
             },
         )? {
             SdoResponse::InitiateDownload { index: i, sub: s } if (i, s) == (index, sub) => {}
-            other => return Err(protocol(format!("{other:?} to a download of {index:04X}h:{sub:02X}h"))),
+            other => {
+                return Err(protocol(format!(
+                    "{other:?} to a download of {index:04X}h:{sub:02X}h"
+                )))
+            }
         }
         if matches!(initiate, InitiateData::Expedited(_)) {
             return Ok(());

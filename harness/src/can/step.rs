@@ -71,7 +71,10 @@ impl BusStep for CanStep {
                 // SDO download (ccs 1) of an object: what it writes.
                 0x601..=0x67F if f.data().first().is_some_and(|b| b >> 5 == 1) => {
                     let d = f.data();
-                    let index = u16::from_le_bytes([d.get(1).copied().unwrap_or(0), d.get(2).copied().unwrap_or(0)]);
+                    let index = u16::from_le_bytes([
+                        d.get(1).copied().unwrap_or(0),
+                        d.get(2).copied().unwrap_or(0),
+                    ]);
                     safety::sdo_download(index, d.get(4..).unwrap_or_default())
                 }
                 // Other SDO requests read or continue a transfer; NMT, SYNC, heartbeat.
@@ -186,12 +189,21 @@ mod tests {
         let n = step(json!({ "nmt": "reset-node", "node": 36, "wait": "50ms" })).unwrap();
         assert_eq!(n.send, Some(Send::Nmt(NmtCommand::RESET_NODE, 36)));
         assert_eq!(n.wait, Duration::from_millis(50));
-        assert_eq!(step(json!({ "listen": "1s" })).unwrap().wait, Duration::from_secs(1));
-        assert!(step(json!({ "frame": "800 00" })).unwrap_err().contains("11-bit"));
+        assert_eq!(
+            step(json!({ "listen": "1s" })).unwrap().wait,
+            Duration::from_secs(1)
+        );
+        assert!(step(json!({ "frame": "800 00" }))
+            .unwrap_err()
+            .contains("11-bit"));
         assert!(step(json!({ "frame": "601 00 00 00 00 00 00 00 00 00" })).is_err());
-        assert!(step(json!({ "nmt": "go" })).unwrap_err().contains("start, stop"));
+        assert!(step(json!({ "nmt": "go" }))
+            .unwrap_err()
+            .contains("start, stop"));
         assert!(step(json!({ "nmt": "start", "node": 128 })).is_err());
-        assert!(step(json!({ "hello": 1 })).unwrap_err().contains("give `frame`"));
+        assert!(step(json!({ "hello": 1 }))
+            .unwrap_err()
+            .contains("give `frame`"));
         // Starting a node may start process data; an SDO upload cannot move anything.
         assert!(n.effect().motion.is_none());
         let start = step(json!({ "nmt": "start" })).unwrap();

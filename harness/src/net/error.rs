@@ -72,5 +72,8 @@ impl LinkError {
 /// Whether a read with a time-out set ended for the time-out (Linux says `WouldBlock`, other
 /// systems `TimedOut`): no data, not a broken link.
 pub(crate) fn timed_out(e: &io::Error) -> bool {
-    matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut)
+    matches!(
+        e.kind(),
+        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+    )
 }

@@ -15,8 +15,8 @@ pub(crate) mod veth;
 pub(crate) mod wait;
 pub(crate) mod workers;
 
-pub use error::LinkError;
 pub(crate) use error::timed_out;
+pub use error::LinkError;
 #[allow(unused_imports)] // the module's API, not all of it used yet
 pub(crate) use iface::{interface, Interface, Mac};
 #[allow(unused_imports)]
