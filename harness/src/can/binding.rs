@@ -68,6 +68,8 @@ pub(crate) struct CanBinding<L> {
     capabilities: &'static [Capability],
     /// On a segment on the network: what the case wrote, to be written back.
     ledger: Option<Ledger<NodeObject>>,
+    /// FI 1's node, whose identity the device reports.
+    fi1_node: u8,
 }
 
 /// The refusal of an SDO abort code.
@@ -139,6 +141,7 @@ impl<L: CanLink> CanBinding<L> {
                 &EMBEDDED_CAPABILITIES
             },
             ledger: persistent.then(Ledger::default),
+            fi1_node: node,
         })
     }
 
@@ -276,10 +279,7 @@ impl<L: CanLink> CanBinding<L> {
     /// FI 1's identity object 1018h (vendor, product code, revision, serial) and its device
     /// name 1008h.
     fn identity_object(&mut self) -> Result<Identity, StepError> {
-        let fi1 = Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?;
-        let node = proto::nord::can::SystemBusAddress::for_inverter(self.product, fi1)
-            .map_err(|e| StepError::Suite(e.to_string()))?
-            .get();
+        let node = self.fi1_node;
         // CiA 301 §7.5.2.24: 1018h:00 counts the entries; only the vendor id (01h) is
         // mandatory, product code, revision and serial number (02h–04h) are optional.
         let count = self.client.upload(node, 0x1018, 0).map_err(step_error)?;
