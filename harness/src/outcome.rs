@@ -197,7 +197,8 @@ pub struct StepResult {
     pub refusal: Option<Refusal>,
     /// Why it failed or errored; empty on pass.
     pub message: String,
-    /// Link exchanges of this step (empty for `compute`).
+    /// Link exchanges of this step (empty for `compute`, and once the case's transcript is
+    /// rendered: see [`CaseResult::transcript`]).
     pub exchanges: Vec<Exchange>,
 }
 
@@ -257,9 +258,10 @@ pub struct CaseResult {
     /// the attempt that counted.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub discarded: Vec<Discarded>,
-    /// The transcript text of a case read back from a report folder (`run.json` keeps the
-    /// deciding step at most, without exchanges): the reports render it in place of the steps
-    /// (see `report::read`).
+    /// The transcript text past its header (the steps and their exchanges), once rendered:
+    /// the runner renders it as the case ends and drops the exchanges, and a case read back
+    /// from a report folder has it from its transcript file (`run.json` keeps the deciding
+    /// step at most). The reports render it in place of the steps (see `report::transcript`).
     #[serde(skip)]
     pub transcript: Option<String>,
 }

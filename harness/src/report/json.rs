@@ -96,8 +96,8 @@ struct Doc<'a> {
     cases: Vec<Case<'a>>,
 }
 
-/// `run.json`, pretty-printed.
-pub(super) fn render(run: &RunResult) -> Result<String, serde_json::Error> {
+/// `run.json`, pretty-printed, streamed into `out` (a default run's is tens of megabytes).
+pub(super) fn write(run: &RunResult, out: &mut dyn std::io::Write) -> std::io::Result<()> {
     let by_profile = |kind| {
         profiles(run)
             .into_iter()
@@ -118,7 +118,7 @@ pub(super) fn render(run: &RunResult) -> Result<String, serde_json::Error> {
         statements: &run.statements,
         cases: run.cases.iter().map(Case::from).collect(),
     };
-    serde_json::to_string_pretty(&doc)
+    serde_json::to_writer_pretty(out, &doc).map_err(std::io::Error::from)
 }
 
 #[cfg(test)]
@@ -128,7 +128,9 @@ mod tests {
     use serde_json::{json, Value};
 
     fn doc() -> Value {
-        serde_json::from_str(&render(&sample_run()).unwrap()).unwrap()
+        let mut out = Vec::new();
+        write(&sample_run(), &mut out).unwrap();
+        serde_json::from_slice(&out).unwrap()
     }
 
     #[test]

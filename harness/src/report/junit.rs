@@ -240,8 +240,10 @@ fn close_suite(s: &mut String, out: &str) {
     );
 }
 
-/// The XML document.
-pub(super) fn render(run: &RunResult) -> String {
+/// The XML document, streamed into `out` a testsuite at a time (a default run's is over ten
+/// megabytes).
+pub(super) fn write(run: &RunResult, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+    out.write_all(b"<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites>\n")?;
     let mut body = String::new();
     let mut id = 0;
     for profile in profiles(run) {
@@ -282,6 +284,8 @@ pub(super) fn render(run: &RunResult) -> String {
                     run.dut
                 ),
             );
+            out.write_all(body.as_bytes())?;
+            body.clear();
             id += 1;
         }
     }
@@ -311,7 +315,8 @@ pub(super) fn render(run: &RunResult) -> String {
         }
         close_suite(&mut body, "suite files that did not load\n");
     }
-    format!("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites>\n{body}</testsuites>\n")
+    out.write_all(body.as_bytes())?;
+    out.write_all(b"</testsuites>\n")
 }
 
 #[cfg(test)]
@@ -336,6 +341,12 @@ mod tests {
     )]
     fn verdict_mapping(#[case] v: Verdict, #[case] msg: &str, #[case] want: JunitResult) {
         assert_eq!(junit_result(v, msg), want);
+    }
+
+    fn render(run: &RunResult) -> String {
+        let mut out = Vec::new();
+        write(run, &mut out).unwrap();
+        String::from_utf8(out).unwrap()
     }
 
     fn xml() -> String {

@@ -35,4 +35,5 @@ pub(crate) use statements::text_table as statements_table;
 pub(crate) use summary::{quiet, terminal};
 #[cfg(test)]
 pub(crate) use transcript::render as transcript_for_tests;
+pub(crate) use transcript::seal;
 pub(crate) use write::{write_all, Transcripts};

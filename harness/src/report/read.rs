@@ -200,7 +200,7 @@ pub(crate) fn read(given: &Path) -> Result<RunResult, ReadError> {
             None => None,
             Some(named) => Some(files.transcript(&path, base, &c, named)?),
         };
-        cases.push(CaseResult {
+        let mut case = CaseResult {
             duration: secs(&path, c.duration)?,
             id: c.id,
             title: c.title,
@@ -230,8 +230,12 @@ pub(crate) fn read(given: &Path) -> Result<RunResult, ReadError> {
                     steps: Vec::new(),
                 })
                 .collect(),
-            transcript,
-        });
+            transcript: None,
+        };
+        if let Some(text) = transcript {
+            super::transcript::read_back(&mut case, &text);
+        }
+        cases.push(case);
     }
     Ok(RunResult {
         dut: doc.dut,
@@ -368,9 +372,10 @@ mod tests {
         );
         std::fs::write(&path, text).unwrap();
         let back = read(&dir).unwrap();
+        assert!(back.cases[1].transcript.is_some());
         assert_eq!(
-            back.cases[1].transcript,
-            Some(transcript::render(&run.cases[1]))
+            transcript::render(&back.cases[1]),
+            transcript::render(&run.cases[1])
         );
         let _ = std::fs::remove_dir_all(&dir);
     }

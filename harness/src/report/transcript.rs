@@ -28,6 +28,8 @@
 
 use std::fmt::Write;
 
+#[cfg(test)]
+use crate::outcome::Verdict;
 use crate::outcome::{CaseResult, Exchange, StepResult};
 
 fn exchange(s: &mut String, x: &Exchange) {
@@ -39,13 +41,20 @@ fn exchange(s: &mut String, x: &Exchange) {
     }
 }
 
-/// The transcript text of one case: rendered from its steps, or, for a case read back from a
-/// report folder (`run.json` holds its deciding step at most), the text its transcript file
-/// held.
+/// The transcript text of one case: its header, then its steps as rendered from them, or as
+/// kept (a case that ran has them sealed, see [`seal`]; a case read back from a report folder,
+/// where `run.json` holds its deciding step at most, has the text its transcript file held).
 pub(crate) fn render(c: &CaseResult) -> String {
-    if let Some(text) = &c.transcript {
-        return text.clone();
+    let mut s = header(c);
+    match &c.transcript {
+        Some(body) => s.push_str(body),
+        None => body(&mut s, c),
     }
+    s
+}
+
+/// The lines before the steps: id, title, manual reference, profile, verdict, message.
+fn header(c: &CaseResult) -> String {
     let mut s = String::new();
     let m = &c.manual;
     let _ = writeln!(s, "case: {}\ntitle: {}", c.id, c.title);
@@ -54,15 +63,51 @@ pub(crate) fn render(c: &CaseResult) -> String {
     if !c.message.is_empty() {
         let _ = writeln!(s, "message: {}", c.message);
     }
+    s
+}
+
+/// The attempts that did not count and the steps, with their exchanges.
+fn body(s: &mut String, c: &CaseResult) {
     for (n, d) in (1..).zip(&c.discarded) {
         let _ = writeln!(s, "\nattempt {n} discarded: {}", d.why);
-        steps(&mut s, &format!("attempt {n}, step"), &d.steps);
+        steps(s, &format!("attempt {n}, step"), &d.steps);
     }
     if !c.discarded.is_empty() {
         let _ = writeln!(s, "\nattempt {} (counted):", c.discarded.len() + 1);
     }
-    steps(&mut s, "step", &c.steps);
-    s
+    steps(s, "step", &c.steps);
+}
+
+/// Renders the steps of a case that ran into its transcript text and drops their exchanges:
+/// kept as strings, the exchanges were most of a run's memory (a default run's 33,000
+/// case-runs held 65 MB of them), and every report reads the text alone. The runner seals
+/// each case as it ends, on the thread that ran it.
+pub(crate) fn seal(c: &mut CaseResult) {
+    if c.transcript.is_some() || (c.steps.is_empty() && c.discarded.is_empty()) {
+        return;
+    }
+    let mut text = String::new();
+    body(&mut text, c);
+    text.shrink_to_fit();
+    c.transcript = Some(text);
+    let discarded = c.discarded.iter_mut().flat_map(|d| d.steps.iter_mut());
+    for st in c.steps.iter_mut().chain(discarded) {
+        st.exchanges = Vec::new();
+    }
+}
+
+/// A case read back from a report folder: `text`, its transcript as the file held it, kept
+/// past the header (which the case's own fields give, as judged now). A header that does not
+/// match the case's fields ends where the first step or attempt begins.
+pub(crate) fn read_back(c: &mut CaseResult, text: &str) {
+    let body = text.strip_prefix(&header(c)).unwrap_or_else(|| {
+        ["\n\nstep ", "\n\nattempt "]
+            .iter()
+            .filter_map(|m| text.find(m))
+            .min()
+            .map_or("", |at| &text[at + 1..])
+    });
+    c.transcript = Some(body.to_string());
 }
 
 /// Steps, each under `label` and its number.
@@ -135,8 +180,25 @@ mod tests {
     #[test]
     fn a_case_read_back_renders_its_stored_text() {
         let mut c = sample_run().cases.remove(1);
-        c.transcript = Some("stored\n".into());
-        assert_eq!(render(&c), "stored\n", "whatever steps it kept");
+        let stored = format!("{}\nstep 1: as the file held it\n", header(&c));
+        read_back(&mut c, &stored);
+        assert_eq!(render(&c), stored, "whatever steps it kept");
+        c.verdict = Verdict::Pass;
+        c.message.clear();
+        let now = "case: bu0620/addressing/coe-p102\ntitle: title of bu0620/addressing/coe-p102\nmanual: BU 0620 (2020-03 en) §2.2.7 p. 20\nprofile: sk550p\nverdict: pass\n\nstep 1: as the file held it\n";
+        assert_eq!(render(&c), now, "the header as judged now");
+        read_back(&mut c, &stored);
+        assert_eq!(render(&c), now, "a header that differs is replaced");
+    }
+
+    #[test]
+    fn a_sealed_case_renders_as_before_without_its_exchanges() {
+        for mut c in sample_run().cases {
+            let before = render(&c);
+            seal(&mut c);
+            assert_eq!(render(&c), before, "{}", c.id);
+            assert!(c.steps.iter().all(|st| st.exchanges.is_empty()), "{}", c.id);
+        }
     }
 
     #[test]

@@ -7,6 +7,8 @@
 //! a run.
 
 use std::fmt;
+use std::fs::File;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::{html, json, junit, summary, transcript};
@@ -22,14 +24,6 @@ pub(crate) enum ReportError {
         path: PathBuf,
         /// What went wrong.
         source: std::io::Error,
-    },
-    /// `run.json` could not be serialized.
-    #[error("{path}: cannot write JSON: {source}")]
-    Json {
-        /// The JSON file.
-        path: PathBuf,
-        /// What went wrong.
-        source: serde_json::Error,
     },
 }
 
@@ -97,6 +91,20 @@ pub(super) fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ReportError + '_
     }
 }
 
+/// Writes a file as `fill` streams it, creating its folder: the big reports are never held
+/// whole in memory (a default run's `run.json` and [`TRANSCRIPTS`] are tens of megabytes, and
+/// building them as strings cost more time than writing them).
+fn stream_file(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), ReportError> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(io(dir))?;
+    }
+    let mut out = std::io::BufWriter::with_capacity(1 << 20, File::create(path).map_err(io(path))?);
+    fill(&mut out).and_then(|()| out.flush()).map_err(io(path))
+}
+
 /// Writes a file, creating its folder.
 pub(super) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ReportError> {
     if let Some(dir) = path.parent() {
@@ -135,20 +143,21 @@ fn section_name(case: &CaseResult) -> String {
     format!("{}/{}", case.profile, case.id)
 }
 
-/// [`TRANSCRIPTS`]' text: each transcript after its section line.
-fn transcripts_text(run: &RunResult) -> String {
-    let mut text = String::new();
+/// [`TRANSCRIPTS`]' text, streamed into `out`: each transcript after its section line.
+fn write_transcripts(run: &RunResult, out: &mut dyn Write) -> std::io::Result<()> {
     for case in run
         .cases
         .iter()
         .filter(|c| c.verdict != Verdict::NotApplicable)
     {
-        text.push_str(SECTION);
-        text.push_str(&section_name(case));
-        text.push('\n');
-        text.push_str(&transcript::render(case));
+        write!(
+            out,
+            "{SECTION}{}\n{}",
+            section_name(case),
+            transcript::render(case)
+        )?;
     }
-    text
+    Ok(())
 }
 
 /// The sections of a [`TRANSCRIPTS`] text by name, each transcript as written.
@@ -190,19 +199,13 @@ pub(crate) fn write_all(
         transcript_count: run.cases.iter().filter_map(transcript_file).count(),
         files: (files == Transcripts::Files).then_some(per_case),
     };
-    let json_doc = || {
-        json::render(run).map_err(|source| ReportError::Json {
-            path: written.run_json.clone(),
-            source,
-        })
-    };
     std::thread::scope(|s| {
         let jobs = [
-            s.spawn(|| write_file(&written.junit, junit::render(run).as_bytes())),
-            s.spawn(|| write_file(&written.run_json, json_doc()?.as_bytes())),
+            s.spawn(|| stream_file(&written.junit, |w| junit::write(run, w))),
+            s.spawn(|| stream_file(&written.run_json, |w| json::write(run, w))),
             s.spawn(|| write_file(&written.summary, summary::markdown(run).as_bytes())),
             s.spawn(|| write_file(&written.html, html::render(run).as_bytes())),
-            s.spawn(|| write_file(&written.transcripts, transcripts_text(run).as_bytes())),
+            s.spawn(|| stream_file(&written.transcripts, |w| write_transcripts(run, w))),
             s.spawn(|| per_case_files(run, written.files.as_deref())),
         ];
         jobs.into_iter()

@@ -92,6 +92,7 @@ pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
     };
     let mut ids = HashSet::new();
     let mut digest = Sha256::new();
+    let mut texts = Vec::new();
     for file in files {
         let rel = file.strip_prefix(dir).unwrap_or(&file).with_extension("");
         let prefix = rel.to_string_lossy().replace('\\', "/");
@@ -100,7 +101,7 @@ pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
                 for part in [prefix.as_bytes(), b"\0", text.as_bytes(), b"\0"] {
                     digest.update(part);
                 }
-                load_text(&file, &prefix, &text, &mut ids, &mut loaded)
+                texts.push((file, prefix, text));
             }
             Err(e) => loaded.errors.push(LoadError {
                 file: file.clone(),
@@ -108,6 +109,9 @@ pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
                 message: format!("cannot read: {e}"),
             }),
         }
+    }
+    for ((file, prefix, _), doc) in texts.iter().zip(parse_all(&texts)) {
+        load_doc(file, prefix, doc, &mut ids, &mut loaded);
     }
     loaded.digest = digest
         .finalize()
@@ -117,11 +121,57 @@ pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
     Ok(loaded)
 }
 
+/// The files' YAML parsed on as many threads as the host has cores, in the files' order:
+/// parsing is most of the loading, and every run pays it.
+fn parse_all(texts: &[(PathBuf, String, String)]) -> Vec<Parsed> {
+    let threads = std::thread::available_parallelism().map_or(1, usize::from);
+    let chunk = texts.len().div_ceil(threads).max(1);
+    std::thread::scope(|s| {
+        let jobs: Vec<_> = texts
+            .chunks(chunk)
+            .map(|part| s.spawn(|| part.iter().map(|(_, _, text)| parse(text)).collect()))
+            .collect();
+        jobs.into_iter()
+            .flat_map(|j: std::thread::ScopedJoinHandle<'_, Vec<Parsed>>| {
+                j.join().unwrap_or_else(|p| std::panic::resume_unwind(p))
+            })
+            .collect()
+    })
+}
+
+/// A file's document, or the line and first line of the message where its YAML is wrong.
+type Parsed = Result<FileDoc, (Option<u64>, String)>;
+
+fn parse(text: &str) -> Parsed {
+    serde_saphyr::from_str(text).map_err(|e| {
+        let line = e.location().map(|l| l.line());
+        let message = e
+            .to_string()
+            .lines()
+            .next()
+            .unwrap_or("invalid YAML")
+            .to_string();
+        (line, message)
+    })
+}
+
 /// Loads one file's text. Cases with errors are dropped and reported; the others load.
+#[cfg(test)]
 pub(crate) fn load_text(
     file: &Path,
     prefix: &str,
     text: &str,
+    ids: &mut HashSet<String>,
+    loaded: &mut Loaded,
+) {
+    load_doc(file, prefix, parse(text), ids, loaded);
+}
+
+/// Loads one file's parsed document.
+fn load_doc(
+    file: &Path,
+    prefix: &str,
+    doc: Parsed,
     ids: &mut HashSet<String>,
     loaded: &mut Loaded,
 ) {
@@ -130,16 +180,9 @@ pub(crate) fn load_text(
         line,
         message,
     };
-    let doc: FileDoc = match serde_saphyr::from_str(text) {
+    let doc = match doc {
         Ok(d) => d,
-        Err(e) => {
-            let line = e.location().map(|l| l.line());
-            let message = e
-                .to_string()
-                .lines()
-                .next()
-                .unwrap_or("invalid YAML")
-                .to_string();
+        Err((line, message)) => {
             loaded.errors.push(err(line, message));
             return;
         }
