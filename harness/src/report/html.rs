@@ -21,7 +21,7 @@ use std::fmt::Write;
 
 use super::markup::text;
 use super::record::{self, group_title};
-use super::summary::{by_section, model_cell, not_passed, profiles, Counts};
+use super::summary::{by_section, model_cell, not_passed, Counts};
 use super::transcript;
 use crate::outcome::{CaseKind, CaseResult, RunResult, Verdict};
 
@@ -86,8 +86,7 @@ fn totals(s: &mut String, run: &RunResult, kind: CaseKind) {
         kind.name(),
         header_cells()
     );
-    for p in profiles(run) {
-        let n = Counts::of_kind(run, kind, Some(p));
+    for (p, n) in Counts::per_profile(run, kind) {
         if kind == CaseKind::Model && n.total() == 0 {
             continue;
         }

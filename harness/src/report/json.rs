@@ -8,7 +8,7 @@
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-use super::summary::{profiles, Counts};
+use super::summary::Counts;
 use super::write::transcript_file;
 use crate::outcome::{
     CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, StatementCoverage,
@@ -98,12 +98,7 @@ struct Doc<'a> {
 
 /// `run.json`, pretty-printed, streamed into `out` (a default run's is tens of megabytes).
 pub(super) fn write(run: &RunResult, out: &mut dyn std::io::Write) -> std::io::Result<()> {
-    let by_profile = |kind| {
-        profiles(run)
-            .into_iter()
-            .map(|p| (p, Counts::of_kind(run, kind, Some(p))))
-            .collect()
-    };
+    let by_profile = |kind| Counts::per_profile(run, kind).into_iter().collect();
     let doc = Doc {
         dut: &run.dut,
         meta: &run.meta,

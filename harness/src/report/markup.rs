@@ -1,28 +1,41 @@
 //! Escaping for the XML and HTML reports, the one place that makes report text safe markup.
 
 use quick_xml::escape::escape;
+use std::borrow::Cow;
 
-/// Text safe as XML 1.0 or HTML content: characters XML forbids (controls other than tab, line
-/// feed and carriage return, and U+FFFE/U+FFFF) become U+FFFD, and `& < > " '` are escaped.
-pub(super) fn text(s: &str) -> String {
-    let clean: String = s
-        .chars()
-        .map(|c| match c {
-            '\t' | '\n' | '\r' => c,
-            c if c < ' ' || c == '\u{FFFE}' || c == '\u{FFFF}' => '\u{FFFD}',
-            c => c,
-        })
-        .collect();
-    escape(clean).into_owned()
+/// Whether XML 1.0 forbids `c`: controls other than tab, line feed and carriage return, and
+/// U+FFFE/U+FFFF.
+fn forbidden(c: char) -> bool {
+    (c < ' ' && !matches!(c, '\t' | '\n' | '\r')) || c == '\u{FFFE}' || c == '\u{FFFF}'
+}
+
+/// Text safe as XML 1.0 or HTML content: characters XML forbids become U+FFFD, and
+/// `& < > " '` are escaped. Borrowed when nothing needs either (most report text).
+pub(super) fn text(s: &str) -> Cow<'_, str> {
+    if s.contains(forbidden) {
+        let clean: String = s
+            .chars()
+            .map(|c| if forbidden(c) { '\u{FFFD}' } else { c })
+            .collect();
+        Cow::Owned(escape(clean).into_owned())
+    } else {
+        escape(s)
+    }
 }
 
 /// An attribute value: [`text`], with tab, line feed and carriage return as character
 /// references, which a parser would otherwise normalize to spaces.
-pub(super) fn attr(s: &str) -> String {
-    text(s)
-        .replace('\t', "&#9;")
-        .replace('\n', "&#10;")
-        .replace('\r', "&#13;")
+pub(super) fn attr(s: &str) -> Cow<'_, str> {
+    let t = text(s);
+    if t.contains(['\t', '\n', '\r']) {
+        Cow::Owned(
+            t.replace('\t', "&#9;")
+                .replace('\n', "&#10;")
+                .replace('\r', "&#13;"),
+        )
+    } else {
+        t
+    }
 }
 
 /// `n` and the noun for it: `1 profile`, `2 profiles`.

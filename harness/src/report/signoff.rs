@@ -7,7 +7,7 @@
 use std::fmt::Write;
 
 use super::markup::{count, text};
-use super::summary::counts_line;
+use super::summary::run_counts_line;
 use crate::outcome::{CaseKind, RunResult, Verdict};
 
 /// The run as a whole.
@@ -110,7 +110,7 @@ pub(super) fn banner(run: &RunResult) -> Banner {
     Banner {
         overall,
         why,
-        counts: counts_line(run, None),
+        counts: run_counts_line(run),
     }
 }
 

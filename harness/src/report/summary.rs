@@ -39,6 +39,21 @@ impl Counts {
         )
     }
 
+    /// Counts the verdicts of the cases of one kind per profile, in [`profiles`]' order, in one
+    /// pass over the run (a pass per profile was a few per cent of a default run).
+    pub(super) fn per_profile(run: &RunResult, kind: CaseKind) -> Vec<(&str, Counts)> {
+        let names = profiles(run);
+        let mut counts: Vec<Counts> = names.iter().map(|_| Counts::of([])).collect();
+        let mut at = 0;
+        for c in run.cases.iter().filter(|c| c.kind == kind) {
+            if names[at] != c.profile {
+                at = names.iter().position(|p| *p == c.profile).unwrap_or(at);
+            }
+            *counts[at].0.entry(c.verdict).or_default() += 1;
+        }
+        names.into_iter().zip(counts).collect()
+    }
+
     pub(super) fn total(&self) -> usize {
         self.0.values().sum()
     }
@@ -57,10 +72,13 @@ impl Counts {
 /// list (so no case is left out of a per-profile report).
 pub(super) fn profiles(run: &RunResult) -> Vec<&str> {
     let mut out: Vec<&str> = run.profiles.iter().map(String::as_str).collect();
+    let mut last = None;
+    // A profile's cases come together: only a change of profile is looked up.
     for c in &run.cases {
-        if !out.contains(&c.profile.as_str()) {
+        if last != Some(c.profile.as_str()) && !out.contains(&c.profile.as_str()) {
             out.push(&c.profile);
         }
+        last = Some(c.profile.as_str());
     }
     out
 }
@@ -96,28 +114,25 @@ pub(super) struct SectionCases {
 
 /// The run's cases by manual, edition and section, sections in numeric order.
 pub(super) fn by_section(run: &RunResult) -> BTreeMap<SectionKey<'_>, SectionCases> {
-    let mut by: BTreeMap<SectionKey<'_>, Vec<&CaseResult>> = BTreeMap::new();
+    // Grouped by the text first: a numeric key per case was a default run's most compared one.
+    let mut by: std::collections::HashMap<(&str, &str, &str), Vec<&CaseResult>> =
+        std::collections::HashMap::new();
     for c in &run.cases {
         let m = &c.manual;
-        let key = (
-            m.doc.as_str(),
-            m.edition.as_str(),
-            section_key(&m.section),
-            m.section.as_str(),
-        );
+        let key = (m.doc.as_str(), m.edition.as_str(), m.section.as_str());
         by.entry(key).or_default().push(c);
     }
     by.into_iter()
-        .map(|(key, cases)| {
+        .map(|((doc, edition, section), cases)| {
             let all = Counts::of(cases.iter().copied());
             let (model, device): (Vec<&CaseResult>, Vec<&CaseResult>) =
                 cases.into_iter().partition(|c| c.kind == CaseKind::Model);
-            let section = SectionCases {
+            let counts = SectionCases {
                 device: Counts::of(device),
                 model: Counts::of(model),
                 all,
             };
-            (key, section)
+            ((doc, edition, section_key(section), section), counts)
         })
         .collect()
 }
@@ -234,8 +249,7 @@ fn verdict_table(s: &mut String, run: &RunResult, kind: CaseKind) {
         s,
         "| profile | {VERDICT_HEADER}\n|---|---:|---:|---:|---:|---:|"
     );
-    for p in profiles(run) {
-        let n = Counts::of_kind(run, kind, Some(p));
+    for (p, n) in Counts::per_profile(run, kind) {
         if kind == CaseKind::Device || n.total() > 0 {
             let _ = writeln!(s, "| {} | {} |", cell(p), n.cells());
         }
@@ -338,19 +352,19 @@ pub(crate) fn terminal(run: &RunResult) -> String {
         );
     }
     let width = profiles(run).iter().map(|p| p.len()).max().unwrap_or(0);
-    for p in profiles(run) {
-        let _ = writeln!(s, "  {p:<width$} {}", counts_line(run, Some(p)));
+    let device = Counts::per_profile(run, CaseKind::Device);
+    let model = Counts::per_profile(run, CaseKind::Model);
+    for ((p, n), (_, m)) in device.iter().zip(&model) {
+        let _ = writeln!(s, "  {p:<width$} {}", counts_line(n, m));
     }
     s.push_str(&totals_line(run));
     s
 }
 
-/// Device counts, each followed by the model cases' count of that verdict when there are any:
-/// `210 pass (+40 model), 0 fail, …`, so a model check is never read as a pass of the device.
-/// Of one profile, or of the whole run.
-pub(super) fn counts_line(run: &RunResult, profile: Option<&str>) -> String {
-    let n = Counts::of_kind(run, CaseKind::Device, profile);
-    let m = Counts::of_kind(run, CaseKind::Model, profile);
+/// Device counts `n`, each followed by the model cases' count `m` of that verdict when there
+/// are any: `210 pass (+40 model), 0 fail, …`, so a model check is never read as a pass of the
+/// device.
+pub(super) fn counts_line(n: &Counts, m: &Counts) -> String {
     Verdict::ALL
         .iter()
         .map(|v| {
@@ -364,6 +378,14 @@ pub(super) fn counts_line(run: &RunResult, profile: Option<&str>) -> String {
         .join(", ")
 }
 
+/// [`counts_line`] of the whole run.
+pub(super) fn run_counts_line(run: &RunResult) -> String {
+    counts_line(
+        &Counts::of_kind(run, CaseKind::Device, None),
+        &Counts::of_kind(run, CaseKind::Model, None),
+    )
+}
+
 /// The console's last line: `22496 cases under 19 profiles: …; 134 errata recorded; 0 suite
 /// files did not load`.
 fn totals_line(run: &RunResult) -> String {
@@ -371,7 +393,7 @@ fn totals_line(run: &RunResult) -> String {
         "{} under {}: {}; {} recorded; {} did not load\n",
         count(run.cases.len(), "case", "cases"),
         count(run.profiles.len(), "profile", "profiles"),
-        counts_line(run, None),
+        run_counts_line(run),
         count(run.errata.len(), "erratum", "errata"),
         count(run.load_errors.len(), "suite file", "suite files"),
     )
