@@ -6,8 +6,12 @@
 //! the node's EDS as `harness describe eds --bus can` writes it (CiA 306) and reads P102 there
 //! by name.
 //!
+//! tshark reads the capture of a system-bus run (`harness run --pcap`, link type
+//! `LINKTYPE_CAN_SOCKETCAN`) with Wireshark's CANopen dissector.
+//!
 //! The peers live in the venv `.ci/interop-setup` installs (python-can and canopen from
-//! PyPI); without it the test says so and skips (fails in strict mode).
+//! PyPI), and tshark comes from its apt package there; without them the tests say so and skip
+//! (fail in strict mode).
 
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
@@ -18,7 +22,7 @@ use serde_json::Value;
 #[allow(dead_code)] // what the other network tests share
 mod common;
 use common::addr::free_loopback;
-use common::peer::interop_python;
+use common::peer::{interop_python, require_tshark};
 use common::{wait_listening, Server};
 
 #[test]
@@ -83,4 +87,103 @@ fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_and_imports_
     assert_eq!(seen["eds_p102_type"], 0x0003, "{seen}");
     assert!(seen["eds_objects"].as_u64().unwrap_or(0) > 20, "{seen}");
     let _ = std::fs::remove_file(&eds);
+}
+
+/// Every frame of a system-bus run's capture decodes as CANopen (a remote frame as CAN), none
+/// malformed, and tshark
+/// finds in it what the cases say they did: the SDO read of P102 of FI 3 (node 36, 2066h
+/// sub-index 1) and the nodes' abort codes for the bad requests, each in the frame its case and
+/// step label.
+#[test]
+fn tshark_decodes_the_capture_of_a_system_bus_run_as_canopen() {
+    if !require_tshark("tshark as the independent reader of the system bus's capture") {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("nord-can-pcap-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a folder for the run");
+    let pcap = dir.join("can.pcapng");
+    let run = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["run", "-q", "--profile", "sk550p@can", "--filter", "can/"])
+        .arg("--out")
+        .arg(&dir)
+        .arg("--pcap")
+        .arg(&pcap)
+        .output()
+        .expect("harness runs");
+    assert!(run.status.success(), "{run:?}");
+    let out = Command::new("tshark")
+        .arg("-r")
+        .arg(&pcap)
+        .args(["-d", "can.subdissector,canopen", "-T", "fields"])
+        .args(["-E", "occurrence=f", "-E", "separator=|"])
+        .args(["-e", "_ws.col.Protocol", "-e", "canopen.cob_id"])
+        .args(["-e", "canopen.sdo.main_idx", "-e", "canopen.sdo.sub_idx"])
+        .args(["-e", "canopen.sdo.abort_code", "-e", "_ws.expert.severity"])
+        .args(["-e", "frame.comment", "-e", "can.flags.rtr"])
+        .output()
+        .expect("tshark runs");
+    assert!(out.status.success(), "{out:?}");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split('|').collect()).collect();
+    assert!(rows.len() > 300, "{} frames", rows.len());
+    for r in &rows {
+        // CANopen's dissector leaves remote frames (a bad-input case's) to CAN's.
+        let protocol = if r[7] == "1" { "CAN" } else { "CANopen" };
+        assert_eq!(r[0], protocol, "{r:?}");
+        // Expert severity, in decimal: a comment (the frame's label) is 0x00100000; warnings
+        // start at 0x00600000 (malformed frames are errors).
+        let severity: u32 = r[5].parse().unwrap_or(0);
+        assert!(severity < 0x0060_0000, "tshark flags {r:?}");
+    }
+    let has = |cob: &str, index: &str, sub: &str, abort: &str, case: &str| {
+        rows.iter().any(|r| {
+            r[1] == cob && r[2] == index && r[3] == sub && r[4] == abort && r[6].contains(case)
+        })
+    };
+    assert!(
+        has(
+            "0x00000624",
+            "0x2066",
+            "0x01",
+            "",
+            "can/sdo/expedited-read-and-write"
+        ),
+        "no SDO to node 36 at 2066h:01"
+    );
+    for (cob, index, sub, abort, case) in [
+        (
+            "0x000005a0",
+            "0x23e7",
+            "0x00",
+            "0x06020000",
+            "can/sdo/absent-object step 1",
+        ),
+        (
+            "0x000005a0",
+            "0x2066",
+            "0x01",
+            "0x06090031",
+            "can/sdo/value-too-high step 1",
+        ),
+        (
+            "0x000005a4",
+            "0x2066",
+            "0x01",
+            "0x06090032",
+            "can/bad-input/p102-below-its-range",
+        ),
+        (
+            "0x000005a4",
+            "0x0000",
+            "0x00",
+            "0x05040001",
+            "can/bad-input/command-specifier-7",
+        ),
+    ] {
+        assert!(
+            has(cob, index, sub, abort, case),
+            "{case}: no abort {abort} from {cob}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

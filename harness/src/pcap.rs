@@ -12,8 +12,9 @@
 //! step (see [`Tap::label`]), so an engineer opening the file sees which case each frame belongs
 //! to, and a test can tell the frames a step broke on purpose from the others.
 //!
-//! The file has one Ethernet interface whose description lists the kinds of traffic in it
-//! ([`Capture::source`]). Nothing in the file depends on the wall clock or on the order of a
+//! The file has an Ethernet interface whose description lists the kinds of traffic in it
+//! ([`Capture::source`]), and, when the run put frames on the NORD system bus, a second
+//! interface of link type `LINKTYPE_CAN_SOCKETCAN` with those ([`Capture::can`]). Nothing in the file depends on the wall clock or on the order of a
 //! hash map, so a capture of the same embedded run is byte-for-byte the same.
 
 use std::any::Any;
@@ -45,16 +46,29 @@ pub(crate) const TSRESOL_NANOS: u8 = 9;
 pub(crate) const MAX_COMMENT: usize = 4096;
 /// The interface description of a capture no bus named itself in.
 const NO_SOURCE: &str = "Traffic of a harness run";
+/// The description of the system-bus interface.
+const CAN_SOURCE: &str = "NORD system bus (CAN 2.0A, CANopen) of a harness run";
+
+/// The interface a packet was captured on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Interface {
+    /// Ethernet II frames (interface 0).
+    Ethernet,
+    /// `struct can_frame` records of the system bus ([`CAN_SOURCE`], after the Ethernet one).
+    Can,
+}
 
 /// One captured frame.
 #[derive(Debug)]
 pub(crate) struct Packet {
     /// Time since [`EPOCH_SECS`].
     pub(crate) at: Duration,
-    /// Ethernet II onwards.
+    /// Ethernet II onwards, or a CAN frame's capture record.
     pub(crate) frame: Vec<u8>,
     /// What produced it (the capture's label when it was captured).
     pub(crate) comment: Option<Rc<str>>,
+    /// Where it was captured.
+    pub(crate) interface: Interface,
 }
 
 /// A capture: packets collected in memory, written out with [`Capture::write`].
@@ -93,6 +107,19 @@ impl Capture {
             at,
             frame,
             comment: self.label.clone(),
+            interface: Interface::Ethernet,
+        });
+    }
+
+    /// A frame of the NORD system bus, captured at `at` on the capture's CAN interface, with
+    /// the current label as its comment.
+    pub(crate) fn can(&mut self, frame: &proto::can::CanFrame, at: Duration) {
+        let record = proto::can::socketcan::SocketCanRepr::Frame(*frame).to_pcap_record();
+        self.packets.push(Packet {
+            at,
+            frame: record.to_vec(),
+            comment: self.label.clone(),
+            interface: Interface::Can,
         });
     }
 
@@ -147,7 +174,8 @@ impl Capture {
     }
 
     /// Writes the capture to `path` as pcapng (little endian): a section header naming the
-    /// harness, one Ethernet interface with nanosecond timestamps, and an Enhanced Packet Block
+    /// harness, an Ethernet interface with nanosecond timestamps (and a CAN one after it when
+    /// there are system-bus frames), and an Enhanced Packet Block
     /// per packet, stamped 2026-11-23T00:00:00Z plus its `at`, with its comment.
     pub(crate) fn write(&self, path: &Path) -> std::io::Result<()> {
         let file = BufWriter::new(File::create(path)?);
@@ -170,18 +198,28 @@ impl Capture {
             true => NO_SOURCE.to_string(),
             false => self.sources.join("; "),
         };
-        let interface = InterfaceDescriptionBlock {
-            linktype: DataLink::ETHERNET,
+        let interface = |linktype, description: String| InterfaceDescriptionBlock {
+            linktype,
             snaplen: SNAPLEN,
             options: vec![
                 InterfaceDescriptionOption::IfDescription(description.into()),
                 InterfaceDescriptionOption::IfTsResol(TSRESOL_NANOS),
             ],
         };
-        writer.write_pcapng_block(interface).map_err(io_error)?;
+        writer
+            .write_pcapng_block(interface(DataLink::ETHERNET, description))
+            .map_err(io_error)?;
+        if self.packets.iter().any(|p| p.interface == Interface::Can) {
+            writer
+                .write_pcapng_block(interface(DataLink::CAN_SOCKETCAN, CAN_SOURCE.into()))
+                .map_err(io_error)?;
+        }
         for p in &self.packets {
             let block = EnhancedPacketBlock {
-                interface_id: 0,
+                interface_id: match p.interface {
+                    Interface::Ethernet => 0,
+                    Interface::Can => 1,
+                },
                 timestamp: Duration::from_secs(EPOCH_SECS) + p.at,
                 original_len: p.frame.len() as u32,
                 data: p.frame.as_slice().into(),
@@ -250,11 +288,14 @@ pub(crate) struct Stamper {
 impl Stamper {
     /// Records for a link whose clock reads `now`, naming its traffic `source`.
     pub(crate) fn new(tap: SharedTap, source: &'static str, now: Duration) -> Stamper {
-        let base = {
-            let mut t = tap.borrow_mut();
-            t.capture.source(source);
-            t.last + Duration::from_millis(1)
-        };
+        tap.borrow_mut().capture.source(source);
+        Stamper::on(tap, now)
+    }
+
+    /// Records for a link whose clock reads `now` and whose traffic goes to an interface that
+    /// names itself (the system bus's).
+    pub(crate) fn on(tap: SharedTap, now: Duration) -> Stamper {
+        let base = tap.borrow().last + Duration::from_millis(1);
         Stamper {
             tap,
             base: base.saturating_sub(now),
@@ -290,7 +331,6 @@ pub(crate) mod testing {
         while let Some(block) = reader.next_block() {
             let block = block.unwrap();
             if let Some(epb) = block.into_enhanced_packet() {
-                assert_eq!(epb.interface_id, 0);
                 assert_eq!(epb.original_len as usize, epb.data.len());
                 let comments = epb
                     .options
@@ -348,6 +388,36 @@ mod tests {
         f.extend([0x02, 0x00, 0, 0]); // 2 bytes, last datagram, IRQ 0
         f.extend([0, 0, 0, 0]); // data, working counter
         f
+    }
+
+    #[test]
+    fn system_bus_frames_go_to_a_can_interface_of_their_own() {
+        let mut c = Capture::default();
+        c.frame(&ecat_frame(1), ms(1));
+        c.label(Some("sk550p@can step 1"));
+        let sdo = proto::can::CanFrame::new(0x624, &[0x40, 0x66, 0x20, 0x01, 0, 0, 0, 0]).unwrap();
+        c.can(&sdo, ms(2));
+        let bytes = c.write_to(Vec::new()).unwrap();
+        let (_, interfaces, packets) = read_pcapng(&bytes);
+        let types: Vec<DataLink> = interfaces.iter().map(|i| i.linktype).collect();
+        assert_eq!(types, [DataLink::ETHERNET, DataLink::CAN_SOCKETCAN]);
+        assert_eq!(description(&interfaces[1]).as_deref(), Some(CAN_SOURCE));
+        let (_, record, comments) = &packets[1];
+        assert_eq!(
+            record[..5],
+            [0, 0, 0x06, 0x24, 8],
+            "identifier big-endian, then len"
+        );
+        assert_eq!(record[8..], [0x40, 0x66, 0x20, 0x01, 0, 0, 0, 0]);
+        assert_eq!(comments, &["sk550p@can step 1"]);
+        let mut ethernet_only = Capture::default();
+        ethernet_only.frame(&ecat_frame(1), ms(1));
+        let (_, interfaces, _) = read_pcapng(&ethernet_only.write_to(Vec::new()).unwrap());
+        assert_eq!(
+            interfaces.len(),
+            1,
+            "no CAN interface without system-bus frames"
+        );
     }
 
     #[test]

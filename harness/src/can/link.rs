@@ -13,6 +13,8 @@ use proto::can::socketcand::{Framed, Message, MAX_MESSAGE_LEN};
 use proto::can::CanFrame;
 use sim::can::Segment;
 
+use crate::pcap::{SharedTap, Stamper};
+
 /// Why a link failed.
 #[derive(Debug, thiserror::Error)]
 pub(crate) enum CanLinkError {
@@ -104,6 +106,50 @@ impl CanLink for Embedded {
 
     fn segment(&mut self) -> Option<(&mut Segment, Duration)> {
         Some((&mut self.segment, self.now))
+    }
+}
+
+/// A link whose frames also go to the run's capture (`--pcap`), both ways, on its CAN
+/// interface, stamped on the run's time line.
+pub(crate) struct Tapped<L> {
+    inner: L,
+    stamper: Stamper,
+}
+
+impl<L: CanLink> Tapped<L> {
+    /// `inner`, recorded into `tap` from now on.
+    pub(crate) fn new(inner: L, tap: SharedTap) -> Tapped<L> {
+        let stamper = Stamper::on(tap, inner.now());
+        Tapped { inner, stamper }
+    }
+
+    fn record(&self, frame: &CanFrame) {
+        self.stamper
+            .record(self.inner.now(), |c, at| c.can(frame, at));
+    }
+}
+
+impl<L: CanLink> CanLink for Tapped<L> {
+    fn send(&mut self, frame: &CanFrame) -> Result<(), CanLinkError> {
+        self.inner.send(frame)?;
+        self.record(frame);
+        Ok(())
+    }
+
+    fn recv(&mut self, limit: Duration) -> Result<Option<CanFrame>, CanLinkError> {
+        let frame = self.inner.recv(limit)?;
+        if let Some(f) = &frame {
+            self.record(f);
+        }
+        Ok(frame)
+    }
+
+    fn now(&self) -> Duration {
+        self.inner.now()
+    }
+
+    fn segment(&mut self) -> Option<(&mut Segment, Duration)> {
+        self.inner.segment()
     }
 }
 

@@ -24,6 +24,7 @@ use serde_json::Value;
 
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, BusStep, Description, Embedded, Network};
+use crate::pcap::SharedTap;
 use crate::profile::Profile;
 use crate::runner::DutFactory;
 use binding::CanBinding;
@@ -64,19 +65,41 @@ fn parse_step(v: &Value) -> Result<Box<dyn BusStep>, String> {
 }
 
 /// The simulated segment of the profile's product, behind the SDO client.
-fn embedded(profile: &Profile, _: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
+fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
     let config = crate::binding::embedded::device_config(profile)?;
     let product = config.product;
     let segment = sim::can::Segment::new(config).map_err(|e| OpenError::Profile(e.to_string()))?;
     let link = link::Embedded::new(segment);
     let what = "embedded system-bus segment".to_string();
-    Ok(Box::new(CanBinding::open(
+    open(
         link,
+        context.tap.as_ref(),
         EMBEDDED_LIMIT,
         product,
         what,
         false,
-    )?))
+    )
+}
+
+/// The binding on `link`, its frames also going to the run's capture when it has one.
+fn open<L: link::CanLink + 'static>(
+    link: L,
+    tap: Option<&SharedTap>,
+    limit: Duration,
+    product: proto::nord::Product,
+    what: String,
+    persistent: bool,
+) -> Result<Box<dyn Binding>, OpenError> {
+    Ok(match tap {
+        None => Box::new(CanBinding::open(link, limit, product, what, persistent)?),
+        Some(tap) => Box::new(CanBinding::open(
+            link::Tapped::new(link, tap.clone()),
+            limit,
+            product,
+            what,
+            persistent,
+        )?),
+    })
 }
 
 /// `--dut socketcand://HOST[:PORT]/CHANNEL`: the inverters on the bus `CHANNEL` of a socketcand
@@ -107,6 +130,7 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
         addr,
         channel: channel.to_string(),
         timeout: n.timeout,
+        tap: n.tap.clone(),
     }))
 }
 
@@ -115,6 +139,8 @@ struct SocketcandFactory {
     addr: SocketAddr,
     channel: String,
     timeout: Duration,
+    /// The run's capture (`--pcap`).
+    tap: Option<SharedTap>,
 }
 
 impl DutFactory for SocketcandFactory {
@@ -132,13 +158,14 @@ impl DutFactory for SocketcandFactory {
         })?;
         let link = link::Socketcand::connect(self.addr, &self.channel, self.timeout)
             .map_err(|e| OpenError::Unreachable(e.to_string()))?;
-        Ok(Box::new(CanBinding::open(
+        open(
             link,
+            self.tap.as_ref(),
             self.timeout,
             product,
             self.describe(),
             true,
-        )?))
+        )
     }
 }
 

@@ -283,6 +283,16 @@ impl SocketCanRepr {
         self.emit(&mut f);
         f.into_inner()
     }
+
+    /// The frame as a capture file holds it under `LINKTYPE_CAN_SOCKETCAN` (227): the same 16
+    /// bytes, but `can_id` in network byte order (big-endian), as libpcap writes it and
+    /// Wireshark reads it, whatever the host's order.
+    pub fn to_pcap_record(&self) -> [u8; FRAME_LEN] {
+        let mut b = self.to_bytes();
+        let can_id = SocketCanFrame::new_unchecked(&b[..]).can_id();
+        b[field::CAN_ID].copy_from_slice(&can_id.to_be_bytes());
+        b
+    }
 }
 
 #[cfg(test)]
@@ -303,6 +313,17 @@ mod tests {
         assert_eq!(r, SocketCanRepr::Frame(f));
         assert_eq!(r.to_bytes(), bytes);
         assert_eq!(r.buffer_len(), 16);
+    }
+
+    #[test]
+    fn a_capture_record_has_the_identifier_big_endian() {
+        let r = SocketCanRepr::Frame(CanFrame::new(0x5A4, &[0x40, 0x66, 0x20, 0x01]).unwrap());
+        assert_eq!(
+            r.to_pcap_record(),
+            [0, 0, 0x05, 0xA4, 4, 0, 0, 0, 0x40, 0x66, 0x20, 0x01, 0, 0, 0, 0]
+        );
+        let rtr = SocketCanRepr::Frame(CanFrame::remote(0x705, 1).unwrap());
+        assert_eq!(rtr.to_pcap_record()[..5], [0x40, 0, 0x07, 0x05, 1]);
     }
 
     #[test]
