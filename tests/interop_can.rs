@@ -2,7 +2,8 @@
 //! NORD system bus served over socketcand (`harness serve can --socketcand`, reached through
 //! python-can's `socketcand` interface): it reads and writes P102 of inverter 3 at its NORD
 //! object (node 36 = P515 address of FI 3, object 2000h + 102, sub-index 1 = set 1) and gets
-//! CiA 301 abort codes for bad requests, after which the node still serves. It also imports
+//! CiA 301 abort codes for bad requests, after which the node still serves; then it starts the
+//! node and gets its TPDO1 (the status word) for each RPDO1 and SYNC it sends. It also imports
 //! the node's EDS as `harness describe eds --bus can` writes it (CiA 306) and reads P102 there
 //! by name.
 //!
@@ -26,7 +27,8 @@ use common::peer::{interop_python, require_tshark};
 use common::{wait_listening, Server};
 
 #[test]
-fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_and_imports_the_eds() {
+fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_runs_pdos_and_imports_the_eds()
+{
     let Some(py) = interop_python(
         &["can", "canopen"],
         "python-canopen as master of the served system bus",
@@ -82,6 +84,14 @@ fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_and_imports_
     assert_eq!(aborts["read_only"], 0x0601_0002, "{seen}");
     assert_eq!(aborts["too_high"], 0x0609_0031, "{seen}");
     assert_eq!(seen["p102_last"], 250, "still serving: {seen}");
+    // Process data on SYNC: a TPDO1 per SYNC, 8 bytes, the status "Ready to switch on".
+    assert!(seen["tpdo_count"].as_u64().unwrap_or(0) >= 4, "{seen}");
+    assert_eq!(seen["tpdo_len"], 8, "{seen}");
+    assert_eq!(
+        seen["tpdo_status"].as_u64().map(|s| s & 0xFF),
+        Some(0x31),
+        "{seen}"
+    );
     // The EDS: python-canopen imports it and reads P102 set 1 by name, typed INTEGER16.
     assert_eq!(seen["eds_p102_by_name"], 250, "{seen}");
     assert_eq!(seen["eds_p102_type"], 0x0003, "{seen}");
@@ -90,10 +100,9 @@ fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_and_imports_
 }
 
 /// Every frame of a system-bus run's capture decodes as CANopen (a remote frame as CAN), none
-/// malformed, and tshark
-/// finds in it what the cases say they did: the SDO read of P102 of FI 3 (node 36, 2066h
-/// sub-index 1) and the nodes' abort codes for the bad requests, each in the frame its case and
-/// step label.
+/// malformed, and tshark finds in it what the cases say they did: the SDO read of P102 of FI 3
+/// (node 36, 2066h sub-index 1) and the nodes' abort codes for the bad requests, each in the
+/// frame its case and step label.
 #[test]
 fn tshark_decodes_the_capture_of_a_system_bus_run_as_canopen() {
     if !require_tshark("tshark as the independent reader of the system bus's capture") {

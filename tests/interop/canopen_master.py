@@ -1,8 +1,9 @@
 """python-canopen as the master of the served NORD system bus, over socketcand (python-can's
 `socketcand` interface): reads and writes P102 of inverter 3 at its NORD object (node 36,
 object 2000h + 102 = 2066h, sub-index 1 = parameter set 1), and checks that bad requests get
-CiA 301 abort codes while the node goes on serving. Prints one JSON line of what it saw; the
-Rust test judges it.
+CiA 301 abort codes while the node goes on serving. Then it starts the node and runs process
+data the CiA 301 way: RPDO1 (200h + 36) with control word 047Eh, SYNC, and the node's TPDO1
+(180h + 36) with its status word. Prints one JSON line of what it saw; the Rust test judges it.
 
 With an EDS (`harness describe eds --bus can --profile sk550p --inverter 3`), python-canopen
 imports it as the node's object dictionary and also reads P102 by its name there.
@@ -13,6 +14,7 @@ Usage: canopen_master.py HOST PORT CHANNEL [EDS]
 import json
 import struct
 import sys
+import time
 
 import canopen
 
@@ -43,6 +45,20 @@ try:
     seen["aborts"] = aborts
     # Still serving after the refusals.
     seen["p102_last"] = struct.unpack("<H", sdo.upload(0x2066, 1))[0]
+    # Process data: node 36 to OPERATIONAL, then RPDO1 "Shut down" (047Eh) and SYNC, a few
+    # cycles; the node answers each SYNC with its TPDO1.
+    tpdo = []
+    network.subscribe(0x1A4, lambda cob_id, data, ts: tpdo.append(bytes(data)))
+    node.nmt.state = "OPERATIONAL"
+    time.sleep(0.05)
+    for _ in range(5):
+        network.send_message(0x224, struct.pack("<4H", 0x047E, 0, 0, 0))
+        network.sync.transmit()
+        time.sleep(0.02)
+    time.sleep(0.1)
+    seen["tpdo_count"] = len(tpdo)
+    seen["tpdo_status"] = struct.unpack("<H", tpdo[-1][:2])[0] if tpdo else None
+    seen["tpdo_len"] = len(tpdo[-1]) if tpdo else None
     if len(sys.argv) > 4:
         described = network.add_node(36, sys.argv[4])
         od = described.object_dictionary

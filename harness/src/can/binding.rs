@@ -8,8 +8,9 @@
 //! built into it); a bus module's own parameters are not on the system bus.
 //!
 //! `can:` steps (`step.rs`) put a frame or an NMT command on the bus and observe every frame
-//! for the step's time. Not yet: process data (PDOs and SYNC are not simulated): a case that
-//! needs it is not applicable, with that reason.
+//! for the step's time. Not yet: process data (the simulated nodes run PDOs on SYNC, see
+//! `sim::can`, but this binding does not drive them): a case that needs it is not
+//! applicable, with that reason.
 
 use std::time::Duration;
 

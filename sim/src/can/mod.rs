@@ -16,8 +16,18 @@
 //! - EMCY: one when an inverter error appears (P700 [-01] from 0), the code as the SK 550P's
 //!   EtherCAT interface sends it (BU 0620 §5.3's DS402 code for a communication error, else
 //!   FF00h).
-//!
-//! Process data (PDOs) and SYNC are not simulated yet.
+//! - Process data: the layout `proto::nord::can::pdo_words` chooses, RPDO1 (200h + node) the
+//!   control word and setpoints 1–3 and RPDO2 (300h + node) setpoints 4–5, TPDO1 (180h + node)
+//!   the status word and actual values 1–3 and TPDO2 (280h + node) actual values 4–5, each word
+//!   UNSIGNED16 little-endian; PDO 2 only for an inverter with five values (`process_values`:
+//!   SK 5x0P, SK 54xE). All are synchronous (transmission type 1): at each SYNC (080h) a node in
+//!   Operational takes the words its RPDOs brought last and answers with its TPDOs; a node that
+//!   has received no RPDO1 since it entered Operational sends none. An RPDO shorter than its
+//!   mapping is not processed and gives an EMCY 8210h, a longer one is processed and gives an
+//!   EMCY 8220h (CiA 301 "PDO not processed due to length error", "PDO length exceeded").
+//! - The inverters' series: SK 5x0P behind the SK 550P (BU 0620 §2.1); behind a bus module
+//!   SK 54xE, whose five setpoints and actual values (BU 2100 §6.2.5, BU 2200 §6.3.4) the
+//!   simulator's drives take on the modules' other buses too.
 
 mod node;
 mod sdo;
@@ -27,8 +37,8 @@ mod tests;
 use std::time::Duration;
 
 use proto::can::CanFrame;
-use proto::nord::can::SystemBusAddress;
-use proto::nord::Inverter;
+use proto::nord::can::{InverterSeries, SystemBusAddress};
+use proto::nord::{Family, Inverter, Product};
 
 use crate::device::{Device, DeviceConfig};
 use node::Node;
@@ -39,6 +49,14 @@ pub enum SegmentError {
     /// An inverter has no system-bus address.
     #[error("FI {0} has no system-bus address")]
     NoAddress(u8),
+}
+
+/// The series of the simulated inverters of `product` (see the module documentation).
+fn series(product: Product) -> InverterSeries {
+    match product.family() {
+        Family::Integrated => InverterSeries::Sk5x0p,
+        _ => InverterSeries::Sk54xe,
+    }
 }
 
 /// One CAN segment: the device's inverters as nodes.
@@ -60,6 +78,7 @@ impl Segment {
                     fi,
                     SystemBusAddress::inverter(fi).get(),
                     config.product,
+                    series(config.product),
                 ))
             })
             .collect::<Result<Vec<_>, SegmentError>>()?;

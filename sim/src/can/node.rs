@@ -1,11 +1,15 @@
 //! One inverter as a CANopen node: NMT state machine, boot-up and heartbeat, node guarding,
-//! the SDO server over its object dictionary, EMCY.
+//! the SDO server over its object dictionary, EMCY, and its process data (RPDO1/TPDO1 on
+//! SYNC).
 
 use std::time::Duration;
 
 use proto::can::CanFrame;
 use proto::canopen::cob_id::{Cob, Function};
+use proto::canopen::emcy::{register, Emergency};
 use proto::canopen::nmt::{ErrorControl, NmtFrame, NmtState};
+use proto::canopen::sync::SyncFrame;
+use proto::nord::can::{pdo_words, process_values, InverterSeries};
 use proto::nord::errors::SdoAbort;
 use proto::nord::params::ParamDef;
 use proto::nord::{Family, Inverter, ParamNumber, Product};
@@ -26,6 +30,11 @@ const IDENTITY: u16 = 0x1018;
 const PARAMETERS: u16 = 0x2000;
 const LAST_PARAMETER: u16 = PARAMETERS + 999;
 
+/// CiA 301 emergency error code 8210h "PDO not processed due to length error".
+const PDO_TOO_SHORT: u16 = 0x8210;
+/// CiA 301 emergency error code 8220h "PDO length exceeded".
+const PDO_TOO_LONG: u16 = 0x8220;
+
 /// One node.
 #[derive(Debug)]
 pub(super) struct Node {
@@ -42,10 +51,16 @@ pub(super) struct Node {
     transfer: Transfer,
     /// The error register (1001h) as the last EMCY set it.
     error_register: u8,
+    /// Its inverter's series: how many process values its PDOs carry.
+    series: InverterSeries,
+    /// The control word and setpoints 1–5 as the RPDOs last brought them, taken at each SYNC
+    /// once an RPDO1 came in Operational (`started`).
+    outputs: [u16; 6],
+    started: bool,
 }
 
 impl Node {
-    pub(super) fn new(fi: Inverter, id: u8, product: Product) -> Node {
+    pub(super) fn new(fi: Inverter, id: u8, product: Product, series: InverterSeries) -> Node {
         Node {
             fi,
             id,
@@ -56,6 +71,9 @@ impl Node {
             guard_toggle: false,
             transfer: Transfer::Idle,
             error_register: 0,
+            series,
+            outputs: [0; 6],
+            started: false,
         }
     }
 
@@ -110,8 +128,27 @@ impl Node {
         frame: &CanFrame,
         device: &mut Device,
         now: Duration,
+    ) -> Vec<CanFrame> {
+        let Some(cob) = Cob::classify(frame.id()) else {
+            return Vec::new();
+        };
+        if cob.function == Function::Sync {
+            return match SyncFrame::parse(frame.data()) {
+                Ok(_) if !frame.is_remote() => self.sync(device, now),
+                _ => Vec::new(),
+            };
+        }
+        self.answer(frame, cob, device, now).into_iter().collect()
+    }
+
+    /// The one frame, if any, the node answers to a frame other than SYNC.
+    fn answer(
+        &mut self,
+        frame: &CanFrame,
+        cob: Cob,
+        device: &mut Device,
+        now: Duration,
     ) -> Option<CanFrame> {
-        let cob = Cob::classify(frame.id())?;
         match cob.function {
             Function::Nmt => {
                 let nmt = NmtFrame::parse(frame.data()).ok()?;
@@ -142,8 +179,66 @@ impl Node {
                 self.transfer = transfer;
                 self.frame(Function::SdoTx, &answer?.emit())
             }
+            Function::Rpdo { number } if cob.node == self.id => {
+                // PDOs only in Operational; a remote frame requests no RPDO.
+                if self.state != NmtState::Operational || frame.is_remote() {
+                    return None;
+                }
+                let (first, count) = pdo_words(cob.function, self.series)?;
+                let (first, count) = (usize::from(first), usize::from(count));
+                let data = frame.data();
+                // Fewer bytes than mapped: not processed; more: processed. An EMCY says which
+                // (CiA 301).
+                if data.len() < 2 * count {
+                    return self.pdo_length_error(PDO_TOO_SHORT);
+                }
+                for (w, b) in self.outputs[first..first + count]
+                    .iter_mut()
+                    .zip(data.chunks_exact(2))
+                {
+                    *w = u16::from_le_bytes([b[0], b[1]]);
+                }
+                self.started |= number == 1;
+                (data.len() > 2 * count)
+                    .then(|| self.pdo_length_error(PDO_TOO_LONG))
+                    .flatten()
+            }
             _ => None,
         }
+    }
+
+    /// The EMCY of an RPDO of the wrong length.
+    fn pdo_length_error(&self, code: u16) -> Option<CanFrame> {
+        let emcy = Emergency {
+            code,
+            register: self.error_register | register::GENERIC | register::COMMUNICATION,
+            data: [0; 5],
+        };
+        self.frame(Function::Emcy, &emcy.emit())
+    }
+
+    /// SYNC: the inverter takes the control word and setpoints the RPDOs brought and answers
+    /// with its TPDOs, once its process data started (an RPDO1 in Operational).
+    fn sync(&mut self, device: &mut Device, now: Duration) -> Vec<CanFrame> {
+        if self.state != NmtState::Operational || !self.started {
+            return Vec::new();
+        }
+        let values = usize::from(process_values(self.series));
+        let [control, setpoints @ ..] = self.outputs;
+        let Ok(answer) = device.process_monitored(self.fi, control, &setpoints[..values], now)
+        else {
+            return Vec::new();
+        };
+        [1, 2]
+            .into_iter()
+            .filter_map(|number| {
+                let tpdo = Function::Tpdo { number };
+                let (first, count) = pdo_words(tpdo, self.series)?;
+                let words = &answer[usize::from(first)..usize::from(first + count)];
+                let data: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+                self.frame(tpdo, &data)
+            })
+            .collect()
     }
 
     fn command(&mut self, nmt: NmtFrame, now: Duration) {
@@ -157,6 +252,10 @@ impl Node {
             self.guard_toggle = false;
             self.transfer = Transfer::Idle;
             self.due = Some(now);
+        }
+        if to != NmtState::Operational {
+            // Out of Operational no PDO: the process data start again with an RPDO1.
+            self.started = false;
         }
         self.state = to;
     }

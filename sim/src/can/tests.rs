@@ -431,3 +431,108 @@ fn bad_input_is_refused_by_the_standards_code_or_silence_and_the_node_serves_on(
     }
     serves(&mut s);
 }
+
+/// RPDO1 of `node`: control word and three setpoints.
+fn rpdo(node: u8, words: [u16; 4]) -> CanFrame {
+    let data: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+    frame(0x200 + u16::from(node), &data)
+}
+
+const SYNC: u16 = 0x080;
+
+#[test]
+fn process_data_run_on_sync_in_operational_only() {
+    let mut s = segment();
+    // Pre-operational: no PDO taken, none sent.
+    assert!(s.receive(&rpdo(32, [0x047E, 0, 0, 0]), MS).is_empty());
+    assert!(s.receive(&frame(SYNC, &[]), 2 * MS).is_empty());
+    s.receive(&frame(0, &[NmtCommand::START.0, 0]), 3 * MS);
+    // Operational, but no RPDO1 yet: SYNC gets no TPDO.
+    assert!(s.receive(&frame(SYNC, &[]), 4 * MS).is_empty());
+    // The RPDO1 is taken at the SYNC, after the charging time: "Ready to switch on".
+    assert!(s.receive(&rpdo(32, [0x047E, 0, 0, 0]), 30 * MS).is_empty());
+    let out = s.receive(&frame(SYNC, &[]), 31 * MS);
+    let ids: Vec<u16> = out.iter().map(CanFrame::id).collect();
+    assert_eq!(
+        ids,
+        [0x1A0, 0x2A0],
+        "FI 1 alone had an RPDO1: its TPDO1 and TPDO2"
+    );
+    let status = u16::from_le_bytes([out[0].data()[0], out[0].data()[1]]);
+    assert_eq!(status & 0x00FF, 0x31, "{status:04X}h");
+    assert_eq!(out[0].data().len(), 8, "status word, actual values 1-3");
+    assert_eq!(out[1].data().len(), 4, "actual values 4-5 of an SK 5x0P");
+    // A SYNC with a counter works the same; every SYNC brings the TPDOs.
+    assert_eq!(s.receive(&frame(SYNC, &[1]), 32 * MS).len(), 2);
+    // Stopped: no PDO, and the process data start again with an RPDO1 in Operational.
+    s.receive(&frame(0, &[NmtCommand::STOP.0, 32]), 33 * MS);
+    assert!(s.receive(&frame(SYNC, &[]), 34 * MS).is_empty());
+    s.receive(&frame(0, &[NmtCommand::START.0, 32]), 35 * MS);
+    assert!(s.receive(&frame(SYNC, &[]), 36 * MS).is_empty());
+}
+
+#[test]
+fn setpoints_reach_the_drive_and_actual_values_come_back() {
+    let mut s = segment();
+    s.receive(&frame(0, &[NmtCommand::START.0, 0]), MS);
+    let mut t = 30;
+    let mut cycle = |s: &mut Segment, words: [u16; 4]| {
+        s.receive(&rpdo(36, words), t * MS);
+        let out = s.receive(&frame(SYNC, &[]), (t + 1) * MS);
+        t += 5;
+        assert_eq!(out.len(), 2, "{out:?}");
+        assert_eq!(out[0].id(), 0x1A4, "TPDO1 of node 36, FI 3");
+        let d = out[0].data();
+        [0, 1, 2, 3].map(|i| u16::from_le_bytes([d[2 * i], d[2 * i + 1]]))
+    };
+    cycle(&mut s, [0x047E, 0, 0, 0]);
+    // Enable operation with 50 % setpoint: the drive ramps up, the first actual value (the
+    // actual frequency, P543 [-01] = 1) follows.
+    let mut last = [0; 4];
+    for _ in 0..400 {
+        last = cycle(&mut s, [0x047F, 0x2000, 0, 0]);
+    }
+    assert_eq!(
+        last[0] & 0x00FF,
+        0x37,
+        "operation enabled: {:04X}h",
+        last[0]
+    );
+    assert!(last[1] > 0x1000, "actual frequency: {:04X}h", last[1]);
+}
+
+#[test]
+fn an_rpdo_of_the_wrong_length_gives_an_emcy_and_a_short_one_is_not_taken() {
+    let mut s = segment();
+    s.receive(&frame(0, &[NmtCommand::START.0, 0]), MS);
+    let out = s.receive(&frame(0x220, &[0x7E, 0x04]), 30 * MS);
+    assert_eq!(out.len(), 1, "{out:?}");
+    assert_eq!(out[0].id(), 0x0A0, "EMCY of node 32");
+    assert_eq!(out[0].data(), [0x10, 0x82, 0x11, 0, 0, 0, 0, 0], "8210h");
+    assert!(
+        s.receive(&frame(SYNC, &[]), 31 * MS).is_empty(),
+        "the short RPDO1 was not taken"
+    );
+    // RPDO2 (setpoints 4-5) is 4 bytes: 6 are taken, with EMCY 8220h.
+    let out = s.receive(&frame(0x320, &[0, 0x10, 0, 0x20, 0xFF, 0xFF]), 32 * MS);
+    assert_eq!(out.len(), 1, "{out:?}");
+    assert_eq!(out[0].data()[..3], [0x20, 0x82, 0x11], "8220h");
+    // A SYNC with a counter out of range is no SYNC.
+    s.receive(&rpdo(32, [0x047E, 0, 0, 0]), 33 * MS);
+    assert!(s.receive(&frame(SYNC, &[0]), 34 * MS).is_empty());
+    assert_eq!(s.receive(&frame(SYNC, &[]), 35 * MS).len(), 2);
+}
+
+#[test]
+fn behind_a_module_the_inverters_are_sk_54xe_with_five_values() {
+    let mut s = Segment::new(DeviceConfig::new(Product::Tu3Eip)).unwrap();
+    s.poll(Duration::ZERO);
+    s.receive(&frame(0, &[NmtCommand::START.0, 0]), MS);
+    s.receive(&rpdo(32, [0x047E, 0, 0, 0]), 30 * MS);
+    let ids: Vec<u16> = s
+        .receive(&frame(SYNC, &[]), 31 * MS)
+        .iter()
+        .map(CanFrame::id)
+        .collect();
+    assert_eq!(ids, [0x1A0, 0x2A0]);
+}
