@@ -15,8 +15,7 @@
 //! (fail in strict mode).
 
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
-use std::time::Duration;
+use std::process::Command;
 
 use serde_json::Value;
 
@@ -24,7 +23,7 @@ use serde_json::Value;
 mod common;
 use common::addr::free_loopback;
 use common::peer::{interop_python, require_tshark};
-use common::{wait_listening, Server};
+use common::serve_can;
 
 #[test]
 fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_runs_pdos_and_imports_the_eds()
@@ -36,21 +35,7 @@ fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_runs_pdos_an
         return;
     };
     let listen = format!("{}:29536", free_loopback());
-    let child = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args([
-            "serve",
-            "can",
-            "--socketcand",
-            &listen,
-            "--profile",
-            "sk550p",
-        ])
-        .args(["--seconds", "120"])
-        .stdout(Stdio::null())
-        .spawn()
-        .expect("harness serve can starts");
-    let _server = Server(child);
-    wait_listening(&listen, Duration::from_secs(10));
+    let _server = serve_can(&listen);
     let eds = std::env::temp_dir().join(format!("nord-fi3-{}.eds", std::process::id()));
     let described = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args(["describe", "eds", "--bus", "can", "--profile", "sk550p"])

@@ -4,39 +4,19 @@
 //! system-bus cases as the embedded run; what a case wrote is written back afterwards. A
 //! missing bus name and a refused channel are clear errors. Loopback only: no peer to skip for.
 
-use std::process::{Command, Stdio};
-use std::time::Duration;
+use std::process::Command;
 
 use serde_json::Value;
 
 #[allow(dead_code)] // what the other network tests share
 mod common;
 use common::addr::free_loopback;
-use common::{wait_listening, Server};
-
-fn serve(listen: &str) -> Server {
-    let child = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args([
-            "serve",
-            "can",
-            "--socketcand",
-            listen,
-            "--profile",
-            "sk550p",
-        ])
-        .args(["--seconds", "120"])
-        .stdout(Stdio::null())
-        .spawn()
-        .expect("harness serve can starts");
-    let server = Server(child);
-    wait_listening(listen, Duration::from_secs(10));
-    server
-}
+use common::serve_can;
 
 #[test]
 fn the_system_bus_cases_pass_over_socketcand_and_leave_the_parameters_as_found() {
     let listen = format!("{}:29536", free_loopback());
-    let _server = serve(&listen);
+    let _server = serve_can(&listen);
     let out_dir = std::env::temp_dir().join(format!("nord-can-dut-{}", std::process::id()));
     let run = |filter: &str| {
         Command::new(env!("CARGO_BIN_EXE_harness"))
@@ -88,7 +68,7 @@ fn the_system_bus_cases_pass_over_socketcand_and_leave_the_parameters_as_found()
 #[test]
 fn a_socketcand_url_without_a_bus_or_with_an_unknown_one_is_a_clear_error() {
     let listen = format!("{}:29536", free_loopback());
-    let _server = serve(&listen);
+    let _server = serve_can(&listen);
     let no_bus = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args([
             "run",

@@ -72,3 +72,24 @@ pub(crate) fn case_verdict<'a>(run: &'a serde_json::Value, id: &str) -> (&'a str
         c["message"].as_str().unwrap_or_default(),
     )
 }
+
+/// `harness serve can --socketcand LISTEN --profile sk550p` for two minutes at most, once it
+/// listens: the SK 550P's simulated system bus for the tests that reach it over socketcand.
+pub(crate) fn serve_can(listen: &str) -> Server {
+    let child = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args([
+            "serve",
+            "can",
+            "--socketcand",
+            listen,
+            "--profile",
+            "sk550p",
+        ])
+        .args(["--seconds", "120"])
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("harness serve can starts");
+    let server = Server(child);
+    wait_listening(listen, Duration::from_secs(10));
+    server
+}

@@ -26,7 +26,7 @@ use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
 use crate::hex::hex;
-use crate::ledger::{self, Account, Ledger, Problem};
+use crate::ledger::{Account, Ledger, Problem};
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::suite::{Action, OrderSpec};
@@ -206,15 +206,8 @@ impl<L: CanLink> CanBinding<L> {
         }
         let r = self.client.download(at.node, index, sub, &data);
         if let Some(l) = self.ledger.as_mut() {
-            let outcome = match &r {
-                Ok(()) => Ok(true),
-                Err(SdoError::Abort(_)) => Ok(false),
-                Err(e) => Err(StepError::Link(e.to_string())),
-            };
-            l.wrote(
-                &at,
-                ledger::may_have_taken_effect(outcome.as_ref().copied()),
-            );
+            // Only the node's refusal (an abort) surely left the object as it was.
+            l.wrote(&at, !matches!(r, Err(SdoError::Abort(_))));
         }
         match r {
             Ok(()) => Ok(json!({ "abort": null, "ok": true }).into()),

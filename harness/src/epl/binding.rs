@@ -34,7 +34,7 @@ use crate::binding::{
     process_run, process_time, Binding, CleanupError, Observation, OpenError, StepError,
 };
 use crate::hex::hex;
-use crate::ledger::{self, Account, Ledger, Problem};
+use crate::ledger::{Account, Ledger, Problem};
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::suite::{Action, OrderSpec};
@@ -244,15 +244,8 @@ impl<L: Link> EplBinding<L> {
             .mn
             .sdo(via, Command::write_by_index(0, obj.index, obj.sub, data));
         if let Some(l) = self.ledger.as_mut() {
-            let outcome = match &r {
-                Ok(_) => Ok(true),
-                Err(MnError::Abort(_)) => Ok(false),
-                Err(e) => Err(StepError::Link(e.to_string())),
-            };
-            l.wrote(
-                &obj,
-                ledger::may_have_taken_effect(outcome.as_ref().copied()),
-            );
+            // Only the node's refusal (an abort) surely left the object as it was.
+            l.wrote(&obj, !matches!(r, Err(MnError::Abort(_))));
         }
         match r {
             Ok(_) => Ok(json!({ "abort": null, "ok": true }).into()),
