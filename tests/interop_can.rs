@@ -81,6 +81,9 @@ fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_runs_pdos_an
     assert_eq!(seen["eds_p102_by_name"], 250, "{seen}");
     assert_eq!(seen["eds_p102_type"], 0x0003, "{seen}");
     assert!(seen["eds_objects"].as_u64().unwrap_or(0) > 20, "{seen}");
+    // 1016h:01, read from the node and the EDS's default: node 32's heartbeat, 600 ms.
+    assert_eq!(seen["consumer_read"], 0x0020_0258, "{seen}");
+    assert_eq!(seen["consumer_eds"], 0x0020_0258, "{seen}");
     let _ = std::fs::remove_file(&eds);
 }
 

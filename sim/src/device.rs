@@ -922,6 +922,32 @@ impl Device {
         Ok(())
     }
 
+    /// FI `inverter`'s P120 monitoring lost the interface on the system bus: the error of
+    /// `proto::nord::can::interface_loss_error`, P700 [-04] its extended code, unless an error
+    /// is present or the inverter ignores system-bus errors (P513 [-03] "CANopen" = -0.1, BU 0620
+    /// §4.5 p. 90 and §5.1 p. 92; P513 itself where it has no elements).
+    pub fn lose_interface(&mut self, inverter: Inverter) -> Result<(), DeviceError> {
+        let (p700, extended) = proto::nord::can::interface_loss_error(self.config.product);
+        let code = FaultCode {
+            group: p700 / 10,
+            sub: (p700 % 10) as u8,
+        };
+        let unit = self.inverter_mut(inverter)?;
+        let store = &unit.params.store;
+        let element =
+            proto::nord::ArrayElement::new(i64::from(proto::nord::can::P513_CANOPEN_ELEMENT)).ok();
+        let p513 = store
+            .read(P513, None, element)
+            .or_else(|_| store.read(P513, None, None));
+        if unit.drive.fault().is_some() || p513 == Ok(proto::nord::can::P513_NO_ERROR) {
+            return Ok(());
+        }
+        unit.extended = extended.map(|x| (code, x));
+        unit.drive.inject_fault(code);
+        unit.show_fault();
+        Ok(())
+    }
+
     /// FI `inverter` is lost from the system bus: the SK TU3-PNT's bus status no longer shows
     /// its one FI online (BU 0590 §5.1.3 P173 bits 9–8 "00 FI is offline"). The others' bus
     /// status counts the FIs online from FI 1 and is left as it was.

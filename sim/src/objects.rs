@@ -75,14 +75,24 @@ pub(crate) fn abort_of(e: AccessError, value: i32, def: Option<&ParamDef>) -> Sd
 /// The emergency for an inverter error that appeared (P700 [-01] = `p700`, 0: none any more):
 /// the DS402 code of BU 0620 §5.3 for communication errors (error register 11h), else FF00h
 /// (manufacturer specific, error register 81h); bytes 3–4 the P700 value, byte 5 the FI. An
-/// error reset is code 0000h with register 0 (CiA 301 "Emergency object").
-pub(crate) fn emergency_of(p700: i32, fi: proto::nord::Inverter) -> Emergency {
+/// error reset is code 0000h with register 0 (CiA 301 "Emergency object"). Where the error
+/// has several rows, `extended` (P700 [-04]) picks the row.
+pub(crate) fn emergency_of(
+    p700: i32,
+    extended: Option<u16>,
+    fi: proto::nord::Inverter,
+) -> Emergency {
     if p700 == 0 {
         return Emergency::default();
     }
-    let (code, register) = proto::nord::errors::COMM_ERRORS
-        .iter()
-        .find(|c| i32::from(c.p700) == p700)
+    let rows = || {
+        proto::nord::errors::COMM_ERRORS
+            .iter()
+            .filter(|c| i32::from(c.p700) == p700)
+    };
+    let (code, register) = rows()
+        .find(|c| Some(c.ds402) == extended)
+        .or_else(|| rows().next())
         .map_or((0xFF00, 0x81), |c| (c.ds402, 0x11));
     let v = (p700 as u16).to_le_bytes();
     Emergency {

@@ -65,6 +65,10 @@ try:
         seen["eds_objects"] = len(od)
         seen["eds_p102_by_name"] = described.sdo["P102 Acceleration time"]["Set 1"].raw
         seen["eds_p102_type"] = od[0x2066][1].data_type
+        # The node's heartbeat consumer (P120 watches FI 1, node 32) as the node and the EDS
+        # give it.
+        seen["consumer_read"] = described.sdo[0x1016][1].raw
+        seen["consumer_eds"] = od[0x1016][1].default
 finally:
     network.disconnect()
 print(json.dumps(seen))

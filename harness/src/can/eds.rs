@@ -6,7 +6,9 @@
 //!
 //! The manuals give no EDS for the system bus (it is NORD's internal bus); what the file
 //! states beyond the manuals is this project's choice, as `sim::can` documents it: device
-//! type 0, 1017h off by default, NORD's vendor id 538h, 250 kBaud only (P514, BU 0620 §2.6).
+//! type 0, 1017h off by default, 1016h watching the interface's heartbeat for P120
+//! (`proto::nord::can::InterfaceWatch`), NORD's vendor id 538h, 250 kBaud only (P514, BU 0620
+//! §2.6).
 //! Its dates are fixed, so that the same product gives the same file.
 
 use std::fmt::Write;
@@ -49,6 +51,21 @@ pub(crate) fn eds(product: Product, fi: Inverter) -> Result<String, String> {
     let optional = vec![
         ObjectDoc::var(0x1008, "Manufacturer device name", VISIBLE_STRING, "const")
             .default(product.name()),
+        ObjectDoc::compound(
+            0x1016,
+            "Consumer heartbeat time",
+            ObjectCode::Array,
+            vec![
+                ObjectDoc::var(0, "Highest sub-index supported", DataType::U8.code(), "ro")
+                    .default("1"),
+                ObjectDoc::var(1, "Consumer heartbeat time 1", DataType::U32.code(), "rw").default(
+                    format!(
+                        "0x{:08X}",
+                        proto::nord::can::interface_watch(product).consumer_entry()
+                    ),
+                ),
+            ],
+        ),
         ObjectDoc::var(
             0x1017,
             "Producer heartbeat time",
@@ -168,6 +185,8 @@ mod tests {
         ));
         assert!(e.contains("[2066sub1]\nParameterName=Set 1\nObjectType=0x7\nDataType="));
         assert!(e.contains("BaudRate_250=1\n"));
+        // P120 watches FI 1's heartbeat (node 32) for 600 ms (sim::can's choice).
+        assert!(e.contains("[1016sub1]\nParameterName=Consumer heartbeat time 1\nObjectType=0x7\nDataType=0x0007\nAccessType=rw\nDefaultValue=0x00200258\n"));
         assert!(e.contains("[1018sub1]\nParameterName=Vendor-ID\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=0x00000538\n"));
     }
 

@@ -26,8 +26,10 @@
 //!   time-outs; which one the interface uses is not said. Choice: CiA 301 heartbeat.
 //! - The interface's own node-ID: fixed and not settable, its value not printed
 //!   ([`INTERFACE_NODE_ID_CHOICE`]); the addresses of I/O extensions (SK xU4-IOE).
-//! - The bits of P748 "CANopen status" ([`P748`]); P514's values other than 5; what P120 = 1
-//!   "Auto" waits for. The manuals refer to the inverter manuals (BU 0600, BU 0200, BU 0500).
+//! - The bits of P748 "CANopen status" ([`P748`]: here the NMT state); P514's values other
+//!   than 5; which telegram P120 watches, for how long, and what P120 = 1 "Auto" waits for
+//!   ([`InterfaceWatch`]: the interface's heartbeat, 600 ms, from the first one seen). The
+//!   manuals refer to the inverter manuals (BU 0600, BU 0200, BU 0500).
 //!
 //! Errata of the manuals kept here (the code holds the right value):
 //! - BU 0620 §3.1 (p. 61) prints the further inverters' CAN IDs "34, 36, 37, 38, 40, 42, 44,

@@ -25,6 +25,13 @@
 //!   has received no RPDO1 since it entered Operational sends none. An RPDO shorter than its
 //!   mapping is not processed and gives an EMCY 8210h, a longer one is processed and gives an
 //!   EMCY 8220h (CiA 301 "PDO not processed due to length error", "PDO length exceeded").
+//! - P120 monitoring: each node consumes the interface's heartbeat (1016h:01, node 1 behind a
+//!   module, FI 1's node 32 behind the SK 550P, 600 ms; `proto::nord::can::InterfaceWatch`),
+//!   from boot-up with P120 [-01] = 2, from the first heartbeat with 1 "Auto", not with 0. Every
+//!   node hears every frame on the segment, its neighbours' heartbeats too. A late heartbeat is
+//!   the error `interface_loss_error` names (E10.0 with 7583h behind the SK 550P, E10.8 behind
+//!   an SK TU3, E10.9 behind an SK CU4/TU4), with its EMCY, unless P513 [-03] is −0.1 "no
+//!   error". P748 [-01] shows the node's NMT state (`proto::nord::can::p748_status`).
 //! - The inverters' series: SK 5x0P behind the SK 550P (BU 0620 §2.1); behind a bus module
 //!   SK 54xE, whose five setpoints and actual values (BU 2100 §6.2.5, BU 2200 §6.3.4) the
 //!   simulator's drives take on the modules' other buses too.
@@ -38,9 +45,10 @@ use std::time::Duration;
 
 use proto::can::CanFrame;
 use proto::nord::can::{InverterSeries, SystemBusAddress};
-use proto::nord::{Family, Inverter, Product};
+use proto::nord::{ArrayElement, Family, Inverter, ParamNumber, Product};
 
 use crate::device::{Device, DeviceConfig};
+use crate::link::Unit;
 use node::Node;
 
 /// Why a segment cannot be built.
@@ -50,6 +58,12 @@ pub enum SegmentError {
     #[error("FI {0} has no system-bus address")]
     NoAddress(u8),
 }
+
+/// P700 "Current fault".
+const P700: ParamNumber = match ParamNumber::new(700) {
+    Ok(p) => p,
+    Err(_) => panic!("P700 is a parameter number"),
+};
 
 /// The series of the simulated inverters of `product` (see the module documentation).
 fn series(product: Product) -> InverterSeries {
@@ -103,8 +117,12 @@ impl Segment {
     pub fn receive(&mut self, frame: &CanFrame, now: Duration) -> Vec<CanFrame> {
         let mut out = self.poll(now);
         for node in &mut self.nodes {
+            node.overhear(frame, now);
             out.extend(node.receive(frame, &mut self.device, now));
         }
+        self.overheard(&out, now);
+        self.look(now);
+        self.emergencies(&mut out);
         out
     }
 
@@ -115,12 +133,41 @@ impl Segment {
         for node in &mut self.nodes {
             out.extend(node.poll(now));
         }
+        self.overheard(&out, now);
+        self.look(now);
+        self.emergencies(&mut out);
+        out
+    }
+
+    /// An EMCY for each inverter error that appeared or went.
+    fn emergencies(&mut self, out: &mut Vec<CanFrame>) {
         for (fi, value) in self.device.fault_changes(&mut self.faults) {
+            let extended = self
+                .device
+                .store(Unit::Inverter(fi))
+                .ok()
+                .and_then(|s| s.read(P700, None, ArrayElement::new(4).ok()).ok())
+                .and_then(|x| u16::try_from(x).ok());
             if let Some(node) = self.nodes.iter_mut().find(|n| n.inverter() == fi) {
-                out.extend(node.emergency(value));
+                out.extend(node.emergency(value, extended));
             }
         }
-        out
+    }
+
+    /// Every node hears what the others sent, as on a real bus.
+    fn overheard(&mut self, frames: &[CanFrame], now: Duration) {
+        for frame in frames {
+            for node in &mut self.nodes {
+                node.overhear(frame, now);
+            }
+        }
+    }
+
+    /// The nodes' monitoring and status parameters brought up to date.
+    fn look(&mut self, now: Duration) {
+        for node in &mut self.nodes {
+            node.look(&mut self.device, now);
+        }
     }
 
     /// When a node next sends on its own (`None`: nothing scheduled).

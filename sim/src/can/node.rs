@@ -9,7 +9,7 @@ use proto::canopen::cob_id::{Cob, Function};
 use proto::canopen::emcy::{register, Emergency};
 use proto::canopen::nmt::{ErrorControl, NmtFrame, NmtState};
 use proto::canopen::sync::SyncFrame;
-use proto::nord::can::{pdo_words, process_values, InverterSeries};
+use proto::nord::can::{interface_watch, p748_status, pdo_words, process_values, InverterSeries};
 use proto::nord::errors::SdoAbort;
 use proto::nord::params::ParamDef;
 use proto::nord::{Family, Inverter, ParamNumber, Product};
@@ -24,6 +24,7 @@ use crate::store::ParamStore;
 const DEVICE_TYPE: u16 = 0x1000;
 const ERROR_REGISTER: u16 = 0x1001;
 const DEVICE_NAME: u16 = 0x1008;
+const CONSUMER_HEARTBEAT: u16 = 0x1016;
 const HEARTBEAT_TIME: u16 = 0x1017;
 const IDENTITY: u16 = 0x1018;
 /// The parameters: P at 2000h + P (the project's EtherCAT layout, one node per inverter).
@@ -57,6 +58,25 @@ pub(super) struct Node {
     /// once an RPDO1 came in Operational (`started`).
     outputs: [u16; 6],
     started: bool,
+    /// 1016h:01, the heartbeat the node consumes: node-ID in bits 16–23, time (ms) in 0–15.
+    consumer: u32,
+    /// Its P120 monitoring of the interface (`proto::nord::can::InterfaceWatch`).
+    watch: Watch,
+    /// P748 [-01] as last shown.
+    shown_status: Option<i32>,
+}
+
+/// The P120 monitoring of the interface's heartbeat.
+#[derive(Debug, Clone, Copy, Default)]
+struct Watch {
+    /// When the node booted (P120 = 2 watches from then).
+    booted: Duration,
+    /// When the consumed heartbeat came last.
+    heard: Option<Duration>,
+    /// When the monitoring trips, as P120 stood at the last look (`None`: not watching).
+    deadline: Option<Duration>,
+    /// Tripped, until the heartbeat comes again.
+    tripped: bool,
 }
 
 impl Node {
@@ -74,6 +94,9 @@ impl Node {
             series,
             outputs: [0; 6],
             started: false,
+            consumer: factory_consumer(product),
+            watch: Watch::default(),
+            shown_status: None,
         }
     }
 
@@ -86,7 +109,58 @@ impl Node {
     }
 
     pub(super) fn next_due(&self) -> Option<Duration> {
-        self.due
+        match (self.due, self.watch.deadline) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// A frame on the bus, from anyone: the heartbeat the node consumes feeds its monitoring.
+    pub(super) fn overhear(&mut self, frame: &CanFrame, now: Duration) {
+        let node = (self.consumer >> 16) as u8;
+        let heartbeat = Function::ErrorControl.cob_id(node).ok() == Some(frame.id())
+            && !frame.is_remote()
+            && ErrorControl::parse(frame.data()).is_ok_and(|e| !e.is_boot_up());
+        if heartbeat && node != self.id {
+            self.watch.heard = Some(now);
+            self.watch.tripped = false;
+        }
+    }
+
+    /// The monitoring of the interface (P120 [-01] of the node's inverter: 0 off, 1 "Auto"
+    /// from the first heartbeat, 2 from boot-up) and P748 [-01] (the NMT state) brought up to
+    /// date; the inverter loses its interface once the heartbeat is late.
+    pub(super) fn look(&mut self, device: &mut Device, now: Duration) {
+        let status = p748_status(self.state);
+        let Ok(store) = device.store(Unit::Inverter(self.fi)) else {
+            return;
+        };
+        if self.shown_status != Some(status) {
+            store.set_info(748, 1, status);
+            self.shown_status = Some(status);
+        }
+        let p120 = ParamNumber::new(120)
+            .ok()
+            .and_then(|n| {
+                let first = proto::nord::ArrayElement::new(1).ok();
+                store.read(n, None, first).ok()
+            })
+            .unwrap_or(0);
+        let ms = u64::from(self.consumer as u16);
+        let since = match p120 {
+            _ if ms == 0 || self.state == NmtState::Initialisation => None,
+            1 => self.watch.heard,
+            2 => Some(self.watch.heard.unwrap_or(self.watch.booted)),
+            _ => None,
+        };
+        self.watch.deadline = since
+            .filter(|_| !self.watch.tripped)
+            .map(|t| t + Duration::from_millis(ms));
+        if self.watch.deadline.is_some_and(|d| d <= now) {
+            self.watch.tripped = true;
+            self.watch.deadline = None;
+            let _ = device.lose_interface(self.fi);
+        }
     }
 
     fn frame(&self, function: Function, data: &[u8]) -> Option<CanFrame> {
@@ -101,6 +175,10 @@ impl Node {
         };
         let message = if self.state == NmtState::Initialisation {
             self.state = NmtState::PreOperational;
+            self.watch = Watch {
+                booted: now,
+                ..Watch::default()
+            };
             ErrorControl::BOOT_UP
         } else {
             ErrorControl::heartbeat(self.state)
@@ -112,9 +190,10 @@ impl Node {
             .collect()
     }
 
-    /// An EMCY for the inverter's present error `p700` (0: the error went).
-    pub(super) fn emergency(&mut self, p700: i32) -> Option<CanFrame> {
-        let emcy = emergency_of(p700, self.fi);
+    /// An EMCY for the inverter's present error `p700` (0: the error went), of extended
+    /// code `extended` (P700 [-04]).
+    pub(super) fn emergency(&mut self, p700: i32, extended: Option<u16>) -> Option<CanFrame> {
+        let emcy = emergency_of(p700, extended, self.fi);
         self.error_register = emcy.register;
         if matches!(self.state, NmtState::Stopped | NmtState::Initialisation) {
             return None;
@@ -249,6 +328,7 @@ impl Node {
             // Reset node / reset communication: the communication objects return to their
             // factory values and the node boots again.
             self.heartbeat_ms = 0;
+            self.consumer = factory_consumer(self.product);
             self.guard_toggle = false;
             self.transfer = Transfer::Idle;
             self.due = Some(now);
@@ -301,11 +381,15 @@ impl Objects for Dictionary<'_> {
             (ERROR_REGISTER, 0) => Ok(vec![self.node.error_register]),
             (DEVICE_NAME, 0) => Ok(self.node.product.name().as_bytes().to_vec()),
             (HEARTBEAT_TIME, 0) => Ok(self.node.heartbeat_ms.to_le_bytes().to_vec()),
+            (CONSUMER_HEARTBEAT, 0) => Ok(vec![1]),
+            (CONSUMER_HEARTBEAT, 1) => Ok(self.node.consumer.to_le_bytes().to_vec()),
             (IDENTITY, 0) => Ok(vec![1]),
             (IDENTITY, 1) => Ok(proto::nord::ecat::VENDOR_ID.to_le_bytes().to_vec()),
-            (DEVICE_TYPE | ERROR_REGISTER | DEVICE_NAME | HEARTBEAT_TIME | IDENTITY, _) => {
-                Err(abort::NO_SUBINDEX)
-            }
+            (
+                DEVICE_TYPE | ERROR_REGISTER | DEVICE_NAME | CONSUMER_HEARTBEAT | HEARTBEAT_TIME
+                | IDENTITY,
+                _,
+            ) => Err(abort::NO_SUBINDEX),
             (PARAMETERS..=LAST_PARAMETER, _) => {
                 let (store, number, def) = self.parameter(index)?;
                 read_sub(store, number, def, sub)
@@ -323,12 +407,24 @@ impl Objects for Dictionary<'_> {
                 self.node.due = (ms > 0).then_some(Duration::ZERO);
                 Ok(())
             }
-            (DEVICE_TYPE | ERROR_REGISTER | DEVICE_NAME | IDENTITY, 0) | (IDENTITY, 1) => {
-                Err(abort::READ_ONLY)
+            (CONSUMER_HEARTBEAT, 1) => {
+                let value = decode_number(data, proto::nord::ecat::DataType::U32)? as u32;
+                // A node-ID of 0 or above 127 is not valid (CiA 301 §7.5.2.32: value range).
+                let node = (value >> 16) as u8;
+                if value >> 24 != 0 || (value as u16 != 0 && !(1..=127).contains(&node)) {
+                    return Err(abort::VALUE_RANGE);
+                }
+                self.node.consumer = value;
+                self.node.watch.tripped = false;
+                Ok(())
             }
-            (DEVICE_TYPE | ERROR_REGISTER | DEVICE_NAME | HEARTBEAT_TIME | IDENTITY, _) => {
-                Err(abort::NO_SUBINDEX)
-            }
+            (DEVICE_TYPE | ERROR_REGISTER | DEVICE_NAME | IDENTITY | CONSUMER_HEARTBEAT, 0)
+            | (IDENTITY, 1) => Err(abort::READ_ONLY),
+            (
+                DEVICE_TYPE | ERROR_REGISTER | DEVICE_NAME | CONSUMER_HEARTBEAT | HEARTBEAT_TIME
+                | IDENTITY,
+                _,
+            ) => Err(abort::NO_SUBINDEX),
             (PARAMETERS..=LAST_PARAMETER, _) => {
                 let (store, number, def) = self.parameter(index)?;
                 write_sub(store, number, def, sub, data)
@@ -336,4 +432,10 @@ impl Objects for Dictionary<'_> {
             _ => Err(abort::NO_OBJECT),
         }
     }
+}
+
+/// 1016h:01 at power-on: the interface's heartbeat, watched for 600 ms (not stated by the
+/// manuals, `proto::nord::can::InterfaceWatch`).
+fn factory_consumer(product: Product) -> u32 {
+    interface_watch(product).consumer_entry()
 }

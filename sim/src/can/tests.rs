@@ -536,3 +536,141 @@ fn behind_a_module_the_inverters_are_sk_54xe_with_five_values() {
         .collect();
     assert_eq!(ids, [0x1A0, 0x2A0]);
 }
+
+/// An expedited download of a 16-bit value.
+fn download_u16(index: u16, sub: u8, value: u16) -> [u8; 8] {
+    let (i, v) = (index.to_le_bytes(), value.to_le_bytes());
+    [0x2B, i[0], i[1], sub, v[0], v[1], 0, 0]
+}
+
+/// P700 [-01] and [-04] of `fi`.
+fn p700(s: &mut Segment, fi: i64) -> (i32, i32) {
+    let store = s
+        .device_mut()
+        .store(crate::link::Unit::Inverter(Inverter::new(fi).unwrap()))
+        .unwrap();
+    let number = proto::nord::ParamNumber::new(700).unwrap();
+    let at = |e| store.read(number, None, proto::nord::ArrayElement::new(e).ok());
+    (at(1).unwrap(), at(4).unwrap())
+}
+
+/// Every frame the segment sends on its own from `from` to `to`, polled each millisecond.
+fn run(s: &mut Segment, from: u64, to: u64) -> Vec<(u64, CanFrame)> {
+    (from..=to)
+        .flat_map(|t| {
+            s.poll(Duration::from_millis(t))
+                .into_iter()
+                .map(move |f| (t, f))
+        })
+        .collect()
+}
+
+#[test]
+fn p120_watches_the_interfaces_heartbeat_and_loses_it_as_the_manual_says() {
+    // Behind the SK 550P the interface is FI 1 (node 32): FI 2 (node 34) watches its
+    // heartbeat. P120 [-01] = 2: from boot-up, so 600 ms of silence is E10.0, 7583h
+    // "HeartBeat telegram timeout" (BU 0620 §5.3), and an EMCY with that code.
+    let mut s = segment();
+    assert!(matches!(
+        sdo(&mut s, 34, download_u16(0x2078, 1, 2)),
+        SdoResponse::InitiateDownload { .. }
+    ));
+    let out = run(&mut s, 2, 700);
+    let emcy: Vec<_> = out.iter().filter(|(_, f)| f.id() == 0x0A2).collect();
+    assert_eq!(emcy.len(), 1, "{out:?}");
+    assert_eq!(emcy[0].0, 600, "600 ms after boot-up");
+    assert_eq!(&emcy[0].1.data()[..2], &[0x83, 0x75]);
+    assert_eq!(p700(&mut s, 2), (100, 0x7583));
+    assert_eq!(
+        p700(&mut s, 3),
+        (0, 0),
+        "FI 3 has P120 = 1 (Auto) and heard nothing"
+    );
+
+    // P120 = 1 "Auto": from FI 1's first heartbeat. FI 1 beats every 100 ms, then stops.
+    let mut s = segment();
+    assert!(run(&mut s, 1, 1000).is_empty());
+    assert_eq!(p700(&mut s, 3), (0, 0));
+    assert!(matches!(
+        sdo(&mut s, 32, [0x2B, 0x17, 0x10, 0, 100, 0, 0, 0]),
+        SdoResponse::InitiateDownload { .. }
+    ));
+    let beats = run(&mut s, 1001, 2000);
+    assert!(beats.iter().all(|(_, f)| f.id() == 0x720), "{beats:?}");
+    assert_eq!(p700(&mut s, 3), (0, 0), "heartbeats keep it quiet");
+    s.receive(&frame(0x620, &[0x2B, 0x17, 0x10, 0, 0, 0, 0, 0]), 2000 * MS);
+    let out = run(&mut s, 2001, 3000);
+    let lost: Vec<u16> = out.iter().map(|(_, f)| f.id()).collect();
+    // Every further inverter (nodes 34…46) reports it.
+    assert_eq!(lost, (0x0A2..=0x0AE).step_by(2).collect::<Vec<u16>>());
+    assert!(
+        out.iter().all(|(t, _)| *t == 2501),
+        "last beat at 1901 ms + 600 ms"
+    );
+    assert_eq!(p700(&mut s, 3), (100, 0x7583));
+    assert_eq!(p700(&mut s, 1), (0, 0), "FI 1 is the interface");
+}
+
+#[test]
+fn p120_off_and_p513_no_error_keep_the_inverter_running() {
+    // P120 [-01] = 0; P513 [-03] = -0.1 s "no error" (−1) with P120 = 2.
+    for (index, sub, value) in [(0x2078, 1, 0), (0x2201, 3, 0xFFFF)] {
+        let mut s = segment();
+        if value == 0xFFFF {
+            sdo(&mut s, 34, download_u16(0x2078, 1, 2));
+        }
+        let request = download_u16(index, sub, value);
+        assert!(matches!(
+            sdo(&mut s, 34, request),
+            SdoResponse::InitiateDownload { .. }
+        ));
+        assert!(run(&mut s, 2, 2000).is_empty());
+        assert_eq!(p700(&mut s, 2), (0, 0));
+    }
+}
+
+#[test]
+fn behind_a_module_p120_loses_node_1_as_e10_9_or_e10_8() {
+    for (product, error) in [(Product::Tu4Eip, 109u16), (Product::Tu3Pol, 108)] {
+        let mut s = Segment::new(DeviceConfig::new(product)).unwrap();
+        s.poll(Duration::ZERO);
+        // The module's heartbeat (node 1, operational) arms "Auto"; 1016h names it.
+        assert_eq!(
+            sdo(&mut s, 32, upload(0x1016, 1)),
+            SdoResponse::InitiateUpload {
+                index: 0x1016,
+                sub: 1,
+                data: InitiateData::Expedited(
+                    proto::canopen::sdo::Expedited::new(&[0x58, 0x02, 0x01, 0x00]).unwrap()
+                ),
+            }
+        );
+        s.receive(&frame(0x701, &[0x05]), 10 * MS);
+        // Each of its four inverters (nodes 32…38) reports it, 600 ms after the beat.
+        let out = run(&mut s, 11, 700);
+        let ids: Vec<(u64, u16)> = out.iter().map(|(t, f)| (*t, f.id())).collect();
+        assert_eq!(
+            ids,
+            [(610, 0x0A0), (610, 0x0A2), (610, 0x0A4), (610, 0x0A6)]
+        );
+        assert_eq!(&out[0].1.data()[3..5], &error.to_le_bytes());
+        assert_eq!(p700(&mut s, 1).0, i32::from(error));
+    }
+}
+
+#[test]
+fn p748_shows_the_nodes_nmt_state() {
+    let mut s = segment();
+    let p748 = |s: &mut Segment| match sdo(s, 36, upload(0x22EC, 1)) {
+        SdoResponse::InitiateUpload {
+            data: InitiateData::Expedited(e),
+            ..
+        } => e.data()[0],
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(p748(&mut s), 127);
+    s.receive(&frame(0, &[NmtCommand::START.0, 36]), MS);
+    assert_eq!(p748(&mut s), 5);
+    s.receive(&frame(0, &[NmtCommand::ENTER_PRE_OPERATIONAL.0, 36]), MS);
+    assert_eq!(p748(&mut s), 127);
+}

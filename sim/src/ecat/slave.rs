@@ -391,7 +391,7 @@ impl Slave {
             if value == 0 || self.al.state == EcState::Init {
                 continue;
             }
-            let emergency = crate::objects::emergency_of(value, fi);
+            let emergency = crate::objects::emergency_of(value, None, fi);
             self.mailbox.send(MailboxType::COE, emergency.emit_coe());
             self.fill_mailbox();
         }

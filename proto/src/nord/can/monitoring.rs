@@ -149,6 +149,65 @@ pub fn loss_errors(product: Product) -> impl Iterator<Item = u16> {
         .map(|e| e.p700)
 }
 
+/// The heartbeat an inverter watches for its P120 monitoring, and how long it waits for it.
+///
+/// Not stated by the manuals: they say that P120 monitors the connection to the bus interface
+/// and that a lost connection is E10.0/E10.8/E10.9, not with which telegram or after how long.
+/// BU 0620 §5.3 (p. 94) names "CANopen HeartBeat monitoring telegram timeout" (7583h) among
+/// the causes of E10.0. Choice: CiA 301 heartbeat consumption (object 1016h) of the
+/// interface's heartbeat — node [`INTERFACE_NODE_ID_CHOICE`] behind a module, FI 1's node
+/// (32) behind the SK 550P, whose interface is built into FI 1 — with a consumer time of
+/// [`HEARTBEAT_CONSUMER_MS_CHOICE`]. P120 = 2 watches from boot-up, P120 = 1 "Auto" from the
+/// first heartbeat seen, P120 = 0 not at all.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct InterfaceWatch {
+    /// The node-ID whose heartbeat is consumed.
+    pub node: u8,
+    /// The consumer heartbeat time, ms.
+    pub ms: u16,
+}
+
+impl InterfaceWatch {
+    /// The watch as a CiA 301 1016h entry: the node-ID in bits 16–23, the time in 0–15.
+    pub fn consumer_entry(self) -> u32 {
+        u32::from(self.node) << 16 | u32::from(self.ms)
+    }
+}
+
+/// The consumer heartbeat time an inverter gives its interface's heartbeat (not stated by the
+/// manuals, see [`InterfaceWatch`]): 600 ms, the telegram time-out BU 2100 §4.3's gateway
+/// conditions set in P513.
+pub const HEARTBEAT_CONSUMER_MS_CHOICE: u16 = 600;
+
+/// The heartbeat the inverters behind `product` watch (see [`InterfaceWatch`]).
+pub fn interface_watch(product: Product) -> InterfaceWatch {
+    let node = match product {
+        Product::Sk550p => super::FIRST_INVERTER_ADDRESS,
+        _ => super::INTERFACE_NODE_ID_CHOICE,
+    };
+    InterfaceWatch {
+        node,
+        ms: HEARTBEAT_CONSUMER_MS_CHOICE,
+    }
+}
+
+/// The error an inverter behind `product` raises when its P120 monitoring loses the
+/// interface, P700 [-01] in tenths with the extended code for P700 [-04] where the manual
+/// gives one: E10.0 with 7583h "CANopen HeartBeat monitoring telegram timeout" behind the
+/// SK 550P (BU 0620 §5.3 p. 94, whose table ends at 10.8), E10.8 behind an SK TU3, E10.9
+/// behind an SK CU4/TU4 "(see setting of parameter P120)" (BU 2100 §8.3 p. 59, BU 2200 §8.4
+/// p. 67; [`FI_ERRORS`]).
+pub fn interface_loss_error(product: Product) -> (u16, Option<u16>) {
+    match product {
+        Product::Sk550p => (
+            CanCause::HeartbeatTimeout.p700(),
+            Some(CanCause::HeartbeatTimeout.ds402()),
+        ),
+        Product::Tu3Eip | Product::Tu3Pol | Product::Tu3Pnt => (108, None),
+        Product::Tu4Eip | Product::Cu4Eip | Product::Tu4Pol | Product::Cu4Pol => (109, None),
+    }
+}
+
 /// The CAN causes of E10.0 with their DS402 extended code in P700 [-04] (BU 0620 §5.3 p. 94;
 /// the USS and USB rows of 10.0, 7584h and 7586h, are no system-bus causes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -289,6 +348,23 @@ mod tests {
 
     fn fi(n: i64) -> Inverter {
         Inverter::new(n).unwrap()
+    }
+
+    #[test]
+    fn a_lost_interface_is_the_error_each_manual_gives() {
+        for product in Product::ALL {
+            let (p700, extended) = interface_loss_error(product);
+            assert!(loss_errors(product).any(|e| e == p700), "{product:?}");
+            assert_eq!(extended.is_some(), product == Product::Sk550p);
+        }
+        assert_eq!(
+            interface_watch(Product::Sk550p).consumer_entry(),
+            0x0020_0258
+        );
+        assert_eq!(
+            interface_watch(Product::Tu4Pol).node,
+            super::super::INTERFACE_NODE_ID_CHOICE
+        );
     }
 
     #[test]

@@ -185,8 +185,15 @@ pub const TB_IO_OUTPUTS: [(u16, u8); 2] = [(481, 9), (481, 10)];
 /// P748 "CANopen status" of every inverter, [-01] "Displays the system bus status" (BU 0620
 /// §4.5 p. 91, §3.9 step 8 p. 75; BU 2100 §7.2 p. 55 and §5.3 step 8 "System bus status";
 /// BU 2200 §7.2 p. 60 "CANopen Zustand"). Its bits are not stated by the manuals (they refer
-/// to BU 0600 / BU 0200); nothing here defines them.
+/// to BU 0600 / BU 0200). This project's choice, not stated by the manuals: [-01] is the
+/// node's NMT state as its heartbeat codes it (CiA 301 §7.2.8.3.2.1: 0 boot-up, 4 stopped,
+/// 5 operational, 127 pre-operational), [`p748_status`].
 pub const P748: u16 = 748;
+
+/// P748 [-01] of a node in `state` (the choice named at [`P748`]).
+pub fn p748_status(state: crate::canopen::nmt::NmtState) -> i32 {
+    i32::from(state.code().0)
+}
 
 #[cfg(test)]
 mod tests {
