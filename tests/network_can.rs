@@ -1,7 +1,8 @@
 //! The harness against a system bus it reaches over the network: `harness serve can
 //! --socketcand` serves the simulated segment of an SK 550P on loopback, and `harness run --dut
 //! socketcand://HOST:PORT/can0` tests its inverters as a persistent device, with the same
-//! system-bus cases as the embedded run; what a case wrote is written back afterwards. A
+//! system-bus cases as the embedded run; what a case wrote is written back afterwards, and
+//! process data run in real time and end with the drives and nodes as the case found them. A
 //! missing bus name and a refused channel are clear errors. Loopback only: no peer to skip for.
 
 use std::process::Command;
@@ -18,9 +19,10 @@ fn the_system_bus_cases_pass_over_socketcand_and_leave_the_parameters_as_found()
     let listen = format!("{}:29536", free_loopback());
     let _server = serve_can(&listen);
     let out_dir = std::env::temp_dir().join(format!("nord-can-dut-{}", std::process::id()));
-    let run = |filter: &str| {
+    let run_with = |filter: &str, extra: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_harness"))
             .args(["run", "--profile", "sk550p", "--timeout", "2"])
+            .args(extra)
             .args(["--filter", filter])
             .args(["--dut", &format!("socketcand://{listen}/can0")])
             .arg("--out")
@@ -28,6 +30,7 @@ fn the_system_bus_cases_pass_over_socketcand_and_leave_the_parameters_as_found()
             .output()
             .expect("harness runs")
     };
+    let run = |filter: &str| run_with(filter, &[]);
     let out = run("can/sdo/");
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(0), "{stdout}");
@@ -62,6 +65,17 @@ fn the_system_bus_cases_pass_over_socketcand_and_leave_the_parameters_as_found()
         "{}",
         String::from_utf8_lossy(&again.stdout)
     );
+    // Process data in the bus interface's place, in real time: the drive is enabled and
+    // stopped through PDOs on SYNC and brought back to "Switch-on block" after the case. The
+    // nodes are then back in pre-operational, where the PDO cases expect to find them.
+    let moved = run_with("bu0620/drive-bits/enable-pulses-bit-4", &["--allow-motion"]);
+    let stdout = String::from_utf8_lossy(&moved.stdout);
+    assert_eq!(moved.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("1 pass, 0 fail"), "{stdout}");
+    let pdo = run_with("can/pdo/pdos-only-in-operational", &["--allow-motion"]);
+    let stdout = String::from_utf8_lossy(&pdo.stdout);
+    assert_eq!(pdo.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("1 pass, 0 fail"), "{stdout}");
     let _ = std::fs::remove_dir_all(&out_dir);
 }
 

@@ -993,11 +993,13 @@ impl Device {
     pub fn fault_changes(&mut self, seen: &mut [i32; 8]) -> Vec<(Inverter, i32)> {
         let mut changed = Vec::new();
         for (i, unit) in self.inverters.iter().enumerate().take(seen.len()) {
-            let value = unit
-                .params
-                .store
-                .read(P700, None, proto::nord::ArrayElement::new(1).ok())
-                .unwrap_or(0);
+            // What `show_fault` last wrote, else the store (this runs on every bus frame).
+            let value = unit.p700.unwrap_or_else(|| {
+                unit.params
+                    .store
+                    .read(P700, None, proto::nord::ArrayElement::new(1).ok())
+                    .unwrap_or(0)
+            });
             if value != seen[i] {
                 seen[i] = value;
                 if let Ok(fi) = Inverter::new(i as i64 + 1) {

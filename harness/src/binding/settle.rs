@@ -178,6 +178,16 @@ impl Drives {
         }
     }
 
+    /// Only the inverters `commanded` (a bus that carries no others' process data).
+    pub(crate) fn only(commanded: &[Inverter]) -> Drives {
+        Drives {
+            fis: commanded
+                .iter()
+                .map(|fi| (*fi, Settle::new(true)))
+                .collect(),
+        }
+    }
+
     /// The control word of each inverter for cycle `n`.
     pub(crate) fn controls(&mut self, n: u32) -> Vec<(Inverter, u16)> {
         self.fis

@@ -8,9 +8,8 @@
 //! built into it); a bus module's own parameters are not on the system bus.
 //!
 //! `can:` steps (`step.rs`) put a frame or an NMT command on the bus and observe every frame
-//! for the step's time. Not yet: process data (the simulated nodes run PDOs on SYNC, see
-//! `sim::can`, but this binding does not drive them): a case that needs it is not
-//! applicable, with that reason.
+//! for the step's time. `process`/`wait` steps run the inverters' PDOs on SYNC in the bus
+//! interface's place (`process.rs`).
 
 use std::time::Duration;
 
@@ -20,10 +19,12 @@ use proto::nord::{Inverter, ParamAddress, Product};
 use serde_json::{json, Value};
 
 use super::link::CanLink;
+use super::process::{nmt, PdoCycle, PdoError, Pdos};
 use super::sdo::{describe, frame_hex, Client, SdoError};
 use super::step::CanStep;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::objects::{self, Object, Unit};
+use crate::binding::settle::{self, Cycling, Drives};
 use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
 use crate::hex::hex;
 use crate::ledger::{Account, Ledger, Problem};
@@ -32,10 +33,11 @@ use crate::profile::Capability;
 use crate::suite::{Action, OrderSpec};
 use proto::can::CanFrame;
 
-/// What the embedded segment offers: parameters over SDO, and the simulator's own powers.
-/// `can` marks a case about the system bus itself (its own `can:` steps are not built yet).
-const EMBEDDED_CAPABILITIES: [Capability; 6] = [
+/// What the embedded segment offers: parameters over SDO, process data over PDOs, `can:`
+/// steps, and the simulator's own powers.
+const EMBEDDED_CAPABILITIES: [Capability; 7] = [
     Capability::ParameterAccess,
+    Capability::ProcessData,
     Capability::Bus("can"),
     Capability::FaultInjection,
     Capability::Observe,
@@ -43,7 +45,15 @@ const EMBEDDED_CAPABILITIES: [Capability; 6] = [
     Capability::FactoryState,
 ];
 /// What a segment on the network offers.
-const NETWORK_CAPABILITIES: [Capability; 2] = [Capability::ParameterAccess, Capability::Bus("can")];
+const NETWORK_CAPABILITIES: [Capability; 3] = [
+    Capability::ParameterAccess,
+    Capability::ProcessData,
+    Capability::Bus("can"),
+];
+
+/// Cycles a process step runs on past its own for an inverter's TPDO1 that did not come in
+/// the last one (a node on a loaded host), before the step fails.
+const LATE_CYCLES: u32 = 20;
 
 /// The frames a `can:` step takes at most (a babbling node ends the step there).
 const MAX_FRAMES_PER_STEP: usize = 1000;
@@ -71,6 +81,10 @@ pub(crate) struct CanBinding<L> {
     ledger: Option<Ledger<NodeObject>>,
     /// FI 1's node, whose identity the device reports.
     fi1_node: u8,
+    /// The inverters' process data.
+    pdos: Pdos,
+    /// Exchanges of process-data cycles taken ahead of the step's end (compacted).
+    pending: Vec<Exchange>,
 }
 
 /// The refusal of an SDO abort code.
@@ -98,6 +112,24 @@ fn step_error(e: SdoError) -> StepError {
     }
 }
 
+fn pdo_error(e: PdoError) -> StepError {
+    match e {
+        PdoError::Link(l) => StepError::Link(l.to_string()),
+        e @ PdoError::Frame(_) => StepError::Suite(e.to_string()),
+        e @ PdoError::NoNode(_) => StepError::NotApplicable(e.to_string()),
+        PdoError::Silent {
+            fi,
+            node,
+            cycles,
+            cycle,
+        } => StepError::Late {
+            what: format!("TPDO1 of node {node} (FI {fi}) after SYNC"),
+            limit: cycle,
+            waited: cycle * cycles,
+        },
+    }
+}
+
 fn refused_or(e: SdoError) -> Result<Observation, StepError> {
     match e {
         SdoError::Abort(code) => Ok(abort(code)),
@@ -112,6 +144,7 @@ impl<L: CanLink> CanBinding<L> {
         link: L,
         limit: Duration,
         product: Product,
+        inverters: u8,
         what: String,
         persistent: bool,
     ) -> Result<CanBinding<L>, OpenError> {
@@ -143,7 +176,82 @@ impl<L: CanLink> CanBinding<L> {
             },
             ledger: persistent.then(Ledger::default),
             fi1_node: node,
+            pdos: Pdos::new(product, inverters),
+            pending: Vec::new(),
         })
+    }
+
+    /// A `process` or `wait` step: cycles of every inverter's PDOs, then the status word and
+    /// actual values of the step's inverter from its last TPDOs.
+    fn process(&mut self, action: &Action) -> Result<Value, StepError> {
+        let (fi, words, _) = crate::binding::process_run(action, self.pdos.cycle())?;
+        match words {
+            Some(w) => self.pdos.set_words(fi, w).map_err(pdo_error)?,
+            // `wait` before any words: FI 1's process data run, 0000h.
+            None if self.pdos.commanded.is_empty() => {
+                self.pdos.set_words(fi, [0; 6]).map_err(pdo_error)?
+            }
+            None => {}
+        }
+        // The cycle depends on how many inverters run.
+        let (_, _, cycles) = crate::binding::process_run(action, self.pdos.cycle())?;
+        let real_time = self.client.link.segment().is_none();
+        let time = crate::binding::process_time(action, real_time);
+        let mut c = PdoCycle {
+            client: &mut self.client,
+            pdos: &mut self.pdos,
+        };
+        match time {
+            Some(d) => settle::run_cycles_for(&mut c, &mut self.pending, d),
+            None => settle::run_cycles(&mut c, &mut self.pending, u64::from(cycles.max(1))),
+        }
+        .map_err(pdo_error)?;
+        for _ in 0..LATE_CYCLES {
+            if c.pdos.inputs(fi).map_err(pdo_error)?.is_some() {
+                break;
+            }
+            c.run_cycles(1).map_err(pdo_error)?;
+        }
+        let words = match c.pdos.inputs(fi).map_err(pdo_error)? {
+            Some(w) => w,
+            None => {
+                return Err(pdo_error(PdoError::Silent {
+                    fi: fi.get(),
+                    node: c.pdos.node(fi).map_err(pdo_error)?,
+                    cycles: LATE_CYCLES + 1,
+                    cycle: c.pdos.cycle(),
+                }))
+            }
+        };
+        Ok(crate::binding::process_fields(words[0], &words[1..]))
+    }
+
+    /// After a case that ran process data: on a segment that outlives the case, the drives
+    /// it moved back to "Switch-on block"; then every node back to pre-operational, where a
+    /// case finds them.
+    fn stop_process_data(&mut self) -> Result<(), Problem> {
+        if !self.pdos.started() {
+            return Ok(());
+        }
+        if self.ledger.is_some() {
+            let period = self.pdos.cycle();
+            let mut drives = Drives::only(&self.pdos.commanded);
+            let mut c = PdoCycle {
+                client: &mut self.client,
+                pdos: &mut self.pdos,
+            };
+            drives.settle(&mut c, &mut self.pending, period, |e| {
+                Problem::step("settling the drives", pdo_error(e))
+            })?;
+        }
+        let stop = nmt(proto::canopen::NmtCommand::ENTER_PRE_OPERATIONAL, 0)
+            .map_err(|e| Problem::step("NMT pre-operational", pdo_error(e)))?;
+        self.client
+            .link
+            .send(&stop)
+            .map_err(|e| Problem::step("NMT pre-operational", StepError::Link(e.to_string())))?;
+        self.pdos = Pdos::new(self.product, self.pdos.len());
+        Ok(())
     }
 
     /// The node and object of a `read`/`write` step, and the parameter's definition.
@@ -337,11 +445,7 @@ impl<L: CanLink> Binding for CanBinding<L> {
                         .into(),
                 ))
             }
-            Action::Process { .. } | Action::Wait(_) => {
-                return Err(StepError::NotApplicable(
-                    "process data over the system bus (PDOs, SYNC) is not built yet".into(),
-                ))
-            }
+            Action::Process { .. } | Action::Wait(_) => self.process(action)?,
             Action::Inject { inverter, error } => {
                 self.simulated()?
                     .0
@@ -372,7 +476,9 @@ impl<L: CanLink> Binding for CanBinding<L> {
     }
 
     fn take_exchanges(&mut self) -> Vec<Exchange> {
-        self.client.take_exchanges()
+        let mut all = std::mem::take(&mut self.pending);
+        all.extend(self.client.take_exchanges());
+        all
     }
 
     fn identity(&mut self) -> Option<Result<Identity, StepError>> {
@@ -380,10 +486,14 @@ impl<L: CanLink> Binding for CanBinding<L> {
     }
 
     fn finish(&mut self) -> Result<(), CleanupError> {
-        let Some(ledger) = self.ledger.take() else {
-            return Ok(());
-        };
         let mut account = Account::default();
+        if account.attempt(|| "stopping the process data".into()) {
+            let r = self.stop_process_data();
+            account.note(r);
+        }
+        let Some(ledger) = self.ledger.take() else {
+            return account.into_result().map_err(CleanupError);
+        };
         ledger.restore(&mut account, |at, before| {
             self.client
                 .download(at.node, at.object.index, at.object.sub, before)

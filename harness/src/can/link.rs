@@ -58,6 +58,9 @@ pub(crate) struct Embedded {
     segment: Segment,
     now: Duration,
     queue: VecDeque<CanFrame>,
+    /// Frames sent at `now` and not yet on the segment: they go together when the link is
+    /// next read (the same instant on the virtual clock).
+    inbox: Vec<CanFrame>,
 }
 
 impl Embedded {
@@ -68,18 +71,28 @@ impl Embedded {
             segment,
             now: Duration::ZERO,
             queue,
+            inbox: Vec::new(),
+        }
+    }
+
+    /// The frames sent so far onto the segment.
+    fn deliver(&mut self) {
+        if !self.inbox.is_empty() {
+            let answers = self.segment.receive_all(&self.inbox, self.now);
+            self.queue.extend(answers);
+            self.inbox.clear();
         }
     }
 }
 
 impl CanLink for Embedded {
     fn send(&mut self, frame: &CanFrame) -> Result<(), CanLinkError> {
-        let answers = self.segment.receive(frame, self.now);
-        self.queue.extend(answers);
+        self.inbox.push(*frame);
         Ok(())
     }
 
     fn recv(&mut self, limit: Duration) -> Result<Option<CanFrame>, CanLinkError> {
+        self.deliver();
         let deadline = self.now + limit;
         loop {
             if let Some(f) = self.queue.pop_front() {
@@ -105,6 +118,7 @@ impl CanLink for Embedded {
     }
 
     fn segment(&mut self) -> Option<(&mut Segment, Duration)> {
+        self.deliver();
         Some((&mut self.segment, self.now))
     }
 }

@@ -6,13 +6,15 @@
 //! or a segment behind a socketcand server (`--dut socketcand://HOST[:PORT]/CHANNEL`);
 //! `harness serve can --socketcand ADDR` serves the simulated segment to CANopen masters such
 //! as python-canopen; `can:` steps put frames and NMT commands on the bus and observe what comes
-//! back. What does not yet: process data (PDOs, SYNC), any
-//! maker's node (`any@can`) and SocketCAN (`can://IFACE`); each refuses with that said.
+//! back; `process`/`wait` steps run PDOs on SYNC in the bus interface's place ([`process`]).
+//! What does not yet: any maker's node (`any@can`) and SocketCAN (`can://IFACE`); each refuses
+//! with that said.
 
 pub mod bench_support;
 mod binding;
 mod eds;
 mod link;
+mod process;
 mod sdo;
 mod serve;
 mod step;
@@ -67,7 +69,7 @@ fn parse_step(v: &Value) -> Result<Box<dyn BusStep>, String> {
 /// The simulated segment of the profile's product, behind the SDO client.
 fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
     let config = crate::binding::embedded::device_config(profile)?;
-    let product = config.product;
+    let (product, inverters) = (config.product, config.inverters);
     let segment = sim::can::Segment::new(config).map_err(|e| OpenError::Profile(e.to_string()))?;
     let link = link::Embedded::new(segment);
     let what = "embedded system-bus segment".to_string();
@@ -75,7 +77,7 @@ fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, O
         link,
         context.tap.as_ref(),
         EMBEDDED_LIMIT,
-        product,
+        (product, inverters),
         what,
         false,
     )
@@ -86,16 +88,19 @@ fn open<L: link::CanLink + 'static>(
     link: L,
     tap: Option<&SharedTap>,
     limit: Duration,
-    product: proto::nord::Product,
+    (product, inverters): (proto::nord::Product, u8),
     what: String,
     persistent: bool,
 ) -> Result<Box<dyn Binding>, OpenError> {
     Ok(match tap {
-        None => Box::new(CanBinding::open(link, limit, product, what, persistent)?),
+        None => Box::new(CanBinding::open(
+            link, limit, product, inverters, what, persistent,
+        )?),
         Some(tap) => Box::new(CanBinding::open(
             link::Tapped::new(link, tap.clone()),
             limit,
             product,
+            inverters,
             what,
             persistent,
         )?),
@@ -158,11 +163,12 @@ impl DutFactory for SocketcandFactory {
         })?;
         let link = link::Socketcand::connect(self.addr, &self.channel, self.timeout)
             .map_err(|e| OpenError::Unreachable(e.to_string()))?;
+        let inverters = profile.inverters.min(product.max_inverters());
         open(
             link,
             self.tap.as_ref(),
             self.timeout,
-            product,
+            (product, inverters),
             self.describe(),
             true,
         )

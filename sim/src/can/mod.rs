@@ -115,10 +115,18 @@ impl Segment {
 
     /// A frame on the bus at `now`: what the nodes answer to it, in node order.
     pub fn receive(&mut self, frame: &CanFrame, now: Duration) -> Vec<CanFrame> {
+        self.receive_all(std::slice::from_ref(frame), now)
+    }
+
+    /// Frames on the bus one after the other at `now` (a master's RPDOs and SYNC): what the
+    /// nodes answer to them, in order, the segment's monitoring run once for all of them.
+    pub fn receive_all(&mut self, frames: &[CanFrame], now: Duration) -> Vec<CanFrame> {
         let mut out = self.poll(now);
-        for node in &mut self.nodes {
-            node.overhear(frame, now);
-            out.extend(node.receive(frame, &mut self.device, now));
+        for frame in frames {
+            for node in &mut self.nodes {
+                node.overhear(frame, now);
+                out.extend(node.receive(frame, &mut self.device, now));
+            }
         }
         self.overheard(&out, now);
         self.look(now);

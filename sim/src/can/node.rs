@@ -64,6 +64,8 @@ pub(super) struct Node {
     watch: Watch,
     /// P748 [-01] as last shown.
     shown_status: Option<i32>,
+    /// P120 [-01] as last read; read again after an SDO download to the node.
+    p120: Option<i32>,
 }
 
 /// The P120 monitoring of the interface's heartbeat.
@@ -97,6 +99,7 @@ impl Node {
             consumer: factory_consumer(product),
             watch: Watch::default(),
             shown_status: None,
+            p120: None,
         }
     }
 
@@ -139,13 +142,16 @@ impl Node {
             store.set_info(748, 1, status);
             self.shown_status = Some(status);
         }
-        let p120 = ParamNumber::new(120)
-            .ok()
-            .and_then(|n| {
-                let first = proto::nord::ArrayElement::new(1).ok();
-                store.read(n, None, first).ok()
-            })
-            .unwrap_or(0);
+        let p120 = *self.p120.get_or_insert_with(|| {
+            ParamNumber::new(120)
+                .ok()
+                .and_then(|n| {
+                    store
+                        .read(n, None, proto::nord::ArrayElement::new(1).ok())
+                        .ok()
+                })
+                .unwrap_or(0)
+        });
         let ms = u64::from(self.consumer as u16);
         let since = match p120 {
             _ if ms == 0 || self.state == NmtState::Initialisation => None,
@@ -252,6 +258,7 @@ impl Node {
                 {
                     return None;
                 }
+                self.p120 = None;
                 let mut od = Dictionary { node: self, device };
                 let mut transfer = std::mem::take(&mut od.node.transfer);
                 let answer = transfer.serve(frame.data(), &mut od);
