@@ -415,6 +415,10 @@ pub struct Device {
     /// Per inverter, the words the interface's display parameters show
     /// ([`Device::show_process_data`]).
     process_shown: Vec<Option<([u16; 6], [u16; 6])>>,
+    /// The system bus's frames, recorded once a tap asked for them ([`Device::tap_system_bus`]).
+    tap: Option<crate::system_bus::Tap>,
+    /// The latest time the device was given.
+    now: Duration,
 }
 
 impl Device {
@@ -509,6 +513,35 @@ impl Device {
             shown: None,
             module_outputs: 0,
             process_shown: vec![None; usize::from(count)],
+            tap: None,
+            now: Duration::ZERO,
+        }
+    }
+
+    /// The frames the bus interface exchanged with its inverters on the system bus since the
+    /// last call (`crate::system_bus`), each with its time; the first call attaches the tap
+    /// and returns none (nothing is recorded without one).
+    pub fn tap_system_bus(&mut self) -> Vec<(Duration, proto::can::CanFrame)> {
+        match self.tap.as_mut() {
+            Some(tap) => tap.take(self.now),
+            None => {
+                self.tap = Some(crate::system_bus::Tap::new(self.config.product));
+                Vec::new()
+            }
+        }
+    }
+
+    /// A field-bus access to parameter `number` of `unit` at SDO sub-index `sub`, for the tap.
+    pub(crate) fn gateway_parameter(
+        &mut self,
+        unit: Unit,
+        number: ParamNumber,
+        sub: u8,
+        access: crate::system_bus::Access<'_>,
+    ) {
+        if let (Some(tap), Unit::Inverter(fi)) = (self.tap.as_mut(), unit) {
+            let index = proto::nord::ecat::PARAMETER_BASE + number.get();
+            tap.parameter(fi, index, sub, access, self.now);
         }
     }
 
@@ -535,6 +568,7 @@ impl Device {
     ///   [`bus_status`]): ready, cyclic communication, field-bus timeout, timeout P513/P151
     ///   (while an inverter shows E10.3), the inverters online.
     fn monitor(&mut self, now: Duration) {
+        self.now = now;
         self.show_relays();
         let mut flags = BusFlags {
             fieldbus_timeout: self.fieldbus_timeout,
@@ -693,7 +727,11 @@ impl Device {
                 let unit = self.inverter_mut(i)?;
                 let control = ppo.pzd.first().copied().unwrap_or(0);
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
-                let mut pzd = unit.process(control, setpoints, now).to_vec();
+                let answer = unit.process(control, setpoints, now);
+                if let Some(tap) = self.tap.as_mut() {
+                    tap.process(i, &ppo.pzd, &answer, now);
+                }
+                let mut pzd = answer.to_vec();
                 pzd.resize(ppo.pzd.len(), 0);
                 self.show_process_data(i, Some(ppo_type), &ppo.pzd, &pzd);
                 (pkw, pzd)
@@ -723,9 +761,71 @@ impl Device {
                 let params = &mut self.inverter_mut(i)?.params;
                 let answer = params.cycle(order, delay, product, unit);
                 show_parameter_data(&mut params.store, &order, &answer);
+                if self.tap.is_some() {
+                    self.tap_order(i, &order, &answer);
+                }
                 Ok(answer)
             }
         }
+    }
+
+    /// A PKW order to FI `fi` the inverter answered, for the tap: once per order and answer
+    /// (the order repeats every cycle until it changes). The manuals map no PKW error number
+    /// to an abort code: a refused order shows as abort 0800 0000h "general error".
+    fn tap_order(&mut self, fi: Inverter, order: &PkwRepr, answer: &PkwRepr) {
+        use proto::nord::params::Width;
+        use proto::nord::pkw::{Ind, OrderLabel, ResponseLabel};
+        let label = OrderLabel(order.ak);
+        let read = matches!(
+            label,
+            OrderLabel::REQUEST_VALUE | OrderLabel::REQUEST_ARRAY_VALUE
+        );
+        if answer.ak == 0 || !(read || label.is_change()) {
+            return;
+        }
+        let Ok(number) = ParamNumber::new(i64::from(order.parameter())) else {
+            return;
+        };
+        let Some(def) = self
+            .inverter_mut(fi)
+            .ok()
+            .and_then(|u| u.params.store.def(number))
+        else {
+            return;
+        };
+        let Some(tap) = self.tap.as_mut() else {
+            return;
+        };
+        if !tap.first_answer(fi, order.emit_bytes(), answer.emit_bytes()) {
+            return;
+        }
+        let ind = Ind(order.ind);
+        let set = def
+            .set_dependent
+            .then(|| proto::nord::ParamSet::new(i64::from(ind.set())).ok())
+            .flatten();
+        let element = match (def.array.is_some(), def.set_dependent) {
+            (false, _) => None,
+            (true, true) => proto::nord::ArrayElement::new(i64::from(ind.element())).ok(),
+            (true, false) => proto::nord::ArrayElement::new(i64::from(ind.subindex()) + 1).ok(),
+        };
+        let sub = proto::nord::addr::sdo_subindex(set, element);
+        let width = match def.width {
+            Width::Word => 2,
+            Width::Dword => 4,
+        };
+        let refused = (ResponseLabel(answer.ak) == ResponseLabel::CANNOT_EXECUTE)
+            .then_some(proto::nord::errors::SdoAbort(0x0800_0000));
+        let index = proto::nord::ecat::PARAMETER_BASE + number.get();
+        let now = self.now;
+        let value = |r: &PkwRepr| r.value().to_le_bytes();
+        let (sent, back) = (value(order), value(answer));
+        let access = match (read, refused) {
+            (true, None) => crate::system_bus::Access::Read(Ok(&back[..width])),
+            (true, Some(code)) => crate::system_bus::Access::Read(Err(code)),
+            (false, r) => crate::system_bus::Access::Write(&sent[..width], r.map_or(Ok(()), Err)),
+        };
+        tap.parameter(fi, index, sub, access, now);
     }
 
     /// The present IP settings show a saved one: P877 "Present IP gateway" the gateway of P852
@@ -851,9 +951,18 @@ impl Device {
         setpoints: &[u16],
         now: Duration,
     ) -> Result<[u16; 6], DeviceError> {
-        Ok(self
+        let answer = self
             .inverter_mut(inverter)?
-            .process(control, setpoints, now))
+            .process(control, setpoints, now);
+        if let Some(tap) = self.tap.as_mut() {
+            let mut sent = [0u16; 6];
+            sent[0] = control;
+            for (d, w) in sent[1..].iter_mut().zip(setpoints) {
+                *d = *w;
+            }
+            tap.process(inverter, &sent, &answer, now);
+        }
+        Ok(answer)
     }
 
     /// Time passes without a frame: telegram monitoring runs.

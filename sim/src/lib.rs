@@ -18,3 +18,4 @@ mod objects;
 pub mod pkw_server;
 pub mod pnio;
 pub mod store;
+mod system_bus;

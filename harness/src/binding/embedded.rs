@@ -202,7 +202,11 @@ impl Dut for Embedded {
 }
 
 /// What every embedded DUT can show.
-pub(crate) const OBSERVABLE: &str = "state, leds, eeprom-writes, interface-eeprom-writes";
+pub(crate) const OBSERVABLE: &str =
+    "state, leds, eeprom-writes, interface-eeprom-writes, system-bus";
+
+/// The frames of the system bus a `system-bus` observation shows in full; the count covers all.
+const SYSTEM_BUS_FRAMES_SHOWN: usize = 200;
 
 /// Internal state of the simulated device at `now`; `None` for a `what` it does not know, so a
 /// binding can add its own.
@@ -220,8 +224,39 @@ pub(crate) fn observe_device(
         }
         "eeprom-writes" => json!({ "count": device.eeprom_writes(Some(inverter))? }),
         "interface-eeprom-writes" => json!({ "count": device.eeprom_writes(None)? }),
+        "system-bus" => system_bus(device),
         _ => return Ok(None),
     }))
+}
+
+/// What the bus interface put on the system bus since the last look (the first look attaches
+/// the tap, `sim::device::Device::tap_system_bus`): the frames (`ID DATA`, joined by `; `),
+/// the SDO frames among them alone, their count, and the shortest time between two SYNCs
+/// (µs), the process-data cycle.
+fn system_bus(device: &mut Device) -> Value {
+    let frames = device.tap_system_bus();
+    let syncs: Vec<Duration> = frames
+        .iter()
+        .filter(|(_, f)| f.id() == 0x080)
+        .map(|(t, _)| *t)
+        .collect();
+    let gap = syncs.windows(2).map(|w| w[1] - w[0]).min();
+    let shown: Vec<String> = frames
+        .iter()
+        .take(SYSTEM_BUS_FRAMES_SHOWN)
+        .map(|(_, f)| crate::can::frame_hex(f))
+        .collect();
+    let sdo: Vec<String> = frames
+        .iter()
+        .filter(|(_, f)| (0x581..=0x67F).contains(&f.id()))
+        .map(|(_, f)| crate::can::frame_hex(f))
+        .collect();
+    json!({
+        "frames": shown.join("; "),
+        "sdo": sdo.join("; "),
+        "count": frames.len(),
+        "sync_gap_us": gap.map(|g| g.as_micros() as u64),
+    })
 }
 
 /// The identity the embedded simulator of `product` reports over `bus`, as a connection check

@@ -30,6 +30,7 @@ use crate::pcap::SharedTap;
 use crate::profile::Profile;
 use crate::runner::DutFactory;
 use binding::CanBinding;
+pub(crate) use sdo::frame_hex;
 
 /// The registry entry.
 pub(crate) const BUS: Bus = Bus {

@@ -19,8 +19,7 @@ use proto::can::CanFrame;
 use proto::canopen::cob_id::{Cob, Function};
 use proto::canopen::NmtCommand;
 use proto::nord::can::{
-    cycle_bus_time_us, inverter_series, pdo_words, process_values, update_cycle, InverterSeries,
-    SystemBusAddress, UpdateCycle,
+    cycle_period_us, inverter_series, pdo_words, process_values, InverterSeries, SystemBusAddress,
 };
 use proto::nord::{Inverter, Product};
 
@@ -84,12 +83,11 @@ fn series(product: Product) -> InverterSeries {
 
 /// The period of `inverters` inverters behind `product` (see the module documentation).
 pub(super) fn period(product: Product, inverters: u8) -> Duration {
-    let stated = match update_cycle(product, inverters) {
-        Ok(UpdateCycle::Table(us) | UpdateCycle::AtLeast(us)) => us,
-        Err(_) => proto::nord::can::MIN_CYCLE_US,
-    };
-    let wire = cycle_bus_time_us(series(product), inverters).div_ceil(1000) * 1000;
-    Duration::from_micros(u64::from(stated.max(wire)))
+    Duration::from_micros(u64::from(cycle_period_us(
+        product,
+        series(product),
+        inverters,
+    )))
 }
 
 impl Pdos {
@@ -330,7 +328,11 @@ mod tests {
         let eight = period(Product::Sk550p, 8);
         assert!(eight > Duration::from_millis(5), "{eight:?}");
         assert_eq!(
-            u64::from(cycle_bus_time_us(InverterSeries::Sk5x0p, 8)).div_ceil(1000),
+            u64::from(proto::nord::can::cycle_bus_time_us(
+                InverterSeries::Sk5x0p,
+                8
+            ))
+            .div_ceil(1000),
             eight.as_millis() as u64
         );
         // The SK TU3-EIP's table gives 5 ms for one inverter.

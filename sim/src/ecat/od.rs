@@ -9,6 +9,7 @@
 //! Refusals are CiA 301 abort codes; [`abort_of`] is the one place a parameter store's refusal
 //! becomes one.
 
+use crate::system_bus::Access as GatewayAccess;
 use proto::nord::ecat::{
     self as def, parameter_data_type, parameter_object, parameter_subindex, DataType, EntryAccess,
     Object, ObjectCode, ParamSub, Value,
@@ -112,10 +113,14 @@ impl Dictionary {
             },
             Target::Parameter { unit, number, def } => {
                 let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
-                let read = |s: u8| read_sub(store, number, def, s);
                 if !complete {
-                    return read(sub);
+                    let r = read_sub(store, number, def, sub);
+                    let carried = r.as_deref().map_err(|e| *e);
+                    cx.device
+                        .gateway_parameter(unit, number, sub, GatewayAccess::Read(carried));
+                    return r;
                 }
+                let read = |s: u8| read_sub(store, number, def, s);
                 let count = def::parameter_count(def.set_dependent, def.array)
                     .ok_or(abort::UNSUPPORTED_ACCESS)?;
                 let mut out = Vec::new();
@@ -197,7 +202,10 @@ impl Dictionary {
                     }
                     return Ok(());
                 }
-                write_sub(store, number, def, sub, data)
+                let r = write_sub(store, number, def, sub, data);
+                cx.device
+                    .gateway_parameter(unit, number, sub, GatewayAccess::Write(data, r));
+                r
             }
         }
     }

@@ -8,12 +8,14 @@ use proto::enip::cm::UnconnectedSend;
 use proto::enip::epath::Segment;
 use proto::enip::WireError;
 use proto::nord::addr::cip_decode_instance;
-use proto::nord::params::{Access, Width};
+use proto::nord::params::{Access as ParamAccess, Width};
 use proto::nord::{Family, Inverter, ParamNumber, Product};
 
 use super::{connections, malformed, Adapter, ClientId};
 use crate::link::Unit;
+use crate::objects::abort_of;
 use crate::store::{AccessError, ParamStore, Persist};
+use crate::system_bus::Access;
 
 /// The MAC address the simulator shows: NORD's prefix F0:5F:5A (BU 0620 §4.4.1, BU 2100
 /// §7.1.4) and a suffix from the product code.
@@ -500,12 +502,19 @@ fn parameter(a: &mut Adapter, class: u16, req: &MrRequest) -> MrResponse {
         Width::Word => 2,
         Width::Dword => 4,
     };
+    let sub = proto::nord::addr::sdo_subindex(set, element);
     if get {
         if !req.data.is_empty() {
             return MrResponse::error(s, GS::TOO_MUCH_DATA);
         }
-        return match store.read(number, set, element) {
-            Ok(v) => MrResponse::ok(s, v.to_le_bytes()[..width].to_vec()),
+        let read = store
+            .read(number, set, element)
+            .map(|v| v.to_le_bytes()[..width].to_vec());
+        let carried = read.as_deref().map_err(|e| abort_of(*e, 0, Some(def)));
+        a.device
+            .gateway_parameter(unit, number, sub, Access::Read(carried));
+        return match read {
+            Ok(bytes) => MrResponse::ok(s, bytes),
             Err(e) => MrResponse::error(s, access_status(e)),
         };
     }
@@ -513,7 +522,7 @@ fn parameter(a: &mut Adapter, class: u16, req: &MrRequest) -> MrResponse {
     if product == Product::Sk550p && attr == 853 {
         return MrResponse::error(s, GS::ATTRIBUTE_NOT_SETTABLE);
     }
-    if def.access == Access::ReadOnly {
+    if def.access == ParamAccess::ReadOnly {
         return MrResponse::error(s, GS::ATTRIBUTE_NOT_SETTABLE);
     }
     let value = match req.data.len() {
@@ -529,7 +538,17 @@ fn parameter(a: &mut Adapter, class: u16, req: &MrRequest) -> MrResponse {
         }
         _ => i32::from_le_bytes([req.data[0], req.data[1], req.data[2], req.data[3]]),
     };
-    match store.write(number, set, element, value, Persist::Eeprom) {
+    let written = store.write(number, set, element, value, Persist::Eeprom);
+    a.device.gateway_parameter(
+        unit,
+        number,
+        sub,
+        Access::Write(
+            &req.data,
+            written.map_err(|e| abort_of(e, value, Some(def))),
+        ),
+    );
+    match written {
         Ok(()) => MrResponse::ok(s, Vec::new()),
         Err(e) => MrResponse::error(s, access_status(e)),
     }

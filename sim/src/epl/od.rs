@@ -8,6 +8,7 @@
 //! Refusals are the abort codes of BU 0620 §2.4.7 / BU 2200 §6.4.1 (DS 301's, which are
 //! CiA 301's): [`crate::objects`] maps a store's refusal to one.
 
+use crate::system_bus::Access as GatewayAccess;
 use proto::epl::asnd::ErrorEntry;
 use proto::epl::NmtState;
 use proto::nord::ecat::Object;
@@ -188,7 +189,11 @@ impl Dictionary {
         let (unit, number, d) = self.parameter(cx.device, index)?;
         reachable(cx.vars, unit)?;
         let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
-        read_sub(store, number, d, sub)
+        let r = read_sub(store, number, d, sub);
+        let carried = r.as_deref().map_err(|e| *e);
+        cx.device
+            .gateway_parameter(unit, number, sub, GatewayAccess::Read(carried));
+        r
     }
 
     /// SDO write of `data` to `index`:`sub`.
@@ -261,7 +266,10 @@ impl Dictionary {
         let (unit, number, d) = self.parameter(cx.device, index)?;
         reachable(cx.vars, unit)?;
         let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
-        write_sub(store, number, d, sub, data)?;
+        let r = write_sub(store, number, d, sub, data);
+        cx.device
+            .gateway_parameter(unit, number, sub, GatewayAccess::Write(data, r));
+        r?;
         if unit == Unit::Interface {
             // P150 / P152 act at once (BU 2200 §7.1.1).
             cx.device.settle_interface();

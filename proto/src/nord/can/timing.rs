@@ -54,6 +54,19 @@ pub fn cycle_bus_time_us(series: super::InverterSeries, inverters: u8) -> u32 {
     (u64::from(bits) * u64::from(BIT_TIME_NS)).div_ceil(1000) as u32
 }
 
+/// The period of a process-data cycle of `inverters` inverters of `series` behind `product`,
+/// µs: the update cycle ([`update_cycle`]: the SK TU3-EIP's table, else "≥ 5 ms") unless
+/// their frames need longer on the wire ([`cycle_bus_time_us`]), then that bus time rounded up
+/// to the millisecond. Not stated by the manuals beyond the update cycle: a cycle shorter than
+/// its frames cannot run on a real bus.
+pub fn cycle_period_us(product: Product, series: super::InverterSeries, inverters: u8) -> u32 {
+    let stated = match update_cycle(product, inverters) {
+        Ok(UpdateCycle::Table(us) | UpdateCycle::AtLeast(us)) => us,
+        Err(_) => MIN_CYCLE_US,
+    };
+    stated.max(cycle_bus_time_us(series, inverters).div_ceil(1000) * 1000)
+}
+
 /// P153 "Min. system bus cycle", ms: range 0…250, [-01] "TxSDO Inhibit Time" {10}, [-02]
 /// "TxPDO Inhibit Time" {5}; "the pause time for the system bus in order to reduce the bus
 /// load"; SK CU4/TU4 only (BU 2100 §7.1.1 p. 46, BU 2200 §7.1.1 p. 49).
