@@ -2,7 +2,8 @@
 //! --socketcand` serves the simulated segment of an SK 550P on loopback, and `harness run --dut
 //! socketcand://HOST:PORT/can0` tests its inverters as a persistent device, with the same
 //! system-bus cases as the embedded run; what a case wrote is written back afterwards, and
-//! process data run in real time and end with the drives and nodes as the case found them. A
+//! process data run in real time and end with the drives and nodes as the case found them; a
+//! served EtherNet/IP module's system bus is tapped during a run over EtherNet/IP. A
 //! missing bus name and a refused channel are clear errors. Loopback only: no peer to skip for.
 
 use std::process::Command;
@@ -12,7 +13,7 @@ use serde_json::Value;
 #[allow(dead_code)] // what the other network tests share
 mod common;
 use common::addr::free_loopback;
-use common::serve_can;
+use common::{case_verdict, serve_can, serve_with, wait_listening};
 
 #[test]
 fn the_system_bus_cases_pass_over_socketcand_and_leave_the_parameters_as_found() {
@@ -113,5 +114,61 @@ fn a_socketcand_url_without_a_bus_or_with_an_unknown_one_is_a_clear_error() {
     let said = String::from_utf8_lossy(&refused.stdout);
     assert_ne!(refused.status.code(), Some(0), "{said}");
     assert!(said.contains("could not open bus"), "{said}");
+    // A tap that is not socketcand's is refused before anything runs.
+    let tap = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["run", "--profile", "sk550p", "--tap", "can://vcan0"])
+        .args(["--dut", &format!("socketcand://{listen}/can0")])
+        .output()
+        .expect("harness runs");
+    assert_eq!(tap.status.code(), Some(2));
+    let said = String::from_utf8_lossy(&tap.stderr);
+    assert!(
+        said.contains("`--tap can://vcan0`: give socketcand://"),
+        "{said}"
+    );
+    let _ = std::fs::remove_dir_all(&out_dir);
+}
+
+/// Both sides of a served bus module's gateway: `harness serve enip --system-bus` publishes the
+/// CANopen frames its gateway exchanges with the inverters over socketcand, and a run over
+/// EtherNet/IP with `--tap` asserts them (P102 of FI 3 written over CIP is an SDO download to
+/// node 36; FI 2's process data are PDOs of node 34). Without `--tap` the same cases are not
+/// applicable, saying what they need.
+#[test]
+fn an_enip_run_with_tap_asserts_the_served_modules_system_bus() {
+    let ip = free_loopback();
+    let (listen, bus) = (format!("{ip}:44818"), format!("{ip}:29536"));
+    let _server = serve_with(&listen, "tu4-eip", 120, &["--system-bus", &bus]);
+    wait_listening(&bus, std::time::Duration::from_secs(10));
+    let out_dir = std::env::temp_dir().join(format!("nord-can-tap-{}", std::process::id()));
+    let run = |tap: bool| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_harness"));
+        c.args(["run", "--profile", "tu4-eip", "--allow-motion"])
+            .args(["--filter", "bu2100/systembus/gateway"])
+            .args(["--dut", &format!("enip://{ip}")])
+            .arg("--out")
+            .arg(&out_dir);
+        if tap {
+            c.args(["--tap", &format!("socketcand://{bus}/can0")]);
+        }
+        let out = c.output().expect("harness runs");
+        let report: Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
+        (out, report)
+    };
+    let (out, report) = run(true);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    for id in [
+        "bu2100/systembus/gateway-parameter-access-is-sdo",
+        "bu2100/systembus/gateway-process-data-are-pdos",
+    ] {
+        assert_eq!(case_verdict(&report, id).0, "pass", "{id}: {stdout}");
+    }
+    let (_, report) = run(false);
+    let (verdict, message) =
+        case_verdict(&report, "bu2100/systembus/gateway-parameter-access-is-sdo");
+    assert_eq!(verdict, "not_applicable");
+    assert!(message.contains("needs `system-bus`"), "{message}");
     let _ = std::fs::remove_dir_all(&out_dir);
 }

@@ -168,6 +168,12 @@ struct RunArgs {
     /// addresses and times.
     #[arg(long)]
     pcap: Option<PathBuf>,
+    /// With `--dut`: also watch the bus module's system bus, `socketcand://HOST[:PORT]/CHANNEL`
+    /// (a socketcand server on the CAN bus behind the module, or `harness serve enip
+    /// --system-bus`), so that `observe: { what: system-bus }` steps assert what the module's
+    /// gateway put on it.
+    #[arg(long, value_name = "URL", requires = "dut")]
+    tap: Option<String>,
     /// Run only share K of N of the case-runs (round robin over the unsharded order), for
     /// parallel CI; `harness merge` joins the N report folders.
     #[arg(long, value_name = "K/N")]
@@ -511,6 +517,16 @@ fn run(a: RunArgs) -> Result<i32, String> {
                 tap: tap.clone(),
             })
             .map_err(|e| e.to_string())?;
+            if let Some(url) = &a.tap {
+                let tap = crate::can::SystemBusTap::connect(
+                    url,
+                    std::time::Duration::from_secs_f64(a.timeout),
+                )?;
+                factory = Box::new(crate::can::TapFactory {
+                    inner: factory,
+                    tap,
+                });
+            }
             runner::run_shard(&loaded, &opts, a.shard, factory.as_mut())
         }
     };

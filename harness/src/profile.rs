@@ -27,6 +27,10 @@ pub(crate) enum Capability {
     /// simulator is; a device on the network carries its site's settings (its IP address
     /// first of all), which the harness neither knows nor may overwrite.
     FactoryState,
+    /// The CANopen frames the bus interface exchanges with its inverters on the system bus can
+    /// be watched (`observe: { what: system-bus }`): the embedded simulator's gateway, or a
+    /// device on the network whose system bus the run taps (`--tap socketcand://…`).
+    SystemBus,
     /// The DUT may be given a new address (P160–P165 or P850–P856 and a reset): the simulator
     /// keeps its link whatever its parameters say; a device on the network would move to the
     /// new address and the harness would lose it.
@@ -37,7 +41,7 @@ pub(crate) enum Capability {
 
 impl Capability {
     /// The capabilities that are not a bus.
-    pub(crate) const GENERAL: [Capability; 8] = [
+    pub(crate) const GENERAL: [Capability; 9] = [
         Capability::ParameterAccess,
         Capability::ParameterChannel,
         Capability::ProcessData,
@@ -46,11 +50,12 @@ impl Capability {
         Capability::PowerOn,
         Capability::FactoryState,
         Capability::Readdressing,
+        Capability::SystemBus,
     ];
 
     /// The general capabilities and `bus`'s steps: what a bus's embedded simulator offers
     /// when it answers the parameter channel too.
-    pub(crate) const fn general_and(bus: &'static str) -> [Capability; 9] {
+    pub(crate) const fn general_and(bus: &'static str) -> [Capability; 10] {
         let g = Capability::GENERAL;
         [
             g[0],
@@ -61,6 +66,7 @@ impl Capability {
             g[5],
             g[6],
             g[7],
+            g[8],
             Capability::Bus(bus),
         ]
     }
@@ -82,6 +88,7 @@ impl Capability {
             Capability::PowerOn => "power-on",
             Capability::FactoryState => "factory-state",
             Capability::Readdressing => "readdressing",
+            Capability::SystemBus => "system-bus",
             Capability::Bus(name) => name,
         }
     }

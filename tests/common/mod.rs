@@ -29,9 +29,15 @@ impl Drop for Server {
 /// test die without killing it; returns once it accepts TCP connections. LISTEN is an address
 /// of the test's own ([`addr::free_loopback`]), never a fixed one another job may hold.
 pub(crate) fn serve(listen: &str, profile: &str, seconds: u32) -> Server {
+    serve_with(listen, profile, seconds, &[])
+}
+
+/// [`serve`] with further `harness serve enip` arguments.
+pub(crate) fn serve_with(listen: &str, profile: &str, seconds: u32, extra: &[&str]) -> Server {
     let mut child = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args(["serve", "enip", "--listen", listen, "--profile", profile])
         .args(["--seconds", &seconds.to_string()])
+        .args(extra)
         .stdout(Stdio::piped())
         .spawn()
         .expect("harness serve starts");

@@ -18,16 +18,7 @@ const CYCLE: Duration = Duration::from_millis(4);
 
 /// What the embedded PPO link offers: everything but a bus's own steps (a fresh simulator per
 /// case is in its power-on and factory state, and keeps its link whatever its address).
-const PPO_CAPABILITIES: [Capability; 8] = [
-    Capability::ParameterAccess,
-    Capability::ParameterChannel,
-    Capability::ProcessData,
-    Capability::FaultInjection,
-    Capability::Observe,
-    Capability::PowerOn,
-    Capability::FactoryState,
-    Capability::Readdressing,
-];
+const PPO_CAPABILITIES: [Capability; 9] = Capability::GENERAL;
 
 /// Opens a fresh simulator per case, behind the profile's binding: the PPO link, or the bus's
 /// own binding; a bus's frames go to the tap when there is one.
@@ -234,7 +225,11 @@ pub(crate) fn observe_device(
 /// the SDO frames among them alone, their count, and the shortest time between two SYNCs
 /// (µs), the process-data cycle.
 fn system_bus(device: &mut Device) -> Value {
-    let frames = device.tap_system_bus();
+    system_bus_observation(&device.tap_system_bus())
+}
+
+/// A `system-bus` observation of `frames` (see [`system_bus`]).
+pub(crate) fn system_bus_observation(frames: &[(Duration, proto::can::CanFrame)]) -> Value {
     let syncs: Vec<Duration> = frames
         .iter()
         .filter(|(_, f)| f.id() == 0x080)

@@ -16,7 +16,7 @@ use crate::suite::{OrderSpec, Target};
 
 /// What the embedded simulator behind such a bus's binding offers: every general capability
 /// but the PKW parameter channel (the parameters are objects), and the bus's own steps.
-pub(crate) const fn embedded_capabilities(bus: &'static str) -> [Capability; 8] {
+pub(crate) const fn embedded_capabilities(bus: &'static str) -> [Capability; 9] {
     [
         Capability::ParameterAccess,
         Capability::ProcessData,
@@ -25,6 +25,7 @@ pub(crate) const fn embedded_capabilities(bus: &'static str) -> [Capability; 8] 
         Capability::PowerOn,
         Capability::FactoryState,
         Capability::Readdressing,
+        Capability::SystemBus,
         Capability::Bus(bus),
     ]
 }

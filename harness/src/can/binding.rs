@@ -454,13 +454,6 @@ impl<L: CanLink> Binding for CanBinding<L> {
                     .map_err(StepError::Refused)?;
                 json!({})
             }
-            Action::Observe { what, .. } if what == "system-bus" => {
-                return Err(StepError::NotApplicable(
-                    "the harness is the bus interface on this system bus: there is no gateway \
-                     to watch"
-                        .into(),
-                ))
-            }
             Action::Observe { what, inverter } => {
                 let (segment, now) = self.simulated()?;
                 match observe_device(segment.device_mut(), what, *inverter, now)

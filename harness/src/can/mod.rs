@@ -18,6 +18,7 @@ mod process;
 mod sdo;
 mod serve;
 mod step;
+mod tap;
 
 use std::net::SocketAddr;
 use std::time::Duration;
@@ -31,6 +32,8 @@ use crate::profile::Profile;
 use crate::runner::DutFactory;
 use binding::CanBinding;
 pub(crate) use sdo::frame_hex;
+pub(crate) use serve::relay_system_bus;
+pub(crate) use tap::{SystemBusTap, TapFactory};
 
 /// The registry entry.
 pub(crate) const BUS: Bus = Bus {

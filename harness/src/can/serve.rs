@@ -125,9 +125,9 @@ struct Client {
     raw: bool,
 }
 
-/// What the threads share: the segment and the clients.
+/// What the threads share: the segment (none on a relay, [`Served::relay`]) and the clients.
 struct Hub {
-    segment: Mutex<Segment>,
+    segment: Option<Mutex<Segment>>,
     clients: Mutex<Vec<Client>>,
     start: Instant,
     channel: String,
@@ -140,8 +140,10 @@ impl Hub {
         self.start.elapsed()
     }
 
-    fn segment(&self) -> MutexGuard<'_, Segment> {
-        self.segment.lock().unwrap_or_else(|p| p.into_inner())
+    fn segment(&self) -> Option<MutexGuard<'_, Segment>> {
+        self.segment
+            .as_ref()
+            .map(|s| s.lock().unwrap_or_else(|p| p.into_inner()))
     }
 
     fn clients(&self) -> MutexGuard<'_, Vec<Client>> {
@@ -181,7 +183,10 @@ impl Hub {
     /// A client put `frame` on the bus: the others see it, the nodes take it and answer.
     fn transmit(&self, from: u64, frame: &CanFrame) {
         self.broadcast(std::slice::from_ref(frame), Some(from));
-        let answers = self.segment().receive(frame, self.now());
+        let answers = self
+            .segment()
+            .map(|mut s| s.receive(frame, self.now()))
+            .unwrap_or_default();
         self.broadcast(&answers, None);
     }
 }
@@ -204,11 +209,29 @@ impl Served {
         config: DeviceConfig,
         channel: String,
     ) -> Result<Served, String> {
-        let addr = listener.local_addr().map_err(|e| e.to_string())?;
         let segment = Segment::new(config).map_err(|e| e.to_string())?;
-        let nodes = segment.nodes();
+        let served = Served::hub(listener, Some(segment), channel)?;
+        let h = served.hub.clone();
+        thread::spawn(move || produce(&h));
+        Ok(served)
+    }
+
+    /// A bus with no nodes of its own, to `listener`'s clients: what [`relay_system_bus`] puts
+    /// on it (a served bus module's system bus, seen from its gateway) and what the clients
+    /// send each other.
+    fn relay(listener: TcpListener, channel: String) -> Result<Served, String> {
+        Served::hub(listener, None, channel)
+    }
+
+    fn hub(
+        listener: TcpListener,
+        segment: Option<Segment>,
+        channel: String,
+    ) -> Result<Served, String> {
+        let addr = listener.local_addr().map_err(|e| e.to_string())?;
+        let nodes = segment.as_ref().map(Segment::nodes).unwrap_or_default();
         let hub = Arc::new(Hub {
-            segment: Mutex::new(segment),
+            segment: segment.map(Mutex::new),
             clients: Mutex::new(Vec::new()),
             start: Instant::now(),
             channel: channel.clone(),
@@ -217,8 +240,6 @@ impl Served {
         });
         let h = hub.clone();
         thread::spawn(move || accept(&h, &listener));
-        let h = hub.clone();
-        thread::spawn(move || produce(&h));
         Ok(Served {
             hub,
             addr,
@@ -255,9 +276,8 @@ fn accept(hub: &Arc<Hub>, listener: &TcpListener) {
 fn produce(hub: &Hub) {
     while !hub.stop.load(Ordering::Relaxed) {
         let now = hub.now();
-        let (frames, due) = {
-            let mut s = hub.segment();
-            (s.poll(now), s.next_due())
+        let Some((frames, due)) = hub.segment().map(|mut s| (s.poll(now), s.next_due())) else {
+            return;
         };
         hub.broadcast(&frames, None);
         let wait = due.map_or(IDLE, |d| d.saturating_sub(hub.now()).min(IDLE));
@@ -323,6 +343,32 @@ fn serve_client(hub: &Hub, mut stream: TcpStream) -> std::io::Result<()> {
         }
     }
     close(hub, id, &stream)
+}
+
+/// How often a served bus module's system-bus frames are handed to the relay.
+const RELAY_PERIOD: Duration = Duration::from_millis(2);
+
+/// `serve enip|epl|pnio --system-bus ADDR`: a socketcand server on `addr` (HOST[:PORT], channel
+/// `can0`) carrying what the served bus module's gateway exchanges with its inverters, which
+/// `take` hands over (`sim::device::Device::tap_system_bus`), every [`RELAY_PERIOD`]. A run
+/// watches it with `--tap socketcand://ADDR/can0`.
+pub(crate) fn relay_system_bus(
+    addr: &str,
+    mut take: impl FnMut() -> Vec<CanFrame> + Send + 'static,
+) -> Result<Served, String> {
+    let addr = crate::net::serve_args::socket_addr(addr, DEFAULT_PORT)?;
+    let listener = TcpListener::bind(addr).map_err(|e| format!("cannot listen on {addr}: {e}"))?;
+    let served = Served::relay(listener, "can0".into())?;
+    // The first look attaches the tap.
+    take();
+    let hub = served.hub.clone();
+    thread::spawn(move || {
+        while !hub.stop.load(Ordering::Relaxed) {
+            hub.broadcast(&take(), None);
+            thread::sleep(RELAY_PERIOD);
+        }
+    });
+    Ok(served)
 }
 
 fn close(hub: &Hub, id: u64, stream: &TcpStream) -> std::io::Result<()> {

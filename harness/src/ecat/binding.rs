@@ -61,7 +61,7 @@ impl DutSegment for NetSegment {
 
 /// What the embedded simulator offers (the parameters are CoE objects) and what a device on
 /// the network offers.
-pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 8] = objects::embedded_capabilities("ecat");
+pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 9] = objects::embedded_capabilities("ecat");
 pub(crate) const NETWORK_CAPABILITIES: [Capability; 3] = objects::network_capabilities("ecat");
 
 /// How long the interface may go on showing cyclic process data after the cycle stopped,

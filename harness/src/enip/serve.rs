@@ -115,6 +115,18 @@ pub(crate) fn start_enip(
     limits: Limits,
     reply_delay: Duration,
 ) -> Result<Served, String> {
+    start_enip_tapped(listen, config, limits, reply_delay, None)
+}
+
+/// [`start_enip`], and with `system_bus` (HOST[:PORT]) a socketcand server carrying what the
+/// adapter's gateway exchanges with its inverters (`crate::can::relay_system_bus`).
+pub(crate) fn start_enip_tapped(
+    listen: SocketAddr,
+    config: DeviceConfig,
+    limits: Limits,
+    reply_delay: Duration,
+    system_bus: Option<&str>,
+) -> Result<Served, String> {
     let SocketAddr::V4(v4) = listen else {
         return Err("EtherNet/IP needs an IPv4 listen address".into());
     };
@@ -147,6 +159,13 @@ pub(crate) fn start_enip(
     {
         let s = shared.clone();
         thread::spawn(move || discovery(udp, s, late));
+    }
+    if let Some(addr) = system_bus {
+        let s = shared.clone();
+        crate::can::relay_system_bus(addr, move || {
+            let frames = s.lock().device_mut().tap_system_bus();
+            frames.into_iter().map(|(_, f)| f).collect()
+        })?;
     }
     Ok(Served {
         listen,
@@ -214,6 +233,11 @@ struct ServeArgs {
     /// its own host).
     #[arg(long, value_name = "MS", default_value_t = 0)]
     reply_delay: u64,
+    /// Also serve the adapter's system bus over socketcand on HOST[:PORT] (channel `can0`):
+    /// the CANopen frames its gateway exchanges with the inverters, for `harness run --tap
+    /// socketcand://HOST:PORT/can0` or any CAN tool.
+    #[arg(long, value_name = "ADDR")]
+    system_bus: Option<String>,
 }
 
 /// A limit of 1 or more.
@@ -250,7 +274,10 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         parse_addr(&a.listen)?,
         config,
         limits,
-        Duration::from_millis(a.reply_delay),
+        (
+            Duration::from_millis(a.reply_delay),
+            a.system_bus.as_deref(),
+        ),
         a.seconds.map(Duration::from_secs),
     )?;
     Ok(crate::cli::EXIT_PASS)
@@ -261,16 +288,20 @@ pub(crate) fn serve_enip(
     listen: SocketAddr,
     config: DeviceConfig,
     limits: Limits,
-    reply_delay: Duration,
+    (reply_delay, system_bus): (Duration, Option<&str>),
     duration: Option<Duration>,
 ) -> Result<(), String> {
     let product = config.product;
     let inverters = config.inverters;
-    let served = start_enip(listen, config, limits, reply_delay)?;
+    let served = start_enip_tapped(listen, config, limits, reply_delay, system_bus)?;
     let late = if reply_delay.is_zero() {
         String::new()
     } else {
         format!("; every reply {} ms late", reply_delay.as_millis())
+    };
+    let late = match system_bus {
+        Some(addr) => format!("{late}; its system bus over socketcand on {addr}, channel can0"),
+        None => late,
     };
     outln!(
         "serving EtherNet/IP adapter ({}, {inverters} inverters) on {} (TCP, UDP) and {} (class-1 I/O); at most {} sessions, {} TCP connections{late}",

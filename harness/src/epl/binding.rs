@@ -41,7 +41,7 @@ use crate::suite::{Action, OrderSpec};
 
 /// What the embedded simulator offers (the parameters are SDO objects) and what a device on
 /// the network offers.
-pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 8] = objects::embedded_capabilities("epl");
+pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 9] = objects::embedded_capabilities("epl");
 pub(crate) const NETWORK_CAPABILITIES: [Capability; 3] = objects::network_capabilities("epl");
 
 /// How long the interface may go on showing cyclic process data after the drives stopped.

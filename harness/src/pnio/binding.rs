@@ -46,7 +46,7 @@ use crate::profile::Capability;
 use crate::suite::{Action, Run};
 
 /// What the embedded simulator offers: every general capability and the `pnio:` steps.
-pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 9] = Capability::general_and("pnio");
+pub(crate) const EMBEDDED_CAPABILITIES: [Capability; 10] = Capability::general_and("pnio");
 
 /// What a device on the network offers: one persistent device, which the harness can neither
 /// power-cycle, reset to factory settings nor look into.

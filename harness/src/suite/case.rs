@@ -172,6 +172,7 @@ impl Action {
             Action::Pkw { .. } => Some(Capability::ParameterChannel),
             Action::Process { .. } | Action::Wait(_) => Some(Capability::ProcessData),
             Action::Inject { .. } => Some(Capability::FaultInjection),
+            Action::Observe { what, .. } if what == "system-bus" => Some(Capability::SystemBus),
             Action::Observe { .. } => Some(Capability::Observe),
             Action::Bus(step) => Some(Capability::Bus(step.bus())),
         }
