@@ -10,6 +10,9 @@
 //! - python-canopen's, the same operation, in the same run against the same server
 //!   (`tests/interop/canopen_bench.py` in the interop venv; said and skipped without it);
 //!   target: the harness at least 5 times as fast;
+//! - the jitter of the harness's process-data cycle at 5 ms (FI 2's RPDOs and a SYNC per
+//!   cycle, over socketcand): the SYNC intervals a second client of the bus sees, median,
+//!   1st–99th percentile and worst, against a target of 98 % within 0.5 ms of the period;
 //! - the bus time one process-data cycle of 8 inverters takes at 250 kBaud at the most
 //!   (`proto::nord::can::cycle_bus_time_us`: SYNC, each inverter's RPDOs and TPDOs at their
 //!   worst-case stuffed length), against the 8-inverter update cycle of BU 2100's table and
@@ -38,6 +41,10 @@ const READS: u32 = 20_000;
 const PEER_READS: u32 = 2_000;
 /// How much faster the harness must be.
 const TARGET_RATIO: f64 = 5.0;
+/// Process-data cycles timed (5 s at 5 ms).
+const PDO_CYCLES: u32 = 1000;
+/// How far from its period 98 % of the SYNC intervals may be, µs (a tenth of 5 ms).
+const JITTER_TARGET_US: u64 = 500;
 
 fn main() {
     let addr = SocketAddr::from(([127, 0, 0, 1], free_port()));
@@ -87,6 +94,31 @@ fn main() {
         }
         Script::Skipped(why) => println!("python-canopen: skipped ({why})"),
         Script::Failed(why) => println!("python-canopen: ERROR {why}"),
+    }
+    // Process data in the bus interface's place: FI 2's PDOs and a SYNC per cycle, the SYNCs
+    // timed by a second client of the bus.
+    match can_bench::pdo_cycles(addr, "can0", PDO_CYCLES) {
+        Ok(j) => {
+            let period = j.period.as_micros() as u64;
+            let p99 = j
+                .quantile(0.99)
+                .abs_diff(period)
+                .max(j.quantile(0.01).abs_diff(period));
+            println!(
+                "PDO cycle of the harness at {} ms, {} SYNC intervals seen by another client: \
+                 median {} µs, 1st–99th percentile {}–{} µs, worst deviation {} µs \
+                 (target: 98 % within {} µs of the period: {})",
+                period / 1000,
+                j.intervals_us.len(),
+                j.quantile(0.5),
+                j.quantile(0.01),
+                j.quantile(0.99),
+                j.worst_us(),
+                JITTER_TARGET_US,
+                met(p99 <= JITTER_TARGET_US)
+            );
+        }
+        Err(e) => println!("PDO cycle: ERROR {e}"),
     }
     // The SK TU3-EIP's table (BU 2100 §4.3) gives the update cycle per number of inverters;
     // the other products only "≥ 5 ms".

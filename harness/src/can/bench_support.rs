@@ -47,3 +47,79 @@ pub fn sdo_reads(addr: SocketAddr, channel: &str, count: u32) -> Result<Rate, St
         secs: start.elapsed().as_secs_f64(),
     })
 }
+
+/// What [`pdo_cycles`] measured: the period the harness ran at, and the intervals between
+/// SYNCs as another client of the bus saw them (µs, sorted).
+pub struct PdoJitter {
+    /// The period the harness's process data ran at.
+    pub period: Duration,
+    /// Intervals between consecutive SYNCs seen on the bus, sorted.
+    pub intervals_us: Vec<u64>,
+}
+
+impl PdoJitter {
+    /// The interval at quantile `q` (0…1), µs.
+    pub fn quantile(&self, q: f64) -> u64 {
+        let n = self.intervals_us.len();
+        if n == 0 {
+            return 0;
+        }
+        self.intervals_us[((n - 1) as f64 * q).round() as usize]
+    }
+
+    /// The largest deviation of an interval from the period, µs.
+    pub fn worst_us(&self) -> u64 {
+        let p = self.period.as_micros() as u64;
+        self.intervals_us
+            .iter()
+            .map(|i| i.abs_diff(p))
+            .max()
+            .unwrap_or(0)
+    }
+}
+
+/// `cycles` process-data cycles of the harness (`harness run` over socketcand drives the same
+/// code) with FI 2 of the SK 550P commanded, on the bus `channel` at `addr`; a second client
+/// of the bus timestamps every SYNC it sees.
+pub fn pdo_cycles(addr: SocketAddr, channel: &str, cycles: u32) -> Result<PdoJitter, String> {
+    use super::link::CanLink;
+    use super::process::{PdoCycle, Pdos};
+    use crate::binding::settle::Cycling;
+    let limit = Duration::from_secs(2);
+    let mut listener = Socketcand::connect(addr, channel, limit).map_err(|e| e.to_string())?;
+    let watch = std::thread::spawn(move || {
+        let mut seen = Vec::new();
+        while let Ok(Some(f)) = listener.recv(Duration::from_millis(500)) {
+            if f.id() == 0x080 {
+                seen.push(Instant::now());
+            }
+        }
+        seen
+    });
+    let link = Socketcand::connect(addr, channel, limit).map_err(|e| e.to_string())?;
+    let mut client = Client::new(link, limit);
+    let mut pdos = Pdos::new(proto::nord::Product::Sk550p, 8);
+    let fi2 = proto::nord::Inverter::new(2).map_err(|e| e.to_string())?;
+    pdos.set_words(fi2, [0x047E, 0, 0, 0, 0, 0])
+        .map_err(|e| e.to_string())?;
+    let period = pdos.cycle();
+    let mut c = PdoCycle {
+        client: &mut client,
+        pdos: &mut pdos,
+    };
+    c.set_recording(false);
+    c.run_cycles(u64::from(cycles)).map_err(|e| e.to_string())?;
+    drop(client);
+    let seen = watch
+        .join()
+        .map_err(|_| "the listener panicked".to_string())?;
+    let mut intervals_us: Vec<u64> = seen
+        .windows(2)
+        .map(|w| (w[1] - w[0]).as_micros() as u64)
+        .collect();
+    intervals_us.sort_unstable();
+    Ok(PdoJitter {
+        period,
+        intervals_us,
+    })
+}

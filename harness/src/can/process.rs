@@ -13,6 +13,7 @@
 //! The nodes are started (NMT start, all nodes) before the first cycle and put back into
 //! pre-operational when the case ends.
 
+use std::thread;
 use std::time::Duration;
 
 use proto::can::CanFrame;
@@ -44,6 +45,8 @@ pub(super) struct Pdos {
     started: bool,
     /// Whether cycles are recorded in the transcript.
     recording: bool,
+    /// When the next cycle is due.
+    due: Option<Duration>,
     /// The inverters the case sent words.
     pub(super) commanded: Vec<Inverter>,
 }
@@ -109,6 +112,7 @@ impl Pdos {
             product,
             started: false,
             recording: true,
+            due: None,
             commanded: Vec::new(),
         }
     }
@@ -160,7 +164,13 @@ impl Pdos {
     /// One cycle: NMT start before the first, each inverter's RPDOs, SYNC, then the frames of
     /// the cycle's time, its TPDOs among them.
     fn run_cycle<L: CanLink>(&mut self, client: &mut Client<L>) -> Result<(), PdoError> {
-        let start = client.link.now();
+        // Cycles follow each other on the schedule, not on when the last one ended: a cycle
+        // that ran over its time does not push the later ones back, unless by a whole cycle.
+        let now = client.link.now();
+        let start = match self.due {
+            Some(due) if due <= now && now - due < self.cycle() => due,
+            _ => now,
+        };
         let mut sent = Vec::with_capacity(2 * self.nodes.len() + 2);
         if !self.started {
             sent.push(nmt(NmtCommand::START, 0)?);
@@ -191,12 +201,31 @@ impl Pdos {
             *fresh = false;
         }
         let end = start + self.cycle();
+        self.due = Some(end);
         let mut received = Vec::new();
+        // On a real clock the rest of the cycle is slept once every TPDO is in: a socket's
+        // receive time-out rounds up to the kernel's tick (milliseconds), a sleep does not.
+        let real_time = client.link.segment().is_none();
+        let expected = self.commanded.len() * self.tpdos_per_node();
+        let mut tpdos = 0;
         loop {
+            if real_time && tpdos >= expected {
+                thread::sleep(end.saturating_sub(client.link.now()));
+                break;
+            }
             let left = end.saturating_sub(client.link.now());
             let Some(f) = client.link.recv(left)? else {
                 break;
             };
+            if matches!(
+                Cob::classify(f.id()),
+                Some(Cob {
+                    function: Function::Tpdo { .. },
+                    ..
+                })
+            ) {
+                tpdos += 1;
+            }
             self.take(&f);
             received.push(f);
             if left.is_zero() {
@@ -219,6 +248,14 @@ impl Pdos {
             });
         }
         Ok(())
+    }
+
+    /// The TPDOs a node of the assumed series answers each SYNC with.
+    fn tpdos_per_node(&self) -> usize {
+        [1, 2]
+            .into_iter()
+            .filter(|&number| pdo_words(Function::Tpdo { number }, self.series).is_some())
+            .count()
     }
 
     /// A frame of the cycle: a TPDO fills its inverter's inputs.
