@@ -19,8 +19,10 @@
 //! The embedded link stands in for the field bus: its cyclic process data count as cyclic
 //! communication (and, for PROFINET, as an established application relation), and the
 //! TU3-PNT's bit 5 "Ethernet connection" is set, as every other bit of its list reads 1 = the
-//! condition named (the simulated module is always on its network). Bits the simulator has no
-//! cause for (TU3-PNT bit 0 "Initialisation"; POWERLINK ASIC and system-bus errors) stay 0.
+//! condition named (the simulated module is always on its network). The system-bus bits 6 "Bus
+//! WARNING" and 7 "Bus Off" follow an injected CAN controller state (`inject: { error:
+//! bus-warning | bus-off }`). Bits the simulator has no cause for (TU3-PNT bit 0
+//! "Initialisation"; ASIC errors) stay 0.
 
 use proto::nord::Product;
 
@@ -37,6 +39,20 @@ pub(crate) struct BusFlags {
     pub(crate) telegram_timeout: bool,
     /// Inverters on the system bus: FI 1..=online are online.
     pub(crate) online: u8,
+    /// The interface's CAN controller on the system bus is in "Bus Warning" (error counters
+    /// past the warning limit).
+    pub(crate) bus_warning: bool,
+    /// ... or "Bus Off": it no longer takes part in the system bus.
+    pub(crate) bus_off: bool,
+}
+
+/// P173 [-01] bits 6 "Bus WARNING" and 7 "Bus Off" of the products that show them
+/// (`proto::nord::can::p173_bus_bits`).
+fn bus_bits(product: Product, f: BusFlags) -> i32 {
+    match proto::nord::can::p173_bus_bits(product) {
+        Some((warning, off)) => i32::from(f.bus_warning) << warning | i32::from(f.bus_off) << off,
+        None => 0,
+    }
 }
 
 /// A bit pair "10b = online" for each of FI 1..=`online` among the first `slots`, from `first`.
@@ -52,7 +68,8 @@ pub(crate) fn status_parameters(
     let low = 1
         | i32::from(f.cyclic) << 1
         | i32::from(f.fieldbus_timeout) << 2
-        | i32::from(f.telegram_timeout) << 3;
+        | i32::from(f.telegram_timeout) << 3
+        | bus_bits(product, f);
     // At most two words: no allocation, this runs for every process-data exchange.
     let words = match product {
         Product::Sk550p => {
@@ -135,6 +152,7 @@ mod tests {
             config_error: false,
             telegram_timeout: timeout,
             online,
+            ..BusFlags::default()
         }
     }
 

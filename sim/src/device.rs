@@ -229,6 +229,17 @@ fn inverter_store(product: Product, fi: Inverter) -> ParamStore {
     store
 }
 
+/// The interface's CAN controller on the system bus, as injected.
+#[derive(Debug, Clone, Copy, Default)]
+struct CanState {
+    /// "Bus Warning".
+    warning: bool,
+    /// "Bus Off" since then.
+    off_since: Option<Duration>,
+    /// The inverters have lost the interface since it went off the bus.
+    lost: bool,
+}
+
 /// One inverter: its parameters and its drive.
 #[derive(Debug)]
 struct InverterUnit {
@@ -417,6 +428,8 @@ pub struct Device {
     process_shown: Vec<Option<([u16; 6], [u16; 6])>>,
     /// The system bus's frames, recorded once a tap asked for them ([`Device::tap_system_bus`]).
     tap: Option<crate::system_bus::Tap>,
+    /// The interface's CAN controller on the system bus (`inject: { error: bus-off }`).
+    can_state: CanState,
     /// The latest time the device was given.
     now: Duration,
 }
@@ -515,6 +528,7 @@ impl Device {
             process_shown: vec![None; usize::from(count)],
             tap: None,
             now: Duration::ZERO,
+            can_state: CanState::default(),
         }
     }
 
@@ -539,6 +553,9 @@ impl Device {
         sub: u8,
         access: crate::system_bus::Access<'_>,
     ) {
+        if self.can_state.off_since.is_some() {
+            return;
+        }
         if let (Some(tap), Unit::Inverter(fi)) = (self.tap.as_mut(), unit) {
             let index = proto::nord::ecat::PARAMETER_BASE + number.get();
             tap.parameter(fi, index, sub, access, self.now);
@@ -574,8 +591,11 @@ impl Device {
             fieldbus_timeout: self.fieldbus_timeout,
             config_error: self.config_error,
             online: self.online(),
+            bus_warning: self.can_state.warning,
+            bus_off: self.can_state.off_since.is_some(),
             ..BusFlags::default()
         };
+        self.lose_behind_bus_off(now);
         let p151 = match self.config.product.family() {
             proto::nord::Family::Module => self.interface.store.read(P151, None, None).ok(),
             proto::nord::Family::Integrated => None,
@@ -636,6 +656,18 @@ impl Device {
                 bus_status::present_error(self.config.product, was, flags.telegram_timeout, present)
             {
                 self.interface.store.set_info(number, element, value);
+            }
+            // Bus off: the module's P170 shows 103.0 "System bus Off" (BU 2100 §8.3, BU 2200
+            // §8.4), unless another error is present.
+            if let (true, Some(code), 0) = (
+                flags.bus_off,
+                proto::nord::can::p170_bus_off(self.config.product),
+                self.interface
+                    .store
+                    .read(P170, None, proto::nord::ArrayElement::new(1).ok())
+                    .unwrap_or(0),
+            ) {
+                self.interface.store.set_info(170, 1, i32::from(code));
             }
             self.shown = Some(flags);
         }
@@ -728,7 +760,7 @@ impl Device {
                 let control = ppo.pzd.first().copied().unwrap_or(0);
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
                 let answer = unit.process(control, setpoints, now);
-                if let Some(tap) = self.tap.as_mut() {
+                if let (Some(tap), None) = (self.tap.as_mut(), self.can_state.off_since) {
                     tap.process(i, &ppo.pzd, &answer, now);
                 }
                 let mut pzd = answer.to_vec();
@@ -761,7 +793,7 @@ impl Device {
                 let params = &mut self.inverter_mut(i)?.params;
                 let answer = params.cycle(order, delay, product, unit);
                 show_parameter_data(&mut params.store, &order, &answer);
-                if self.tap.is_some() {
+                if self.tap.is_some() && self.can_state.off_since.is_none() {
                     self.tap_order(i, &order, &answer);
                 }
                 Ok(answer)
@@ -954,7 +986,7 @@ impl Device {
         let answer = self
             .inverter_mut(inverter)?
             .process(control, setpoints, now);
-        if let Some(tap) = self.tap.as_mut() {
+        if let (Some(tap), None) = (self.tap.as_mut(), self.can_state.off_since) {
             let mut sent = [0u16; 6];
             sent[0] = control;
             for (d, w) in sent[1..].iter_mut().zip(setpoints) {
@@ -1029,6 +1061,41 @@ impl Device {
             unit.show_fault();
         }
         Ok(())
+    }
+
+    /// While the interface is off the system bus, its heartbeat stops: once the inverters'
+    /// consumer time has passed (`proto::nord::can::InterfaceWatch`, 600 ms), each inverter on
+    /// the system bus whose P120 [-01] watches (1 "Auto", having heard the running interface, or
+    /// 2) loses it, "a system-bus fault is registered in both" (BU 2200 §8.1). The SK 550P's
+    /// FI 1 is the interface itself.
+    fn lose_behind_bus_off(&mut self, now: Duration) {
+        let Some(since) = self.can_state.off_since else {
+            return;
+        };
+        let watch = proto::nord::can::interface_watch(self.config.product);
+        if self.can_state.lost || now < since + Duration::from_millis(u64::from(watch.ms)) {
+            return;
+        }
+        self.can_state.lost = true;
+        let first = match self.config.product.family() {
+            proto::nord::Family::Integrated => 2,
+            proto::nord::Family::Module => 1,
+        };
+        for n in first..=self.config.inverters {
+            let Ok(fi) = Inverter::new(i64::from(n)) else {
+                continue;
+            };
+            let watching = self.inverter_mut(fi).is_ok_and(|u| {
+                let p120 = ParamNumber::new(120).ok().and_then(|p| {
+                    let first = proto::nord::ArrayElement::new(1).ok();
+                    u.params.store.read(p, None, first).ok()
+                });
+                matches!(p120, Some(1 | 2))
+            });
+            if watching {
+                let _ = self.lose_interface(fi);
+            }
+        }
     }
 
     /// FI `inverter`'s P120 monitoring lost the interface on the system bus: the error of
@@ -1119,8 +1186,23 @@ impl Device {
         changed
     }
 
-    /// Raises an inverter error, as P700 shows it (`"10.0"`).
+    /// Raises an inverter error, as P700 shows it (`"10.0"`), or puts the interface's CAN
+    /// controller on the system bus into "Bus Warning" (`bus-warning`) or "Bus Off" (`bus-off`:
+    /// no 24 V on the bus, wrong connections, BU 2200 §8.4).
     pub fn inject_fault(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
+        match error {
+            "bus-warning" => {
+                self.can_state.warning = true;
+                self.monitor(self.now);
+                return Ok(());
+            }
+            "bus-off" => {
+                self.can_state.off_since.get_or_insert(self.now);
+                self.monitor(self.now);
+                return Ok(());
+            }
+            _ => {}
+        }
         let code: FaultCode = error.parse()?;
         let unit = self.inverter_mut(inverter).map_err(|e| e.to_string())?;
         unit.drive.inject_fault(code);
@@ -1331,6 +1413,41 @@ mod tests {
             (read_fi(&mut d, 1, 745, 7), read_fi(&mut d, 1, 745, 8)),
             (11, 1)
         );
+    }
+
+    #[test]
+    fn bus_off_shows_in_p170_and_p173_and_the_inverters_lose_the_interface() {
+        let mut d = Device::new(DeviceConfig::new(Product::Tu4Pol));
+        let fi1 = Inverter::new(1).unwrap();
+        // P120 [-02]: not watching (0) on FI 2 only.
+        d.store(Unit::Inverter(Inverter::new(2).unwrap()))
+            .unwrap()
+            .set_info(120, 1, 0);
+        d.inject_fault(fi1, "bus-warning").unwrap();
+        assert_eq!(read_interface(&mut d, 173, 1) & 0xC0, 0x40);
+        assert_eq!(read_interface(&mut d, 170, 1), 0);
+        d.inject_fault(fi1, "bus-off").unwrap();
+        assert_eq!(read_interface(&mut d, 173, 1) & 0xC0, 0xC0);
+        assert_eq!(read_interface(&mut d, 170, 1), 1030, "103.0 System bus Off");
+        d.tick(Duration::from_millis(599));
+        assert_eq!(
+            read_fi(&mut d, 1, 700, 1),
+            0,
+            "the heartbeat is not late yet"
+        );
+        d.tick(Duration::from_millis(600));
+        assert_eq!(
+            read_fi(&mut d, 1, 700, 1),
+            109,
+            "E10.9 behind an SK TU4-POL"
+        );
+        assert_eq!(read_fi(&mut d, 2, 700, 1), 0, "P120 = 0 does not watch");
+        // The SK TU3-POL has no bits 6/7, and its inverters show E10.8.
+        let mut d = Device::new(DeviceConfig::new(Product::Tu3Pol));
+        d.inject_fault(fi1, "bus-off").unwrap();
+        assert_eq!(read_interface(&mut d, 173, 1) & 0xC0, 0);
+        d.tick(Duration::from_millis(600));
+        assert_eq!(read_fi(&mut d, 1, 700, 1), 108);
     }
 
     #[test]
