@@ -7,6 +7,10 @@
 //! the node's EDS as `harness describe eds --bus can` writes it (CiA 306) and reads P102 there
 //! by name.
 //!
+//! The other way round, python-canopen's LocalNode (its own SDO server) joins the served bus as
+//! a node of any maker, and the harness tests it with the generic CiA 301 cases
+//! (`--profile any`, `suites/can/any-node.yaml`).
+//!
 //! tshark reads the capture of a system-bus run (`harness run --pcap`, link type
 //! `LINKTYPE_CAN_SOCKETCAN`) with Wireshark's CANopen dissector.
 //!
@@ -23,7 +27,7 @@ use serde_json::Value;
 mod common;
 use common::addr::free_loopback;
 use common::peer::{interop_python, require_tshark};
-use common::serve_can;
+use common::{serve_can, Server};
 
 #[test]
 fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_runs_pdos_and_imports_the_eds()
@@ -183,4 +187,71 @@ fn tshark_decodes_the_capture_of_a_system_bus_run_as_canopen() {
         );
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The harness against any maker's CANopen node: python-canopen's LocalNode, with the object
+/// dictionary of FI 1's EDS and python-canopen's own SDO server, joins the served bus as node 5;
+/// `harness run --profile any --dut socketcand://…/can0/5` runs the CiA 301 cases written
+/// relative to the node, and every one passes (expedited uploads, and the abort codes for an
+/// absent object, an absent sub-index, a read-only object and an unknown command specifier).
+#[test]
+fn the_harness_tests_a_python_canopen_local_node_as_any_makers_node() {
+    let Some(py) = interop_python(
+        &["can", "canopen"],
+        "a python-canopen LocalNode as the DUT of `--profile any`",
+    ) else {
+        return;
+    };
+    let listen = format!("{}:29536", free_loopback());
+    let _server = serve_can(&listen);
+    let eds = std::env::temp_dir().join(format!("nord-any-{}.eds", std::process::id()));
+    let described = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["describe", "eds", "--bus", "can", "--profile", "sk550p"])
+        .output()
+        .expect("harness describe runs");
+    assert!(described.status.success(), "{described:?}");
+    std::fs::write(&eds, &described.stdout).expect("EDS written");
+    let (host, port) = listen.split_once(':').expect("HOST:PORT");
+    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/interop/canopen_node.py");
+    let mut child = Command::new(&py)
+        .arg(script)
+        .args([host, port, "can0", "5"])
+        .arg(&eds)
+        .arg("60")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("python runs");
+    let mut ready = String::new();
+    let stdout = child.stdout.take().expect("piped");
+    let node = Server(child);
+    std::io::BufRead::read_line(&mut std::io::BufReader::new(stdout), &mut ready)
+        .expect("the node says it is ready");
+    assert_eq!(ready.trim(), "ready");
+    let out_dir = std::env::temp_dir().join(format!("nord-any-run-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["run", "--profile", "any", "--filter", "can/any-node/"])
+        .args(["--dut", &format!("socketcand://{listen}/can0/5")])
+        .arg("--out")
+        .arg(&out_dir)
+        .output()
+        .expect("harness runs");
+    drop(node);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
+    let passed = report["cases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["verdict"] == "pass")
+        .count();
+    assert_eq!(passed, 6, "{stdout}");
+    assert!(
+        report["meta"]["identities"]["any@can"].is_object(),
+        "the node's identity is on record: {report}"
+    );
+    let _ = std::fs::remove_dir_all(&out_dir);
+    let _ = std::fs::remove_file(&eds);
 }

@@ -55,6 +55,9 @@ const NETWORK_CAPABILITIES: [Capability; 3] = [
 /// the last one (a node on a loaded host), before the step fails.
 const LATE_CYCLES: u32 = 20;
 
+/// What any maker's node offers: the bus's own steps.
+const ANY_CAPABILITIES: [Capability; 1] = [Capability::Bus("can")];
+
 /// The frames a `can:` step takes at most (a babbling node ends the step there).
 const MAX_FRAMES_PER_STEP: usize = 1000;
 
@@ -71,18 +74,19 @@ impl std::fmt::Display for NodeObject {
     }
 }
 
-/// The harness as SDO client of a product's inverters on one segment.
+/// The harness as SDO client of a product's inverters on one segment, or of any maker's
+/// CANopen node (`any@can`: no product, only `can:` steps).
 pub(crate) struct CanBinding<L> {
     client: Client<L>,
-    product: Product,
+    product: Option<Product>,
     what: String,
     capabilities: &'static [Capability],
     /// On a segment on the network: what the case wrote, to be written back.
     ledger: Option<Ledger<NodeObject>>,
-    /// FI 1's node, whose identity the device reports.
-    fi1_node: u8,
-    /// The inverters' process data.
-    pdos: Pdos,
+    /// The DUT's node: FI 1's, whose identity the device reports, or any maker's node.
+    node: u8,
+    /// The inverters' process data (none on any maker's node).
+    pdos: Option<Pdos>,
     /// Exchanges of process-data cycles taken ahead of the step's end (compacted).
     pending: Vec<Exchange>,
 }
@@ -167,7 +171,7 @@ impl<L: CanLink> CanBinding<L> {
         client.take_exchanges();
         Ok(CanBinding {
             client,
-            product,
+            product: Some(product),
             what: format!("{what}: FI 1 at node {node} (vendor {vendor:08X}h)"),
             capabilities: if persistent {
                 &NETWORK_CAPABILITIES
@@ -175,31 +179,72 @@ impl<L: CanLink> CanBinding<L> {
                 &EMBEDDED_CAPABILITIES
             },
             ledger: persistent.then(Ledger::default),
-            fi1_node: node,
-            pdos: Pdos::new(product, inverters),
+            node,
+            pdos: Some(Pdos::new(product, inverters)),
             pending: Vec::new(),
+        })
+    }
+
+    /// Any maker's CANopen node `node` over `link`: it must answer an upload of its vendor id
+    /// (1018h:01, mandatory in CiA 301 §7.5.2.24) before a case runs. Only `can:` steps apply.
+    pub(crate) fn open_any(
+        link: L,
+        limit: Duration,
+        node: u8,
+        what: String,
+    ) -> Result<CanBinding<L>, OpenError> {
+        let mut client = Client::new(link, limit);
+        let vendor = client.upload(node, 0x1018, 1).map_err(|e| match e {
+            SdoError::Link(_) | SdoError::Silent { .. } => OpenError::Unreachable(e.to_string()),
+            _ => OpenError::BringUp(e.to_string()),
+        })?;
+        let vendor = u32::from_le_bytes(vendor.try_into().unwrap_or([0; 4]));
+        client.take_exchanges();
+        Ok(CanBinding {
+            client,
+            product: None,
+            what: format!("{what}: node {node} (vendor {vendor:08X}h)"),
+            capabilities: &ANY_CAPABILITIES,
+            ledger: None,
+            node,
+            pdos: None,
+            pending: Vec::new(),
+        })
+    }
+
+    /// The NORD product behind the binding; not applicable on any maker's node.
+    fn product(&self) -> Result<Product, StepError> {
+        self.product.ok_or_else(|| {
+            StepError::NotApplicable(
+                "any maker's node: NORD parameters and process data are not its objects".into(),
+            )
         })
     }
 
     /// A `process` or `wait` step: cycles of every inverter's PDOs, then the status word and
     /// actual values of the step's inverter from its last TPDOs.
     fn process(&mut self, action: &Action) -> Result<Value, StepError> {
-        let (fi, words, _) = crate::binding::process_run(action, self.pdos.cycle())?;
+        self.product()?;
+        let Some(pdos) = self.pdos.as_mut() else {
+            return Err(StepError::Suite("no process data".into()));
+        };
+        let (fi, words, _) = crate::binding::process_run(action, pdos.cycle())?;
         match words {
-            Some(w) => self.pdos.set_words(fi, w).map_err(pdo_error)?,
+            Some(w) => pdos.set_words(fi, w).map_err(pdo_error)?,
             // `wait` before any words: FI 1's process data run, 0000h.
-            None if self.pdos.commanded.is_empty() => {
-                self.pdos.set_words(fi, [0; 6]).map_err(pdo_error)?
-            }
+            None if pdos.commanded.is_empty() => pdos.set_words(fi, [0; 6]).map_err(pdo_error)?,
             None => {}
         }
         // The cycle depends on how many inverters run.
-        let (_, _, cycles) = crate::binding::process_run(action, self.pdos.cycle())?;
+        let (_, _, cycles) = crate::binding::process_run(action, pdos.cycle())?;
         let real_time = self.client.link.segment().is_none();
         let time = crate::binding::process_time(action, real_time);
+        let Some(pdos) = self.pdos.as_mut() else {
+            return Err(StepError::Suite("no process data".into()));
+        };
         let mut c = PdoCycle {
             client: &mut self.client,
-            pdos: &mut self.pdos,
+            pdos,
         };
         match time {
             Some(d) => settle::run_cycles_for(&mut c, &mut self.pending, d),
@@ -230,15 +275,18 @@ impl<L: CanLink> CanBinding<L> {
     /// it moved back to "Switch-on block"; then every node back to pre-operational, where a
     /// case finds them.
     fn stop_process_data(&mut self) -> Result<(), Problem> {
-        if !self.pdos.started() {
+        let (Some(product), Some(pdos)) = (self.product, self.pdos.as_mut()) else {
+            return Ok(());
+        };
+        if !pdos.started() {
             return Ok(());
         }
         if self.ledger.is_some() {
-            let period = self.pdos.cycle();
-            let mut drives = Drives::only(&self.pdos.commanded);
+            let period = pdos.cycle();
+            let mut drives = Drives::only(&pdos.commanded);
             let mut c = PdoCycle {
                 client: &mut self.client,
-                pdos: &mut self.pdos,
+                pdos,
             };
             drives.settle(&mut c, &mut self.pending, period, |e| {
                 Problem::step("settling the drives", pdo_error(e))
@@ -250,7 +298,8 @@ impl<L: CanLink> CanBinding<L> {
             .link
             .send(&stop)
             .map_err(|e| Problem::step("NMT pre-operational", StepError::Link(e.to_string())))?;
-        self.pdos = Pdos::new(self.product, self.pdos.len());
+        let inverters = self.pdos.as_ref().map_or(1, Pdos::len);
+        self.pdos = Some(Pdos::new(product, inverters));
         Ok(())
     }
 
@@ -259,7 +308,8 @@ impl<L: CanLink> CanBinding<L> {
         &self,
         o: &OrderSpec,
     ) -> Result<(NodeObject, Option<&'static proto::nord::params::ParamDef>), StepError> {
-        let a = objects::address(self.product, o)?;
+        let product = self.product()?;
+        let a = objects::address(product, o)?;
         let Unit::Inverter(inverter) = a.unit else {
             return Err(StepError::NotApplicable(
                 "a bus module's own parameters are not on the system bus (its nodes are the \
@@ -268,7 +318,7 @@ impl<L: CanLink> CanBinding<L> {
             ));
         };
         let (node, sdo) = parameter_sdo(
-            self.product,
+            product,
             ParamAddress {
                 inverter,
                 number: o.number,
@@ -327,7 +377,7 @@ impl<L: CanLink> CanBinding<L> {
     fn can_step(&mut self, step: &CanStep) -> Result<Value, StepError> {
         let sent = match &step.send {
             Some(s) => {
-                let f = s.frame().map_err(StepError::Suite)?;
+                let f = s.frame(self.node).map_err(StepError::Suite)?;
                 self.client
                     .link
                     .send(&f)
@@ -360,6 +410,18 @@ impl<L: CanLink> CanBinding<L> {
         });
         let joined =
             |each: fn(&CanFrame) -> String| frames.iter().map(each).collect::<Vec<_>>().join("; ");
+        let node = self.node;
+        let from_node: Vec<String> = frames
+            .iter()
+            .filter(|f| f.id() > 0x080 && f.id() & 0x7F == u16::from(node))
+            .map(|f| {
+                let hex = frame_hex(f);
+                let data = hex.split_once(' ').map_or("", |(_, d)| d);
+                format!("{:03X}+N {data}", f.id() - u16::from(node))
+                    .trim_end()
+                    .to_string()
+            })
+            .collect();
         self.client.record(Exchange {
             sent_hex: sent.as_ref().map(frame_hex).unwrap_or_default(),
             sent: sent.as_ref().map_or_else(|| "(listening)".into(), describe),
@@ -374,6 +436,7 @@ impl<L: CanLink> CanBinding<L> {
             "answered": !frames.is_empty(),
             "count": frames.len(),
             "frames": joined(frame_hex),
+            "from_node": from_node.join("; "),
             "abort": abort,
         }))
     }
@@ -381,7 +444,7 @@ impl<L: CanLink> CanBinding<L> {
     /// FI 1's identity object 1018h (vendor, product code, revision, serial) and its device
     /// name 1008h.
     fn identity_object(&mut self) -> Result<Identity, StepError> {
-        let node = self.fi1_node;
+        let node = self.node;
         // CiA 301 §7.5.2.24: 1018h:00 counts the entries; only the vendor id (01h) is
         // mandatory, product code, revision and serial number (02h–04h) are optional.
         let count = self.client.upload(node, 0x1018, 0).map_err(step_error)?;
@@ -406,7 +469,10 @@ impl<L: CanLink> CanBinding<L> {
         };
         let [vendor, product_code, revision, serial] = subs;
         Ok(Identity {
-            source: format!("objects 1018h and 1008h of node {node} (FI 1)"),
+            source: match self.product {
+                Some(_) => format!("objects 1018h and 1008h of node {node} (FI 1)"),
+                None => format!("objects 1018h and 1008h of node {node}"),
+            },
             vendor,
             product_code,
             product_name: name,

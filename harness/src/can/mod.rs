@@ -7,8 +7,9 @@
 //! `harness serve can --socketcand ADDR` serves the simulated segment to CANopen masters such
 //! as python-canopen; `can:` steps put frames and NMT commands on the bus and observe what comes
 //! back; `process`/`wait` steps run PDOs on SYNC in the bus interface's place ([`process`]).
-//! What does not yet: any maker's node (`any@can`) and SocketCAN (`can://IFACE`); each refuses
-//! with that said.
+//! `--profile any` with `--dut socketcand://HOST[:PORT]/CHANNEL/NODE` tests any maker's CANopen
+//! node with the cases whose steps are all `can:` (COB-IDs relative to the node: `600+N`).
+//! What does not yet: SocketCAN (`can://IFACE`); it refuses with that said.
 
 pub mod bench_support;
 mod binding;
@@ -111,8 +112,9 @@ fn open<L: link::CanLink + 'static>(
     })
 }
 
-/// `--dut socketcand://HOST[:PORT]/CHANNEL`: the inverters on the bus `CHANNEL` of a socketcand
-/// server (port 29536 unless given).
+/// `--dut socketcand://HOST[:PORT]/CHANNEL[/NODE]`: the inverters on the bus `CHANNEL` of a
+/// socketcand server (port 29536 unless given), or with `--profile any` the CANopen node NODE
+/// of any maker.
 fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
     if n.scheme != "socketcand" {
         return Err(OpenError::Profile(format!(
@@ -127,6 +129,23 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
             n.target
         ))
     })?;
+    // Any maker's node: `…/CHANNEL/NODE`.
+    let (channel, node) = match channel.split_once('/') {
+        None => (channel, None),
+        Some((channel, node)) => {
+            let id = node
+                .parse::<u8>()
+                .ok()
+                .filter(|n| (1..=127).contains(n))
+                .ok_or_else(|| {
+                    OpenError::Profile(format!(
+                        "`socketcand://{}`: `{node}` is not a node id 1…127",
+                        n.target
+                    ))
+                })?;
+            (channel, Some(id))
+        }
+    };
     if channel.is_empty() || channel.contains(char::is_whitespace) {
         return Err(OpenError::Profile(format!(
             "`socketcand://{}`: `{channel}` is not a bus name",
@@ -137,6 +156,7 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
         .map_err(|e| OpenError::Profile(format!("`socketcand://{}`: {e}", n.target)))?;
     Ok(Box::new(SocketcandFactory {
         addr,
+        node,
         channel: channel.to_string(),
         timeout: n.timeout,
         tap: n.tap.clone(),
@@ -146,6 +166,8 @@ fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
 /// Opens the socketcand server's bus anew for every case.
 struct SocketcandFactory {
     addr: SocketAddr,
+    /// Any maker's node, as the URL names it (`…/CHANNEL/NODE`).
+    node: Option<u8>,
     channel: String,
     timeout: Duration,
     /// The run's capture (`--pcap`).
@@ -158,15 +180,28 @@ impl DutFactory for SocketcandFactory {
     }
 
     fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
-        let product = profile.nord().map_err(|_| {
-            OpenError::Profile(
-                "any maker's CANopen node (`any@can`) is not built yet: give a NORD product's \
-                 profile"
-                    .into(),
-            )
-        })?;
         let link = link::Socketcand::connect(self.addr, &self.channel, self.timeout)
             .map_err(|e| OpenError::Unreachable(e.to_string()))?;
+        let Ok(product) = profile.nord() else {
+            // Any maker's CANopen node: the URL names it.
+            let node = self.node.ok_or_else(|| {
+                OpenError::Profile(
+                    "any maker's CANopen node: give its node id in the URL \
+                     (`socketcand://HOST[:PORT]/CHANNEL/NODE`)"
+                        .into(),
+                )
+            })?;
+            let what = self.describe();
+            return Ok(match &self.tap {
+                None => Box::new(CanBinding::open_any(link, self.timeout, node, what)?),
+                Some(tap) => Box::new(CanBinding::open_any(
+                    link::Tapped::new(link, tap.clone()),
+                    self.timeout,
+                    node,
+                    what,
+                )?),
+            });
+        };
         let inverters = profile.inverters.min(product.max_inverters());
         open(
             link,
