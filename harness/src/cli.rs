@@ -170,8 +170,8 @@ struct RunArgs {
     pcap: Option<PathBuf>,
     /// With `--dut`: also watch the bus module's system bus, `socketcand://HOST[:PORT]/CHANNEL`
     /// (a socketcand server on the CAN bus behind the module, or `harness serve enip
-    /// --system-bus`), so that `observe: { what: system-bus }` steps assert what the module's
-    /// gateway put on it.
+    /// --system-bus`) or `can://IFACE` (a CAN adapter of this host on it), so that `observe: {
+    /// what: system-bus }` steps assert what the module's gateway put on it.
     #[arg(long, value_name = "URL", requires = "dut")]
     tap: Option<String>,
     /// Run only share K of N of the case-runs (round robin over the unsharded order), for

@@ -10,7 +10,7 @@ use std::process::{Command, Stdio};
 
 #[path = "skip.rs"]
 mod skip;
-pub(crate) use skip::require_or_skip;
+pub(crate) use skip::{allowed_skip, require_or_skip};
 
 /// Whether this process runs as root (effective user id 0, from `/proc/self/status`).
 pub(crate) fn is_root() -> bool {

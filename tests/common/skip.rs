@@ -109,6 +109,19 @@ pub(crate) fn require_or_skip(have: bool, what: &str, why: &str) -> bool {
     }
 }
 
+/// The one skip strict mode lets pass: SocketCAN needs a kernel with AF_CAN and the `vcan`
+/// module, which some machines lack (this project's CI among them); the README says so. `true`
+/// when `have` holds; else prints and records the skip and returns `false`, strict or not.
+#[allow(dead_code)] // only the SocketCAN test uses it
+pub(crate) fn allowed_skip(have: bool, what: &str, why: &str) -> bool {
+    if !have {
+        let message = format!("{why}: needs {what} (the one skip allowed under CI)");
+        eprintln!("skipped: {message}");
+        record("skip", &message);
+    }
+    have
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

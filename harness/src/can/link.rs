@@ -19,17 +19,17 @@ use crate::pcap::{SharedTap, Stamper};
 #[derive(Debug, thiserror::Error)]
 pub(crate) enum CanLinkError {
     /// The socket failed.
-    #[error("socketcand {peer}: {source}")]
+    #[error("{peer}: {source}")]
     Io {
-        /// The server.
+        /// The server (`socketcand ADDR`) or interface (`CAN interface IFACE`).
         peer: String,
         /// What the system said.
         source: std::io::Error,
     },
-    /// The server said something socketcand does not, or refused.
-    #[error("socketcand {peer}: {what}")]
+    /// The server said something socketcand does not, or refused; a frame the link cannot carry.
+    #[error("{peer}: {what}")]
     Protocol {
-        /// The server.
+        /// As for `Io`.
         peer: String,
         /// What went wrong.
         what: String,
@@ -45,6 +45,14 @@ pub(crate) trait CanLink {
     fn recv(&mut self, limit: Duration) -> Result<Option<CanFrame>, CanLinkError>;
     /// The time on the link's clock (virtual in-process, since the connection on a network).
     fn now(&self) -> Duration;
+    /// [`CanLink::recv`] with the time the frame was on the bus: the link's clock when it came,
+    /// unless the link carries the sender's time (socketcand's timestamps).
+    fn recv_stamped(
+        &mut self,
+        limit: Duration,
+    ) -> Result<Option<(Duration, CanFrame)>, CanLinkError> {
+        Ok(self.recv(limit)?.map(|f| (self.now(), f)))
+    }
     /// The simulated segment behind the link, if it is one (`inject`, `observe`), and the time
     /// on its clock.
     fn segment(&mut self) -> Option<(&mut Segment, Duration)> {
@@ -183,7 +191,7 @@ impl Socketcand {
         channel: &str,
         limit: Duration,
     ) -> Result<Socketcand, CanLinkError> {
-        let peer = addr.to_string();
+        let peer = format!("socketcand {addr}");
         let io = |source| CanLinkError::Io {
             peer: peer.clone(),
             source,
@@ -281,11 +289,22 @@ impl CanLink for Socketcand {
     }
 
     fn recv(&mut self, limit: Duration) -> Result<Option<CanFrame>, CanLinkError> {
+        Ok(self.recv_stamped(limit)?.map(|(_, f)| f))
+    }
+
+    fn recv_stamped(
+        &mut self,
+        limit: Duration,
+    ) -> Result<Option<(Duration, CanFrame)>, CanLinkError> {
         let deadline = Instant::now() + limit;
         loop {
             let left = deadline.saturating_duration_since(Instant::now());
             match self.message(left)? {
-                Some(Message::Frame { frame, .. }) => return Ok(Some(frame)),
+                Some(Message::Frame { frame, time }) => {
+                    let at =
+                        Duration::from_secs(time.secs) + Duration::from_micros(time.usecs.into());
+                    return Ok(Some((at, frame)));
+                }
                 // Error frames and replies to nothing the harness asked are not frames.
                 Some(_) => continue,
                 None => return Ok(None),

@@ -9,7 +9,8 @@
 //! back; `process`/`wait` steps run PDOs on SYNC in the bus interface's place ([`process`]).
 //! `--profile any` with `--dut socketcand://HOST[:PORT]/CHANNEL/NODE` tests any maker's CANopen
 //! node with the cases whose steps are all `can:` (COB-IDs relative to the node: `600+N`).
-//! What does not yet: SocketCAN (`can://IFACE`); it refuses with that said.
+//! `--dut can://IFACE[/NODE]` reaches a CAN interface of this host (SocketCAN), and `harness
+//! serve can --iface IFACE` serves the simulated segment on one.
 
 pub mod bench_support;
 mod binding;
@@ -18,6 +19,7 @@ mod link;
 mod process;
 mod sdo;
 mod serve;
+mod socketcan;
 mod step;
 mod tap;
 
@@ -40,8 +42,8 @@ pub(crate) use tap::{SystemBusTap, TapFactory};
 pub(crate) const BUS: Bus = Bus {
     name: "can",
     title: "NORD system bus (CANopen)",
-    url: "socketcand://HOST[:PORT]/CHANNEL",
-    schemes: &["socketcand"],
+    url: "socketcand://HOST[:PORT]/CHANNEL or can://IFACE",
+    schemes: &["socketcand", "can"],
     profiles,
     parse_step,
     embedded,
@@ -113,81 +115,85 @@ fn open<L: link::CanLink + 'static>(
 }
 
 /// `--dut socketcand://HOST[:PORT]/CHANNEL[/NODE]`: the inverters on the bus `CHANNEL` of a
-/// socketcand server (port 29536 unless given), or with `--profile any` the CANopen node NODE
-/// of any maker.
+/// socketcand server (port 29536 unless given); `--dut can://IFACE[/NODE]`: those on a CAN
+/// interface of this host (SocketCAN). With `--profile any`, the CANopen node NODE of any
+/// maker.
 fn network(n: &Network) -> Result<Box<dyn DutFactory>, OpenError> {
-    if n.scheme != "socketcand" {
-        return Err(OpenError::Profile(format!(
-            "`{}://{}`: SocketCAN is not built yet; reach the bus through a socketcand server \
-             (`--dut socketcand://HOST[:PORT]/CHANNEL`)",
-            n.scheme, n.target
-        )));
-    }
-    let (host, channel) = n.target.split_once('/').ok_or_else(|| {
-        OpenError::Profile(format!(
-            "`socketcand://{}`: give the bus after a slash (`socketcand://HOST[:PORT]/can0`)",
-            n.target
-        ))
-    })?;
-    // Any maker's node: `…/CHANNEL/NODE`.
-    let (channel, node) = match channel.split_once('/') {
-        None => (channel, None),
-        Some((channel, node)) => {
+    let url = format!("{}://{}", n.scheme, n.target);
+    let bad = |what: String| OpenError::Profile(format!("`{url}`: {what}"));
+    let (transport, rest) = match n.scheme.as_str() {
+        "socketcand" => {
+            let (host, rest) = n.target.split_once('/').ok_or_else(|| {
+                bad("give the bus after a slash (`socketcand://HOST[:PORT]/can0`)".into())
+            })?;
+            let addr = crate::net::serve_args::socket_addr(host, serve::DEFAULT_PORT)
+                .map_err(|e| bad(e.to_string()))?;
+            (Some(addr), rest)
+        }
+        _ => (None, n.target.as_str()),
+    };
+    // Any maker's node: `…/NODE`.
+    let (bus, node) = match rest.split_once('/') {
+        None => (rest, None),
+        Some((bus, node)) => {
             let id = node
                 .parse::<u8>()
                 .ok()
                 .filter(|n| (1..=127).contains(n))
-                .ok_or_else(|| {
-                    OpenError::Profile(format!(
-                        "`socketcand://{}`: `{node}` is not a node id 1…127",
-                        n.target
-                    ))
-                })?;
-            (channel, Some(id))
+                .ok_or_else(|| bad(format!("`{node}` is not a node id 1…127")))?;
+            (bus, Some(id))
         }
     };
-    if channel.is_empty() || channel.contains(char::is_whitespace) {
-        return Err(OpenError::Profile(format!(
-            "`socketcand://{}`: `{channel}` is not a bus name",
-            n.target
-        )));
+    if bus.is_empty() || bus.contains(char::is_whitespace) {
+        return Err(bad(format!("`{bus}` is not a bus name")));
     }
-    let addr = crate::net::serve_args::socket_addr(host, serve::DEFAULT_PORT)
-        .map_err(|e| OpenError::Profile(format!("`socketcand://{}`: {e}", n.target)))?;
-    Ok(Box::new(SocketcandFactory {
-        addr,
+    Ok(Box::new(BusFactory {
+        transport: match transport {
+            Some(addr) => Transport::Socketcand {
+                addr,
+                channel: bus.to_string(),
+            },
+            None => Transport::SocketCan {
+                iface: bus.to_string(),
+            },
+        },
         node,
-        channel: channel.to_string(),
         timeout: n.timeout,
         tap: n.tap.clone(),
     }))
 }
 
-/// Opens the socketcand server's bus anew for every case.
-struct SocketcandFactory {
-    addr: SocketAddr,
-    /// Any maker's node, as the URL names it (`…/CHANNEL/NODE`).
+/// How the harness reaches a system bus on the network.
+enum Transport {
+    /// The bus `channel` of a socketcand server.
+    Socketcand { addr: SocketAddr, channel: String },
+    /// A CAN interface of this host.
+    SocketCan { iface: String },
+}
+
+/// Opens the bus anew for every case.
+struct BusFactory {
+    transport: Transport,
+    /// Any maker's node, as the URL names it (`…/NODE`).
     node: Option<u8>,
-    channel: String,
     timeout: Duration,
     /// The run's capture (`--pcap`).
     tap: Option<SharedTap>,
 }
 
-impl DutFactory for SocketcandFactory {
-    fn describe(&self) -> String {
-        format!("system bus `{}` of socketcand {}", self.channel, self.addr)
-    }
-
-    fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
-        let link = link::Socketcand::connect(self.addr, &self.channel, self.timeout)
-            .map_err(|e| OpenError::Unreachable(e.to_string()))?;
+impl BusFactory {
+    /// The binding of `profile` on `link`: a NORD product's inverters, or any maker's node.
+    fn open_on<L: link::CanLink + 'static>(
+        &self,
+        link: L,
+        profile: &Profile,
+    ) -> Result<Box<dyn Binding>, OpenError> {
         let Ok(product) = profile.nord() else {
             // Any maker's CANopen node: the URL names it.
             let node = self.node.ok_or_else(|| {
                 OpenError::Profile(
-                    "any maker's CANopen node: give its node id in the URL \
-                     (`socketcand://HOST[:PORT]/CHANNEL/NODE`)"
+                    "any maker's CANopen node: give its node id at the end of the URL \
+                     (`socketcand://HOST[:PORT]/CHANNEL/NODE`, `can://IFACE/NODE`)"
                         .into(),
                 )
             })?;
@@ -211,6 +217,32 @@ impl DutFactory for SocketcandFactory {
             self.describe(),
             true,
         )
+    }
+}
+
+impl DutFactory for BusFactory {
+    fn describe(&self) -> String {
+        match &self.transport {
+            Transport::Socketcand { addr, channel } => {
+                format!("system bus `{channel}` of socketcand {addr}")
+            }
+            Transport::SocketCan { iface } => format!("system bus on CAN interface {iface}"),
+        }
+    }
+
+    fn open(&mut self, profile: &Profile, _retries: u32) -> Result<Box<dyn Binding>, OpenError> {
+        let unreachable = |e: link::CanLinkError| OpenError::Unreachable(e.to_string());
+        match &self.transport {
+            Transport::Socketcand { addr, channel } => {
+                let link =
+                    link::Socketcand::connect(*addr, channel, self.timeout).map_err(unreachable)?;
+                self.open_on(link, profile)
+            }
+            Transport::SocketCan { iface } => {
+                let link = socketcan::SocketCan::open(iface).map_err(unreachable)?;
+                self.open_on(link, profile)
+            }
+        }
     }
 }
 

@@ -1,4 +1,5 @@
-//! `harness serve can --socketcand ADDR`: the simulated system bus (a CAN segment carrying the
+//! `harness serve can --socketcand ADDR` (or `--iface IFACE`, on a CAN interface of the host
+//! through SocketCAN, [`serve_iface`]): the simulated system bus (a CAN segment carrying the
 //! inverters as CANopen nodes, `sim::can`) served over socketcand's TCP protocol, the way a CAN
 //! bus on another machine is reached (a Raspberry Pi on a test bench running socketcand).
 //!
@@ -39,8 +40,17 @@ const IDLE: Duration = Duration::from_millis(20);
 )]
 struct ServeArgs {
     /// Listen address of the socketcand server, HOST[:PORT] (port 29536 by default).
-    #[arg(long, value_name = "ADDR")]
-    socketcand: String,
+    #[arg(
+        long,
+        value_name = "ADDR",
+        required_unless_present = "iface",
+        conflicts_with = "iface"
+    )]
+    socketcand: Option<String>,
+    /// Serve on this CAN interface of the host instead (SocketCAN: `can0` on an adapter,
+    /// `vcan0`).
+    #[arg(long, value_name = "IFACE")]
+    iface: Option<String>,
     /// The bus name clients open (`< open NAME >`).
     #[arg(long, default_value = "can0")]
     channel: String,
@@ -62,7 +72,16 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         Err(code) => return Ok(code),
     };
     let product = crate::profile::Profile::by_name(&a.profile)?.nord()?;
-    let addr = crate::net::serve_args::socket_addr(&a.socketcand, DEFAULT_PORT)?;
+    let (Some(socketcand), None) = (&a.socketcand, &a.iface) else {
+        let iface = a.iface.as_deref().unwrap_or_default();
+        return serve_iface(
+            iface,
+            config(product, a.inverters),
+            a.seconds.map(Duration::from_secs),
+        )
+        .map(|()| crate::cli::EXIT_PASS);
+    };
+    let addr = crate::net::serve_args::socket_addr(socketcand, DEFAULT_PORT)?;
     let listener = TcpListener::bind(addr).map_err(|e| format!("cannot listen on {addr}: {e}"))?;
     let served = Served::start(listener, config(product, a.inverters), a.channel)?;
     // On stdout, once the socket is bound: what a test or a script waits for.
@@ -96,6 +115,46 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
     }
     served.stop();
     Ok(crate::cli::EXIT_PASS)
+}
+
+/// `harness serve can --iface IFACE`: the segment on a CAN interface of this host, one thread:
+/// each frame read is the nodes' to answer, and what they send on their own goes out when due;
+/// until `duration` has passed (forever when `None`).
+fn serve_iface(
+    iface: &str,
+    config: DeviceConfig,
+    duration: Option<Duration>,
+) -> Result<(), String> {
+    use super::link::CanLink;
+    let mut link = super::socketcan::SocketCan::open(iface).map_err(|e| e.to_string())?;
+    let mut segment = Segment::new(config).map_err(|e| e.to_string())?;
+    outln!(
+        "serving the system bus of {} (nodes {}) on CAN interface {iface}",
+        config.product.name(),
+        segment
+            .nodes()
+            .iter()
+            .map(u8::to_string)
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let start = Instant::now();
+    while duration.is_none_or(|d| start.elapsed() < d) {
+        let now = start.elapsed();
+        for f in segment.poll(now) {
+            link.send(&f).map_err(|e| e.to_string())?;
+        }
+        let wait = segment
+            .next_due()
+            .map_or(IDLE, |d| d.saturating_sub(now).min(IDLE))
+            .max(Duration::from_micros(200));
+        if let Some(frame) = link.recv(wait).map_err(|e| e.to_string())? {
+            for f in segment.receive(&frame, start.elapsed()) {
+                link.send(&f).map_err(|e| e.to_string())?;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The product with `inverters` (default and ceiling: its maximum).
@@ -153,19 +212,24 @@ impl Hub {
     /// `frames` to every raw-mode client but `except`; a client that cannot take them is
     /// dropped.
     fn broadcast(&self, frames: &[CanFrame], except: Option<u64>) {
+        let now = self.now();
+        let stamped: Vec<(Duration, CanFrame)> = frames.iter().map(|f| (now, *f)).collect();
+        self.broadcast_at(&stamped, except);
+    }
+
+    /// [`Hub::broadcast`] with each frame's own time (a relayed bus's, when it was on it).
+    fn broadcast_at(&self, frames: &[(Duration, CanFrame)], except: Option<u64>) {
         if frames.is_empty() {
             return;
         }
-        let now = self.now();
-        let time = Timestamp {
-            secs: now.as_secs(),
-            usecs: now.subsec_micros(),
-        };
         let mut text = String::new();
-        for frame in frames {
+        for (at, frame) in frames {
             let m = Message::Frame {
                 frame: *frame,
-                time,
+                time: Timestamp {
+                    secs: at.as_secs(),
+                    usecs: at.subsec_micros(),
+                },
             };
             // A frame of the segment is a data frame of at most 8 bytes: always writable.
             if let Ok(s) = m.emit() {
@@ -348,13 +412,14 @@ fn serve_client(hub: &Hub, mut stream: TcpStream) -> std::io::Result<()> {
 /// How often a served bus module's system-bus frames are handed to the relay.
 const RELAY_PERIOD: Duration = Duration::from_millis(2);
 
-/// `serve enip|epl|pnio --system-bus ADDR`: a socketcand server on `addr` (HOST[:PORT], channel
-/// `can0`) carrying what the served bus module's gateway exchanges with its inverters, which
-/// `take` hands over (`sim::device::Device::tap_system_bus`), every [`RELAY_PERIOD`]. A run
+/// `serve enip --system-bus ADDR`: a socketcand server on `addr` (HOST[:PORT], channel `can0`)
+/// carrying what the served bus module's gateway exchanges with its inverters, which `take`
+/// hands over with the time each frame was on the bus (`sim::device::Device::tap_system_bus`),
+/// every [`RELAY_PERIOD`]: each frame's socketcand timestamp is its own, not the relay's. A run
 /// watches it with `--tap socketcand://ADDR/can0`.
 pub(crate) fn relay_system_bus(
     addr: &str,
-    mut take: impl FnMut() -> Vec<CanFrame> + Send + 'static,
+    mut take: impl FnMut() -> Vec<(Duration, CanFrame)> + Send + 'static,
 ) -> Result<Served, String> {
     let addr = crate::net::serve_args::socket_addr(addr, DEFAULT_PORT)?;
     let listener = TcpListener::bind(addr).map_err(|e| format!("cannot listen on {addr}: {e}"))?;
@@ -364,7 +429,7 @@ pub(crate) fn relay_system_bus(
     let hub = served.hub.clone();
     thread::spawn(move || {
         while !hub.stop.load(Ordering::Relaxed) {
-            hub.broadcast(&take(), None);
+            hub.broadcast_at(&take(), None);
             thread::sleep(RELAY_PERIOD);
         }
     });

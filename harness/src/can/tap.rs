@@ -1,4 +1,5 @@
-//! `harness run --dut … --tap socketcand://HOST[:PORT]/CHANNEL`: the system bus of a bus
+//! `harness run --dut … --tap socketcand://HOST[:PORT]/CHANNEL` (or `--tap can://IFACE`): the
+//! system bus of a bus
 //! module under test, watched while its field bus is tested, so that cases assert what the
 //! gateway put on the system bus for a field-bus request (`observe: { what: system-bus }`).
 //!
@@ -25,8 +26,9 @@ use crate::suite::Action;
 /// frames over every 2 ms) before it takes what came.
 const SETTLE: Duration = Duration::from_millis(20);
 
-/// The frames of a tapped system bus, each with its time since the tap connected. The reader
-/// runs until the bus's server closes the connection or the run ends.
+/// The frames of a tapped system bus, each with its time on the bus (socketcand's timestamp; on
+/// a CAN interface, when it came). The reader runs until the bus's server closes the connection
+/// or the run ends.
 #[derive(Clone)]
 pub(crate) struct SystemBusTap {
     frames: Arc<Mutex<Vec<(Duration, CanFrame)>>>,
@@ -34,41 +36,54 @@ pub(crate) struct SystemBusTap {
 }
 
 impl SystemBusTap {
-    /// Connects to `url` (`socketcand://HOST[:PORT]/CHANNEL`) and starts reading.
+    /// Connects to `url` (`socketcand://HOST[:PORT]/CHANNEL`, or `can://IFACE` for a CAN
+    /// interface of this host) and starts reading.
     pub(crate) fn connect(url: &str, limit: Duration) -> Result<SystemBusTap, String> {
-        let target = url.strip_prefix("socketcand://").ok_or_else(|| {
-            format!(
-                "`--tap {url}`: give socketcand://HOST[:PORT]/CHANNEL (SocketCAN is not built yet)"
-            )
-        })?;
+        let bad = |what: &str| format!("`--tap {url}`: {what}");
+        if let Some(iface) = url.strip_prefix("can://") {
+            let link = super::socketcan::SocketCan::open(iface).map_err(|e| bad(&e.to_string()))?;
+            return Ok(SystemBusTap::reading(
+                link,
+                format!("system bus on {iface}"),
+            ));
+        }
+        let target = url
+            .strip_prefix("socketcand://")
+            .ok_or_else(|| bad("give socketcand://HOST[:PORT]/CHANNEL or can://IFACE"))?;
         let (host, channel) = target
             .split_once('/')
             .filter(|(_, c)| !c.is_empty())
-            .ok_or_else(|| format!("`--tap {url}`: give the bus after a slash (…/can0)"))?;
+            .ok_or_else(|| bad("give the bus after a slash (…/can0)"))?;
         let addr: SocketAddr =
             crate::net::serve_args::socket_addr(host, super::serve::DEFAULT_PORT)
-                .map_err(|e| format!("`--tap {url}`: {e}"))?;
-        let mut link =
-            Socketcand::connect(addr, channel, limit).map_err(|e| format!("`--tap {url}`: {e}"))?;
+                .map_err(|e| bad(&e))?;
+        let link = Socketcand::connect(addr, channel, limit).map_err(|e| bad(&e.to_string()))?;
+        Ok(SystemBusTap::reading(
+            link,
+            format!("system bus `{channel}` of socketcand {addr}"),
+        ))
+    }
+
+    /// Reads every frame of `link` on a thread of its own.
+    fn reading<L: CanLink + Send + 'static>(mut link: L, what: String) -> SystemBusTap {
         let tap = SystemBusTap {
             frames: Arc::default(),
-            what: format!("system bus `{channel}` of socketcand {addr}"),
+            what,
         };
         let frames = tap.frames.clone();
         thread::spawn(move || loop {
-            match link.recv(Duration::from_secs(1)) {
-                Ok(Some(f)) => {
-                    let now = link.now();
+            match link.recv_stamped(Duration::from_secs(1)) {
+                Ok(Some(stamped)) => {
                     frames
                         .lock()
                         .unwrap_or_else(|p| p.into_inner())
-                        .push((now, f));
+                        .push(stamped);
                 }
                 Ok(None) => {}
                 Err(_) => return,
             }
         });
-        Ok(tap)
+        tap
     }
 
     /// The frames since the last call.

@@ -162,10 +162,7 @@ pub(crate) fn start_enip_tapped(
     }
     if let Some(addr) = system_bus {
         let s = shared.clone();
-        crate::can::relay_system_bus(addr, move || {
-            let frames = s.lock().device_mut().tap_system_bus();
-            frames.into_iter().map(|(_, f)| f).collect()
-        })?;
+        crate::can::relay_system_bus(addr, move || s.lock().device_mut().tap_system_bus())?;
     }
     Ok(Served {
         listen,
