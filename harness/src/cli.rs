@@ -149,7 +149,8 @@ struct RunArgs {
     #[arg(long, requires = "dut")]
     local: Option<std::net::IpAddr>,
     /// The DUT's node id on its bus, the same as the URL's `/N` (`--dut epl://IFACE --node-id
-    /// 5`: POWERLINK node 5).
+    /// 5`: POWERLINK node 5; `--dut socketcand://HOST/can0 --node-id 5 --profile any`: CANopen
+    /// node 5).
     #[arg(long, requires = "dut")]
     node_id: Option<u8>,
     /// How the DUT's SDO travel, the same as the URL's `?sdo=` (POWERLINK: `asnd`, `udp`).
@@ -200,12 +201,17 @@ struct RunArgs {
 }
 
 /// A `--dut` target with `--node-id` and `--sdo` written into it as the URL spells them
-/// (`IFACE/N?sdo=udp`); the bus reads them, or refuses what it does not take.
+/// (`IFACE/N?sdo=udp`, `HOST:PORT/can0/N`: the node id is the last path segment, which
+/// replaces one the URL gave); the bus reads them, or refuses what it does not take.
 fn with_options(target: &str, node_id: Option<u8>, sdo: Option<&str>) -> String {
     let (path, query) = target.split_once('?').unwrap_or((target, ""));
     let mut path = path.to_string();
     if let Some(n) = node_id {
-        path = format!("{}/{n}", path.split('/').next().unwrap_or(&path));
+        let base = match path.rsplit_once('/') {
+            Some((base, last)) if last.parse::<u8>().is_ok() => base,
+            _ => path.as_str(),
+        };
+        path = format!("{base}/{n}");
     }
     let mut query: Vec<String> = query
         .split('&')
@@ -767,5 +773,11 @@ mod tests {
             with_options("veth0?sdo=asnd&cycle=1ms", None, Some("udp")),
             "veth0?cycle=1ms&sdo=udp"
         );
+        // The system bus keeps its channel: the node id follows it.
+        assert_eq!(
+            with_options("127.0.0.1:29536/can0", Some(5), None),
+            "127.0.0.1:29536/can0/5"
+        );
+        assert_eq!(with_options("can0/3", Some(5), None), "can0/5");
     }
 }
