@@ -24,7 +24,7 @@ use proto::can::CanFrame;
 use proto::canopen::cob_id::Function;
 use proto::canopen::sdo::{Abort, Expedited, InitiateData, SdoRequest, SdoResponse};
 use proto::canopen::SdoAbortCode;
-use proto::nord::can::{pdo_words, process_values, InverterSeries, SystemBusAddress};
+use proto::nord::can::{pdo_data, process_values, InverterSeries, SystemBusAddress};
 use proto::nord::errors::SdoAbort;
 use proto::nord::{Family, Inverter, Product};
 
@@ -197,14 +197,9 @@ impl Tap {
                 (Function::Rpdo { number }, &out, &mut cycle.rpdos),
                 (Function::Tpdo { number }, &back, &mut cycle.tpdos),
             ] {
-                let Some((first, count)) = pdo_words(function, series) else {
+                let Some(data) = pdo_data(function, series, words) else {
                     continue;
                 };
-                let (first, count) = (usize::from(first), usize::from(count));
-                let data: Vec<u8> = words[first..first + count]
-                    .iter()
-                    .flat_map(|w| w.to_le_bytes())
-                    .collect();
                 if let Some(f) = frame(function, node, &data) {
                     to.push(f);
                 }

@@ -134,6 +134,16 @@ fn pdo_error(e: PdoError) -> StepError {
     }
 }
 
+/// The vendor-ID (1018h:01) of `node`, the first thing asked of a DUT: no answer is an
+/// unreachable DUT, a refusal one that did not come up.
+fn vendor_id<L: CanLink>(client: &mut Client<L>, node: u8) -> Result<u32, OpenError> {
+    let vendor = client.upload(node, 0x1018, 1).map_err(|e| match e {
+        SdoError::Link(_) | SdoError::Silent { .. } => OpenError::Unreachable(e.to_string()),
+        _ => OpenError::BringUp(e.to_string()),
+    })?;
+    Ok(u32::from_le_bytes(vendor.try_into().unwrap_or([0; 4])))
+}
+
 fn refused_or(e: SdoError) -> Result<Observation, StepError> {
     match e {
         SdoError::Abort(code) => Ok(abort(code)),
@@ -157,11 +167,7 @@ impl<L: CanLink> CanBinding<L> {
         let node = proto::nord::can::SystemBusAddress::for_inverter(product, fi1)
             .map_err(|e| OpenError::Profile(e.to_string()))?
             .get();
-        let vendor = client.upload(node, 0x1018, 1).map_err(|e| match e {
-            SdoError::Link(_) | SdoError::Silent { .. } => OpenError::Unreachable(e.to_string()),
-            _ => OpenError::BringUp(e.to_string()),
-        })?;
-        let vendor = u32::from_le_bytes(vendor.try_into().unwrap_or([0; 4]));
+        let vendor = vendor_id(&mut client, node)?;
         if vendor != proto::nord::ecat::VENDOR_ID {
             return Err(OpenError::BringUp(format!(
                 "node {node} has vendor id {vendor:08X}h, not NORD's {:08X}h",
@@ -194,11 +200,7 @@ impl<L: CanLink> CanBinding<L> {
         what: String,
     ) -> Result<CanBinding<L>, OpenError> {
         let mut client = Client::new(link, limit);
-        let vendor = client.upload(node, 0x1018, 1).map_err(|e| match e {
-            SdoError::Link(_) | SdoError::Silent { .. } => OpenError::Unreachable(e.to_string()),
-            _ => OpenError::BringUp(e.to_string()),
-        })?;
-        let vendor = u32::from_le_bytes(vendor.try_into().unwrap_or([0; 4]));
+        let vendor = vendor_id(&mut client, node)?;
         client.take_exchanges();
         Ok(CanBinding {
             client,

@@ -20,7 +20,8 @@ use proto::can::CanFrame;
 use proto::canopen::cob_id::{Cob, Function};
 use proto::canopen::NmtCommand;
 use proto::nord::can::{
-    cycle_period_us, inverter_series, pdo_words, process_values, InverterSeries, SystemBusAddress,
+    cycle_period_us, inverter_series, pdo_data, pdo_words, process_values, InverterSeries,
+    SystemBusAddress,
 };
 use proto::nord::{Inverter, Product};
 
@@ -182,15 +183,9 @@ impl Pdos {
             }
             for number in [1, 2] {
                 let rpdo = Function::Rpdo { number };
-                let Some((first, count)) = pdo_words(rpdo, self.series) else {
-                    continue;
-                };
-                let (first, count) = (usize::from(first), usize::from(count));
-                let data: Vec<u8> = words[first..first + count]
-                    .iter()
-                    .flat_map(|w| w.to_le_bytes())
-                    .collect();
-                sent.push(frame(rpdo, *node, &data)?);
+                if let Some(data) = pdo_data(rpdo, self.series, words) {
+                    sent.push(frame(rpdo, *node, &data)?);
+                }
             }
         }
         sent.push(CanFrame::new(0x080, &[]).map_err(|e| PdoError::Frame(e.to_string()))?);

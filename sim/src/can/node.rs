@@ -9,7 +9,9 @@ use proto::canopen::cob_id::{Cob, Function};
 use proto::canopen::emcy::{register, Emergency};
 use proto::canopen::nmt::{ErrorControl, NmtFrame, NmtState};
 use proto::canopen::sync::SyncFrame;
-use proto::nord::can::{interface_watch, p748_status, pdo_words, process_values, InverterSeries};
+use proto::nord::can::{
+    interface_watch, p748_status, pdo_data, pdo_words, process_values, InverterSeries,
+};
 use proto::nord::errors::SdoAbort;
 use proto::nord::params::ParamDef;
 use proto::nord::{Family, Inverter, ParamNumber, Product};
@@ -319,9 +321,7 @@ impl Node {
             .into_iter()
             .filter_map(|number| {
                 let tpdo = Function::Tpdo { number };
-                let (first, count) = pdo_words(tpdo, self.series)?;
-                let words = &answer[usize::from(first)..usize::from(first + count)];
-                let data: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+                let data = pdo_data(tpdo, self.series, &answer)?;
                 self.frame(tpdo, &data)
             })
             .collect()

@@ -36,6 +36,20 @@ pub fn pdo_words(function: Function, series: InverterSeries) -> Option<(u8, u8)>
     }
 }
 
+/// The data bytes of PDO `function` for an inverter's six words (control/status word and
+/// values 1…5): the words [`pdo_words`] gives it, UNSIGNED16 little-endian; `None` where the
+/// PDO carries none.
+pub fn pdo_data(function: Function, series: InverterSeries, words: &[u16; 6]) -> Option<Vec<u8>> {
+    let (first, count) = pdo_words(function, series)?;
+    let (first, count) = (usize::from(first), usize::from(count));
+    Some(
+        words[first..first + count]
+            .iter()
+            .flat_map(|w| w.to_le_bytes())
+            .collect(),
+    )
+}
+
 /// The CiA 301 mapping entries (index · 10000h + sub-index · 100h + 16 bits) of a PDO: the
 /// words of [`pdo_words`] as entries 1…6 of 7000h (RPDO) or 6000h (TPDO), the objects of FI 1
 /// in the project's EtherCAT layout.
