@@ -7,22 +7,17 @@
 //! 2 usage or configuration error (bad arguments, a suite file that does not load).
 
 use clap::{Args as ClapArgs, Parser, Subcommand};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crate::binding::embedded::EmbeddedFactory;
-use crate::outcome::Verdict;
+use crate::exit::verdict_exit;
 use crate::profile::Profile;
 use crate::progress::Verbosity;
 use crate::report::{self, SnapshotMode};
 use crate::runner::{self, RunOptions};
 use crate::suite;
 
-/// Exit code: every case passed or did not apply.
-pub const EXIT_PASS: i32 = 0;
-/// Exit code: a case failed or ended in error.
-pub const EXIT_FAIL: i32 = 1;
-/// Exit code: usage or configuration error.
-pub const EXIT_USAGE: i32 = 2;
+pub use crate::exit::{EXIT_FAIL, EXIT_PASS, EXIT_USAGE};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -262,60 +257,6 @@ fn dut_help() -> String {
     )
 }
 
-/// The suites folder: as given, else `suites/` of the current directory, else the one of the
-/// checkout the harness was built in, with a note on stderr saying so (a binary run from
-/// elsewhere would otherwise test suites the user never chose, silently). When there is none,
-/// `suites`, for the caller's load error to name.
-pub(crate) fn suites_dir(given: Option<PathBuf>) -> PathBuf {
-    suites_or_usage(given).unwrap_or_else(|e| {
-        eprintln!("harness: {e}");
-        PathBuf::from("suites")
-    })
-}
-
-/// The suites folder or why there is none: as given; else `here` (`./suites`); else `built`
-/// (the build checkout's), with the note to print.
-fn default_suites(
-    given: Option<PathBuf>,
-    here: &Path,
-    built: &Path,
-) -> Result<(PathBuf, Option<String>), String> {
-    if let Some(dir) = given {
-        return Ok((dir, None));
-    }
-    if here.is_dir() {
-        return Ok((here.to_path_buf(), None));
-    }
-    let cwd = std::env::current_dir()
-        .map(|d| d.display().to_string())
-        .unwrap_or_else(|_| ".".into());
-    if built.is_dir() {
-        let built = built.canonicalize().unwrap_or_else(|_| built.to_path_buf());
-        return Ok((
-            built.clone(),
-            Some(format!(
-                "no `suites/` in {cwd}: using the suites of the checkout this harness was built in, {} (`--suites DIR` chooses)",
-                built.display()
-            )),
-        ));
-    }
-    Err(format!(
-        "no suites: no `suites/` in {cwd}, and the checkout this harness was built in ({}) has none; give `--suites DIR`",
-        built.display()
-    ))
-}
-
-/// The suites folder for `run` and `list`: [`default_suites`], the note printed; none is a
-/// usage error.
-fn suites_or_usage(given: Option<PathBuf>) -> Result<PathBuf, String> {
-    let built = Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites");
-    let (dir, note) = default_suites(given, Path::new("suites"), &built)?;
-    if let Some(n) = note {
-        eprintln!("harness: {n}");
-    }
-    Ok(dir)
-}
-
 /// Entry point; returns the process exit code.
 pub fn main() -> i32 {
     let cli = match Cli::try_parse() {
@@ -354,19 +295,6 @@ pub fn main() -> i32 {
             EXIT_USAGE
         }
     }
-}
-
-/// Parses a subcommand's own arguments (a bus's `serve` options); `Err` is the exit code when
-/// clap printed help, a version or a usage error instead.
-pub(crate) fn parse_args<T: clap::Parser>(name: &str, args: &[String]) -> Result<T, i32> {
-    T::try_parse_from(std::iter::once(name).chain(args.iter().map(String::as_str))).map_err(|e| {
-        let _ = e.print();
-        if e.use_stderr() {
-            EXIT_USAGE
-        } else {
-            EXIT_PASS
-        }
-    })
 }
 
 fn describe(a: DescribeArgs) -> Result<i32, String> {
@@ -432,7 +360,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
             p.name()
         ));
     }
-    let dir = suites_or_usage(a.suites)?;
+    let dir = suite::location::suites_or_usage(a.suites)?;
     let loaded = suite::load_dir(&dir).map_err(|e| e.to_string())?;
     let selected = loaded
         .cases
@@ -609,18 +537,6 @@ fn chosen_profiles(names: &[String]) -> Result<Vec<Profile>, String> {
     Ok(chosen)
 }
 
-/// A run's exit code: usage error when a suite file did not load, fail when a case failed or
-/// ended in error, else pass (a merge of shards exits as the unsharded run would).
-pub(crate) fn verdict_exit(run: &crate::outcome::RunResult) -> i32 {
-    if !run.load_errors.is_empty() {
-        EXIT_USAGE
-    } else if run.count(Verdict::Fail) + run.count(Verdict::Error) > 0 {
-        EXIT_FAIL
-    } else {
-        EXIT_PASS
-    }
-}
-
 fn list(a: ListArgs) -> Result<i32, String> {
     if a.functions {
         for f in crate::model::registry() {
@@ -628,7 +544,7 @@ fn list(a: ListArgs) -> Result<i32, String> {
         }
         return Ok(EXIT_PASS);
     }
-    let loaded = suite::load_dir(&suites_or_usage(a.suites)?).map_err(|e| e.to_string())?;
+    let loaded = suite::load_dir(&suite::location::suites_or_usage(a.suites)?).map_err(|e| e.to_string())?;
     let mut chosen: Vec<Profile> = Vec::new();
     for p in chosen_profiles(&a.profiles)? {
         // `any` names no bus until `--dut` does: listed, it is every bus's generic profile.
@@ -725,37 +641,6 @@ mod tests {
             assert!(flat.contains(bus.url), "{} missing:\n{help}", bus.url);
         }
         assert!(flat.contains("pnio://IFACE"), "{help}");
-    }
-
-    #[test]
-    fn the_suites_are_the_given_then_here_then_the_build_checkouts_with_a_note() {
-        let dir = std::env::temp_dir().join(format!("suites-default-{}", std::process::id()));
-        let (here, built) = (dir.join("here"), dir.join("built"));
-        let given = Some(PathBuf::from("mine"));
-        // Neither folder exists: a usage error naming both ways out.
-        assert_eq!(
-            default_suites(given.clone(), &here, &built),
-            Ok((PathBuf::from("mine"), None))
-        );
-        let e = default_suites(None, &here, &built).unwrap_err();
-        assert!(
-            e.contains("--suites DIR") && e.contains(&built.display().to_string()),
-            "{e}"
-        );
-        std::fs::create_dir_all(&built).unwrap();
-        let (got, note) = default_suites(None, &here, &built).unwrap();
-        assert_eq!(got, built.canonicalize().unwrap());
-        let note = note.expect("a note when the build checkout's suites are used");
-        assert!(
-            note.contains("checkout this harness was built in"),
-            "{note}"
-        );
-        std::fs::create_dir_all(&here).unwrap();
-        assert_eq!(
-            default_suites(None, &here, &built),
-            Ok((here.clone(), None))
-        );
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -7,7 +7,7 @@ use clap::Args;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use crate::cli::{verdict_exit, EXIT_FAIL, EXIT_PASS};
+use crate::exit::{verdict_exit, EXIT_FAIL, EXIT_PASS};
 use crate::report;
 
 #[derive(Args, Debug)]
@@ -129,7 +129,7 @@ pub(crate) struct CoverageArgs {
 /// its floor. Exit 1 when any of those, 2 when an inventory or suite does not load.
 pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
     use crate::suite::inventory;
-    let dir = crate::cli::suites_dir(a.suites);
+    let dir = crate::suite::location::suites_dir(a.suites);
     let loaded = crate::suite::load_dir(&dir).map_err(|e| e.to_string())?;
     if let Some(e) = loaded.errors.first() {
         return Err(e.to_string());

@@ -10,7 +10,7 @@ use proto::nord::{addr, control::ControlWord, status::StatusWord};
 use proto::nord::{ArrayElement, Inverter, ParamAddress, ParamNumber, ParamSet, Product};
 use serde_json::{json, Value};
 
-use crate::cli::EXIT_PASS;
+use crate::exit::EXIT_PASS;
 use crate::notation::int_of;
 
 /// `harness addr`.

@@ -16,6 +16,7 @@ macro_rules! outln {
     }};
 }
 
+mod args;
 mod binding;
 mod bus;
 mod can;
@@ -40,6 +41,7 @@ pub use pnio::bench_support as pnio_bench;
 pub use pnio::serve as pnio_serve;
 mod enip;
 mod epl;
+mod exit;
 /// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the
 /// simulator served as an adapter, the harness scanner reading a parameter.
 pub use enip::bench_support as enip_bench;

@@ -67,7 +67,7 @@ struct ServeArgs {
 
 /// `harness serve can ARGS…`; returns the exit code.
 pub(super) fn command(args: &[String]) -> Result<i32, String> {
-    let a = match crate::cli::parse_args::<ServeArgs>("harness serve can", args) {
+    let a = match crate::args::parse_args::<ServeArgs>("harness serve can", args) {
         Ok(a) => a,
         Err(code) => return Ok(code),
     };
@@ -79,7 +79,7 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
             config(product, a.inverters),
             a.seconds.map(Duration::from_secs),
         )
-        .map(|()| crate::cli::EXIT_PASS);
+        .map(|()| crate::exit::EXIT_PASS);
     };
     let addr = crate::net::serve_args::socket_addr(socketcand, DEFAULT_PORT)?;
     let listener = TcpListener::bind(addr).map_err(|e| format!("cannot listen on {addr}: {e}"))?;
@@ -114,7 +114,7 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         },
     }
     served.stop();
-    Ok(crate::cli::EXIT_PASS)
+    Ok(crate::exit::EXIT_PASS)
 }
 
 /// `harness serve can --iface IFACE`: the segment on a CAN interface of this host, one thread:

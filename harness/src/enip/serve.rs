@@ -248,7 +248,7 @@ fn at_least_one(text: &str) -> Result<usize, String> {
 
 /// `harness serve enip ARGS…`; returns the exit code.
 pub(super) fn command(args: &[String]) -> Result<i32, String> {
-    let a = match crate::cli::parse_args::<ServeArgs>("harness serve enip", args) {
+    let a = match crate::args::parse_args::<ServeArgs>("harness serve enip", args) {
         Ok(a) => a,
         Err(code) => return Ok(code),
     };
@@ -277,7 +277,7 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         ),
         a.seconds.map(Duration::from_secs),
     )?;
-    Ok(crate::cli::EXIT_PASS)
+    Ok(crate::exit::EXIT_PASS)
 }
 
 /// Serves until `duration` has passed (forever when `None`).

@@ -366,7 +366,7 @@ fn parse_node_id(s: &str) -> Result<u8, String> {
 
 /// `harness serve epl ARGS…`; returns the exit code.
 pub(crate) fn command(args: &[String]) -> Result<i32, String> {
-    let a = match crate::cli::parse_args::<ServeArgs>("harness serve epl", args) {
+    let a = match crate::args::parse_args::<ServeArgs>("harness serve epl", args) {
         Ok(a) => a,
         Err(code) => return Ok(code),
     };
@@ -378,7 +378,7 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         reply_delay: Duration::from_millis(a.common.reply_delay),
     };
     serve(&opts, a.common.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
-    Ok(crate::cli::EXIT_PASS)
+    Ok(crate::exit::EXIT_PASS)
 }
 
 /// The simulated device of `opts`: a product with a POWERLINK interface.

@@ -4,6 +4,7 @@ mod case;
 pub(crate) mod fields;
 pub(crate) mod inventory;
 mod load;
+pub(crate) mod location;
 mod schema;
 
 pub(crate) use case::{parse_duration, Action, Case, OrderSpec, Run, Step, Target};
