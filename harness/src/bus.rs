@@ -6,16 +6,16 @@
 //! given by URL (`--dut ecat://IFACE`), its `serve` command and its device-description writers.
 //! Adding a bus adds a folder and a line to [`BUSES`].
 
+use crate::suite::BusStep;
 use serde_json::Value;
-use std::any::Any;
 use std::fmt;
 use std::net::IpAddr;
 use std::time::Duration;
 
+use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::pcap::SharedTap;
 use crate::profile::Profile;
-use crate::runner::DutFactory;
 
 impl fmt::Debug for Bus {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -122,20 +122,6 @@ pub(crate) struct Network {
     pub(crate) description: Option<crate::description::Description>,
 }
 
-/// A step in a bus's own terms (an encapsulation message, a datagram, an SDO), carried by the
-/// suite model as [`crate::suite::Action::Bus`]; only the bus's binding looks inside.
-pub(crate) trait BusStep: fmt::Debug + Send + Sync {
-    /// The bus it belongs to.
-    fn bus(&self) -> &'static str;
-    /// One line for reports.
-    fn describe(&self) -> String;
-    /// What it can do to a real device: make a motor turn, write the EEPROM
-    /// ([`crate::safety`]), judged from its bytes alone, conservatively.
-    fn effect(&self) -> crate::safety::Effect;
-    /// Lets the bus's own binding recover its step type.
-    fn as_any(&self) -> &dyn Any;
-}
-
 /// The bus of that name.
 pub(crate) fn by_name(name: &str) -> Option<&'static Bus> {
     BUSES.iter().copied().find(|b| b.name == name)
@@ -207,20 +193,6 @@ pub(crate) fn description(
                 .collect();
             format!("cannot describe `{format}` (known: {})", known.join(", "))
         })
-}
-
-/// Downcasts a bus step to the bus's own step type; the error is a suite error naming the
-/// bus, for a step handed to the wrong binding.
-pub(crate) fn own_step<'a, T: 'static>(
-    step: &'a dyn BusStep,
-    binding: &str,
-) -> Result<&'a T, crate::binding::StepError> {
-    step.as_any().downcast_ref::<T>().ok_or_else(|| {
-        crate::binding::StepError::NotApplicable(format!(
-            "a `{}:` step cannot run over {binding}",
-            step.bus()
-        ))
-    })
 }
 
 #[cfg(test)]

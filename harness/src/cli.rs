@@ -544,7 +544,8 @@ fn list(a: ListArgs) -> Result<i32, String> {
         }
         return Ok(EXIT_PASS);
     }
-    let loaded = suite::load_dir(&suite::location::suites_or_usage(a.suites)?).map_err(|e| e.to_string())?;
+    let loaded =
+        suite::load_dir(&suite::location::suites_or_usage(a.suites)?).map_err(|e| e.to_string())?;
     let mut chosen: Vec<Profile> = Vec::new();
     for p in chosen_profiles(&a.profiles)? {
         // `any` names no bus until `--dut` does: listed, it is every bus's generic profile.

@@ -26,6 +26,7 @@ mod cli_tools;
 mod description;
 mod dictionary;
 mod ecat;
+mod effect;
 /// What the system-bus speed bench (`harness/benches/can/`) needs of the library.
 pub use can::bench_support as can_bench;
 /// What the EtherCAT speed bench (`harness/benches/ecat/`) needs of the library.

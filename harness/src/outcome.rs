@@ -6,6 +6,9 @@ use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::time::Duration;
 
+/// Id of the case that stands for a failed connection check in the reports.
+pub(crate) const CONNECTION_CHECK: &str = "harness/connection-check";
+
 /// The verdict of one case (or one step).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

@@ -9,13 +9,14 @@ use serde_json::{json, Value};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use crate::binding::{Binding, Observation, OpenError, StepError};
+use crate::binding::{Binding, DutFactory, Observation, OpenError, StepError};
 use crate::model::{Args, ComputeError, Ctx};
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 
 use crate::outcome::{
     CaseKind, CaseResult, Discarded, Identity, ManualRef, RunMeta, RunResult, StepResult, Verdict,
+    CONNECTION_CHECK,
 };
 use crate::profile::{Capability, Profile};
 use crate::progress::Progress;
@@ -97,20 +98,6 @@ impl Offer {
             describe: dut.describe(),
             capabilities: dut.capabilities().to_vec(),
         }
-    }
-}
-
-/// Opens a DUT for a profile; called once per case so every case starts from a known state.
-pub(crate) trait DutFactory {
-    /// What is tested, for reports.
-    fn describe(&self) -> String;
-    /// A DUT in its power-on state for the profile, behind the profile's binding.
-    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError>;
-    /// A factory of its own for another thread, when the DUTs this one opens share nothing
-    /// (the embedded simulator's): the runner then runs profiles side by side. `None` for a
-    /// device on the network, which is one device however many profiles test it.
-    fn fork(&self) -> Option<Box<dyn DutFactory + Send>> {
-        None
     }
 }
 
@@ -385,9 +372,6 @@ fn run_side_by_side(
     ended.sort_unstable_by_key(|&(p, i, _)| (p, i));
     ended.into_iter().map(|(_, _, r)| *r).collect()
 }
-
-/// Id of the case that stands for a failed connection check in the reports.
-pub(crate) const CONNECTION_CHECK: &str = "harness/connection-check";
 
 /// Opens the DUT once for every profile a selected case needs it under and reads its
 /// identity. A DUT that cannot be reached or does not answer is the `Err`: one error result

@@ -9,8 +9,8 @@ use std::time::Duration;
 
 use super::channel::Channel;
 use super::{Binding, Dut, DutError, OpenError};
+use crate::binding::DutFactory;
 use crate::profile::{Capability, Profile};
-use crate::runner::DutFactory;
 use proto::nord::Inverter;
 
 /// Bus cycle of the embedded link: 4 ms, a common PROFINET send clock multiple.

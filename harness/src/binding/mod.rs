@@ -18,7 +18,7 @@ use std::time::Duration;
 pub(crate) use channel::StepError;
 
 use crate::outcome::{Exchange, Identity, Refusal};
-use crate::profile::Capability;
+use crate::profile::{Capability, Profile};
 use crate::suite::Action;
 use proto::nord::Inverter;
 
@@ -207,4 +207,32 @@ pub(crate) trait Dut {
     fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), DutError>;
     /// Shows internal state (`observe`).
     fn observe(&mut self, what: &str, inverter: Inverter) -> Result<Value, DutError>;
+}
+
+/// Opens a DUT for a profile; called once per case so every case starts from a known state.
+pub(crate) trait DutFactory {
+    /// What is tested, for reports.
+    fn describe(&self) -> String;
+    /// A DUT in its power-on state for the profile, behind the profile's binding.
+    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError>;
+    /// A factory of its own for another thread, when the DUTs this one opens share nothing
+    /// (the embedded simulator's): the runner then runs profiles side by side. `None` for a
+    /// device on the network, which is one device however many profiles test it.
+    fn fork(&self) -> Option<Box<dyn DutFactory + Send>> {
+        None
+    }
+}
+
+/// Downcasts a bus step to the bus's own step type; the error is a suite error naming the
+/// bus, for a step handed to the wrong binding.
+pub(crate) fn own_step<'a, T: 'static>(
+    step: &'a dyn crate::suite::BusStep,
+    binding: &str,
+) -> Result<&'a T, StepError> {
+    step.as_any().downcast_ref::<T>().ok_or_else(|| {
+        StepError::NotApplicable(format!(
+            "a `{}:` step cannot run over {binding}",
+            step.bus()
+        ))
+    })
 }

@@ -357,7 +357,7 @@ mod tests {
     #[test]
     fn the_way_back_never_sends_a_word_that_can_turn_a_motor() {
         // The cleanup runs against a DUT without `--allow-motion` too.
-        assert_eq!(crate::safety::control_word(DISABLE), None);
-        assert_eq!(crate::safety::control_word(ACKNOWLEDGE), None);
+        assert_eq!(crate::effect::control_word(DISABLE), None);
+        assert_eq!(crate::effect::control_word(ACKNOWLEDGE), None);
     }
 }

@@ -536,7 +536,7 @@ impl<L: CanLink> Binding for CanBinding<L> {
                 }
             }
             Action::Bus(step) => {
-                let step = crate::bus::own_step::<CanStep>(step.as_ref(), "the system bus")?;
+                let step = crate::binding::own_step::<CanStep>(step.as_ref(), "the system bus")?;
                 self.can_step(step)?
             }
         };

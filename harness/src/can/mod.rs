@@ -28,11 +28,12 @@ use std::time::Duration;
 
 use serde_json::Value;
 
+use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
-use crate::bus::{Bus, BusStep, Description, Embedded, Network};
+use crate::bus::{Bus, Description, Embedded, Network};
 use crate::pcap::SharedTap;
 use crate::profile::Profile;
-use crate::runner::DutFactory;
+use crate::suite::BusStep;
 use binding::CanBinding;
 pub(crate) use sdo::frame_hex;
 pub(crate) use serve::relay_system_bus;

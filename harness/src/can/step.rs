@@ -21,10 +21,10 @@ use proto::can::CanFrame;
 use proto::canopen::NmtCommand;
 
 use super::sdo::frame_hex;
-use crate::bus::BusStep;
-use crate::safety::{self, Effect};
+use crate::effect::{self, Effect};
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
+use crate::suite::BusStep;
 
 /// How long a step listens unless it says.
 pub(super) const DEFAULT_WAIT: Duration = Duration::from_millis(20);
@@ -89,7 +89,7 @@ impl BusStep for CanStep {
                         d.get(1).copied().unwrap_or(0),
                         d.get(2).copied().unwrap_or(0),
                     ]);
-                    safety::sdo_download(index, d.get(4..).unwrap_or_default())
+                    effect::sdo_download(index, d.get(4..).unwrap_or_default())
                 }
                 // Other SDO requests read or continue a transfer; NMT, SYNC, heartbeat.
                 0x000..=0x0FF | 0x601..=0x67F | 0x700..=0x77F => Effect::NONE,

@@ -16,10 +16,10 @@ use std::time::Duration;
 use proto::can::CanFrame;
 
 use super::link::{CanLink, Socketcand};
+use crate::binding::DutFactory;
 use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
 use crate::outcome::{Exchange, Identity};
 use crate::profile::{Capability, Profile};
-use crate::runner::DutFactory;
 use crate::suite::Action;
 
 /// How long an observation waits for frames still on their way (the served relay hands its

@@ -702,7 +702,7 @@ impl<S: DutSegment> Binding for EcatBinding<S> {
             }
             Action::Observe { what, inverter } => self.observe(what, *inverter)?,
             Action::Bus(step) => {
-                let step = crate::bus::own_step::<EcatStep>(step.as_ref(), "EtherCAT")?;
+                let step = crate::binding::own_step::<EcatStep>(step.as_ref(), "EtherCAT")?;
                 return self.ecat_step(step);
             }
         };
@@ -1013,7 +1013,7 @@ mod tests {
     /// Opens nothing: a case of a bus's own steps under a profile of another bus.
     struct NoOpen;
 
-    impl crate::runner::DutFactory for NoOpen {
+    impl crate::binding::DutFactory for NoOpen {
         fn describe(&self) -> String {
             "a DUT that must not be opened".into()
         }

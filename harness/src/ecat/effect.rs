@@ -1,4 +1,4 @@
-//! What an `ecat:` step can do to a real device ([`crate::safety`]): an SDO download writes
+//! What an `ecat:` step can do to a real device ([`crate::effect`]): an SDO download writes
 //! the object it names (a NORD parameter from 2000h on, the outputs from 7000h on: BU 0620
 //! §2.2.7); a write into the ESC's process memory (from 1000h on, where the sync managers'
 //! output and mailbox buffers lie) or to a logical address writes output data, or a mailbox,
@@ -12,7 +12,7 @@ use proto::ecat::frame::EcatFrameRepr;
 use proto::ecat::mailbox::{MailboxRepr, MailboxType};
 
 use super::step::EcatStep;
-use crate::safety::{self, Effect};
+use crate::effect::{self, Effect};
 
 /// The first address of the ESC's process memory (ETG.1000.4: registers below 1000h).
 const PROCESS_MEMORY: u16 = 0x1000;
@@ -27,7 +27,7 @@ pub(super) fn of(step: &EcatStep) -> Effect {
         | EcatStep::StopPdo { .. }
         | EcatStep::Identify
         | EcatStep::Emergencies => Effect::NONE,
-        EcatStep::Download { index, data, .. } => safety::sdo_download(*index, data),
+        EcatStep::Download { index, data, .. } => effect::sdo_download(*index, data),
         EcatStep::WriteRegister { address, data } => datagram(Command::FPWR, *address, data),
         EcatStep::Datagram {
             command, ado, data, ..
@@ -38,7 +38,7 @@ pub(super) fn of(step: &EcatStep) -> Effect {
                 .iter()
                 .map(|d| datagram(d.command, d.ado(), &d.data))
                 .fold(Effect::NONE, Effect::and),
-            Err(_) => safety::output_data("an EtherCAT frame the harness cannot decode", bytes),
+            Err(_) => effect::output_data("an EtherCAT frame the harness cannot decode", bytes),
         },
         EcatStep::Mailbox { bytes } => mailbox(bytes),
     }
@@ -60,7 +60,7 @@ fn datagram(command: Command, ado: u16, data: &[u8]) -> Effect {
         {
             Effect::NONE
         }
-        c => safety::output_data(
+        c => effect::output_data(
             &format!("datagram command {:02X}h at {ado:04X}h", c.0),
             data,
         ),
@@ -92,7 +92,7 @@ fn coe(data: &[u8]) -> Effect {
     };
     match header.service {
         CoeService::SDO_REQUEST => sdo_request(rest),
-        CoeService::RXPDO => safety::output_data("an RxPDO over the mailbox", rest),
+        CoeService::RXPDO => effect::output_data("an RxPDO over the mailbox", rest),
         _ => Effect::NONE,
     }
 }
@@ -106,16 +106,16 @@ fn sdo_request(b: &[u8]) -> Effect {
             index,
             data: SdoData::Expedited { data, .. } | SdoData::Normal { data, .. },
             ..
-        }) => safety::sdo_download(index, &data),
+        }) => effect::sdo_download(index, &data),
         // The initiate that named the object counted the write; its segments may carry
         // output data.
         Ok(SdoRequest::DownloadSegment { data, .. }) => {
-            safety::output_data("an SDO download segment", &data)
+            effect::output_data("an SDO download segment", &data)
         }
         Ok(_) => Effect::NONE,
         Err(_) => match b.split_first() {
             Some((c, rest)) if matches!(c >> 5, 0 | 1 | 6) => {
-                safety::output_data("an SDO download the harness cannot decode", rest)
+                effect::output_data("an SDO download the harness cannot decode", rest)
             }
             _ => Effect::NONE,
         },

@@ -19,11 +19,11 @@ use sim::ecat::Slave;
 use std::time::Duration;
 
 use crate::binding::embedded::device_config;
+use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
 use crate::net::LinkError;
 use crate::profile::Profile;
-use crate::runner::DutFactory;
 
 /// The registry entry.
 pub(crate) const BUS: Bus = Bus {

@@ -6,11 +6,11 @@ use serde_json::Value;
 use std::any::Any;
 use std::time::Duration;
 
-use crate::bus::BusStep;
 use crate::hex::hex;
 use crate::notation::int_of;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
+use crate::suite::BusStep;
 
 /// An `ecat:` step.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -121,7 +121,7 @@ impl BusStep for EcatStep {
         "ecat"
     }
 
-    fn effect(&self) -> crate::safety::Effect {
+    fn effect(&self) -> crate::effect::Effect {
         super::effect::of(self)
     }
 

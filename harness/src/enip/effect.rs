@@ -1,4 +1,4 @@
-//! What an `enip:` step can do to a real device ([`crate::safety`]), decoded from the request
+//! What an `enip:` step can do to a real device ([`crate::effect`]), decoded from the request
 //! it sends: a Set_Attribute_Single to a NORD parameter class writes that parameter (class 100
 //! the module's own, 100 + n FI n: BU 2100 §6.3, BU 0620 §2.3.5), one to an assembly (class
 //! 04h) writes output process data, an Unconnected_Send or Multiple_Service carries further
@@ -13,8 +13,7 @@ use proto::enip::epath::EPath;
 use proto::nord::Inverter;
 
 use super::step::EnipStep;
-use crate::safety::{self, Effect};
-use crate::suite::Target;
+use crate::effect::{self, Effect};
 
 /// Encapsulation commands that carry CIP requests: SendRRData, SendUnitData.
 const SEND_RR_DATA: u16 = 0x6F;
@@ -139,7 +138,7 @@ fn request(service: u8, path: &EPath, data: &[u8]) -> Effect {
     }
     match service {
         Service::SET_ATTRIBUTE_SINGLE => match (class, path.attribute_id()) {
-            (Some(class::ASSEMBLY), _) => safety::output_data(
+            (Some(class::ASSEMBLY), _) => effect::output_data(
                 &format!(
                     "Set_Attribute_Single of assembly {}",
                     path.instance_id().unwrap_or(0)
@@ -152,7 +151,7 @@ fn request(service: u8, path: &EPath, data: &[u8]) -> Effect {
             _ => Effect::eeprom(1),
         },
         Service::SET_ATTRIBUTES_ALL | Service(SET_ATTRIBUTE_LIST) => match class {
-            Some(class::ASSEMBLY) => safety::output_data("a Set_Attribute of an assembly", data),
+            Some(class::ASSEMBLY) => effect::output_data("a Set_Attribute of an assembly", data),
             Some(100..=108) => Effect::motion(
                 "sets parameters of a NORD parameter class the harness does not decode one by one",
             )
@@ -179,11 +178,8 @@ fn request(service: u8, path: &EPath, data: &[u8]) -> Effect {
 /// the parameter number. Class 100 is a module's own parameters; 101 is FI 1 (on an SK 550P
 /// its interface parameters too, counted as the inverter's, conservatively).
 fn parameter(class: u16, attribute: u16) -> Effect {
-    let target = match Inverter::new(i64::from(class - 100)) {
-        Ok(fi) => Target::Inverter(fi),
-        Err(_) => Target::Interface,
-    };
-    safety::parameter_write(target, attribute, false)
+    let fi = Inverter::new(i64::from(class - 100)).ok();
+    effect::parameter_write(fi, attribute, false)
 }
 
 /// A Multiple_Service request: a count, offsets from the count, the requests (CIP Vol 1

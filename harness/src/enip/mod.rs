@@ -24,10 +24,10 @@ use sim::device::Device;
 use std::rc::Rc;
 
 use crate::binding::embedded::device_config;
+use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
 use crate::profile::Profile;
-use crate::runner::DutFactory;
 
 /// The registry entry.
 pub(crate) const BUS: Bus = Bus {

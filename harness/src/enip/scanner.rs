@@ -823,7 +823,7 @@ pub(crate) struct NetworkFactory {
     pub(crate) declared: Option<crate::description::eds::Connection>,
 }
 
-impl crate::runner::DutFactory for NetworkFactory {
+impl crate::binding::DutFactory for NetworkFactory {
     fn describe(&self) -> String {
         format!("EtherNet/IP target at {}", self.target)
     }
@@ -1157,7 +1157,7 @@ impl Binding for Scanner {
                 observe(adapter, what, *inverter, now).map_err(StepError::Refused)
             }
             Action::Bus(step) => {
-                let step = crate::bus::own_step::<EnipStep>(step.as_ref(), "EtherNet/IP")?;
+                let step = crate::binding::own_step::<EnipStep>(step.as_ref(), "EtherNet/IP")?;
                 return self.enip_step(step).map(status_refusal);
             }
         };

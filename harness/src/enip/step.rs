@@ -6,10 +6,10 @@ use std::any::Any;
 use std::time::Duration;
 
 use super::ForwardOpenSpec;
-use crate::bus::BusStep;
 use crate::hex::hex;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
+use crate::suite::BusStep;
 
 /// How a raw message leaves in two TCP segments (`split: N`, `gap: 50ms`): its first `at`
 /// bytes, then, `gap` later, the rest. TCP is a byte stream, so a target must put an
@@ -69,7 +69,7 @@ impl BusStep for EnipStep {
         describe(self)
     }
 
-    fn effect(&self) -> crate::safety::Effect {
+    fn effect(&self) -> crate::effect::Effect {
         super::effect::of(self)
     }
 

@@ -818,7 +818,7 @@ impl<L: Link> Binding for EplBinding<L> {
             }
             Action::Observe { what, inverter } => self.observe(what, *inverter)?,
             Action::Bus(step) => {
-                let step = crate::bus::own_step::<EplStep>(step.as_ref(), "POWERLINK")?;
+                let step = crate::binding::own_step::<EplStep>(step.as_ref(), "POWERLINK")?;
                 return self.epl_step(step);
             }
         };

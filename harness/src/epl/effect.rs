@@ -1,4 +1,4 @@
-//! What an `epl:` step can do to a real device ([`crate::safety`]): an SDO write names the
+//! What an `epl:` step can do to a real device ([`crate::effect`]): an SDO write names the
 //! object it writes (a NORD parameter from 2000h on, the process-data objects 5000h–5003h:
 //! BU 2200 §6.3), a PReq carries output process data, an ASnd may carry an SDO. A write that
 //! does not decode counts as able to make a motor turn.
@@ -8,7 +8,7 @@ use proto::epl::sdo::{CommandId, SdoFrame, Segmentation, CMD_HEADER_LEN, SEQ_LEN
 use proto::epl::ServiceId;
 
 use super::step::EplStep;
-use crate::safety::{self, Effect};
+use crate::effect::{self, Effect};
 
 /// The SDO commands that only read (DS 301 §6.3.2.4.2): harmless even when they do not
 /// decode.
@@ -36,7 +36,7 @@ pub(super) fn of(step: &EplStep) -> Effect {
         | EplStep::Upload { .. }
         | EplStep::Silence(_)
         | EplStep::Cycles(_) => Effect::NONE,
-        EplStep::Download { index, data, .. } => safety::sdo_download(*index, data),
+        EplStep::Download { index, data, .. } => effect::sdo_download(*index, data),
         EplStep::Frame(bytes) => frame(bytes),
         EplStep::Sdo { bytes, .. } => sdo(bytes),
     }
@@ -48,14 +48,14 @@ fn frame(bytes: &[u8]) -> Effect {
         Ok(EplRepr {
             body: Body::Preq(p),
             ..
-        }) => safety::output_data("a PReq", &p.payload),
+        }) => effect::output_data("a PReq", &p.payload),
         Ok(EplRepr {
             body: Body::Asnd(a),
             ..
         }) if a.service == ServiceId::SDO => sdo(&a.payload),
         Ok(_) => Effect::NONE,
         Err(_) => match bytes.first().map(|t| MessageType(t & 0x7F)) {
-            Some(MessageType::PREQ) => safety::output_data(
+            Some(MessageType::PREQ) => effect::output_data(
                 "a PReq the harness cannot decode",
                 bytes.get(PREQ_PAYLOAD..).unwrap_or_default(),
             ),
@@ -79,7 +79,7 @@ fn sdo(bytes: &[u8]) -> Effect {
             return match id {
                 None => Effect::NONE,
                 Some(id) if READS.contains(&id) => Effect::NONE,
-                Some(_) => safety::output_data(
+                Some(_) => effect::output_data(
                     "an SDO write the harness cannot decode",
                     bytes.get(SEQ_LEN + CMD_HEADER_LEN..).unwrap_or_default(),
                 ),
@@ -95,10 +95,10 @@ fn sdo(bytes: &[u8]) -> Effect {
     );
     match (by_index, command.segmentation, command.by_index()) {
         (true, Segmentation::Expedited | Segmentation::Initiate, Ok((index, _, data))) => {
-            safety::sdo_download(index, data)
+            effect::sdo_download(index, data)
         }
         (true, Segmentation::Segment | Segmentation::Complete, _) => {
-            safety::output_data("an SDO write segment", &command.payload).and(Effect::eeprom(1))
+            effect::output_data("an SDO write segment", &command.payload).and(Effect::eeprom(1))
         }
         (_, _, _) if command.command == CommandId::FILE_WRITE => Effect::eeprom(1),
         _ => Effect::motion(format!(

@@ -25,11 +25,11 @@ use sim::device::Device;
 use sim::epl::{Node, NodeConfig};
 
 use crate::binding::embedded::device_config;
+use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
 use crate::net::LinkError;
 use crate::profile::Profile;
-use crate::runner::DutFactory;
 
 /// The registry entry.
 pub(crate) const BUS: Bus = Bus {

@@ -9,11 +9,11 @@ use std::time::Duration;
 use proto::epl::{NmtCommand, NmtState};
 
 use super::mn::Via;
-use crate::bus::BusStep;
 use crate::hex::hex;
 use crate::notation::int_of;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
+use crate::suite::BusStep;
 
 /// An `epl:` step.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -67,7 +67,7 @@ impl BusStep for EplStep {
         "epl"
     }
 
-    fn effect(&self) -> crate::safety::Effect {
+    fn effect(&self) -> crate::effect::Effect {
         super::effect::of(self)
     }
 

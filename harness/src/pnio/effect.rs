@@ -1,4 +1,4 @@
-//! What a `pnio:` step can do to a real device ([`crate::safety`]): a write of the parameter
+//! What a `pnio:` step can do to a real device ([`crate::effect`]): a write of the parameter
 //! records (100 the interface, 101..108 FI 1..8: BU 0620 §2.5.6.2; the SK TU3-PNT's record
 //! 47: BU 0590 §4.2.2) carries a PKW order; other records, a DCP Set kept over a power cycle
 //! and a reset to factory settings may be kept in the device's memory; a raw cyclic frame
@@ -8,7 +8,7 @@ use proto::nord::pnio::{Record47Repr, RECORD_AXIS, RECORD_INTERFACE};
 use proto::pnio::dcp::ServiceId;
 
 use super::step::PnioStep;
-use crate::safety::{self, Effect};
+use crate::effect::{self, Effect};
 
 /// The RPC operation IODWrite (IEC 61158-6-10 "PNIO interface operations": 0 Connect,
 /// 1 Release, 2 Read, 3 Write, 4 Control).
@@ -59,12 +59,12 @@ pub(super) fn of(step: &PnioStep) -> Effect {
 /// A record write.
 fn record(index: u16, data: &[u8]) -> Effect {
     match index {
-        RECORD_INTERFACE => interface(safety::pkw(data)),
-        101..=108 => safety::pkw(data),
+        RECORD_INTERFACE => interface(effect::pkw(data)),
+        101..=108 => effect::pkw(data),
         // Label, axis (0 the SK TU3-PNT, 1 the FI), PNU + 1000: BU 0590 §4.2.4.3.
         RECORD_AXIS => match Record47Repr::parse(data) {
-            Ok(r) if r.axis == 0 => interface(safety::pkw(&r.pkw().emit_bytes())),
-            Ok(r) => safety::pkw(&r.pkw().emit_bytes()),
+            Ok(r) if r.axis == 0 => interface(effect::pkw(&r.pkw().emit_bytes())),
+            Ok(r) => effect::pkw(&r.pkw().emit_bytes()),
             Err(_) => Effect::NONE,
         },
         // I&M records and any other the harness does not know may be kept.
@@ -86,7 +86,7 @@ fn frame(bytes: &[u8]) -> Effect {
         return Effect::NONE;
     };
     if CYCLIC.contains(&id) {
-        safety::output_data(&format!("RT frame {id:04X}h"), rest)
+        effect::output_data(&format!("RT frame {id:04X}h"), rest)
     } else if DCP.contains(&id) && rest.first() == Some(&ServiceId::SET.0) {
         // A DCP Set may be permanent.
         Effect::eeprom(1)

@@ -78,7 +78,7 @@ impl<L: Link + 'static> Binding for GenericPnio<L> {
                 "any maker's PROFINET device runs the `pnio:` steps only".into(),
             ));
         };
-        let step = crate::bus::own_step::<PnioStep>(step.as_ref(), "PROFINET IO")?;
+        let step = crate::binding::own_step::<PnioStep>(step.as_ref(), "PROFINET IO")?;
         let modules = self.layout.modules.clone();
         let place = modules.first().map_or((0, 1), |m| (m.slot, m.subslot));
         let plan = StepPlan {

@@ -26,12 +26,12 @@ use sim::device::Device;
 use sim::pnio::{IoConfig, IoDevice};
 
 use crate::binding::embedded::device_config;
+use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
 use crate::net::peer::Tapped;
 use crate::net::LinkError;
 use crate::profile::Profile;
-use crate::runner::DutFactory;
 
 /// The registry entry.
 pub(crate) const BUS: Bus = Bus {

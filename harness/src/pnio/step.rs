@@ -10,11 +10,11 @@ use std::time::Duration;
 
 use proto::nord::ppo::PpoType;
 
-use crate::bus::BusStep;
 use crate::hex::hex;
 use crate::notation::int_of;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
+use crate::suite::BusStep;
 
 /// What the controller expects in one inverter's slot at Connect.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -95,7 +95,7 @@ impl BusStep for PnioStep {
         "pnio"
     }
 
-    fn effect(&self) -> crate::safety::Effect {
+    fn effect(&self) -> crate::effect::Effect {
         super::effect::of(self)
     }
 

@@ -10,8 +10,8 @@
 //! may write up to N times the cap, and where the cap decided a case, the merge can differ from
 //! an unsharded run.
 
+use crate::outcome::CONNECTION_CHECK;
 use crate::outcome::{CaseResult, RunResult};
-use crate::runner::CONNECTION_CHECK;
 use crate::shard::Shard;
 
 /// Shards that are not one run cut in pieces.

@@ -75,6 +75,16 @@ pub(crate) enum Target {
     Inverter(Inverter),
 }
 
+impl Target {
+    /// The inverter, or `None` for the interface.
+    pub(crate) fn inverter(self) -> Option<Inverter> {
+        match self {
+            Target::Inverter(fi) => Some(fi),
+            Target::Interface => None,
+        }
+    }
+}
+
 /// A `read:` or `write:` step's order.
 #[derive(Debug, Clone)]
 pub(crate) struct OrderSpec {
@@ -153,7 +163,7 @@ pub(crate) enum Action {
     /// Look at internal state.
     Observe { what: String, inverter: Inverter },
     /// A step in a bus's own terms, performed only by that bus's binding.
-    Bus(Box<dyn crate::bus::BusStep>),
+    Bus(Box<dyn super::BusStep>),
 }
 
 /// How long a `process:` step runs.

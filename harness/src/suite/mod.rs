@@ -1,5 +1,6 @@
 //! Suites: YAML files of cases, checked at load and turned into validated [`Case`]s.
 
+mod bus_step;
 mod case;
 pub(crate) mod fields;
 pub(crate) mod inventory;
@@ -7,6 +8,7 @@ mod load;
 pub(crate) mod location;
 mod schema;
 
+pub(crate) use bus_step::BusStep;
 pub(crate) use case::{parse_duration, Action, Case, OrderSpec, Run, Step, Target};
 pub(crate) use load::{load_dir, Loaded};
 
