@@ -49,7 +49,6 @@ pub use enip::bench_support as enip_bench;
 mod hex;
 mod identity;
 mod interrupt;
-mod ledger;
 mod model;
 mod net;
 mod notation;

@@ -64,7 +64,7 @@ pub(crate) struct Guard {
 }
 
 /// Each EEPROM write a case makes is counted twice: the cleanup of a device on the network
-/// writes the value before back the same way ([`crate::ledger`]), at most once per write.
+/// writes the value before back the same way ([`crate::binding::ledger`]), at most once per write.
 const WITH_RESTORE: u32 = 2;
 
 impl Guard {

@@ -9,6 +9,7 @@
 
 pub(crate) mod channel;
 pub(crate) mod embedded;
+pub(crate) mod ledger;
 pub(crate) mod objects;
 pub(crate) mod settle;
 

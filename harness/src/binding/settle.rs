@@ -11,7 +11,7 @@ use proto::nord::status::StatusWord;
 use proto::nord::Inverter;
 
 use super::channel::{compact, cycles_left_out};
-use crate::ledger::Problem;
+use crate::binding::ledger::Problem;
 use crate::outcome::Exchange;
 
 /// "Control data valid" (bit 10) and nothing else: "disable voltage" (bit 1 = 0), the output

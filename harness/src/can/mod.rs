@@ -14,7 +14,6 @@
 
 pub mod bench_support;
 mod binding;
-mod eds;
 mod link;
 mod process;
 mod sdo;
@@ -252,5 +251,5 @@ impl DutFactory for BusFactory {
 fn describe_eds(profile: &Profile, fi: u8) -> Result<String, String> {
     let product = profile.nord()?;
     let fi = proto::nord::Inverter::new(i64::from(fi)).map_err(|e| e.to_string())?;
-    eds::eds(product, fi)
+    crate::dictionary::eds::eds(product, fi)
 }

@@ -29,11 +29,11 @@ use super::master::{
 };
 use super::step::{state_name, EcatStep};
 use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::ledger::{self, Account, Ledger, Problem};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
 use crate::binding::{process_run, process_time, Binding, CleanupError, Observation, StepError};
 use crate::hex::hex;
-use crate::ledger::{self, Account, Ledger, Problem};
 use crate::net::wait::BringUpError;
 use crate::outcome::{Exchange, Identity};
 use crate::profile::Capability;

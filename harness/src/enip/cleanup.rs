@@ -3,7 +3,7 @@
 //!
 //! The embedded adapter is made afresh for every case and needs none of this. A device on the
 //! network is one device for the whole run, so the scanner keeps a [`Ledger`] while a case runs
-//! (the attributes it set, in the shared [`crate::ledger::Ledger`], and the connections it
+//! (the attributes it set, in the shared [`crate::binding::ledger::Ledger`], and the connections it
 //! opened) and, when it ends, whatever its verdict:
 //!
 //! 1. stops the inverters the case commanded through the case's own I/O connection while that
@@ -49,10 +49,10 @@ use proto::nord::{ArrayElement, Family, Inverter, ParamNumber};
 use serde_json::Value;
 
 use super::scanner::{Scanner, RPI};
+use crate::binding::ledger::{self, Account, Problem};
 use crate::binding::settle::{Drives, DISABLE, SETTLE_CYCLES};
 use crate::binding::StepError;
 use crate::hex::hex;
-use crate::ledger::{self, Account, Problem};
 use crate::outcome::Exchange;
 use crate::suite::{OrderSpec, Target};
 use crate::timing::Deadline;

@@ -28,13 +28,13 @@ use super::mn::link::Link;
 use super::mn::{describe, Manager, MnError, Via};
 use super::step::EplStep;
 use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::ledger::{Account, Ledger, Problem};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
 use crate::binding::{
     process_run, process_time, Binding, CleanupError, Observation, OpenError, StepError,
 };
 use crate::hex::hex;
-use crate::ledger::{Account, Ledger, Problem};
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::suite::{Action, OrderSpec};

@@ -9,7 +9,6 @@ mod effect;
 pub(crate) mod mn;
 pub mod serve;
 mod step;
-pub(crate) mod xdd;
 
 use std::net::SocketAddr;
 use std::time::Duration;
@@ -53,7 +52,7 @@ pub(crate) const BUS: Bus = Bus {
 /// `harness describe xdd`: the XDD of a POWERLINK product, from `proto::nord::epl` (the
 /// definition the simulated node runs on).
 fn describe_xdd(profile: &Profile, inverters: u8) -> Result<String, String> {
-    xdd::xdd(profile.nord()?, inverters)
+    crate::dictionary::xdd::xdd(profile.nord()?, inverters)
 }
 
 fn profiles() -> Vec<Profile> {

@@ -1,4 +1,4 @@
-//! The end of a case on a PROFINET device on the network ([`crate::ledger`]): the parameters
+//! The end of a case on a PROFINET device on the network ([`crate::binding::ledger`]): the parameters
 //! the case wrote are written back, the drives it ran are brought back to "Switch-on block",
 //! a name of station or IP suite it set by DCP is set back, and the AR is released, so that
 //! the next case connects to the device as this one found it.

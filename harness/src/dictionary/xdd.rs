@@ -36,7 +36,7 @@ use proto::nord::{Family, Inverter, Product, Protocol};
 use quick_xml::events::{BytesDecl, BytesText, Event};
 use quick_xml::Writer;
 
-use crate::dictionary::{defs, inverter_parameters, parameter, ObjectDoc};
+use super::{defs, inverter_parameters, parameter, ObjectDoc};
 
 type W = Writer<Cursor<Vec<u8>>>;
 

@@ -16,7 +16,7 @@ use std::fmt::Write;
 use proto::nord::ecat::{DataType, ObjectCode};
 use proto::nord::{Inverter, Product};
 
-use crate::dictionary::{inverter_parameters, parameter, ObjectDoc};
+use super::{inverter_parameters, parameter, ObjectDoc};
 
 /// VISIBLE_STRING (CiA 301 data type 0009h), beyond [`DataType::code`]'s numbers.
 const VISIBLE_STRING: u16 = 0x0009;

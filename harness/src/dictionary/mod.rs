@@ -3,6 +3,13 @@
 //! its sub-objects, types, access, defaults and limits, filled from the parameter catalogue
 //! (`proto::nord::params`) the simulated devices answer from. A parameter with sets or elements
 //! is an ARRAY whose sub-index 0 is the count (`proto::nord::ecat::parameter_subindex`).
+//!
+//! The two writers built on it live here too ([`xdd`], [`eds`]), not in their buses' folders:
+//! the reference model reads the XDD (BU 2200 §5.2.1: the SK TU3-POL's file carries the
+//! inverters' parameters), and the model sits below every bus.
+
+pub(crate) mod eds;
+pub(crate) mod xdd;
 
 use std::collections::BTreeSet;
 
