@@ -1,13 +1,12 @@
-//! The buses the harness speaks, one entry per `harness/src/<bus>/` folder.
+//! What a bus provides the shared code: one [`Bus`] entry per `harness/src/<bus>/` folder.
 //!
-//! This registry is the only shared place that names a bus. The runner, the suite loader and
-//! the reports reach a bus through its entry: its profiles (`sk550p@ecat`), the suite steps
-//! written under its key (`ecat:`), the binding that opens the embedded simulator or a DUT
-//! given by URL (`--dut ecat://IFACE`), its `serve` command and its device-description writers.
-//! Adding a bus adds a folder and a line to [`BUSES`].
+//! The runner, the suite loader and the reports reach a bus through its entry: its profiles
+//! (`sk550p@ecat`), the suite steps written under its key (`ecat:`), the binding that opens the
+//! embedded simulator or a DUT given by URL (`--dut ecat://IFACE`), its `serve` command and its
+//! device-description writers. The list of the entries is `crate::buses`, read by the CLI
+//! alone and handed down as `&[&Bus]`; the functions here look a bus up in such a list.
+//! Adding a bus adds a folder and a line to that list.
 
-use crate::suite::BusStep;
-use serde_json::Value;
 use std::fmt;
 use std::net::IpAddr;
 use std::time::Duration;
@@ -15,7 +14,8 @@ use std::time::Duration;
 use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::pcap::SharedTap;
-use crate::profile::Profile;
+use crate::profile::{Catalog, Profile};
+use crate::suite::{ParseStep, Vocabulary};
 
 impl fmt::Debug for Bus {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -28,15 +28,6 @@ impl fmt::Debug for Description {
         write!(f, "Description({})", self.format)
     }
 }
-
-/// Every bus, in report order.
-pub(crate) const BUSES: &[&Bus] = &[
-    &crate::enip::BUS,
-    &crate::ecat::BUS,
-    &crate::epl::BUS,
-    &crate::pnio::BUS,
-    &crate::can::BUS,
-];
 
 /// A bus: what the shared code may ask of it.
 pub(crate) struct Bus {
@@ -54,7 +45,7 @@ pub(crate) struct Bus {
     /// maker's device, `--dut` only) is added by [`Profile`].
     pub(crate) profiles: fn() -> Vec<Profile>,
     /// Parses a suite step written under the bus's key; the error says what is wrong.
-    pub(crate) parse_step: fn(&Value) -> Result<Box<dyn BusStep>, String>,
+    pub(crate) parse_step: ParseStep,
     /// Opens the embedded simulator for one case, behind the bus's binding.
     pub(crate) embedded: fn(&Profile, &Embedded) -> Result<Box<dyn Binding>, OpenError>,
     /// Reaches a DUT given as `<name>://<target>`.
@@ -122,20 +113,33 @@ pub(crate) struct Network {
     pub(crate) description: Option<crate::description::Description>,
 }
 
+/// The profiles and capabilities of `buses`.
+pub(crate) fn catalog(buses: &[&Bus]) -> Catalog {
+    Catalog::new(buses.iter().map(|b| (b.name, (b.profiles)())))
+}
+
+/// What the suite loader must know of `buses`: their profiles, capabilities and step parsers.
+pub(crate) fn vocabulary(buses: &[&Bus]) -> Vocabulary {
+    Vocabulary {
+        catalog: catalog(buses),
+        steps: buses.iter().map(|b| (b.name, b.parse_step)).collect(),
+    }
+}
+
 /// The bus of that name.
-pub(crate) fn by_name(name: &str) -> Option<&'static Bus> {
-    BUSES.iter().copied().find(|b| b.name == name)
+pub(crate) fn by_name<'a>(buses: &[&'a Bus], name: &str) -> Option<&'a Bus> {
+    buses.iter().copied().find(|b| b.name == name)
 }
 
 /// The bus names, for messages.
-pub(crate) fn names() -> String {
-    let v: Vec<&str> = BUSES.iter().map(|b| b.name).collect();
+pub(crate) fn names(buses: &[&Bus]) -> String {
+    let v: Vec<&str> = buses.iter().map(|b| b.name).collect();
     v.join(", ")
 }
 
 /// Every bus's `--dut` URL with its title (`enip://HOST[:PORT] (EtherNet/IP), …`), for help.
-pub(crate) fn urls() -> String {
-    let v: Vec<String> = BUSES
+pub(crate) fn urls(buses: &[&Bus]) -> String {
+    let v: Vec<String> = buses
         .iter()
         .map(|b| format!("{} ({})", b.url, b.title))
         .collect();
@@ -143,9 +147,12 @@ pub(crate) fn urls() -> String {
 }
 
 /// The bus, scheme and target of a `--dut` URL (`ecat://veth0`).
-pub(crate) fn by_url(url: &str) -> Result<(&'static Bus, &str, &str), String> {
+pub(crate) fn by_url<'a, 'u>(
+    buses: &[&'a Bus],
+    url: &'u str,
+) -> Result<(&'a Bus, &'u str, &'u str), String> {
     let schemes = || {
-        let v: Vec<String> = BUSES
+        let v: Vec<String> = buses
             .iter()
             .flat_map(|b| std::iter::once(b.name).chain(b.schemes.iter().copied()))
             .map(|s| format!("{s}://"))
@@ -155,7 +162,7 @@ pub(crate) fn by_url(url: &str) -> Result<(&'static Bus, &str, &str), String> {
     let (scheme, target) = url
         .split_once("://")
         .ok_or_else(|| format!("`--dut {url}`: give a URL ({})", schemes()))?;
-    let bus = BUSES
+    let bus = buses
         .iter()
         .copied()
         .find(|b| b.name == scheme || b.schemes.contains(&scheme));
@@ -173,17 +180,18 @@ pub(crate) fn by_url(url: &str) -> Result<(&'static Bus, &str, &str), String> {
 
 /// The description writer for `format`, with its bus: of the bus `bus` names, else of the
 /// first bus that writes one (`eds`: EtherNet/IP's; `--bus can` the system bus's).
-pub(crate) fn description(
+pub(crate) fn description<'a>(
+    buses: &[&'a Bus],
     format: &str,
     bus: Option<&str>,
-) -> Result<(&'static Bus, &'static Description), String> {
-    BUSES
+) -> Result<(&'a Bus, &'a Description), String> {
+    buses
         .iter()
         .filter(|b| bus.is_none_or(|name| b.name == name))
         .flat_map(|b| b.descriptions.iter().map(move |d| (*b, d)))
         .find(|(_, d)| d.format == format)
         .ok_or_else(|| {
-            let known: Vec<String> = BUSES
+            let known: Vec<String> = buses
                 .iter()
                 .flat_map(|b| {
                     b.descriptions
@@ -193,68 +201,4 @@ pub(crate) fn description(
                 .collect();
             format!("cannot describe `{format}` (known: {})", known.join(", "))
         })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn names_and_urls_resolve_through_the_registry() {
-        assert_eq!(by_name("enip").map(|b| b.title), Some("EtherNet/IP"));
-        assert_eq!(by_name("ecat").map(|b| b.title), Some("EtherCAT"));
-        let (bus, _, target) = by_url("ecat://veth0").unwrap();
-        assert_eq!((bus.name, target), ("ecat", "veth0"));
-        assert!(by_url("ecat://").unwrap_err().contains("nothing after"));
-        let (bus, scheme, target) = by_url("socketcand://127.0.0.1/can0").unwrap();
-        assert_eq!(
-            (bus.name, scheme, target),
-            ("can", "socketcand", "127.0.0.1/can0")
-        );
-        let e = by_url("lin://x").unwrap_err();
-        assert!(e.contains("unknown scheme `lin://`"), "{e}");
-        assert!(e.contains("enip://, ecat://"), "{e}");
-        assert!(by_url("veth0").unwrap_err().contains("give a URL"));
-    }
-
-    #[test]
-    fn every_profile_of_a_bus_names_the_bus() {
-        for bus in BUSES {
-            for p in (bus.profiles)() {
-                assert_eq!(p.bus, Some(bus.name), "{}", p.name());
-                if p.product.is_some() {
-                    assert!(
-                        p.name().ends_with(&format!("@{}", bus.name)),
-                        "{}",
-                        p.name()
-                    );
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn every_bus_url_starts_with_its_scheme() {
-        for bus in BUSES {
-            let scheme = bus.url.split("://").next().unwrap_or_default();
-            assert!(
-                scheme == bus.name || bus.schemes.contains(&scheme),
-                "{}",
-                bus.url
-            );
-            assert_eq!(by_url(bus.url).unwrap().0.name, bus.name);
-            assert!(urls().contains(bus.url));
-        }
-    }
-
-    #[test]
-    fn description_formats_are_found_by_name() {
-        assert_eq!(description("eds", None).unwrap().0.name, "enip");
-        assert_eq!(description("eds", Some("can")).unwrap().0.name, "can");
-        assert_eq!(description("gsdml", None).unwrap().0.name, "pnio");
-        let e = description("xyz", None).unwrap_err();
-        assert!(e.contains("known: eds (enip), esi (ecat)"), "{e}");
-        assert!(e.contains("eds (can)"), "{e}");
-        assert!(description("esi", Some("can")).is_err());
-    }
 }

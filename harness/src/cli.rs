@@ -9,9 +9,10 @@
 use clap::{Args as ClapArgs, Parser, Subcommand};
 use std::path::PathBuf;
 
-use crate::binding::embedded::EmbeddedFactory;
+use crate::buses::BUSES;
+use crate::embedded::EmbeddedFactory;
 use crate::exit::verdict_exit;
-use crate::profile::Profile;
+use crate::profile::{Catalog, Profile};
 use crate::progress::Verbosity;
 use crate::report::{self, SnapshotMode};
 use crate::runner::{self, RunOptions};
@@ -244,7 +245,7 @@ struct ListArgs {
 fn profiles_help() -> String {
     format!(
         "Built-in profile to run, repeatable (default: every product over PPO and over each bus it speaks): {}; `{}` (any maker's device) with --dut",
-        Profile::names().join(", "),
+        crate::bus::catalog(BUSES).names().join(", "),
         crate::profile::ANY
     )
 }
@@ -253,7 +254,7 @@ fn profiles_help() -> String {
 fn dut_help() -> String {
     format!(
         "The DUT: the embedded simulator (default), or a device or another implementation on the network: {}",
-        crate::bus::urls()
+        crate::bus::urls(BUSES)
     )
 }
 
@@ -298,11 +299,12 @@ pub fn main() -> i32 {
 }
 
 fn describe(a: DescribeArgs) -> Result<i32, String> {
-    let (bus, description) = crate::bus::description(&a.what, a.bus.as_deref())?;
-    let profile = Profile::by_name(&a.profile)?;
+    let (bus, description) = crate::bus::description(BUSES, &a.what, a.bus.as_deref())?;
+    let catalog = crate::bus::catalog(BUSES);
+    let profile = catalog.by_name(&a.profile)?;
     let product = profile.nord()?;
     // The writer says so when the product has no such interface.
-    let profile = profile.over(bus.name).unwrap_or(profile);
+    let profile = catalog.over(&profile, bus.name).unwrap_or(profile);
     let units = match description.per_inverter {
         true => a.inverter.unwrap_or(1),
         false => a.inverters.unwrap_or(product.max_inverters()),
@@ -315,16 +317,21 @@ fn describe(a: DescribeArgs) -> Result<i32, String> {
 
 fn serve(a: ServeArgs) -> Result<i32, String> {
     let (name, args) = a.words.split_first().ok_or("`harness serve` needs a bus")?;
-    let bus = crate::bus::by_name(name)
-        .ok_or_else(|| format!("cannot serve `{name}` (buses: {})", crate::bus::names()))?;
+    let bus = crate::bus::by_name(BUSES, name).ok_or_else(|| {
+        format!(
+            "cannot serve `{name}` (buses: {})",
+            crate::bus::names(BUSES)
+        )
+    })?;
     (bus.serve)(args)
 }
 
 fn run(a: RunArgs) -> Result<i32, String> {
+    let catalog = crate::bus::catalog(BUSES);
     let profiles = if a.profiles.is_empty() {
-        Profile::all()
+        catalog.all()
     } else {
-        chosen_profiles(&a.profiles)?
+        chosen_profiles(&catalog, &a.profiles)?
     };
     let profiles: Vec<Profile> = profiles
         .into_iter()
@@ -361,7 +368,8 @@ fn run(a: RunArgs) -> Result<i32, String> {
         ));
     }
     let dir = suite::location::suites_or_usage(a.suites)?;
-    let loaded = suite::load_dir(&dir).map_err(|e| e.to_string())?;
+    let loaded =
+        suite::load_dir(&dir, &crate::bus::vocabulary(BUSES)).map_err(|e| e.to_string())?;
     let selected = loaded
         .cases
         .iter()
@@ -399,14 +407,13 @@ fn run(a: RunArgs) -> Result<i32, String> {
     crate::interrupt::install()?;
     let mut run = match &a.dut {
         None => {
-            crate::binding::embedded::sim_firmware()?;
-            let mut factory = EmbeddedFactory {
-                context: crate::bus::Embedded { tap: tap.clone() },
-            };
+            crate::binding::simulator::sim_firmware()?;
+            let mut factory = EmbeddedFactory::new(BUSES);
+            factory.context.tap = tap.clone();
             runner::run_shard(&loaded, &opts, a.shard, &mut factory)
         }
         Some(url) => {
-            let (bus, scheme, target) = crate::bus::by_url(url)?;
+            let (bus, scheme, target) = crate::bus::by_url(BUSES, url)?;
             if !(0.01..=60.0).contains(&a.timeout) {
                 return Err(format!(
                     "`--timeout {}`: give 0.01 to 60 seconds",
@@ -415,7 +422,11 @@ fn run(a: RunArgs) -> Result<i32, String> {
             }
             // Each product once, over the DUT's bus.
             let mut profiles: Vec<Profile> = Vec::new();
-            for p in opts.profiles.iter().filter_map(|p| p.over(bus.name)) {
+            for p in opts
+                .profiles
+                .iter()
+                .filter_map(|p| catalog.over(p, bus.name))
+            {
                 if !profiles.iter().any(|q| q.name() == p.name()) {
                     profiles.push(p);
                 }
@@ -500,7 +511,7 @@ fn run(a: RunArgs) -> Result<i32, String> {
     } else {
         SnapshotMode::Off
     };
-    let snaps = report::apply_snapshots(&mut run, &mode).map_err(|e| e.to_string())?;
+    let snaps = report::apply_snapshots(BUSES, &mut run, &mode).map_err(|e| e.to_string())?;
     crate::interrupt::doing(format!("writing the reports into {}", a.out.display()));
     let written = report::write_all(&run, &a.out, a.transcripts).map_err(|e| e.to_string())?;
     if verbosity == Verbosity::Quiet {
@@ -526,8 +537,8 @@ fn run(a: RunArgs) -> Result<i32, String> {
 
 /// The `--profile` profiles, each once in the order given; a repeated one is dropped with a
 /// note on stderr (one testsuite per profile in the reports, not two of the same).
-fn chosen_profiles(names: &[String]) -> Result<Vec<Profile>, String> {
-    let (chosen, repeated) = Profile::by_names(names)?;
+fn chosen_profiles(catalog: &Catalog, names: &[String]) -> Result<Vec<Profile>, String> {
+    let (chosen, repeated) = catalog.by_names(names)?;
     if !repeated.is_empty() {
         eprintln!(
             "harness: `--profile {}` given again: each profile runs once",
@@ -544,13 +555,15 @@ fn list(a: ListArgs) -> Result<i32, String> {
         }
         return Ok(EXIT_PASS);
     }
+    let dir = suite::location::suites_or_usage(a.suites)?;
     let loaded =
-        suite::load_dir(&suite::location::suites_or_usage(a.suites)?).map_err(|e| e.to_string())?;
+        suite::load_dir(&dir, &crate::bus::vocabulary(BUSES)).map_err(|e| e.to_string())?;
+    let catalog = crate::bus::catalog(BUSES);
     let mut chosen: Vec<Profile> = Vec::new();
-    for p in chosen_profiles(&a.profiles)? {
+    for p in chosen_profiles(&catalog, &a.profiles)? {
         // `any` names no bus until `--dut` does: listed, it is every bus's generic profile.
         if p.product.is_none() && p.bus.is_none() {
-            chosen.extend(crate::bus::BUSES.iter().filter_map(|b| p.over(b.name)));
+            chosen.extend(BUSES.iter().filter_map(|b| catalog.over(&p, b.name)));
         } else {
             chosen.push(p);
         }
@@ -630,7 +643,7 @@ mod tests {
         let help = run_help();
         // Wrapped lines joined, so a name is found whatever the terminal width.
         let flat = help.split_whitespace().collect::<Vec<_>>().join(" ");
-        let names = Profile::names();
+        let names = crate::bus::catalog(BUSES).names();
         assert!(names.len() >= 19, "{names:?}");
         for name in &names {
             assert!(
@@ -638,7 +651,7 @@ mod tests {
                 "{name} missing from run --help:\n{help}"
             );
         }
-        for bus in crate::bus::BUSES {
+        for bus in BUSES {
             assert!(flat.contains(bus.url), "{} missing:\n{help}", bus.url);
         }
         assert!(flat.contains("pnio://IFACE"), "{help}");

@@ -33,6 +33,7 @@ pub(crate) fn diff(a: DiffArgs) -> Result<i32, String> {
     let old = report::read(&a.old).map_err(|e| e.to_string())?;
     let new = report::read(&a.new).map_err(|e| e.to_string())?;
     let d = report::compare_runs(
+        crate::buses::BUSES,
         &a.old.display().to_string(),
         &old,
         &a.new.display().to_string(),
@@ -130,7 +131,8 @@ pub(crate) struct CoverageArgs {
 pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
     use crate::suite::inventory;
     let dir = crate::suite::location::suites_dir(a.suites);
-    let loaded = crate::suite::load_dir(&dir).map_err(|e| e.to_string())?;
+    let vocabulary = crate::bus::vocabulary(crate::buses::BUSES);
+    let loaded = crate::suite::load_dir(&dir, &vocabulary).map_err(|e| e.to_string())?;
     if let Some(e) = loaded.errors.first() {
         return Err(e.to_string());
     }

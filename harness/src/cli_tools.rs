@@ -114,8 +114,7 @@ fn check_against_catalogue(product: Product, a: &ParamAddress) -> Result<(), Str
 
 /// Runs `harness addr`.
 pub(crate) fn addr(a: AddrArgs) -> Result<i32, String> {
-    let product = Product::from_name(&a.profile)
-        .ok_or_else(|| crate::profile::Profile::by_name(&a.profile).unwrap_err())?;
+    let product = crate::profile::product_named(&a.profile)?;
     let p = a.param.strip_prefix(['P', 'p']).unwrap_or(&a.param);
     let address = ParamAddress {
         inverter: Inverter::new(number("inverter", &a.inverter)?).map_err(|e| e.to_string())?,

@@ -17,6 +17,16 @@ pub(crate) fn hex(bytes: &[u8]) -> String {
     String::from_utf8(s).unwrap_or_default()
 }
 
+/// A CAN frame as transcripts and `system-bus` observations show it: the COB-ID, then the data
+/// bytes (`604 40 00 20 00 00 00 00 00`).
+pub(crate) fn can_frame(f: &proto::can::CanFrame) -> String {
+    if f.data().is_empty() {
+        format!("{:03X}", f.id())
+    } else {
+        format!("{:03X} {}", f.id(), hex(f.data()))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -19,6 +19,7 @@ macro_rules! outln {
 mod args;
 mod binding;
 mod bus;
+mod buses;
 mod can;
 pub mod cli;
 mod cli_reports;
@@ -27,6 +28,7 @@ mod description;
 mod dictionary;
 mod ecat;
 mod effect;
+mod embedded;
 /// What the system-bus speed bench (`harness/benches/can/`) needs of the library.
 pub use can::bench_support as can_bench;
 /// What the EtherCAT speed bench (`harness/benches/ecat/`) needs of the library.
@@ -70,11 +72,12 @@ mod timing;
 /// Runs every suite below `suites` against the embedded simulator under every built-in profile
 /// (the default job, without writing reports). Used by the bench.
 pub fn run_embedded(suites: &std::path::Path) -> Result<outcome::RunResult, String> {
-    let loaded = suite::load_dir(suites).map_err(|e| e.to_string())?;
-    let opts = runner::RunOptions::new(profile::Profile::all());
+    let loaded =
+        suite::load_dir(suites, &bus::vocabulary(buses::BUSES)).map_err(|e| e.to_string())?;
+    let opts = runner::RunOptions::new(bus::catalog(buses::BUSES).all());
     Ok(runner::run(
         &loaded,
         &opts,
-        &mut binding::embedded::EmbeddedFactory::default(),
+        &mut crate::embedded::EmbeddedFactory::new(crate::buses::BUSES),
     ))
 }

@@ -71,12 +71,6 @@ impl Capability {
         ]
     }
 
-    /// Every capability: the general ones and one per bus.
-    pub(crate) fn all() -> Vec<Capability> {
-        let buses = crate::bus::BUSES.iter().map(|b| Capability::Bus(b.name));
-        Capability::GENERAL.into_iter().chain(buses).collect()
-    }
-
     /// Name as suites write it (a bus capability is the bus's name).
     pub(crate) fn name(self) -> &'static str {
         match self {
@@ -91,11 +85,6 @@ impl Capability {
             Capability::SystemBus => "system-bus",
             Capability::Bus(name) => name,
         }
-    }
-
-    /// Parses a suite's name.
-    pub(crate) fn from_name(s: &str) -> Option<Capability> {
-        Capability::all().into_iter().find(|c| c.name() == s)
     }
 }
 
@@ -155,22 +144,6 @@ impl Profile {
         }
     }
 
-    /// The default run's profiles: each product over PPO, and each product over each bus it
-    /// speaks (`<product>@<bus>`), so every case runs over every binding it can.
-    pub(crate) fn all() -> Vec<Profile> {
-        let ppo = Product::ALL.into_iter().map(Profile::builtin);
-        ppo.chain(Profile::of_buses().filter(|p| p.product.is_some()))
-            .collect()
-    }
-
-    /// Every bus's NORD profiles, then its generic one (`any@<bus>`).
-    fn of_buses() -> impl Iterator<Item = Profile> {
-        crate::bus::BUSES.iter().flat_map(|b| {
-            let generic = Profile::generic(&format!("{ANY}@{}", b.name), b.name);
-            (b.profiles)().into_iter().chain([generic])
-        })
-    }
-
     /// The NORD product, or why a generic profile has none.
     pub(crate) fn nord(&self) -> Result<Product, String> {
         self.product.ok_or_else(|| {
@@ -185,11 +158,74 @@ impl Profile {
     pub(crate) fn name(&self) -> &str {
         &self.name
     }
+}
+
+/// The NORD product a `serve` command's `--profile` names: a product (`sk550p`) or a product
+/// over a bus (`sk550p@ecat`). Serving needs no list of the buses: the bus is the command's
+/// own, and the command checks that the product speaks it.
+pub(crate) fn product_named(name: &str) -> Result<Product, String> {
+    let product = name.split_once('@').map_or(name, |(p, _)| p);
+    if product == ANY || name == "cip" {
+        return Err(format!(
+            "profile `{name}` stands for any maker's device, not a NORD product"
+        ));
+    }
+    Product::from_name(product).ok_or_else(|| {
+        let names: Vec<&str> = Product::ALL.into_iter().map(Product::name).collect();
+        format!("unknown profile `{name}` (products: {})", names.join(", "))
+    })
+}
+
+/// Every profile and capability a run may name: each product over PPO, and each bus's NORD
+/// profiles and its generic one (`any@<bus>`). It is built from the buses' entries by whoever
+/// holds their list (`crate::bus::catalog`) and handed down, so that nothing here reads the list.
+#[derive(Debug, Clone)]
+pub(crate) struct Catalog {
+    /// The bus names, in report order.
+    buses: Vec<&'static str>,
+    /// Each bus's NORD profiles, then its generic one, bus after bus.
+    of_buses: Vec<Profile>,
+}
+
+impl Catalog {
+    /// The catalog of these buses: each with its NORD profiles, in report order.
+    pub(crate) fn new(buses: impl IntoIterator<Item = (&'static str, Vec<Profile>)>) -> Catalog {
+        let mut names = Vec::new();
+        let mut of_buses = Vec::new();
+        for (bus, profiles) in buses {
+            names.push(bus);
+            of_buses.extend(profiles);
+            of_buses.push(Profile::generic(&format!("{ANY}@{bus}"), bus));
+        }
+        Catalog {
+            buses: names,
+            of_buses,
+        }
+    }
+
+    /// Every capability: the general ones and one per bus.
+    pub(crate) fn capabilities(&self) -> Vec<Capability> {
+        let buses = self.buses.iter().map(|b| Capability::Bus(b));
+        Capability::GENERAL.into_iter().chain(buses).collect()
+    }
+
+    /// The capability a suite names.
+    pub(crate) fn capability(&self, name: &str) -> Option<Capability> {
+        self.capabilities().into_iter().find(|c| c.name() == name)
+    }
+
+    /// The default run's profiles: each product over PPO, and each product over each bus it
+    /// speaks (`<product>@<bus>`), so every case runs over every binding it can.
+    pub(crate) fn all(&self) -> Vec<Profile> {
+        let ppo = Product::ALL.into_iter().map(Profile::builtin);
+        let nord = self.of_buses.iter().filter(|p| p.product.is_some());
+        ppo.chain(nord.cloned()).collect()
+    }
 
     /// Looks a built-in profile up by name; the error lists the valid names. `any` is any
-    /// maker's device of the bus `--dut` names ([`Profile::over`] makes it `any@<bus>`);
+    /// maker's device of the bus `--dut` names ([`Catalog::over`] makes it `any@<bus>`);
     /// `cip` is `any@enip`, its name before every bus had a generic profile.
-    pub(crate) fn by_name(name: &str) -> Result<Profile, String> {
+    pub(crate) fn by_name(&self, name: &str) -> Result<Profile, String> {
         match name {
             ANY => {
                 return Ok(Profile {
@@ -199,40 +235,40 @@ impl Profile {
                     bus: None,
                 })
             }
-            "cip" => return Profile::by_name("any@enip"),
+            "cip" => return self.by_name("any@enip"),
             _ => {}
         }
-        Profile::known().find(|p| p.name() == name).ok_or_else(|| {
+        self.known().find(|p| p.name() == name).ok_or_else(|| {
             format!(
                 "unknown profile `{name}` (built-in profiles: {}; `{ANY}` with `--dut`)",
-                Profile::names().join(", ")
+                self.names().join(", ")
             )
         })
     }
 
     /// Every built-in profile: each product over PPO, then each bus's NORD profiles and its
     /// generic one.
-    fn known() -> impl Iterator<Item = Profile> {
+    fn known(&self) -> impl Iterator<Item = Profile> + '_ {
         Product::ALL
             .into_iter()
             .map(Profile::builtin)
-            .chain(Profile::of_buses())
+            .chain(self.of_buses.iter().cloned())
     }
 
-    /// The names of every built-in profile ([`Profile::by_name`] takes each), for help and
+    /// The names of every built-in profile ([`Catalog::by_name`] takes each), for help and
     /// messages.
-    pub(crate) fn names() -> Vec<String> {
-        Profile::known().map(|p| p.name).collect()
+    pub(crate) fn names(&self) -> Vec<String> {
+        self.known().map(|p| p.name).collect()
     }
 
     /// The profiles named on the command line (`--profile`, in the order given), each once:
     /// a name given again, or another name of one profile (`cip` and `any@enip`), is dropped
     /// and returned apart so the caller can say so. The error lists the valid names.
-    pub(crate) fn by_names(names: &[String]) -> Result<(Vec<Profile>, Vec<String>), String> {
+    pub(crate) fn by_names(&self, names: &[String]) -> Result<(Vec<Profile>, Vec<String>), String> {
         let mut chosen: Vec<Profile> = Vec::new();
         let mut repeated = Vec::new();
         for n in names {
-            let p = Profile::by_name(n)?;
+            let p = self.by_name(n)?;
             if chosen.iter().any(|q| q.name == p.name) {
                 repeated.push(n.clone());
             } else {
@@ -242,74 +278,84 @@ impl Profile {
         Ok((chosen, repeated))
     }
 
-    /// This profile's product over `bus`, if the product speaks it; `any` is the bus's
-    /// generic profile, and a generic profile of another bus is none.
-    pub(crate) fn over(&self, bus: &'static str) -> Option<Profile> {
-        if self.product.is_none() && self.bus.is_some_and(|b| b != bus) {
+    /// `profile`'s product over `bus`, if the product speaks it; `any` is the bus's generic
+    /// profile, and a generic profile of another bus is none.
+    pub(crate) fn over(&self, profile: &Profile, bus: &'static str) -> Option<Profile> {
+        if profile.product.is_none() && profile.bus.is_some_and(|b| b != bus) {
             return None;
         }
-        let found =
-            Profile::of_buses().find(|p| p.bus == Some(bus) && p.product == self.product)?;
+        let found = self
+            .of_buses
+            .iter()
+            .find(|p| p.bus == Some(bus) && p.product == profile.product)?;
         Some(Profile {
             inverters: if found.product.is_some() {
-                self.inverters
+                profile.inverters
             } else {
                 found.inverters
             },
-            ..found
+            ..found.clone()
         })
     }
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::buses::{catalog, BUSES};
 
     #[test]
     fn every_capability_parses_from_its_name() {
-        for c in Capability::all() {
-            assert_eq!(Capability::from_name(c.name()), Some(c));
+        for c in catalog().capabilities() {
+            assert_eq!(catalog().capability(c.name()), Some(c));
         }
-        assert_eq!(Capability::from_name("power-on"), Some(Capability::PowerOn));
+        assert_eq!(catalog().capability("power-on"), Some(Capability::PowerOn));
         assert_eq!(
-            Capability::from_name("factory-state"),
+            catalog().capability("factory-state"),
             Some(Capability::FactoryState)
         );
-        assert_eq!(Capability::from_name("powered-on"), None);
-        assert_eq!(Capability::from_name("ecat"), Some(Capability::Bus("ecat")));
+        assert_eq!(catalog().capability("powered-on"), None);
+        assert_eq!(catalog().capability("ecat"), Some(Capability::Bus("ecat")));
     }
 
     #[test]
     fn a_profile_named_twice_is_chosen_once_in_the_order_given() {
         let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-        let (chosen, repeated) = Profile::by_names(&names(&[
-            "sk550p",
-            "tu3-eip@enip",
-            "sk550p",
-            "cip",
-            "any@enip",
-        ]))
-        .unwrap();
+        let (chosen, repeated) = catalog()
+            .by_names(&names(&[
+                "sk550p",
+                "tu3-eip@enip",
+                "sk550p",
+                "cip",
+                "any@enip",
+            ]))
+            .unwrap();
         let chosen: Vec<&str> = chosen.iter().map(Profile::name).collect();
         assert_eq!(chosen, ["sk550p", "tu3-eip@enip", "any@enip"]);
         assert_eq!(repeated, ["sk550p", "any@enip"]);
-        let e = Profile::by_names(&names(&["sk550p", "sk999"])).unwrap_err();
+        let e = catalog()
+            .by_names(&names(&["sk550p", "sk999"]))
+            .unwrap_err();
         assert!(e.contains("unknown profile `sk999`"), "{e}");
     }
 
     #[test]
     fn any_is_the_generic_profile_of_the_bus_the_dut_names() {
-        let any = Profile::by_name("any").unwrap();
-        for bus in crate::bus::BUSES {
-            let p = any.over(bus.name).unwrap();
+        let any = catalog().by_name("any").unwrap();
+        for bus in BUSES {
+            let p = catalog().over(&any, bus.name).unwrap();
             assert_eq!(p.name(), format!("any@{}", bus.name));
             assert_eq!((p.product, p.bus), (None, Some(bus.name)));
-            assert_eq!(Profile::by_name(p.name()).unwrap(), p);
+            assert_eq!(catalog().by_name(p.name()).unwrap(), p);
         }
-        assert_eq!(Profile::by_name("cip").unwrap().name(), "any@enip");
-        assert_eq!(Profile::by_name("any@ecat").unwrap().over("enip"), None);
-        let nord = Profile::by_name("sk550p").unwrap().over("ecat").unwrap();
+        assert_eq!(catalog().by_name("cip").unwrap().name(), "any@enip");
+        assert_eq!(
+            catalog().over(&catalog().by_name("any@ecat").unwrap(), "enip"),
+            None
+        );
+        let nord = catalog()
+            .over(&catalog().by_name("sk550p").unwrap(), "ecat")
+            .unwrap();
         assert_eq!(nord.name(), "sk550p@ecat");
-        assert!(!Profile::all().iter().any(|p| p.product.is_none()));
+        assert!(!catalog().all().iter().any(|p| p.product.is_none()));
     }
 }

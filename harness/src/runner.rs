@@ -979,8 +979,9 @@ fn run_step(
 mod tests {
     use super::*;
     use crate::binding::channel::Channel;
-    use crate::binding::embedded::{ppo_dut, EmbeddedFactory};
+    use crate::binding::simulator::ppo_dut;
     use crate::binding::{CleanupError, Dut, DutError};
+    use crate::embedded::EmbeddedFactory;
     use crate::profile::Capability;
     use crate::suite::load_text_for_tests;
     use proto::nord::{Inverter, Product};
@@ -1090,7 +1091,11 @@ cases:
         let loaded = load_text_for_tests(SUITE);
         let opts = sk550p_options();
         match fault {
-            None => run(&loaded, &opts, &mut EmbeddedFactory::default()),
+            None => run(
+                &loaded,
+                &opts,
+                &mut EmbeddedFactory::new(crate::buses::BUSES),
+            ),
             Some(f) => run(&loaded, &opts, &mut FaultyFactory(f)),
         }
     }
@@ -1207,7 +1212,7 @@ cases:
         let r = run(
             &load_text_for_tests(SUITE),
             &opts,
-            &mut EmbeddedFactory::default(),
+            &mut EmbeddedFactory::new(crate::buses::BUSES),
         );
         let pnt = &r.meta.identities["tu3-pnt"];
         assert_eq!(
@@ -1221,9 +1226,13 @@ cases:
     #[test]
     fn every_bus_profile_reads_its_bus_identity_service() {
         let loaded = load_text_for_tests(SUITE);
-        let opts = RunOptions::new(Profile::all());
-        let r = run(&loaded, &opts, &mut EmbeddedFactory::default());
-        for p in Profile::all() {
+        let opts = RunOptions::new(crate::buses::catalog().all());
+        let r = run(
+            &loaded,
+            &opts,
+            &mut EmbeddedFactory::new(crate::buses::BUSES),
+        );
+        for p in crate::buses::catalog().all() {
             let id = &r.meta.identities[p.name()];
             eprintln!("{}: {}", p.name(), id.line());
             // Which service each bus asks is its own folder's test.
@@ -1273,7 +1282,7 @@ cases:
         }
         fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
             self.0 += 1;
-            EmbeddedFactory::default().open(profile, retries)
+            EmbeddedFactory::new(crate::buses::BUSES).open(profile, retries)
         }
     }
 
@@ -1384,7 +1393,7 @@ cases:
             "restoring simulator".into()
         }
         fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
-            let inner = EmbeddedFactory::default().open(profile, retries)?;
+            let inner = EmbeddedFactory::new(crate::buses::BUSES).open(profile, retries)?;
             // The connection check opens one first.
             let case = self.opened.checked_sub(1);
             self.opened += 1;
@@ -1483,7 +1492,7 @@ cases:
             "interrupting simulator".into()
         }
         fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
-            let inner = EmbeddedFactory::default().open(profile, retries)?;
+            let inner = EmbeddedFactory::new(crate::buses::BUSES).open(profile, retries)?;
             self.opened += 1;
             Ok(Box::new(Interrupting {
                 inner,
@@ -1550,7 +1559,11 @@ cases:
         assert_eq!(i.not_run, [named(1)]);
 
         // Stopped before it began: nothing runs, everything is listed.
-        let r = run(&loaded, &opts, &mut EmbeddedFactory::default());
+        let r = run(
+            &loaded,
+            &opts,
+            &mut EmbeddedFactory::new(crate::buses::BUSES),
+        );
         assert!(r.cases.is_empty());
         assert_eq!(r.meta.interrupted.expect("interrupted").not_run.len(), 2);
     }
@@ -1696,7 +1709,7 @@ cases:
             let late = self.late > 0;
             self.late = self.late.saturating_sub(1);
             Ok(Box::new(Late {
-                inner: EmbeddedFactory::default().open(profile, retries)?,
+                inner: EmbeddedFactory::new(crate::buses::BUSES).open(profile, retries)?,
                 late,
                 host_late: self.host_late,
             }))
@@ -1808,7 +1821,11 @@ cases:
                 shuffle,
                 ..sk550p_options()
             };
-            let r = run(&loaded, &opts, &mut EmbeddedFactory::default());
+            let r = run(
+                &loaded,
+                &opts,
+                &mut EmbeddedFactory::new(crate::buses::BUSES),
+            );
             assert_eq!(r.meta.shuffle, shuffle);
             r.cases.into_iter().map(|c| c.id).collect::<Vec<_>>()
         };
@@ -1835,7 +1852,11 @@ cases:
             filter: Some("a".into()),
             ..sk550p_options()
         };
-        let whole = run(&loaded, &opts, &mut EmbeddedFactory::default());
+        let whole = run(
+            &loaded,
+            &opts,
+            &mut EmbeddedFactory::new(crate::buses::BUSES),
+        );
         let names = |r: &RunResult| -> Vec<(usize, String, String)> {
             r.cases
                 .iter()
@@ -1849,7 +1870,12 @@ cases:
         );
         assert_eq!(whole.meta.shard, None);
         let shard: Shard = "2/3".parse().unwrap();
-        let part = run_shard(&loaded, &opts, Some(shard), &mut EmbeddedFactory::default());
+        let part = run_shard(
+            &loaded,
+            &opts,
+            Some(shard),
+            &mut EmbeddedFactory::new(crate::buses::BUSES),
+        );
         assert_eq!(names(&part), [names(&whole)[1].clone()]);
         assert_eq!(part.cases[0].verdict, whole.cases[1].verdict);
         assert_eq!(part.meta.shard, Some(Shard { of: 4, ..shard }));

@@ -8,10 +8,10 @@
 //! [`channel::Channel`] holding the parameter-channel logic above it.
 
 pub(crate) mod channel;
-pub(crate) mod embedded;
 pub(crate) mod ledger;
 pub(crate) mod objects;
 pub(crate) mod settle;
+pub(crate) mod simulator;
 
 use serde_json::Value;
 use std::time::Duration;

@@ -20,13 +20,14 @@ use serde_json::{json, Value};
 
 use super::link::CanLink;
 use super::process::{nmt, PdoCycle, PdoError, Pdos};
-use super::sdo::{describe, frame_hex, Client, SdoError};
+use super::sdo::{describe, Client, SdoError};
 use super::step::CanStep;
-use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::ledger::{Account, Ledger, Problem};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
+use crate::binding::simulator::{observe_device, OBSERVABLE};
 use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
+use crate::hex::can_frame;
 use crate::hex::hex;
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
@@ -417,7 +418,7 @@ impl<L: CanLink> CanBinding<L> {
             .iter()
             .filter(|f| f.id() > 0x080 && f.id() & 0x7F == u16::from(node))
             .map(|f| {
-                let hex = frame_hex(f);
+                let hex = can_frame(f);
                 let data = hex.split_once(' ').map_or("", |(_, d)| d);
                 format!("{:03X}+N {data}", f.id() - u16::from(node))
                     .trim_end()
@@ -425,9 +426,9 @@ impl<L: CanLink> CanBinding<L> {
             })
             .collect();
         self.client.record(Exchange {
-            sent_hex: sent.as_ref().map(frame_hex).unwrap_or_default(),
+            sent_hex: sent.as_ref().map(can_frame).unwrap_or_default(),
             sent: sent.as_ref().map_or_else(|| "(listening)".into(), describe),
-            received_hex: joined(frame_hex),
+            received_hex: joined(can_frame),
             received: if frames.is_empty() {
                 "(nothing received)".into()
             } else {
@@ -437,7 +438,7 @@ impl<L: CanLink> CanBinding<L> {
         Ok(json!({
             "answered": !frames.is_empty(),
             "count": frames.len(),
-            "frames": joined(frame_hex),
+            "frames": joined(can_frame),
             "from_node": from_node.join("; "),
             "abort": abort,
         }))

@@ -34,7 +34,6 @@ use crate::pcap::SharedTap;
 use crate::profile::Profile;
 use crate::suite::BusStep;
 use binding::CanBinding;
-pub(crate) use sdo::frame_hex;
 pub(crate) use serve::relay_system_bus;
 pub(crate) use tap::{SystemBusTap, TapFactory};
 
@@ -75,7 +74,7 @@ fn parse_step(v: &Value) -> Result<Box<dyn BusStep>, String> {
 
 /// The simulated segment of the profile's product, behind the SDO client.
 fn embedded(profile: &Profile, context: &Embedded) -> Result<Box<dyn Binding>, OpenError> {
-    let config = crate::binding::embedded::device_config(profile)?;
+    let config = crate::binding::simulator::device_config(profile)?;
     let (product, inverters) = (config.product, config.inverters);
     let segment = sim::can::Segment::new(config).map_err(|e| OpenError::Profile(e.to_string()))?;
     let link = link::Embedded::new(segment);

@@ -26,8 +26,9 @@ use proto::nord::can::{
 use proto::nord::{Inverter, Product};
 
 use super::link::{CanLink, CanLinkError};
-use super::sdo::{describe, frame_hex, Client};
+use super::sdo::{describe, Client};
 use crate::binding::settle::{Clocked, Cycling};
+use crate::hex::can_frame;
 use crate::outcome::Exchange;
 
 /// The process data of one segment: each inverter's node, its words out and in.
@@ -232,9 +233,9 @@ impl Pdos {
                 frames.iter().map(each).collect::<Vec<_>>().join("; ")
             };
             client.record(Exchange {
-                sent_hex: joined(&sent, frame_hex),
+                sent_hex: joined(&sent, can_frame),
                 sent: format!("process-data cycle: {}", joined(&sent, describe)),
-                received_hex: joined(&received, frame_hex),
+                received_hex: joined(&received, can_frame),
                 received: if received.is_empty() {
                     "(nothing received)".into()
                 } else {

@@ -9,7 +9,7 @@ use proto::canopen::{
 };
 
 use super::link::{CanLink, CanLinkError};
-use crate::hex::hex;
+use crate::hex::can_frame;
 use crate::outcome::Exchange;
 
 /// Why a transfer did not complete.
@@ -47,15 +47,6 @@ pub(crate) struct Client<L> {
     /// How long a node may take to answer one request.
     pub(crate) limit: Duration,
     exchanges: Vec<Exchange>,
-}
-
-/// A frame as a transcript shows it: the COB-ID, then the data bytes.
-pub(crate) fn frame_hex(f: &CanFrame) -> String {
-    if f.data().is_empty() {
-        format!("{:03X}", f.id())
-    } else {
-        format!("{:03X} {}", f.id(), hex(f.data()))
-    }
 }
 
 /// A frame decoded as CANopen, for the transcript.
@@ -108,9 +99,9 @@ impl<L: CanLink> Client<L> {
             }
         };
         self.exchanges.push(Exchange {
-            sent_hex: frame_hex(&frame),
+            sent_hex: can_frame(&frame),
             sent: describe(&frame),
-            received_hex: answer.as_ref().map(frame_hex).unwrap_or_default(),
+            received_hex: answer.as_ref().map(can_frame).unwrap_or_default(),
             received: answer
                 .as_ref()
                 .map_or_else(|| "(nothing received)".into(), describe),

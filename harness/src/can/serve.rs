@@ -71,7 +71,7 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         Ok(a) => a,
         Err(code) => return Ok(code),
     };
-    let product = crate::profile::Profile::by_name(&a.profile)?.nord()?;
+    let product = crate::profile::product_named(&a.profile)?;
     let (Some(socketcand), None) = (&a.socketcand, &a.iface) else {
         let iface = a.iface.as_deref().unwrap_or_default();
         return serve_iface(

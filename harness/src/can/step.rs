@@ -20,8 +20,8 @@ use std::time::Duration;
 use proto::can::CanFrame;
 use proto::canopen::NmtCommand;
 
-use super::sdo::frame_hex;
 use crate::effect::{self, Effect};
+use crate::hex::can_frame;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 use crate::suite::BusStep;
@@ -108,9 +108,9 @@ impl BusStep for CanStep {
                 if *relative { " + node" } else { "" },
                 f.dlc()
             ),
-            Some(Send::Frame(f, false)) => format!("frame {}", frame_hex(f)),
+            Some(Send::Frame(f, false)) => format!("frame {}", can_frame(f)),
             Some(Send::Frame(f, true)) => {
-                format!("frame {} (COB-ID + the DUT's node)", frame_hex(f))
+                format!("frame {} (COB-ID + the DUT's node)", can_frame(f))
             }
             Some(Send::Nmt(c, Some(node))) => format!("NMT {c:?} to node {node}"),
             Some(Send::Nmt(c, None)) => format!("NMT {c:?} to the DUT's node"),

@@ -141,7 +141,7 @@ impl Binding for TapBinding {
     fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
         match action {
             Action::Observe { what, .. } if what == "system-bus" => {
-                Ok(crate::binding::embedded::system_bus_observation(&self.tap.take()).into())
+                Ok(crate::binding::simulator::system_bus_observation(&self.tap.take()).into())
             }
             _ => self.inner.perform(action),
         }

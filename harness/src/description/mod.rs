@@ -183,7 +183,7 @@ mod tests {
     fn our_own_descriptions_are_told_apart_and_read() {
         // `--description` is for `--dut` runs over the buses it plans; the system bus's
         // CiA 306 EDS is written for CANopen masters (python-canopen imports it), not read.
-        for bus in crate::bus::BUSES.iter().filter(|b| b.name != "can") {
+        for bus in crate::buses::BUSES.iter().filter(|b| b.name != "can") {
             for d in bus.descriptions {
                 for p in (bus.profiles)() {
                     let n = p.product.map_or(1, |x| x.max_inverters());

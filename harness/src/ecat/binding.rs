@@ -28,10 +28,10 @@ use super::master::{
     ProtocolError, Refusal, Segment,
 };
 use super::step::{state_name, EcatStep};
-use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::ledger::{self, Account, Ledger, Problem};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
+use crate::binding::simulator::{observe_device, OBSERVABLE};
 use crate::binding::{process_run, process_time, Binding, CleanupError, Observation, StepError};
 use crate::hex::hex;
 use crate::net::wait::BringUpError;
@@ -900,7 +900,7 @@ impl<S: DutSegment> DutSegment for super::master::Faulty<S> {
 mod tests {
     use super::super::master::{al_limit, Fault, Faulty};
     use super::*;
-    use crate::binding::embedded::EmbeddedFactory;
+    use crate::embedded::EmbeddedFactory;
     use crate::outcome::Verdict;
     use crate::profile::Profile;
     use crate::runner::{run, RunOptions};
@@ -912,7 +912,7 @@ mod tests {
 
     #[test]
     fn the_identity_is_object_1018h_checked_against_the_sii() {
-        let id = crate::binding::embedded::identity_over(Product::Sk550p, "ecat");
+        let id = crate::embedded::identity_over(Product::Sk550p, "ecat");
         assert_eq!(id.source, "object 1018h (the SII header agrees)");
         assert_eq!(id.vendor.as_deref(), Some("00000538h"));
     }
@@ -1058,7 +1058,11 @@ cases:
             profiles: vec![ecat],
             ..opts
         };
-        let r = run(&loaded, &opts, &mut EmbeddedFactory::default());
+        let r = run(
+            &loaded,
+            &opts,
+            &mut EmbeddedFactory::new(crate::buses::BUSES),
+        );
         assert_eq!(r.cases[0].verdict, Verdict::Pass, "{}", r.cases[0].message);
     }
 }

@@ -18,7 +18,7 @@ use sim::device::Device;
 use sim::ecat::Slave;
 use std::time::Duration;
 
-use crate::binding::embedded::device_config;
+use crate::binding::simulator::device_config;
 use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};

@@ -23,7 +23,7 @@ use proto::nord::Product;
 use sim::device::Device;
 use std::rc::Rc;
 
-use crate::binding::embedded::device_config;
+use crate::binding::simulator::device_config;
 use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
@@ -131,7 +131,7 @@ mod identity_tests {
 
     #[test]
     fn the_identity_comes_from_the_bus_service() {
-        let id = crate::binding::embedded::identity_over(Product::Tu3Eip, "enip");
+        let id = crate::embedded::identity_over(Product::Tu3Eip, "enip");
         assert_eq!(id.source, "ListIdentity");
         assert_eq!(id.product_name.as_deref(), Some("SK TU3-EIP"));
     }

@@ -31,7 +31,7 @@ use super::link::{self, EnipLink, LinkError, Network};
 use super::serials::{self, Serials};
 use super::step::EnipStep;
 use crate::binding::channel::compact;
-use crate::binding::embedded::{observe_device, OBSERVABLE};
+use crate::binding::simulator::{observe_device, OBSERVABLE};
 use crate::binding::{Binding, CleanupError, Observation, OpenError, StepError};
 use crate::hex::hex;
 use crate::outcome::{Exchange, Identity, Refusal};
@@ -100,13 +100,10 @@ impl Scanner {
         Scanner::new(
             Box::new(link::Embedded::new(adapter, EMBEDDED_ADDR, tap)),
             Some(product),
-            Capability::all()
+            Capability::GENERAL
                 .into_iter()
-                .filter(|c| match c {
-                    Capability::ParameterChannel => false,
-                    Capability::Bus(b) => *b == "enip",
-                    _ => true,
-                })
+                .filter(|c| *c != Capability::ParameterChannel)
+                .chain([Capability::Bus(super::BUS.name)])
                 .collect(),
         )
     }

@@ -252,7 +252,7 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         Ok(a) => a,
         Err(code) => return Ok(code),
     };
-    let product = crate::profile::Profile::by_name(&a.profile)?.nord()?;
+    let product = crate::profile::product_named(&a.profile)?;
     if proto::nord::eip::identity(product).is_none() {
         return Err(format!("{} has no EtherNet/IP interface", product.name()));
     }

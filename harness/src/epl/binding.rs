@@ -27,10 +27,10 @@ use serde_json::{json, Value};
 use super::mn::link::Link;
 use super::mn::{describe, Manager, MnError, Via};
 use super::step::EplStep;
-use crate::binding::embedded::{observe_device, OBSERVABLE};
 use crate::binding::ledger::{Account, Ledger, Problem};
 use crate::binding::objects::{self, Object, Unit};
 use crate::binding::settle::{self, Cycling, Drives};
+use crate::binding::simulator::{observe_device, OBSERVABLE};
 use crate::binding::{
     process_run, process_time, Binding, CleanupError, Observation, OpenError, StepError,
 };
@@ -850,7 +850,7 @@ mod tests {
 
     #[test]
     fn the_identity_is_the_ident_response() {
-        let id = crate::binding::embedded::identity_over(Product::Tu3Pol, "epl");
+        let id = crate::embedded::identity_over(Product::Tu3Pol, "epl");
         assert!(id.source.starts_with("IdentResponse of node 1"), "{id:?}");
         assert_eq!(id.product_code.as_deref(), Some("00002203h"));
     }

@@ -23,7 +23,7 @@ use proto::nord::{Product, Protocol};
 use sim::device::Device;
 use sim::epl::{Node, NodeConfig};
 
-use crate::binding::embedded::device_config;
+use crate::binding::simulator::device_config;
 use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};

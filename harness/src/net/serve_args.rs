@@ -37,7 +37,7 @@ pub(crate) fn device_config(
     protocol: Protocol,
     bus_name: &str,
 ) -> Result<DeviceConfig, String> {
-    let product = crate::profile::Profile::by_name(profile)?.nord()?;
+    let product = crate::profile::product_named(profile)?;
     if !product.protocols().contains(&protocol) {
         let with: Vec<&str> = Product::ALL
             .into_iter()

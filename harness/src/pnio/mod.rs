@@ -25,7 +25,7 @@ use proto::nord::{Product, Protocol};
 use sim::device::Device;
 use sim::pnio::{IoConfig, IoDevice};
 
-use crate::binding::embedded::device_config;
+use crate::binding::simulator::device_config;
 use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
@@ -271,7 +271,7 @@ mod identity_tests {
 
     #[test]
     fn the_identity_comes_from_the_bus_service() {
-        let id = crate::binding::embedded::identity_over(Product::Tu3Pnt, "pnio");
+        let id = crate::embedded::identity_over(Product::Tu3Pnt, "pnio");
         assert_eq!(
             id.source,
             "DCP Identify of station \"nord-device\" and I&M0"

@@ -21,6 +21,7 @@ use std::collections::BTreeMap;
 
 use super::redact::redact;
 use super::transcript;
+use crate::bus::Bus;
 use crate::outcome::{CaseResult, RunMeta, RunResult, Verdict};
 
 /// Unchanged lines shown either side of a change.
@@ -161,8 +162,8 @@ fn place(lines: &[&str], at: usize) -> String {
 }
 
 /// Compares two transcripts (each after [`redact`]); `None` when they are equal.
-pub(crate) fn compare_transcripts(old: &str, new: &str) -> Option<TranscriptDiff> {
-    let (old, new) = (redact(old), redact(new));
+pub(crate) fn compare_transcripts(buses: &[&Bus], old: &str, new: &str) -> Option<TranscriptDiff> {
+    let (old, new) = (redact(buses, old), redact(buses, new));
     if old == new {
         return None;
     }
@@ -449,8 +450,10 @@ fn lone(c: &CaseResult) -> LoneCase {
     }
 }
 
-/// Compares two runs case by case (profile and id); `old_source`/`new_source` name them.
+/// Compares two runs case by case (profile and id); `old_source`/`new_source` name them, and
+/// `buses` know what in their transcripts varies.
 pub(crate) fn compare_runs(
+    buses: &[&Bus],
     old_source: &str,
     old: &RunResult,
     new_source: &str,
@@ -472,7 +475,7 @@ pub(crate) fn compare_runs(
             diff.added.push(lone(n));
             continue;
         };
-        let transcript = compare_transcripts(&transcript::render(o), &transcript::render(n));
+        let transcript = compare_transcripts(buses, &transcript::render(o), &transcript::render(n));
         if o.verdict == n.verdict && transcript.is_none() {
             diff.unchanged += 1;
             continue;
@@ -521,8 +524,11 @@ mod tests {
 
     #[test]
     fn equal_transcripts_have_no_difference() {
-        assert_eq!(compare_transcripts("a\nb\n", "a\nb\n"), None);
-        assert_eq!(compare_transcripts("", ""), None);
+        assert_eq!(
+            compare_transcripts(crate::buses::BUSES, "a\nb\n", "a\nb\n"),
+            None
+        );
+        assert_eq!(compare_transcripts(crate::buses::BUSES, "", ""), None);
     }
 
     #[test]
@@ -531,7 +537,7 @@ mod tests {
         let new = old
             .replace("PWE 250", "PWE 251")
             .replace("  <- 02", "  <- 03");
-        let d = compare_transcripts(old, &new).unwrap();
+        let d = compare_transcripts(crate::buses::BUSES, old, &new).unwrap();
         assert_eq!(
             d.hunks,
             vec![Hunk {
@@ -564,7 +570,7 @@ mod tests {
             .replace("l2\n", "l2\nextra\n")
             .replace("l15\n", "L15\n")
             .replace("l20\n", "");
-        let d = compare_transcripts(&old, &new).unwrap();
+        let d = compare_transcripts(crate::buses::BUSES, &old, &new).unwrap();
         assert_eq!(d.hunks.len(), 2, "{d:#?}");
         assert_eq!(d.hunks[0].place, "header");
         assert_eq!(
@@ -593,7 +599,7 @@ mod tests {
     fn a_huge_middle_is_one_replaced_block() {
         let old: String = (0..3000).map(|i| format!("a{i}\n")).collect();
         let new: String = (0..3000).map(|i| format!("b{i}\n")).collect();
-        let d = compare_transcripts(&old, &new).unwrap();
+        let d = compare_transcripts(crate::buses::BUSES, &old, &new).unwrap();
         assert_eq!(d.hunks.len(), 1);
         assert_eq!(d.hunks[0].rows.len(), 3000);
         assert_eq!(
@@ -618,7 +624,7 @@ mod tests {
         added.id = "bu0620/new/case".into();
         new.cases.push(added);
 
-        let d = compare_runs("old", &old, "new", &new);
+        let d = compare_runs(crate::buses::BUSES, "old", &old, "new", &new);
         let names: Vec<(&str, Verdict, Verdict, bool)> = d
             .changed
             .iter()
@@ -698,7 +704,7 @@ mod tests {
         let mut added = sample_run().cases.remove(3);
         added.id = "bu0620/new/case".into();
         new.cases.push(added);
-        let d = compare_runs("old", &old, "new", &new);
+        let d = compare_runs(crate::buses::BUSES, "old", &old, "new", &new);
         assert_eq!(d.regressions().count(), 0);
         let want = [
             "tu3-eip bu0620/addressing/coe-p102: not_applicable → fail",
@@ -717,13 +723,13 @@ mod tests {
         // A pass → inconclusive is a regression under both rules, and no new fail.
         let mut new = sample_run();
         new.cases[0].verdict = Verdict::Inconclusive;
-        let d = compare_runs("old", &old, "new", &new);
+        let d = compare_runs(crate::buses::BUSES, "old", &old, "new", &new);
         assert!(d.new_failures().is_empty());
         let regression = ["sk550p bu0620/pkw-telegrams/p102-write: pass → inconclusive"];
         assert_eq!(d.gated(Gate::NewFailures), regression);
         assert_eq!(d.gated(Gate::RegressionsOnly), regression);
         // The same run twice gates nothing.
-        assert!(compare_runs("old", &old, "new", &old)
+        assert!(compare_runs(crate::buses::BUSES, "old", &old, "new", &old)
             .gated(Gate::NewFailures)
             .is_empty());
     }
@@ -734,14 +740,14 @@ mod tests {
         let mut new = sample_run();
         new.cases[0].verdict = Verdict::NotApplicable;
         new.cases[0].steps.clear();
-        let d = compare_runs("old", &old, "new", &new);
+        let d = compare_runs(crate::buses::BUSES, "old", &old, "new", &new);
         assert_eq!(d.regressions().count(), 0);
         assert!(d.changed[0].lost_coverage());
         assert!(d
             .headline()
             .ends_with(", coverage lost: 1 (passing cases that no longer run)"));
         new.cases.remove(0);
-        let d = compare_runs("old", &old, "new", &new);
+        let d = compare_runs(crate::buses::BUSES, "old", &old, "new", &new);
         assert_eq!((d.regressions().count(), d.vanished.len()), (0, 1));
         assert!(
             d.headline().contains("coverage lost: 1"),

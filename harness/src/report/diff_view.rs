@@ -433,7 +433,7 @@ mod tests {
         let mut added = sample_run().cases.remove(3);
         added.id = "bu0620/new/errs".into();
         new.cases.push(added);
-        compare_runs("old/", &old, "new/", &new)
+        compare_runs(crate::buses::BUSES, "old/", &old, "new/", &new)
     }
 
     #[test]

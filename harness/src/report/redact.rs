@@ -5,16 +5,16 @@
 //!
 //! A masked byte reads `..`: `  <- 6F 00 14 00 .. .. .. .. 00 00 …`.
 
-use crate::bus;
+use crate::bus::{self, Bus};
 
-/// The transcript with its bus's variable bytes masked; the bus is the one after `@` in its
+/// The transcript with its bus's variable bytes masked (the bus one of `buses`); the bus is the one after `@` in its
 /// `profile:` line (a PPO profile has none, and nothing to mask).
-pub(crate) fn redact(text: &str) -> String {
+pub(crate) fn redact(buses: &[&Bus], text: &str) -> String {
     let variable = text
         .lines()
         .find_map(|l| l.strip_prefix("profile: "))
         .and_then(|p| p.split_once('@'))
-        .and_then(|(_, name)| bus::by_name(name))
+        .and_then(|(_, name)| bus::by_name(buses, name))
         .map(|b| b.variable);
     let Some(variable) = variable else {
         return text.to_string();
@@ -83,8 +83,11 @@ mod tests {
     fn two_sessions_with_other_handles_compare_equal() {
         let other = ENIP.replace("65 00 04 00 00 10 00 00", "65 00 04 00 7A 3C 01 9F");
         assert_ne!(other, ENIP);
-        assert_eq!(redact(&other), redact(ENIP));
-        let r = redact(ENIP);
+        assert_eq!(
+            redact(crate::buses::BUSES, &other),
+            redact(crate::buses::BUSES, ENIP)
+        );
+        let r = redact(crate::buses::BUSES, ENIP);
         assert!(r.contains("  -> 65 00 04 00 .. .. .. .. 00 00"), "{r}");
         assert!(r.contains("  <- 02 00 02 80 08 00 .. .. .. .. .. .. .. .. B1 00 38 00 .. .. 01 00\n     I/O T→O count .. (50 bytes)\n"), "{r}");
         assert!(r.ends_with("  <- (nothing received)\n"), "{r}");
@@ -92,21 +95,24 @@ mod tests {
 
     #[test]
     fn a_stored_snapshot_masked_once_stays_as_it_is() {
-        let once = redact(ENIP);
-        assert_eq!(redact(&once), once);
+        let once = redact(crate::buses::BUSES, ENIP);
+        assert_eq!(redact(crate::buses::BUSES, &once), once);
     }
 
     #[test]
     fn what_the_device_answers_stays_compared() {
         let changed = ENIP.replace("B1 00 38 00 19 00 01 00", "B1 00 38 00 19 00 02 00");
-        assert_ne!(redact(&changed), redact(ENIP));
+        assert_ne!(
+            redact(crate::buses::BUSES, &changed),
+            redact(crate::buses::BUSES, ENIP)
+        );
     }
 
     #[test]
     fn ppo_transcripts_and_buses_without_variable_bytes_are_kept() {
         let ppo = "profile: sk550p\n  -> 65 02 24 4E 01 00 00 00 00 FA\n     AK 2\n";
-        assert_eq!(redact(ppo), ppo);
+        assert_eq!(redact(crate::buses::BUSES, ppo), ppo);
         let ecat = ENIP.replace("tu3-eip@enip", "sk550p@ecat");
-        assert_eq!(redact(&ecat), ecat);
+        assert_eq!(redact(crate::buses::BUSES, &ecat), ecat);
     }
 }

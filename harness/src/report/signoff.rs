@@ -191,10 +191,14 @@ pub(super) fn na_reason(message: &str) -> NaReason {
         .strip_prefix("needs `")
         .and_then(|rest| rest.split('`').next())
     {
-        if crate::bus::by_name(cap).is_some() {
-            NaReason::Bus
-        } else {
+        // What a case needs is a general capability or a bus's steps.
+        if crate::profile::Capability::GENERAL
+            .iter()
+            .any(|c| c.name() == cap)
+        {
             NaReason::Capability
+        } else {
+            NaReason::Bus
         }
     } else {
         NaReason::Other

@@ -15,6 +15,7 @@ use super::diff::compare_transcripts;
 use super::redact::redact;
 use super::transcript;
 use super::write::{case_file, io, write_file, ReportError};
+use crate::bus::Bus;
 use crate::outcome::{RunResult, Verdict};
 
 /// What to do with snapshots.
@@ -59,6 +60,7 @@ impl fmt::Display for SnapshotReport {
 }
 
 fn compare(
+    buses: &[&Bus],
     run: &mut RunResult,
     dir: &Path,
     report: &mut SnapshotReport,
@@ -74,7 +76,7 @@ fn compare(
             }
             Err(e) => return Err(io(&path)(e)),
         };
-        let Some(diff) = compare_transcripts(&stored, &transcript::render(c)) else {
+        let Some(diff) = compare_transcripts(buses, &stored, &transcript::render(c)) else {
             report.same += 1;
             continue;
         };
@@ -94,6 +96,7 @@ fn compare(
 /// Applies `mode` to the run: stores every transcript (accept), or compares every transcript with
 /// its snapshot and turns each passing case whose transcript changed into a failure (compare).
 pub(crate) fn apply_snapshots(
+    buses: &[&Bus],
     run: &mut RunResult,
     mode: &SnapshotMode,
 ) -> Result<SnapshotReport, ReportError> {
@@ -102,12 +105,12 @@ pub(crate) fn apply_snapshots(
         SnapshotMode::Off => {}
         SnapshotMode::Accept(dir) => {
             for c in &run.cases {
-                let text = redact(&transcript::render(c));
+                let text = redact(buses, &transcript::render(c));
                 write_file(&dir.join(case_file(c, "snap")), text.as_bytes())?;
                 report.stored += 1;
             }
         }
-        SnapshotMode::Compare(dir) => compare(run, dir, &mut report)?,
+        SnapshotMode::Compare(dir) => compare(buses, run, dir, &mut report)?,
     }
     Ok(report)
 }
@@ -121,12 +124,22 @@ mod tests {
     fn accept_then_compare_then_detect_a_change() {
         let dir = temp_dir("snap");
         let mut run = sample_run();
-        let r = apply_snapshots(&mut run, &SnapshotMode::Accept(dir.clone())).unwrap();
+        let r = apply_snapshots(
+            crate::buses::BUSES,
+            &mut run,
+            &SnapshotMode::Accept(dir.clone()),
+        )
+        .unwrap();
         assert_eq!(r.stored, run.cases.len());
         assert!(dir
             .join("sk550p/bu0620__pkw-telegrams__p102-write.snap")
             .is_file());
-        let r = apply_snapshots(&mut run, &SnapshotMode::Compare(dir.clone())).unwrap();
+        let r = apply_snapshots(
+            crate::buses::BUSES,
+            &mut run,
+            &SnapshotMode::Compare(dir.clone()),
+        )
+        .unwrap();
         assert_eq!(
             (r.same, r.changed.len(), r.new.len()),
             (run.cases.len(), 0, 0)
@@ -136,7 +149,12 @@ mod tests {
         for c in &mut run.cases[..2] {
             c.steps[0].exchanges[0].received_hex = "65 02 14 4E 01 00 00 00 00 FB".into();
         }
-        let r = apply_snapshots(&mut run, &SnapshotMode::Compare(dir.clone())).unwrap();
+        let r = apply_snapshots(
+            crate::buses::BUSES,
+            &mut run,
+            &SnapshotMode::Compare(dir.clone()),
+        )
+        .unwrap();
         assert_eq!(
             r.changed,
             vec![
@@ -163,7 +181,12 @@ mod tests {
     fn a_missing_snapshot_is_new_not_a_failure() {
         let dir = temp_dir("snap-new");
         let mut run = sample_run();
-        let r = apply_snapshots(&mut run, &SnapshotMode::Compare(dir.clone())).unwrap();
+        let r = apply_snapshots(
+            crate::buses::BUSES,
+            &mut run,
+            &SnapshotMode::Compare(dir.clone()),
+        )
+        .unwrap();
         assert_eq!(r.new.len(), run.cases.len());
         assert_eq!(run, sample_run(), "verdicts untouched");
     }
@@ -171,7 +194,7 @@ mod tests {
     #[test]
     fn off_does_nothing() {
         let mut run = sample_run();
-        let r = apply_snapshots(&mut run, &SnapshotMode::Off).unwrap();
+        let r = apply_snapshots(crate::buses::BUSES, &mut run, &SnapshotMode::Off).unwrap();
         assert_eq!((r, run), (SnapshotReport::default(), sample_run()));
     }
 }

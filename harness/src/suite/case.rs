@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use super::fields::Fields;
 use super::schema::{CaseDoc, StepDoc};
+use super::Vocabulary;
 use crate::model::{self, ComputeFn};
 use crate::notation::{int_of, Matcher};
 use crate::outcome::{CaseKind, Erratum, ManualRef};
@@ -277,7 +278,7 @@ fn hex8(text: &str) -> Result<[u8; 8], String> {
 /// The manual-level actions a step may have (besides a bus's own step).
 const ACTIONS: &str = "compute, read, write, pkw, process, wait, inject, observe";
 
-fn action(step: StepDoc) -> Result<Action, String> {
+fn action(vocabulary: &Vocabulary, step: StepDoc) -> Result<Action, String> {
     let mut found: Vec<&str> = Vec::new();
     for (name, present) in [
         ("compute", step.compute.is_some()),
@@ -294,10 +295,10 @@ fn action(step: StepDoc) -> Result<Action, String> {
         }
     }
     for key in step.bus.keys() {
-        if crate::bus::by_name(key).is_none() {
+        if vocabulary.step_parser(key).is_none() {
             return Err(format!(
                 "a step has no key `{key}` (actions: {ACTIONS}, or a bus: {})",
-                crate::bus::names()
+                vocabulary.bus_names()
             ));
         }
         found.push(key);
@@ -305,7 +306,7 @@ fn action(step: StepDoc) -> Result<Action, String> {
     if found.len() != 1 {
         return Err(format!(
             "a step needs exactly one action ({ACTIONS}, or a bus: {}); found {}",
-            crate::bus::names(),
+            vocabulary.bus_names(),
             if found.is_empty() {
                 "none".to_string()
             } else {
@@ -404,8 +405,8 @@ fn action(step: StepDoc) -> Result<Action, String> {
         });
     }
     if let Some((key, value)) = step.bus.into_iter().next() {
-        let bus = crate::bus::by_name(&key).expect("checked above");
-        return Ok(Action::Bus((bus.parse_step)(&value)?));
+        let parse = vocabulary.step_parser(&key).expect("checked above");
+        return Ok(Action::Bus(parse(&value)?));
     }
     let m = step.observe.unwrap_or_default();
     let f = Fields::new("observe", &m, &["what", "inverter"])?;
@@ -416,7 +417,7 @@ fn action(step: StepDoc) -> Result<Action, String> {
 }
 
 /// Converts one step; the error text is placed by the loader.
-pub(super) fn step(doc: StepDoc) -> Result<Step, String> {
+pub(super) fn step(vocabulary: &Vocabulary, doc: StepDoc) -> Result<Step, String> {
     let expect = doc
         .expect
         .as_ref()
@@ -425,7 +426,7 @@ pub(super) fn step(doc: StepDoc) -> Result<Step, String> {
         .map_err(|e| format!("expect: {e}"))?;
     let setup = doc.setup;
     Ok(Step {
-        action: action(doc)?,
+        action: action(vocabulary, doc)?,
         expect,
         setup,
     })
@@ -433,6 +434,7 @@ pub(super) fn step(doc: StepDoc) -> Result<Step, String> {
 
 /// Converts the case-level fields (not the steps).
 pub(super) fn case_head(
+    vocabulary: &Vocabulary,
     id: String,
     doc: &CaseDoc,
     file_doc: &str,
@@ -473,7 +475,7 @@ pub(super) fn case_head(
             names
                 .iter()
                 .map(|n| {
-                    Product::from_name(n).ok_or_else(|| match crate::profile::Profile::by_name(n) {
+                    Product::from_name(n).ok_or_else(|| match vocabulary.catalog.by_name(n) {
                         Ok(p) => format!(
                             "`profiles` names products; `{n}` is a profile: give `{}` and \
                              `requires: [{}]`",
@@ -490,8 +492,9 @@ pub(super) fn case_head(
         .requires
         .iter()
         .map(|r| {
-            Capability::from_name(r).ok_or_else(|| {
-                let known: Vec<&str> = Capability::all().iter().map(|c| c.name()).collect();
+            vocabulary.catalog.capability(r).ok_or_else(|| {
+                let caps = vocabulary.catalog.capabilities();
+                let known: Vec<&str> = caps.iter().map(|c| c.name()).collect();
                 format!("unknown capability `{r}` (one of {})", known.join(", "))
             })
         })

@@ -379,7 +379,7 @@ cases:
         // The README's firmware comparison: "next" changes P856's factory value, so a device
         // case must assert it (a model case alone let the change through).
         let suites = Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites");
-        let loaded = crate::suite::load_dir(&suites).unwrap();
+        let loaded = crate::suite::load_dir(&suites, &crate::buses::vocabulary()).unwrap();
         for inv in load(&suites).unwrap() {
             for s in inv
                 .statements
@@ -453,7 +453,7 @@ cases:
     #[test]
     fn the_checked_in_inventories_are_honest() {
         let suites = Path::new(env!("CARGO_MANIFEST_DIR")).join("../suites");
-        let loaded = crate::suite::load_dir(&suites).unwrap();
+        let loaded = crate::suite::load_dir(&suites, &crate::buses::vocabulary()).unwrap();
         let inventories = load(&suites).unwrap();
         assert!(inventories.len() >= 5, "{}", inventories.len());
         let problems = check(&inventories, &loaded, &floors(&suites).unwrap());

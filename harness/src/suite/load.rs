@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 use super::case::{case_head, step, Case};
 use super::schema::FileDoc;
+use super::Vocabulary;
 use crate::outcome::{Erratum, ErratumCheck};
 
 /// What a suites folder held.
@@ -75,7 +76,7 @@ fn run_order(a: &PathBuf, b: &PathBuf) -> std::cmp::Ordering {
 }
 
 /// Loads every suite file below `dir`. Only an unreadable folder is an `Err`.
-pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
+pub(crate) fn load_dir(dir: &Path, vocabulary: &Vocabulary) -> Result<Loaded, LoadError> {
     let mut files = Vec::new();
     yaml_files(dir, &mut files).map_err(|e| LoadError {
         file: dir.to_path_buf(),
@@ -111,7 +112,7 @@ pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, LoadError> {
         }
     }
     for ((file, prefix, _), doc) in texts.iter().zip(parse_all(&texts)) {
-        load_doc(file, prefix, doc, &mut ids, &mut loaded);
+        load_doc(vocabulary, file, prefix, doc, &mut ids, &mut loaded);
     }
     loaded.digest = digest
         .finalize()
@@ -158,17 +159,19 @@ fn parse(text: &str) -> Parsed {
 /// Loads one file's text. Cases with errors are dropped and reported; the others load.
 #[cfg(test)]
 pub(crate) fn load_text(
+    vocabulary: &Vocabulary,
     file: &Path,
     prefix: &str,
     text: &str,
     ids: &mut HashSet<String>,
     loaded: &mut Loaded,
 ) {
-    load_doc(file, prefix, parse(text), ids, loaded);
+    load_doc(vocabulary, file, prefix, parse(text), ids, loaded);
 }
 
 /// Loads one file's parsed document.
 fn load_doc(
+    vocabulary: &Vocabulary,
     file: &Path,
     prefix: &str,
     doc: Parsed,
@@ -202,7 +205,7 @@ fn load_doc(
                 .push(err(line, format!("duplicate case id `{}`", case_doc.id)));
             continue;
         }
-        let mut case = match case_head(id, &case_doc, &doc.doc, &doc.edition) {
+        let mut case = match case_head(vocabulary, id, &case_doc, &doc.doc, &doc.edition) {
             Ok(c) => c,
             Err(m) => {
                 loaded
@@ -220,7 +223,7 @@ fn load_doc(
         let mut ok = true;
         for (i, s) in case_doc.steps.into_iter().enumerate() {
             let step_line = Some(s.defined.line());
-            match step(s.value) {
+            match step(vocabulary, s.value) {
                 Ok(st) => case.steps.push(st),
                 Err(m) => {
                     loaded.errors.push(err(
@@ -274,6 +277,7 @@ mod tests {
     fn load(text: &str) -> Loaded {
         let mut loaded = Loaded::default();
         load_text(
+            &crate::buses::vocabulary(),
             Path::new("t.yaml"),
             "x/t",
             text,

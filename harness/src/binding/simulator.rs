@@ -1,5 +1,6 @@
-//! The embedded DUT: the simulator in-process, behind an in-memory link that carries the same
-//! bytes a bus would, on a virtual clock (deterministic, instant).
+//! The embedded simulator as every binding opens it: the simulated device of a profile (as
+//! the firmware release [`FIRMWARE_VAR`] names), the in-memory PPO link that carries the bytes
+//! a bus would on a virtual clock, and what every embedded DUT can show (`observe:`).
 
 use serde_json::{json, Value};
 use sim::clock::{Clock, VirtualClock};
@@ -7,9 +8,7 @@ use sim::device::{Device, DeviceConfig, Firmware};
 use sim::link::{mem_pair, MemEnd};
 use std::time::Duration;
 
-use super::channel::Channel;
-use super::{Binding, Dut, DutError, OpenError};
-use crate::binding::DutFactory;
+use super::{Dut, DutError, OpenError};
 use crate::profile::{Capability, Profile};
 use proto::nord::Inverter;
 
@@ -19,76 +18,6 @@ const CYCLE: Duration = Duration::from_millis(4);
 /// What the embedded PPO link offers: everything but a bus's own steps (a fresh simulator per
 /// case is in its power-on and factory state, and keeps its link whatever its address).
 const PPO_CAPABILITIES: [Capability; 9] = Capability::GENERAL;
-
-/// Opens a fresh simulator per case, behind the profile's binding: the PPO link, or the bus's
-/// own binding; a bus's frames go to the tap when there is one.
-#[derive(Default)]
-pub(crate) struct EmbeddedFactory {
-    /// What the buses' bindings may use.
-    pub(crate) context: crate::bus::Embedded,
-}
-
-impl DutFactory for EmbeddedFactory {
-    fn describe(&self) -> String {
-        describe()
-    }
-
-    fn fork(&self) -> Option<Box<dyn DutFactory + Send>> {
-        // A capture is one time line of the run's packets: one thread writes it.
-        self.context
-            .tap
-            .is_none()
-            .then(|| Box::new(Untapped) as Box<dyn DutFactory + Send>)
-    }
-
-    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
-        open(profile, retries, &self.context)
-    }
-}
-
-/// An [`EmbeddedFactory`] without a capture, for a thread of its own.
-struct Untapped;
-
-impl DutFactory for Untapped {
-    fn describe(&self) -> String {
-        describe()
-    }
-
-    fn fork(&self) -> Option<Box<dyn DutFactory + Send>> {
-        Some(Box::new(Untapped))
-    }
-
-    fn open(&mut self, profile: &Profile, retries: u32) -> Result<Box<dyn Binding>, OpenError> {
-        open(profile, retries, &crate::bus::Embedded::default())
-    }
-}
-
-/// The embedded simulator, as reports name it.
-fn describe() -> String {
-    match sim_firmware() {
-        Ok(Firmware::Next) => "embedded simulator (firmware next)".into(),
-        _ => "embedded simulator".into(),
-    }
-}
-
-/// A fresh simulator for `profile`, behind its binding.
-fn open(
-    profile: &Profile,
-    retries: u32,
-    context: &crate::bus::Embedded,
-) -> Result<Box<dyn Binding>, OpenError> {
-    match profile.bus {
-        None => {
-            let product = profile.nord().map_err(OpenError::Profile)?;
-            Ok(Box::new(Channel::new(ppo_dut(profile)?, product, retries)))
-        }
-        Some(name) => {
-            let bus = crate::bus::by_name(name)
-                .ok_or_else(|| OpenError::Profile(format!("no bus `{name}`")))?;
-            (bus.embedded)(profile, context)
-        }
-    }
-}
 
 /// The environment variable that picks the embedded simulator's firmware release: unset or
 /// `release`, or `next` ([`Firmware::Next`]: P856's factory value and the modules' P171 revision changed), to compare the runs of
@@ -239,12 +168,12 @@ pub(crate) fn system_bus_observation(frames: &[(Duration, proto::can::CanFrame)]
     let shown: Vec<String> = frames
         .iter()
         .take(SYSTEM_BUS_FRAMES_SHOWN)
-        .map(|(_, f)| crate::can::frame_hex(f))
+        .map(|(_, f)| crate::hex::can_frame(f))
         .collect();
     let sdo: Vec<String> = frames
         .iter()
         .filter(|(_, f)| (0x581..=0x67F).contains(&f.id()))
-        .map(|(_, f)| crate::can::frame_hex(f))
+        .map(|(_, f)| crate::hex::can_frame(f))
         .collect();
     json!({
         "frames": shown.join("; "),
@@ -252,22 +181,6 @@ pub(crate) fn system_bus_observation(frames: &[(Duration, proto::can::CanFrame)]
         "count": frames.len(),
         "sync_gap_us": gap.map(|g| g.as_micros() as u64),
     })
-}
-
-/// The identity the embedded simulator of `product` reports over `bus`, as a connection check
-/// reads it (for each bus's own identity test).
-#[cfg(test)]
-pub(crate) fn identity_over(
-    product: proto::nord::Product,
-    bus: &'static str,
-) -> crate::outcome::Identity {
-    let profile = Profile::on_bus(product, bus);
-    let mut dut = EmbeddedFactory::default()
-        .open(&profile, 25)
-        .expect("the embedded simulator opens");
-    dut.identity()
-        .expect("the bus has an identity service")
-        .expect("the simulator answers it")
 }
 
 #[cfg(test)]
@@ -289,101 +202,5 @@ mod tests {
     #[test]
     fn the_ppo_link_offers_every_general_capability() {
         assert_eq!(PPO_CAPABILITIES, Capability::GENERAL);
-    }
-
-    /// One case written twice: the second runs after the first, on a simulator of its own.
-    /// With `process`, process data before and after the parameter access (the system bus
-    /// has no process data yet: its profiles run the access alone).
-    fn twice(process: bool) -> String {
-        let case = |id: &str| {
-            let (before, after) = if process {
-                (
-                    "\n      - process: { control: \"047Eh\", for: 20ms }",
-                    "\n      - process: { control: \"047Fh\", setpoints: [\"2000h\"], for: 20ms }",
-                )
-            } else {
-                ("", "")
-            };
-            format!(
-                r#"
-  - id: {id}
-    title: process data, a parameter read and write, process data again
-    ref: {{ section: "6.1.3", page: 114 }}
-    steps:{before}
-      - read: {{ param: 102 }}
-      - write: {{ param: 102, value: 300 }}{after}"#
-            )
-        };
-        format!(
-            "doc: BU 0620\nedition: \"2020-03 en\"\ncases:{}{}\n",
-            case("first"),
-            case("again")
-        )
-    }
-
-    /// A case's exchanges are a function of the case alone: the identifiers the harness and
-    /// the simulated device choose (EtherNet/IP connection serial numbers and ids, PROFINET RPC
-    /// activities, session handles and keys, EtherCAT datagram indices, POWERLINK SDO sequence
-    /// numbers) start afresh in every case, so a case sends and receives the same bytes
-    /// whatever ran before it, under every profile of every bus.
-    #[test]
-    fn a_cases_exchanges_do_not_depend_on_the_cases_before_it() {
-        let (can, others): (Vec<Profile>, Vec<Profile>) = Profile::all()
-            .into_iter()
-            .partition(|p| p.bus == Some("can"));
-        assert!(!can.is_empty() && !others.is_empty());
-        for (profiles, process) in [(others, true), (can, false)] {
-            exchanges_repeat(profiles, process);
-        }
-    }
-
-    fn exchanges_repeat(profiles: Vec<Profile>, process: bool) {
-        let loaded = crate::suite::load_text_for_tests(&twice(process));
-        let opts = crate::runner::RunOptions {
-            retries: 25,
-            ..crate::runner::RunOptions::new(profiles.clone())
-        };
-        let run = crate::runner::run(&loaded, &opts, &mut EmbeddedFactory::default());
-        for profile in profiles {
-            let cases: Vec<_> = run
-                .cases
-                .iter()
-                .filter(|c| c.profile == profile.name())
-                .collect();
-            let [first, again] = cases[..] else {
-                panic!("{}: {} cases", profile.name(), cases.len());
-            };
-            for c in [first, again] {
-                assert_eq!(
-                    c.verdict,
-                    crate::outcome::Verdict::Pass,
-                    "{} {}: {}",
-                    c.profile,
-                    c.id,
-                    c.message
-                );
-            }
-            // The transcripts past their headers: each step with its exchanges.
-            let [a, b] = [first, again].map(|c| c.transcript.as_deref().unwrap_or_default());
-            let steps: Vec<&str> = a.split("\nstep ").skip(1).collect();
-            assert_eq!(steps.len(), first.steps.len(), "{}: {a}", c_name(first));
-            for (n, step) in (1..).zip(&steps) {
-                assert!(
-                    step.contains("\n  -> "),
-                    "{} step {n}: no exchange",
-                    c_name(first)
-                );
-            }
-            assert_eq!(
-                a,
-                b,
-                "{}: the second case's exchanges differ",
-                c_name(first)
-            );
-        }
-    }
-
-    fn c_name(c: &crate::outcome::CaseResult) -> String {
-        format!("{} {}", c.profile, c.id)
     }
 }
