@@ -191,16 +191,6 @@ impl Deadline {
     pub(crate) fn passed(&self) -> bool {
         self.remaining().is_zero()
     }
-
-    /// The time-out of this wait for `what`, as a step error: a failure of the device unless
-    /// the runner finds the host was late (then the attempt is discarded).
-    pub(crate) fn missed(&self, what: impl Into<String>) -> crate::binding::StepError {
-        crate::binding::StepError::Late {
-            what: what.into(),
-            limit: self.limit,
-            waited: self.waited(),
-        }
-    }
 }
 
 #[cfg(test)]

@@ -14,6 +14,10 @@ use std::process::{Command, ExitCode};
 #[path = "../../tests/common/skip.rs"]
 mod skip;
 
+/// The import graph of the crates' top-level modules, checked acyclic by its tests.
+#[cfg(test)]
+mod imports;
+
 const USAGE: &str = "\
 usage: cargo xtask test [--strict] [--no-setup] [-- ARGS...]
 

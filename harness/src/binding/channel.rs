@@ -75,6 +75,16 @@ pub(crate) enum StepError {
 }
 
 impl StepError {
+    /// The time-out of `wait` for `what`: a failure of the device unless the runner finds the
+    /// host was late (then the attempt is discarded).
+    pub(crate) fn late(wait: &crate::timing::Deadline, what: impl Into<String>) -> StepError {
+        StepError::Late {
+            what: what.into(),
+            limit: wait.limit(),
+            waited: wait.waited(),
+        }
+    }
+
     /// The verdict this error stands for.
     pub(crate) fn verdict(&self) -> Verdict {
         match self {

@@ -164,7 +164,7 @@ impl Scanner {
     /// times; the embedded adapter's silence a link error.
     fn no_reply(&self, what: &str, wait: &Deadline) -> StepError {
         match self.link.timeout() {
-            Some(_) => wait.missed(what),
+            Some(_) => StepError::late(wait, what),
             None => StepError::Link(format!("no reply to {what}")),
         }
     }
@@ -668,10 +668,13 @@ impl Scanner {
             .as_ref()
             .ok_or_else(|| StepError::Suite("no I/O connection".into()))?;
         let data = last.ok_or_else(|| match first_frame {
-            Some(d) => d.missed(format!(
-                "T→O data of I/O connection {:08X}h after {n} O→T frames",
-                io.t_o_id
-            )),
+            Some(d) => StepError::late(
+                &d,
+                format!(
+                    "T→O data of I/O connection {:08X}h after {n} O→T frames",
+                    io.t_o_id
+                ),
+            ),
             None => StepError::Silent { cycles: n },
         })?;
         let off = io.t_o.and_then(|a| a.offset(inverter)).ok_or_else(|| {
