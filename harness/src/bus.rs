@@ -11,8 +11,8 @@ use std::fmt;
 use std::net::IpAddr;
 use std::time::Duration;
 
-use crate::binding::DutFactory;
-use crate::binding::{Binding, OpenError};
+use crate::binding::{Binding, DutFactory, OpenError};
+use crate::dictionary::DescribeError;
 use crate::pcap::SharedTap;
 use crate::profile::{Catalog, Profile};
 use crate::suite::{ParseStep, Vocabulary};
@@ -85,7 +85,7 @@ pub(crate) struct Description {
     pub(crate) format: &'static str,
     /// Writes it for a product profile of the bus with `inverters` inverters, or, for a
     /// description of one node per inverter ([`Description::per_inverter`]), of that inverter.
-    pub(crate) write: fn(&Profile, u8) -> Result<String, String>,
+    pub(crate) write: fn(&Profile, u8) -> Result<String, DescribeError>,
     /// Describes one inverter (a node of the system bus), not the interface with all of them.
     pub(crate) per_inverter: bool,
 }

@@ -309,7 +309,7 @@ fn describe(a: DescribeArgs) -> Result<i32, String> {
         true => a.inverter.unwrap_or(1),
         false => a.inverters.unwrap_or(product.max_inverters()),
     };
-    let text = (description.write)(&profile, units)?;
+    let text = (description.write)(&profile, units).map_err(|e| e.to_string())?;
     // A closed pipe (`| head`) ends the output, not the program with a panic.
     let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes());
     Ok(EXIT_PASS)

@@ -30,6 +30,7 @@ use serde_json::Value;
 use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
+use crate::dictionary::DescribeError;
 use crate::pcap::SharedTap;
 use crate::profile::Profile;
 use crate::suite::BusStep;
@@ -247,8 +248,11 @@ impl DutFactory for BusFactory {
 
 /// `harness describe eds --bus can --profile P [--inverter N]`: the EDS of inverter N (FI 1 by
 /// default) of the product's system bus.
-fn describe_eds(profile: &Profile, fi: u8) -> Result<String, String> {
-    let product = profile.nord()?;
-    let fi = proto::nord::Inverter::new(i64::from(fi)).map_err(|e| e.to_string())?;
+fn describe_eds(profile: &Profile, fi: u8) -> Result<String, DescribeError> {
+    let product = profile
+        .nord()
+        .map_err(|_| DescribeError::AnyMaker(profile.name().to_string()))?;
+    let fi = proto::nord::Inverter::new(i64::from(fi))
+        .map_err(|_| DescribeError::Inverters { product, asked: fi })?;
     crate::dictionary::eds::eds(product, fi)
 }

@@ -16,7 +16,7 @@ use std::fmt::Write;
 use proto::nord::ecat::{DataType, ObjectCode};
 use proto::nord::{Inverter, Product};
 
-use super::{inverter_parameters, parameter, ObjectDoc};
+use super::{inverter_parameters, parameter, DescribeError, ObjectDoc};
 
 /// VISIBLE_STRING (CiA 301 data type 0009h), beyond [`DataType::code`]'s numbers.
 const VISIBLE_STRING: u16 = 0x0009;
@@ -24,15 +24,8 @@ const VISIBLE_STRING: u16 = 0x0009;
 const PARAMETERS: u16 = 0x2000;
 
 /// The EDS of inverter `fi` of `product` on the system bus.
-pub(crate) fn eds(product: Product, fi: Inverter) -> Result<String, String> {
-    if fi.get() > product.max_inverters() {
-        return Err(format!(
-            "{} has 1…{} inverters on its system bus, not {}",
-            product.name(),
-            product.max_inverters(),
-            fi.get()
-        ));
-    }
+pub(crate) fn eds(product: Product, fi: Inverter) -> Result<String, DescribeError> {
+    DescribeError::check_inverters(product, fi.get())?;
     let mandatory = vec![
         ObjectDoc::var(0x1000, "Device type", DataType::U32.code(), "ro").default("0x00000000"),
         ObjectDoc::var(0x1001, "Error register", DataType::U8.code(), "ro").default("0"),
@@ -79,13 +72,17 @@ pub(crate) fn eds(product: Product, fi: Inverter) -> Result<String, String> {
         .map(|d| parameter(PARAMETERS, "", d))
         .collect();
     let mut s = String::new();
-    header(&mut s, product, fi).map_err(|e| e.to_string())?;
+    let failed = |e: std::fmt::Error| DescribeError::Write {
+        format: "EDS",
+        detail: e.to_string(),
+    };
+    header(&mut s, product, fi).map_err(failed)?;
     for (section, objects) in [
         ("MandatoryObjects", &mandatory),
         ("OptionalObjects", &optional),
         ("ManufacturerObjects", &manufacturer),
     ] {
-        list(&mut s, section, objects).map_err(|e| e.to_string())?;
+        list(&mut s, section, objects).map_err(failed)?;
     }
     Ok(s)
 }
@@ -202,6 +199,10 @@ mod tests {
     #[test]
     fn an_inverter_beyond_the_products_is_refused() {
         let e = eds(Product::Tu3Pnt, fi(8)).unwrap_err();
-        assert!(e.contains("inverters on its system bus"), "{e}");
+        assert!(
+            matches!(e, DescribeError::Inverters { asked: 8, .. }),
+            "{e:?}"
+        );
+        assert_eq!(e.to_string(), "tu3-pnt has 1 inverter behind it, not 8");
     }
 }

@@ -19,6 +19,65 @@ use proto::nord::ecat::{
 use proto::nord::params::{self, Access, Owner, ParamDef};
 use proto::nord::{Family, Inverter, ParamNumber, Product};
 
+/// Why a device description (`harness describe <format>`) cannot be written, for every format.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum DescribeError {
+    /// A generic profile: any maker's device has no NORD description.
+    #[error("profile `{0}` stands for any maker's device, not a NORD product")]
+    AnyMaker(String),
+    /// The product has no interface of the bus the format describes.
+    #[error("{} has no {bus} interface ({}): there is no {format} for it", product.name(), product.manual())]
+    NoInterface {
+        /// The product.
+        product: Product,
+        /// The bus, as people write it.
+        bus: &'static str,
+        /// The format (`EDS`, `XDD`).
+        format: &'static str,
+    },
+    /// More inverters, or a higher inverter number, than the product has.
+    #[error("{} has {} behind it, not {asked}", product.name(), inverter_range(*product))]
+    Inverters {
+        /// The product.
+        product: Product,
+        /// The count or number asked for.
+        asked: u8,
+    },
+    /// The definitions the file is written from contradict each other: a bug of the harness.
+    #[error("{0} (a bug)")]
+    Inconsistent(String),
+    /// The text could not be written (it is written to memory: only on a bug).
+    #[error("cannot write the {format}: {detail}")]
+    Write {
+        /// The format.
+        format: &'static str,
+        /// What the writer said.
+        detail: String,
+    },
+}
+
+/// The inverter counts a product can have behind it, as a message says them.
+fn inverter_range(product: Product) -> String {
+    match product.max_inverters() {
+        1 => "1 inverter".into(),
+        max => format!("1…{max} inverters"),
+    }
+}
+
+impl DescribeError {
+    /// The error unless `inverters` is a count the product can have behind it.
+    pub(crate) fn check_inverters(product: Product, inverters: u8) -> Result<(), DescribeError> {
+        if (1..=product.max_inverters()).contains(&inverters) {
+            Ok(())
+        } else {
+            Err(DescribeError::Inverters {
+                product,
+                asked: inverters,
+            })
+        }
+    }
+}
+
 /// One object or sub-object as a device description writes it (a DS 311 `Object` or
 /// `SubObject`, a CiA 306 EDS section).
 #[derive(Debug, Clone, PartialEq)]

@@ -36,7 +36,7 @@ use proto::nord::{Family, Inverter, Product, Protocol};
 use quick_xml::events::{BytesDecl, BytesText, Event};
 use quick_xml::Writer;
 
-use super::{defs, inverter_parameters, parameter, ObjectDoc};
+use super::{defs, inverter_parameters, parameter, DescribeError, ObjectDoc};
 
 type W = Writer<Cursor<Vec<u8>>>;
 
@@ -57,19 +57,20 @@ const SOC_TO_PREQ_NS: u32 = 0;
 const ERROR_ENTRIES: u32 = 8;
 
 /// The XDD of `product` with `inverters` inverters behind its interface.
-pub(crate) fn xdd(product: Product, inverters: u8) -> Result<String, String> {
+pub(crate) fn xdd(product: Product, inverters: u8) -> Result<String, DescribeError> {
     if !product.protocols().contains(&Protocol::Powerlink) {
-        return Err(format!("{} has no POWERLINK interface", product.name()));
+        return Err(DescribeError::NoInterface {
+            product,
+            bus: "POWERLINK",
+            format: "XDD",
+        });
     }
-    let max = product.max_inverters();
-    if !(1..=max).contains(&inverters) {
-        return Err(format!(
-            "{} has 1…{max} inverters behind it, not {inverters}",
-            product.name()
-        ));
-    }
+    DescribeError::check_inverters(product, inverters)?;
     let objects = object_list(product, inverters)?;
-    write(product, &objects).map_err(|e| format!("cannot write the XDD XML: {e}"))
+    write(product, &objects).map_err(|e| DescribeError::Write {
+        format: "XDD",
+        detail: e.to_string(),
+    })
 }
 
 /// The DS 311 file name (BU 2200 §5.2.1; the SK 550P's assumed).
@@ -83,7 +84,7 @@ pub(crate) fn file_name(product: Product) -> &'static str {
 }
 
 /// Every object of the node, by index.
-fn object_list(product: Product, inverters: u8) -> Result<Vec<ObjectDoc>, String> {
+fn object_list(product: Product, inverters: u8) -> Result<Vec<ObjectDoc>, DescribeError> {
     let mut list: Vec<ObjectDoc> = def::object_dictionary(product)
         .iter()
         .map(from_dictionary)
@@ -92,10 +93,10 @@ fn object_list(product: Product, inverters: u8) -> Result<Vec<ObjectDoc>, String
     list.extend(parameter_objects(product, inverters));
     list.sort_by_key(|o| o.at);
     if let Some(w) = list.windows(2).find(|w| w[0].at == w[1].at) {
-        return Err(format!(
-            "two objects at {:04X}h: {} and {} (a bug in the dictionary)",
+        return Err(DescribeError::Inconsistent(format!(
+            "two objects at {:04X}h: {} and {} in the dictionary",
             w[0].at, w[0].name, w[1].name
-        ));
+        )));
     }
     Ok(list)
 }
@@ -658,6 +659,7 @@ mod tests {
         }
         assert!(xdd(Product::Tu3Eip, 1)
             .unwrap_err()
+            .to_string()
             .contains("no POWERLINK"));
         assert!(xdd(Product::Tu4Pol, 5).is_err());
         assert!(xdd(Product::Sk550p, 0).is_err());

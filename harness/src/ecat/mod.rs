@@ -22,6 +22,7 @@ use crate::binding::simulator::device_config;
 use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
+use crate::dictionary::DescribeError;
 use crate::net::LinkError;
 use crate::profile::Profile;
 
@@ -46,12 +47,22 @@ pub(crate) const BUS: Bus = Bus {
 
 /// `harness describe esi`: the products speaking EtherCAT have their ESI from
 /// `proto::nord::ecat` (the SK 550P's integrated interface, BU 0620 §2.2).
-fn describe_esi(profile: &Profile, inverters: u8) -> Result<String, String> {
-    let product = profile.nord()?;
+fn describe_esi(profile: &Profile, inverters: u8) -> Result<String, DescribeError> {
+    let product = profile
+        .nord()
+        .map_err(|_| DescribeError::AnyMaker(profile.name().to_string()))?;
     if !product.protocols().contains(&Protocol::Ethercat) {
-        return Err(format!("{} has no EtherCAT interface", product.name()));
+        return Err(DescribeError::NoInterface {
+            product,
+            bus: "EtherCAT",
+            format: "ESI",
+        });
     }
-    esi::esi(inverters).map_err(|e| e.to_string())
+    DescribeError::check_inverters(product, inverters)?;
+    esi::esi(inverters).map_err(|e| DescribeError::Write {
+        format: "ESI",
+        detail: e.to_string(),
+    })
 }
 
 fn profiles() -> Vec<Profile> {

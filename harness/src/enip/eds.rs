@@ -13,6 +13,7 @@
 
 use std::fmt::Write as _;
 
+use crate::dictionary::DescribeError;
 use proto::enip::cip::class;
 use proto::enip::epath::EPath;
 use proto::nord::addr::cip_instance;
@@ -71,21 +72,15 @@ const T_O_SCHEDULED: u32 = 1 << 30;
 /// The EDS of an EtherNet/IP product with `inverters` inverters (FI 1..=n) behind the
 /// interface. `Err` for products without EtherNet/IP and for an inverter count outside
 /// 1..=the product's maximum.
-pub(crate) fn eds(product: Product, inverters: u8) -> Result<String, String> {
+pub(crate) fn eds(product: Product, inverters: u8) -> Result<String, DescribeError> {
     let Some(id) = eip::identity(product) else {
-        return Err(format!(
-            "{} has no EtherNet/IP interface ({}): there is no EDS for it",
-            product.name(),
-            product.manual()
-        ));
+        return Err(DescribeError::NoInterface {
+            product,
+            bus: "EtherNet/IP",
+            format: "EDS",
+        });
     };
-    let max = product.max_inverters();
-    if !(1..=max).contains(&inverters) {
-        return Err(format!(
-            "inverters: {inverters} is outside 1..={max} for {}",
-            product.name()
-        ));
-    }
+    DescribeError::check_inverters(product, inverters)?;
     let assemblies = eip::assemblies(product);
     let mut params = Vec::new();
     params.push(rpi_param());
@@ -97,7 +92,8 @@ pub(crate) fn eds(product: Product, inverters: u8) -> Result<String, String> {
         params.push(nord_param(def, iface_class, None));
     }
     for n in 1..=inverters {
-        let fi = Inverter::new(i64::from(n)).map_err(|e| e.to_string())?;
+        let fi = Inverter::new(i64::from(n))
+            .map_err(|e| DescribeError::Inconsistent(format!("FI {n}: {e}")))?;
         for def in catalogue(product, Owner::Inverter) {
             params.push(nord_param(def, eip::param_class(Some(fi)), Some(fi)));
         }
@@ -1251,12 +1247,19 @@ mod tests {
     #[case(Product::Cu4Pol)]
     fn products_without_ethernet_ip_have_no_eds(#[case] p: Product) {
         let e = eds(p, 1).unwrap_err();
-        assert!(e.contains(p.name()), "{e}");
+        assert!(
+            matches!(e, DescribeError::NoInterface { product, format: "EDS", .. } if product == p),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains(p.name()), "{e}");
     }
 
     #[test]
     fn inverter_count_is_checked() {
-        assert!(eds(Product::Sk550p, 0).unwrap_err().contains("sk550p"));
+        assert!(matches!(
+            eds(Product::Sk550p, 0),
+            Err(DescribeError::Inverters { asked: 0, .. })
+        ));
         assert!(eds(Product::Tu4Eip, 5).is_err());
         assert!(eds(Product::Tu3Eip, 8).is_ok());
     }

@@ -27,6 +27,7 @@ use crate::binding::simulator::device_config;
 use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
+use crate::dictionary::DescribeError;
 use crate::profile::Profile;
 
 /// The registry entry.
@@ -121,8 +122,13 @@ fn io_port_free(
     }
 }
 
-fn describe_eds(profile: &Profile, inverters: u8) -> Result<String, String> {
-    eds::eds(profile.nord()?, inverters)
+fn describe_eds(profile: &Profile, inverters: u8) -> Result<String, DescribeError> {
+    eds::eds(
+        profile
+            .nord()
+            .map_err(|_| DescribeError::AnyMaker(profile.name().to_string()))?,
+        inverters,
+    )
 }
 
 #[cfg(test)]

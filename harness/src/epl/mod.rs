@@ -27,6 +27,7 @@ use crate::binding::simulator::device_config;
 use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
+use crate::dictionary::DescribeError;
 use crate::net::LinkError;
 use crate::profile::Profile;
 
@@ -51,8 +52,13 @@ pub(crate) const BUS: Bus = Bus {
 
 /// `harness describe xdd`: the XDD of a POWERLINK product, from `proto::nord::epl` (the
 /// definition the simulated node runs on).
-fn describe_xdd(profile: &Profile, inverters: u8) -> Result<String, String> {
-    crate::dictionary::xdd::xdd(profile.nord()?, inverters)
+fn describe_xdd(profile: &Profile, inverters: u8) -> Result<String, DescribeError> {
+    crate::dictionary::xdd::xdd(
+        profile
+            .nord()
+            .map_err(|_| DescribeError::AnyMaker(profile.name().to_string()))?,
+        inverters,
+    )
 }
 
 fn profiles() -> Vec<Profile> {

@@ -220,7 +220,8 @@ fn od_area(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
 /// The POWERLINK device description file of the profile's product (BU 2200 §5.2.1): its name
 /// and, with `index`, whether it describes that object (the inverters' parameters at 2800h + P…).
 fn xdd_file(c: &Ctx, a: &Args) -> Result<Value, ComputeError> {
-    let text = crate::dictionary::xdd::xdd(c.product, 1).map_err(ComputeError::Refused)?;
+    let text = crate::dictionary::xdd::xdd(c.product, 1)
+        .map_err(|e| ComputeError::Refused(e.to_string()))?;
     let mut out = json!({ "file": crate::dictionary::xdd::file_name(c.product) });
     if let Some(index) = a.opt_int("index")? {
         out["has_object"] = json!(text.contains(&format!("index=\"{index:04X}\"")));

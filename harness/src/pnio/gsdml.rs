@@ -43,6 +43,7 @@
 use std::collections::{BTreeMap, HashSet};
 use std::io::Cursor;
 
+use crate::dictionary::DescribeError;
 use proto::nord::errors::{COMM_ERRORS, POWERLINK_ERRORS};
 use proto::nord::pnio::{self as def, Module, ModuleKind, RecordTarget, SlotRole};
 use proto::nord::{Inverter, Product};
@@ -61,22 +62,21 @@ const SEND_CLOCK: u16 = 32;
 const MAU_100BASETX_FD: u8 = 16;
 
 /// The GSDML of `product` with `inverters` inverters behind its interface.
-pub(crate) fn gsdml(product: Product, inverters: u8) -> Result<String, String> {
+pub(crate) fn gsdml(product: Product, inverters: u8) -> Result<String, DescribeError> {
     let (Some(device_id), Some(station)) = (def::device_id(product), def::station_type(product))
     else {
-        return Err(format!("{} has no PROFINET IO interface", product.name()));
+        return Err(DescribeError::NoInterface {
+            product,
+            bus: "PROFINET IO",
+            format: "GSDML",
+        });
     };
-    let max = product.max_inverters();
-    if !(1..=max).contains(&inverters) {
-        return Err(format!(
-            "{} has 1…{max} inverters behind it, not {inverters}",
-            product.name()
-        ));
-    }
+    DescribeError::check_inverters(product, inverters)?;
     let model = Model::new(product, inverters, device_id, station)?;
-    model
-        .write()
-        .map_err(|e| format!("cannot write the GSDML XML: {e}"))
+    model.write().map_err(|e| DescribeError::Write {
+        format: "GSDML",
+        detail: e.to_string(),
+    })
 }
 
 /// The texts the file refers to, in first-use order (`ExternalTextList`).
@@ -140,7 +140,7 @@ impl Model {
         inverters: u8,
         device_id: u16,
         station: &'static str,
-    ) -> Result<Model, String> {
+    ) -> Result<Model, DescribeError> {
         let mut texts = Texts::default();
         texts.id(
             "IDT_INFO_Device",
@@ -215,7 +215,7 @@ fn module_desc(
     inverters: u8,
     m: Module,
     texts: &mut Texts,
-) -> Result<ModuleDesc, String> {
+) -> Result<ModuleDesc, DescribeError> {
     let name = m.name();
     let key = name.replace('-', "_");
     let info = match m.kind {
@@ -241,10 +241,10 @@ fn module_desc(
         (&inputs, m.input_len, "input"),
     ] {
         if 2 * items.len() != len {
-            return Err(format!(
-                "{name}: {} data words do not make the module's {len} {way} bytes (a bug)",
+            return Err(DescribeError::Inconsistent(format!(
+                "{name}: {} data words do not make the module's {len} {way} bytes",
                 items.len()
-            ));
+            )));
         }
     }
     let allowed: Vec<u16> = (0..def::slot_count(product))
@@ -340,8 +340,10 @@ fn records(
     role: SlotRole,
     inverters: u8,
     texts: &mut Texts,
-) -> Result<Vec<Record>, String> {
-    let fi = |n: u8| Inverter::new(i64::from(n)).map_err(|e| e.to_string());
+) -> Result<Vec<Record>, DescribeError> {
+    let fi = |n: u8| {
+        Inverter::new(i64::from(n)).map_err(|e| DescribeError::Inconsistent(format!("FI {n}: {e}")))
+    };
     let targets: Vec<RecordTarget> = match (product, role) {
         (Product::Sk550p, SlotRole::Inverter(_)) => {
             let mut t = vec![RecordTarget::Interface];
@@ -357,12 +359,15 @@ fn records(
     };
     let slot = (0..def::slot_count(product))
         .find(|&s| def::slot_role(product, s) == Some(role))
-        .ok_or_else(|| format!("{} has no slot for {role:?}", product.name()))?;
+        .ok_or_else(|| {
+            DescribeError::Inconsistent(format!("{} has no slot for {role:?}", product.name()))
+        })?;
     let mut out = Vec::new();
     for target in targets {
         let index = def::record_index(target);
-        def::record_target(product, slot, def::IO_SUBSLOT, index)
-            .map_err(|e| format!("record {index} in slot {slot}: {e} (a bug)"))?;
+        def::record_target(product, slot, def::IO_SUBSLOT, index).map_err(|e| {
+            DescribeError::Inconsistent(format!("record {index} in slot {slot}: {e}"))
+        })?;
         let (len, what) = match target {
             RecordTarget::ByAxis => (
                 def::AXIS_RECORD_LEN,
@@ -384,7 +389,8 @@ fn records(
                 ),
             ),
         };
-        def::check_record_len(index, len).map_err(|e| format!("{e} (a bug)"))?;
+        def::check_record_len(index, len)
+            .map_err(|e| DescribeError::Inconsistent(e.to_string()))?;
         let text = texts.id(
             format!("IDT_RECORD_{index}"),
             format!("Record {index}: {what}"),
@@ -1200,6 +1206,7 @@ mod tests {
     fn refusals() {
         assert!(gsdml(Product::Tu3Eip, 1)
             .unwrap_err()
+            .to_string()
             .contains("no PROFINET"));
         assert!(gsdml(Product::Tu3Pnt, 2).is_err());
         assert!(gsdml(Product::Sk550p, 0).is_err());

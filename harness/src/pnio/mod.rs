@@ -29,6 +29,7 @@ use crate::binding::simulator::device_config;
 use crate::binding::DutFactory;
 use crate::binding::{Binding, OpenError};
 use crate::bus::{Bus, Description, Embedded, Network};
+use crate::dictionary::DescribeError;
 use crate::net::peer::Tapped;
 use crate::net::LinkError;
 use crate::profile::Profile;
@@ -54,8 +55,13 @@ pub(crate) const BUS: Bus = Bus {
 
 /// `harness describe gsdml`: the GSDML of a PROFINET product, from `proto::nord::pnio` (the
 /// definition the simulated IO device runs on).
-fn describe_gsdml(profile: &Profile, inverters: u8) -> Result<String, String> {
-    gsdml::gsdml(profile.nord()?, inverters)
+fn describe_gsdml(profile: &Profile, inverters: u8) -> Result<String, DescribeError> {
+    gsdml::gsdml(
+        profile
+            .nord()
+            .map_err(|_| DescribeError::AnyMaker(profile.name().to_string()))?,
+        inverters,
+    )
 }
 
 fn profiles() -> Vec<Profile> {
