@@ -17,6 +17,8 @@
 
 use std::fmt;
 
+use crate::wire::Error;
+
 /// EtherCAT (ETG.1000.4 §5.3). BU 0620 §2.2.3 figure 3 prints 88ABh, which is POWERLINK's: an
 /// erratum of the manual.
 pub const ETHERTYPE_ECAT: u16 = 0x88A4;
@@ -55,27 +57,6 @@ pub fn ethertype_name(ethertype: u16) -> Option<&'static str> {
         ETHERTYPE_LLDP => "LLDP",
         _ => return None,
     })
-}
-
-/// A malformed Ethernet frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-pub enum Error {
-    /// The buffer ends inside the header.
-    #[error("Ethernet header truncated: need {need} bytes, got {got}")]
-    Truncated {
-        /// Bytes the header needs (14, or 18 with a VLAN tag).
-        need: usize,
-        /// Bytes present.
-        got: usize,
-    },
-    /// The buffer given to `emit` is shorter than the frame.
-    #[error("Ethernet frame does not fit: need {need} bytes, buffer has {got}")]
-    BufferTooShort {
-        /// Bytes the frame needs.
-        need: usize,
-        /// Bytes in the buffer.
-        got: usize,
-    },
 }
 
 /// A MAC address (IEEE 802).
@@ -171,12 +152,14 @@ impl<T: AsRef<[u8]>> EthernetFrame<T> {
         let got = self.buffer.as_ref().len();
         if got < HEADER_LEN {
             return Err(Error::Truncated {
+                what: "Ethernet header",
                 need: HEADER_LEN,
                 got,
             });
         }
         if self.ethertype() == ETHERTYPE_VLAN && got < TAGGED_HEADER_LEN {
             return Err(Error::Truncated {
+                what: "Ethernet header",
                 need: TAGGED_HEADER_LEN,
                 got,
             });
@@ -321,9 +304,10 @@ impl EthernetRepr {
     /// Writes the header into the first 14 bytes of `buffer`.
     pub fn emit_header(&self, buffer: &mut [u8]) -> Result<(), Error> {
         if buffer.len() < HEADER_LEN {
-            return Err(Error::BufferTooShort {
-                need: HEADER_LEN,
-                got: buffer.len(),
+            return Err(Error::TooLong {
+                what: "Ethernet header",
+                len: HEADER_LEN,
+                max: buffer.len(),
             });
         }
         let mut f = EthernetFrame::new_unchecked(buffer);
@@ -384,7 +368,11 @@ mod tests {
         assert_eq!(r.emit(&[0; 100]).len(), 114);
         assert_eq!(
             r.emit_header(&mut [0; 13]),
-            Err(Error::BufferTooShort { need: 14, got: 13 })
+            Err(Error::TooLong {
+                what: "Ethernet header",
+                len: 14,
+                max: 13
+            })
         );
     }
 
@@ -393,7 +381,11 @@ mod tests {
         for n in 0..HEADER_LEN {
             assert_eq!(
                 EthernetFrame::new_checked(&FRAME[..n]).unwrap_err(),
-                Error::Truncated { need: 14, got: n }
+                Error::Truncated {
+                    what: "Ethernet header",
+                    need: 14,
+                    got: n
+                }
             );
         }
         assert!(EthernetFrame::new_checked(&FRAME[..14]).is_ok());
@@ -416,7 +408,11 @@ mod tests {
         for n in 14..18 {
             assert_eq!(
                 EthernetFrame::new_checked(&tagged[..n]).unwrap_err(),
-                Error::Truncated { need: 18, got: n }
+                Error::Truncated {
+                    what: "Ethernet header",
+                    need: 18,
+                    got: n
+                }
             );
         }
     }

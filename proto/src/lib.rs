@@ -15,4 +15,4 @@ pub mod eth;
 pub mod lldp;
 pub mod nord;
 pub mod pnio;
-mod wire;
+pub mod wire;

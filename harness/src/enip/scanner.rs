@@ -1069,7 +1069,7 @@ impl Scanner {
                 crate::timing::ms(on_time.limit())
             )
         });
-        let malformed = |e: proto::enip::WireError| {
+        let malformed = |e: proto::wire::Error| {
             StepError::Protocol(format!("malformed ListIdentity reply: {e}"))
         };
         let cpf = Cpf::parse(&reply.data).map_err(malformed)?;

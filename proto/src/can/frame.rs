@@ -6,7 +6,7 @@
 
 use std::fmt;
 
-use super::Error;
+use crate::wire::Error;
 
 /// The largest base-format identifier (11 bits).
 pub const MAX_ID: u16 = 0x7FF;
@@ -115,7 +115,7 @@ pub(crate) fn check_id(id: u32) -> Result<u16, Error> {
     u16::try_from(id)
         .ok()
         .filter(|&i| i <= MAX_ID)
-        .ok_or(Error::Identifier { id })
+        .ok_or(Error::CanIdentifier { id })
 }
 
 /// `len` as a classical CAN data length.
@@ -123,7 +123,7 @@ pub(crate) fn check_len(len: usize) -> Result<u8, Error> {
     u8::try_from(len)
         .ok()
         .filter(|&l| usize::from(l) <= MAX_LEN)
-        .ok_or(Error::Length { len })
+        .ok_or(Error::CanDataLength { len })
 }
 
 #[cfg(test)]
@@ -162,19 +162,22 @@ mod tests {
     fn identifier_and_length_are_checked() {
         assert_eq!(
             CanFrame::new(0x800, &[]),
-            Err(Error::Identifier { id: 0x800 })
+            Err(Error::CanIdentifier { id: 0x800 })
         );
-        assert_eq!(CanFrame::new(0x7FF, &[0; 9]), Err(Error::Length { len: 9 }));
+        assert_eq!(
+            CanFrame::new(0x7FF, &[0; 9]),
+            Err(Error::CanDataLength { len: 9 })
+        );
         assert_eq!(
             CanFrame::remote(0xFFFF, 0),
-            Err(Error::Identifier { id: 0xFFFF })
+            Err(Error::CanIdentifier { id: 0xFFFF })
         );
-        assert_eq!(CanFrame::remote(0, 9), Err(Error::Length { len: 9 }));
+        assert_eq!(CanFrame::remote(0, 9), Err(Error::CanDataLength { len: 9 }));
         assert_eq!(check_id(0x7FF), Ok(0x7FF));
         assert_eq!(
             check_id(0x1234_5678),
-            Err(Error::Identifier { id: 0x1234_5678 })
+            Err(Error::CanIdentifier { id: 0x1234_5678 })
         );
-        assert_eq!(check_len(300), Err(Error::Length { len: 300 }));
+        assert_eq!(check_len(300), Err(Error::CanDataLength { len: 300 }));
     }
 }

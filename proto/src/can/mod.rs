@@ -6,16 +6,14 @@
 //! - [`socketcan`]: the 16-byte `struct can_frame` of `linux/can.h`, with its error frames;
 //! - [`socketcand`]: socketcand's `< … >` messages, framed out of a byte stream.
 //!
-//! The system bus is CAN 2.0A: an extended (29-bit) frame is an [`Error::Extended`], never
-//! silently truncated to 11 bits. Every parser returns `Err` naming the field on malformed
-//! input and never panics on any byte sequence.
+//! The system bus is CAN 2.0A: an extended (29-bit) frame is an
+//! [`crate::wire::Error::CanExtended`], never silently truncated to 11 bits. Every parser
+//! returns `Err` naming the field on malformed input and never panics on any byte sequence.
 
-mod error;
 pub mod frame;
 #[cfg(test)]
 pub(crate) mod no_panic;
 pub mod socketcan;
 pub mod socketcand;
 
-pub use error::Error;
 pub use frame::CanFrame;

@@ -14,13 +14,12 @@
 //! extended one ([`EFF_MASK`]). An error frame (`linux/can/error.h`) carries its error class
 //! in bits 0–28 and details in the data ([`ErrorFrame`]).
 //!
-//! The system bus is CAN 2.0A: an extended frame parses to [`Error::Extended`].
+//! The system bus is CAN 2.0A: an extended frame parses to [`Error::CanExtended`].
 
 use std::fmt;
 
 use super::frame::{check_id, check_len, CanFrame};
-use super::Error;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// Offsets of `struct can_frame`.
 mod field {
@@ -61,7 +60,7 @@ impl<T: AsRef<[u8]>> SocketCanFrame<T> {
     /// Wraps `buffer` after checking it is exactly [`FRAME_LEN`] bytes (a 72-byte CAN FD
     /// frame is left over bytes).
     pub fn new_checked(buffer: T) -> Result<Self, Error> {
-        let mut r = Reader::<Error>::new(buffer.as_ref());
+        let mut r = Reader::new(buffer.as_ref());
         r.bytes(FRAME_LEN, "struct can_frame")?;
         r.finish("struct can_frame")?;
         Ok(SocketCanFrame { buffer })
@@ -222,8 +221,8 @@ pub enum SocketCanRepr {
 
 impl SocketCanRepr {
     /// Reads a checked frame. An error frame wins over the other flags; an extended frame is
-    /// [`Error::Extended`]; a base frame with identifier bits above bit 10 is
-    /// [`Error::Identifier`]; `len` above 8 is [`Error::Length`].
+    /// [`Error::CanExtended`]; a base frame with identifier bits above bit 10 is
+    /// [`Error::CanIdentifier`]; `len` above 8 is [`Error::CanDataLength`].
     pub fn parse<T: AsRef<[u8]>>(f: &SocketCanFrame<T>) -> Result<SocketCanRepr, Error> {
         let can_id = f.can_id();
         if can_id & ERR_FLAG != 0 {
@@ -235,7 +234,7 @@ impl SocketCanRepr {
             }));
         }
         if can_id & EFF_FLAG != 0 {
-            return Err(Error::Extended {
+            return Err(Error::CanExtended {
                 id: can_id & EFF_MASK,
             });
         }
@@ -347,20 +346,26 @@ mod tests {
         f.set_can_id(EFF_FLAG | 0x1AAA_AAAA);
         assert_eq!(
             SocketCanRepr::parse(&f),
-            Err(Error::Extended { id: 0x1AAA_AAAA })
+            Err(Error::CanExtended { id: 0x1AAA_AAAA })
         );
         // Also when the extended identifier would fit 11 bits.
         f.set_can_id(EFF_FLAG | 0x123);
-        assert_eq!(SocketCanRepr::parse(&f), Err(Error::Extended { id: 0x123 }));
+        assert_eq!(
+            SocketCanRepr::parse(&f),
+            Err(Error::CanExtended { id: 0x123 })
+        );
         // A base frame with identifier bits above bit 10.
         f.set_can_id(0x923);
         assert_eq!(
             SocketCanRepr::parse(&f),
-            Err(Error::Identifier { id: 0x923 })
+            Err(Error::CanIdentifier { id: 0x923 })
         );
         f.set_can_id(0x123);
         f.set_data_len(9);
-        assert_eq!(SocketCanRepr::parse(&f), Err(Error::Length { len: 9 }));
+        assert_eq!(
+            SocketCanRepr::parse(&f),
+            Err(Error::CanDataLength { len: 9 })
+        );
     }
 
     #[test]

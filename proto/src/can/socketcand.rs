@@ -18,9 +18,9 @@
 //! a frame without data: `< frame 123 1.000000  >`); BCM mode writes one word per byte. The
 //! document asks for lower-case, unpadded data bytes in `send` ("1 f1"). Remote frames appear
 //! in neither direction: socketcand's raw mode drops received RTR frames and `send` cannot
-//! set the RTR flag, so emitting one is [`Error::Remote`]. An error frame is written as
-//! `< error CLASS SECS.USECS >` in raw mode (class = `can_id` & `CAN_ERR_MASK`) and with the
-//! whole `can_id` and the 8 data bytes in BCM mode; both parse to [`Message::ErrorFrame`],
+//! set the RTR flag, so emitting one is [`Error::SocketcandRemote`]. An error frame is written
+//! as `< error CLASS SECS.USECS >` in raw mode (class = `can_id` & `CAN_ERR_MASK`) and with
+//! the whole `can_id` and the 8 data bytes in BCM mode; both parse to [`Message::ErrorFrame`],
 //! which is emitted with the class alone (as raw mode writes it) and the data bytes, if any.
 //!
 //! Parsing takes words separated by any whitespace; emitting writes the spacing socketcand
@@ -30,7 +30,7 @@
 
 use super::frame::{check_id, check_len, CanFrame, MAX_LEN};
 use super::socketcan::{ErrorClass, EFF_MASK};
-use super::Error;
+use crate::wire::Error;
 
 /// The longest message [`Message::parse`] waits for before calling the stream garbage
 /// (socketcand's own buffer is about 8 KiB, for ISO-TP PDUs this codec does not carry).
@@ -132,7 +132,7 @@ impl Message {
         }
         let Some(end) = rest.iter().position(|&b| b == b'>') else {
             return if rest.len() > MAX_MESSAGE_LEN {
-                Err(Error::Unterminated {
+                Err(Error::SocketcandUnterminated {
                     max: MAX_MESSAGE_LEN,
                 })
             } else {
@@ -140,7 +140,7 @@ impl Message {
             };
         };
         if end > MAX_MESSAGE_LEN {
-            return Err(Error::Unterminated {
+            return Err(Error::SocketcandUnterminated {
                 max: MAX_MESSAGE_LEN,
             });
         }
@@ -210,9 +210,10 @@ impl Message {
         }
     }
 
-    /// The message as socketcand writes it. A remote frame is [`Error::Remote`]; a bus name
-    /// or text that is empty where a word is needed, or holds whitespace, `<` or `>`, is
-    /// [`Error::Syntax`]; error-frame data longer than 8 bytes is [`Error::Length`].
+    /// The message as socketcand writes it. A remote frame is [`Error::SocketcandRemote`]; a
+    /// bus name or text that is empty where a word is needed, or holds whitespace, `<` or `>`,
+    /// is [`Error::SocketcandSyntax`]; error-frame data longer than 8 bytes is
+    /// [`Error::CanDataLength`].
     pub fn emit(&self) -> Result<String, Error> {
         Ok(match self {
             Message::Hi => "< hi >".to_owned(),
@@ -278,7 +279,7 @@ fn plain<'a>(field: &'static str, text: &'a str) -> Result<&'a str, Error> {
 
 fn no_remote(frame: &CanFrame) -> Result<(), Error> {
     if frame.is_remote() {
-        Err(Error::Remote)
+        Err(Error::SocketcandRemote)
     } else {
         Ok(())
     }
@@ -315,7 +316,7 @@ fn identifier(word: &str) -> Result<u16, Error> {
     let id = hex_u32(word)
         .ok_or_else(|| Error::syntax("identifier", word, "is not 1 to 8 hex digits"))?;
     if word.len() == 8 {
-        return Err(Error::Extended { id: id & EFF_MASK });
+        return Err(Error::CanExtended { id: id & EFF_MASK });
     }
     check_id(id)
 }
@@ -341,7 +342,7 @@ fn hex_data(words: &[&str]) -> Result<Vec<u8>, Error> {
         return Err(Error::syntax("data", &hex, "is not pairs of hex digits"));
     }
     if hex.len() > 2 * MAX_LEN {
-        return Err(Error::Length { len: hex.len() / 2 });
+        return Err(Error::CanDataLength { len: hex.len() / 2 });
     }
     (0..hex.len())
         .step_by(2)
@@ -488,19 +489,19 @@ mod tests {
         // The document's extended example: 8 digits.
         assert_eq!(
             Message::parse(b"< send 1AAAAAAA 2 1 f1 >"),
-            Err(Error::Extended { id: 0x1AAA_AAAA })
+            Err(Error::CanExtended { id: 0x1AAA_AAAA })
         );
         assert_eq!(
             Message::parse(b"< send 00000123 0 >"),
-            Err(Error::Extended { id: 0x123 })
+            Err(Error::CanExtended { id: 0x123 })
         );
         assert_eq!(
             Message::parse(b"< send 800 0 >"),
-            Err(Error::Identifier { id: 0x800 })
+            Err(Error::CanIdentifier { id: 0x800 })
         );
         assert_eq!(
             Message::parse(b"< send 123 9 1 2 3 4 5 6 7 8 9 >"),
-            Err(Error::Length { len: 9 })
+            Err(Error::CanDataLength { len: 9 })
         );
         for bad in [
             "< send 123 2 1 >",
@@ -511,7 +512,10 @@ mod tests {
             "< send 123 >",
         ] {
             assert!(
-                matches!(Message::parse(bad.as_bytes()), Err(Error::Syntax { .. })),
+                matches!(
+                    Message::parse(bad.as_bytes()),
+                    Err(Error::SocketcandSyntax { .. })
+                ),
                 "{bad}"
             );
         }
@@ -520,14 +524,17 @@ mod tests {
     #[test]
     fn remote_frames_cannot_be_carried() {
         let r = CanFrame::remote(0x705, 1).unwrap();
-        assert_eq!(Message::Send { frame: r }.emit(), Err(Error::Remote));
+        assert_eq!(
+            Message::Send { frame: r }.emit(),
+            Err(Error::SocketcandRemote)
+        );
         assert_eq!(
             Message::Frame {
                 frame: r,
                 time: Timestamp::default()
             }
             .emit(),
-            Err(Error::Remote)
+            Err(Error::SocketcandRemote)
         );
     }
 
@@ -614,13 +621,13 @@ mod tests {
         long.resize(MAX_MESSAGE_LEN + 2, b'a');
         assert_eq!(
             Message::parse(&long),
-            Err(Error::Unterminated {
+            Err(Error::SocketcandUnterminated {
                 max: MAX_MESSAGE_LEN
             })
         );
         assert_eq!(
             Message::parse(b"x"),
-            Err(Error::Syntax {
+            Err(Error::SocketcandSyntax {
                 field: "message",
                 token: "x".into(),
                 why: "does not start with '<'"
@@ -635,7 +642,10 @@ mod tests {
             Message::Error { text: "a>b".into() },
             Message::Other { text: " ".into() },
         ] {
-            assert!(matches!(m.emit(), Err(Error::Syntax { .. })), "{m:?}");
+            assert!(
+                matches!(m.emit(), Err(Error::SocketcandSyntax { .. })),
+                "{m:?}"
+            );
         }
     }
 }

@@ -24,7 +24,7 @@
 //! when the data set has at most pst bytes.
 
 use super::command::{head, ClientCommand, SdoFrame, ServerCommand, FRAME_LEN, SEGMENT_DATA};
-use super::Error;
+use crate::wire::Error;
 
 /// The largest number of segments in a sub-block (blksize, seqno).
 pub const MAX_BLOCK_SIZE: u8 = 127;
@@ -399,13 +399,13 @@ impl SubBlock {
         })
     }
 
-    /// Takes the next segment: [`Error::Sequence`] if it is not the one expected (CiA 301
+    /// Takes the next segment: [`Error::SdoBlockSequence`] if it is not the one expected (CiA 301
     /// abort code 0504_0003h); `Ok(true)` when the sub-block is complete (blksize segments,
     /// or the last one of the data set).
     pub fn accept(&mut self, seg: &BlockSegment) -> Result<bool, Error> {
         let expected = self.ackseq + 1;
         if self.done || seg.seqno != expected {
-            return Err(Error::Sequence {
+            return Err(Error::SdoBlockSequence {
                 expected,
                 got: seg.seqno,
             });
@@ -609,7 +609,7 @@ mod tests {
         // Segment 3 before 2: invalid sequence (abort 05040003h); ackseq stays 1.
         assert_eq!(
             sb.accept(&seg(3, false)),
-            Err(Error::Sequence {
+            Err(Error::SdoBlockSequence {
                 expected: 2,
                 got: 3
             })

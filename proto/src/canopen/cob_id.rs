@@ -19,7 +19,7 @@
 //! 780h..7FFh and the unused node-0 ids of each range belong to no object here (CiA 305 LSS
 //! uses 7E4h/7E5h, which falls in the NMT error control range of node 100/101).
 
-use super::Error;
+use crate::wire::Error;
 
 /// The largest node id.
 pub const MAX_NODE: u8 = 127;

@@ -16,8 +16,7 @@
 
 use std::fmt;
 
-use super::Error;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// The toggle bit t of segments (bit 4).
 pub const TOGGLE: u8 = 0x10;
@@ -150,7 +149,7 @@ pub struct SdoFrame<T: AsRef<[u8]>> {
 impl<T: AsRef<[u8]>> SdoFrame<T> {
     /// Checks the length: 8 bytes.
     pub fn new_checked(buffer: T) -> Result<Self, Error> {
-        let mut r = Reader::<Error>::new(buffer.as_ref());
+        let mut r = Reader::new(buffer.as_ref());
         r.bytes(FRAME_LEN, "SDO frame")?;
         r.finish("SDO frame")?;
         Ok(SdoFrame { buffer })
@@ -219,7 +218,7 @@ pub(crate) fn head(command: u8, index: u16, sub: u8) -> [u8; FRAME_LEN] {
 
 /// The toggle bit a segmented transfer expects next: 0 for the first segment, then
 /// alternating (CiA 301 "Download SDO segment" / "Upload SDO segment": t alternates for each
-/// subsequent segment; the response echoes it). A mismatch is [`Error::Toggle`]; the peer
+/// subsequent segment; the response echoes it). A mismatch is [`Error::SdoToggle`]; the peer
 /// answers it with abort code 0503_0000h ([`super::SdoAbortCode::TOGGLE_BIT`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Toggle {
@@ -240,7 +239,7 @@ impl Toggle {
     /// Checks a segment's toggle bit and, if right, moves on to the next segment.
     pub fn check(&mut self, got: bool) -> Result<(), Error> {
         if got != self.next {
-            return Err(Error::Toggle {
+            return Err(Error::SdoToggle {
                 expected: self.next,
                 got,
             });
@@ -312,7 +311,7 @@ mod tests {
         assert_eq!(t.check(true), Ok(()));
         assert_eq!(
             t.check(true),
-            Err(Error::Toggle {
+            Err(Error::SdoToggle {
                 expected: false,
                 got: true
             })

@@ -8,8 +8,7 @@
 //! | 2 | error register (object 1001h, [`register`]) |
 //! | 3–7 | manufacturer-specific error field |
 
-use super::Error;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// Bits of the error register, object 1001h (CiA 301 "Error register").
 pub mod register {
@@ -47,7 +46,7 @@ impl Emergency {
     /// Parses at least 8 bytes; bytes after them are ignored (the padding of a CoE mailbox; a
     /// CAN frame has no more than 8).
     pub fn parse(bytes: &[u8]) -> Result<Emergency, Error> {
-        let mut r = Reader::<Error>::new(bytes);
+        let mut r = Reader::new(bytes);
         let b = r.bytes(Emergency::LEN, "emergency")?;
         Ok(Emergency::from_bytes([
             b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7],

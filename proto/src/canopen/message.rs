@@ -7,9 +7,9 @@
 //! knows.
 
 use super::cob_id::{Cob, Function};
-use super::{Emergency, Error, ErrorControl, NmtFrame, SdoRequest, SdoResponse, SyncFrame};
+use super::{Emergency, ErrorControl, NmtFrame, SdoRequest, SdoResponse, SyncFrame};
 use crate::can::CanFrame;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// Length of the TIME object (CiA 301 TIME_OF_DAY: ms after midnight, 28 bits, 4 reserved;
 /// days since 1 January 1984, u16).
@@ -74,7 +74,7 @@ pub enum Message {
 }
 
 fn exact<const N: usize>(data: &[u8], what: &'static str) -> Result<[u8; N], Error> {
-    let mut r = Reader::<Error>::new(data);
+    let mut r = Reader::new(data);
     let b = r.bytes(N, what)?;
     r.finish(what)?;
     let mut out = [0; N];

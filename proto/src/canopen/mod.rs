@@ -13,10 +13,10 @@
 //!   [`crc`]: the block transfer CRC; [`abort`]: [`SdoAbortCode`];
 //! - [`message`]: a CAN frame read as one of these objects.
 //!
-//! Every parser checks each length and returns [`Error`] naming the field on malformed input
-//! (wrong length, unknown command specifier, value out of range); none panics on any byte
-//! sequence. Multi-byte fields are little-endian. A device's refusal, an SDO abort, parses to
-//! a message, not an error.
+//! Every parser checks each length and returns [`crate::wire::Error`] naming the field on
+//! malformed input (wrong length, unknown command specifier, value out of range); none panics
+//! on any byte sequence. Multi-byte fields are little-endian. A device's refusal, an SDO abort,
+//! parses to a message, not an error.
 
 pub mod abort;
 pub mod block;
@@ -31,7 +31,6 @@ mod no_panic;
 pub mod sdo;
 pub mod sync;
 
-pub use crate::can::Error;
 pub(crate) use abort::abort_codes;
 pub use abort::SdoAbortCode;
 pub use block::{BlockRequest, BlockResponse, BlockSegment, SubBlock};

@@ -12,8 +12,7 @@
 use std::fmt;
 
 use super::cob_id::MAX_NODE;
-use super::Error;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// An NMT command specifier (CiA 301 NMT module control services; open).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
@@ -144,7 +143,7 @@ impl NmtFrame {
     /// Parses the 2 data bytes: an unknown command specifier is [`Error::Unknown`], a node id
     /// above 127 [`Error::Invalid`].
     pub fn parse(bytes: &[u8]) -> Result<NmtFrame, Error> {
-        let mut r = Reader::<Error>::new(bytes);
+        let mut r = Reader::new(bytes);
         let command = NmtCommand(r.u8("NMT command specifier")?);
         let node = r.u8("NMT node id")?;
         r.finish("NMT frame")?;
@@ -235,7 +234,7 @@ impl ErrorControl {
 
     /// Parses the 1 data byte; an undefined state code is [`Error::Unknown`].
     pub fn parse(bytes: &[u8]) -> Result<ErrorControl, Error> {
-        let mut r = Reader::<Error>::new(bytes);
+        let mut r = Reader::new(bytes);
         let b = r.u8("NMT error control state")?;
         r.finish("NMT error control")?;
         let state = StateCode(b & 0x7F);

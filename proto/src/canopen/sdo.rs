@@ -20,7 +20,8 @@ use super::command::{
     expedited_bits, expedited_len, head, segment_bits, segment_unused, tg, ClientCommand, SdoFrame,
     ServerCommand, ABORT, EXPEDITED, FRAME_LEN, LAST, SEGMENT_DATA, SIZE, TOGGLE,
 };
-use super::{Error, SdoAbortCode};
+use super::SdoAbortCode;
+use crate::wire::Error;
 
 /// Expedited data: 1..4 bytes with the size indicated (s = 1), or 4 bytes without (s = 0).
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
@@ -648,7 +649,7 @@ mod tests {
         };
         assert_eq!(
             t.check(toggle),
-            Err(Error::Toggle {
+            Err(Error::SdoToggle {
                 expected: false,
                 got: true
             })

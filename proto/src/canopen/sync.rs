@@ -2,8 +2,7 @@
 //! synchronous counter, when the synchronous counter overflow value (object 1019h) is 2..240.
 //! The counter runs from 1 up to the overflow value.
 
-use super::Error;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// The largest synchronous counter overflow value (object 1019h).
 pub const MAX_COUNTER: u8 = 240;
@@ -18,7 +17,7 @@ pub struct SyncFrame {
 impl SyncFrame {
     /// Parses 0 or 1 data bytes; a counter of 0 or above 240 is [`Error::Invalid`].
     pub fn parse(bytes: &[u8]) -> Result<SyncFrame, Error> {
-        let mut r = Reader::<Error>::new(bytes);
+        let mut r = Reader::new(bytes);
         let counter = match r.remaining() {
             0 => None,
             _ => Some(r.u8("SYNC counter")?),

@@ -17,9 +17,8 @@
 
 use std::fmt;
 
-use super::wire::Reader;
-use super::Error;
 pub use crate::nord::nmt::EcState;
+use crate::wire::{Error, Reader};
 
 /// The error flag (bit 4) of AL control (acknowledge) and AL status (error indication).
 pub const ERROR_FLAG: u8 = 0x10;

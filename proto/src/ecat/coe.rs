@@ -31,12 +31,12 @@
 use std::fmt;
 
 use super::mailbox::{MailboxRepr, MailboxType};
-use super::wire::{fit, le16, le32, Reader};
-use super::Error;
+use super::wire::{fit, le16, le32};
 use crate::canopen::command::{
     expedited_bits, expedited_len, segment_bits, segment_unused, tg, ClientCommand, ServerCommand,
     ABORT, EXPEDITED, LAST, SIZE, TOGGLE,
 };
+use crate::wire::{Error, Reader};
 
 /// CoE header length.
 pub const COE_HEADER_LEN: usize = 2;
@@ -290,7 +290,7 @@ impl SdoData {
                 data = &data[..size as usize];
             }
             if data.len() as u64 > u64::from(size) {
-                return Err(Error::BadLength {
+                return Err(Error::Length {
                     field: "SDO complete size",
                     value: size as usize,
                     available: data.len(),
@@ -767,7 +767,7 @@ impl Emergency {
     }
 }
 
-/// The emergency in the bytes after the CoE header, reporting EtherCAT [`Error`]s.
+/// The emergency in the bytes after the CoE header.
 fn emergency(rest: &[u8]) -> Result<Emergency, Error> {
     let b = Reader::new(rest).bytes(Emergency::LEN, "emergency")?;
     let mut bytes = [0; Emergency::LEN];
@@ -1119,7 +1119,7 @@ mod tests {
         let b = [0x21, 0x00, 0x20, 0x00, 0x02, 0, 0, 0, 1, 2, 3];
         assert_eq!(
             SdoRequest::parse(&b),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "SDO complete size",
                 value: 2,
                 available: 3

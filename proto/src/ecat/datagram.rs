@@ -16,8 +16,8 @@
 
 use std::fmt;
 
-use super::wire::{fit, le16, le32, Reader};
-use super::Error;
+use super::wire::{fit, le16, le32};
+use crate::wire::{Error, Reader};
 
 /// Datagram header length (command .. IRQ).
 pub const HEADER_LEN: usize = 10;
@@ -258,7 +258,7 @@ impl<T: AsRef<[u8]>> Datagram<T> {
         }
         let len = self.len();
         if HEADER_LEN + len + WKC_LEN != got {
-            return Err(Error::BadLength {
+            return Err(Error::Length {
                 field: "datagram length",
                 value: len,
                 available: got - HEADER_LEN - WKC_LEN,
@@ -498,7 +498,7 @@ impl DatagramRepr {
     pub fn emit_into(&self, buf: &mut [u8]) -> Result<(), Error> {
         let len = fit("datagram data", self.data.len(), MAX_DATA_LEN)?;
         if buf.len() != self.buffer_len() {
-            return Err(Error::BadLength {
+            return Err(Error::Length {
                 field: "datagram buffer",
                 value: buf.len(),
                 available: self.buffer_len(),
@@ -616,7 +616,7 @@ mod tests {
                 ),
                 _ => assert_eq!(
                     e,
-                    Error::BadLength {
+                    Error::Length {
                         field: "datagram length",
                         value: 2,
                         available: n - 12
@@ -643,7 +643,7 @@ mod tests {
         assert_eq!((d.data().len(), d.wkc()), (2, 2));
         assert!(matches!(
             d.check_len(),
-            Err(Error::BadLength { value: 0x7FF, .. })
+            Err(Error::Length { value: 0x7FF, .. })
         ));
         d.set_ado(0x0120);
         d.set_index(9);
@@ -695,7 +695,7 @@ mod tests {
         let ok = DatagramRepr::logical(Command::LWR, 0, 0, vec![0; 4]);
         assert!(matches!(
             ok.emit_into(&mut [0; 10]),
-            Err(Error::BadLength { .. })
+            Err(Error::Length { .. })
         ));
     }
 }

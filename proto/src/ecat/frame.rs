@@ -18,8 +18,8 @@ use std::ops::Range;
 
 use super::datagram::{Datagram, DatagramRepr, HEADER_LEN as DG_HEADER, WKC_LEN};
 use super::wire::{fit, le16};
-use super::Error;
 use crate::eth::{EthernetRepr, MacAddr, ETHERTYPE_ECAT};
+use crate::wire::Error;
 
 /// UDP port of EtherCAT frames over UDP (ETG.1000.4 "EtherCAT frame inside a UDP datagram":
 /// 88A4h = 34980).
@@ -106,7 +106,7 @@ impl<T: AsRef<[u8]>> EcatFrame<T> {
         }
         let len = self.len();
         if len > got - HEADER_LEN {
-            return Err(Error::BadLength {
+            return Err(Error::Length {
                 field: "EtherCAT length",
                 value: len,
                 available: got - HEADER_LEN,
@@ -442,7 +442,7 @@ mod tests {
         );
         assert_eq!(
             EcatFrameRepr::parse_bytes(&FRAME[..29]),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "EtherCAT length",
                 value: 28,
                 available: 27

@@ -15,8 +15,8 @@
 
 use std::fmt;
 
-use super::wire::{fit, le16, Reader};
-use super::Error;
+use super::wire::{fit, le16};
+use crate::wire::{Error, Reader};
 
 /// Mailbox header length.
 pub const HEADER_LEN: usize = 6;
@@ -129,7 +129,7 @@ impl<T: AsRef<[u8]>> Mailbox<T> {
             });
         }
         if self.len() > got - HEADER_LEN {
-            return Err(Error::BadLength {
+            return Err(Error::Length {
                 field: "mailbox length",
                 value: self.len(),
                 available: got - HEADER_LEN,
@@ -456,7 +456,7 @@ mod tests {
             } else {
                 assert_eq!(
                     e,
-                    Error::BadLength {
+                    Error::Length {
                         field: "mailbox length",
                         value: 10,
                         available: n - 6

@@ -11,13 +11,12 @@
 //!   codes, emergencies.
 //!
 //! Every checked view (`new_checked`) and every `parse` checks each length and returns
-//! [`Error`] naming the field on malformed input; none panics on any byte sequence. Byte order
-//! is little-endian throughout.
+//! [`crate::wire::Error`] naming the field on malformed input; none panics on any byte
+//! sequence. Byte order is little-endian throughout.
 
 pub mod al;
 pub mod coe;
 pub mod datagram;
-mod error;
 pub mod frame;
 pub mod mailbox;
 pub mod register;
@@ -28,5 +27,4 @@ mod wire;
 mod no_panic;
 
 pub use datagram::{Command, Datagram, DatagramRepr};
-pub use error::Error;
 pub use frame::{EcatFrame, EcatFrameRepr, ECAT_UDP_PORT};

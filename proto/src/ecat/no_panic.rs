@@ -1,14 +1,15 @@
 //! Every parser of `proto::ecat` and `proto::eth` against mutated and random input: each
 //! returns `Ok` or a typed `Err`, none panics (the promise of the module documentation).
 
+use super::al;
 use super::coe::{CoeMessage, Emergency, SdoData, SdoInfo, SdoRequest, SdoResponse};
 use super::datagram::{Command, DatagramRepr};
 use super::frame::{EcatFrame, EcatFrameRepr};
 use super::mailbox::{MailboxError, MailboxRepr, MailboxType};
 use super::register::{FmmuRepr, SmRepr};
 use super::sii::{Category, CategoryType, General, SiiHeader, SiiRepr};
-use super::{al, Error};
 use crate::eth::{EthernetFrame, EthernetRepr, MacAddr};
+use crate::wire::Error;
 
 /// A small deterministic generator (xorshift).
 struct Rng(u64);

@@ -10,8 +10,7 @@
 
 use std::fmt;
 
-use super::wire::Reader;
-use super::Error;
+use crate::wire::{Error, Reader};
 
 pub use super::al::{AlControl, AlStatus};
 

@@ -28,8 +28,8 @@
 
 use std::fmt;
 
-use super::wire::{fit, le16, le32, Reader};
-use super::Error;
+use super::wire::{fit, le16, le32};
+use crate::wire::{Error, Reader};
 
 /// Word addresses of the fixed header.
 pub mod word {
@@ -177,7 +177,7 @@ impl SiiHeader {
         let b = Reader::new(bytes).bytes(HEADER_LEN, "SII header")?;
         let computed = crc8(&b[..14]);
         if b[14] != computed {
-            return Err(Error::Checksum {
+            return Err(Error::SiiChecksum {
                 stored: b[14],
                 computed,
             });
@@ -776,7 +776,7 @@ impl SiiRepr {
             let available = r.remaining();
             let data = r
                 .bytes(2 * words, "SII category data")
-                .map_err(|_| Error::BadLength {
+                .map_err(|_| Error::Length {
                     field: "SII category size (bytes)",
                     value: 2 * words,
                     available,
@@ -1045,7 +1045,10 @@ mod tests {
         let img = sample().emit_image().unwrap();
         let mut bad = img.clone();
         bad[8] ^= 1; // alias changed, checksum not
-        assert!(matches!(SiiRepr::parse(&bad), Err(Error::Checksum { .. })));
+        assert!(matches!(
+            SiiRepr::parse(&bad),
+            Err(Error::SiiChecksum { .. })
+        ));
         // Truncation at every length up to the END marker is an error.
         let end = sample().emit().unwrap().len();
         for n in 0..end {
@@ -1058,7 +1061,7 @@ mod tests {
         lie[131] = 0x7F;
         assert!(matches!(
             SiiRepr::parse(&lie),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "SII category size (bytes)",
                 ..
             })

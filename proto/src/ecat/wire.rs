@@ -1,13 +1,8 @@
-//! Length-checked little-endian reading shared by the EtherCAT codecs (EtherCAT is
-//! little-endian throughout, ETG.1000.4; only the Ethernet header is big-endian): the reader
-//! of `crate::wire` reporting [`Error`]s, and the helpers for slices already checked.
+//! Little-endian helpers of the EtherCAT codecs (EtherCAT is little-endian throughout,
+//! ETG.1000.4; only the Ethernet header is big-endian) for slices already checked, and the
+//! check of a length to emit. Reading unchecked bytes is `crate::wire`'s reader.
 
-use super::Error;
-
-/// The shared length-checked reader, reporting [`Error`]s.
-pub(crate) type Reader<'a> = crate::wire::Reader<'a, Error>;
-
-crate::wire::read_error!(Error);
+use crate::wire::Error;
 
 /// Little-endian u16 at `at` of a slice the caller has checked.
 pub(crate) fn le16(b: &[u8], at: usize) -> u16 {
@@ -33,16 +28,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn short_reads_are_ecat_errors_and_lengths_must_fit() {
-        // 01 02 03: a u16, then one byte where a u32 was wanted.
-        let mut r = Reader::new(&[1, 2, 3]);
-        assert_eq!(r.u16("a"), Ok(0x0201));
-        let short = Error::Truncated {
-            what: "b",
-            need: 4,
-            got: 1,
-        };
-        assert_eq!(r.u32("b"), Err(short));
+    fn lengths_must_fit() {
         assert_eq!(
             fit("x", 3, 2),
             Err(Error::TooLong {

@@ -7,7 +7,8 @@
 use std::fmt;
 
 use super::epath::EPath;
-use super::wire::{Put, Reader, WireError};
+use super::wire::Put;
+use crate::wire::{Error, Reader};
 
 /// CIP object class ids.
 pub mod class {
@@ -180,13 +181,14 @@ pub fn request_service(bytes: &[u8]) -> Option<u8> {
 
 impl MrRequest {
     /// Parses a request filling `bytes`.
-    pub fn parse(bytes: &[u8]) -> Result<MrRequest, WireError> {
+    pub fn parse(bytes: &[u8]) -> Result<MrRequest, Error> {
         let mut r = Reader::new(bytes);
         let service = r.u8("request service")?;
         if service & 0x80 != 0 {
-            return Err(WireError::Invalid {
-                what: "request service",
-                detail: format!("{service:02X}h has the reply bit set"),
+            return Err(Error::Invalid {
+                field: "request service",
+                value: u32::from(service),
+                why: "the reply bit (80h) is set",
             });
         }
         let words = usize::from(r.u8("request path size")?);
@@ -246,13 +248,14 @@ impl MrResponse {
     }
 
     /// Parses a response filling `bytes`.
-    pub fn parse(bytes: &[u8]) -> Result<MrResponse, WireError> {
+    pub fn parse(bytes: &[u8]) -> Result<MrResponse, Error> {
         let mut r = Reader::new(bytes);
         let service = r.u8("reply service")?;
         if service & 0x80 == 0 {
-            return Err(WireError::Invalid {
-                what: "reply service",
-                detail: format!("{service:02X}h lacks the reply bit"),
+            return Err(Error::Invalid {
+                field: "reply service",
+                value: u32::from(service),
+                why: "the reply bit (80h) is clear",
             });
         }
         r.u8("reply reserved byte")?;
@@ -324,9 +327,9 @@ mod tests {
     fn a_path_size_beyond_the_message_is_an_error() {
         assert!(matches!(
             MrRequest::parse(&[0x0E, 0x05, 0x20, 0x01]),
-            Err(WireError::Length {
-                declared: 10,
-                actual: 2,
+            Err(Error::Length {
+                value: 10,
+                available: 2,
                 ..
             })
         ));

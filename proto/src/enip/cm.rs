@@ -3,7 +3,8 @@
 
 use super::cip::MrRequest;
 use super::epath::EPath;
-use super::wire::{Put, Reader, WireError};
+use super::wire::Put;
+use crate::wire::{Error, Reader};
 
 /// Extended status codes of the Connection Manager (general status 01h).
 pub mod ext {
@@ -205,7 +206,7 @@ impl ForwardOpen {
     }
 
     /// Parses the service data of Forward_Open (`large` false) or Large_Forward_Open.
-    pub fn parse(data: &[u8], large: bool) -> Result<ForwardOpen, WireError> {
+    pub fn parse(data: &[u8], large: bool) -> Result<ForwardOpen, Error> {
         let mut r = Reader::new(data);
         let priority_tick = r.u8("priority/time tick")?;
         let timeout_ticks = r.u8("timeout ticks")?;
@@ -310,7 +311,7 @@ pub struct ForwardOpenReply {
 
 impl ForwardOpenReply {
     /// Parses the reply data.
-    pub fn parse(data: &[u8]) -> Result<ForwardOpenReply, WireError> {
+    pub fn parse(data: &[u8]) -> Result<ForwardOpenReply, Error> {
         let mut r = Reader::new(data);
         let reply = ForwardOpenReply {
             o_t_id: r.u32("O→T connection id")?,
@@ -380,7 +381,7 @@ impl ForwardClose {
     }
 
     /// Parses the service data.
-    pub fn parse(data: &[u8]) -> Result<ForwardClose, WireError> {
+    pub fn parse(data: &[u8]) -> Result<ForwardClose, Error> {
         let mut r = Reader::new(data);
         let priority_tick = r.u8("priority/time tick")?;
         let timeout_ticks = r.u8("timeout ticks")?;
@@ -438,7 +439,7 @@ pub struct UnconnectedSend {
 
 impl UnconnectedSend {
     /// Parses the service data.
-    pub fn parse(data: &[u8]) -> Result<UnconnectedSend, WireError> {
+    pub fn parse(data: &[u8]) -> Result<UnconnectedSend, Error> {
         let mut r = Reader::new(data);
         let priority_tick = r.u8("priority/time tick")?;
         let timeout_ticks = r.u8("timeout ticks")?;
@@ -477,7 +478,7 @@ impl UnconnectedSend {
     }
 
     /// The embedded request, parsed.
-    pub fn embedded(&self) -> Result<MrRequest, WireError> {
+    pub fn embedded(&self) -> Result<MrRequest, Error> {
         MrRequest::parse(&self.request)
     }
 }
@@ -539,7 +540,7 @@ mod tests {
         b.truncate(b.len() - 2);
         assert!(matches!(
             ForwardOpen::parse(&b, false),
-            Err(WireError::Length { .. })
+            Err(Error::Length { .. })
         ));
         assert!(ForwardOpen::parse(&b[..10], false).is_err());
     }

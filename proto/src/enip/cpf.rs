@@ -7,7 +7,8 @@
 
 use std::net::{Ipv4Addr, SocketAddrV4};
 
-use super::wire::{len16, Put, Reader, WireError};
+use super::wire::{len16, Put};
+use crate::wire::{Error, Reader};
 
 /// Item type ids.
 pub mod item_type {
@@ -62,19 +63,20 @@ pub enum Item {
     },
 }
 
-fn sockaddr(data: &[u8]) -> Result<SocketAddrV4, WireError> {
+fn sockaddr(data: &[u8]) -> Result<SocketAddrV4, Error> {
     if data.len() != 16 {
-        return Err(WireError::Length {
-            what: "socket address item",
-            declared: data.len(),
-            actual: 16,
+        return Err(Error::Length {
+            field: "socket address item",
+            value: data.len(),
+            available: 16,
         });
     }
     let family = u16::from_be_bytes([data[0], data[1]]);
     if family != 2 {
-        return Err(WireError::Invalid {
-            what: "socket address family",
-            detail: format!("{family}, must be 2 (AF_INET)"),
+        return Err(Error::Invalid {
+            field: "socket address family",
+            value: u32::from(family),
+            why: "must be 2 (AF_INET)",
         });
     }
     let port = u16::from_be_bytes([data[2], data[3]]);
@@ -107,15 +109,15 @@ impl Item {
         }
     }
 
-    fn parse(type_id: u16, data: &[u8]) -> Result<Item, WireError> {
+    fn parse(type_id: u16, data: &[u8]) -> Result<Item, Error> {
         let fixed = |n: usize, what: &'static str| {
             if data.len() == n {
                 Ok(())
             } else {
-                Err(WireError::Length {
-                    what,
-                    declared: data.len(),
-                    actual: n,
+                Err(Error::Length {
+                    field: what,
+                    value: data.len(),
+                    available: n,
                 })
             }
         };
@@ -181,7 +183,7 @@ impl Cpf {
     }
 
     /// Parses an item count and exactly that many items filling the buffer.
-    pub fn parse(bytes: &[u8]) -> Result<Cpf, WireError> {
+    pub fn parse(bytes: &[u8]) -> Result<Cpf, Error> {
         let mut r = Reader::new(bytes);
         let count = r.u16("CPF item count")?;
         let mut items = Vec::with_capacity(usize::from(count).min(8));
@@ -196,14 +198,14 @@ impl Cpf {
     }
 
     /// The bytes.
-    pub fn emit(&self) -> Result<Vec<u8>, WireError> {
+    pub fn emit(&self) -> Result<Vec<u8>, Error> {
         let mut out = Vec::with_capacity(64);
         self.emit_into(&mut out)?;
         Ok(out)
     }
 
     /// Appends the encoded list to `out`: one buffer for a whole message.
-    pub fn emit_into(&self, out: &mut Vec<u8>) -> Result<(), WireError> {
+    pub fn emit_into(&self, out: &mut Vec<u8>) -> Result<(), Error> {
         out.put_u16(len16("CPF item count", self.items.len())?);
         for item in &self.items {
             out.put_u16(item.type_id());
@@ -254,26 +256,26 @@ mod tests {
         // Two items announced, one present.
         assert!(matches!(
             Cpf::parse(&[2, 0, 0, 0, 0, 0]),
-            Err(WireError::Truncated { .. })
+            Err(Error::Truncated { .. })
         ));
         // Item length beyond the buffer.
         assert!(matches!(
             Cpf::parse(&[1, 0, 0xB2, 0, 9, 0, 1, 2]),
-            Err(WireError::Length {
-                declared: 9,
-                actual: 2,
+            Err(Error::Length {
+                value: 9,
+                available: 2,
                 ..
             })
         ));
         // A null address with data.
         assert!(matches!(
             Cpf::parse(&[1, 0, 0, 0, 1, 0, 7]),
-            Err(WireError::Length { .. })
+            Err(Error::Length { .. })
         ));
         // Bytes after the last item.
         assert!(matches!(
             Cpf::parse(&[1, 0, 0, 0, 0, 0, 9]),
-            Err(WireError::Trailing { .. })
+            Err(Error::Trailing { .. })
         ));
     }
 }

@@ -14,7 +14,8 @@
 
 use std::fmt;
 
-use super::wire::{len16, Put, Reader, WireError};
+use super::wire::{len16, Put};
+use crate::wire::{Error, Reader};
 
 /// Length of the encapsulation header.
 pub const HEADER_LEN: usize = 24;
@@ -119,10 +120,10 @@ pub struct EncapFrame<T: AsRef<[u8]>> {
 
 impl<T: AsRef<[u8]>> EncapFrame<T> {
     /// Wraps a buffer holding one whole message (header and the data its length field names).
-    pub fn new_checked(buffer: T) -> Result<Self, WireError> {
+    pub fn new_checked(buffer: T) -> Result<Self, Error> {
         let b = buffer.as_ref();
         if b.len() < HEADER_LEN {
-            return Err(WireError::Truncated {
+            return Err(Error::Truncated {
                 what: "encapsulation header",
                 need: HEADER_LEN,
                 got: b.len(),
@@ -131,10 +132,10 @@ impl<T: AsRef<[u8]>> EncapFrame<T> {
         let declared = usize::from(u16::from_le_bytes([b[2], b[3]]));
         let actual = b.len() - HEADER_LEN;
         if declared != actual {
-            return Err(WireError::Length {
-                what: "encapsulation length",
-                declared,
-                actual,
+            return Err(Error::Length {
+                field: "encapsulation length",
+                value: declared,
+                available: actual,
             });
         }
         Ok(EncapFrame { buffer })
@@ -202,7 +203,7 @@ pub struct EncapRepr {
 
 impl EncapRepr {
     /// Parses one whole message.
-    pub fn parse(bytes: &[u8]) -> Result<EncapRepr, WireError> {
+    pub fn parse(bytes: &[u8]) -> Result<EncapRepr, Error> {
         let f = EncapFrame::new_checked(bytes)?;
         Ok(EncapRepr {
             command: f.command().0,
@@ -227,7 +228,7 @@ impl EncapRepr {
     }
 
     /// The message's bytes.
-    pub fn emit(&self) -> Result<Vec<u8>, WireError> {
+    pub fn emit(&self) -> Result<Vec<u8>, Error> {
         let len = len16("encapsulation data", self.data.len())?;
         let mut out = Vec::with_capacity(HEADER_LEN + self.data.len());
         out.put_u16(self.command);
@@ -258,7 +259,7 @@ impl RegisterSession {
     };
 
     /// Parses the 4 data bytes.
-    pub fn parse(data: &[u8]) -> Result<RegisterSession, WireError> {
+    pub fn parse(data: &[u8]) -> Result<RegisterSession, Error> {
         let mut r = Reader::new(data);
         let rs = RegisterSession {
             version: r.u16("RegisterSession protocol version")?,
@@ -291,7 +292,7 @@ pub struct SendData {
 
 impl SendData {
     /// Parses the data of a SendRRData/SendUnitData message.
-    pub fn parse(data: &[u8]) -> Result<SendData, WireError> {
+    pub fn parse(data: &[u8]) -> Result<SendData, Error> {
         let mut r = Reader::new(data);
         let interface = r.u32("interface handle")?;
         let timeout = r.u16("timeout")?;
@@ -304,7 +305,7 @@ impl SendData {
     }
 
     /// The bytes.
-    pub fn emit(&self) -> Result<Vec<u8>, WireError> {
+    pub fn emit(&self) -> Result<Vec<u8>, Error> {
         let mut out = Vec::with_capacity(64);
         out.put_u32(self.interface);
         out.put_u16(self.timeout);
@@ -343,15 +344,15 @@ mod tests {
         b[2] = 5;
         assert_eq!(
             EncapRepr::parse(&b),
-            Err(WireError::Length {
-                what: "encapsulation length",
-                declared: 5,
-                actual: 4
+            Err(Error::Length {
+                field: "encapsulation length",
+                value: 5,
+                available: 4
             })
         );
         assert!(matches!(
             EncapRepr::parse(&REGISTER[..10]),
-            Err(WireError::Truncated {
+            Err(Error::Truncated {
                 need: 24,
                 got: 10,
                 ..

@@ -7,7 +7,8 @@
 
 use std::fmt;
 
-use super::wire::{Put, Reader, WireError};
+use super::wire::Put;
+use crate::wire::{Error, Reader};
 
 /// One path segment.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -72,10 +73,11 @@ fn logical(out: &mut Vec<u8>, kind: u8, v: u32) {
     }
 }
 
-fn narrow(v: u32, what: &'static str) -> Result<u16, WireError> {
-    u16::try_from(v).map_err(|_| WireError::Invalid {
-        what,
-        detail: format!("32-bit value {v} where 16 bits are allowed"),
+fn narrow(v: u32, what: &'static str) -> Result<u16, Error> {
+    u16::try_from(v).map_err(|_| Error::Invalid {
+        field: what,
+        value: v,
+        why: "a 32-bit value where 16 bits are allowed",
     })
 }
 
@@ -119,7 +121,7 @@ impl EPath {
     }
 
     /// Parses a padded path filling `bytes`.
-    pub fn parse(bytes: &[u8]) -> Result<EPath, WireError> {
+    pub fn parse(bytes: &[u8]) -> Result<EPath, Error> {
         let mut r = Reader::new(bytes);
         let mut segments = Vec::new();
         while r.remaining() > 0 {
@@ -128,7 +130,7 @@ impl EPath {
         Ok(EPath { segments })
     }
 
-    fn segment(r: &mut Reader<'_>) -> Result<Segment, WireError> {
+    fn segment(r: &mut Reader<'_>) -> Result<Segment, Error> {
         let t = r.u8("path segment type")?;
         match t >> 5 {
             0 => {
@@ -151,9 +153,10 @@ impl EPath {
                     vec![r.u8("port segment link address")?]
                 };
                 if port == 0 {
-                    return Err(WireError::Invalid {
-                        what: "port segment",
-                        detail: "port 0 is reserved".into(),
+                    return Err(Error::Invalid {
+                        field: "port segment port",
+                        value: 0,
+                        why: "port 0 is reserved",
                     });
                 }
                 Ok(Segment::Port { port, link })
@@ -164,16 +167,18 @@ impl EPath {
                 if kind == 5 {
                     // Special: electronic key.
                     if t != 0x34 {
-                        return Err(WireError::Invalid {
-                            what: "logical segment",
-                            detail: format!("special segment {t:02X}h is not an electronic key"),
+                        return Err(Error::Invalid {
+                            field: "logical segment",
+                            value: u32::from(t),
+                            why: "a special segment other than the electronic key (34h)",
                         });
                     }
                     let fmt = r.u8("electronic key format")?;
                     if fmt != 4 {
-                        return Err(WireError::Invalid {
-                            what: "electronic key format",
-                            detail: format!("{fmt}, only format 4 exists"),
+                        return Err(Error::Invalid {
+                            field: "electronic key format",
+                            value: u32::from(fmt),
+                            why: "only format 4 exists",
                         });
                     }
                     return Ok(Segment::Key(ElectronicKey {
@@ -195,9 +200,10 @@ impl EPath {
                         r.u32("logical segment value")?
                     }
                     _ => {
-                        return Err(WireError::Invalid {
-                            what: "logical segment format",
-                            detail: format!("{t:02X}h uses the reserved format 3"),
+                        return Err(Error::Invalid {
+                            field: "logical segment format",
+                            value: u32::from(t),
+                            why: "the reserved format 3",
                         })
                     }
                 };
@@ -210,9 +216,10 @@ impl EPath {
                         "connection point segment",
                     )?)),
                     4 => Ok(Segment::Attribute(narrow(value, "attribute segment")?)),
-                    _ => Err(WireError::Invalid {
-                        what: "logical segment",
-                        detail: format!("logical type {kind} ({t:02X}h) is not supported"),
+                    _ => Err(Error::Invalid {
+                        field: "logical segment type",
+                        value: u32::from(t),
+                        why: "not a class, instance, member, connection point or attribute",
                     }),
                 }
             }
@@ -220,9 +227,10 @@ impl EPath {
                 let words = usize::from(r.u8("data segment size")?);
                 Ok(Segment::Data(r.bytes(words * 2, "data segment")?.to_vec()))
             }
-            _ => Err(WireError::Invalid {
-                what: "path segment type",
-                detail: format!("{t:02X}h is not a port, logical or data segment"),
+            _ => Err(Error::Invalid {
+                field: "path segment type",
+                value: u32::from(t),
+                why: "not a port, logical or data segment",
             }),
         }
     }

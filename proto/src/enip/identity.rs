@@ -3,7 +3,8 @@
 use std::net::SocketAddrV4;
 
 use super::cpf::sockaddr_bytes;
-use super::wire::{Put, Reader, WireError};
+use super::wire::Put;
+use crate::wire::{Error, Reader};
 
 /// What a device says about itself (Identity object, class 01h, instance 1).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -35,7 +36,7 @@ pub fn short_string(s: &str) -> Vec<u8> {
     out
 }
 
-fn read_short_string(r: &mut Reader<'_>) -> Result<String, WireError> {
+fn read_short_string(r: &mut Reader<'_>) -> Result<String, Error> {
     let n = usize::from(r.u8("product name length")?);
     Ok(String::from_utf8_lossy(r.bytes(n, "product name")?).into_owned())
 }
@@ -77,13 +78,14 @@ impl Identity {
     }
 
     /// Parses a ListIdentity item's data.
-    pub fn parse_list_identity_item(data: &[u8]) -> Result<(Identity, SocketAddrV4), WireError> {
+    pub fn parse_list_identity_item(data: &[u8]) -> Result<(Identity, SocketAddrV4), Error> {
         let mut r = Reader::new(data);
         let version = r.u16("encapsulation protocol version")?;
         if version != 1 {
-            return Err(WireError::Invalid {
-                what: "ListIdentity protocol version",
-                detail: format!("{version}, must be 1"),
+            return Err(Error::Invalid {
+                field: "ListIdentity protocol version",
+                value: u32::from(version),
+                why: "must be 1",
             });
         }
         let sa = r.bytes(16, "socket address")?;

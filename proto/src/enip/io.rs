@@ -6,7 +6,8 @@
 //! Format" (application data only).
 
 use super::cpf::{item_type, Cpf, Item};
-use super::wire::{Put, Reader, WireError};
+use super::wire::Put;
+use crate::wire::{Error, Reader};
 
 /// UDP port of class-1 I/O.
 pub const IO_PORT: u16 = 2222;
@@ -30,24 +31,19 @@ pub struct IoFrame {
 
 impl IoFrame {
     /// Parses a datagram; `run_idle` says whether the connection carries the 32-bit header.
-    pub fn parse(bytes: &[u8], run_idle: bool) -> Result<IoFrame, WireError> {
+    pub fn parse(bytes: &[u8], run_idle: bool) -> Result<IoFrame, Error> {
         let cpf = Cpf::parse(bytes)?;
         let (connection, sequence) = match cpf.items.first() {
             Some(Item::SequencedAddress {
                 connection,
                 sequence,
             }) => (*connection, *sequence),
-            _ => {
-                return Err(WireError::Invalid {
-                    what: "I/O frame",
-                    detail: "the first item is not a sequenced address item".into(),
-                })
-            }
+            first => return Err(not_sequenced(first)),
         };
         let Some(Item::ConnectedData(payload)) = cpf.find(item_type::CONNECTED_DATA) else {
-            return Err(WireError::Invalid {
+            return Err(Error::Missing {
                 what: "I/O frame",
-                detail: "no connected data item".into(),
+                part: "connected data item",
             });
         };
         let mut r = Reader::new(payload);
@@ -67,7 +63,7 @@ impl IoFrame {
     }
 
     /// The datagram.
-    pub fn emit(&self) -> Result<Vec<u8>, WireError> {
+    pub fn emit(&self) -> Result<Vec<u8>, Error> {
         let mut payload = Vec::with_capacity(6 + self.data.len());
         payload.put_u16(self.count);
         if let Some(h) = self.run_idle {
@@ -86,19 +82,32 @@ impl IoFrame {
 
     /// The connection id of a datagram, read without knowing the connection's format (to find
     /// the connection first).
-    pub fn connection_of(bytes: &[u8]) -> Result<u32, WireError> {
+    pub fn connection_of(bytes: &[u8]) -> Result<u32, Error> {
         match Cpf::parse(bytes)?.items.first() {
             Some(Item::SequencedAddress { connection, .. }) => Ok(*connection),
-            _ => Err(WireError::Invalid {
-                what: "I/O frame",
-                detail: "the first item is not a sequenced address item".into(),
-            }),
+            first => Err(not_sequenced(first)),
         }
     }
 
     /// Whether the run/idle header says "run".
     pub fn is_run(&self) -> bool {
         self.run_idle.is_none_or(|h| h & 1 == 1)
+    }
+}
+
+/// The error for an I/O frame whose first item is not the sequenced address item: the
+/// connection id is read from there, so nothing else may come first.
+fn not_sequenced(first: Option<&Item>) -> Error {
+    match first {
+        None => Error::Missing {
+            what: "I/O frame",
+            part: "sequenced address item",
+        },
+        Some(item) => Error::Invalid {
+            field: "I/O frame first item type",
+            value: u32::from(item.type_id()),
+            why: "not the sequenced address item (8002h)",
+        },
     }
 }
 
@@ -133,14 +142,28 @@ mod tests {
         let b = Cpf::new(vec![Item::Null, Item::ConnectedData(vec![0, 0])])
             .emit()
             .unwrap();
-        assert!(IoFrame::parse(&b, false).is_err());
+        assert!(matches!(
+            IoFrame::parse(&b, false),
+            Err(Error::Invalid { value: 0, .. })
+        ));
+        let b = Cpf::new(vec![]).emit().unwrap();
+        assert!(matches!(
+            IoFrame::connection_of(&b),
+            Err(Error::Missing {
+                part: "sequenced address item",
+                ..
+            })
+        ));
         let b = Cpf::new(vec![Item::SequencedAddress {
             connection: 1,
             sequence: 1,
         }])
         .emit()
         .unwrap();
-        assert!(IoFrame::parse(&b, false).is_err());
+        assert_eq!(
+            IoFrame::parse(&b, false).unwrap_err().to_string(),
+            "I/O frame: no connected data item"
+        );
         let b = Cpf::new(vec![
             Item::SequencedAddress {
                 connection: 1,
@@ -152,7 +175,7 @@ mod tests {
         .unwrap();
         assert!(matches!(
             IoFrame::parse(&b, true),
-            Err(WireError::Truncated { .. })
+            Err(Error::Truncated { .. })
         ));
     }
 }

@@ -1,67 +1,9 @@
-//! Length-checked little-endian reading shared by the EtherNet/IP codecs.
+//! Little-endian writing shared by the EtherNet/IP codecs.
 //!
 //! CIP and the encapsulation layer are little-endian; only the socket-address item is
-//! big-endian (network order). Every read names what it was reading, so an error says which
-//! field of which structure ran short.
+//! big-endian (network order). Reading is `crate::wire`'s length-checked reader.
 
-/// A malformed EtherNet/IP or CIP structure.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum WireError {
-    /// The bytes end before the field.
-    #[error("{what}: truncated, need {need} bytes, got {got}")]
-    Truncated {
-        /// The field or structure.
-        what: &'static str,
-        /// Bytes needed.
-        need: usize,
-        /// Bytes present.
-        got: usize,
-    },
-    /// A length field disagrees with the bytes present.
-    #[error("{what}: length field says {declared} bytes, {actual} present")]
-    Length {
-        /// The length field.
-        what: &'static str,
-        /// What the field says.
-        declared: usize,
-        /// What is there.
-        actual: usize,
-    },
-    /// Bytes left over after a structure that must fill its buffer.
-    #[error("{what}: {extra} unexpected trailing bytes")]
-    Trailing {
-        /// The structure.
-        what: &'static str,
-        /// How many bytes are left.
-        extra: usize,
-    },
-    /// A field holds a value the format does not allow.
-    #[error("{what}: {detail}")]
-    Invalid {
-        /// The field.
-        what: &'static str,
-        /// What is wrong.
-        detail: String,
-    },
-}
-
-/// The shared length-checked reader, reporting [`WireError`]s.
-pub(crate) type Reader<'a> = crate::wire::Reader<'a, WireError>;
-
-crate::wire::read_error!(WireError);
-
-impl<'a> Reader<'a> {
-    /// `n` bytes announced by the length field `what`; too few is a [`WireError::Length`]
-    /// naming that field, since the field, not the data, is what lies.
-    pub(crate) fn sized(&mut self, n: usize, what: &'static str) -> Result<&'a [u8], WireError> {
-        let actual = self.remaining();
-        self.bytes(n, what).map_err(|_| WireError::Length {
-            what,
-            declared: n,
-            actual,
-        })
-    }
-}
+use crate::wire::Error;
 
 /// Writes little-endian fields.
 pub(crate) trait Put {
@@ -83,10 +25,11 @@ impl Put for Vec<u8> {
 }
 
 /// A length that must fit a 16-bit field.
-pub(crate) fn len16(what: &'static str, n: usize) -> Result<u16, WireError> {
-    u16::try_from(n).map_err(|_| WireError::Invalid {
+pub(crate) fn len16(what: &'static str, n: usize) -> Result<u16, Error> {
+    u16::try_from(n).map_err(|_| Error::TooLong {
         what,
-        detail: format!("{n} bytes do not fit a 16-bit length"),
+        len: n,
+        max: usize::from(u16::MAX),
     })
 }
 
@@ -95,16 +38,15 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_lying_length_field_is_named() {
-        // A length field announcing 4 bytes where 3 are left.
-        let mut r = Reader::new(&[1, 2, 3]);
-        let lie = WireError::Length {
-            what: "item length",
-            declared: 4,
-            actual: 3,
-        };
-        assert_eq!(r.sized(4, "item length"), Err(lie));
-        assert_eq!(r.sized(3, "item length"), Ok(&[1u8, 2, 3][..]));
-        assert!(len16("x", 65_536).is_err());
+    fn a_length_must_fit_16_bits() {
+        assert_eq!(len16("x", 65_535), Ok(65_535));
+        assert_eq!(
+            len16("x", 65_536),
+            Err(Error::TooLong {
+                what: "x",
+                len: 65_536,
+                max: 65_535
+            })
+        );
     }
 }

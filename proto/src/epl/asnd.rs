@@ -20,8 +20,7 @@
 use std::net::Ipv4Addr;
 
 use super::nmt::{NmtCommand, NmtState};
-use super::Error;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// Length of an IdentResponse payload.
 pub const IDENT_RESPONSE_LEN: usize = 158;
@@ -46,7 +45,7 @@ pub struct Flags {
 }
 
 impl Flags {
-    fn parse(r: &mut Reader<'_, Error>) -> Result<Flags, Error> {
+    fn parse(r: &mut Reader<'_>) -> Result<Flags, Error> {
         let f = r.u8("EN/EC flags")?;
         let prrs = r.u8("PR/RS")?;
         Ok(Flags {
@@ -108,12 +107,12 @@ pub struct IdentResponse {
     pub vendor_ext2: [u8; 48],
 }
 
-fn ipv4(r: &mut Reader<'_, Error>, what: &'static str) -> Result<Ipv4Addr, Error> {
+fn ipv4(r: &mut Reader<'_>, what: &'static str) -> Result<Ipv4Addr, Error> {
     let b = r.bytes(4, what)?;
     Ok(Ipv4Addr::new(b[0], b[1], b[2], b[3]))
 }
 
-fn u64le(r: &mut Reader<'_, Error>, what: &'static str) -> Result<u64, Error> {
+fn u64le(r: &mut Reader<'_>, what: &'static str) -> Result<u64, Error> {
     let b = r.bytes(8, what)?;
     let mut a = [0u8; 8];
     a.copy_from_slice(b);
@@ -123,7 +122,7 @@ fn u64le(r: &mut Reader<'_, Error>, what: &'static str) -> Result<u64, Error> {
 impl IdentResponse {
     /// Parses an IdentResponse payload (bytes after the ServiceID; padding may follow).
     pub fn parse(payload: &[u8]) -> Result<IdentResponse, Error> {
-        let mut r = Reader::<Error>::new(payload);
+        let mut r = Reader::new(payload);
         let flags = Flags::parse(&mut r)?;
         let state = NmtState(r.u8("IdentResponse NMTStatus")?);
         r.u8("IdentResponse reserved")?;
@@ -248,7 +247,7 @@ impl ErrorEntry {
 
     /// Parses one 20-byte entry.
     pub fn parse(bytes: &[u8]) -> Result<ErrorEntry, Error> {
-        let mut r = Reader::<Error>::new(bytes);
+        let mut r = Reader::new(bytes);
         let e = ErrorEntry {
             entry_type: r.u16("error entry EntryType")?,
             code: r.u16("error entry ErrorCode")?,
@@ -289,7 +288,7 @@ impl StatusResponse {
     /// Parses a StatusResponse payload. Its list has no count: every whole 20-byte entry up
     /// to the end counts, and a trailing run of zero bytes (Ethernet padding) is not an entry.
     pub fn parse(payload: &[u8]) -> Result<StatusResponse, Error> {
-        let mut r = Reader::<Error>::new(payload);
+        let mut r = Reader::new(payload);
         let flags = Flags::parse(&mut r)?;
         let state = NmtState(r.u8("StatusResponse NMTStatus")?);
         r.bytes(3, "StatusResponse reserved")?;
@@ -340,7 +339,7 @@ pub struct NmtCommandFrame {
 impl NmtCommandFrame {
     /// Parses the payload.
     pub fn parse(payload: &[u8]) -> Result<NmtCommandFrame, Error> {
-        let mut r = Reader::<Error>::new(payload);
+        let mut r = Reader::new(payload);
         let command = NmtCommand(r.u8("NMTCommandID")?);
         r.u8("NMTCommand reserved")?;
         Ok(NmtCommandFrame {
@@ -371,7 +370,7 @@ pub struct NmtRequestFrame {
 impl NmtRequestFrame {
     /// Parses the payload.
     pub fn parse(payload: &[u8]) -> Result<NmtRequestFrame, Error> {
-        let mut r = Reader::<Error>::new(payload);
+        let mut r = Reader::new(payload);
         Ok(NmtRequestFrame {
             command: NmtCommand(r.u8("NMTRequestedCommandID")?),
             target: r.u8("NMTRequestedCommandTarget")?,

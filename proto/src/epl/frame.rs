@@ -16,8 +16,8 @@
 use std::fmt;
 
 use super::nmt::{NmtState, RequestedService, ServiceId};
-use super::{Error, HEADER_LEN};
-use crate::wire::Reader;
+use super::HEADER_LEN;
+use crate::wire::{Error, Reader};
 
 /// The message type (DS 301 §4.6.1.1.1; BU 0620 §2.4.3 table; the top bit is reserved).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -205,10 +205,10 @@ pub struct EplRepr {
     pub body: Body,
 }
 
-fn poll_payload<'a>(r: &mut Reader<'a, Error>, what: &'static str) -> Result<&'a [u8], Error> {
+fn poll_payload<'a>(r: &mut Reader<'a>, what: &'static str) -> Result<&'a [u8], Error> {
     let size = usize::from(r.u16(what)?);
     if size > r.remaining() {
-        return Err(Error::BadLength {
+        return Err(Error::Length {
             field: what,
             value: size,
             available: r.remaining(),
@@ -220,7 +220,7 @@ fn poll_payload<'a>(r: &mut Reader<'a, Error>, what: &'static str) -> Result<&'a
 impl EplRepr {
     /// Parses a frame; the message type must be one of the five.
     pub fn parse<T: AsRef<[u8]>>(frame: &EplFrame<T>) -> Result<EplRepr, Error> {
-        let mut r = Reader::<Error>::new(frame.body());
+        let mut r = Reader::new(frame.body());
         let body = match frame.message_type() {
             MessageType::SOC => {
                 r.u8("SoC reserved")?;
@@ -435,7 +435,7 @@ mod tests {
         let bytes = [0x03, 0x01, 0xF0, 0, 0x01, 0, 0x20, 0, 100, 0, 1, 2];
         assert_eq!(
             EplRepr::parse_bytes(&bytes),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "PReq size",
                 value: 100,
                 available: 2

@@ -16,19 +16,17 @@
 //!   NMT request;
 //! - [`sdo`]: the SDO sequence layer and command layer, over ASnd and over UDP.
 //!
-//! Every parser returns `Err` on malformed input and never panics ([`Error`] names the field).
-//! All multi-byte fields are little-endian except the IP addresses of the IdentResponse,
-//! which are in network order as DS 301 prints them.
+//! Every parser returns `Err` on malformed input and never panics ([`crate::wire::Error`]
+//! names the field). All multi-byte fields are little-endian except the IP addresses of the
+//! IdentResponse, which are in network order as DS 301 prints them.
 
 pub mod asnd;
-mod error;
 pub mod frame;
 pub mod nmt;
 #[cfg(test)]
 mod no_panic;
 pub mod sdo;
 
-pub use error::Error;
 pub use frame::{EplFrame, EplRepr, MessageType};
 pub use nmt::{NmtCommand, NmtState, RequestedService, ServiceId};
 

@@ -17,8 +17,7 @@
 
 use std::fmt;
 
-use super::Error;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// Length of the sequence layer header.
 pub const SEQ_LEN: usize = 4;
@@ -79,7 +78,7 @@ pub struct Seq {
 
 impl Seq {
     /// Parses the 4 bytes.
-    fn parse(r: &mut Reader<'_, Error>) -> Result<Seq, Error> {
+    fn parse(r: &mut Reader<'_>) -> Result<Seq, Error> {
         let b = r.bytes(SEQ_LEN, "SDO sequence layer")?;
         Ok(Seq {
             rsnr: b[0] >> 2,
@@ -257,14 +256,14 @@ impl Command {
 
     /// The index, sub-index and the data after them of a by-index request.
     pub fn by_index(&self) -> Result<(u16, u8, &[u8]), Error> {
-        let mut r = Reader::<Error>::new(&self.payload);
+        let mut r = Reader::new(&self.payload);
         let index = r.u16("SDO index")?;
         let sub = r.u8("SDO sub-index")?;
         r.u8("SDO reserved")?;
         Ok((index, sub, r.rest()))
     }
 
-    fn parse(r: &mut Reader<'_, Error>) -> Result<Command, Error> {
+    fn parse(r: &mut Reader<'_>) -> Result<Command, Error> {
         r.u8("SDO command reserved")?;
         let transaction = r.u8("SDO TransactionID")?;
         let flags = r.u8("SDO command flags")?;
@@ -272,14 +271,14 @@ impl Command {
         let size = usize::from(r.u16("SDO SegmentSize")?);
         r.u16("SDO command reserved")?;
         if size > r.remaining() {
-            return Err(Error::BadLength {
+            return Err(Error::Length {
                 field: "SDO SegmentSize",
                 value: size,
                 available: r.remaining(),
             });
         }
         let segmentation = Segmentation::from_bits(flags);
-        let mut body = Reader::<Error>::new(r.bytes(size, "SDO segment")?);
+        let mut body = Reader::new(r.bytes(size, "SDO segment")?);
         let data_size = match segmentation {
             Segmentation::Initiate if flags & 0x40 == 0 => Some(body.u32("SDO DataSize")?),
             _ => None,
@@ -329,7 +328,7 @@ impl SdoFrame {
     /// Parses the bytes after the ASnd ServiceID (or after [`UDP_PREFIX`]). Bytes after a
     /// command's segment are padding.
     pub fn parse(bytes: &[u8]) -> Result<SdoFrame, Error> {
-        let mut r = Reader::<Error>::new(bytes);
+        let mut r = Reader::new(bytes);
         let seq = Seq::parse(&mut r)?;
         // Nothing, or only zeros (Ethernet padding), after the sequence layer: a connection or
         // acknowledgement frame without a command (a command has at least its size or id).
@@ -455,7 +454,7 @@ mod tests {
         let b = [0x0A, 0x0A, 0, 0, 0, 1, 0, 2, 50, 0, 0, 0, 1, 2, 3, 4];
         assert!(matches!(
             SdoFrame::parse(&b),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "SDO SegmentSize",
                 ..
             })

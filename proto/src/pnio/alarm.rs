@@ -37,8 +37,8 @@
 use std::fmt;
 
 use super::frame::{read_frame_id, FrameId};
-use super::{Error, PnioStatus};
-use crate::wire::Reader;
+use super::PnioStatus;
+use crate::wire::{Error, Reader};
 
 /// The RTA-PDU header after the frame id (endpoints, type, flags, sequence numbers, length).
 pub const RTA_HEADER_LEN: usize = 12;
@@ -308,16 +308,16 @@ pub enum AlarmItem {
 }
 
 impl AlarmItem {
-    fn parse(r: &mut Reader<'_, Error>) -> Result<AlarmItem, Error> {
+    fn parse(r: &mut Reader<'_>) -> Result<AlarmItem, Error> {
         let usi = r.u16_be("UserStructureIdentifier")?;
-        let channel = |r: &mut Reader<'_, Error>| -> Result<ChannelDiagnosis, Error> {
+        let channel = |r: &mut Reader<'_>| -> Result<ChannelDiagnosis, Error> {
             Ok(ChannelDiagnosis {
                 channel: r.u16_be("ChannelNumber")?,
                 properties: ChannelProperties(r.u16_be("ChannelProperties")?),
                 error_type: r.u16_be("ChannelErrorType")?,
             })
         };
-        let ext = |r: &mut Reader<'_, Error>| -> Result<ExtChannelDiagnosis, Error> {
+        let ext = |r: &mut Reader<'_>| -> Result<ExtChannelDiagnosis, Error> {
             Ok(ExtChannelDiagnosis {
                 channel: channel(r)?,
                 ext_error_type: r.u16_be("ExtChannelErrorType")?,
@@ -339,7 +339,7 @@ impl AlarmItem {
                         value: u32::from(block_type),
                     });
                 }
-                let mut b = Reader::<Error>::new(body);
+                let mut b = Reader::new(body);
                 b.u16_be("MaintenanceItem padding")?;
                 let status = b.u32_be("MaintenanceStatus")?;
                 b.finish("MaintenanceItem")?;
@@ -397,11 +397,11 @@ impl AlarmItem {
 
 /// Reads a block header (type, length, version 1.0) and returns the type and the body after
 /// the version bytes.
-fn block<'a>(r: &mut Reader<'a, Error>, what: &'static str) -> Result<(u16, &'a [u8]), Error> {
+fn block<'a>(r: &mut Reader<'a>, what: &'static str) -> Result<(u16, &'a [u8]), Error> {
     let block_type = r.u16_be(what)?;
     let len = usize::from(r.u16_be("BlockLength")?);
     if len < 2 || len > r.remaining() {
-        return Err(Error::BadLength {
+        return Err(Error::Length {
             field: "BlockLength",
             value: len,
             available: r.remaining(),
@@ -412,6 +412,7 @@ fn block<'a>(r: &mut Reader<'a, Error>, what: &'static str) -> Result<(u16, &'a 
         return Err(Error::Invalid {
             field: "BlockVersion",
             value: u32::from(u16::from_be_bytes([body[0], body[1]])),
+            why: "the typed blocks are version 1.0",
         });
     }
     Ok((block_type, &body[2..]))
@@ -593,7 +594,7 @@ impl AlarmRepr {
     /// Parses an alarm frame from its frame id on; bytes after VarPartLen are padding.
     pub fn parse(buf: &[u8]) -> Result<AlarmRepr, Error> {
         let frame_id = read_frame_id(buf)?;
-        let mut r = Reader::<Error>::new(&buf[2..]);
+        let mut r = Reader::new(&buf[2..]);
         let dst_endpoint = r.u16_be("AlarmDstEndpoint")?;
         let src_endpoint = r.u16_be("AlarmSrcEndpoint")?;
         let pdu = r.u8("PDUType")?;
@@ -602,7 +603,7 @@ impl AlarmRepr {
         let ack_seq = r.u16_be("AckSeqNum")?;
         let var_len = usize::from(r.u16_be("VarPartLen")?);
         if var_len > r.remaining() {
-            return Err(Error::BadLength {
+            return Err(Error::Length {
                 field: "VarPartLen",
                 value: var_len,
                 available: r.remaining(),
@@ -613,7 +614,7 @@ impl AlarmRepr {
         let body = match pdu_type {
             RtaPduType::DATA => parse_data(var)?,
             RtaPduType::ERR => {
-                let mut v = Reader::<Error>::new(var);
+                let mut v = Reader::new(var);
                 let s = v.bytes(4, "RTA ERR PNIOStatus")?;
                 RtaBody::Error {
                     status: PnioStatus::new(s[0], s[1], s[2], s[3]),
@@ -716,10 +717,10 @@ fn put_block(out: &mut Vec<u8>, ty: u16, body: &[u8], what: &'static str) -> Res
 }
 
 fn parse_data(var: &[u8]) -> Result<RtaBody, Error> {
-    let mut r = Reader::<Error>::new(var);
+    let mut r = Reader::new(var);
     let (ty, body) = block(&mut r, "alarm BlockType")?;
     r.finish("RTA-SDU")?;
-    let mut b = Reader::<Error>::new(body);
+    let mut b = Reader::new(body);
     let high = matches!(ty, block_type::NOTIFICATION_HIGH | block_type::ACK_HIGH);
     match ty {
         block_type::NOTIFICATION_HIGH | block_type::NOTIFICATION_LOW => {
@@ -983,7 +984,7 @@ mod tests {
         x[13] = 35;
         assert_eq!(
             AlarmRepr::parse(&x),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "VarPartLen",
                 value: 35,
                 available: 34
@@ -992,7 +993,7 @@ mod tests {
         // BlockLength 31 in a 34-byte var part.
         let mut x = b.clone();
         x[17] = 0x1F;
-        assert!(matches!(AlarmRepr::parse(&x), Err(Error::BadLength { .. })));
+        assert!(matches!(AlarmRepr::parse(&x), Err(Error::Length { .. })));
         // BlockLength 28: two bytes left in the var part after the block.
         let mut x = b.clone();
         x[17] = 0x1C;
@@ -1010,7 +1011,8 @@ mod tests {
             AlarmRepr::parse(&x),
             Err(Error::Invalid {
                 field: "BlockVersion",
-                value: 0x0200
+                value: 0x0200,
+                why: "the typed blocks are version 1.0",
             })
         );
         // An unknown block type is kept raw.

@@ -35,9 +35,9 @@
 //! RecordDataLength.
 
 use super::rpc::{open_code, Uuid};
-use super::{Error, PnioStatus};
+use super::PnioStatus;
 use crate::eth::MacAddr;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 mod codes;
 mod connect;
@@ -202,10 +202,11 @@ impl<T: AsRef<[u8]>> BlockView<T> {
             return Err(Error::Invalid {
                 field: "BlockLength",
                 value: len as u32,
+                why: "shorter than the block version (2 bytes)",
             });
         }
         if len > got - 4 {
-            return Err(Error::BadLength {
+            return Err(Error::Length {
                 field: "BlockLength",
                 value: len,
                 available: got - 4,
@@ -274,25 +275,23 @@ impl<T: AsRef<[u8]> + AsMut<[u8]>> BlockView<T> {
     }
 }
 
-type R<'a> = Reader<'a, Error>;
-
-fn uuid(r: &mut R<'_>, what: &'static str) -> Result<Uuid, Error> {
+fn uuid(r: &mut Reader<'_>, what: &'static str) -> Result<Uuid, Error> {
     let mut b = [0u8; 16];
     b.copy_from_slice(r.bytes(16, what)?);
     Ok(Uuid(b))
 }
 
-fn mac(r: &mut R<'_>, what: &'static str) -> Result<MacAddr, Error> {
+fn mac(r: &mut Reader<'_>, what: &'static str) -> Result<MacAddr, Error> {
     let mut b = [0u8; 6];
     b.copy_from_slice(r.bytes(6, what)?);
     Ok(MacAddr(b))
 }
 
 /// A count of items of at least `min` bytes each: they must fit in what is left.
-fn count(r: &mut R<'_>, min: usize, field: &'static str) -> Result<usize, Error> {
+fn count(r: &mut Reader<'_>, min: usize, field: &'static str) -> Result<usize, Error> {
     let n = usize::from(r.u16_be(field)?);
     if n * min > r.remaining() {
-        return Err(Error::BadLength {
+        return Err(Error::Length {
             field,
             value: n * min,
             available: r.remaining(),
@@ -302,10 +301,10 @@ fn count(r: &mut R<'_>, min: usize, field: &'static str) -> Result<usize, Error>
 }
 
 /// A length-prefixed station name.
-fn station_name(r: &mut R<'_>, field: &'static str) -> Result<Vec<u8>, Error> {
+fn station_name(r: &mut Reader<'_>, field: &'static str) -> Result<Vec<u8>, Error> {
     let n = usize::from(r.u16_be(field)?);
     if n > r.remaining() {
-        return Err(Error::BadLength {
+        return Err(Error::Length {
             field,
             value: n,
             available: r.remaining(),
@@ -338,7 +337,7 @@ fn put_name(b: &mut Vec<u8>, name: &[u8], what: &'static str) -> Result<(), Erro
     Ok(())
 }
 
-fn padding(r: &mut R<'_>, n: usize, what: &'static str) -> Result<(), Error> {
+fn padding(r: &mut Reader<'_>, n: usize, what: &'static str) -> Result<(), Error> {
     r.bytes(n, what).map(|_| ())
 }
 
@@ -443,16 +442,17 @@ impl Block {
             return Err(Error::Invalid {
                 field: "BlockVersion",
                 value: u32::from(u16::from_be_bytes([version.0, version.1])),
+                why: "the typed blocks are version 1.0",
             });
         }
-        let mut r = R::new(view.body());
+        let mut r = Reader::new(view.body());
         let mut used = view.total_len();
         // Record data after the header block.
         let mut record_data = |len: u32| -> Result<Vec<u8>, Error> {
             let rest = &buf[used..];
             let n = len as usize;
             if n > rest.len() {
-                return Err(Error::BadLength {
+                return Err(Error::Length {
                     field: "RecordDataLength",
                     value: n,
                     available: rest.len(),
@@ -702,7 +702,7 @@ mod tests {
         // BlockLength 57 with 56 bytes after it.
         assert_eq!(
             Block::parse(&ar[..ar.len() - 1]),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "BlockLength",
                 value: 57,
                 available: 56
@@ -717,7 +717,8 @@ mod tests {
             Block::parse(&b),
             Err(Error::Invalid {
                 field: "BlockLength",
-                value: 1
+                value: 1,
+                why: "shorter than the block version (2 bytes)",
             })
         );
         // Version 1.1.
@@ -729,7 +730,8 @@ mod tests {
             Block::parse(&b),
             Err(Error::Invalid {
                 field: "BlockVersion",
-                value: 0x0101
+                value: 0x0101,
+                why: "the typed blocks are version 1.0",
             })
         );
         // A block length too small for the type: the name's length byte cut off.
@@ -748,7 +750,7 @@ mod tests {
         b[57] = 4;
         assert_eq!(
             Block::parse(&b),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "ARBlockReq StationNameLength",
                 value: 4,
                 available: 3
@@ -771,7 +773,7 @@ mod tests {
         e[7] = 5;
         assert_eq!(
             Block::parse(&e),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "ExpectedSubmoduleBlockReq NumberOfAPIs",
                 value: 70,
                 available: 62
@@ -792,7 +794,7 @@ mod tests {
         c[59] = 2;
         assert!(matches!(
             Block::parse(&c),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "IOCRBlockReq NumberOfIOCS",
                 ..
             })

@@ -44,9 +44,8 @@ use std::fmt;
 use std::net::Ipv4Addr;
 
 use super::frame::{read_frame_id, FrameId};
-use super::Error;
 use crate::eth::MacAddr;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// The DCP header after the frame id: ServiceID, ServiceType, Xid, ResponseDelay,
 /// DCPDataLength.
@@ -487,6 +486,7 @@ fn exact(data: &[u8], n: usize, field: &'static str) -> Result<(), Error> {
         Err(Error::Invalid {
             field,
             value: data.len() as u32,
+            why: "not the length of the option's value",
         })
     }
 }
@@ -583,6 +583,7 @@ impl BlockValue {
                     return Err(Error::Invalid {
                         field: "Device/DeviceOptions block length",
                         value: d.len() as u32,
+                        why: "odd: each option is 2 bytes",
                     });
                 }
                 BlockValue::DeviceOptions(
@@ -764,7 +765,7 @@ impl DcpBlock {
                 data: raw.data.to_vec(),
             }));
         }
-        let mut r = Reader::<Error>::new(raw.data);
+        let mut r = Reader::new(raw.data);
         let head = match kind {
             HeadKind::None => BlockHead::None,
             HeadKind::Info => BlockHead::Info(BlockInfo(r.u16_be("BlockInfo")?)),
@@ -841,7 +842,7 @@ impl<T: AsRef<[u8]>> DcpPacket<T> {
         let len = usize::from(p.data_length());
         let available = p.buffer.as_ref().len() - field::DATA;
         if len > available {
-            return Err(Error::BadLength {
+            return Err(Error::Length {
                 field: "DCPDataLength",
                 value: len,
                 available,
@@ -941,7 +942,7 @@ impl<T: AsRef<[u8]> + AsMut<[u8]>> DcpPacket<T> {
 /// The framing iterator of [`DcpPacket::blocks`].
 #[derive(Debug, Clone)]
 pub struct Blocks<'a> {
-    r: Reader<'a, Error>,
+    r: Reader<'a>,
     done: bool,
 }
 
@@ -957,7 +958,7 @@ impl<'a> Iterator for Blocks<'a> {
             let option = DcpOption::new(h[0], h[1]);
             let len = usize::from(u16::from_be_bytes([h[2], h[3]]));
             if len > self.r.remaining() {
-                return Err(Error::BadLength {
+                return Err(Error::Length {
                     field: "DCPBlockLength",
                     value: len,
                     available: self.r.remaining(),
@@ -1615,7 +1616,7 @@ mod tests {
         x[11] = 0x3E;
         assert_eq!(
             DcpRepr::parse(&x),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "DCPDataLength",
                 value: 62,
                 available: 60
@@ -1626,7 +1627,7 @@ mod tests {
         x[15] = 100;
         assert_eq!(
             DcpRepr::parse(&x),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "DCPBlockLength",
                 value: 100,
                 available: 56
@@ -1639,7 +1640,8 @@ mod tests {
             DcpRepr::parse(&x),
             Err(Error::Invalid {
                 field: "IP/IPParameter block length",
-                value: 10
+                value: 10,
+                why: "not the length of the option's value",
             })
         ));
         // A block header cut by DCPDataLength.

@@ -31,7 +31,7 @@ use std::ops::RangeInclusive;
 use super::alarm::AlarmRepr;
 use super::dcp::DcpRepr;
 use super::rt::RtRepr;
-use super::Error;
+use crate::wire::Error;
 
 /// A PROFINET frame id (big-endian, the first two bytes after the EtherType). Open: any value
 /// round-trips; [`FrameId::kind`] says what this crate makes of it.

@@ -20,8 +20,7 @@
 //! | 58 | IM_Supported (u16): bit n = I&Mn offered |
 
 use super::block::{VERSION_HIGH, VERSION_LOW};
-use super::Error;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// Record index of I&M0.
 pub const INDEX: u16 = 0xAFF0;
@@ -99,6 +98,7 @@ fn visible(out: &mut Vec<u8>, text: &str, len: usize, what: &'static str) -> Res
         return Err(Error::Invalid {
             field: what,
             value: u32::from(b),
+            why: "outside the visible characters 20h..7Eh",
         });
     }
     out.extend(text.bytes());
@@ -106,16 +106,13 @@ fn visible(out: &mut Vec<u8>, text: &str, len: usize, what: &'static str) -> Res
     Ok(())
 }
 
-fn read_visible(
-    r: &mut Reader<'_, Error>,
-    len: usize,
-    what: &'static str,
-) -> Result<String, Error> {
+fn read_visible(r: &mut Reader<'_>, len: usize, what: &'static str) -> Result<String, Error> {
     let b = r.bytes(len, what)?;
     if let Some(c) = b.iter().find(|c| !(0x20..=0x7E).contains(*c)) {
         return Err(Error::Invalid {
             field: what,
             value: u32::from(*c),
+            why: "outside the visible characters 20h..7Eh",
         });
     }
     Ok(String::from_utf8_lossy(b).trim_end().to_string())
@@ -124,7 +121,7 @@ fn read_visible(
 impl Im0Repr {
     /// Parses the record data: exactly one I&M0 block.
     pub fn parse(data: &[u8]) -> Result<Im0Repr, Error> {
-        let mut r = Reader::<Error>::new(data);
+        let mut r = Reader::new(data);
         let block_type = r.u16_be("I&M0 BlockType")?;
         if block_type != BLOCK_TYPE {
             return Err(Error::Unknown {
@@ -134,7 +131,7 @@ impl Im0Repr {
         }
         let length = usize::from(r.u16_be("I&M0 BlockLength")?);
         if length != LEN - 4 {
-            return Err(Error::BadLength {
+            return Err(Error::Length {
                 field: "I&M0 BlockLength",
                 value: length,
                 available: LEN - 4,
@@ -148,6 +145,7 @@ impl Im0Repr {
             return Err(Error::Invalid {
                 field: "I&M0 BlockVersion",
                 value: u32::from(version.0) << 8 | u32::from(version.1),
+                why: "the typed blocks are version 1.0",
             });
         }
         let im = Im0Repr {

@@ -16,14 +16,13 @@
 //! - `im0`: the I&M0 identification record;
 //! - `plan`: the cyclic layout a controller's Connect gives (frame offsets of the IOCRs).
 //!
-//! Every parser returns `Err` on malformed input and never panics ([`Error`] names the field).
-//! PROFINET fields are big-endian (network order) except the DCE/RPC header, whose byte order
-//! its data representation field gives.
+//! Every parser returns `Err` on malformed input and never panics ([`crate::wire::Error`]
+//! names the field). PROFINET fields are big-endian (network order) except the DCE/RPC
+//! header, whose byte order its data representation field gives.
 
 pub mod alarm;
 pub mod block;
 pub mod dcp;
-mod error;
 pub mod frame;
 pub mod im0;
 #[cfg(test)]
@@ -33,7 +32,6 @@ pub mod rpc;
 pub mod rt;
 pub mod status;
 
-pub use error::Error;
 pub use frame::{FrameId, FrameKind, PnRepr};
 pub use status::PnioStatus;
 

@@ -13,7 +13,7 @@ use super::block::{
     IocrApi, IocrEntry, SubmoduleProperties,
 };
 use super::rt::{MAX_C_SDU, MIN_C_SDU};
-use super::Error;
+use crate::wire::Error;
 
 /// One submodule as the controller expects it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

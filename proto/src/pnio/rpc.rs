@@ -46,8 +46,7 @@
 
 use std::fmt;
 
-use super::Error;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// Defines an open code: a newtype over an integer with named constants, whose Debug and
 /// Display print the name or the hex value.
@@ -195,7 +194,7 @@ impl NcaStatus {
     /// The status of a reject or fault body: its first 4 bytes in the drep's order (bytes after
     /// them are ignored, as stacks differ in what they append).
     pub fn parse(body: &[u8], drep: Drep) -> Result<NcaStatus, Error> {
-        let mut r = Reader::<Error>::new(body);
+        let mut r = Reader::new(body);
         Ok(NcaStatus(u32d(&mut r, drep, "reject/fault status")?))
     }
 
@@ -313,7 +312,7 @@ impl fmt::Debug for Drep {
     }
 }
 
-fn u16d(r: &mut Reader<'_, Error>, drep: Drep, what: &'static str) -> Result<u16, Error> {
+fn u16d(r: &mut Reader<'_>, drep: Drep, what: &'static str) -> Result<u16, Error> {
     if drep.is_little_endian() {
         r.u16(what)
     } else {
@@ -321,7 +320,7 @@ fn u16d(r: &mut Reader<'_, Error>, drep: Drep, what: &'static str) -> Result<u16
     }
 }
 
-fn u32d(r: &mut Reader<'_, Error>, drep: Drep, what: &'static str) -> Result<u32, Error> {
+fn u32d(r: &mut Reader<'_>, drep: Drep, what: &'static str) -> Result<u32, Error> {
     if drep.is_little_endian() {
         r.u32(what)
     } else {
@@ -364,7 +363,7 @@ impl<T: AsRef<[u8]>> RpcPacket<T> {
         let p = RpcPacket { buffer };
         let len = usize::from(p.fragment_length());
         if len > got - HEADER_LEN {
-            return Err(Error::BadLength {
+            return Err(Error::Length {
                 field: "RPC fragment length",
                 value: len,
                 available: got - HEADER_LEN,
@@ -596,11 +595,12 @@ impl RpcRepr {
             return Err(Error::Invalid {
                 field: "RPC version",
                 value: u32::from(packet.version()),
+                why: "must be 4",
             });
         }
         let drep = packet.drep();
         let le = drep.is_little_endian();
-        let mut r = Reader::<Error>::new(bytes);
+        let mut r = Reader::new(bytes);
         r.bytes(2, "RPC version/ptype")?;
         let flags1 = Flags1(r.u8("RPC flags1")?);
         let flags2 = r.u8("RPC flags2")?;
@@ -811,7 +811,7 @@ mod tests {
         // Fragment length 4 with 3 body bytes.
         assert_eq!(
             RpcRepr::parse_bytes(&bytes[..83]),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "RPC fragment length",
                 value: 4,
                 available: 3
@@ -833,7 +833,8 @@ mod tests {
             RpcRepr::parse_bytes(&v5),
             Err(Error::Invalid {
                 field: "RPC version",
-                value: 5
+                value: 5,
+                why: "must be 4",
             })
         );
         let mut long = bytes.clone();
@@ -841,7 +842,7 @@ mod tests {
         p.set_fragment_length(100);
         assert!(matches!(
             RpcPacket::new_checked(&long[..]),
-            Err(Error::BadLength { value: 100, .. })
+            Err(Error::Length { value: 100, .. })
         ));
         let mut other = bytes;
         let mut p = RpcPacket::new_checked(&mut other[..]).unwrap();

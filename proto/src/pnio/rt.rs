@@ -23,7 +23,7 @@
 use std::fmt;
 
 use super::frame::{read_frame_id, FrameId};
-use super::Error;
+use crate::wire::Error;
 
 /// The shortest C_SDU (IEC 61158-6-10 "C_SDU length 40..1440"; shorter data is padded).
 pub const MIN_C_SDU: usize = 40;
@@ -213,6 +213,7 @@ impl RtRepr {
                     return Err(Error::Invalid {
                         field: "C_SDU length",
                         value: n as u32,
+                        why: "outside 40..1440 bytes",
                     });
                 }
                 n
@@ -338,7 +339,8 @@ mod tests {
             RtRepr::parse(&b[..40], None),
             Err(Error::Invalid {
                 field: "C_SDU length",
-                value: 34
+                value: 34,
+                why: "outside 40..1440 bytes",
             })
         );
         let mut long = vec![0xC0, 0x01];

@@ -18,8 +18,8 @@ use proto::ecat::coe::{CoeHeader, CoeService, SdoRequest};
 use proto::ecat::mailbox::{
     Mailbox as MailboxView, MailboxError, MailboxErrorCode, MailboxRepr, MailboxType,
 };
-use proto::ecat::Error;
 use proto::nord::nmt::EcState;
+use proto::wire::Error;
 
 use super::coe::SdoServer;
 use super::od::{Context, Dictionary};

@@ -26,7 +26,7 @@ use crate::link::Unit;
 pub const POLL_PERIOD: Duration = Duration::from_millis(10);
 
 /// What the slave did with a frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Processed {
     /// An EtherCAT frame, processed in place: send it on (back to the master).
     Forwarded,
@@ -490,7 +490,7 @@ impl Slave {
 
 /// Why a frame was not processed: the EtherCAT codec's error (a lying frame or datagram
 /// length, trailing bytes, a frame too short for its header).
-pub type DropReason = proto::ecat::Error;
+pub type DropReason = proto::wire::Error;
 
 /// The smallest datagram: header and working counter.
 const DATAGRAM_MIN: usize = proto::ecat::datagram::HEADER_LEN + proto::ecat::datagram::WKC_LEN;

@@ -17,11 +17,11 @@ use proto::enip::cm::{
 };
 use proto::enip::epath::Segment;
 use proto::enip::io::{IoFrame, IO_PORT};
-use proto::enip::WireError;
 use proto::nord::eip::{
     self, Assembly, Direction, LISTEN_ONLY_POINT, RPI_RANGE, WORDS_PER_INVERTER,
 };
 use proto::nord::{Family, Inverter, ParamNumber};
+use proto::wire::Error;
 
 use super::objects;
 use super::{Adapter, ClientId};
@@ -40,7 +40,7 @@ const E10_2: FaultCode = FaultCode { group: 10, sub: 2 };
 pub enum IoError {
     /// Malformed datagram.
     #[error("malformed I/O frame: {0}")]
-    Malformed(#[from] WireError),
+    Malformed(#[from] Error),
     /// No open connection has this O→T id.
     #[error("no connection with O→T id {0:08X}h")]
     UnknownConnection(u32),
@@ -189,12 +189,8 @@ pub(super) fn forward_open(
     let large = Service(req.service) == Service::LARGE_FORWARD_OPEN;
     let fo = match ForwardOpen::parse(&req.data, large) {
         Ok(f) => f,
-        Err(WireError::Truncated { .. }) => {
-            return MrResponse::error(req.service, GS::NOT_ENOUGH_DATA)
-        }
-        Err(WireError::Trailing { .. }) => {
-            return MrResponse::error(req.service, GS::TOO_MUCH_DATA)
-        }
+        Err(Error::Truncated { .. }) => return MrResponse::error(req.service, GS::NOT_ENOUGH_DATA),
+        Err(Error::Trailing { .. }) => return MrResponse::error(req.service, GS::TOO_MUCH_DATA),
         Err(_) => {
             let key = forward_open_key(&req.data);
             return refuse(req, key, vec![ext::INVALID_SEGMENT]);
@@ -431,12 +427,8 @@ fn io_connection(a: &mut Adapter, fo: &ForwardOpen, mut c: Conn) -> Result<Conn,
 pub(super) fn forward_close(a: &mut Adapter, req: &MrRequest) -> MrResponse {
     let fc = match ForwardClose::parse(&req.data) {
         Ok(f) => f,
-        Err(WireError::Truncated { .. }) => {
-            return MrResponse::error(req.service, GS::NOT_ENOUGH_DATA)
-        }
-        Err(WireError::Trailing { .. }) => {
-            return MrResponse::error(req.service, GS::TOO_MUCH_DATA)
-        }
+        Err(Error::Truncated { .. }) => return MrResponse::error(req.service, GS::NOT_ENOUGH_DATA),
+        Err(Error::Trailing { .. }) => return MrResponse::error(req.service, GS::TOO_MUCH_DATA),
         Err(_) => return refuse(req, forward_open_key(&[]), vec![ext::INVALID_SEGMENT]),
     };
     match a.conns.remove(fc.key()) {

@@ -6,10 +6,10 @@ use std::time::Duration;
 use proto::enip::cip::{class, GeneralStatus as GS, MrRequest, MrResponse, Service};
 use proto::enip::cm::UnconnectedSend;
 use proto::enip::epath::Segment;
-use proto::enip::WireError;
 use proto::nord::addr::cip_decode_instance;
 use proto::nord::params::{Access as ParamAccess, Width};
 use proto::nord::{Family, Inverter, ParamNumber, Product};
+use proto::wire::Error;
 
 use super::{connections, malformed, Adapter, ClientId};
 use crate::link::Unit;
@@ -132,7 +132,7 @@ pub(super) fn request(
             let service = bytes.first().copied().unwrap_or(0) & 0x7F;
             let status = match e {
                 _ if bytes.len() < 2 => GS::NOT_ENOUGH_DATA,
-                WireError::Length { .. } | WireError::Truncated { .. } => GS::PATH_SIZE_INVALID,
+                Error::Length { .. } | Error::Truncated { .. } => GS::PATH_SIZE_INVALID,
                 _ => GS::PATH_SEGMENT_ERROR,
             };
             return malformed(service, status);
@@ -172,9 +172,7 @@ fn unconnected_send(
 ) -> MrResponse {
     let us = match UnconnectedSend::parse(&req.data) {
         Ok(u) => u,
-        Err(WireError::Truncated { .. }) => {
-            return MrResponse::error(req.service, GS::NOT_ENOUGH_DATA)
-        }
+        Err(Error::Truncated { .. }) => return MrResponse::error(req.service, GS::NOT_ENOUGH_DATA),
         Err(_) => {
             return MrResponse {
                 service: req.service,

@@ -18,9 +18,9 @@ use proto::enip::encap::{Command, EncapRepr, EncapStatus, RegisterSession, SendD
 use proto::enip::epath::{EPath, Segment};
 use proto::enip::identity::Identity;
 use proto::enip::io::{IoFrame, IO_PORT};
-use proto::enip::WireError;
 use proto::nord::addr::{self, cip_instance};
 use proto::nord::{eip, led, ArrayElement, Inverter, ParamAddress, ParamNumber, ParamSet, Product};
+use proto::wire::Error;
 use rstest::rstest;
 
 use super::{
@@ -1109,7 +1109,7 @@ fn io_frames_that_do_not_fit_are_dropped_with_a_reason() {
     let no_header = io(id, 1, None, vec![]);
     assert!(matches!(
         b.io(&no_header),
-        Err(IoError::Malformed(WireError::Truncated { .. }))
+        Err(IoError::Malformed(Error::Truncated { .. }))
     ));
     assert!(matches!(b.io(&[1, 0]), Err(IoError::Malformed(_))));
     assert_eq!(b.a.dropped(), 4);

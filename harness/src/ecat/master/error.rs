@@ -145,7 +145,7 @@ pub(crate) enum ProtocolError {
     /// An EtherCAT frame came back that cannot be parsed (the last such frame; no good frame
     /// came within the timeout).
     #[error("malformed EtherCAT frame came back: {0}")]
-    Malformed(proto::ecat::Error),
+    Malformed(proto::wire::Error),
     /// A frame came back with the index of the frame sent but other datagrams (other commands
     /// or lengths).
     #[error("the frame with index {index:02X}h came back with other datagrams than were sent")]
@@ -171,7 +171,7 @@ pub(crate) enum ProtocolError {
     },
     /// The SII contents cannot be parsed (a wrong checksum of the configuration area too).
     #[error("SII contents: {0}")]
-    Sii(proto::ecat::Error),
+    Sii(proto::wire::Error),
     /// The SII's categories have no end marker within the words the master reads at most.
     #[error("SII: no end marker within {words} words")]
     SiiEnd {
@@ -180,10 +180,10 @@ pub(crate) enum ProtocolError {
     },
     /// A mailbox message from the slave cannot be parsed.
     #[error("mailbox reply: {0}")]
-    Mailbox(proto::ecat::Error),
+    Mailbox(proto::wire::Error),
     /// A CoE message from the slave cannot be parsed.
     #[error("CoE reply: {0}")]
-    Coe(proto::ecat::Error),
+    Coe(proto::wire::Error),
     /// A reply that does not answer the request (an SDO response of another service, index or
     /// sub-index; a mailbox type not asked for).
     #[error("unexpected reply: expected {expected}, got {got}")]
@@ -245,7 +245,7 @@ pub(crate) enum UsageError {
     Frame(super::wire::BuildError),
     /// The mailbox message cannot be built (too long for its length field).
     #[error("cannot build the mailbox message: {0}")]
-    Mailbox(proto::ecat::Error),
+    Mailbox(proto::wire::Error),
     /// Data too large for a mailbox.
     #[error("{what}: {len} bytes do not fit ({max} at most)")]
     TooLong {

@@ -3,8 +3,9 @@
 //! received frame is to the exchange waiting for that index.
 
 use proto::ecat::frame::{EcatFrame, FrameType, MAX_DATAGRAMS_LEN};
-use proto::ecat::{Command, DatagramRepr, EcatFrameRepr, Error};
+use proto::ecat::{Command, DatagramRepr, EcatFrameRepr};
 use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_ECAT};
+use proto::wire::Error;
 
 /// A read of `len` bytes at `adp`:`ado` (zeros sent, the slave fills them in).
 pub(crate) fn read(command: Command, adp: u16, ado: u16, len: usize) -> DatagramRepr {

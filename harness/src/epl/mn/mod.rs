@@ -748,7 +748,7 @@ impl<L: Link> Manager<L> {
         Ok(s)
     }
 
-    fn malformed(&self, what: &str, e: proto::epl::Error) -> MnError {
+    fn malformed(&self, what: &str, e: proto::wire::Error) -> MnError {
         MnError::Malformed {
             node: self.config.node,
             what: what.into(),

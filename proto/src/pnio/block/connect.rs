@@ -29,7 +29,7 @@ pub struct ArBlockReq {
 }
 
 impl ArBlockReq {
-    pub(super) fn parse(r: &mut R<'_>) -> Result<ArBlockReq, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<ArBlockReq, Error> {
         Ok(ArBlockReq {
             ar_type: ArType(r.u16_be("ARBlockReq ARType")?),
             ar_uuid: uuid(r, "ARBlockReq ARUUID")?,
@@ -72,7 +72,7 @@ pub struct ArBlockRes {
 }
 
 impl ArBlockRes {
-    pub(super) fn parse(r: &mut R<'_>) -> Result<ArBlockRes, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<ArBlockRes, Error> {
         Ok(ArBlockRes {
             ar_type: ArType(r.u16_be("ARBlockRes ARType")?),
             ar_uuid: uuid(r, "ARBlockRes ARUUID")?,
@@ -104,7 +104,7 @@ pub struct IocrEntry {
 }
 
 impl IocrEntry {
-    pub(super) fn parse(r: &mut R<'_>) -> Result<IocrEntry, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<IocrEntry, Error> {
         Ok(IocrEntry {
             slot: r.u16_be("IOCRBlockReq SlotNumber")?,
             subslot: r.u16_be("IOCRBlockReq SubslotNumber")?,
@@ -168,7 +168,7 @@ pub struct IocrBlockReq {
 }
 
 impl IocrBlockReq {
-    pub(super) fn parse(r: &mut R<'_>) -> Result<IocrBlockReq, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<IocrBlockReq, Error> {
         let mut b = IocrBlockReq {
             iocr_type: IocrType(r.u16_be("IOCRBlockReq IOCRType")?),
             reference: r.u16_be("IOCRBlockReq IOCRReference")?,
@@ -246,7 +246,7 @@ pub struct IocrBlockRes {
 }
 
 impl IocrBlockRes {
-    pub(super) fn parse(r: &mut R<'_>) -> Result<IocrBlockRes, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<IocrBlockRes, Error> {
         Ok(IocrBlockRes {
             iocr_type: IocrType(r.u16_be("IOCRBlockRes IOCRType")?),
             reference: r.u16_be("IOCRBlockRes IOCRReference")?,
@@ -285,7 +285,7 @@ pub struct AlarmCrBlockReq {
 }
 
 impl AlarmCrBlockReq {
-    pub(super) fn parse(r: &mut R<'_>) -> Result<AlarmCrBlockReq, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<AlarmCrBlockReq, Error> {
         Ok(AlarmCrBlockReq {
             alarm_cr_type: AlarmCrType(r.u16_be("AlarmCRBlockReq AlarmCRType")?),
             lt: r.u16_be("AlarmCRBlockReq LT")?,
@@ -328,7 +328,7 @@ pub struct AlarmCrBlockRes {
 }
 
 impl AlarmCrBlockRes {
-    pub(super) fn parse(r: &mut R<'_>) -> Result<AlarmCrBlockRes, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<AlarmCrBlockRes, Error> {
         Ok(AlarmCrBlockRes {
             alarm_cr_type: AlarmCrType(r.u16_be("AlarmCRBlockRes AlarmCRType")?),
             local_alarm_reference: r.u16_be("AlarmCRBlockRes LocalAlarmReference")?,
@@ -367,7 +367,7 @@ impl DataDescription {
         }
     }
 
-    pub(super) fn parse(r: &mut R<'_>) -> Result<DataDescription, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<DataDescription, Error> {
         Ok(DataDescription {
             direction: DataDirection(r.u16_be("ExpectedSubmoduleBlockReq DataDescription")?),
             length: r.u16_be("ExpectedSubmoduleBlockReq SubmoduleDataLength")?,
@@ -420,7 +420,7 @@ pub struct ExpectedSubmoduleBlockReq {
 }
 
 impl ExpectedSubmoduleBlockReq {
-    pub(super) fn parse(r: &mut R<'_>) -> Result<ExpectedSubmoduleBlockReq, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<ExpectedSubmoduleBlockReq, Error> {
         let mut apis = Vec::new();
         for _ in 0..count(r, 14, "ExpectedSubmoduleBlockReq NumberOfAPIs")? {
             let mut a = ExpectedApi {
@@ -468,6 +468,7 @@ impl ExpectedSubmoduleBlockReq {
                     return Err(Error::Invalid {
                         field: "ExpectedSubmoduleBlockReq DataDescription count",
                         value: s.data.len() as u32,
+                        why: "not the count the submodule properties call for",
                     });
                 }
                 put16(b, s.subslot);
@@ -521,7 +522,7 @@ pub struct ModuleDiffBlock {
 }
 
 impl ModuleDiffBlock {
-    pub(super) fn parse(r: &mut R<'_>) -> Result<ModuleDiffBlock, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<ModuleDiffBlock, Error> {
         let mut apis = Vec::new();
         for _ in 0..count(r, 6, "ModuleDiffBlock NumberOfAPIs")? {
             let mut a = DiffApi {
@@ -579,7 +580,7 @@ pub struct ArServerBlock {
 }
 
 impl ArServerBlock {
-    pub(super) fn parse(r: &mut R<'_>) -> Result<ArServerBlock, Error> {
+    pub(super) fn parse(r: &mut Reader<'_>) -> Result<ArServerBlock, Error> {
         let station_name = station_name(r, "ARServerBlock StationNameLength")?;
         let pad = r.rest();
         if pad.len() > 3 {
@@ -744,7 +745,8 @@ mod tests {
             Block::ExpectedSubmoduleReq(bad).to_bytes(),
             Err(Error::Invalid {
                 field: "ExpectedSubmoduleBlockReq DataDescription count",
-                value: 1
+                value: 1,
+                why: "not the count the submodule properties call for",
             })
         );
     }

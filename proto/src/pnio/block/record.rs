@@ -24,7 +24,10 @@ pub struct RecordAddress {
 
 impl RecordAddress {
     /// Reads SeqNumber .. RecordDataLength; returns the address and RecordDataLength.
-    pub(super) fn parse(r: &mut R<'_>, what: &'static str) -> Result<(RecordAddress, u32), Error> {
+    pub(super) fn parse(
+        r: &mut Reader<'_>,
+        what: &'static str,
+    ) -> Result<(RecordAddress, u32), Error> {
         let seq_number = r.u16_be(what)?;
         let ar_uuid = uuid(r, what)?;
         let api = r.u32_be(what)?;
@@ -185,7 +188,7 @@ impl IodControl {
         }
     }
 
-    pub(super) fn parse(block_type: BlockType, r: &mut R<'_>) -> Result<IodControl, Error> {
+    pub(super) fn parse(block_type: BlockType, r: &mut Reader<'_>) -> Result<IodControl, Error> {
         padding(r, 2, "IODControl reserved")?;
         Ok(IodControl {
             block_type,
@@ -236,7 +239,7 @@ mod tests {
         // RecordDataLength 4 with 3 bytes.
         assert_eq!(
             Block::parse_all(&bytes[..bytes.len() - 1]),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "RecordDataLength",
                 value: 4,
                 available: 3

@@ -2,8 +2,8 @@
 //! C706 §14 conformant varying array): see the table of [`super`].
 
 use super::{u32d, Drep};
-use crate::pnio::{Error, PnioStatus};
-use crate::wire::Reader;
+use crate::pnio::PnioStatus;
+use crate::wire::{Error, Reader};
 
 /// Length of the NDR header of a request (ArgsMaximum .. ActualCount).
 pub const NDR_REQUEST_LEN: usize = 20;
@@ -13,7 +13,7 @@ pub const NDR_RESPONSE_LEN: usize = 20;
 /// ArgsLength, MaximumCount, Offset, ActualCount and the ActualCount bytes, which must fill
 /// the rest.
 fn ndr_array(
-    r: &mut Reader<'_, Error>,
+    r: &mut Reader<'_>,
     drep: Drep,
     what: &'static str,
 ) -> Result<(u32, u32, u32, u32, Vec<u8>), Error> {
@@ -23,7 +23,7 @@ fn ndr_array(
     let actual_count = u32d(r, drep, "NDR ActualCount")?;
     let n = actual_count as usize;
     if n > r.remaining() {
-        return Err(Error::BadLength {
+        return Err(Error::Length {
             field: "NDR ActualCount",
             value: n,
             available: r.remaining(),
@@ -79,7 +79,7 @@ impl NdrRequest {
 
     /// Parses a request body: ActualCount bytes must follow the header and fill the body.
     pub fn parse(body: &[u8], drep: Drep) -> Result<NdrRequest, Error> {
-        let mut r = Reader::<Error>::new(body);
+        let mut r = Reader::new(body);
         let args_maximum = u32d(&mut r, drep, "NDR ArgsMaximum")?;
         let (args_length, maximum_count, offset, actual_count, data) =
             ndr_array(&mut r, drep, "NDR request data")?;
@@ -154,7 +154,7 @@ impl NdrResponse {
 
     /// Parses a response body.
     pub fn parse(body: &[u8], drep: Drep) -> Result<NdrResponse, Error> {
-        let mut r = Reader::<Error>::new(body);
+        let mut r = Reader::new(body);
         let status = u32d(&mut r, drep, "NDR PNIOStatus")?;
         let (args_length, maximum_count, offset, actual_count, data) =
             ndr_array(&mut r, drep, "NDR response data")?;
@@ -232,7 +232,7 @@ mod tests {
         ];
         assert_eq!(
             NdrRequest::parse(&bytes, Drep::LITTLE_ENDIAN),
-            Err(Error::BadLength {
+            Err(Error::Length {
                 field: "NDR ActualCount",
                 value: 5,
                 available: 2

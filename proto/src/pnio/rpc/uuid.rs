@@ -4,8 +4,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::pnio::Error;
-use crate::wire::Reader;
+use crate::wire::{Error, Reader};
 
 /// A UUID (C706 appendix A) held in canonical order: the 16 bytes as the 8-4-4-4-12 text
 /// reads them, i.e. time_low, time_mid and time_hi_and_version big-endian. On the wire of
@@ -142,7 +141,7 @@ impl Uuid {
     }
 
     pub(super) fn read(
-        r: &mut Reader<'_, Error>,
+        r: &mut Reader<'_>,
         little_endian: bool,
         what: &'static str,
     ) -> Result<Uuid, Error> {
@@ -179,6 +178,7 @@ impl FromStr for Uuid {
         let bad = || Error::Invalid {
             field: "UUID text",
             value: s.len() as u32,
+            why: "not the 8-4-4-4-12 hexadecimal form",
         };
         let groups: Vec<&str> = s.split('-').collect();
         if groups.iter().map(|g| g.len()).collect::<Vec<_>>() != [8, 4, 4, 4, 12] {

@@ -352,7 +352,7 @@ fn other_frames_pass_and_malformed_ones_are_dropped_and_counted() {
     lying[14..16].copy_from_slice(&(200u16 | 0x1000).to_le_bytes());
     assert!(matches!(
         m.slave.process(&mut lying, ms(2)),
-        Processed::Dropped(DropReason::BadLength { value: 200, .. })
+        Processed::Dropped(DropReason::Length { value: 200, .. })
     ));
     // Datagram length 100 in a frame of 2 data bytes.
     let mut long = frame(&[dg(2, 0, 0x0010, &[0x05, 0x00])]);
