@@ -518,7 +518,6 @@ impl<L: CanLink> Binding for CanBinding<L> {
             Action::Inject { inverter, error } => {
                 self.simulated()?
                     .0
-                    .device_mut()
                     .inject_fault(*inverter, error)
                     .map_err(StepError::Refused)?;
                 json!({})

@@ -73,11 +73,18 @@ fn series(product: Product) -> InverterSeries {
     }
 }
 
+/// The fault a case injects to take an inverter's node off the segment (`inject: { inverter:
+/// N, error: off-bus }`): its cable pulled. The node hears nothing and sends nothing, its
+/// heartbeat stops, and its inverter no longer hears the interface's heartbeat either.
+pub const OFF_BUS: &str = "off-bus";
+
 /// One CAN segment: the device's inverters as nodes.
 #[derive(Debug)]
 pub struct Segment {
     device: Device,
     nodes: Vec<Node>,
+    /// The inverters whose nodes are off the segment ([`OFF_BUS`]).
+    off_bus: Vec<Inverter>,
     /// P700 [-01] of each inverter as last seen, for EMCY.
     faults: [i32; 8],
 }
@@ -99,8 +106,32 @@ impl Segment {
         Ok(Segment {
             device: Device::new(config),
             nodes,
+            off_bus: Vec::new(),
             faults: [0; 8],
         })
+    }
+
+    /// Raises `error` on `inverter`: [`OFF_BUS`] takes its node off the segment, anything else
+    /// is the device's fault ([`Device::inject_fault`]).
+    pub fn inject_fault(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
+        if error != OFF_BUS {
+            return self.device.inject_fault(inverter, error);
+        }
+        if !self.nodes.iter().any(|n| n.inverter() == inverter) {
+            return Err(format!("FI {} is not on the system bus", inverter.get()));
+        }
+        if !self.off_bus.contains(&inverter) {
+            self.off_bus.push(inverter);
+        }
+        Ok(())
+    }
+
+    /// The nodes still on the segment.
+    fn on_bus(&mut self) -> impl Iterator<Item = &mut Node> {
+        let off = &self.off_bus;
+        self.nodes
+            .iter_mut()
+            .filter(move |n| !off.contains(&n.inverter()))
     }
 
     /// The node ids on the segment.
@@ -122,8 +153,13 @@ impl Segment {
     /// nodes answer to them, in order, the segment's monitoring run once for all of them.
     pub fn receive_all(&mut self, frames: &[CanFrame], now: Duration) -> Vec<CanFrame> {
         let mut out = self.poll(now);
+        let off = &self.off_bus;
         for frame in frames {
-            for node in &mut self.nodes {
+            for node in self
+                .nodes
+                .iter_mut()
+                .filter(|n| !off.contains(&n.inverter()))
+            {
                 node.overhear(frame, now);
                 out.extend(node.receive(frame, &mut self.device, now));
             }
@@ -138,7 +174,7 @@ impl Segment {
     pub fn poll(&mut self, now: Duration) -> Vec<CanFrame> {
         self.device.tick(now);
         let mut out = Vec::new();
-        for node in &mut self.nodes {
+        for node in self.on_bus() {
             out.extend(node.poll(now));
         }
         self.overheard(&out, now);
@@ -156,7 +192,7 @@ impl Segment {
                 .ok()
                 .and_then(|s| s.read(P700, None, ArrayElement::new(4).ok()).ok())
                 .and_then(|x| u16::try_from(x).ok());
-            if let Some(node) = self.nodes.iter_mut().find(|n| n.inverter() == fi) {
+            if let Some(node) = self.on_bus().find(|n| n.inverter() == fi) {
                 out.extend(node.emergency(value, extended));
             }
         }
@@ -165,7 +201,7 @@ impl Segment {
     /// Every node hears what the others sent, as on a real bus.
     fn overheard(&mut self, frames: &[CanFrame], now: Duration) {
         for frame in frames {
-            for node in &mut self.nodes {
+            for node in self.on_bus() {
                 node.overhear(frame, now);
             }
         }
@@ -180,6 +216,10 @@ impl Segment {
 
     /// When a node next sends on its own (`None`: nothing scheduled).
     pub fn next_due(&self) -> Option<Duration> {
-        self.nodes.iter().filter_map(Node::next_due).min()
+        self.nodes
+            .iter()
+            .filter(|n| !self.off_bus.contains(&n.inverter()))
+            .filter_map(Node::next_due)
+            .min()
     }
 }

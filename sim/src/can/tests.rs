@@ -257,6 +257,44 @@ fn an_inverter_error_sends_an_emergency_and_sets_the_error_register() {
     }
 }
 
+#[test]
+fn a_node_off_the_bus_is_silent_and_the_others_serve_on() {
+    let mut s = segment();
+    // FI 3 (node 36) produces a heartbeat every 10 ms (1017h).
+    let heartbeat = [0x2B, 0x17, 0x10, 0x00, 10, 0, 0, 0];
+    assert!(matches!(
+        sdo(&mut s, 36, heartbeat),
+        SdoResponse::InitiateDownload { .. }
+    ));
+    let beats = |s: &mut Segment, from: u32, to: u32| {
+        (from..to)
+            .flat_map(|t| s.poll(t * MS))
+            .filter(|f| f.id() == 0x724)
+            .count()
+    };
+    assert!(beats(&mut s, 2, 50) >= 4);
+    assert_eq!(
+        s.inject_fault(Inverter::new(3).unwrap(), super::OFF_BUS),
+        Ok(())
+    );
+    assert_eq!(beats(&mut s, 50, 100), 0, "no heartbeat off the bus");
+    assert_eq!(s.next_due(), None, "nothing scheduled on the bus");
+    let request = frame(0x624, &upload(0x1000, 0));
+    assert!(s.receive(&request, 100 * MS).is_empty(), "no SDO answer");
+    // FI 2 (node 34) still answers.
+    assert!(matches!(
+        sdo(&mut s, 34, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+    let e = s.inject_fault(Inverter::new(8).unwrap(), super::OFF_BUS);
+    assert!(e.is_ok(), "the SK 550P has 8 inverters: {e:?}");
+    let mut config = DeviceConfig::new(Product::Tu3Eip);
+    config.inverters = 1;
+    let mut one = Segment::new(config).unwrap();
+    let e = one.inject_fault(Inverter::new(2).unwrap(), super::OFF_BUS);
+    assert_eq!(e, Err("FI 2 is not on the system bus".into()));
+}
+
 /// CiA 301's answers to malformed and misplaced requests, each followed by a request the node
 /// still serves.
 #[test]
