@@ -38,6 +38,14 @@ pub(crate) enum StepError {
     /// The DUT answered with bytes that break the protocol.
     #[error("malformed answer from the DUT: {0}")]
     Protocol(String),
+    /// The DUT's answer `what` does not parse: the codec's own error, naming the field.
+    #[error("malformed answer from the DUT: {what}: {error}")]
+    Malformed {
+        /// What was parsed (`Forward_Open reply`).
+        what: &'static str,
+        /// Why it does not parse.
+        error: proto::wire::Error,
+    },
     /// The DUT (simulator) refused a harness request (`inject`, `observe`).
     #[error("the DUT refused: {0}")]
     Refused(String),
@@ -75,6 +83,11 @@ pub(crate) enum StepError {
 }
 
 impl StepError {
+    /// A parse of the DUT's answer `what` that failed with `error`.
+    pub(crate) fn malformed(what: &'static str) -> impl Fn(proto::wire::Error) -> StepError {
+        move |error| StepError::Malformed { what, error }
+    }
+
     /// The time-out of `wait` for `what`: a failure of the device unless the runner finds the
     /// host was late (then the attempt is discarded).
     pub(crate) fn late(wait: &crate::timing::Deadline, what: impl Into<String>) -> StepError {
@@ -90,6 +103,7 @@ impl StepError {
         match self {
             StepError::Unanswered { .. }
             | StepError::Protocol(_)
+            | StepError::Malformed { .. }
             | StepError::Late { .. }
             | StepError::Closed(_) => Verdict::Fail,
             StepError::Silent { .. }
@@ -417,5 +431,26 @@ fn pkw_result(r: &PkwRepr, mut fields: Value) -> super::Observation {
                 text: format!("response label 7, error {} ({})", e.0, e.meaning()),
             },
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_malformed_answer_keeps_the_codecs_error_and_fails_the_device() {
+        let error = proto::wire::Error::Truncated {
+            what: "Forward_Open reply",
+            need: 26,
+            got: 4,
+        };
+        let e = StepError::malformed("Forward_Open reply")(error.clone());
+        assert!(matches!(&e, StepError::Malformed { error: inner, .. } if *inner == error));
+        assert_eq!(e.verdict(), Verdict::Fail);
+        assert_eq!(
+            e.to_string(),
+            "malformed answer from the DUT: Forward_Open reply: Forward_Open reply: truncated, need 26 bytes, got 4"
+        );
     }
 }

@@ -315,15 +315,13 @@ impl Scanner {
                 EncapStatus(reply.status)
             )));
         }
-        let sd = SendData::parse(&reply.data)
-            .map_err(|e| StepError::Protocol(format!("SendRRData reply: {e}")))?;
+        let sd = SendData::parse(&reply.data).map_err(StepError::malformed("SendRRData reply"))?;
         let Some(Item::UnconnectedData(payload)) = sd.cpf.items.get(1) else {
             return Err(StepError::Protocol(
                 "SendRRData reply without unconnected data item".into(),
             ));
         };
-        MrResponse::parse(payload)
-            .map_err(|e| StepError::Protocol(format!("message-router reply: {e}")))
+        MrResponse::parse(payload).map_err(StepError::malformed("message-router reply"))
     }
 
     /// The NORD product, for steps about its parameters and assemblies.
@@ -521,7 +519,7 @@ impl Scanner {
             return Ok((resp, None));
         }
         let reply = ForwardOpenReply::parse(&resp.data)
-            .map_err(|e| StepError::Protocol(format!("Forward_Open reply: {e}")))?;
+            .map_err(StepError::malformed("Forward_Open reply"))?;
         if s.o_t_point != eip::LISTEN_ONLY_POINT {
             // An owner connection: the following process-data steps run over it.
             self.io = Some(IoConn {
@@ -1069,10 +1067,8 @@ impl Scanner {
                 crate::timing::ms(on_time.limit())
             )
         });
-        let malformed = |e: proto::wire::Error| {
-            StepError::Protocol(format!("malformed ListIdentity reply: {e}"))
-        };
-        let cpf = Cpf::parse(&reply.data).map_err(malformed)?;
+        let malformed = StepError::malformed("malformed ListIdentity reply");
+        let cpf = Cpf::parse(&reply.data).map_err(&malformed)?;
         let data = cpf
             .items
             .iter()
@@ -1088,7 +1084,7 @@ impl Scanner {
                 StepError::Protocol("the ListIdentity reply has no identity item (0Ch)".into())
             })?;
         let (id, _) =
-            proto::enip::identity::Identity::parse_list_identity_item(data).map_err(malformed)?;
+            proto::enip::identity::Identity::parse_list_identity_item(data).map_err(&malformed)?;
         Ok(Identity {
             source: format!("ListIdentity{}", late.unwrap_or_default()),
             vendor: Some(format!("vendor id {}", id.vendor)),

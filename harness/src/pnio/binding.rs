@@ -753,7 +753,7 @@ pub(super) fn identity_of<L: Link>(ctl: &mut Controller<L>) -> Option<Result<Ide
                 id.revision = Some(im.software_revision.to_string());
                 id.serial = Some(im.serial);
             }
-            Err(e) => return Some(Err(StepError::Protocol(format!("malformed I&M0: {e}")))),
+            Err(e) => return Some(Err(StepError::malformed("malformed I&M0")(e))),
         },
         Ok((status, _)) => id.source += &format!(" (I&M0 refused: {})", status_hex(status)),
         Err(e) => return Some(Err(step_error(e))),
