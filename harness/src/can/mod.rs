@@ -69,7 +69,7 @@ fn profiles() -> Vec<Profile> {
         .collect()
 }
 
-fn parse_step(v: &Value) -> Result<Box<dyn BusStep>, String> {
+fn parse_step(v: &Value) -> Result<Box<dyn BusStep>, crate::suite::fields::FieldError> {
     step::parse(v)
 }
 

@@ -22,6 +22,7 @@ use proto::canopen::NmtCommand;
 
 use crate::effect::{self, Effect};
 use crate::hex::can_frame;
+use crate::suite::fields::FieldError;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 use crate::suite::BusStep;
@@ -124,82 +125,95 @@ impl BusStep for CanStep {
 }
 
 /// Parses a `can:` step.
-pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
+pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, FieldError> {
     let m = v
         .as_object()
-        .ok_or_else(|| format!("`can`: expected a map of fields, got {v}"))?;
-    let wait = |f: &Fields| -> Result<Duration, String> {
+        .ok_or_else(|| FieldError::value("can", format!("expected a map of fields, got {v}")))?;
+    let wait = |f: &Fields| -> Result<Duration, FieldError> {
         match f.text("wait")? {
             None => Ok(DEFAULT_WAIT),
-            Some(t) => parse_duration(&t).map_err(|e| format!("`can.wait`: {e}")),
+            Some(t) => parse_duration(&t).map_err(|e| FieldError::value("can.wait", e)),
         }
     };
-    let step =
-        if m.contains_key("frame") {
-            let f = Fields::new("can", m, &["frame", "remote", "wait"])?;
-            let text = f.text("frame")?.unwrap_or_default();
-            let (id, data) = text.trim().split_once(' ').unwrap_or((text.trim(), ""));
-            let (id, relative) = match id.strip_suffix("+N") {
-                Some(base) => (base, true),
-                None => (id, false),
-            };
-            let id = u16::from_str_radix(id.trim_end_matches('h'), 16)
-                .ok()
-                .filter(|id| *id <= 0x7FF - if relative { 127 } else { 0 })
-                .ok_or_else(|| {
-                    format!("`can.frame`: `{id}` is not an 11-bit COB-ID (000…7FF, hex; `600+N`)")
-                })?;
-            let frame = match f.int("remote")? {
-                Some(dlc) => {
-                    let dlc = u8::try_from(dlc).map_err(|_| format!("`can.remote`: DLC {dlc}"))?;
-                    CanFrame::remote(id, dlc)
-                }
-                None => CanFrame::new(id, &hex_bytes("can.frame", data)?),
-            }
-            .map_err(|e| format!("`can.frame`: {e}"))?;
-            CanStep {
-                send: Some(Send::Frame(frame, relative)),
-                wait: wait(&f)?,
-            }
-        } else if m.contains_key("nmt") {
-            let f = Fields::new("can", m, &["nmt", "node", "wait"])?;
-            let command = match f.text("nmt")?.unwrap_or_default().as_str() {
-                "start" => NmtCommand::START,
-                "stop" => NmtCommand::STOP,
-                "pre-operational" => NmtCommand::ENTER_PRE_OPERATIONAL,
-                "reset-node" => NmtCommand::RESET_NODE,
-                "reset-communication" => NmtCommand::RESET_COMMUNICATION,
-                other => {
-                    return Err(format!(
-                        "`can.nmt`: `{other}` (start, stop, pre-operational, reset-node, \
-                     reset-communication)"
-                    ))
-                }
-            };
-            let node =
-                match m.get("node") {
-                    Some(Value::String(s)) if s == "dut" => None,
-                    _ => {
-                        let node = f.int("node")?.unwrap_or(0);
-                        Some(u8::try_from(node).ok().filter(|n| *n <= 127).ok_or_else(|| {
-                    format!("`can.node`: {node} is not 0 (all), a node id 1…127 or `dut`")
-                })?)
-                    }
-                };
-            CanStep {
-                send: Some(Send::Nmt(command, node)),
-                wait: wait(&f)?,
-            }
-        } else if m.contains_key("listen") {
-            let f = Fields::new("can", m, &["listen"])?;
-            let t = f.text("listen")?.unwrap_or_default();
-            CanStep {
-                send: None,
-                wait: parse_duration(&t).map_err(|e| format!("`can.listen`: {e}"))?,
-            }
-        } else {
-            return Err("`can`: give `frame`, `nmt` or `listen`".into());
+    let step = if m.contains_key("frame") {
+        let f = Fields::new("can", m, &["frame", "remote", "wait"])?;
+        let text = f.text("frame")?.unwrap_or_default();
+        let (id, data) = text.trim().split_once(' ').unwrap_or((text.trim(), ""));
+        let (id, relative) = match id.strip_suffix("+N") {
+            Some(base) => (base, true),
+            None => (id, false),
         };
+        let id = u16::from_str_radix(id.trim_end_matches('h'), 16)
+            .ok()
+            .filter(|id| *id <= 0x7FF - if relative { 127 } else { 0 })
+            .ok_or_else(|| {
+                FieldError::value(
+                    "can.frame",
+                    format!("`{id}` is not an 11-bit COB-ID (000…7FF, hex; `600+N`)"),
+                )
+            })?;
+        let frame = match f.int("remote")? {
+            Some(dlc) => {
+                let dlc = u8::try_from(dlc)
+                    .map_err(|_| FieldError::value("can.remote", format!("DLC {dlc}")))?;
+                CanFrame::remote(id, dlc)
+            }
+            None => CanFrame::new(id, &hex_bytes("can.frame", data)?),
+        }
+        .map_err(|e| FieldError::value("can.frame", format!("{e}")))?;
+        CanStep {
+            send: Some(Send::Frame(frame, relative)),
+            wait: wait(&f)?,
+        }
+    } else if m.contains_key("nmt") {
+        let f = Fields::new("can", m, &["nmt", "node", "wait"])?;
+        let command = match f.text("nmt")?.unwrap_or_default().as_str() {
+            "start" => NmtCommand::START,
+            "stop" => NmtCommand::STOP,
+            "pre-operational" => NmtCommand::ENTER_PRE_OPERATIONAL,
+            "reset-node" => NmtCommand::RESET_NODE,
+            "reset-communication" => NmtCommand::RESET_COMMUNICATION,
+            other => {
+                return Err(FieldError::value(
+                    "can.nmt",
+                    format!(
+                        "`{other}` (start, stop, pre-operational, reset-node, \
+                     reset-communication)"
+                    ),
+                ))
+            }
+        };
+        let node = match m.get("node") {
+            Some(Value::String(s)) if s == "dut" => None,
+            _ => {
+                let node = f.int("node")?.unwrap_or(0);
+                Some(
+                    u8::try_from(node)
+                        .ok()
+                        .filter(|n| *n <= 127)
+                        .ok_or_else(|| {
+                            FieldError::value(
+                                "can.node",
+                                format!("{node} is not 0 (all), a node id 1…127 or `dut`"),
+                            )
+                        })?,
+                )
+            }
+        };
+        CanStep {
+            send: Some(Send::Nmt(command, node)),
+            wait: wait(&f)?,
+        }
+    } else if m.contains_key("listen") {
+        let f = Fields::new("can", m, &["listen"])?;
+        let t = f.text("listen")?.unwrap_or_default();
+        CanStep {
+            send: None,
+            wait: parse_duration(&t).map_err(|e| FieldError::value("can.listen", e))?,
+        }
+    } else {
+        return Err("`can`: give `frame`, `nmt` or `listen`".into());
+    };
     Ok(Box::new(step))
 }
 
@@ -208,7 +222,7 @@ mod tests {
     use super::*;
     use serde_json::json;
 
-    fn step(v: Value) -> Result<CanStep, String> {
+    fn step(v: Value) -> Result<CanStep, FieldError> {
         parse(&v).map(|s| s.as_any().downcast_ref::<CanStep>().unwrap().clone())
     }
 
@@ -235,14 +249,17 @@ mod tests {
         );
         assert!(step(json!({ "frame": "800 00" }))
             .unwrap_err()
+            .to_string()
             .contains("11-bit"));
         assert!(step(json!({ "frame": "601 00 00 00 00 00 00 00 00 00" })).is_err());
         assert!(step(json!({ "nmt": "go" }))
             .unwrap_err()
+            .to_string()
             .contains("start, stop"));
         assert!(step(json!({ "nmt": "start", "node": 128 })).is_err());
         assert!(step(json!({ "hello": 1 }))
             .unwrap_err()
+            .to_string()
             .contains("give `frame`"));
         // Starting a node may start process data; an SDO upload cannot move anything.
         assert!(n.effect().motion.is_none());

@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use crate::hex::hex;
 use crate::notation::int_of;
+use crate::suite::fields::FieldError;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 use crate::suite::BusStep;
@@ -180,22 +181,24 @@ impl BusStep for EcatStep {
 }
 
 /// Parses an `ecat:` step.
-pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
+pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, FieldError> {
     let m = v
         .as_object()
-        .ok_or_else(|| format!("`ecat`: expected a map of fields, got {v}"))?;
+        .ok_or_else(|| FieldError::value("ecat", format!("expected a map of fields, got {v}")))?;
     let has = |k: &str| m.contains_key(k);
-    let word = |f: &Fields, k: &str| -> Result<u16, String> {
+    let word = |f: &Fields, k: &str| -> Result<u16, FieldError> {
         let v = f.req_int(k)?;
-        u16::try_from(v).map_err(|_| format!("`ecat.{k}`: {v} is not 0..=FFFFh"))
+        u16::try_from(v)
+            .map_err(|_| FieldError::value(format!("ecat.{k}"), format!("{v} is not 0..=FFFFh")))
     };
-    let byte = |f: &Fields, k: &str, default: u8| -> Result<u8, String> {
+    let byte = |f: &Fields, k: &str, default: u8| -> Result<u8, FieldError> {
         match f.int(k)? {
             None => Ok(default),
-            Some(v) => u8::try_from(v).map_err(|_| format!("`ecat.{k}`: {v} is not a byte")),
+            Some(v) => u8::try_from(v)
+                .map_err(|_| FieldError::value(format!("ecat.{k}"), format!("{v} is not a byte"))),
         }
     };
-    let bytes = |f: &Fields, k: &str| -> Result<Vec<u8>, String> {
+    let bytes = |f: &Fields, k: &str| -> Result<Vec<u8>, FieldError> {
         hex_bytes(&format!("ecat.{k}"), &f.text(k)?.unwrap_or_default())
     };
     let step = if has("state") {
@@ -238,7 +241,10 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
             let n = usize::try_from(n)
                 .ok()
                 .filter(|n| *n <= 1486)
-                .ok_or(format!("`ecat.length`: {n} is not 0..=1486"))?;
+                .ok_or(FieldError::value(
+                    "ecat.length",
+                    format!("{n} is not 0..=1486"),
+                ))?;
             data.resize(n, 0);
         }
         EcatStep::Datagram {
@@ -358,7 +364,19 @@ mod tests {
 
     #[test]
     fn bad_steps_say_what_is_wrong() {
-        let e = |v: Value| parse(&v).unwrap_err();
+        let e = |v: Value| parse(&v).unwrap_err().to_string();
+        // Each error names the field it is about.
+        assert_eq!(
+            parse(&json!({ "read": "0130h" })).unwrap_err(),
+            FieldError::Missing {
+                action: "ecat".into(),
+                field: "length".into()
+            }
+        );
+        assert!(matches!(
+            parse(&json!({ "upload": "1018h", "index": 1 })).unwrap_err(),
+            FieldError::Unknown { field, .. } if field == "index"
+        ));
         assert!(e(json!({ "state": "RUN" })).contains("give INIT, PREOP"));
         assert!(e(json!({ "upload": "10000h" })).contains("is not 0..=FFFFh"));
         assert!(e(json!({ "upload": "1018h", "sub": 300 })).contains("is not a byte"));

@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use super::ForwardOpenSpec;
 use crate::hex::hex;
+use crate::suite::fields::FieldError;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 use crate::suite::BusStep;
@@ -163,16 +164,16 @@ fn describe(e: &EnipStep) -> String {
 }
 
 /// Parses an `enip:` step.
-pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
+pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, FieldError> {
     let m = v
         .as_object()
-        .ok_or_else(|| format!("`enip`: expected a map of fields, got {v}"))?;
+        .ok_or_else(|| FieldError::value("enip", format!("expected a map of fields, got {v}")))?;
     Ok(Box::new(enip_step(m)?))
 }
 
 /// `split: N` and `gap: T` of a raw message of `len` bytes: N must leave bytes on both sides;
 /// `gap` alone is an error (there is nothing to pause between).
-fn split(f: &Fields, len: usize) -> Result<Option<Split>, String> {
+fn split(f: &Fields, len: usize) -> Result<Option<Split>, FieldError> {
     let gap = f.text("gap")?.map(|g| parse_duration(&g)).transpose()?;
     let Some(at) = f.int("split")? else {
         return match gap {
@@ -185,19 +186,25 @@ fn split(f: &Fields, len: usize) -> Result<Option<Split>, String> {
             at,
             gap: gap.unwrap_or(DEFAULT_GAP),
         })),
-        _ => Err(format!(
-            "`enip.split`: {at} does not split a message of {len} bytes (1..={})",
-            len.saturating_sub(1)
+        _ => Err(FieldError::value(
+            "enip.split",
+            format!(
+                "{at} does not split a message of {len} bytes (1..={})",
+                len.saturating_sub(1)
+            ),
         )),
     }
 }
 
-fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
-    let client = |f: &Fields| -> Result<u8, String> {
+fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, FieldError> {
+    let client = |f: &Fields| -> Result<u8, FieldError> {
         match f.int("client")? {
             None => Ok(1),
             Some(v @ 1..=99) => Ok(v as u8),
-            Some(v) => Err(format!("`enip.client`: {v} is not 1..=99")),
+            Some(v) => Err(FieldError::value(
+                "enip.client",
+                format!("{v} is not 1..=99"),
+            )),
         }
     };
     if m.contains_key("raw") {
@@ -249,26 +256,39 @@ fn enip_step(m: &Map<String, Value>) -> Result<EnipStep, String> {
             ],
         )?;
         let d = ForwardOpenSpec::default();
-        let small = |k: &str| -> Result<Option<u16>, String> {
+        let small = |k: &str| -> Result<Option<u16>, FieldError> {
             f.int(k)?
-                .map(|v| u16::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not 0..=65535")))
+                .map(|v| {
+                    u16::try_from(v).map_err(|_| {
+                        FieldError::value(format!("enip.{k}"), format!("{v} is not 0..=65535"))
+                    })
+                })
                 .transpose()
         };
-        let byte = |k: &str| -> Result<Option<u8>, String> {
+        let byte = |k: &str| -> Result<Option<u8>, FieldError> {
             f.int(k)?
-                .map(|v| u8::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is not a byte")))
+                .map(|v| {
+                    u8::try_from(v).map_err(|_| {
+                        FieldError::value(format!("enip.{k}"), format!("{v} is not a byte"))
+                    })
+                })
                 .transpose()
         };
         let rpi = f
             .int("rpi_us")?
-            .map(|v| u32::try_from(v).map_err(|_| format!("`enip.rpi_us`: {v} is not 32-bit")))
+            .map(|v| {
+                u32::try_from(v)
+                    .map_err(|_| FieldError::value("enip.rpi_us", format!("{v} is not 32-bit")))
+            })
             .transpose()?;
         // `forward_open: declared`: the connection of the device's EDS, its sizes changed by
         // `o_t_size_delta` / `t_o_size_delta` bytes.
         if f.text("forward_open").ok().flatten().as_deref() == Some("declared") {
-            let delta = |k: &str| -> Result<i32, String> {
+            let delta = |k: &str| -> Result<i32, FieldError> {
                 f.int(k)?.map_or(Ok(0), |v| {
-                    i32::try_from(v).map_err(|_| format!("`enip.{k}`: {v} is too big"))
+                    i32::try_from(v).map_err(|_| {
+                        FieldError::value(format!("enip.{k}"), format!("{v} is too big"))
+                    })
                 })
             };
             return Ok(EnipStep::ForwardOpen(ForwardOpenSpec {
@@ -315,13 +335,13 @@ mod tests {
     const LIST_IDENTITY: &str = "6300 0000 00000000 00000000 0000000000000000 00000000";
 
     /// A raw step with these fields beside `raw`.
-    fn raw(extra: Value) -> Result<EnipStep, String> {
+    fn raw(extra: Value) -> Result<EnipStep, FieldError> {
         let mut m = extra.as_object().cloned().unwrap_or_default();
         m.insert("raw".into(), json!(LIST_IDENTITY));
         enip_step(&m)
     }
 
-    fn split_of(step: Result<EnipStep, String>) -> Option<Split> {
+    fn split_of(step: Result<EnipStep, FieldError>) -> Option<Split> {
         match step {
             Ok(EnipStep::Raw { bytes, split, .. }) => {
                 assert_eq!(bytes.len(), 24);
@@ -361,6 +381,10 @@ mod tests {
             assert!(raw(bad.clone()).is_err(), "{bad} loaded");
         }
         let e = raw(json!({ "split": 24 })).unwrap_err();
-        assert!(e.contains("does not split a message of 24 bytes"), "{e}");
+        assert!(
+            matches!(&e, FieldError::Value { at, why } if at == "enip.split"
+                && why.contains("does not split a message of 24 bytes")),
+            "{e:?}"
+        );
     }
 }

@@ -11,6 +11,7 @@ use proto::epl::{NmtCommand, NmtState};
 use super::mn::Via;
 use crate::hex::hex;
 use crate::notation::int_of;
+use crate::suite::fields::FieldError;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 use crate::suite::BusStep;
@@ -114,7 +115,7 @@ fn named<T>(
     by_name: fn(&str) -> Option<T>,
     from_byte: fn(u8) -> T,
     known: &str,
-) -> Result<T, String> {
+) -> Result<T, FieldError> {
     match v {
         Value::String(s) => by_name(s).or_else(|| {
             int_of(v)
@@ -127,31 +128,38 @@ fn named<T>(
             .and_then(|n| u8::try_from(n).ok())
             .map(from_byte),
     }
-    .ok_or_else(|| format!("`epl.{key}`: give {known} or a byte like 21h"))
+    .ok_or_else(|| {
+        FieldError::value(
+            format!("epl.{key}"),
+            format!("give {known} or a byte like 21h"),
+        )
+    })
 }
 
 /// Parses an `epl:` step.
-pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
+pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, FieldError> {
     let m = v
         .as_object()
-        .ok_or_else(|| format!("`epl`: expected a map of fields, got {v}"))?;
+        .ok_or_else(|| FieldError::value("epl", format!("expected a map of fields, got {v}")))?;
     let has = |k: &str| m.contains_key(k);
-    let via = |f: &Fields| -> Result<Option<Via>, String> {
+    let via = |f: &Fields| -> Result<Option<Via>, FieldError> {
         f.text("via")?
-            .map(|s| Via::parse(&s).map_err(|e| format!("`epl.via`: {e}")))
+            .map(|s| Via::parse(&s).map_err(|e| FieldError::value("epl.via", e)))
             .transpose()
     };
-    let index = |f: &Fields, k: &str| -> Result<u16, String> {
+    let index = |f: &Fields, k: &str| -> Result<u16, FieldError> {
         let v = f.req_int(k)?;
-        u16::try_from(v).map_err(|_| format!("`epl.{k}`: {v} is not 0..=FFFFh"))
+        u16::try_from(v)
+            .map_err(|_| FieldError::value(format!("epl.{k}"), format!("{v} is not 0..=FFFFh")))
     };
-    let sub = |f: &Fields| -> Result<u8, String> {
+    let sub = |f: &Fields| -> Result<u8, FieldError> {
         match f.int("sub")? {
             None => Ok(0),
-            Some(v) => u8::try_from(v).map_err(|_| format!("`epl.sub`: {v} is not a byte")),
+            Some(v) => u8::try_from(v)
+                .map_err(|_| FieldError::value("epl.sub", format!("{v} is not a byte"))),
         }
     };
-    let bytes = |f: &Fields, k: &str| -> Result<Vec<u8>, String> {
+    let bytes = |f: &Fields, k: &str| -> Result<Vec<u8>, FieldError> {
         hex_bytes(&format!("epl.{k}"), &f.text(k)?.unwrap_or_default())
     };
     let step = if has("nmt") {
@@ -181,8 +189,9 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
                 u8::try_from(n)
                     .ok()
                     .filter(|n| (1..=239).contains(n))
-                    .ok_or(format!(
-                        "`epl.node`: {n} is not a controlled node's id (1…239)"
+                    .ok_or(FieldError::value(
+                        "epl.node",
+                        format!("{n} is not a controlled node's id (1…239)"),
                     ))?,
             ),
         };
@@ -224,7 +233,10 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
             u64::try_from(n)
                 .ok()
                 .filter(|n| (1..=100_000).contains(n))
-                .ok_or(format!("`epl.cycles`: {n} is not 1..=100000"))?,
+                .ok_or(FieldError::value(
+                    "epl.cycles",
+                    format!("{n} is not 1..=100000"),
+                ))?,
         )
     } else {
         return Err(
@@ -280,7 +292,7 @@ mod tests {
 
     #[test]
     fn bad_steps_say_what_is_wrong() {
-        let e = |v: Value| parse(&v).unwrap_err();
+        let e = |v: Value| parse(&v).unwrap_err().to_string();
         assert!(e(json!({ "nmt": "jump" })).contains("give start-node"));
         assert!(e(json!({ "upload": "1018h", "via": "tcp" })).contains("asnd or udp"));
         assert!(e(json!({ "cycles": 0 })).contains("1..=100000"));

@@ -12,6 +12,7 @@ use proto::nord::ppo::PpoType;
 
 use crate::hex::hex;
 use crate::notation::int_of;
+use crate::suite::fields::FieldError;
 use crate::suite::fields::{hex_bytes, Fields};
 use crate::suite::parse_duration;
 use crate::suite::BusStep;
@@ -184,8 +185,13 @@ impl BusStep for PnioStep {
 }
 
 /// A module: `ppo1`…`ppo6` or an ident number.
-fn module(v: &Value) -> Result<Module, String> {
-    let bad = || format!("`pnio.connect`: {v} is not ppo1, ppo2, ppo3, ppo4, ppo6 or a number");
+fn module(v: &Value) -> Result<Module, FieldError> {
+    let bad = || {
+        FieldError::value(
+            "pnio.connect",
+            format!("{v} is not ppo1, ppo2, ppo3, ppo4, ppo6 or a number"),
+        )
+    };
     if let Some(s) = v.as_str() {
         if let Some(n) = s.to_ascii_lowercase().strip_prefix("ppo") {
             let n: u8 = n.parse().map_err(|_| bad())?;
@@ -199,35 +205,39 @@ fn module(v: &Value) -> Result<Module, String> {
         .ok_or_else(bad)
 }
 
-fn ipv4(f: &Fields, key: &str) -> Result<Ipv4Addr, String> {
+fn ipv4(f: &Fields, key: &str) -> Result<Ipv4Addr, FieldError> {
     f.text(key)?
         .ok_or(format!("`pnio.set-ip` needs `{key}`"))?
         .parse()
-        .map_err(|e| format!("`pnio.{key}`: {e}"))
+        .map_err(|e| FieldError::value(format!("pnio.{key}"), format!("{e}")))
 }
 
-fn word(f: &Fields, key: &str) -> Result<Option<u16>, String> {
+fn word(f: &Fields, key: &str) -> Result<Option<u16>, FieldError> {
     f.int(key)?
-        .map(|v| u16::try_from(v).map_err(|_| format!("`pnio.{key}`: {v} is not 0..=FFFFh")))
+        .map(|v| {
+            u16::try_from(v).map_err(|_| {
+                FieldError::value(format!("pnio.{key}"), format!("{v} is not 0..=FFFFh"))
+            })
+        })
         .transpose()
 }
 
 /// Parses a `pnio:` step.
-pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
+pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, FieldError> {
     let m = v
         .as_object()
-        .ok_or_else(|| format!("`pnio`: expected a map of fields, got {v}"))?;
+        .ok_or_else(|| FieldError::value("pnio", format!("expected a map of fields, got {v}")))?;
     let has = |k: &str| m.contains_key(k);
     let permanent =
-        |f: &Fields| -> Result<bool, String> { Ok(f.bool("permanent")?.unwrap_or(true)) };
-    let bytes = |f: &Fields, k: &str| -> Result<Vec<u8>, String> {
+        |f: &Fields| -> Result<bool, FieldError> { Ok(f.bool("permanent")?.unwrap_or(true)) };
+    let bytes = |f: &Fields, k: &str| -> Result<Vec<u8>, FieldError> {
         hex_bytes(&format!("pnio.{k}"), &f.text(k)?.unwrap_or_default())
     };
-    let duration = |f: &Fields, k: &str| -> Result<Duration, String> {
-        parse_duration(
-            &f.text(k)?
-                .ok_or(format!("`pnio.{k}`: give a time like 200ms"))?,
-        )
+    let duration = |f: &Fields, k: &str| -> Result<Duration, FieldError> {
+        Ok(parse_duration(&f.text(k)?.ok_or(FieldError::value(
+            format!("pnio.{k}"),
+            "give a time like 200ms",
+        ))?)?)
     };
     let step = if has("identify") {
         let f = Fields::new("pnio", m, &["identify"])?;
@@ -250,7 +260,10 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
             mask: ipv4(&f, "mask")?,
             gateway: f
                 .text("gateway")?
-                .map(|g| g.parse().map_err(|e| format!("`pnio.gateway`: {e}")))
+                .map(|g| {
+                    g.parse()
+                        .map_err(|e| FieldError::value("pnio.gateway", format!("{e}")))
+                })
                 .transpose()?
                 .unwrap_or(Ipv4Addr::UNSPECIFIED),
             permanent: permanent(&f)?,
@@ -267,7 +280,12 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
             None => 1,
             // IEC 61158-6-10: 1…512 for RT class 1 frames.
             Some(n @ 1..=512) => n as u16,
-            Some(n) => return Err(format!("`pnio.reduction-ratio`: {n} is not 1…512")),
+            Some(n) => {
+                return Err(FieldError::value(
+                    "pnio.reduction-ratio",
+                    format!("{n} is not 1…512"),
+                ))
+            }
         };
         let modules = match &m["connect"] {
             Value::Array(a) => a.iter().map(module).collect::<Result<_, _>>()?,
@@ -315,7 +333,10 @@ pub(super) fn parse(v: &Value) -> Result<Box<dyn BusStep>, String> {
             u64::try_from(n)
                 .ok()
                 .filter(|n| (1..=100_000).contains(n))
-                .ok_or(format!("`pnio.cycles`: {n} is not 1..=100000"))?,
+                .ok_or(FieldError::value(
+                    "pnio.cycles",
+                    format!("{n} is not 1..=100000"),
+                ))?,
         )
     } else if has("frame") {
         let f = Fields::new("pnio", m, &["frame"])?;
@@ -404,7 +425,7 @@ mod tests {
 
     #[test]
     fn bad_steps_say_what_is_wrong() {
-        let e = |v: Value| parse(&v).unwrap_err();
+        let e = |v: Value| parse(&v).unwrap_err().to_string();
         assert!(e(json!({ "connect": ["ppo5"] })).contains("is not ppo1"));
         assert!(e(json!({ "read": 70000 })).contains("not 0..=FFFFh"));
         assert!(e(json!({ "set-ip": "300.1.1.1", "mask": "255.0.0.0" })).contains("pnio.set-ip"));

@@ -4,11 +4,12 @@
 
 use serde_json::Value;
 
+use super::fields::FieldError;
 use super::BusStep;
 use crate::profile::Catalog;
 
 /// Parses a suite step written under a bus's key; the error says what is wrong.
-pub(crate) type ParseStep = fn(&Value) -> Result<Box<dyn BusStep>, String>;
+pub(crate) type ParseStep = fn(&Value) -> Result<Box<dyn BusStep>, FieldError>;
 
 /// The names a suite may use.
 #[derive(Debug, Clone)]
