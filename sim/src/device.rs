@@ -464,6 +464,18 @@ impl Device {
                 store.set_info(746, 3, 1);
             }
         }
+        // P745 "Module version" of the inverters behind an SK TU3/TU4 EtherNet/IP or POWERLINK
+        // module (BU 2100 §7.2 p. 55, BU 2200 §7.2 p. 60; "—" for the SK CU4): the module's
+        // software version as P171 [-01] shows it (no value printed; BU 0590 §5.2.2 names P745
+        // the technology unit's software version).
+        if let (Some(_), Some((version, _))) = (
+            proto::nord::can::p746_interface_id(config.product),
+            software_version(config.product),
+        ) {
+            for unit in inverters.iter_mut() {
+                unit.params.store.set_info(745, 1, version);
+            }
+        }
         let mut interface = ParamChannel::new(ParamStore::new(config.product, Target::Interface));
         // P172 "Configuration level" (BU 2100 §7.1.3, BU 0590 §5.1.3, BU 2200 §7.1.3): 0 CU4,
         // 1 TU4, 2 TU3 (the simulated TU3 modules have no DIP-switch addressing: never 3).
@@ -640,6 +652,7 @@ impl Device {
                 flags.telegram_timeout = true;
             }
         }
+        self.show_module_status(now);
         if self.shown != Some(flags) {
             for (number, element, value) in
                 bus_status::status_parameters(self.config.product, flags)
@@ -673,6 +686,49 @@ impl Device {
         }
         self.settle_interface();
         self.change_protocol(now);
+    }
+
+    /// P153 [-02] "TxPDO Inhibit Time" of an SK CU4/TU4 module, µs: "the pause time for the
+    /// system bus in order to reduce the bus load" (BU 2100 §7.1.1 p. 46, BU 2200 §7.1.1 p. 49),
+    /// the least time between two process-data cycles its gateway puts on the system bus; 0
+    /// for the products without P153.
+    fn pdo_pause_us(&self) -> u32 {
+        if !proto::nord::can::has_p153_p154(self.config.product) {
+            return 0;
+        }
+        let p153 = ParamNumber::new(153).ok();
+        let second = proto::nord::ArrayElement::new(2).ok();
+        p153.and_then(|p| self.interface.store.read(p, None, second).ok())
+            .and_then(|ms| u32::try_from(ms).ok())
+            .map_or(0, |ms| ms * 1000)
+    }
+
+    /// P746 "Module status" of each inverter behind an EtherNet/IP or POWERLINK module (BU 2100
+    /// §7.2 p. 55, BU 2200 §7.2 p. 60; `proto::nord::can::p746_status`): bit 0 the interface
+    /// initialised (from power-on), bit 1 its process data within [`PROCESS_DATA_WINDOW`],
+    /// error 011 "P513 timeout" while it shows E10.3 (its telegram monitoring, P513 or the
+    /// module's P151, tripped), else 010 "Bus timeout" while the field bus's watchdog has
+    /// tripped (P173 bit 2), else 000. Which of the two a P151 trip shows is not stated; E10.3
+    /// is "Timeout by P151/P513" (BU 2100 §7.1.1), so the simulator shows 011.
+    fn show_module_status(&mut self, now: Duration) {
+        use proto::nord::can::{p746_status, P746Error};
+        let product = self.config.product;
+        let bus_timeout = self.fieldbus_timeout;
+        for unit in self.inverters.iter_mut() {
+            let cyclic = unit
+                .last_process
+                .is_some_and(|last| now.saturating_sub(last) <= PROCESS_DATA_WINDOW);
+            let timeout =
+                unit.drive.fault() == Some(E10_3) || unit.drive.pending_fault() == Some(E10_3);
+            let error = match (timeout, bus_timeout) {
+                (true, _) => P746Error::P513Timeout,
+                (false, true) => P746Error::BusTimeout,
+                (false, false) => P746Error::None,
+            };
+            if let Some(value) = p746_status(product, true, cyclic, error) {
+                unit.params.store.set_info(746, 1, value);
+            }
+        }
     }
 
     /// What a write to the interface's own parameters sets off at once: P150's outputs, P152's
@@ -760,8 +816,9 @@ impl Device {
                 let control = ppo.pzd.first().copied().unwrap_or(0);
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
                 let answer = unit.process(control, setpoints, now);
+                let pause = self.pdo_pause_us();
                 if let (Some(tap), None) = (self.tap.as_mut(), self.can_state.off_since) {
-                    tap.process(i, &ppo.pzd, &answer, now);
+                    tap.process(i, &ppo.pzd, &answer, pause, now);
                 }
                 let mut pzd = answer.to_vec();
                 pzd.resize(ppo.pzd.len(), 0);
@@ -986,13 +1043,14 @@ impl Device {
         let answer = self
             .inverter_mut(inverter)?
             .process(control, setpoints, now);
+        let pause = self.pdo_pause_us();
         if let (Some(tap), None) = (self.tap.as_mut(), self.can_state.off_since) {
             let mut sent = [0u16; 6];
             sent[0] = control;
             for (d, w) in sent[1..].iter_mut().zip(setpoints) {
                 *d = *w;
             }
-            tap.process(inverter, &sent, &answer, now);
+            tap.process(inverter, &sent, &answer, pause, now);
         }
         Ok(answer)
     }

@@ -149,8 +149,17 @@ impl Tap {
     }
 
     /// FI `fi`'s words of one field-bus cycle at `now`: the control word and setpoints it
-    /// got, the status word and actual values it answered.
-    pub(crate) fn process(&mut self, fi: Inverter, sent: &[u16], answer: &[u16], now: Duration) {
+    /// got, the status word and actual values it answered. `pause_us`: the module's P153 [-02]
+    /// "TxPDO Inhibit Time" (0 without one), a least time between two cycles beside the
+    /// update cycle.
+    pub(crate) fn process(
+        &mut self,
+        fi: Inverter,
+        sent: &[u16],
+        answer: &[u16],
+        pause_us: u32,
+        now: Duration,
+    ) {
         let Some(node) = self.node(fi) else {
             return;
         };
@@ -159,7 +168,8 @@ impl Tap {
         }
         if self.cycle.is_none() {
             if let Some((t, carried)) = self.last_cycle {
-                let period = proto::nord::can::cycle_period_us(self.product, self.series, carried);
+                let period = proto::nord::can::cycle_period_us(self.product, self.series, carried)
+                    .max(pause_us);
                 if now < t + Duration::from_micros(u64::from(period)) {
                     return;
                 }
@@ -298,8 +308,8 @@ mod tests {
         // Two FIs in one field-bus cycle, the next field-bus cycle 4 ms later (too soon), the
         // one after at 8 ms.
         for t in [0, 4, 8] {
-            tap.process(fi(1), &sent, &back, ms(t));
-            tap.process(fi(2), &sent, &back, ms(t));
+            tap.process(fi(1), &sent, &back, 5000, ms(t));
+            tap.process(fi(2), &sent, &back, 5000, ms(t));
         }
         let frames = tap.take(ms(9));
         let ids: Vec<u16> = frames.iter().map(|(_, f)| f.id()).collect();
@@ -311,7 +321,26 @@ mod tests {
         assert_eq!(hex(&frames[..1]), ["220 7E 04 00 20 00 00 00 00"]);
         // Behind the SK 550P, FI 1 is the device itself.
         let mut tap = Tap::new(Product::Sk550p);
-        tap.process(fi(1), &sent, &back, ms(0));
+        tap.process(fi(1), &sent, &back, 0, ms(0));
         assert!(tap.take(ms(1)).is_empty());
+    }
+
+    #[test]
+    fn p153_spaces_the_cycles() {
+        // P153 [-02] = 20 ms on an SK TU4: field-bus cycles every 4 ms, a system-bus cycle every
+        // 20 ms (BU 2100 §7.1.1 p. 46).
+        let mut tap = Tap::new(Product::Tu4Eip);
+        let ms = Duration::from_millis;
+        let words = [0x047E, 0, 0, 0, 0, 0];
+        for t in (0..=44).step_by(4) {
+            tap.process(fi(1), &words, &words, 20_000, ms(t));
+        }
+        let syncs: Vec<Duration> = tap
+            .take(ms(45))
+            .into_iter()
+            .filter(|(_, f)| f.id() == 0x080)
+            .map(|(t, _)| t)
+            .collect();
+        assert_eq!(syncs, [ms(0), ms(20), ms(40)]);
     }
 }

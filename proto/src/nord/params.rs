@@ -229,6 +229,12 @@ pub const CATALOGUE: &[ParamDef] = &[
     only(ro(array(inv(701, "Last error", 0, 9999, 0, 1, "BU 0590 §6.2 (p. 44): the error 'is permanently stored in the FI error statistics'; BU 0620 §4.5 / BU 2100 §7.2 name P701 'Last error'; [-01]..[-05] newest first assumed from BU 0500"), 5)), PNT),
     only(ro(inv(745, "Module version", 0, 9999, 0, 1, "BU 0590 §5.2.2 (p. 43): 0.0…999.9, the technology unit's software version")), PNT),
     only(ro(inv(746, "Module status", 0, 0xFFFF, 0, 0, "BU 0590 §5.2.2 (p. 43): 0000…FFFFh, readiness, error and communication of the technology unit")), PNT),
+    // The SK 54xE behind the EtherNet/IP and POWERLINK modules (BU 2100 §7.2 p. 54/55, BU 2200
+    // §7.2 p. 59/60: "information parameters relevant for the bus interface").
+    only(inv(512, "USS address", 0, 30, 0, 0, "BU 2100 §4.3 (p. 22): the SK TU3-EIP gateway needs P512 USS address = 0 (factory setting) on every inverter; range 0…30 assumed from BU 0500"), &[Product::Tu3Eip, Product::Tu3Pol]),
+    only(ro(inv(744, "Configuration", 0, 0xFFFF, 0, 0, "BU 2100 §7.2 (p. 55) \"Configuration\", BU 2200 §7.2 (p. 60) \"Ausbaustufe\": for SK TU3, SK CU4 and SK TU4; no value printed (the inverter's manual), 0 assumed")), EIP_POL_ALL),
+    only(ro(inv(745, "Module version", 0, 9999, 0, 1, "BU 2100 §7.2 (p. 55), BU 2200 §7.2 (p. 60): \"—\" in the SK CU4 column (the tab-separated row of BU 2100: SK TU3 empty, SK CU4 \"—\"; BU 2200 prints the same module); no value printed: the module's software version as P171 [-01] shows it assumed (BU 0590 §5.2.2: the version of the technology unit)")), &[Product::Tu3Eip, Product::Tu4Eip, Product::Tu3Pol, Product::Tu4Pol]),
+    only(ro(inv(746, "Module status", 0, 0xFFFF, 0, 0, "BU 2100 §7.2 (p. 55), BU 2200 §7.2 (p. 60): bit 0 initialised, 1 cyclic communication, 4…6 error, 8…15 bus interface ID (EtherNet/IP 23, POWERLINK 24): proto::nord::can::p746_status")), EIP_POL_ALL),
     array(inv(120, "Option monitoring", 0, 2, 1, 0, "BU 0620 §3.9 step 7 (p. 74): [-01] 1 (Auto) or 2 (monitoring active immediately) for the system bus; 0 = off, factory 1 and 4 elements assumed from BU 0600"), 4),
     inv(506, "Auto. Acknowledge Error", 0, 7, 0, 0, "BU 0620 §5.2 (p. 93): activating P506 acknowledges errors automatically; 0 = off (factory) and range 0…7 assumed from BU 0600, any other value acknowledges (BU 0600's count of acknowledgements per mains-on is not modelled)"),
     inv(509, "Control word source", 0, 10, 0, 0, "BU 0620 §4.5: 8 = Ethernet (FI 1), 6 = CANopen (further FIs)"),
@@ -491,8 +497,14 @@ mod tests {
             (fi(744).array, fi(745).array, fi(746).array),
             (Some(2), Some(11), Some(3))
         );
-        // The XU5 extension parameters are the SK 550P's only.
-        assert!(lookup(Product::Tu3Eip, Owner::Inverter, p(744)).is_none());
+        // The XU5 extension parameters are the SK 550P's only; the modules' inverters have one
+        // value each (BU 2100 §7.2 p. 55), P745 not behind the SK CU4.
+        assert_eq!(
+            lookup(Product::Tu3Eip, Owner::Inverter, p(744)).map(|d| d.array),
+            Some(None)
+        );
+        assert!(lookup(Product::Cu4Eip, Owner::Inverter, p(745)).is_none());
+        assert!(lookup(Product::Tu4Pol, Owner::Inverter, p(746)).is_some());
         // §4: position values (POSICON) are double words.
         assert_eq!((fi(615).width, fi(102).width), (Width::Dword, Width::Word));
     }

@@ -182,6 +182,67 @@ pub const TB_IO_INPUTS: [(u16, u8); 2] = [(480, 11), (480, 12)];
 /// See [`TB_IO_INPUTS`].
 pub const TB_IO_OUTPUTS: [(u16, u8); 2] = [(481, 9), (481, 10)];
 
+/// P746 "Module status" of an inverter behind an EtherNet/IP or POWERLINK module, as the
+/// inverter shows the bus interface (BU 2100 §7.2 p. 55, BU 2200 §7.2 p. 60): bit 0 "Bus
+/// interface initialised", bit 1 "Cyclic communication", bits 4…6 "Error 1…3" (the error
+/// table, [`P746Error`]), bits 8…15 the bus interface ID ([`p746_interface_id`]); bits 2, 3
+/// and 7 reserved.
+pub const P746: u16 = 746;
+
+/// The error field of P746, bits 6…4 ("Error 3 2 1"), as the error table prints it (BU 2100
+/// §7.2 p. 55: all eight rows; BU 2200 §7.2 p. 60: the first four).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum P746Error {
+    /// 000 "No error" / "Kein Fehler".
+    None,
+    /// 001 "No communication with ASIC" / "ASIC nicht erreichbar".
+    NoAsic,
+    /// 010 "Bus timeout" / "Bus-Timeout".
+    BusTimeout,
+    /// 011 "P513 timeout" / "P513 Timeout".
+    P513Timeout,
+}
+
+impl P746Error {
+    /// The three bits 6…4 as a number.
+    pub fn code(self) -> u8 {
+        match self {
+            P746Error::None => 0,
+            P746Error::NoAsic => 1,
+            P746Error::BusTimeout => 2,
+            P746Error::P513Timeout => 3,
+        }
+    }
+}
+
+/// The bus interface ID P746 bits 8…15 carry: EtherNet/IP "23" (BU 2100 §7.2 p. 55),
+/// POWERLINK "24" (BU 2200 §7.2 p. 60). `None` where the manuals print none: BU 0590 (SK
+/// TU3-PNT) gives only the example 0603h with high byte 06h "Profibus" (§5.2.2 p. 43), no
+/// PROFINET ID; the SK 550P's P746 is the XU5 status array of BU 0620 §4.5.
+pub fn p746_interface_id(product: Product) -> Option<u8> {
+    match product {
+        Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => Some(23),
+        Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => Some(24),
+        Product::Tu3Pnt | Product::Sk550p => None,
+    }
+}
+
+/// P746 of an inverter behind `product` ([`P746`]); `None` where [`p746_interface_id`] is.
+pub fn p746_status(
+    product: Product,
+    initialised: bool,
+    cyclic: bool,
+    error: P746Error,
+) -> Option<i32> {
+    let id = p746_interface_id(product)?;
+    Some(
+        i32::from(id) << 8
+            | i32::from(error.code()) << 4
+            | i32::from(cyclic) << 1
+            | i32::from(initialised),
+    )
+}
+
 /// P748 "CANopen status" of every inverter, [-01] "Displays the system bus status" (BU 0620
 /// §4.5 p. 91, §3.9 step 8 p. 75; BU 2100 §7.2 p. 55 and §5.3 step 8 "System bus status";
 /// BU 2200 §7.2 p. 60 "CANopen Zustand"). Its bits are not stated by the manuals (they refer
@@ -202,6 +263,27 @@ mod tests {
 
     fn fi(n: i64) -> Inverter {
         Inverter::new(n).unwrap()
+    }
+
+    #[test]
+    fn p746_module_status() {
+        // BU 2100 §7.2: EtherNet/IP = 23 in bits 8…15; BU 2200 §7.2: POWERLINK = 24.
+        assert_eq!(
+            p746_status(Product::Tu4Eip, true, true, P746Error::None),
+            Some(0x1703)
+        );
+        assert_eq!(
+            p746_status(Product::Cu4Pol, true, false, P746Error::P513Timeout),
+            Some(0x1831)
+        );
+        assert_eq!(
+            p746_status(Product::Tu3Eip, true, false, P746Error::BusTimeout),
+            Some(0x1721)
+        );
+        assert_eq!(
+            p746_status(Product::Tu3Pnt, true, true, P746Error::None),
+            None
+        );
     }
 
     #[test]
