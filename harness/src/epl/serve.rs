@@ -40,7 +40,7 @@ use sim::endpoint::{Input, Output};
 use sim::epl::{Node, NodeConfig, NodeError};
 
 use super::address;
-use crate::net::driver::{Counts, Options, Serving, Shared};
+use crate::net::driver::{Options, Serving, Shared};
 use crate::net::raw_port::RawPort;
 use crate::net::serve_args::RawServeArgs;
 use crate::net::udp::ipv4s_of;
@@ -112,32 +112,7 @@ pub enum ServeError {
     Panicked(String),
 }
 
-/// What a served node did, as counted by its threads.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct Stats {
-    /// POWERLINK frames received (every frame of EtherType 88ABh on the interface).
-    pub frames_in: u64,
-    /// Frames the node sent (PRes, ASnd).
-    pub frames_out: u64,
-    /// Datagrams received on UDP port 3819.
-    pub datagrams_in: u64,
-    /// Datagrams the node answered with.
-    pub datagrams_out: u64,
-    /// Frames skipped because they were longer than a standard Ethernet frame.
-    pub oversized: u64,
-}
-
-impl From<Counts> for Stats {
-    fn from(c: Counts) -> Stats {
-        Stats {
-            frames_in: c.frames_in,
-            frames_out: c.frames_out,
-            datagrams_in: c.datagrams_in,
-            datagrams_out: c.datagrams_out,
-            oversized: c.oversized,
-        }
-    }
-}
+pub use crate::net::driver::Counts as Stats;
 
 /// A node served in threads by [`start`]; dropping it stops them.
 #[derive(Debug)]
@@ -173,7 +148,7 @@ impl Served {
 
     /// What the thread counted so far.
     pub fn stats(&self) -> Stats {
-        self.serving.counts().into()
+        self.serving.counts()
     }
 
     /// Whether the thread still serves (it ends on a link or socket error).
@@ -188,7 +163,7 @@ impl Served {
     }
 
     fn join(&mut self) -> Result<Stats, ServeError> {
-        self.serving.stop(ServeError::Panicked).map(Stats::from)
+        self.serving.stop(ServeError::Panicked)
     }
 }
 

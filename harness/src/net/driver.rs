@@ -138,23 +138,24 @@ pub(crate) struct Counters {
     oversized: AtomicU64,
 }
 
-/// What serving threads counted, at one moment.
+/// What the threads serving a device counted, at one moment (the POWERLINK node's and the
+/// PROFINET device's `Stats`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub(crate) struct Counts {
+pub struct Counts {
     /// Frames received (Ethernet or CAN).
-    pub(crate) frames_in: u64,
+    pub frames_in: u64,
     /// Frames sent.
-    pub(crate) frames_out: u64,
+    pub frames_out: u64,
     /// Datagrams received.
-    pub(crate) datagrams_in: u64,
+    pub datagrams_in: u64,
     /// Datagrams sent.
-    pub(crate) datagrams_out: u64,
+    pub datagrams_out: u64,
     /// Inputs the device made nothing of.
-    pub(crate) unanswered: u64,
+    pub unanswered: u64,
     /// Outputs lost on the way out (a link down, a peer gone).
-    pub(crate) lost: u64,
+    pub lost: u64,
     /// Frames skipped because they were longer than a standard Ethernet frame.
-    pub(crate) oversized: u64,
+    pub oversized: u64,
 }
 
 impl Counters {

@@ -32,7 +32,7 @@ use proto::pnio::RPC_PORT;
 use sim::endpoint::{Input, Output};
 use sim::pnio::{IoConfig, IoDevice};
 
-use crate::net::driver::{Counts, Options, Serving, Shared};
+use crate::net::driver::{Options, Serving, Shared};
 use crate::net::raw_port::RawPort;
 use crate::net::serve_args::RawServeArgs;
 use crate::net::udp::ipv4_of;
@@ -96,29 +96,7 @@ pub enum ServeError {
     Panicked(String),
 }
 
-/// What a served device did.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct Stats {
-    /// PROFINET frames received.
-    pub frames_in: u64,
-    /// Frames the device sent.
-    pub frames_out: u64,
-    /// RPC datagrams received.
-    pub datagrams_in: u64,
-    /// Datagrams the device sent.
-    pub datagrams_out: u64,
-}
-
-impl From<Counts> for Stats {
-    fn from(c: Counts) -> Stats {
-        Stats {
-            frames_in: c.frames_in,
-            frames_out: c.frames_out,
-            datagrams_in: c.datagrams_in,
-            datagrams_out: c.datagrams_out,
-        }
-    }
-}
+pub use crate::net::driver::Counts as Stats;
 
 /// A device served in a thread by [`start`]; dropping it stops it.
 #[derive(Debug)]
@@ -142,7 +120,7 @@ impl Served {
 
     /// What the thread counted so far.
     pub fn stats(&self) -> Stats {
-        self.serving.counts().into()
+        self.serving.counts()
     }
 
     /// Whether the thread still serves.
@@ -156,7 +134,7 @@ impl Served {
     }
 
     fn join(&mut self) -> Result<Stats, ServeError> {
-        self.serving.stop(ServeError::Panicked).map(Stats::from)
+        self.serving.stop(ServeError::Panicked)
     }
 }
 

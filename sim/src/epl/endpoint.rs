@@ -51,13 +51,14 @@ mod tests {
     use crate::epl::NodeConfig;
     use proto::nord::Product;
 
+    fn node() -> Node {
+        let device = Device::new(DeviceConfig::new(Product::Sk550p));
+        Node::new(device, NodeConfig::new(1)).unwrap()
+    }
+
     #[test]
     fn polled_a_period_after_the_last_however_often_asked() {
-        let mut n = Node::new(
-            Device::new(DeviceConfig::new(Product::Sk550p)),
-            NodeConfig::new(1),
-        )
-        .unwrap();
+        let mut n = node();
         assert_eq!(n.next_deadline(), Some(Duration::ZERO));
         let t = Duration::from_millis(3);
         assert!(Endpoint::poll(&mut n, t).is_empty());
@@ -68,11 +69,7 @@ mod tests {
 
     #[test]
     fn datagrams_to_another_port_are_not_the_nodes() {
-        let mut n = Node::new(
-            Device::new(DeviceConfig::new(Product::Sk550p)),
-            NodeConfig::new(1),
-        )
-        .unwrap();
+        let mut n = node();
         let from = "192.168.100.240:3819".parse().unwrap();
         let input = Input::Datagram {
             port: SDO_UDP_PORT + 1,
