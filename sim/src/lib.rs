@@ -11,6 +11,7 @@ pub mod clock;
 pub mod device;
 pub mod drive;
 pub mod ecat;
+pub mod endpoint;
 pub mod enip;
 pub mod epl;
 pub mod link;

@@ -21,10 +21,10 @@
 //! A bench, not a timed test: bounded in count and time (a few seconds), nothing asserts on
 //! time, a missed target is printed, not failed.
 
-use std::net::{SocketAddr, TcpStream};
+use std::net::SocketAddr;
 use std::path::Path;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 use harness::can_bench;
 use harness::stats::Rate;
@@ -33,6 +33,7 @@ use proto::nord::can::MIN_CYCLE_US;
 #[path = "../common/mod.rs"]
 mod common;
 
+use common::served::Served;
 use common::{interop_python, met, run_script, Script};
 
 /// The harness's reads.
@@ -48,16 +49,17 @@ const JITTER_TARGET_US: u64 = 500;
 
 fn main() {
     let addr = SocketAddr::from(([127, 0, 0, 1], free_port()));
-    let mut server = Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args(["serve", "can", "--socketcand", &addr.to_string()])
-        .args(["--profile", "sk550p", "--seconds", "120"])
-        .stdout(Stdio::null())
-        .spawn()
+    let listen = addr.to_string();
+    let args = [
+        "--socketcand",
+        &listen,
+        "--profile",
+        "sk550p",
+        "--seconds",
+        "120",
+    ];
+    let (server, _) = Served::start(Command::new(env!("CARGO_BIN_EXE_harness")), "can", &args)
         .expect("harness serve can starts");
-    let deadline = Instant::now() + Duration::from_secs(10);
-    while TcpStream::connect(addr).is_err() && Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(20));
-    }
     let ours = can_bench::sdo_reads(addr, "can0", READS);
     match &ours {
         Ok(r) => println!("harness SDO client: {}", r.show("complete SDO reads")),
@@ -139,8 +141,7 @@ fn main() {
             met(us <= MIN_CYCLE_US)
         );
     }
-    let _ = server.kill();
-    let _ = server.wait();
+    drop(server);
 }
 
 /// A port nobody listens on now.

@@ -20,10 +20,8 @@
 //! 40 s), nothing asserts on time, a missed target is printed, not failed. Without root (or
 //! without `ip`) it says why and exits 0.
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
+use std::process::{Command, Stdio};
 use std::time::Duration;
 
 use harness::ecat_bench;
@@ -37,6 +35,7 @@ mod netns;
 #[path = "../../../tests/common/peer.rs"]
 mod peer;
 
+use common::served::Served;
 use common::{met, run_script, Script};
 use netns::Netns;
 
@@ -120,54 +119,16 @@ fn cannot_run() -> Option<String> {
     None
 }
 
-/// The served slave: `harness serve ecat` inside the namespace, killed when dropped.
-struct Slave(Child);
-
-impl Slave {
-    /// Starts `harness serve ecat --iface IFACE` inside `ns` for `seconds` at most, and waits
-    /// (10 s at most) for its line saying it serves.
-    fn start(ns: &Netns, seconds: u64) -> Result<(Slave, String), String> {
-        let mut child = ns
-            .command(env!("CARGO_BIN_EXE_harness"))
-            .args(["serve", "ecat", "--iface", ns.ns_if(), "--seconds"])
-            .arg(seconds.to_string())
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .map_err(|e| format!("cannot start harness serve ecat: {e}"))?;
-        let stdout = child
-            .stdout
-            .take()
-            .ok_or("no stdout of harness serve ecat")?;
-        let slave = Slave(child);
-        let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            let mut lines = BufReader::new(stdout).lines();
-            let _ = tx.send(lines.next());
-            // Keep reading, so the slave never blocks on a full pipe.
-            for _ in lines {}
-        });
-        match rx.recv_timeout(Duration::from_secs(10)) {
-            Ok(Some(Ok(line))) if line.starts_with("serving") => Ok((slave, line)),
-            Ok(other) => Err(format!("harness serve ecat said: {other:?}")),
-            Err(_) => Err("harness serve ecat did not start within 10 s".into()),
-        }
-    }
-}
-
-impl Drop for Slave {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
 /// Serves the slave and prints every figure. An error means the bench could not run at all;
 /// a figure that fails prints why and the rest go on.
 fn run(s: &Settings) -> Result<(), String> {
     let ns = Netns::new("ecat-bench");
-    let (slave, line) = Slave::start(&ns, 120)?;
+    let command = ns.command(env!("CARGO_BIN_EXE_harness"));
+    let (slave, line) = Served::start(
+        command,
+        "ecat",
+        &["--iface", ns.ns_if(), "--seconds", "120"],
+    )?;
     let iface = ns.root_if().to_string();
     println!(
         "EtherCAT bench: {line}, namespace {}; masters on {iface}",

@@ -31,10 +31,7 @@
 //! asserts on time, a missed target is printed, not failed. Without root (or without `ip`) it
 //! says why and exits 0.
 
-use std::io::{BufRead, BufReader};
 use std::net::SocketAddr;
-use std::process::{Child, Stdio};
-use std::sync::mpsc;
 use std::time::Duration;
 
 use harness::epl_bench::{self, Transport};
@@ -49,6 +46,7 @@ mod netns;
 #[path = "../../../tests/common/peer.rs"]
 mod peer;
 
+use common::served::Served;
 use common::{ip, met, wait_carrier, ClientNs};
 use netns::Netns;
 
@@ -120,62 +118,22 @@ fn cannot_run() -> Option<String> {
     None
 }
 
-/// The served node: `harness serve epl` inside the namespace, killed when dropped.
-struct Node(Child);
-
-impl Node {
-    /// Starts `harness serve epl --iface IFACE` inside `ns` for `seconds` at most (under
-    /// `chrt -f 10` when `realtime`), and waits (10 s at most) for its line saying it serves.
-    fn start(ns: &Netns, seconds: u64, realtime: bool) -> Result<(Node, String), String> {
-        let mut command = if realtime {
-            let mut c = ns.command("chrt");
-            c.args(["-f", "10", env!("CARGO_BIN_EXE_harness")]);
-            c
-        } else {
-            ns.command(env!("CARGO_BIN_EXE_harness"))
-        };
-        let mut child = command
-            .args(["serve", "epl", "--iface", ns.ns_if(), "--seconds"])
-            .arg(seconds.to_string())
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .map_err(|e| format!("cannot start harness serve epl: {e}"))?;
-        let stdout = child
-            .stdout
-            .take()
-            .ok_or("no stdout of harness serve epl")?;
-        let stderr = child
-            .stderr
-            .take()
-            .ok_or("no stderr of harness serve epl")?;
-        let node = Node(child);
-        std::thread::spawn(move || {
-            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-                eprintln!("harness serve epl: {line}");
-            }
-        });
-        let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            let mut lines = BufReader::new(stdout).lines();
-            let _ = tx.send(lines.next());
-            // Keep reading, so the node never blocks on a full pipe.
-            for _ in lines {}
-        });
-        match rx.recv_timeout(Duration::from_secs(10)) {
-            Ok(Some(Ok(line))) if line.starts_with("serving") => Ok((node, line)),
-            Ok(other) => Err(format!("harness serve epl said: {other:?}")),
-            Err(_) => Err("harness serve epl did not start within 10 s".into()),
-        }
-    }
-}
-
-impl Drop for Node {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
+/// `harness serve epl --iface IFACE` inside `ns` for `seconds` at most (under `chrt -f 10`
+/// when `realtime`), once it says it serves.
+fn serve_node(ns: &Netns, seconds: u64, realtime: bool) -> Result<(Served, String), String> {
+    let command = if realtime {
+        let mut c = ns.command("chrt");
+        c.args(["-f", "10", env!("CARGO_BIN_EXE_harness")]);
+        c
+    } else {
+        ns.command(env!("CARGO_BIN_EXE_harness"))
+    };
+    let seconds = seconds.to_string();
+    Served::start(
+        command,
+        "epl",
+        &["--iface", ns.ns_if(), "--seconds", &seconds],
+    )
 }
 
 /// Serves the node and prints every figure. An error means the bench could not run at all;
@@ -200,10 +158,10 @@ fn run(s: &Settings) -> Result<(), String> {
     // real-time priority, a busy machine does not delay its PRes by a time slice (at 400 µs a
     // served node at normal priority missed 59 of 25,000 PRes on a loaded 2-core machine, at
     // SCHED_FIFO 0 or 1). The managing node, the thing measured, runs as `harness run` runs it.
-    let (node, line, priority) = match Node::start(&ns, 180, peer::runs("chrt", "--version")) {
+    let (node, line, priority) = match serve_node(&ns, 180, peer::runs("chrt", "--version")) {
         Ok((node, line)) => (node, line, "SCHED_FIFO 10 (chrt)"),
         Err(e) => {
-            let (node, line) = Node::start(&ns, 180, false)?;
+            let (node, line) = serve_node(&ns, 180, false)?;
             eprintln!("serving the node at a real-time priority failed ({e}): normal priority");
             (node, line, "normal priority")
         }

@@ -9,9 +9,10 @@
 //! is refused as socketcand refuses an interface it does not have) and switches to raw mode;
 //! then `< send … >` puts a frame on the bus and `< frame … >` brings each frame of the bus.
 //!
-//! Threads: one accepting clients, one per client reading its messages, one producing what
-//! the nodes send on their own schedule (heartbeats). The sans-IO segment sits behind a mutex;
-//! its clock is the real time since the start.
+//! Threads: one accepting clients, one per client reading its messages and handing its frames
+//! to the segment, one the serve driver's ([`crate::net::driver`]) running the segment's timers
+//! (the nodes' heartbeats). The sans-IO segment sits behind the driver's mutex; its clock is
+//! the real time since the start.
 
 use std::io::{Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
@@ -25,12 +26,20 @@ use proto::can::CanFrame;
 use proto::nord::Product;
 use sim::can::Segment;
 use sim::device::DeviceConfig;
+use sim::endpoint::{Input, Output};
+
+use super::link::{CanLink, CanLinkError};
+use crate::net::driver::{self, Counters, Options, Port, Serving, Shared};
 
 /// socketcand's own default port.
 pub(crate) const DEFAULT_PORT: u16 = 29536;
 
-/// The longest the producer sleeps when no node has anything due.
+/// The longest the segment's timers wait when no node has anything due.
 const IDLE: Duration = Duration::from_millis(20);
+
+/// The shortest wait for the next frame or timer (a zero timeout would wait for ever on a
+/// socket).
+const MIN_WAIT: Duration = Duration::from_micros(200);
 
 /// `harness serve can` arguments.
 #[derive(clap::Parser, Debug)]
@@ -117,17 +126,27 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
     Ok(crate::exit::EXIT_PASS)
 }
 
-/// `harness serve can --iface IFACE`: the segment on a CAN interface of this host, one thread:
-/// each frame read is the nodes' to answer, and what they send on their own goes out when due;
-/// until `duration` has passed (forever when `None`).
+/// Why the segment on a CAN interface stopped serving.
+#[derive(Debug, thiserror::Error)]
+enum ServeError {
+    /// The interface failed.
+    #[error(transparent)]
+    Link(#[from] CanLinkError),
+    /// The serving thread panicked (a bug).
+    #[error("the system bus's thread panicked: {0}")]
+    Panicked(String),
+}
+
+/// `harness serve can --iface IFACE`: the segment on a CAN interface of this host, served by
+/// one thread of the serve driver: each frame read is the nodes' to answer, and what they send
+/// on their own goes out when due; until `duration` has passed (forever when `None`).
 fn serve_iface(
     iface: &str,
     config: DeviceConfig,
     duration: Option<Duration>,
 ) -> Result<(), String> {
-    use super::link::CanLink;
-    let mut link = super::socketcan::SocketCan::open(iface).map_err(|e| e.to_string())?;
-    let mut segment = Segment::new(config).map_err(|e| e.to_string())?;
+    let link = super::socketcan::SocketCan::open(iface).map_err(|e| e.to_string())?;
+    let segment = Segment::new(config).map_err(|e| e.to_string())?;
     outln!(
         "serving the system bus of {} (nodes {}) on CAN interface {iface}",
         config.product.name(),
@@ -138,23 +157,45 @@ fn serve_iface(
             .collect::<Vec<_>>()
             .join(", ")
     );
-    let start = Instant::now();
-    while duration.is_none_or(|d| start.elapsed() < d) {
-        let now = start.elapsed();
-        for f in segment.poll(now) {
-            link.send(&f).map_err(|e| e.to_string())?;
-        }
-        let wait = segment
-            .next_due()
-            .map_or(IDLE, |d| d.saturating_sub(now).min(IDLE))
-            .max(Duration::from_micros(200));
-        if let Some(frame) = link.recv(wait).map_err(|e| e.to_string())? {
-            for f in segment.receive(&frame, start.elapsed()) {
-                link.send(&f).map_err(|e| e.to_string())?;
-            }
-        }
+    let mut serving = Serving::<ServeError>::new();
+    let port = Channel { link, frame: None };
+    serving
+        .spawn(
+            format!("can-{iface}"),
+            Shared::new(segment),
+            port,
+            Options::new(IDLE),
+        )
+        .map_err(|e| format!("cannot start a thread: {e}"))?;
+    crate::net::workers::serve_for(duration, IDLE, || serving.is_running());
+    serving
+        .stop(ServeError::Panicked)
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
+/// A CAN interface of this host as the driver's port: frames in and out.
+struct Channel<L> {
+    link: L,
+    /// The last frame read (the input handed over borrows it).
+    frame: Option<CanFrame>,
+}
+
+impl<L: CanLink> Port for Channel<L> {
+    type Error = CanLinkError;
+
+    fn recv(&mut self, deadline: Instant) -> Result<Option<Input<'_>>, CanLinkError> {
+        let wait = deadline.saturating_duration_since(Instant::now());
+        self.frame = self.link.recv(wait.max(MIN_WAIT))?;
+        Ok(self.frame.as_ref().map(Input::Can))
     }
-    Ok(())
+
+    fn send(&mut self, out: &Output) -> Result<bool, CanLinkError> {
+        let Output::Can(frame) = out else {
+            return Ok(false);
+        };
+        self.link.send(frame).map(|()| true)
+    }
 }
 
 /// The product with `inverters` (default and ceiling: its maximum).
@@ -186,7 +227,7 @@ struct Client {
 
 /// What the threads share: the segment (none on a relay, [`Served::relay`]) and the clients.
 struct Hub {
-    segment: Option<Mutex<Segment>>,
+    segment: Option<Arc<Shared<Segment>>>,
     clients: Mutex<Vec<Client>>,
     start: Instant,
     channel: String,
@@ -197,12 +238,6 @@ struct Hub {
 impl Hub {
     fn now(&self) -> Duration {
         self.start.elapsed()
-    }
-
-    fn segment(&self) -> Option<MutexGuard<'_, Segment>> {
-        self.segment
-            .as_ref()
-            .map(|s| s.lock().unwrap_or_else(|p| p.into_inner()))
     }
 
     fn clients(&self) -> MutexGuard<'_, Vec<Client>> {
@@ -247,11 +282,44 @@ impl Hub {
     /// A client put `frame` on the bus: the others see it, the nodes take it and answer.
     fn transmit(&self, from: u64, frame: &CanFrame) {
         self.broadcast(std::slice::from_ref(frame), Some(from));
-        let answers = self
-            .segment()
-            .map(|mut s| s.receive(frame, self.now()))
-            .unwrap_or_default();
+        let answers: Vec<CanFrame> = self
+            .segment
+            .as_ref()
+            .map(|s| s.input(Input::Can(frame)))
+            .unwrap_or_default()
+            .into_iter()
+            .filter_map(|o| match o {
+                Output::Can(f) => Some(f),
+                _ => None,
+            })
+            .collect();
         self.broadcast(&answers, None);
+    }
+}
+
+/// The socketcand server as the port of the thread that runs the segment's timers: what the
+/// nodes send on their own goes to every client; nothing comes in (the clients' threads hand
+/// their frames over themselves).
+struct Clients(Arc<Hub>);
+
+impl Port for Clients {
+    type Error = std::convert::Infallible;
+
+    fn recv(&mut self, deadline: Instant) -> Result<Option<Input<'_>>, Self::Error> {
+        thread::sleep(
+            deadline
+                .saturating_duration_since(Instant::now())
+                .max(MIN_WAIT),
+        );
+        Ok(None)
+    }
+
+    fn send(&mut self, out: &Output) -> Result<bool, Self::Error> {
+        let Output::Can(frame) = out else {
+            return Ok(false);
+        };
+        self.0.broadcast(std::slice::from_ref(frame), None);
+        Ok(true)
     }
 }
 
@@ -276,7 +344,14 @@ impl Served {
         let segment = Segment::new(config).map_err(|e| e.to_string())?;
         let served = Served::hub(listener, Some(segment), channel)?;
         let h = served.hub.clone();
-        thread::spawn(move || produce(&h));
+        thread::spawn(move || {
+            let Some(segment) = h.segment.clone() else {
+                return;
+            };
+            let counters = Counters::default();
+            let mut port = Clients(h.clone());
+            let Ok(()) = driver::run(&segment, &mut port, &Options::new(IDLE), &counters, &h.stop);
+        });
         Ok(served)
     }
 
@@ -294,10 +369,11 @@ impl Served {
     ) -> Result<Served, String> {
         let addr = listener.local_addr().map_err(|e| e.to_string())?;
         let nodes = segment.as_ref().map(Segment::nodes).unwrap_or_default();
+        let start = Instant::now();
         let hub = Arc::new(Hub {
-            segment: segment.map(Mutex::new),
+            segment: segment.map(|s| Shared::since(s, start)),
             clients: Mutex::new(Vec::new()),
-            start: Instant::now(),
+            start,
             channel: channel.clone(),
             stop: AtomicBool::new(false),
             next_id: AtomicU64::new(1),
@@ -333,19 +409,6 @@ fn accept(hub: &Arc<Hub>, listener: &TcpListener) {
         thread::spawn(move || {
             let _ = serve_client(&hub, stream);
         });
-    }
-}
-
-/// The nodes' own frames (heartbeats) when due.
-fn produce(hub: &Hub) {
-    while !hub.stop.load(Ordering::Relaxed) {
-        let now = hub.now();
-        let Some((frames, due)) = hub.segment().map(|mut s| (s.poll(now), s.next_due())) else {
-            return;
-        };
-        hub.broadcast(&frames, None);
-        let wait = due.map_or(IDLE, |d| d.saturating_sub(hub.now()).min(IDLE));
-        thread::sleep(wait.max(Duration::from_micros(200)));
     }
 }
 

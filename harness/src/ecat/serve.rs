@@ -1,25 +1,25 @@
 //! `harness serve ecat`: the simulated EtherCAT slave on a network interface.
 //!
-//! One thread owns the raw Ethernet link ([`crate::net::RawLink`], EtherType 88A4h, BU 0620
-//! §2.2.3; the manual's figure prints 88ABh, an erratum) and the sans-IO slave. Each frame that
-//! arrives is processed in place, as an EtherCAT slave controller processes a frame on the fly,
-//! and sent back out of the same interface: the slave is the last (and only) one on its
-//! segment, so its port 0 returns what it processed (ETG.1000.4 §5, "processing and
-//! forwarding"). The slave sets the locally administered bit in the source address of what it
-//! sends. Between frames the thread waits at most until the slave's next timer (watchdogs) and
-//! lets it run with the real clock since start. With a reply delay (`--reply-delay MS`) each
-//! processed frame goes back that much later, the slave serving on meanwhile.
+//! The serve driver ([`crate::net::driver`]) runs the sans-IO slave in one thread on the raw
+//! Ethernet link ([`crate::net::RawLink`], EtherType 88A4h, BU 0620 §2.2.3; the manual's
+//! figure prints 88ABh, an erratum). Each frame that arrives is processed in place, as an
+//! EtherCAT slave controller processes a frame on the fly, and sent back out of the same
+//! interface: the slave is the last (and only) one on its segment, so its port 0 returns what
+//! it processed (ETG.1000.4 §5, "processing and forwarding"). The slave sets the locally
+//! administered bit in the source address of what it sends. Between frames the thread waits
+//! at most until the slave's next timer (watchdogs) and lets it run with the real clock since
+//! start. With a reply delay (`--reply-delay MS`) each processed frame goes back that much
+//! later, the slave serving on meanwhile.
 
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-use std::thread::{self, JoinHandle};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use crate::net::held::Held;
+use crate::net::driver::{Counts, Options, Serving, Shared};
+use crate::net::raw_port::RawPort;
 use crate::net::serve_args::RawServeArgs;
 pub use crate::net::LinkError;
-use crate::net::{RawLink, MAX_FRAME};
+use crate::net::RawLink;
 use sim::ecat::Slave;
+use sim::endpoint::Endpoint;
 
 /// EtherType of EtherCAT frames, 88A4h (the simulator's constant; BU 0620 §2.2.3 figure 3
 /// prints 88ABh, an erratum).
@@ -77,10 +77,20 @@ pub enum ServeError {
 pub struct Stats {
     /// Frames received and sent back.
     pub frames: u64,
-    /// Frames received and not sent back (the slave dropped them).
+    /// Frames received and not sent back (the slave dropped them, or the link was down).
     pub dropped: u64,
     /// Frames skipped because they were longer than a standard Ethernet frame.
     pub oversized: u64,
+}
+
+impl From<Counts> for Stats {
+    fn from(c: Counts) -> Stats {
+        Stats {
+            frames: c.frames_out,
+            dropped: c.unanswered + c.lost,
+            oversized: c.oversized,
+        }
+    }
 }
 
 /// A slave served in a thread by [`start`]; dropping it stops the thread.
@@ -88,8 +98,7 @@ pub struct Stats {
 pub struct Served {
     iface: String,
     mac: [u8; 6],
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<Result<Stats, ServeError>>>,
+    serving: Serving<ServeError>,
 }
 
 impl Served {
@@ -106,7 +115,7 @@ impl Served {
 
     /// Whether the thread still serves (it ends on a link error).
     pub fn is_running(&self) -> bool {
-        self.thread.as_ref().is_some_and(|t| !t.is_finished())
+        self.serving.is_running()
     }
 
     /// Stops the thread (within [`STOP_CHECK`]) and returns what it counted, or why it had
@@ -116,18 +125,7 @@ impl Served {
     }
 
     fn join(&mut self) -> Result<Stats, ServeError> {
-        self.stop.store(true, Ordering::Relaxed);
-        match self.thread.take() {
-            Some(t) => t.join().unwrap_or_else(|p| {
-                let why = p
-                    .downcast_ref::<&str>()
-                    .map(|s| s.to_string())
-                    .or_else(|| p.downcast_ref::<String>().cloned())
-                    .unwrap_or_default();
-                Err(ServeError::Panicked(why))
-            }),
-            None => Ok(Stats::default()),
-        }
+        self.serving.stop(ServeError::Panicked).map(Stats::from)
     }
 }
 
@@ -141,14 +139,14 @@ impl Drop for Served {
 /// this process, until the returned handle is stopped or dropped.
 pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let config = device_config(opts)?;
-    start_core(&opts.iface, slave_core(config)?, opts.reply_delay)
+    start_endpoint(&opts.iface, slave(config)?, opts.reply_delay)
 }
 
 /// Serves until `duration` has passed (forever when `None`), after a line on stdout that says
 /// what is served where.
 pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeError> {
     let config = device_config(opts)?;
-    let served = start_core(&opts.iface, slave_core(config)?, opts.reply_delay)?;
+    let served = start_endpoint(&opts.iface, slave(config)?, opts.reply_delay)?;
     let m = served.mac();
     outln!(
         "serving EtherCAT slave ({}, {} inverters) on {} ({:02x}:{:02x}:{:02x}:{:02x}:{:02x}:{:02x})",
@@ -204,109 +202,48 @@ fn device_config(opts: &ServeOptions) -> Result<sim::device::DeviceConfig, Serve
     .map_err(ServeError::Profile)
 }
 
-/// The simulated slave of `config` as the loop drives it.
-fn slave_core(config: sim::device::DeviceConfig) -> Result<Box<dyn Core>, ServeError> {
-    let slave = Slave::new(sim::device::Device::new(config))
-        .map_err(|e| ServeError::Profile(e.to_string()))?;
-    Ok(Box::new(slave))
+/// The simulated slave of `config`.
+fn slave(config: sim::device::DeviceConfig) -> Result<Slave, ServeError> {
+    Slave::new(sim::device::Device::new(config)).map_err(|e| ServeError::Profile(e.to_string()))
 }
 
-impl Core for Slave {
-    fn process(&mut self, frame: &mut [u8], now: Duration) -> bool {
-        Slave::process(self, frame, now).send_back()
-    }
-
-    fn poll(&mut self, now: Duration) -> Option<Duration> {
-        Slave::poll(self, now)
-    }
-}
-
-/// The sans-IO slave as the serving thread drives it.
-pub(crate) trait Core: Send {
-    /// Processes `frame` in place at `now` (time since start); `true` when it is to be sent
-    /// back.
-    fn process(&mut self, frame: &mut [u8], now: Duration) -> bool;
-    /// Runs the timers due at `now`; the time (since start) at which to call again at the
-    /// latest, `None` when nothing is pending.
-    fn poll(&mut self, now: Duration) -> Option<Duration>;
-}
-
-/// Opens the interface and serves `core` on it in a thread, each frame back `delay` after it
-/// was processed.
-pub(crate) fn start_core(
+/// Opens the interface and serves `slave` on it in a thread (the serve driver,
+/// [`crate::net::driver`]), each processed frame back `delay` after it was processed.
+pub(crate) fn start_endpoint(
     iface: &str,
-    core: Box<dyn Core>,
+    slave: impl Endpoint + Send + 'static,
     delay: Duration,
 ) -> Result<Served, ServeError> {
     let mut link = RawLink::open(iface, Some(ETHERTYPE))?;
     link.set_spin(FRAME_POLL);
-    let stop = Arc::new(AtomicBool::new(false));
     let mac = link.mac().0;
-    let thread = {
-        let stop = stop.clone();
-        thread::Builder::new()
-            .name(format!("ecat-slave-{iface}"))
-            .spawn(move || run(link, core, delay, &stop))
-            .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))?
-    };
+    let mut serving = Serving::new();
+    // Every frame the slave sends back is its answer to one that came.
+    let opts = Options::new(STOP_CHECK).late(delay, |_, _| true);
+    serving
+        .spawn(
+            format!("ecat-slave-{iface}"),
+            Shared::new(slave),
+            RawPort::new(link),
+            opts,
+        )
+        .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))?;
     Ok(Served {
         iface: iface.into(),
         mac,
-        stop,
-        thread: Some(thread),
+        serving,
     })
-}
-
-/// The serving loop: frames in, processed, back out `delay` later; timers between them.
-fn run(
-    mut link: RawLink,
-    mut core: Box<dyn Core>,
-    delay: Duration,
-    stop: &AtomicBool,
-) -> Result<Stats, ServeError> {
-    let start = Instant::now();
-    let mut stats = Stats::default();
-    let mut buf = vec![0u8; MAX_FRAME];
-    let mut held: Held<Vec<u8>> = Held::new(delay);
-    while !stop.load(Ordering::Relaxed) {
-        while let Some(frame) = held.due() {
-            match link.send(&frame) {
-                Ok(()) => stats.frames += 1,
-                Err(e) if e.is_link_down() => stats.dropped += 1,
-                Err(e) => return Err(e.into()),
-            }
-        }
-        let now = start.elapsed();
-        let due = core.poll(now).map_or(STOP_CHECK, |t| t.saturating_sub(now));
-        let mut deadline = Instant::now() + due.min(STOP_CHECK);
-        if let Some(next) = held.next() {
-            deadline = deadline.min(next);
-        }
-        let received = match link.recv(&mut buf, deadline) {
-            Ok(r) => r,
-            Err(e) if e.is_link_down() => {
-                // The cable is out (the link went down): an ESC waits for it to come back.
-                thread::sleep(STOP_CHECK);
-                continue;
-            }
-            Err(e) => return Err(e.into()),
-        };
-        let Some(r) = received else { continue };
-        let frame = &mut buf[..r.len];
-        if !core.process(frame, start.elapsed()) {
-            stats.dropped += 1;
-            continue;
-        }
-        held.hold(frame.to_vec());
-    }
-    stats.oversized = link.oversized();
-    Ok(stats)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::net::veth::Veth;
+    use crate::net::MAX_FRAME;
+    use sim::endpoint::{Input, Output};
+    use std::sync::atomic::Ordering;
+    use std::sync::Arc;
+    use std::time::Instant;
 
     /// A stand-in for the slave: sets the locally administered bit in the source address and
     /// increments the first payload byte; drops frames whose first payload byte is FFh. Its
@@ -316,21 +253,29 @@ mod tests {
         next: Duration,
     }
 
-    impl Core for Echo {
-        fn process(&mut self, frame: &mut [u8], _: Duration) -> bool {
+    impl Endpoint for Echo {
+        fn input(&mut self, input: Input<'_>, _: Duration) -> Vec<Output> {
+            let Input::Frame(frame) = input else {
+                return Vec::new();
+            };
             if frame[14] == 0xFF {
-                return false;
+                return Vec::new();
             }
+            let mut frame = frame.to_vec();
             frame[6] |= 0x02;
             frame[14] += 1;
-            true
+            vec![Output::Frame(frame)]
         }
 
-        fn poll(&mut self, now: Duration) -> Option<Duration> {
+        fn poll(&mut self, now: Duration) -> Vec<Output> {
             if now >= self.next {
                 self.polls.fetch_add(1, Ordering::Relaxed);
                 self.next = now + Duration::from_millis(5);
             }
+            Vec::new()
+        }
+
+        fn next_deadline(&self) -> Option<Duration> {
             Some(self.next)
         }
     }
@@ -352,7 +297,7 @@ mod tests {
             polls: polls.clone(),
             next: Duration::ZERO,
         };
-        let served = start_core(&v.0, Box::new(core), Duration::ZERO).expect("serve");
+        let served = start_endpoint(&v.0, core, Duration::ZERO).expect("serve");
         assert!(served.is_running());
         let mut master = RawLink::open(&v.1, Some(ETHERTYPE)).unwrap();
         let mut buf = [0u8; MAX_FRAME];
@@ -383,7 +328,7 @@ mod tests {
             polls: Default::default(),
             next: Duration::ZERO,
         };
-        let served = start_core(&v.0, Box::new(core), Duration::ZERO).expect("serve");
+        let served = start_endpoint(&v.0, core, Duration::ZERO).expect("serve");
         drop(v);
         let t = Instant::now();
         while served.is_running() && t.elapsed() < Duration::from_secs(2) {
@@ -401,7 +346,7 @@ mod tests {
             polls: Default::default(),
             next: Duration::ZERO,
         };
-        match start_core("no-such-if0", Box::new(core), Duration::ZERO) {
+        match start_endpoint("no-such-if0", core, Duration::ZERO) {
             Err(ServeError::Link(LinkError::NoSuchInterface { .. })) => {}
             other => panic!("{other:?}"),
         }

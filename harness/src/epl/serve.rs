@@ -12,41 +12,41 @@
 //!   but not that one is refused, naming them (`super::address`); one without any IPv4 address
 //!   is served over raw Ethernet only, and a line on stderr says so.
 //!
-//! One thread serves both, frames first: each frame goes to [`Node::receive`] and what it
-//! returns is sent at once (a PRes within the PReq's cycle), a datagram to [`Node::udp`] once
-//! no frame that came before it is left, and [`Node::poll`] runs at least every
-//! [`POLL_PERIOD`] (the Basic Ethernet timeout, the loss of the SoC, the drive model). With a
-//! thread each, a datagram sent right after a ResetCommunication frame was answered before the
-//! frame was taken, under load. The node is kept under a mutex for [`Served::state`], and the
-//! time handed to it (since start) is read with the lock held, so it never goes backwards.
+//! One thread of the serve driver ([`crate::net::driver`]) serves both, frames first
+//! ([`RawPort`]): each frame goes to [`Node::receive`] and what it returns is sent at once (a
+//! PRes within the PReq's cycle), a datagram to [`Node::udp`] once no frame that came before
+//! it is left, and [`Node::poll`] runs every [`sim::epl::POLL_PERIOD`] (the Basic Ethernet
+//! timeout, the loss of the SoC, the drive model). With a thread each, a datagram sent right
+//! after a ResetCommunication frame was answered before the frame was taken, under load. The
+//! node is kept under a mutex for [`Served::state`], and the time handed to it (since start)
+//! is read with the lock held, so it never goes backwards.
 //!
 //! `--reply-delay MS` makes the node late on purpose: its SDO answers (ASnd and UDP) leave MS
-//! late, held back without stopping either loop. Its IdentResponse and StatusResponse do not:
+//! late, held back without stopping the loop. Its IdentResponse and StatusResponse do not:
 //! they carry the state of the moment they are asked, and one held back would show a state
 //! the node has left (a wrong answer, not a late one; nothing in them tells the MN which
 //! request they answer). Its PRes stay in their cycle: they are the isochronous phase, whose
 //! timing the cyclic steps check.
 
-use std::collections::VecDeque;
 use std::net::{SocketAddr, UdpSocket};
-use std::os::fd::AsFd;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
-use std::thread;
-use std::time::{Duration, Instant};
+use std::sync::Arc;
+use std::time::Duration;
 
 use proto::epl::{MessageType, NmtState, ServiceId, SDO_UDP_PORT};
 use proto::eth::ETHERTYPE_POWERLINK;
 use proto::nord::epl as def;
 use proto::nord::Protocol;
-use sim::epl::{Node, NodeConfig, NodeError, POLL_PERIOD};
+use sim::endpoint::{Input, Output};
+use sim::epl::{Node, NodeConfig, NodeError};
 
 use super::address;
+use crate::net::driver::{Options, Serving, Shared};
+use crate::net::raw_port::RawPort;
 use crate::net::serve_args::RawServeArgs;
-use crate::net::udp::{ipv4s_of, transient};
-use crate::net::workers::{serve_for, Workers};
+use crate::net::udp::ipv4s_of;
+use crate::net::workers::serve_for;
 pub use crate::net::LinkError;
-use crate::net::{RawLink, Ready, MAX_FRAME};
+use crate::net::RawLink;
 
 /// How long the raw thread polls the socket after a frame before it sleeps: the next frame of
 /// a cycle (SoA after PReq) is taken without a thread wake-up.
@@ -112,47 +112,7 @@ pub enum ServeError {
     Panicked(String),
 }
 
-/// What a served node did, as counted by its threads.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct Stats {
-    /// POWERLINK frames received (every frame of EtherType 88ABh on the interface).
-    pub frames_in: u64,
-    /// Frames the node sent (PRes, ASnd).
-    pub frames_out: u64,
-    /// Datagrams received on UDP port 3819.
-    pub datagrams_in: u64,
-    /// Datagrams the node answered with.
-    pub datagrams_out: u64,
-    /// Frames skipped because they were longer than a standard Ethernet frame.
-    pub oversized: u64,
-}
-
-/// The counters the threads update.
-#[derive(Debug, Default)]
-struct Counters {
-    frames_in: AtomicU64,
-    frames_out: AtomicU64,
-    datagrams_in: AtomicU64,
-    datagrams_out: AtomicU64,
-    oversized: AtomicU64,
-}
-
-impl Counters {
-    fn snapshot(&self) -> Stats {
-        let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
-        Stats {
-            frames_in: get(&self.frames_in),
-            frames_out: get(&self.frames_out),
-            datagrams_in: get(&self.datagrams_in),
-            datagrams_out: get(&self.datagrams_out),
-            oversized: get(&self.oversized),
-        }
-    }
-}
-
-fn bump(c: &AtomicU64) {
-    c.fetch_add(1, Ordering::Relaxed);
-}
+pub use crate::net::driver::Counts as Stats;
 
 /// A node served in threads by [`start`]; dropping it stops them.
 #[derive(Debug)]
@@ -160,9 +120,8 @@ pub struct Served {
     iface: String,
     mac: [u8; 6],
     udp: Option<SocketAddr>,
-    node: Arc<Mutex<Node>>,
-    counters: Arc<Counters>,
-    workers: Workers<ServeError>,
+    node: Arc<Shared<Node>>,
+    serving: Serving<ServeError>,
 }
 
 impl Served {
@@ -184,20 +143,17 @@ impl Served {
 
     /// The node's NMT state now.
     pub fn state(&self) -> NmtState {
-        match self.node.lock() {
-            Ok(n) => n.state(),
-            Err(p) => p.into_inner().state(),
-        }
+        self.node.lock().0.state()
     }
 
-    /// What the threads counted so far.
+    /// What the thread counted so far.
     pub fn stats(&self) -> Stats {
-        self.counters.snapshot()
+        self.serving.counts()
     }
 
-    /// Whether the threads still serve (they end on a link or socket error).
+    /// Whether the thread still serves (it ends on a link or socket error).
     pub fn is_running(&self) -> bool {
-        self.workers.is_running()
+        self.serving.is_running()
     }
 
     /// Stops the threads (within [`STOP_CHECK`]) and returns what they counted, or why they had
@@ -207,8 +163,7 @@ impl Served {
     }
 
     fn join(&mut self) -> Result<Stats, ServeError> {
-        self.workers.join(ServeError::Panicked)?;
-        Ok(self.counters.snapshot())
+        self.serving.stop(ServeError::Panicked)
     }
 }
 
@@ -243,45 +198,50 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         None => None,
     };
     let mac = node.mac().0;
-    let node = Arc::new(Mutex::new(node));
-    let counters = Arc::new(Counters::default());
-    let start = Instant::now();
-    let mut served = Served {
+    let udp_addr = udp.as_ref().map(|(a, _)| *a);
+    let port = match udp {
+        Some((addr, socket)) => RawPort::new(link).with_udp(socket, addr)?,
+        None => RawPort::new(link),
+    };
+    let node = Shared::new(node);
+    let mut serving = Serving::new();
+    serving
+        .spawn(
+            format!("epl-node-{}", opts.iface),
+            node.clone(),
+            port,
+            Options::new(STOP_CHECK).late(opts.reply_delay, late),
+        )
+        .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))?;
+    Ok(Served {
         iface: opts.iface.clone(),
         mac,
-        udp: udp.as_ref().map(|(a, _)| *a),
-        node: node.clone(),
-        counters: counters.clone(),
-        workers: Workers::new(),
-    };
-    let stop = served.workers.stop_flag();
-    let thread = |e: std::io::Error| ServeError::Panicked(format!("cannot start a thread: {e}"));
-    let shared = Shared {
+        udp: udp_addr,
         node,
-        counters,
-        stop,
-        start,
-        reply_delay: opts.reply_delay,
-    };
-    served
-        .workers
-        .spawn(format!("epl-node-{}", opts.iface), move || {
-            run(link, udp.map(|(a, s)| (s, a)), &shared)
-        })
-        .map_err(thread)?;
-    Ok(served)
+        serving,
+    })
+}
+
+/// What `--reply-delay` holds back: the node's SDO answers, over ASnd and UDP (its PRes,
+/// IdentResponse and StatusResponse carry the state of the moment: see the module's
+/// documentation).
+fn late(_: &Input<'_>, out: &Output) -> bool {
+    match out {
+        Output::Frame(f) => is_sdo(f),
+        Output::Datagram { .. } => true,
+        _ => false,
+    }
 }
 
 /// The node's UDP socket on `addr`, tied to `iface`: its answers leave there whatever the
 /// routes say, and nodes served on several interfaces of one host can all have the address
 /// the manuals give (192.168.100.N, BU 0620 §3.7.3), each on its own interface. Read only when
-/// ready ([`RawLink::recv_or`]): non-blocking, so a spurious wake-up cannot block.
+/// ready ([`RawPort::with_udp`]).
 fn udp_socket(addr: SocketAddr, iface: &str) -> std::io::Result<UdpSocket> {
     use socket2::{Domain, Protocol, Socket, Type};
     let s = Socket::new(Domain::for_address(addr), Type::DGRAM, Some(Protocol::UDP))?;
     s.bind_device(Some(iface.as_bytes()))?;
     s.bind(&addr.into())?;
-    s.set_nonblocking(true)?;
     Ok(s.into())
 }
 
@@ -317,13 +277,12 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
     if !late.is_empty() {
         outln!("the node is late on purpose{late} (--reply-delay)");
     }
-    match served.udp_addr() {
-        None => eprintln!(
+    if served.udp_addr().is_none() {
+        eprintln!(
             "note: {} has no IPv4 address: serving raw Ethernet only (SDO over ASnd); give it \
              {expected}/24 (BU 0620 §3.7.3) for SDO over UDP/IP",
             opts.iface
-        ),
-        Some(_) => {}
+        );
     }
     serve_for(duration, STOP_CHECK * 10, || served.is_running());
     served.stop().map(|_| ())
@@ -396,133 +355,6 @@ fn device_config(opts: &ServeOptions) -> Result<sim::device::DeviceConfig, Serve
     Ok(config)
 }
 
-/// What both threads share.
-struct Shared {
-    node: Arc<Mutex<Node>>,
-    counters: Arc<Counters>,
-    stop: Arc<AtomicBool>,
-    start: Instant,
-    reply_delay: Duration,
-}
-
-impl Shared {
-    /// The node and the time to hand it (read with the lock held: never backwards).
-    fn node(&self) -> Result<(MutexGuard<'_, Node>, Duration), ServeError> {
-        let guard = self
-            .node
-            .lock()
-            .map_err(|_| ServeError::Panicked("the other serving thread panicked".into()))?;
-        Ok((guard, self.start.elapsed()))
-    }
-
-    fn stopped(&self) -> bool {
-        self.stop.load(Ordering::Relaxed)
-    }
-}
-
-/// The node's one loop: frames in and the node's frames out, SDO datagrams in and its answers
-/// back to their sender, its timers between them. One thread takes both, frames first
-/// ([`RawLink::recv_or`]), so the node sees them in the order they came on the wire: a
-/// datagram sent after a ResetCommunication frame finds the node reset, as on a device.
-fn run(
-    mut link: RawLink,
-    udp: Option<(UdpSocket, SocketAddr)>,
-    shared: &Shared,
-) -> Result<(), ServeError> {
-    let c = &shared.counters;
-    let mut buf = vec![0u8; MAX_FRAME];
-    let mut dgram = [0u8; 2048];
-    let mut next_poll = Duration::ZERO;
-    let mut late = Delayed::<Vec<u8>>::new(shared.reply_delay);
-    let mut late_udp = Delayed::<(Vec<u8>, SocketAddr)>::new(shared.reply_delay);
-    let send = |link: &mut RawLink, f: &[u8]| match link.send(f) {
-        Ok(()) => {
-            bump(&c.frames_out);
-            Ok(())
-        }
-        Err(e) if e.is_link_down() => Ok(()),
-        Err(e) => Err(ServeError::from(e)),
-    };
-    let send_udp = |(socket, addr): &(UdpSocket, SocketAddr), d: &[u8], to: SocketAddr| match socket
-        .send_to(d, to)
-    {
-        Ok(_) => {
-            bump(&c.datagrams_out);
-            Ok(())
-        }
-        Err(e) if transient(&e) => Ok(()),
-        Err(source) => Err(ServeError::Udp {
-            addr: *addr,
-            source,
-        }),
-    };
-    while !shared.stopped() {
-        for f in late.due() {
-            send(&mut link, &f)?;
-        }
-        if let Some(u) = &udp {
-            for (d, to) in late_udp.due() {
-                send_udp(u, &d, to)?;
-            }
-        }
-        if shared.start.elapsed() >= next_poll {
-            let (mut node, now) = shared.node()?;
-            node.poll(now);
-            next_poll = now + POLL_PERIOD;
-        }
-        let wait = next_poll
-            .saturating_sub(shared.start.elapsed())
-            .min(late.next_in())
-            .min(late_udp.next_in())
-            .min(STOP_CHECK);
-        let other = udp.as_ref().map(|(s, _)| s.as_fd());
-        let ready = match link.recv_or(&mut buf, Instant::now() + wait, other) {
-            Ok(r) => r,
-            Err(e) if e.is_link_down() => {
-                // The cable is out: the node sees no frames, its timers still run.
-                thread::sleep(STOP_CHECK.min(POLL_PERIOD));
-                continue;
-            }
-            Err(e) => return Err(e.into()),
-        };
-        c.oversized.store(link.oversized(), Ordering::Relaxed);
-        match ready {
-            Ready::Nothing => {}
-            Ready::Frame(r) => {
-                bump(&c.frames_in);
-                let out = {
-                    let (mut node, now) = shared.node()?;
-                    node.receive(&buf[..r.len], now)
-                };
-                for f in out {
-                    if let Some(f) = if is_sdo(&f) { late.hold(f) } else { Some(f) } {
-                        send(&mut link, &f)?;
-                    }
-                }
-            }
-            Ready::Other => {
-                let Some(u) = &udp else { continue };
-                let (len, from) = match u.0.recv_from(&mut dgram) {
-                    Ok(r) => r,
-                    Err(e) if transient(&e) => continue,
-                    Err(source) => return Err(ServeError::Udp { addr: u.1, source }),
-                };
-                bump(&c.datagrams_in);
-                let out = {
-                    let (mut node, now) = shared.node()?;
-                    node.udp(from, &dgram[..len], now)
-                };
-                for d in out {
-                    if let Some((d, to)) = late_udp.hold((d, from)) {
-                        send_udp(u, &d, to)?;
-                    }
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Whether a frame of the node is an ASnd carrying SDO: after the 14-byte Ethernet header,
 /// message type 06h, destination, source, service id 05h (DS 301 §4.6.1.1.6).
 fn is_sdo(frame: &[u8]) -> bool {
@@ -530,48 +362,11 @@ fn is_sdo(frame: &[u8]) -> bool {
         && frame.get(17).copied().map(ServiceId) == Some(ServiceId::SDO)
 }
 
-/// Answers held back by `--reply-delay`, in the order they are due.
-struct Delayed<T> {
-    delay: Duration,
-    held: VecDeque<(Instant, T)>,
-}
-
-impl<T> Delayed<T> {
-    fn new(delay: Duration) -> Delayed<T> {
-        Delayed {
-            delay,
-            held: VecDeque::new(),
-        }
-    }
-
-    /// Holds `answer` back for the delay; without one, gives it back to be sent at once.
-    fn hold(&mut self, answer: T) -> Option<T> {
-        if self.delay.is_zero() {
-            return Some(answer);
-        }
-        self.held.push_back((Instant::now() + self.delay, answer));
-        None
-    }
-
-    /// The answers due now.
-    fn due(&mut self) -> Vec<T> {
-        let now = Instant::now();
-        let n = self.held.iter().take_while(|(t, _)| *t <= now).count();
-        self.held.drain(..n).map(|(_, a)| a).collect()
-    }
-
-    /// How long until the next held answer is due (the longest wait when none is held).
-    fn next_in(&self) -> Duration {
-        self.held.front().map_or(STOP_CHECK, |(t, _)| {
-            t.saturating_duration_since(Instant::now())
-        })
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::net::veth::Veth;
+    use crate::net::MAX_FRAME;
     use proto::epl::asnd::IdentResponse;
     use proto::epl::frame::{Body, Preq, Soa, Soc};
     use proto::epl::sdo::{Command, Con, SdoFrame, Seq};
@@ -579,6 +374,8 @@ mod tests {
         EplRepr, RequestedService, ServiceId, MN_NODE_ID, MULTICAST_PRES, MULTICAST_SOA,
     };
     use proto::eth::{EthernetFrame, EthernetRepr, MacAddr};
+    use std::thread;
+    use std::time::Instant;
 
     /// The harness MN's source address in these tests (locally administered).
     const MN_MAC: MacAddr = MacAddr([0x02, 0, 0, 0, 0, 0xF0]);

@@ -3,11 +3,13 @@
 //! EtherType filter, send a frame, receive the next one by a deadline, with the kernel's
 //! receive stamp.
 
+pub(crate) mod driver;
 mod error;
 pub(crate) mod held;
 mod iface;
 mod link;
 pub(crate) mod peer;
+pub(crate) mod raw_port;
 pub(crate) mod serve_args;
 pub(crate) mod udp;
 #[cfg(test)]

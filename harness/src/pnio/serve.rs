@@ -12,40 +12,36 @@
 //!   address). Without an IPv4 address only DCP and RT are served, and a line on stderr says
 //!   so.
 //!
-//! One thread owns the raw link: each frame goes to [`IoDevice::frame`], and
-//! [`IoDevice::poll`] runs every [`POLL_PERIOD`] (the input CR's frames, the watchdog, alarms,
-//! the drive model); what they send goes out at once (the device's own RPC calls on a clone
-//! of the UDP socket). A second thread owns the UDP socket and answers each call at once with
-//! [`IoDevice::call`], which leaves the timers to the first: the raw link cannot be waited on
-//! together with another socket, and a record read must not wait for the next poll. The
-//! device is shared under a mutex, and the time handed to it is read with the lock held, so
-//! it never goes backwards.
+//! One thread of the serve driver ([`crate::net::driver`]) waits on both, frames first
+//! ([`RawPort`]): each frame goes to [`IoDevice::frame`], each call to [`IoDevice::call`]
+//! (answered at once: a record read does not wait for the next poll), and [`IoDevice::poll`]
+//! runs on the grid of [`sim::pnio::POLL_PERIOD`] (the input CR's frames, the watchdog,
+//! alarms, the drive model); what they send goes out at once, the device's own RPC calls from
+//! its RPC port.
 //!
 //! With a reply delay (`--reply-delay MS`) the device's RPC answers and DCP responses leave
-//! that much later than the device made them (the UDP thread waits before it answers; the raw
-//! thread holds DCP responses back while the cyclic frames go on).
+//! that much later than the device made them, held back while the cyclic frames go on.
 
 use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
-use std::thread;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use proto::eth::{MacAddr, ETHERTYPE_PROFINET};
 use proto::nord::pnio::IpSuite;
 use proto::nord::Protocol;
 use proto::pnio::RPC_PORT;
-use sim::pnio::{IoConfig, IoDevice, Out, POLL_PERIOD};
+use sim::endpoint::{Input, Output};
+use sim::pnio::{IoConfig, IoDevice};
 
-use crate::net::held::Held;
+use crate::net::driver::{Options, Serving, Shared};
+use crate::net::raw_port::RawPort;
 use crate::net::serve_args::RawServeArgs;
-use crate::net::udp::{ipv4_of, transient};
-use crate::net::workers::{serve_for, Workers};
-use crate::net::{LinkError, RawLink, MAX_FRAME};
+use crate::net::udp::ipv4_of;
+use crate::net::workers::serve_for;
+use crate::net::{LinkError, RawLink};
 
 /// How long the raw thread polls the socket after a frame before it sleeps.
 const FRAME_POLL: Duration = Duration::from_micros(50);
-/// The longest the UDP thread waits without looking at its stop flag.
+/// The longest the thread waits without looking at its stop flag.
 const STOP_CHECK: Duration = Duration::from_millis(20);
 
 /// What `harness serve pnio` serves.
@@ -100,38 +96,14 @@ pub enum ServeError {
     Panicked(String),
 }
 
-/// What a served device did.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct Stats {
-    /// PROFINET frames received.
-    pub frames_in: u64,
-    /// Frames the device sent.
-    pub frames_out: u64,
-    /// RPC datagrams received.
-    pub datagrams_in: u64,
-    /// Datagrams the device sent.
-    pub datagrams_out: u64,
-}
+pub use crate::net::driver::Counts as Stats;
 
-#[derive(Debug, Default)]
-struct Counters {
-    frames_in: AtomicU64,
-    frames_out: AtomicU64,
-    datagrams_in: AtomicU64,
-    datagrams_out: AtomicU64,
-}
-
-fn bump(c: &AtomicU64) {
-    c.fetch_add(1, Ordering::Relaxed);
-}
-
-/// A device served in threads by [`start`]; dropping it stops them.
+/// A device served in a thread by [`start`]; dropping it stops it.
 #[derive(Debug)]
 pub struct Served {
     mac: MacAddr,
     udp: Option<SocketAddr>,
-    counters: Arc<Counters>,
-    workers: Workers<ServeError>,
+    serving: Serving<ServeError>,
 }
 
 impl Served {
@@ -146,31 +118,23 @@ impl Served {
         self.udp
     }
 
-    /// What the threads counted so far.
+    /// What the thread counted so far.
     pub fn stats(&self) -> Stats {
-        let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
-        let c = &self.counters;
-        Stats {
-            frames_in: get(&c.frames_in),
-            frames_out: get(&c.frames_out),
-            datagrams_in: get(&c.datagrams_in),
-            datagrams_out: get(&c.datagrams_out),
-        }
+        self.serving.counts()
     }
 
-    /// Whether the threads still serve.
+    /// Whether the thread still serves.
     pub fn is_running(&self) -> bool {
-        self.workers.is_running()
+        self.serving.is_running()
     }
 
-    /// Stops the threads and returns what they counted, or why they had stopped before.
+    /// Stops the thread and returns what it counted, or why it had stopped before.
     pub fn stop(mut self) -> Result<Stats, ServeError> {
         self.join()
     }
 
     fn join(&mut self) -> Result<Stats, ServeError> {
-        self.workers.join(ServeError::Panicked)?;
-        Ok(self.stats())
+        self.serving.stop(ServeError::Panicked)
     }
 }
 
@@ -204,7 +168,7 @@ fn device(opts: &ServeOptions, ip: Option<(Ipv4Addr, u8)>) -> Result<IoDevice, S
         .map_err(|e| ServeError::Profile(e.to_string()))
 }
 
-/// Opens `opts.iface` and serves the device there in threads of this process, until the
+/// Opens `opts.iface` and serves the device there in a thread of this process, until the
 /// returned handle is stopped or dropped.
 pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let mut link = RawLink::open(&opts.iface, Some(ETHERTYPE_PROFINET))?;
@@ -212,168 +176,33 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let ip = ipv4_of(&opts.iface);
     let io = device(opts, ip)?;
     let mac = io.mac();
-    let socket = match ip {
-        Some((ip, _)) => {
-            let addr = SocketAddr::from((ip, RPC_PORT));
-            let udp = |source| ServeError::Udp { addr, source };
-            let socket = UdpSocket::bind(addr).map_err(udp)?;
-            socket.set_read_timeout(Some(STOP_CHECK)).map_err(udp)?;
-            Some((addr, socket))
-        }
-        None => None,
-    };
-    let counters = Arc::new(Counters::default());
-    let mut served = Served {
-        mac,
-        udp: socket.as_ref().map(|(a, _)| *a),
-        counters: counters.clone(),
-        workers: Workers::new(),
-    };
-    let stop = served.workers.stop_flag();
-    let thread = |e: std::io::Error| ServeError::Panicked(format!("cannot start a thread: {e}"));
-    let (reply, recv) = match socket {
-        Some((addr, socket)) => {
-            let reply = socket
-                .try_clone()
-                .map_err(|source| ServeError::Udp { addr, source })?;
-            (Some((addr, reply)), Some((addr, socket)))
-        }
-        None => (None, None),
-    };
-    let device = Shared {
-        io: Arc::new(Mutex::new(io)),
-        start: Instant::now(),
-    };
-    let raw = Raw {
-        link,
-        device: device.clone(),
-        reply,
-        counters: counters.clone(),
-        stop: stop.clone(),
-        dcp: Held::new(opts.reply_delay),
-    };
-    let delay = opts.reply_delay;
-    served
-        .workers
-        .spawn(format!("pnio-device-{}", opts.iface), move || raw.run())
-        .map_err(thread)?;
-    if let Some((addr, socket)) = recv {
-        served
-            .workers
-            .spawn(format!("pnio-rpc-{}", opts.iface), move || {
-                run_udp(socket, addr, &device, &counters, &stop, delay)
-            })
-            .map_err(thread)?;
+    let mut port = RawPort::new(link);
+    let mut udp = None;
+    if let Some((ip, _)) = ip {
+        let addr = SocketAddr::from((ip, RPC_PORT));
+        let socket = UdpSocket::bind(addr).map_err(|source| ServeError::Udp { addr, source })?;
+        port = port.with_udp(socket, addr)?;
+        udp = Some(addr);
     }
-    Ok(served)
+    let mut serving = Serving::new();
+    serving
+        .spawn(
+            format!("pnio-device-{}", opts.iface),
+            Shared::new(io),
+            port,
+            Options::new(STOP_CHECK).late(opts.reply_delay, late),
+        )
+        .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))?;
+    Ok(Served { mac, udp, serving })
 }
 
-/// The device and its clock, shared by both threads.
-#[derive(Clone)]
-struct Shared {
-    io: Arc<Mutex<IoDevice>>,
-    start: Instant,
-}
-
-impl Shared {
-    /// The device and the time to hand it (read with the lock held: never backwards).
-    fn lock(&self) -> Result<(MutexGuard<'_, IoDevice>, Duration), ServeError> {
-        let guard = self
-            .io
-            .lock()
-            .map_err(|_| ServeError::Panicked("the other serving thread panicked".into()))?;
-        Ok((guard, self.start.elapsed()))
-    }
-}
-
-/// The raw thread: the link, and the socket the device's own calls go out on.
-struct Raw {
-    link: RawLink,
-    device: Shared,
-    reply: Option<(SocketAddr, UdpSocket)>,
-    counters: Arc<Counters>,
-    stop: Arc<AtomicBool>,
-    /// DCP responses held back by the reply delay.
-    dcp: Held<Vec<u8>>,
-}
-
-impl Raw {
-    fn run(mut self) -> Result<(), ServeError> {
-        let mut buf = vec![0u8; MAX_FRAME];
-        let mut next_poll = Duration::ZERO;
-        while !self.stop.load(Ordering::Relaxed) {
-            while let Some(f) = self.dcp.due() {
-                self.frame(&f)?;
-            }
-            if self.device.start.elapsed() >= next_poll {
-                let (out, now) = {
-                    let (mut io, now) = self.device.lock()?;
-                    (io.poll(now), now)
-                };
-                self.send(out)?;
-                // On the poll grid: a late wake-up does not shift the next one.
-                next_poll = if now - next_poll > POLL_PERIOD {
-                    now + POLL_PERIOD
-                } else {
-                    next_poll + POLL_PERIOD
-                };
-            }
-            let mut until = self.device.start + next_poll;
-            if let Some(next) = self.dcp.next() {
-                until = until.min(next);
-            }
-            let received = match self.link.recv(&mut buf, until) {
-                Ok(r) => r,
-                Err(e) if e.is_link_down() => {
-                    thread::sleep(POLL_PERIOD);
-                    continue;
-                }
-                Err(e) => return Err(e.into()),
-            };
-            let Some(r) = received else { continue };
-            bump(&self.counters.frames_in);
-            let out = {
-                let (mut io, now) = self.device.lock()?;
-                io.frame(&buf[..r.len], now)
-            };
-            self.send(out)?;
-        }
-        Ok(())
-    }
-
-    fn send(&mut self, out: Vec<Out>) -> Result<(), ServeError> {
-        for o in out {
-            match o {
-                Out::Frame(f) if is_dcp(&f) => self.dcp.hold(f),
-                Out::Frame(f) => self.frame(&f)?,
-                Out::Datagram { to, bytes } => {
-                    let Some((addr, socket)) = &self.reply else {
-                        continue;
-                    };
-                    match socket.send_to(&bytes, to) {
-                        Ok(_) => bump(&self.counters.datagrams_out),
-                        Err(e) if transient(&e) => {}
-                        Err(source) => {
-                            return Err(ServeError::Udp {
-                                addr: *addr,
-                                source,
-                            })
-                        }
-                    }
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// One frame out on the link.
-    fn frame(&mut self, f: &[u8]) -> Result<(), ServeError> {
-        match self.link.send(f) {
-            Ok(()) => bump(&self.counters.frames_out),
-            Err(e) if e.is_link_down() => {}
-            Err(e) => return Err(e.into()),
-        }
-        Ok(())
+/// What `--reply-delay` holds back: DCP responses and the answers to RPC calls (not the
+/// device's own calls, ApplicationReady).
+fn late(input: &Input<'_>, out: &Output) -> bool {
+    match out {
+        Output::Frame(f) => is_dcp(f),
+        Output::Datagram { .. } => matches!(input, Input::Datagram { .. }),
+        _ => false,
     }
 }
 
@@ -387,44 +216,6 @@ fn is_dcp(frame: &[u8]) -> bool {
                 proto::pnio::FrameKind::Dcp
             )
     })
-}
-
-/// The UDP thread: RPC calls in, the device's answers back to their sender `delay` later.
-fn run_udp(
-    socket: UdpSocket,
-    addr: SocketAddr,
-    device: &Shared,
-    counters: &Counters,
-    stop: &AtomicBool,
-    delay: Duration,
-) -> Result<(), ServeError> {
-    let mut buf = [0u8; 2048];
-    while !stop.load(Ordering::Relaxed) {
-        let (len, from) = match socket.recv_from(&mut buf) {
-            Ok(r) => r,
-            Err(e) if transient(&e) => continue,
-            Err(source) => return Err(ServeError::Udp { addr, source }),
-        };
-        bump(&counters.datagrams_in);
-        let out = {
-            let (mut io, now) = device.lock()?;
-            io.call(from, &buf[..len], now)
-        };
-        if !out.is_empty() {
-            thread::sleep(delay);
-        }
-        for o in out {
-            let Out::Datagram { to, bytes } = o else {
-                continue;
-            };
-            match socket.send_to(&bytes, to) {
-                Ok(_) => bump(&counters.datagrams_out),
-                Err(e) if transient(&e) => {}
-                Err(source) => return Err(ServeError::Udp { addr, source }),
-            }
-        }
-    }
-    Ok(())
 }
 
 /// Serves until `duration` has passed (forever when `None`), after a line on stdout that says

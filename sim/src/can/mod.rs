@@ -36,6 +36,7 @@
 //!   SK 54xE, whose five setpoints and actual values (BU 2100 §6.2.5, BU 2200 §6.3.4) the
 //!   simulator's drives take on the modules' other buses too.
 
+mod endpoint;
 mod node;
 mod sdo;
 #[cfg(test)]

@@ -14,6 +14,7 @@
 
 mod al;
 mod coe;
+mod endpoint;
 mod esc;
 mod mailbox;
 pub(crate) mod od;

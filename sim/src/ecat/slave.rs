@@ -78,6 +78,8 @@ pub struct Slave {
     id: u16,
     dropped: u64,
     faults: [i32; 8],
+    /// What the last [`Slave::poll`] said, for [`crate::endpoint::Endpoint::next_deadline`].
+    pub(super) next_poll: Option<Duration>,
 }
 
 impl Slave {
@@ -114,6 +116,7 @@ impl Slave {
             id: second,
             dropped: 0,
             faults: [0; 8],
+            next_poll: None,
         };
         sii::load(&mut slave.esc, &slave.image);
         slave.show_al();

@@ -11,6 +11,7 @@
 //! (BU 0620 §2.3.5, BU 2100 §6.3).
 
 mod connections;
+mod endpoint;
 mod framer;
 mod objects;
 #[cfg(test)]
@@ -31,7 +32,7 @@ pub use connections::IoError;
 pub use framer::{Framer, Oversize};
 
 /// A TCP client of the adapter, as the driver numbers them.
-pub type ClientId = u64;
+pub use crate::endpoint::ClientId;
 
 /// Sessions the adapter holds at once unless told otherwise ([`Adapter::with_max_sessions`]);
 /// RegisterSession beyond is refused with "insufficient memory" (encapsulation status 0002h),

@@ -16,6 +16,7 @@
 //!   301's asynchronous scheduling wants).
 //! - Malformed frames are dropped and counted: the node's state does not change.
 
+mod endpoint;
 mod mapping;
 mod node;
 mod od;

@@ -126,6 +126,9 @@ pub struct Node {
     gateway: Ipv4Addr,
     /// Losses of the SoC since power-on (modules: P184 [-01]).
     losses: i32,
+    /// When the node wants [`Node::poll`] next as an endpoint: a [`POLL_PERIOD`] after the
+    /// last.
+    pub(super) next_poll: Duration,
 }
 
 impl Node {
@@ -165,6 +168,7 @@ impl Node {
             en: false,
             faults: [0; 8],
             dropped: 0,
+            next_poll: Duration::ZERO,
         };
         // The node id is the addressing parameter's value (SK 550P P850, BU 0620 §3.7.3; the
         // modules' P160 "Node Id/IP Adresse 4" with the DIP switches off, BU 2200 §5.2.5):

@@ -15,6 +15,7 @@
 mod alarms;
 mod ar;
 mod cyclic;
+mod endpoint;
 mod im0;
 pub mod records;
 mod station;
@@ -121,6 +122,9 @@ pub struct IoDevice {
     calls: u32,
     /// When the next LLDP frame goes out.
     next_lldp: Duration,
+    /// When the device wants [`IoDevice::poll`] next as an endpoint: on a grid of
+    /// [`POLL_PERIOD`].
+    next_poll: Duration,
 }
 
 /// LLDP: a frame every 5 s (IEC 61158-6-10 for PROFINET devices), valid for 4 intervals.
@@ -160,6 +164,7 @@ impl IoDevice {
             dropped: 0,
             calls: 0,
             next_lldp: LLDP_INTERVAL,
+            next_poll: Duration::ZERO,
         };
         if factory {
             // The IP parameters hold the factory suite DCP reports (BU 0620 §4.2.4, BU 0590
