@@ -224,3 +224,70 @@ fn check_product(product: &str) {
     }
     run.finish();
 }
+
+/// Both sides of a served POWERLINK module's gateway: `harness serve epl --system-bus`
+/// publishes the CANopen frames its gateway exchanges with its inverters over socketcand, and
+/// a run over POWERLINK from the namespace with `--tap` asserts them (BU 2200 §5.1: P102 of FI 3
+/// written over SDO is an SDO download to node 36; FI 2's process data are PDOs of node 34).
+/// Without `--tap` the same cases are not applicable, saying what they need.
+#[test]
+fn an_epl_run_with_tap_asserts_the_served_modules_system_bus() {
+    let why = "harness serve epl --system-bus against a run with --tap over a veth pair";
+    if !require_root_or_skip(why) {
+        return;
+    }
+    let ns = Netns::new("epl-tap");
+    ns.add_ipv4("192.168.100.1/24", "192.168.100.240/24");
+    // The relay listens on the served side's address, which the namespace reaches over the pair.
+    let bus = "192.168.100.1:29536";
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args([
+            "serve",
+            "epl",
+            "--iface",
+            ns.root_if(),
+            "--profile",
+            "tu3-pol",
+        ])
+        .args(["--system-bus", bus, "--seconds", "180"])
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("harness serve epl starts");
+    let _server = common::Server(child);
+    common::wait_listening(bus, std::time::Duration::from_secs(10));
+    let out_dir = std::env::temp_dir().join(format!("nord-epl-tap-{}", std::process::id()));
+    let run = |tap: bool| {
+        let mut c = ns.command(env!("CARGO_BIN_EXE_harness"));
+        c.args(["run", "--profile", "tu3-pol", "--allow-motion"])
+            .args(["--filter", "bu2200/systembus/gateway"])
+            .args(["--dut", &format!("epl://{}", ns.ns_if())])
+            .arg("--out")
+            .arg(&out_dir);
+        if tap {
+            c.args(["--tap", &format!("socketcand://{bus}/can0")]);
+        }
+        let out = c.output().expect("harness runs");
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
+        (out, report)
+    };
+    let (out, report) = run(true);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    for id in [
+        "bu2200/systembus/gateway-parameterzugriff-ist-sdo",
+        "bu2200/systembus/gateway-prozessdaten-sind-pdos",
+    ] {
+        assert_eq!(
+            common::case_verdict(&report, id).0,
+            "pass",
+            "{id}: {stdout}"
+        );
+    }
+    let (_, report) = run(false);
+    let (verdict, message) =
+        common::case_verdict(&report, "bu2200/systembus/gateway-parameterzugriff-ist-sdo");
+    assert_eq!(verdict, "not_applicable");
+    assert!(message.contains("needs `system-bus`"), "{message}");
+    let _ = std::fs::remove_dir_all(&out_dir);
+}

@@ -204,3 +204,67 @@ fn a_device_whose_answers_leave_past_the_limit_is_late_with_both_times() {
     );
     assert!(!message.contains("host late"), "{message}");
 }
+
+/// Both sides of the SK 550P's gateway over PROFINET: `harness serve pnio --system-bus`
+/// publishes the CANopen frames it exchanges with FI 2…8 over socketcand, and a run over
+/// PROFINET from the namespace with `--tap` asserts them (BU 0620: P102 of FI 3 written over a
+/// data record is an SDO download to node 36). Without `--tap` the case is not applicable,
+/// saying what it needs.
+#[test]
+fn a_pnio_run_with_tap_asserts_the_served_devices_system_bus() {
+    let why = "harness serve pnio --system-bus against a run with --tap over a veth pair";
+    if !require_root_or_skip(why) {
+        return;
+    }
+    let ns = Netns::new("pniotap");
+    ns.add_ipv4("192.168.20.200/24", "192.168.20.1/24");
+    // The relay listens on the served side's address, which the namespace reaches over the pair.
+    let bus = "192.168.20.200:29536";
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args([
+            "serve",
+            "pnio",
+            "--iface",
+            ns.root_if(),
+            "--profile",
+            "sk550p",
+        ])
+        .args(["--name", NAME, "--system-bus", bus, "--seconds", "180"])
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("harness serve pnio starts");
+    let _server = common::Server(child);
+    common::wait_listening(bus, std::time::Duration::from_secs(10));
+    let out_dir = std::env::temp_dir().join(format!("nord-pnio-tap-{}", std::process::id()));
+    let id = "bu0620/systembus/gateway-parameter-of-fi3-is-sdo";
+    let run = |tap: bool| {
+        let mut c = ns.command(env!("CARGO_BIN_EXE_harness"));
+        c.args([
+            "run",
+            "--profile",
+            "sk550p",
+            "--allow-motion",
+            "--filter",
+            id,
+        ])
+        .args(["--dut", &format!("pnio://{}/{NAME}", ns.ns_if())])
+        .arg("--out")
+        .arg(&out_dir);
+        if tap {
+            c.args(["--tap", &format!("socketcand://{bus}/can0")]);
+        }
+        let out = c.output().expect("harness runs");
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
+        (out, report)
+    };
+    let (out, report) = run(true);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    assert_eq!(common::case_verdict(&report, id).0, "pass", "{stdout}");
+    let (_, report) = run(false);
+    let (verdict, message) = common::case_verdict(&report, id);
+    assert_eq!(verdict, "not_applicable");
+    assert!(message.contains("needs `system-bus`"), "{message}");
+    let _ = std::fs::remove_dir_all(&out_dir);
+}

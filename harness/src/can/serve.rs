@@ -26,7 +26,7 @@ use proto::can::CanFrame;
 use proto::nord::Product;
 use sim::can::Segment;
 use sim::device::DeviceConfig;
-use sim::endpoint::{Input, Output};
+use sim::endpoint::{Endpoint, Input, Output};
 
 use super::link::{CanLink, CanLinkError};
 use crate::net::driver::{self, Counters, Options, Port, Serving, Shared};
@@ -497,6 +497,16 @@ pub(crate) fn relay_system_bus(
         }
     });
     Ok(served)
+}
+
+/// [`relay_system_bus`] for a device the serve driver runs (`serve epl|pnio --system-bus`):
+/// `device` reaches the simulated device inside it.
+pub(crate) fn relay_served<S: Endpoint + Send + 'static>(
+    addr: &str,
+    shared: Arc<driver::Shared<S>>,
+    device: fn(&mut S) -> &mut sim::device::Device,
+) -> Result<Served, String> {
+    relay_system_bus(addr, move || device(&mut shared.lock().0).tap_system_bus())
 }
 
 fn close(hub: &Hub, id: u64, stream: &TcpStream) -> std::io::Result<()> {

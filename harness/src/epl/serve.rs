@@ -42,7 +42,7 @@ use sim::epl::{Node, NodeConfig, NodeError};
 use super::address;
 use crate::net::driver::{Options, Serving, Shared};
 use crate::net::raw_port::RawPort;
-use crate::net::serve_args::RawServeArgs;
+use crate::net::serve_args::{RawServeArgs, SystemBusArg};
 use crate::net::udp::ipv4s_of;
 use crate::net::workers::serve_for;
 pub use crate::net::LinkError;
@@ -110,6 +110,9 @@ pub enum ServeError {
     /// A serving thread panicked (a bug).
     #[error("the POWERLINK node's thread panicked: {0}")]
     Panicked(String),
+    /// The system bus could not be published (`--system-bus`).
+    #[error("--system-bus: {0}")]
+    SystemBus(String),
 }
 
 pub use crate::net::driver::Counts as Stats;
@@ -247,8 +250,16 @@ fn udp_socket(addr: SocketAddr, iface: &str) -> std::io::Result<UdpSocket> {
 
 /// Serves until `duration` has passed (forever when `None`), after a line on stdout that says
 /// what is served where (and one on stderr when SDO over UDP/IP is not served).
-pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeError> {
+pub(crate) fn serve(
+    opts: &ServeOptions,
+    duration: Option<Duration>,
+    system_bus: Option<&str>,
+) -> Result<(), ServeError> {
     let served = start(opts)?;
+    let relay = system_bus
+        .map(|addr| crate::can::relay_served(addr, served.node.clone(), Node::device_mut))
+        .transpose()
+        .map_err(ServeError::SystemBus)?;
     let config = device_config(opts)?;
     let m = served.mac();
     let expected = def::ip_address(opts.node_id);
@@ -277,6 +288,13 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
     if !late.is_empty() {
         outln!("the node is late on purpose{late} (--reply-delay)");
     }
+    if let Some(r) = &relay {
+        outln!(
+            "its system bus over socketcand on {}, channel {}",
+            r.addr,
+            r.channel
+        );
+    }
     if served.udp_addr().is_none() {
         eprintln!(
             "note: {} has no IPv4 address: serving raw Ethernet only (SDO over ASnd); give it \
@@ -297,6 +315,8 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
 struct ServeArgs {
     #[command(flatten)]
     common: RawServeArgs,
+    #[command(flatten)]
+    system_bus: SystemBusArg,
     /// The node id, 1…239 (BU 0620 §2.4.3.1; 240 is the managing node's). SDO over UDP/IP is
     /// served on the interface's 192.168.100.<node id>; an interface with other IPv4
     /// addresses but not that one is refused.
@@ -336,7 +356,8 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         inverters: a.common.inverters,
         reply_delay: Duration::from_millis(a.common.reply_delay),
     };
-    serve(&opts, a.common.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
+    let seconds = a.common.seconds.map(Duration::from_secs);
+    serve(&opts, seconds, a.system_bus.system_bus.as_deref()).map_err(|e| e.to_string())?;
     Ok(crate::exit::EXIT_PASS)
 }
 

@@ -28,6 +28,17 @@ pub(crate) struct RawServeArgs {
     pub(crate) reply_delay: u64,
 }
 
+/// `--system-bus ADDR`, for the raw-Ethernet buses whose bus modules are gateways onto the
+/// system bus (POWERLINK, PROFINET IO).
+#[derive(clap::Args, Debug)]
+pub(crate) struct SystemBusArg {
+    /// Also publish the device's system bus as its gateway sees it (the CANopen frames it
+    /// exchanges with its inverters) on a socketcand server at ADDR, HOST[:PORT], channel
+    /// `can0`: a run over the fieldbus watches it with `--tap socketcand://ADDR/can0`.
+    #[arg(long, value_name = "ADDR")]
+    pub(crate) system_bus: Option<String>,
+}
+
 /// The simulated device of `profile` with `inverters` (default and ceiling: the product's
 /// maximum), if the product has a `protocol` interface; else why not, naming the products
 /// that have one.

@@ -23,6 +23,7 @@
 //! that much later than the device made them, held back while the cyclic frames go on.
 
 use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
+use std::sync::Arc;
 use std::time::Duration;
 
 use proto::eth::{MacAddr, ETHERTYPE_PROFINET};
@@ -34,7 +35,7 @@ use sim::pnio::{IoConfig, IoDevice};
 
 use crate::net::driver::{Options, Serving, Shared};
 use crate::net::raw_port::RawPort;
-use crate::net::serve_args::RawServeArgs;
+use crate::net::serve_args::{RawServeArgs, SystemBusArg};
 use crate::net::udp::ipv4_of;
 use crate::net::workers::serve_for;
 use crate::net::{LinkError, RawLink};
@@ -94,6 +95,9 @@ pub enum ServeError {
     /// A serving thread panicked (a bug).
     #[error("the PROFINET device's thread panicked: {0}")]
     Panicked(String),
+    /// The system bus could not be published (`--system-bus`).
+    #[error("--system-bus: {0}")]
+    SystemBus(String),
 }
 
 pub use crate::net::driver::Counts as Stats;
@@ -103,6 +107,8 @@ pub use crate::net::driver::Counts as Stats;
 pub struct Served {
     mac: MacAddr,
     udp: Option<SocketAddr>,
+    /// The device, for `--system-bus`.
+    device: Arc<Shared<IoDevice>>,
     serving: Serving<ServeError>,
 }
 
@@ -185,15 +191,21 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
         udp = Some(addr);
     }
     let mut serving = Serving::new();
+    let device = Shared::new(io);
     serving
         .spawn(
             format!("pnio-device-{}", opts.iface),
-            Shared::new(io),
+            device.clone(),
             port,
             Options::new(STOP_CHECK).late(opts.reply_delay, late),
         )
         .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))?;
-    Ok(Served { mac, udp, serving })
+    Ok(Served {
+        mac,
+        udp,
+        device,
+        serving,
+    })
 }
 
 /// What `--reply-delay` holds back: DCP responses and the answers to RPC calls (not the
@@ -220,8 +232,16 @@ fn is_dcp(frame: &[u8]) -> bool {
 
 /// Serves until `duration` has passed (forever when `None`), after a line on stdout that says
 /// what is served where.
-fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeError> {
+fn serve(
+    opts: &ServeOptions,
+    duration: Option<Duration>,
+    system_bus: Option<&str>,
+) -> Result<(), ServeError> {
     let served = start(opts)?;
+    let relay = system_bus
+        .map(|addr| crate::can::relay_served(addr, served.device.clone(), IoDevice::device_mut))
+        .transpose()
+        .map_err(ServeError::SystemBus)?;
     let rpc = match served.rpc_addr() {
         Some(a) => format!(", RPC on {a}"),
         None => String::new(),
@@ -237,6 +257,13 @@ fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeErr
         opts.iface,
         served.mac()
     );
+    if let Some(r) = &relay {
+        outln!(
+            "its system bus over socketcand on {}, channel {}",
+            r.addr,
+            r.channel
+        );
+    }
     if served.rpc_addr().is_none() {
         eprintln!(
             "note: {} has no IPv4 address: serving DCP and RT only; give it an address (the \
@@ -257,6 +284,8 @@ fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeErr
 struct ServeArgs {
     #[command(flatten)]
     common: RawServeArgs,
+    #[command(flatten)]
+    system_bus: SystemBusArg,
     /// The name of station at power-on (default: none, as delivered).
     #[arg(long, default_value = "")]
     name: String,
@@ -275,6 +304,7 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         inverters: a.common.inverters,
         reply_delay: Duration::from_millis(a.common.reply_delay),
     };
-    serve(&opts, a.common.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
+    let seconds = a.common.seconds.map(Duration::from_secs);
+    serve(&opts, seconds, a.system_bus.system_bus.as_deref()).map_err(|e| e.to_string())?;
     Ok(crate::exit::EXIT_PASS)
 }
