@@ -238,8 +238,10 @@ fn an_epl_run_with_tap_asserts_the_served_modules_system_bus() {
     }
     let ns = Netns::new("epl-tap");
     ns.add_ipv4("192.168.100.1/24", "192.168.100.240/24");
-    // The relay listens on the served side's address, which the namespace reaches over the pair.
-    let bus = "192.168.100.1:29536";
+    // The relay listens on an address of this pair alone: the other tests' pairs have
+    // 192.168.100.1 on their root side too, and the namespace's answer must come back here.
+    ns.add_ipv4("10.222.0.1/30", "10.222.0.2/30");
+    let bus = "10.222.0.1:29536";
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_harness"))
         .args([
             "serve",

@@ -216,10 +216,12 @@ fn a_pnio_run_with_tap_asserts_the_served_devices_system_bus() {
     if !require_root_or_skip(why) {
         return;
     }
+    // A subnet of its own: the suites' test serves on 192.168.20.200 at the same time (its RPC
+    // socket and its routes); the device takes this interface's address.
     let ns = Netns::new("pniotap");
-    ns.add_ipv4("192.168.20.200/24", "192.168.20.1/24");
+    ns.add_ipv4("192.168.21.200/24", "192.168.21.1/24");
     // The relay listens on the served side's address, which the namespace reaches over the pair.
-    let bus = "192.168.20.200:29536";
+    let bus = "192.168.21.200:29536";
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_harness"))
         .args([
             "serve",
