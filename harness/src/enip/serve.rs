@@ -3,9 +3,8 @@
 //! TCP and UDP on the listen address (44818 by default) carry encapsulation messages, UDP 2222
 //! on the same IP carries class-1 I/O. One event-loop thread for all TCP clients
 //! ([`super::serve_tcp`]: inactivity timeout, connection limit), one for UDP 44818 and two for
-//! class-1 I/O (receiving O→T, and the serve driver's, [`crate::net::driver`], producing T→O
-//! on the adapter's schedule) share the sans-IO [`Adapter`] behind the driver's mutex; time is
-//! the real clock since start. A client whose message
+//! class-1 I/O (receiving O→T, producing T→O on the adapter's schedule) share the sans-IO
+//! [`Adapter`] behind a mutex; time is the real clock since start. A client whose message
 //! stays incomplete for [`STALL`] is disconnected, so a hung peer holds nothing.
 //!
 //! `--reply-delay MS` makes the adapter late on purpose: the adapter acts on each request at
@@ -13,19 +12,15 @@
 //! run against it shows how the harness judges a device that answers past its limit.
 
 use std::net::{SocketAddr, TcpListener, UdpSocket};
-use std::sync::atomic::AtomicBool;
 use std::sync::mpsc::Sender;
-use std::sync::{Arc, MutexGuard, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::thread::{self, Thread};
 use std::time::{Duration, Instant};
 
 use nix::sys::resource::{getrlimit, setrlimit, Resource};
 use proto::enip::io::IO_PORT;
 use sim::device::{Device, DeviceConfig};
-use sim::endpoint::{Input, Output};
 use sim::enip::{Adapter, MAX_SESSIONS};
-
-use crate::net::driver::{self, Counters, Options, Port};
 
 /// How long a partial message may wait for its rest.
 pub(crate) const STALL: Duration = Duration::from_secs(10);
@@ -54,8 +49,8 @@ const IO_IDLE: Duration = Duration::from_millis(50);
 
 /// A running adapter.
 pub(super) struct Shared {
-    /// The adapter on its clock, the real time since it started.
-    pub(super) adapter: Arc<driver::Shared<Adapter>>,
+    adapter: Mutex<Adapter>,
+    start: Instant,
     /// The I/O producer thread, to wake when something becomes due earlier.
     producer: OnceLock<Thread>,
     /// How long after its request an encapsulation reply leaves (`--reply-delay`).
@@ -63,8 +58,13 @@ pub(super) struct Shared {
 }
 
 impl Shared {
-    pub(super) fn lock(&self) -> MutexGuard<'_, Adapter> {
-        self.adapter.lock().0
+    /// The adapter's clock: the real time since it started.
+    pub(super) fn now(&self) -> Duration {
+        self.start.elapsed()
+    }
+
+    pub(super) fn lock(&self) -> std::sync::MutexGuard<'_, Adapter> {
+        self.adapter.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     /// Wakes the I/O producer to look at the adapter's next due time again.
@@ -139,20 +139,15 @@ pub(crate) fn start_enip_tapped(
     let io = UdpSocket::bind(io_addr).map_err(|e| format!("cannot bind UDP {io_addr}: {e}"))?;
     let adapter = Adapter::new(Device::new(config), v4).with_max_sessions(limits.sessions);
     let shared = Arc::new(Shared {
-        adapter: driver::Shared::new(adapter),
+        adapter: Mutex::new(adapter),
+        start: Instant::now(),
         producer: OnceLock::new(),
         reply_delay,
     });
     let io_tx = io.try_clone().map_err(|e| format!("UDP {io_addr}: {e}"))?;
     {
-        let adapter = shared.adapter.clone();
-        let producer = thread::spawn(move || {
-            // Served until the process ends.
-            let serving = AtomicBool::new(false);
-            let opts = Options::new(IO_IDLE);
-            let mut port = Producer(io_tx);
-            let Ok(()) = driver::run(&adapter, &mut port, &opts, &Counters::default(), &serving);
-        });
+        let s = shared.clone();
+        let producer = thread::spawn(move || io_produce(io_tx, s));
         let _ = shared.producer.set(producer.thread().clone());
     }
     {
@@ -324,26 +319,19 @@ pub(crate) fn serve_enip(
 
 fn discovery(udp: UdpSocket, shared: Arc<Shared>, late: Option<Sender<LateReply>>) {
     let mut buf = [0u8; 2048];
-    let Ok(port) = udp.local_addr().map(|a| a.port()) else {
-        return;
-    };
     loop {
         let Ok((n, from)) = udp.recv_from(&mut buf) else {
             continue;
         };
-        let bytes = &buf[..n];
-        for out in shared.adapter.input(Input::Datagram { port, from, bytes }) {
-            let Output::Datagram { to, bytes, .. } = out else {
-                continue;
-            };
-            match &late {
-                None => {
-                    let _ = udp.send_to(&bytes, to);
-                }
-                Some(late) => {
-                    let _ = late.send((Instant::now() + shared.reply_delay, bytes, to));
-                }
+        let reply = shared.lock().handle_udp(&buf[..n]);
+        match (reply, &late) {
+            (Some(r), None) => {
+                let _ = udp.send_to(&r, from);
             }
+            (Some(r), Some(late)) => {
+                let _ = late.send((Instant::now() + shared.reply_delay, r, from));
+            }
+            (None, _) => {}
         }
     }
 }
@@ -374,44 +362,33 @@ fn io_receive(io: UdpSocket, shared: Arc<Shared>) {
     let mut buf = [0u8; 2048];
     loop {
         if let Ok((n, from)) = io.recv_from(&mut buf) {
-            let bytes = &buf[..n];
-            // Class-1 data is not answered: what the adapter makes of it leaves on its schedule.
-            let _ = shared.adapter.input(Input::Datagram {
-                port: IO_PORT,
-                from,
-                bytes,
-            });
+            let _ = shared.lock().handle_io(from, &buf[..n], shared.now());
         }
     }
 }
 
-/// The I/O producer's port: T→O frames out when due; nothing comes in on it. Between polls it
-/// parks until [`IO_SPIN`] before the adapter's next due time (at most [`IO_IDLE`]) and watches
-/// the clock for the rest (a socket receive timeout would round up to the kernel's tick,
-/// milliseconds). A client whose message makes something due earlier (a Forward_Open) unparks
-/// it.
-struct Producer(UdpSocket);
-
-impl Port for Producer {
-    type Error = std::convert::Infallible;
-
-    fn recv(&mut self, deadline: Instant) -> Result<Option<Input<'_>>, Self::Error> {
-        let wait = deadline.saturating_duration_since(Instant::now());
+/// Sends T→O frames when due and runs the watchdogs. It parks until [`IO_SPIN`] before the
+/// adapter's next due time (at most [`IO_IDLE`]) and watches the clock for the rest (a socket
+/// receive timeout would round up to the kernel's tick, milliseconds). A client whose message
+/// makes something due earlier (a Forward_Open) unparks it.
+fn io_produce(io: UdpSocket, shared: Arc<Shared>) {
+    loop {
+        let (frames, due) = {
+            let mut a = shared.lock();
+            let frames = a.poll(shared.now());
+            (frames, a.next_due())
+        };
+        for (to, frame) in frames {
+            let _ = io.send_to(&frame, to);
+        }
+        let wait = due.map_or(IO_IDLE, |d| d.saturating_sub(shared.now()).min(IO_IDLE));
         if wait > IO_SPIN {
             thread::park_timeout(wait - IO_SPIN);
-        } else {
-            while Instant::now() < deadline {
+        } else if let Some(due) = due {
+            while shared.now() < due {
                 std::hint::spin_loop();
             }
         }
-        Ok(None)
-    }
-
-    fn send(&mut self, out: &Output) -> Result<bool, Self::Error> {
-        let Output::Datagram { to, bytes, .. } = out else {
-            return Ok(false);
-        };
-        Ok(self.0.send_to(bytes, to).is_ok())
     }
 }
 
