@@ -90,14 +90,13 @@ fn record(late: Late) {
     w.push_back(late);
 }
 
-/// Held by the tests that make the host late or need it on time: the watch is one per process.
-
 /// Virtual duration as bus cycles (at least one).
 pub(crate) fn cycles_for(d: Duration, cycle: Duration) -> u32 {
     let n = d.as_nanos().div_ceil(cycle.as_nanos().max(1));
     u32::try_from(n).unwrap_or(u32::MAX).max(1)
 }
 
+/// Held by the tests that make the host late or need it on time: the watch is one per process.
 #[cfg(test)]
 pub(crate) static TESTS: Mutex<()> = Mutex::new(());
 

@@ -4,7 +4,7 @@
 //! client costs its socket and a few hundred bytes, no thread (8,000 idle clients leave the
 //! served adapter at its handful of threads; the bench shows it). The tasks share the sans-IO
 //! [`sim::enip::Adapter`] with the UDP and I/O threads behind [`Shared`]'s mutex, never held
-//! across an await.
+//! across an await, and hand it each message as an [`Input::Message`].
 //!
 //! Per client the loop enforces what only the driver can, the adapter deciding the values:
 //!
@@ -32,7 +32,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
-use sim::enip::{ClientId, Framer, TcpReply};
+use sim::endpoint::{Endpoint, Input, Output};
+use sim::enip::{ClientId, Framer};
 use tokio::io::AsyncWriteExt;
 use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::watch;
@@ -148,7 +149,7 @@ impl Slot {
 
 impl Drop for Slot {
     fn drop(&mut self) {
-        self.l.shared.lock().client_closed(self.id);
+        self.l.shared.adapter.input(Input::Closed(self.id));
         self.l.clients.fetch_sub(1, Ordering::Relaxed);
     }
 }
@@ -249,16 +250,18 @@ async fn client(mut stream: TcpStream, peer: SocketAddr, slot: Slot) {
                     // `--reply-delay`: the adapter acts at once, its replies leave late.
                     let due = last + slot.l.shared.reply_delay;
                     for m in messages {
-                        let r = handle(&slot, peer, &m);
-                        if let Some(reply) = r.reply {
-                            sleep_until(due).await;
-                            match timeout(STALL, stream.write_all(&reply)).await {
-                                Ok(Ok(())) => {}
-                                _ => return,
+                        for out in handle(&slot, peer, &m) {
+                            match out {
+                                Output::Message { bytes, .. } => {
+                                    sleep_until(due).await;
+                                    match timeout(STALL, stream.write_all(&bytes)).await {
+                                        Ok(Ok(())) => {}
+                                        _ => return,
+                                    }
+                                }
+                                Output::Close(_) => return,
+                                _ => {}
                             }
-                        }
-                        if r.close {
-                            return;
                         }
                     }
                     polled = std::time::Instant::now();
@@ -273,20 +276,26 @@ async fn client(mut stream: TcpStream, peer: SocketAddr, slot: Slot) {
     }
 }
 
-/// One message through the adapter. Wakes the I/O producer when something became due sooner
-/// (a Forward_Open) and tells every client when the inactivity timeout changed.
-fn handle(slot: &Slot, peer: SocketAddr, msg: &[u8]) -> TcpReply {
+/// One message through the adapter: its reply, and its close when the adapter ends the
+/// connection. Wakes the I/O thread when something became due sooner (a Forward_Open) and
+/// tells every client when the inactivity timeout changed.
+fn handle(slot: &Slot, peer: SocketAddr, msg: &[u8]) -> Vec<Output> {
     let shared = &slot.l.shared;
     let (r, sooner, timeout) = {
-        let mut a = shared.lock();
+        let (mut a, now) = shared.adapter.lock();
         let before = a.next_due();
-        let r = a.handle_tcp(slot.id, peer, msg, shared.now());
+        let message = Input::Message {
+            client: slot.id,
+            peer,
+            bytes: msg,
+        };
+        let r = a.input(message, now);
         let after = a.next_due();
         let sooner = after.is_some_and(|t| before.is_none_or(|b| t < b));
         (r, sooner, a.inactivity_timeout())
     };
     if sooner {
-        shared.wake_producer();
+        shared.wake_io();
     }
     slot.l.timeout.send_if_modified(|t| {
         let changed = *t != timeout;
