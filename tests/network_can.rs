@@ -140,37 +140,17 @@ fn an_enip_run_with_tap_asserts_the_served_modules_system_bus() {
     let (listen, bus) = (format!("{ip}:44818"), format!("{ip}:29536"));
     let _server = serve_with(&listen, "tu4-eip", 120, &["--system-bus", &bus]);
     wait_listening(&bus, std::time::Duration::from_secs(10));
-    let out_dir = std::env::temp_dir().join(format!("nord-can-tap-{}", std::process::id()));
-    let run = |tap: bool| {
-        let mut c = Command::new(env!("CARGO_BIN_EXE_harness"));
-        c.args(["run", "--profile", "tu4-eip", "--allow-motion"])
-            .args(["--filter", "bu2100/systembus/gateway"])
-            .args(["--dut", &format!("enip://{ip}")])
-            .arg("--out")
-            .arg(&out_dir);
-        if tap {
-            c.args(["--tap", &format!("socketcand://{bus}/can0")]);
-        }
-        let out = c.output().expect("harness runs");
-        let report: Value =
-            serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
-        (out, report)
-    };
-    let (out, report) = run(true);
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(out.status.code(), Some(0), "{stdout}");
-    for id in [
-        "bu2100/systembus/gateway-parameter-access-is-sdo",
-        "bu2100/systembus/gateway-process-data-are-pdos",
-    ] {
-        assert_eq!(case_verdict(&report, id).0, "pass", "{id}: {stdout}");
-    }
-    let (_, report) = run(false);
-    let (verdict, message) =
-        case_verdict(&report, "bu2100/systembus/gateway-parameter-access-is-sdo");
-    assert_eq!(verdict, "not_applicable");
-    assert!(message.contains("needs `system-bus`"), "{message}");
-    let _ = std::fs::remove_dir_all(&out_dir);
+    let dut = format!("enip://{ip}");
+    common::check_tap_runs(
+        || Command::new(env!("CARGO_BIN_EXE_harness")),
+        &["--profile", "tu4-eip", "--dut", &dut],
+        "bu2100/systembus/gateway",
+        &bus,
+        &[
+            "bu2100/systembus/gateway-parameter-access-is-sdo",
+            "bu2100/systembus/gateway-process-data-are-pdos",
+        ],
+    );
 }
 
 /// SocketCAN, where the kernel has it: `harness serve can --iface` serves the segment on a vcan

@@ -257,39 +257,15 @@ fn an_epl_run_with_tap_asserts_the_served_modules_system_bus() {
         .expect("harness serve epl starts");
     let _server = common::Server(child);
     common::wait_listening(bus, std::time::Duration::from_secs(10));
-    let out_dir = std::env::temp_dir().join(format!("nord-epl-tap-{}", std::process::id()));
-    let run = |tap: bool| {
-        let mut c = ns.command(env!("CARGO_BIN_EXE_harness"));
-        c.args(["run", "--profile", "tu3-pol", "--allow-motion"])
-            .args(["--filter", "bu2200/systembus/gateway"])
-            .args(["--dut", &format!("epl://{}", ns.ns_if())])
-            .arg("--out")
-            .arg(&out_dir);
-        if tap {
-            c.args(["--tap", &format!("socketcand://{bus}/can0")]);
-        }
-        let out = c.output().expect("harness runs");
-        let report: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
-        (out, report)
-    };
-    let (out, report) = run(true);
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(out.status.code(), Some(0), "{stdout}");
-    for id in [
-        "bu2200/systembus/gateway-parameterzugriff-ist-sdo",
-        "bu2200/systembus/gateway-prozessdaten-sind-pdos",
-    ] {
-        assert_eq!(
-            common::case_verdict(&report, id).0,
-            "pass",
-            "{id}: {stdout}"
-        );
-    }
-    let (_, report) = run(false);
-    let (verdict, message) =
-        common::case_verdict(&report, "bu2200/systembus/gateway-parameterzugriff-ist-sdo");
-    assert_eq!(verdict, "not_applicable");
-    assert!(message.contains("needs `system-bus`"), "{message}");
-    let _ = std::fs::remove_dir_all(&out_dir);
+    let dut = format!("epl://{}", ns.ns_if());
+    common::check_tap_runs(
+        || ns.command(env!("CARGO_BIN_EXE_harness")),
+        &["--profile", "tu3-pol", "--dut", &dut],
+        "bu2200/systembus/gateway",
+        bus,
+        &[
+            "bu2200/systembus/gateway-parameterzugriff-ist-sdo",
+            "bu2200/systembus/gateway-prozessdaten-sind-pdos",
+        ],
+    );
 }

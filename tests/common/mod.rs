@@ -79,6 +79,49 @@ pub(crate) fn case_verdict<'a>(run: &'a serde_json::Value, id: &str) -> (&'a str
     )
 }
 
+/// Both sides of a served device's gateway: `harness` (made by `harness`, in a namespace or
+/// not) runs the cases whose id contains `filter` with `args` (profile and DUT), once with
+/// `--tap socketcand://BUS/can0` and once without. With the tap every case of `ids` passes;
+/// without it the first is not applicable, saying it needs `system-bus`.
+pub(crate) fn check_tap_runs(
+    harness: impl Fn() -> Command,
+    args: &[&str],
+    filter: &str,
+    bus: &str,
+    ids: &[&str],
+) {
+    let out_dir = std::env::temp_dir().join(format!(
+        "nord-tap-{}-{}",
+        std::process::id(),
+        filter.replace('/', "-")
+    ));
+    let run = |tap: bool| {
+        let mut c = harness();
+        c.args(["run", "--allow-motion", "--filter", filter])
+            .args(args)
+            .arg("--out")
+            .arg(&out_dir);
+        if tap {
+            c.args(["--tap", &format!("socketcand://{bus}/can0")]);
+        }
+        let out = c.output().expect("harness runs");
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out_dir.join("run.json")).unwrap()).unwrap();
+        (out, report)
+    };
+    let (out, report) = run(true);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    for id in ids {
+        assert_eq!(case_verdict(&report, id).0, "pass", "{id}: {stdout}");
+    }
+    let (_, report) = run(false);
+    let (verdict, message) = case_verdict(&report, ids[0]);
+    assert_eq!(verdict, "not_applicable");
+    assert!(message.contains("needs `system-bus`"), "{message}");
+    let _ = std::fs::remove_dir_all(&out_dir);
+}
+
 /// `harness serve can --socketcand LISTEN --profile sk550p` for two minutes at most, once it
 /// listens: the SK 550P's simulated system bus for the tests that reach it over socketcand.
 pub(crate) fn serve_can(listen: &str) -> Server {

@@ -10,6 +10,7 @@ use std::process::{Command, Stdio};
 
 #[path = "skip.rs"]
 mod skip;
+#[allow(unused_imports)] // allowed_skip: only the SocketCAN test takes the one allowed skip
 pub(crate) use skip::{allowed_skip, require_or_skip};
 
 /// Whether this process runs as root (effective user id 0, from `/proc/self/status`).
