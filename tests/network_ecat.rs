@@ -67,3 +67,45 @@ fn a_slave_whose_frames_come_back_past_the_limit_is_late_with_both_times() {
     );
     assert!(!message.contains("host late"), "{message}");
 }
+
+/// Both sides of the SK 550P's gateway over EtherCAT: `harness serve ecat --system-bus`
+/// publishes the CANopen frames it exchanges with FI 2…8 over socketcand, and a run over
+/// EtherCAT from the namespace with `--tap` asserts them (BU 0620: P102 of FI 3 written over CoE
+/// is an SDO download to node 36). Without `--tap` the case is not applicable, saying what it
+/// needs.
+#[test]
+fn an_ecat_run_with_tap_asserts_the_served_slaves_system_bus() {
+    let why = "harness serve ecat --system-bus against a run with --tap over a veth pair";
+    if !require_root_or_skip(why) {
+        return;
+    }
+    let ns = Netns::new("ecattap");
+    // EtherCAT needs no address; the relay listens on one of this pair alone, which the
+    // namespace reaches over it.
+    ns.add_ipv4("10.223.0.1/30", "10.223.0.2/30");
+    let bus = "10.223.0.1:29536";
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args([
+            "serve",
+            "ecat",
+            "--iface",
+            ns.root_if(),
+            "--profile",
+            "sk550p",
+        ])
+        .args(["--system-bus", bus, "--seconds", "180"])
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("harness serve ecat starts");
+    let _server = common::Server(child);
+    common::wait_listening(bus, std::time::Duration::from_secs(10));
+    let id = "bu0620/systembus/gateway-parameter-of-fi3-is-sdo";
+    let dut = format!("ecat://{}", ns.ns_if());
+    common::check_tap_runs(
+        || ns.command(env!("CARGO_BIN_EXE_harness")),
+        &["--profile", "sk550p", "--dut", &dut],
+        id,
+        bus,
+        &[id],
+    );
+}

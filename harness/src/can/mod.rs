@@ -35,7 +35,7 @@ use crate::pcap::SharedTap;
 use crate::profile::Profile;
 use crate::suite::BusStep;
 use binding::CanBinding;
-pub(crate) use serve::{relay_served, relay_system_bus};
+pub(crate) use serve::{announce_relay, relay_served, relay_system_bus};
 pub(crate) use tap::{SystemBusTap, TapFactory};
 
 /// The registry entry.

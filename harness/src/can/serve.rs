@@ -509,6 +509,18 @@ pub(crate) fn relay_served<S: Endpoint + Send + 'static>(
     relay_system_bus(addr, move || device(&mut shared.lock().0).tap_system_bus())
 }
 
+/// Says on stdout where a served device's system bus is relayed (`serve ecat|epl|pnio
+/// --system-bus`), after the device's own serving line.
+pub(crate) fn announce_relay(relay: Option<&Served>) {
+    if let Some(r) = relay {
+        outln!(
+            "its system bus over socketcand on {}, channel {}",
+            r.addr,
+            r.channel
+        );
+    }
+}
+
 fn close(hub: &Hub, id: u64, stream: &TcpStream) -> std::io::Result<()> {
     hub.clients().retain(|c| c.id != id);
     stream.shutdown(Shutdown::Both)

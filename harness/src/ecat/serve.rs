@@ -15,7 +15,7 @@ use std::time::Duration;
 
 use crate::net::driver::{Counts, Options, Serving, Shared};
 use crate::net::raw_port::RawPort;
-use crate::net::serve_args::RawServeArgs;
+use crate::net::serve_args::{RawServeArgs, SystemBusArg};
 pub use crate::net::LinkError;
 use crate::net::RawLink;
 use sim::ecat::Slave;
@@ -70,6 +70,9 @@ pub enum ServeError {
     /// The serving thread panicked (a bug).
     #[error("the EtherCAT slave's thread panicked: {0}")]
     Panicked(String),
+    /// `--system-bus`: the socketcand server for the gateway's frames cannot run.
+    #[error("--system-bus: {0}")]
+    SystemBus(String),
 }
 
 /// What a served slave did, as counted by its thread.
@@ -143,10 +146,20 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
 }
 
 /// Serves until `duration` has passed (forever when `None`), after a line on stdout that says
-/// what is served where.
-pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(), ServeError> {
+/// what is served where. With `system_bus` (HOST[:PORT]) a socketcand server there carries the
+/// CANopen frames the slave's gateway exchanges with FI 2…8 (`crate::can::relay_served`).
+pub(crate) fn serve(
+    opts: &ServeOptions,
+    duration: Option<Duration>,
+    system_bus: Option<&str>,
+) -> Result<(), ServeError> {
     let config = device_config(opts)?;
-    let served = start_endpoint(&opts.iface, slave(config)?, opts.reply_delay)?;
+    let shared = Shared::new(slave(config)?);
+    let served = start_shared(&opts.iface, shared.clone(), opts.reply_delay)?;
+    let relay = system_bus
+        .map(|addr| crate::can::relay_served(addr, shared, Slave::device_mut))
+        .transpose()
+        .map_err(ServeError::SystemBus)?;
     let m = served.mac();
     outln!(
         "serving EtherCAT slave ({}, {} inverters) on {} ({:02x}:{:02x}:{:02x}:{:02x}:{:02x}:{:02x})",
@@ -160,6 +173,7 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
         m[4],
         m[5]
     );
+    crate::can::announce_relay(relay.as_ref());
     crate::net::workers::serve_for(duration, STOP_CHECK * 10, || served.is_running());
     served.stop().map(|_| ())
 }
@@ -173,6 +187,8 @@ pub(crate) fn serve(opts: &ServeOptions, duration: Option<Duration>) -> Result<(
 struct ServeArgs {
     #[command(flatten)]
     common: RawServeArgs,
+    #[command(flatten)]
+    system_bus: SystemBusArg,
 }
 
 /// `harness serve ecat ARGS…`; returns the exit code.
@@ -187,7 +203,8 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         inverters: a.common.inverters,
         reply_delay: Duration::from_millis(a.common.reply_delay),
     };
-    serve(&opts, a.common.seconds.map(Duration::from_secs)).map_err(|e| e.to_string())?;
+    let seconds = a.common.seconds.map(Duration::from_secs);
+    serve(&opts, seconds, a.system_bus.system_bus.as_deref()).map_err(|e| e.to_string())?;
     Ok(crate::exit::EXIT_PASS)
 }
 
@@ -214,6 +231,15 @@ pub(crate) fn start_endpoint(
     slave: impl Endpoint + Send + 'static,
     delay: Duration,
 ) -> Result<Served, ServeError> {
+    start_shared(iface, Shared::new(slave), delay)
+}
+
+/// [`start_endpoint`] for a slave already shared (with the `--system-bus` relay).
+fn start_shared<S: Endpoint + Send + 'static>(
+    iface: &str,
+    shared: std::sync::Arc<Shared<S>>,
+    delay: Duration,
+) -> Result<Served, ServeError> {
     let mut link = RawLink::open(iface, Some(ETHERTYPE))?;
     link.set_spin(FRAME_POLL);
     let mac = link.mac().0;
@@ -223,7 +249,7 @@ pub(crate) fn start_endpoint(
     serving
         .spawn(
             format!("ecat-slave-{iface}"),
-            Shared::new(slave),
+            shared,
             RawPort::new(link),
             opts,
         )

@@ -288,13 +288,7 @@ pub(crate) fn serve(
     if !late.is_empty() {
         outln!("the node is late on purpose{late} (--reply-delay)");
     }
-    if let Some(r) = &relay {
-        outln!(
-            "its system bus over socketcand on {}, channel {}",
-            r.addr,
-            r.channel
-        );
-    }
+    crate::can::announce_relay(relay.as_ref());
     if served.udp_addr().is_none() {
         eprintln!(
             "note: {} has no IPv4 address: serving raw Ethernet only (SDO over ASnd); give it \

@@ -257,13 +257,7 @@ fn serve(
         opts.iface,
         served.mac()
     );
-    if let Some(r) = &relay {
-        outln!(
-            "its system bus over socketcand on {}, channel {}",
-            r.addr,
-            r.channel
-        );
-    }
+    crate::can::announce_relay(relay.as_ref());
     if served.rpc_addr().is_none() {
         eprintln!(
             "note: {} has no IPv4 address: serving DCP and RT only; give it an address (the \
