@@ -52,7 +52,7 @@ pub(crate) struct Bus {
     pub(crate) network: fn(&Network) -> Result<Box<dyn DutFactory>, OpenError>,
     /// `harness serve <name> ARGS…`: serves the simulator as a device on the network; the
     /// arguments are the bus's own. Returns the process exit code.
-    pub(crate) serve: fn(&[String]) -> Result<i32, String>,
+    pub(crate) serve: fn(&[String]) -> Result<i32, crate::net::serve_error::ServeError>,
     /// Device descriptions it writes: `harness describe <format>`.
     pub(crate) descriptions: &'static [Description],
     /// What in its frames a device picks anew each run, masked when transcripts are compared.

@@ -323,7 +323,7 @@ fn serve(a: ServeArgs) -> Result<i32, String> {
             crate::bus::names(BUSES)
         )
     })?;
-    (bus.serve)(args)
+    (bus.serve)(args).map_err(|e| e.to_string())
 }
 
 fn run(a: RunArgs) -> Result<i32, String> {

@@ -30,6 +30,7 @@ use sim::endpoint::{Endpoint, Input, Output};
 
 use super::link::{CanLink, CanLinkError};
 use crate::net::driver::{self, Counters, Options, Port, Serving, Shared};
+use crate::net::serve_error::ServeError;
 
 /// socketcand's own default port.
 pub(crate) const DEFAULT_PORT: u16 = 29536;
@@ -75,12 +76,12 @@ struct ServeArgs {
 }
 
 /// `harness serve can ARGS…`; returns the exit code.
-pub(super) fn command(args: &[String]) -> Result<i32, String> {
+pub(super) fn command(args: &[String]) -> Result<i32, ServeError> {
     let a = match crate::args::parse_args::<ServeArgs>("harness serve can", args) {
         Ok(a) => a,
         Err(code) => return Ok(code),
     };
-    let product = crate::profile::product_named(&a.profile)?;
+    let product = crate::profile::product_named(&a.profile).map_err(ServeError::Profile)?;
     let (Some(socketcand), None) = (&a.socketcand, &a.iface) else {
         let iface = a.iface.as_deref().unwrap_or_default();
         return serve_iface(
@@ -90,8 +91,9 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         )
         .map(|()| crate::exit::EXIT_PASS);
     };
-    let addr = crate::net::serve_args::socket_addr(socketcand, DEFAULT_PORT)?;
-    let listener = TcpListener::bind(addr).map_err(|e| format!("cannot listen on {addr}: {e}"))?;
+    let addr = crate::net::serve_args::socket_addr(socketcand, DEFAULT_PORT)
+        .map_err(ServeError::Address)?;
+    let listener = TcpListener::bind(addr).map_err(ServeError::socket("listen on", addr))?;
     let served = Served::start(listener, config(product, a.inverters), a.channel)?;
     // On stdout, once the socket is bound: what a test or a script waits for.
     outln!(
@@ -128,7 +130,7 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
 
 /// Why the segment on a CAN interface stopped serving.
 #[derive(Debug, thiserror::Error)]
-enum ServeError {
+enum IfaceError {
     /// The interface failed.
     #[error(transparent)]
     Link(#[from] CanLinkError),
@@ -144,9 +146,9 @@ fn serve_iface(
     iface: &str,
     config: DeviceConfig,
     duration: Option<Duration>,
-) -> Result<(), String> {
-    let link = super::socketcan::SocketCan::open(iface).map_err(|e| e.to_string())?;
-    let segment = Segment::new(config).map_err(|e| e.to_string())?;
+) -> Result<(), ServeError> {
+    let link = super::socketcan::SocketCan::open(iface).map_err(ServeError::bus)?;
+    let segment = Segment::new(config).map_err(ServeError::bus)?;
     outln!(
         "serving the system bus of {} (nodes {}) on CAN interface {iface}",
         config.product.name(),
@@ -157,7 +159,7 @@ fn serve_iface(
             .collect::<Vec<_>>()
             .join(", ")
     );
-    let mut serving = Serving::<ServeError>::new();
+    let mut serving = Serving::<IfaceError>::new();
     let port = Channel { link, frame: None };
     serving
         .spawn(
@@ -166,12 +168,15 @@ fn serve_iface(
             port,
             Options::new(IDLE),
         )
-        .map_err(|e| format!("cannot start a thread: {e}"))?;
+        .map_err(|source| ServeError::Thread {
+            what: "the system bus's thread",
+            source,
+        })?;
     crate::net::workers::serve_for(duration, IDLE, || serving.is_running());
     serving
-        .stop(ServeError::Panicked)
+        .stop(IfaceError::Panicked)
         .map(|_| ())
-        .map_err(|e| e.to_string())
+        .map_err(ServeError::bus)
 }
 
 /// A CAN interface of this host as the driver's port: frames in and out.
@@ -340,8 +345,8 @@ impl Served {
         listener: TcpListener,
         config: DeviceConfig,
         channel: String,
-    ) -> Result<Served, String> {
-        let segment = Segment::new(config).map_err(|e| e.to_string())?;
+    ) -> Result<Served, ServeError> {
+        let segment = Segment::new(config).map_err(ServeError::bus)?;
         let served = Served::hub(listener, Some(segment), channel)?;
         let h = served.hub.clone();
         thread::spawn(move || {
@@ -358,7 +363,7 @@ impl Served {
     /// A bus with no nodes of its own, to `listener`'s clients: what [`relay_system_bus`] puts
     /// on it (a served bus module's system bus, seen from its gateway) and what the clients
     /// send each other.
-    fn relay(listener: TcpListener, channel: String) -> Result<Served, String> {
+    fn relay(listener: TcpListener, channel: String) -> Result<Served, ServeError> {
         Served::hub(listener, None, channel)
     }
 
@@ -366,8 +371,10 @@ impl Served {
         listener: TcpListener,
         segment: Option<Segment>,
         channel: String,
-    ) -> Result<Served, String> {
-        let addr = listener.local_addr().map_err(|e| e.to_string())?;
+    ) -> Result<Served, ServeError> {
+        let addr = listener
+            .local_addr()
+            .map_err(ServeError::socket("read the address of", "the listener"))?;
         let nodes = segment.as_ref().map(Segment::nodes).unwrap_or_default();
         let start = Instant::now();
         let hub = Arc::new(Hub {
@@ -483,9 +490,10 @@ const RELAY_PERIOD: Duration = Duration::from_millis(2);
 pub(crate) fn relay_system_bus(
     addr: &str,
     mut take: impl FnMut() -> Vec<(Duration, CanFrame)> + Send + 'static,
-) -> Result<Served, String> {
-    let addr = crate::net::serve_args::socket_addr(addr, DEFAULT_PORT)?;
-    let listener = TcpListener::bind(addr).map_err(|e| format!("cannot listen on {addr}: {e}"))?;
+) -> Result<Served, ServeError> {
+    let addr =
+        crate::net::serve_args::socket_addr(addr, DEFAULT_PORT).map_err(ServeError::Address)?;
+    let listener = TcpListener::bind(addr).map_err(ServeError::socket("listen on", addr))?;
     let served = Served::relay(listener, "can0".into())?;
     // The first look attaches the tap.
     take();
@@ -505,7 +513,7 @@ pub(crate) fn relay_served<S: Endpoint + Send + 'static>(
     addr: &str,
     shared: Arc<driver::Shared<S>>,
     device: fn(&mut S) -> &mut sim::device::Device,
-) -> Result<Served, String> {
+) -> Result<Served, ServeError> {
     relay_system_bus(addr, move || device(&mut shared.lock().0).tap_system_bus())
 }
 

@@ -72,7 +72,7 @@ pub enum ServeError {
     Panicked(String),
     /// `--system-bus`: the socketcand server for the gateway's frames cannot run.
     #[error("--system-bus: {0}")]
-    SystemBus(String),
+    SystemBus(crate::net::serve_error::ServeError),
 }
 
 /// What a served slave did, as counted by its thread.
@@ -192,7 +192,7 @@ struct ServeArgs {
 }
 
 /// `harness serve ecat ARGS…`; returns the exit code.
-pub(crate) fn command(args: &[String]) -> Result<i32, String> {
+pub(crate) fn command(args: &[String]) -> Result<i32, crate::net::serve_error::ServeError> {
     let a = match crate::args::parse_args::<ServeArgs>("harness serve ecat", args) {
         Ok(a) => a,
         Err(code) => return Ok(code),
@@ -204,7 +204,8 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         reply_delay: Duration::from_millis(a.common.reply_delay),
     };
     let seconds = a.common.seconds.map(Duration::from_secs);
-    serve(&opts, seconds, a.system_bus.system_bus.as_deref()).map_err(|e| e.to_string())?;
+    serve(&opts, seconds, a.system_bus.system_bus.as_deref())
+        .map_err(crate::net::serve_error::ServeError::bus)?;
     Ok(crate::exit::EXIT_PASS)
 }
 

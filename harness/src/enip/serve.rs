@@ -34,6 +34,7 @@ use sim::endpoint::{Input, Output};
 use sim::enip::{Adapter, MAX_SESSIONS};
 
 use crate::net::driver::{self, Counters, Options, Port};
+use crate::net::serve_error::ServeError;
 
 /// How long a partial message may wait for its rest.
 pub(crate) const STALL: Duration = Duration::from_secs(10);
@@ -122,7 +123,7 @@ pub(crate) fn start_enip(
     config: DeviceConfig,
     limits: Limits,
     reply_delay: Duration,
-) -> Result<Served, String> {
+) -> Result<Served, ServeError> {
     start_enip_tapped(listen, config, limits, reply_delay, None)
 }
 
@@ -134,29 +135,29 @@ pub(crate) fn start_enip_tapped(
     limits: Limits,
     reply_delay: Duration,
     system_bus: Option<&str>,
-) -> Result<Served, String> {
+) -> Result<Served, ServeError> {
     let SocketAddr::V4(v4) = listen else {
-        return Err("EtherNet/IP needs an IPv4 listen address".into());
+        return Err(ServeError::Address(format!(
+            "EtherNet/IP needs an IPv4 listen address, not {listen}"
+        )));
     };
     let connections = limits
         .connections
         .min(open_files_limit().saturating_sub(FD_RESERVE));
-    let tcp = listener(listen).map_err(|e| format!("cannot listen on TCP {listen}: {e}"))?;
-    let udp = UdpSocket::bind(listen).map_err(|e| format!("cannot bind UDP {listen}: {e}"))?;
+    let tcp = listener(listen).map_err(ServeError::socket("listen on TCP", listen))?;
+    let udp = UdpSocket::bind(listen).map_err(ServeError::socket("bind UDP", listen))?;
     let io_addr = SocketAddr::new(listen.ip(), IO_PORT);
-    let io = UdpSocket::bind(io_addr).map_err(|e| format!("cannot bind UDP {io_addr}: {e}"))?;
-    let adapter = Adapter::new(Device::new(config), v4).with_max_sessions(limits.sessions);
-    let (wake, woken) = UnixDatagram::pair().map_err(|e| format!("I/O wake-up socket: {e}"))?;
-    for (socket, what) in [
-        (&wake, "I/O wake-up socket"),
-        (&woken, "I/O wake-up socket"),
-    ] {
-        socket
-            .set_nonblocking(true)
-            .map_err(|e| format!("{what}: {e}"))?;
-    }
+    let io = UdpSocket::bind(io_addr).map_err(ServeError::socket("bind UDP", io_addr))?;
     io.set_nonblocking(true)
-        .map_err(|e| format!("UDP {io_addr}: {e}"))?;
+        .map_err(ServeError::socket("make non-blocking: UDP", io_addr))?;
+    let adapter = Adapter::new(Device::new(config), v4).with_max_sessions(limits.sessions);
+    let wake_up = || -> std::io::Result<(UnixDatagram, UnixDatagram)> {
+        let (wake, woken) = UnixDatagram::pair()?;
+        wake.set_nonblocking(true)?;
+        woken.set_nonblocking(true)?;
+        Ok((wake, woken))
+    };
+    let (wake, woken) = wake_up().map_err(ServeError::socket("open", "the I/O wake-up socket"))?;
     let shared = Arc::new(Shared {
         adapter: driver::Shared::new(adapter),
         wake,
@@ -187,7 +188,8 @@ pub(crate) fn start_enip_tapped(
     }
     if let Some(addr) = system_bus {
         let s = shared.clone();
-        crate::can::relay_system_bus(addr, move || s.lock().device_mut().tap_system_bus())?;
+        crate::can::relay_system_bus(addr, move || s.lock().device_mut().tap_system_bus())
+            .map_err(|e| ServeError::SystemBus(Box::new(e)))?;
     }
     Ok(Served {
         listen,
@@ -272,14 +274,17 @@ fn at_least_one(text: &str) -> Result<usize, String> {
 }
 
 /// `harness serve enip ARGS…`; returns the exit code.
-pub(super) fn command(args: &[String]) -> Result<i32, String> {
+pub(super) fn command(args: &[String]) -> Result<i32, ServeError> {
     let a = match crate::args::parse_args::<ServeArgs>("harness serve enip", args) {
         Ok(a) => a,
         Err(code) => return Ok(code),
     };
-    let product = crate::profile::product_named(&a.profile)?;
+    let product = crate::profile::product_named(&a.profile).map_err(ServeError::Profile)?;
     if proto::nord::eip::identity(product).is_none() {
-        return Err(format!("{} has no EtherNet/IP interface", product.name()));
+        return Err(ServeError::Profile(format!(
+            "{} has no EtherNet/IP interface",
+            product.name()
+        )));
     }
     let config = DeviceConfig {
         inverters: a
@@ -293,7 +298,7 @@ pub(super) fn command(args: &[String]) -> Result<i32, String> {
         connections: a.max_connections,
     };
     serve_enip(
-        parse_addr(&a.listen)?,
+        parse_addr(&a.listen).map_err(ServeError::Address)?,
         config,
         limits,
         (
@@ -312,7 +317,7 @@ pub(crate) fn serve_enip(
     limits: Limits,
     (reply_delay, system_bus): (Duration, Option<&str>),
     duration: Option<Duration>,
-) -> Result<(), String> {
+) -> Result<(), ServeError> {
     let product = config.product;
     let inverters = config.inverters;
     let served = start_enip_tapped(listen, config, limits, reply_delay, system_bus)?;
@@ -374,11 +379,16 @@ type LateReply = (Instant, Vec<u8>, SocketAddr);
 /// With a reply delay, a thread that sends each UDP reply handed to it when it is due (in the
 /// order handed over: with one delay for all, the order they fall due), so that the discovery
 /// thread goes on receiving meanwhile; none without a delay.
-fn late_sender(udp: &UdpSocket, delay: Duration) -> Result<Option<Sender<LateReply>>, String> {
+fn late_sender(udp: &UdpSocket, delay: Duration) -> Result<Option<Sender<LateReply>>, ServeError> {
     if delay.is_zero() {
         return Ok(None);
     }
-    let udp = udp.try_clone().map_err(|e| format!("UDP: {e}"))?;
+    let at = udp
+        .local_addr()
+        .map_or_else(|_| "UDP".into(), |a| a.to_string());
+    let udp = udp
+        .try_clone()
+        .map_err(ServeError::socket("clone UDP", at))?;
     let (tx, rx) = std::sync::mpsc::channel::<LateReply>();
     thread::spawn(move || {
         for (due, reply, to) in rx {

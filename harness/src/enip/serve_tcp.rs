@@ -40,6 +40,7 @@ use tokio::sync::watch;
 use tokio::time::{sleep_until, timeout, Instant};
 
 use super::serve::{Shared, STALL};
+use crate::net::serve_error::ServeError;
 
 /// How long a client's task polls for its next request before it waits on the event loop.
 const REQUEST_POLL: Duration = Duration::from_micros(50);
@@ -63,15 +64,22 @@ pub(super) fn start(
     listener: std::net::TcpListener,
     shared: Arc<Shared>,
     max_clients: usize,
-) -> Result<(), String> {
+) -> Result<(), ServeError> {
+    let at = listener
+        .local_addr()
+        .map_or_else(|_| "TCP".into(), |a| a.to_string());
     listener
         .set_nonblocking(true)
-        .map_err(|e| format!("TCP listener: {e}"))?;
+        .map_err(ServeError::socket("make non-blocking: TCP", at))?;
+    let event_loop = |source| ServeError::Thread {
+        what: "the TCP event loop",
+        source,
+    };
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_io()
         .enable_time()
         .build()
-        .map_err(|e| format!("cannot start the TCP event loop: {e}"))?;
+        .map_err(event_loop)?;
     std::thread::Builder::new()
         .name("enip-tcp".into())
         .spawn(move || {
@@ -82,7 +90,7 @@ pub(super) fn start(
                 }
             })
         })
-        .map_err(|e| format!("cannot start the TCP event loop: {e}"))?;
+        .map_err(event_loop)?;
     Ok(())
 }
 

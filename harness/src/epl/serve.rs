@@ -112,7 +112,7 @@ pub enum ServeError {
     Panicked(String),
     /// The system bus could not be published (`--system-bus`).
     #[error("--system-bus: {0}")]
-    SystemBus(String),
+    SystemBus(crate::net::serve_error::ServeError),
 }
 
 pub use crate::net::driver::Counts as Stats;
@@ -338,7 +338,7 @@ fn parse_node_id(s: &str) -> Result<u8, String> {
 }
 
 /// `harness serve epl ARGS…`; returns the exit code.
-pub(crate) fn command(args: &[String]) -> Result<i32, String> {
+pub(crate) fn command(args: &[String]) -> Result<i32, crate::net::serve_error::ServeError> {
     let a = match crate::args::parse_args::<ServeArgs>("harness serve epl", args) {
         Ok(a) => a,
         Err(code) => return Ok(code),
@@ -351,7 +351,8 @@ pub(crate) fn command(args: &[String]) -> Result<i32, String> {
         reply_delay: Duration::from_millis(a.common.reply_delay),
     };
     let seconds = a.common.seconds.map(Duration::from_secs);
-    serve(&opts, seconds, a.system_bus.system_bus.as_deref()).map_err(|e| e.to_string())?;
+    serve(&opts, seconds, a.system_bus.system_bus.as_deref())
+        .map_err(crate::net::serve_error::ServeError::bus)?;
     Ok(crate::exit::EXIT_PASS)
 }
 

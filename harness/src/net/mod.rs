@@ -11,6 +11,7 @@ mod link;
 pub(crate) mod peer;
 pub(crate) mod raw_port;
 pub(crate) mod serve_args;
+pub(crate) mod serve_error;
 pub(crate) mod udp;
 #[cfg(test)]
 pub(crate) mod veth;
