@@ -84,21 +84,7 @@ fn an_ecat_run_with_tap_asserts_the_served_slaves_system_bus() {
     // namespace reaches over it.
     ns.add_ipv4("10.223.0.1/30", "10.223.0.2/30");
     let bus = "10.223.0.1:29536";
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args([
-            "serve",
-            "ecat",
-            "--iface",
-            ns.root_if(),
-            "--profile",
-            "sk550p",
-        ])
-        .args(["--system-bus", bus, "--seconds", "180"])
-        .stdout(std::process::Stdio::null())
-        .spawn()
-        .expect("harness serve ecat starts");
-    let _server = common::Server(child);
-    common::wait_listening(bus, std::time::Duration::from_secs(10));
+    let _server = common::serve_on_iface_with_relay("ecat", ns.root_if(), "sk550p", &[], bus);
     let id = "bu0620/systembus/gateway-parameter-of-fi3-is-sdo";
     let dut = format!("ecat://{}", ns.ns_if());
     common::check_tap_runs(

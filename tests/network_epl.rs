@@ -242,21 +242,7 @@ fn an_epl_run_with_tap_asserts_the_served_modules_system_bus() {
     // 192.168.100.1 on their root side too, and the namespace's answer must come back here.
     ns.add_ipv4("10.222.0.1/30", "10.222.0.2/30");
     let bus = "10.222.0.1:29536";
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args([
-            "serve",
-            "epl",
-            "--iface",
-            ns.root_if(),
-            "--profile",
-            "tu3-pol",
-        ])
-        .args(["--system-bus", bus, "--seconds", "180"])
-        .stdout(std::process::Stdio::null())
-        .spawn()
-        .expect("harness serve epl starts");
-    let _server = common::Server(child);
-    common::wait_listening(bus, std::time::Duration::from_secs(10));
+    let _server = common::serve_on_iface_with_relay("epl", ns.root_if(), "tu3-pol", &[], bus);
     let dut = format!("epl://{}", ns.ns_if());
     common::check_tap_runs(
         || ns.command(env!("CARGO_BIN_EXE_harness")),

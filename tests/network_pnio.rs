@@ -222,21 +222,8 @@ fn a_pnio_run_with_tap_asserts_the_served_devices_system_bus() {
     ns.add_ipv4("192.168.21.200/24", "192.168.21.1/24");
     // The relay listens on the served side's address, which the namespace reaches over the pair.
     let bus = "192.168.21.200:29536";
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_harness"))
-        .args([
-            "serve",
-            "pnio",
-            "--iface",
-            ns.root_if(),
-            "--profile",
-            "sk550p",
-        ])
-        .args(["--name", NAME, "--system-bus", bus, "--seconds", "180"])
-        .stdout(std::process::Stdio::null())
-        .spawn()
-        .expect("harness serve pnio starts");
-    let _server = common::Server(child);
-    common::wait_listening(bus, std::time::Duration::from_secs(10));
+    let _server =
+        common::serve_on_iface_with_relay("pnio", ns.root_if(), "sk550p", &["--name", NAME], bus);
     let id = "bu0620/systembus/gateway-parameter-of-fi3-is-sdo";
     let dut = format!("pnio://{}/{NAME}", ns.ns_if());
     common::check_tap_runs(

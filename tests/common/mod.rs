@@ -79,6 +79,27 @@ pub(crate) fn case_verdict<'a>(run: &'a serde_json::Value, id: &str) -> (&'a str
     )
 }
 
+/// `harness serve BUS --iface IFACE --profile PROFILE EXTRA… --system-bus RELAY` for three
+/// minutes at most, once the relay (socketcand, the served device's gateway frames) listens.
+pub(crate) fn serve_on_iface_with_relay(
+    bus: &str,
+    iface: &str,
+    profile: &str,
+    extra: &[&str],
+    relay: &str,
+) -> Server {
+    let child = Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["serve", bus, "--iface", iface, "--profile", profile])
+        .args(extra)
+        .args(["--system-bus", relay, "--seconds", "180"])
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap_or_else(|e| panic!("harness serve {bus} starts: {e}"));
+    let server = Server(child);
+    wait_listening(relay, Duration::from_secs(10));
+    server
+}
+
 /// Both sides of a served device's gateway: `harness` (made by `harness`, in a namespace or
 /// not) runs the cases whose id contains `filter` with `args` (profile and DUT), once with
 /// `--tap socketcand://BUS/can0` and once without. With the tap every case of `ids` passes;
