@@ -11,6 +11,7 @@
 //! answer follows in a later cycle — which is why the manuals require the master to repeat an
 //! order until its answer arrives (BU 0620 §2.5.6).
 
+use proto::nord::params::ParamDef;
 use proto::nord::pkw::PkwRepr;
 use proto::nord::ppo::{PpoRepr, PpoType};
 use proto::nord::{led, Inverter, ParamNumber, Product};
@@ -19,6 +20,7 @@ use std::time::Duration;
 use crate::bus_status::{self, BusFlags};
 use crate::drive::{Drive, DriveParams, FaultCode, CYCLE_PARAMETERS};
 use crate::link::{LinkFrameError, LinkRepr, Unit};
+use crate::objects::{abort, Refused};
 use crate::pkw_server;
 use crate::store::{ParamStore, Target};
 
@@ -426,6 +428,8 @@ pub struct Device {
     /// Per inverter, the words the interface's display parameters show
     /// ([`Device::show_process_data`]).
     process_shown: Vec<Option<([u16; 6], [u16; 6])>>,
+    /// The gateway to the inverters' parameters over the system bus.
+    gateway: crate::system_bus::Gateway,
     /// The system bus's frames, recorded once a tap asked for them ([`Device::tap_system_bus`]).
     tap: Option<crate::system_bus::Tap>,
     /// The interface's CAN controller on the system bus (`inject: { error: bus-off }`).
@@ -538,6 +542,7 @@ impl Device {
             shown: None,
             module_outputs: 0,
             process_shown: vec![None; usize::from(count)],
+            gateway: crate::system_bus::Gateway::new(config.product, count),
             tap: None,
             now: Duration::ZERO,
             can_state: CanState::default(),
@@ -557,21 +562,96 @@ impl Device {
         }
     }
 
-    /// A field-bus access to parameter `number` of `unit` at SDO sub-index `sub`, for the tap.
-    pub(crate) fn gateway_parameter(
+    /// A field-bus read of sub-index `sub` (`proto::nord::addr::sdo_subindex`) of parameter
+    /// `number` of `unit`: over the system bus, an SDO upload from the inverter's node, when the
+    /// unit is an inverter on it ([`crate::system_bus::Gateway`]); else from the unit's own
+    /// store. The one way the field buses' parameter objects (CIP, CoE, POWERLINK) read a
+    /// parameter's value.
+    pub(crate) fn gateway_read(
         &mut self,
         unit: Unit,
         number: ParamNumber,
         sub: u8,
-        access: crate::system_bus::Access<'_>,
-    ) {
-        if self.can_state.off_since.is_some() {
-            return;
+    ) -> Result<Vec<u8>, Refused> {
+        self.gateway_access(
+            unit,
+            number,
+            |gateway, fi, store, index, wire| gateway.upload(fi, store, index, sub, wire),
+            |store, def| crate::objects::read_value(store, number, def, sub),
+        )
+    }
+
+    /// A field-bus write of `data` to sub-index `sub` of parameter `number` of `unit`, as
+    /// [`Device::gateway_read`] reads: an SDO download through the inverter's node over the
+    /// system bus, or to the unit's own store (kept in EEPROM, as a bus write is).
+    pub(crate) fn gateway_write(
+        &mut self,
+        unit: Unit,
+        number: ParamNumber,
+        sub: u8,
+        data: &[u8],
+    ) -> Result<(), Refused> {
+        self.gateway_access(
+            unit,
+            number,
+            |gateway, fi, store, index, wire| gateway.download(fi, store, index, sub, data, wire),
+            |store, def| crate::objects::write_value(store, number, def, sub, data),
+        )
+    }
+
+    /// A parameter access through the gateway (`remote`, given the frames to fill) or on the
+    /// unit's own store (`local`). The frames exchanged are recorded while a tap is attached.
+    ///
+    /// An injected "bus off" of the interface's CAN controller (`inject: { error: bus-off }`)
+    /// is the bus status and the inverters' monitoring of it; the gateway's parameter access
+    /// still reaches the nodes then, unrecorded, as the device reached its inverters before the
+    /// gateway was real (refusing it, 08000020h, would change what the cases that inject it
+    /// see).
+    fn gateway_access<T>(
+        &mut self,
+        unit: Unit,
+        number: ParamNumber,
+        remote: impl FnOnce(
+            &mut crate::system_bus::Gateway,
+            Inverter,
+            &mut ParamStore,
+            u16,
+            &mut Vec<proto::can::CanFrame>,
+        ) -> Result<T, Refused>,
+        local: impl FnOnce(&mut ParamStore, &'static ParamDef) -> Result<T, Refused>,
+    ) -> Result<T, Refused> {
+        let fi = match unit {
+            Unit::Inverter(fi) if self.gateway.reaches(fi) => fi,
+            _ => {
+                let store = self
+                    .store(unit)
+                    .map_err(|_| Refused::from(abort::NO_INVERTER))?;
+                let def = store.def(number).ok_or(Refused::from(abort::NO_OBJECT))?;
+                return local(store, def);
+            }
+        };
+        let Some(unit) = self.inverters.get_mut(usize::from(fi.get()) - 1) else {
+            return Err(abort::NO_INVERTER.into());
+        };
+        let index = proto::nord::ecat::PARAMETER_BASE + number.get();
+        let mut wire = Vec::new();
+        let result = remote(
+            &mut self.gateway,
+            fi,
+            &mut unit.params.store,
+            index,
+            &mut wire,
+        );
+        if let (Some(tap), None) = (self.tap.as_mut(), self.can_state.off_since) {
+            tap.exchanged(&wire, self.now);
         }
-        if let (Some(tap), Unit::Inverter(fi)) = (self.tap.as_mut(), unit) {
-            let index = proto::nord::ecat::PARAMETER_BASE + number.get();
-            tap.parameter(fi, index, sub, access, self.now);
-        }
+        result
+    }
+
+    /// FI `fi`'s node's SDO server, as the gateway reaches it.
+    #[cfg(test)]
+    pub(crate) fn node_server(&self, fi: Inverter) -> Option<&crate::sdo_server::SdoServer> {
+        self.gateway.server(fi)
     }
 
     /// The configuration.
