@@ -167,8 +167,21 @@ impl ParamChannel {
     }
 
     /// One cycle of the parameter channel: a new order restarts processing and clears the
-    /// answer; a repeated order is answered once processed.
+    /// answer; a repeated order is answered once processed, by the unit's store.
     fn cycle(&mut self, order: PkwRepr, delay: u32, product: Product, unit: Unit) -> PkwRepr {
+        let supported = proto::nord::pkw::supported_orders(product, unit_is_first(unit));
+        self.cycle_with(order, delay, |store, order| {
+            pkw_server::handle_order(store, supported, order)
+        })
+    }
+
+    /// [`ParamChannel::cycle`], the order processed by `serve`.
+    fn cycle_with(
+        &mut self,
+        order: PkwRepr,
+        delay: u32,
+        serve: impl FnOnce(&mut ParamStore, &PkwRepr) -> PkwRepr,
+    ) -> PkwRepr {
         if order.ak == 0 {
             self.order = None;
             self.response = PkwRepr::default();
@@ -179,8 +192,7 @@ impl ParamChannel {
         } else if self.due > 0 {
             self.due -= 1;
             if self.due == 0 {
-                let supported = proto::nord::pkw::supported_orders(product, unit_is_first(unit));
-                self.response = pkw_server::handle_order(&mut self.store, supported, &order);
+                self.response = serve(&mut self.store, &order);
             }
         }
         self.response
@@ -927,10 +939,24 @@ impl Device {
                 Ok(answer)
             }
             Unit::Inverter(i) => {
-                let params = &mut self.inverter_mut(i)?.params;
-                let answer = params.cycle(order, delay, product, unit);
+                let count = self.config.inverters;
+                let params = &mut self
+                    .inverters
+                    .get_mut(usize::from(i.get()) - 1)
+                    .ok_or(DeviceError::NoSuchInverter(i.get(), count))?
+                    .params;
+                let supported = proto::nord::pkw::supported_orders(product, unit_is_first(unit));
+                let gateway = &mut self.gateway;
+                // Behind the gateway, reads and EEPROM changes are SDO transfers with the
+                // inverter's node (`crate::system_bus::serve_order`).
+                let mut wire = Vec::new();
+                let answer = params.cycle_with(order, delay, |store, order| {
+                    crate::system_bus::serve_order(gateway, i, store, supported, order, &mut wire)
+                        .unwrap_or_else(|| pkw_server::handle_order(store, supported, order))
+                });
                 show_parameter_data(&mut params.store, &order, &answer);
-                if self.tap.is_some() && self.can_state.off_since.is_none() {
+                if let (Some(tap), None) = (self.tap.as_mut(), self.can_state.off_since) {
+                    tap.exchanged(&wire, self.now);
                     self.tap_order(i, &order, &answer);
                 }
                 Ok(answer)
@@ -938,9 +964,12 @@ impl Device {
         }
     }
 
-    /// A PKW order to FI `fi` the inverter answered, for the tap: once per order and answer
-    /// (the order repeats every cycle until it changes). The manuals map no PKW error number
-    /// to an abort code: a refused order shows as abort 0800 0000h "general error".
+    /// A PKW order to FI `fi` the inverter answered, for the tap's image of the orders the
+    /// gateway does not carry over the system bus (`crate::system_bus::carries`: the changes
+    /// in RAM only, and every order to the SK 550P's own FI 1 is no system-bus traffic
+    /// anyway): once per order and answer (the order repeats every cycle until it changes).
+    /// The manuals map no PKW error number to an abort code: a refused order shows as abort
+    /// 0800 0000h "general error".
     fn tap_order(&mut self, fi: Inverter, order: &PkwRepr, answer: &PkwRepr) {
         use proto::nord::params::Width;
         use proto::nord::pkw::{Ind, OrderLabel, ResponseLabel};
@@ -962,10 +991,11 @@ impl Device {
         else {
             return;
         };
+        let carried = self.gateway.reaches(fi) && crate::system_bus::carries(label);
         let Some(tap) = self.tap.as_mut() else {
             return;
         };
-        if !tap.first_answer(fi, order.emit_bytes(), answer.emit_bytes()) {
+        if !tap.first_answer(fi, order.emit_bytes(), answer.emit_bytes()) || carried {
             return;
         }
         let ind = Ind(order.ind);

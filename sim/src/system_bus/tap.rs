@@ -1,15 +1,15 @@
 //! The recorder of the system bus's frames, while a tap is attached
 //! ([`crate::device::Device::tap_system_bus`]), so that a run can see both sides of the gateway
 //! (`observe: { what: system-bus }`):
-//! - a parameter of FI n read or written over CIP, CoE or POWERLINK SDO: the frames the gateway
-//!   ([`super::Gateway`]) and FI n's node actually exchanged ([`Tap::exchanged`]);
-//! - a PKW order to FI n (a PPO or a parameter data record): still an image
-//!   ([`Tap::parameter`]), the expedited SDO upload or download a gateway following the
-//!   project's CANopen layout would send for it and the node's answer, a refusal abort
-//!   0800 0000h "general error" (the manuals map no PKW error number to an abort code). The
-//!   order itself is served on the inverter's store by the parameter channel, whose order
-//!   labels (RAM-only writes, array lengths, the width checks of error 5) have no SDO
-//!   counterpart on a node;
+//! - a parameter of FI n read or written over CIP, CoE or POWERLINK SDO, and a PKW order to
+//!   FI n that reads or changes a value kept in EEPROM (a PPO or a parameter data record): the
+//!   frames the gateway ([`super::Gateway`]) and FI n's node actually exchanged
+//!   ([`Tap::exchanged`]);
+//! - a PKW order the gateway does not carry (a change in RAM only, labels 11–14): an image
+//!   ([`Tap::parameter`]), the expedited SDO download a gateway following the project's CANopen
+//!   layout would send for it and the node's answer, a refusal abort 0800 0000h "general
+//!   error" (the manuals map no PKW error number to an abort code). The order itself is served
+//!   on the inverter's store by the parameter channel: a node has no RAM-only download;
 //! - process data: an image too. Per system-bus cycle, each inverter's RPDO1 (and RPDO2 for
 //!   five values), one SYNC, and each inverter's TPDOs. A cycle starts when the field bus
 //!   brings an inverter's words and the last cycle is at least the update cycle of the
@@ -109,7 +109,8 @@ impl Tap {
         self.frames.extend(frames.iter().map(|f| (now, *f)));
     }
 
-    /// The image of a PKW order's parameter access of FI `fi` at `index`:`sub`, at `now`.
+    /// The image of the parameter access of a PKW order the gateway does not carry, to FI `fi`
+    /// at `index`:`sub`, at `now`.
     pub(crate) fn parameter(
         &mut self,
         fi: Inverter,
