@@ -11,6 +11,7 @@
 //! answer follows in a later cycle — which is why the manuals require the master to repeat an
 //! order until its answer arrives (BU 0620 §2.5.6).
 
+use proto::nord::params::ParamDef;
 use proto::nord::pkw::PkwRepr;
 use proto::nord::ppo::{PpoRepr, PpoType};
 use proto::nord::{led, Inverter, ParamNumber, Product};
@@ -19,6 +20,7 @@ use std::time::Duration;
 use crate::bus_status::{self, BusFlags};
 use crate::drive::{Drive, DriveParams, FaultCode, CYCLE_PARAMETERS};
 use crate::link::{LinkFrameError, LinkRepr, Unit};
+use crate::objects::{abort, Refused};
 use crate::pkw_server;
 use crate::store::{ParamStore, Target};
 
@@ -165,8 +167,21 @@ impl ParamChannel {
     }
 
     /// One cycle of the parameter channel: a new order restarts processing and clears the
-    /// answer; a repeated order is answered once processed.
+    /// answer; a repeated order is answered once processed, by the unit's store.
     fn cycle(&mut self, order: PkwRepr, delay: u32, product: Product, unit: Unit) -> PkwRepr {
+        let supported = proto::nord::pkw::supported_orders(product, unit_is_first(unit));
+        self.cycle_with(order, delay, |store, order| {
+            pkw_server::handle_order(store, supported, order)
+        })
+    }
+
+    /// [`ParamChannel::cycle`], the order processed by `serve`.
+    fn cycle_with(
+        &mut self,
+        order: PkwRepr,
+        delay: u32,
+        serve: impl FnOnce(&mut ParamStore, &PkwRepr) -> PkwRepr,
+    ) -> PkwRepr {
         if order.ak == 0 {
             self.order = None;
             self.response = PkwRepr::default();
@@ -177,8 +192,7 @@ impl ParamChannel {
         } else if self.due > 0 {
             self.due -= 1;
             if self.due == 0 {
-                let supported = proto::nord::pkw::supported_orders(product, unit_is_first(unit));
-                self.response = pkw_server::handle_order(&mut self.store, supported, &order);
+                self.response = serve(&mut self.store, &order);
             }
         }
         self.response
@@ -426,6 +440,8 @@ pub struct Device {
     /// Per inverter, the words the interface's display parameters show
     /// ([`Device::show_process_data`]).
     process_shown: Vec<Option<([u16; 6], [u16; 6])>>,
+    /// The gateway to the inverters' parameters over the system bus.
+    gateway: crate::system_bus::Gateway,
     /// The system bus's frames, recorded once a tap asked for them ([`Device::tap_system_bus`]).
     tap: Option<crate::system_bus::Tap>,
     /// The interface's CAN controller on the system bus (`inject: { error: bus-off }`).
@@ -538,6 +554,7 @@ impl Device {
             shown: None,
             module_outputs: 0,
             process_shown: vec![None; usize::from(count)],
+            gateway: crate::system_bus::Gateway::new(config.product, count),
             tap: None,
             now: Duration::ZERO,
             can_state: CanState::default(),
@@ -557,21 +574,96 @@ impl Device {
         }
     }
 
-    /// A field-bus access to parameter `number` of `unit` at SDO sub-index `sub`, for the tap.
-    pub(crate) fn gateway_parameter(
+    /// A field-bus read of sub-index `sub` (`proto::nord::addr::sdo_subindex`) of parameter
+    /// `number` of `unit`: over the system bus, an SDO upload from the inverter's node, when the
+    /// unit is an inverter on it ([`crate::system_bus::Gateway`]); else from the unit's own
+    /// store. The one way the field buses' parameter objects (CIP, CoE, POWERLINK) read a
+    /// parameter's value.
+    pub(crate) fn gateway_read(
         &mut self,
         unit: Unit,
         number: ParamNumber,
         sub: u8,
-        access: crate::system_bus::Access<'_>,
-    ) {
-        if self.can_state.off_since.is_some() {
-            return;
+    ) -> Result<Vec<u8>, Refused> {
+        self.gateway_access(
+            unit,
+            number,
+            |gateway, fi, store, index, wire| gateway.upload(fi, store, index, sub, wire),
+            |store, def| crate::objects::read_value(store, number, def, sub),
+        )
+    }
+
+    /// A field-bus write of `data` to sub-index `sub` of parameter `number` of `unit`, as
+    /// [`Device::gateway_read`] reads: an SDO download through the inverter's node over the
+    /// system bus, or to the unit's own store (kept in EEPROM, as a bus write is).
+    pub(crate) fn gateway_write(
+        &mut self,
+        unit: Unit,
+        number: ParamNumber,
+        sub: u8,
+        data: &[u8],
+    ) -> Result<(), Refused> {
+        self.gateway_access(
+            unit,
+            number,
+            |gateway, fi, store, index, wire| gateway.download(fi, store, index, sub, data, wire),
+            |store, def| crate::objects::write_value(store, number, def, sub, data),
+        )
+    }
+
+    /// A parameter access through the gateway (`remote`, given the frames to fill) or on the
+    /// unit's own store (`local`). The frames exchanged are recorded while a tap is attached.
+    ///
+    /// An injected "bus off" of the interface's CAN controller (`inject: { error: bus-off }`)
+    /// is the bus status and the inverters' monitoring of it; the gateway's parameter access
+    /// still reaches the nodes then, unrecorded, as the device reached its inverters before the
+    /// gateway was real (refusing it, 08000020h, would change what the cases that inject it
+    /// see).
+    fn gateway_access<T>(
+        &mut self,
+        unit: Unit,
+        number: ParamNumber,
+        remote: impl FnOnce(
+            &mut crate::system_bus::Gateway,
+            Inverter,
+            &mut ParamStore,
+            u16,
+            &mut Vec<proto::can::CanFrame>,
+        ) -> Result<T, Refused>,
+        local: impl FnOnce(&mut ParamStore, &'static ParamDef) -> Result<T, Refused>,
+    ) -> Result<T, Refused> {
+        let fi = match unit {
+            Unit::Inverter(fi) if self.gateway.reaches(fi) => fi,
+            _ => {
+                let store = self
+                    .store(unit)
+                    .map_err(|_| Refused::from(abort::NO_INVERTER))?;
+                let def = store.def(number).ok_or(Refused::from(abort::NO_OBJECT))?;
+                return local(store, def);
+            }
+        };
+        let Some(unit) = self.inverters.get_mut(usize::from(fi.get()) - 1) else {
+            return Err(abort::NO_INVERTER.into());
+        };
+        let index = proto::nord::ecat::PARAMETER_BASE + number.get();
+        let mut wire = Vec::new();
+        let result = remote(
+            &mut self.gateway,
+            fi,
+            &mut unit.params.store,
+            index,
+            &mut wire,
+        );
+        if let (Some(tap), None) = (self.tap.as_mut(), self.can_state.off_since) {
+            tap.exchanged(&wire, self.now);
         }
-        if let (Some(tap), Unit::Inverter(fi)) = (self.tap.as_mut(), unit) {
-            let index = proto::nord::ecat::PARAMETER_BASE + number.get();
-            tap.parameter(fi, index, sub, access, self.now);
-        }
+        result
+    }
+
+    /// FI `fi`'s node's SDO server, as the gateway reaches it.
+    #[cfg(test)]
+    pub(crate) fn node_server(&self, fi: Inverter) -> Option<&crate::sdo_server::SdoServer> {
+        self.gateway.server(fi)
     }
 
     /// The configuration.
@@ -847,10 +939,24 @@ impl Device {
                 Ok(answer)
             }
             Unit::Inverter(i) => {
-                let params = &mut self.inverter_mut(i)?.params;
-                let answer = params.cycle(order, delay, product, unit);
+                let count = self.config.inverters;
+                let params = &mut self
+                    .inverters
+                    .get_mut(usize::from(i.get()) - 1)
+                    .ok_or(DeviceError::NoSuchInverter(i.get(), count))?
+                    .params;
+                let supported = proto::nord::pkw::supported_orders(product, unit_is_first(unit));
+                let gateway = &mut self.gateway;
+                // Behind the gateway, reads and EEPROM changes are SDO transfers with the
+                // inverter's node (`crate::system_bus::serve_order`).
+                let mut wire = Vec::new();
+                let answer = params.cycle_with(order, delay, |store, order| {
+                    crate::system_bus::serve_order(gateway, i, store, supported, order, &mut wire)
+                        .unwrap_or_else(|| pkw_server::handle_order(store, supported, order))
+                });
                 show_parameter_data(&mut params.store, &order, &answer);
-                if self.tap.is_some() && self.can_state.off_since.is_none() {
+                if let (Some(tap), None) = (self.tap.as_mut(), self.can_state.off_since) {
+                    tap.exchanged(&wire, self.now);
                     self.tap_order(i, &order, &answer);
                 }
                 Ok(answer)
@@ -858,9 +964,12 @@ impl Device {
         }
     }
 
-    /// A PKW order to FI `fi` the inverter answered, for the tap: once per order and answer
-    /// (the order repeats every cycle until it changes). The manuals map no PKW error number
-    /// to an abort code: a refused order shows as abort 0800 0000h "general error".
+    /// A PKW order to FI `fi` the inverter answered, for the tap's image of the orders the
+    /// gateway does not carry over the system bus (`crate::system_bus::carries`: the changes
+    /// in RAM only, and every order to the SK 550P's own FI 1 is no system-bus traffic
+    /// anyway): once per order and answer (the order repeats every cycle until it changes).
+    /// The manuals map no PKW error number to an abort code: a refused order shows as abort
+    /// 0800 0000h "general error".
     fn tap_order(&mut self, fi: Inverter, order: &PkwRepr, answer: &PkwRepr) {
         use proto::nord::params::Width;
         use proto::nord::pkw::{Ind, OrderLabel, ResponseLabel};
@@ -882,10 +991,11 @@ impl Device {
         else {
             return;
         };
+        let carried = self.gateway.reaches(fi) && crate::system_bus::carries(label);
         let Some(tap) = self.tap.as_mut() else {
             return;
         };
-        if !tap.first_answer(fi, order.emit_bytes(), answer.emit_bytes()) {
+        if !tap.first_answer(fi, order.emit_bytes(), answer.emit_bytes()) || carried {
             return;
         }
         let ind = Ind(order.ind);

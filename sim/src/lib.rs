@@ -18,5 +18,6 @@ pub mod link;
 mod objects;
 pub mod pkw_server;
 pub mod pnio;
+mod sdo_server;
 pub mod store;
 mod system_bus;

@@ -22,6 +22,8 @@ pub(crate) mod abort {
     use proto::nord::errors::SdoAbort;
     /// Toggle bit not alternated.
     pub(crate) const TOGGLE: SdoAbort = SdoAbort(0x0503_0000);
+    /// SDO protocol timed out (a client's: the server did not answer).
+    pub(crate) const TIMEOUT: SdoAbort = SdoAbort(0x0504_0000);
     /// Client/server command specifier not valid or unknown.
     pub(crate) const COMMAND: SdoAbort = SdoAbort(0x0504_0001);
     /// Out of memory.
@@ -48,6 +50,8 @@ pub(crate) mod abort {
     pub(crate) const VALUE_TOO_HIGH: SdoAbort = SdoAbort(0x0609_0031);
     /// Value of parameter written too low.
     pub(crate) const VALUE_TOO_LOW: SdoAbort = SdoAbort(0x0609_0032);
+    /// General error.
+    pub(crate) const GENERAL: SdoAbort = SdoAbort(0x0800_0000);
     /// BU 0620 §2.2.7.2: "no communication between the bus interface and the frequency
     /// inverter": the addressed FI is not on the system bus.
     pub(crate) const NO_INVERTER: SdoAbort = SdoAbort(0x0800_0020);
@@ -127,6 +131,24 @@ pub(crate) fn check_len(got: usize, want: usize) -> Result<(), SdoAbort> {
     }
 }
 
+/// A parameter access refused: the abort code, and the store's own reason where the store
+/// refused (`None` where the object layout did: a sub-index, a data length, the count at
+/// sub-index 0). The code is what goes on the wire; the reason is finer for some field buses
+/// (a parameter channel tells "no array" from "faulty sub-index", one abort code for both).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Refused {
+    /// The CiA 301 abort code.
+    pub(crate) abort: SdoAbort,
+    /// The store's reason.
+    pub(crate) cause: Option<AccessError>,
+}
+
+impl From<SdoAbort> for Refused {
+    fn from(abort: SdoAbort) -> Refused {
+        Refused { abort, cause: None }
+    }
+}
+
 /// Uploads sub-index `sub` of parameter `number` (`def` its definition) from `store`.
 pub(crate) fn read_sub(
     store: &ParamStore,
@@ -134,36 +156,55 @@ pub(crate) fn read_sub(
     def: &ParamDef,
     sub: u8,
 ) -> Result<Vec<u8>, SdoAbort> {
+    read_value(store, number, def, sub).map_err(|r| r.abort)
+}
+
+/// [`read_sub`], with the store's reason of a refusal.
+pub(crate) fn read_value(
+    store: &ParamStore,
+    number: ParamNumber,
+    def: &ParamDef,
+    sub: u8,
+) -> Result<Vec<u8>, Refused> {
     match parameter_subindex(sub, def.set_dependent, def.array) {
-        None => Err(abort::NO_SUBINDEX),
+        None => Err(abort::NO_SUBINDEX.into()),
         Some(ParamSub::Count(n)) => Ok(vec![n]),
         Some(ParamSub::Value(set, element)) => store
             .read(number, set, element)
             .map(|v| encode_number(i64::from(v), parameter_data_type(def)))
-            .map_err(|e| abort_of(e, 0, Some(def))),
+            .map_err(|e| Refused {
+                abort: abort_of(e, 0, Some(def)),
+                cause: Some(e),
+            }),
     }
 }
 
 /// Downloads `data` to sub-index `sub` of parameter `number` in `store` (kept in EEPROM, as a
 /// bus write is): the count at sub-index 0 and read-only parameters refuse, the data length
 /// must be the parameter's type's, the value its range.
-pub(crate) fn write_sub(
+pub(crate) fn write_value(
     store: &mut ParamStore,
     number: ParamNumber,
     def: &ParamDef,
     sub: u8,
     data: &[u8],
-) -> Result<(), SdoAbort> {
+) -> Result<(), Refused> {
     let (set, element) = match parameter_subindex(sub, def.set_dependent, def.array) {
-        None => return Err(abort::NO_SUBINDEX),
-        Some(ParamSub::Count(_)) => return Err(abort::READ_ONLY),
+        None => return Err(abort::NO_SUBINDEX.into()),
+        Some(ParamSub::Count(_)) => return Err(abort::READ_ONLY.into()),
         Some(ParamSub::Value(s, e)) => (s, e),
     };
     if def.access == Access::ReadOnly {
-        return Err(abort::READ_ONLY);
+        return Err(Refused {
+            abort: abort::READ_ONLY,
+            cause: Some(AccessError::ReadOnly),
+        });
     }
     let v = decode_number(data, parameter_data_type(def))?;
     store
         .write(number, set, element, v, Persist::Eeprom)
-        .map_err(|e| abort_of(e, v, Some(def)))
+        .map_err(|e| Refused {
+            abort: abort_of(e, v, Some(def)),
+            cause: Some(e),
+        })
 }

@@ -5,7 +5,7 @@
 //! P102 in the cyclic PKW) and with the +1000 offset (BU 0620 §2.5.6.2, data records); the
 //! answer echoes the order's PNU and IND.
 
-use proto::nord::params::Width;
+use proto::nord::params::{ParamDef, Width};
 use proto::nord::pkw::{ErrorNumber, Ind, OrderLabel, PkwRepr, ResponseLabel};
 use proto::nord::{ArrayElement, ParamNumber, ParamSet, Product};
 
@@ -23,7 +23,8 @@ pub fn error_number(e: AccessError) -> ErrorNumber {
     }
 }
 
-fn refuse(order: &PkwRepr, e: ErrorNumber) -> PkwRepr {
+/// The refusal of `order` with error number `e` (response label 7).
+pub(crate) fn refuse(order: &PkwRepr, e: ErrorNumber) -> PkwRepr {
     PkwRepr {
         ak: ResponseLabel::CANNOT_EXECUTE.0,
         spm: false,
@@ -41,14 +42,55 @@ pub fn handle_order(store: &mut ParamStore, supported: &[OrderLabel], order: &Pk
     }
 }
 
-fn serve(
-    store: &mut ParamStore,
+/// An order checked against the unit's order labels and the parameter's layout: what it
+/// reads or writes, before the store is asked.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Resolved {
+    /// The order label.
+    pub(crate) ak: OrderLabel,
+    /// The parameter.
+    pub(crate) number: ParamNumber,
+    /// Its definition.
+    pub(crate) def: &'static ParamDef,
+    /// The set, for a set-dependent parameter.
+    pub(crate) set: Option<ParamSet>,
+    /// The element, with the array labels.
+    pub(crate) element: Option<ArrayElement>,
+}
+
+impl Resolved {
+    /// The positive answer of value `value` (the word or double-word label of the order's
+    /// kind).
+    pub(crate) fn answer(&self, order: &PkwRepr, value: i32) -> PkwRepr {
+        let dword = self.def.width == Width::Dword;
+        let label = |word: ResponseLabel, dw: ResponseLabel| if dword { dw } else { word };
+        let ak = match self.ak.0 {
+            9 => ResponseLabel::ARRAY_LEN,
+            1 => label(ResponseLabel::WORD, ResponseLabel::DWORD),
+            6 => label(ResponseLabel::ARRAY_WORD, ResponseLabel::ARRAY_DWORD),
+            _ => self.ak.positive_responses()[0],
+        };
+        PkwRepr {
+            ak: ak.0,
+            spm: false,
+            pnu: order.pnu,
+            ind: order.ind,
+            pwe: value as u32,
+        }
+    }
+}
+
+/// Checks `order` as far as it can be checked without the value: its label (`supported`), its
+/// parameter, the set and element its index names, and for a change the width of its label
+/// (error 5). `None` for label 0 "no order".
+pub(crate) fn resolve(
+    store: &ParamStore,
     supported: &[OrderLabel],
     order: &PkwRepr,
-) -> Result<PkwRepr, ErrorNumber> {
+) -> Result<Option<Resolved>, ErrorNumber> {
     let ak = OrderLabel(order.ak);
     if ak == OrderLabel::NONE {
-        return Ok(PkwRepr::default());
+        return Ok(None);
     }
     let positive = ak.positive_responses();
     if positive.is_empty() || !supported.contains(&ak) {
@@ -80,46 +122,46 @@ fn serve(
     } else {
         None
     };
+    // Error 5 "at present only for SK 700E" (BU 0590 §4.2.3.1 Table 24): the SK 5xxE under
+    // the SK TU3-PNT takes a value in either width.
+    let change = !matches!(ak.0, 1 | 6 | 9);
     let dword = def.width == Width::Dword;
-    let label = |word: ResponseLabel, dw: ResponseLabel| if dword { dw } else { word };
-    let answer = |ak: ResponseLabel, value: i32| PkwRepr {
-        ak: ak.0,
-        spm: false,
-        pnu: order.pnu,
-        ind: order.ind,
-        pwe: value as u32,
+    if change && ak.is_dword() != dword && store.product() != Product::Tu3Pnt {
+        return Err(ErrorNumber::BAD_TYPE);
+    }
+    Ok(Some(Resolved {
+        ak,
+        number,
+        def,
+        set,
+        element,
+    }))
+}
+
+fn serve(
+    store: &mut ParamStore,
+    supported: &[OrderLabel],
+    order: &PkwRepr,
+) -> Result<PkwRepr, ErrorNumber> {
+    let Some(r) = resolve(store, supported, order)? else {
+        return Ok(PkwRepr::default());
     };
     let err = error_number;
-    match ak.0 {
-        9 => Ok(answer(
-            ResponseLabel::ARRAY_LEN,
-            i32::from(store.array_len(number).map_err(err)?),
-        )),
-        1 => Ok(answer(
-            label(ResponseLabel::WORD, ResponseLabel::DWORD),
-            store.read(number, set, element).map_err(err)?,
-        )),
-        6 => Ok(answer(
-            label(ResponseLabel::ARRAY_WORD, ResponseLabel::ARRAY_DWORD),
-            store.read(number, set, element).map_err(err)?,
-        )),
+    match r.ak.0 {
+        9 => Ok(r.answer(order, i32::from(store.array_len(r.number).map_err(err)?))),
+        1 | 6 => Ok(r.answer(order, store.read(r.number, r.set, r.element).map_err(err)?)),
         _ => {
-            // Error 5 "at present only for SK 700E" (BU 0590 §4.2.3.1 Table 24): the SK 5xxE under
-            // the SK TU3-PNT takes a value in either width.
-            if ak.is_dword() != dword && store.product() != Product::Tu3Pnt {
-                return Err(ErrorNumber::BAD_TYPE);
-            }
             let value = order.pwe as i32;
             // P560 "Save in EEPROM" = 0 keeps changes in RAM too: the store decides that.
-            let persist = if ak.is_ram_only() {
+            let persist = if r.ak.is_ram_only() {
                 Persist::RamOnly
             } else {
                 Persist::Eeprom
             };
             store
-                .write(number, set, element, value, persist)
+                .write(r.number, r.set, r.element, value, persist)
                 .map_err(err)?;
-            Ok(answer(positive[0], value))
+            Ok(r.answer(order, value))
         }
     }
 }

@@ -38,7 +38,6 @@
 
 mod endpoint;
 mod node;
-mod sdo;
 #[cfg(test)]
 mod tests;
 

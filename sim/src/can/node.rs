@@ -13,14 +13,12 @@ use proto::nord::can::{
     interface_watch, p748_status, pdo_data, pdo_words, process_values, InverterSeries,
 };
 use proto::nord::errors::SdoAbort;
-use proto::nord::params::ParamDef;
 use proto::nord::{Family, Inverter, ParamNumber, Product};
 
-use super::sdo::{Objects, Transfer};
 use crate::device::Device;
 use crate::link::Unit;
-use crate::objects::{abort, decode_number, emergency_of, read_sub, write_sub};
-use crate::store::ParamStore;
+use crate::objects::{abort, decode_number, emergency_of};
+use crate::sdo_server::{Objects, ParameterObjects, SdoServer, LAST_PARAMETER, PARAMETERS};
 
 /// Communication objects (CiA 301 §7.5.2).
 const DEVICE_TYPE: u16 = 0x1000;
@@ -29,9 +27,6 @@ const DEVICE_NAME: u16 = 0x1008;
 const CONSUMER_HEARTBEAT: u16 = 0x1016;
 const HEARTBEAT_TIME: u16 = 0x1017;
 const IDENTITY: u16 = 0x1018;
-/// The parameters: P at 2000h + P (the project's EtherCAT layout, one node per inverter).
-const PARAMETERS: u16 = 0x2000;
-const LAST_PARAMETER: u16 = PARAMETERS + 999;
 
 /// CiA 301 emergency error code 8210h "PDO not processed due to length error".
 const PDO_TOO_SHORT: u16 = 0x8210;
@@ -51,7 +46,8 @@ pub(super) struct Node {
     due: Option<Duration>,
     /// The toggle bit of the next node guarding response.
     guard_toggle: bool,
-    transfer: Transfer,
+    /// Its SDO server.
+    sdo: SdoServer,
     /// The error register (1001h) as the last EMCY set it.
     error_register: u8,
     /// Its inverter's series: how many process values its PDOs carry.
@@ -93,7 +89,7 @@ impl Node {
             heartbeat_ms: 0,
             due: Some(Duration::ZERO),
             guard_toggle: false,
-            transfer: Transfer::Idle,
+            sdo: SdoServer::default(),
             error_register: 0,
             series,
             outputs: [0; 6],
@@ -262,9 +258,9 @@ impl Node {
                 }
                 self.p120 = None;
                 let mut od = Dictionary { node: self, device };
-                let mut transfer = std::mem::take(&mut od.node.transfer);
-                let answer = transfer.serve(frame.data(), &mut od);
-                self.transfer = transfer;
+                let mut sdo = std::mem::take(&mut od.node.sdo);
+                let answer = sdo.serve(frame.data(), &mut od);
+                self.sdo = sdo;
                 self.frame(Function::SdoTx, &answer?.emit())
             }
             Function::Rpdo { number } if cob.node == self.id => {
@@ -337,7 +333,7 @@ impl Node {
             self.heartbeat_ms = 0;
             self.consumer = factory_consumer(self.product);
             self.guard_toggle = false;
-            self.transfer = Transfer::Idle;
+            self.sdo.reset();
             self.due = Some(now);
         }
         if to != NmtState::Operational {
@@ -355,13 +351,9 @@ struct Dictionary<'a> {
 }
 
 impl Dictionary<'_> {
-    /// Parameter `index` − 2000h of the node's inverter (of the SK 550P's interface, for its
-    /// own parameters at FI 1): its store, number and definition.
-    #[allow(clippy::type_complexity)]
-    fn parameter(
-        &mut self,
-        index: u16,
-    ) -> Result<(&mut ParamStore, ParamNumber, &'static ParamDef), SdoAbort> {
+    /// The parameter objects of the node's inverter (of the SK 550P's interface, for its own
+    /// parameters at FI 1): the store that has parameter `index` − 2000h.
+    fn parameters(&mut self, index: u16) -> Result<ParameterObjects<'_>, SdoAbort> {
         let number =
             ParamNumber::new(i64::from(index - PARAMETERS)).map_err(|_| abort::NO_OBJECT)?;
         // The SK 550P's interface is built into FI 1: its P85x–P89x answer there.
@@ -376,8 +368,7 @@ impl Dictionary<'_> {
             false => Unit::Inverter(self.node.fi),
         };
         let store = self.device.store(unit).map_err(|_| abort::NO_OBJECT)?;
-        let def = store.def(number).ok_or(abort::NO_OBJECT)?;
-        Ok((store, number, def))
+        Ok(ParameterObjects::new(store))
     }
 }
 
@@ -397,10 +388,7 @@ impl Objects for Dictionary<'_> {
                 | IDENTITY,
                 _,
             ) => Err(abort::NO_SUBINDEX),
-            (PARAMETERS..=LAST_PARAMETER, _) => {
-                let (store, number, def) = self.parameter(index)?;
-                read_sub(store, number, def, sub)
-            }
+            (PARAMETERS..=LAST_PARAMETER, _) => self.parameters(index)?.upload(index, sub),
             _ => Err(abort::NO_OBJECT),
         }
     }
@@ -432,10 +420,7 @@ impl Objects for Dictionary<'_> {
                 | IDENTITY,
                 _,
             ) => Err(abort::NO_SUBINDEX),
-            (PARAMETERS..=LAST_PARAMETER, _) => {
-                let (store, number, def) = self.parameter(index)?;
-                write_sub(store, number, def, sub, data)
-            }
+            (PARAMETERS..=LAST_PARAMETER, _) => self.parameters(index)?.download(index, sub, data),
             _ => Err(abort::NO_OBJECT),
         }
     }

@@ -9,7 +9,6 @@
 //! Refusals are CiA 301 abort codes; [`abort_of`] is the one place a parameter store's refusal
 //! becomes one.
 
-use crate::system_bus::Access as GatewayAccess;
 use proto::nord::ecat::{
     self as def, parameter_data_type, parameter_object, parameter_subindex, DataType, EntryAccess,
     Object, ObjectCode, ParamSub, Value,
@@ -20,9 +19,7 @@ use proto::nord::ParamNumber;
 use super::pdo::ProcessWords;
 use crate::device::Device;
 use crate::link::Unit;
-use crate::objects::{
-    abort, abort_of, check_len, decode_number, encode_number, read_sub, write_sub,
-};
+use crate::objects::{abort, abort_of, check_len, decode_number, encode_number, read_sub};
 use crate::store::Persist;
 use proto::nord::errors::SdoAbort;
 
@@ -112,14 +109,14 @@ impl Dictionary {
                 _ => Err(abort::NO_SUBINDEX),
             },
             Target::Parameter { unit, number, def } => {
-                let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
                 if !complete {
-                    let r = read_sub(store, number, def, sub);
-                    let carried = r.as_deref().map_err(|e| *e);
-                    cx.device
-                        .gateway_parameter(unit, number, sub, GatewayAccess::Read(carried));
-                    return r;
+                    // Behind the gateway, an SDO upload from the inverter's node.
+                    return cx
+                        .device
+                        .gateway_read(unit, number, sub)
+                        .map_err(|r| r.abort);
                 }
+                let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
                 let read = |s: u8| read_sub(store, number, def, s);
                 let count = def::parameter_count(def.set_dependent, def.array)
                     .ok_or(abort::UNSUPPORTED_ACCESS)?;
@@ -202,10 +199,10 @@ impl Dictionary {
                     }
                     return Ok(());
                 }
-                let r = write_sub(store, number, def, sub, data);
+                // Behind the gateway, an SDO download through the inverter's node.
                 cx.device
-                    .gateway_parameter(unit, number, sub, GatewayAccess::Write(data, r));
-                r
+                    .gateway_write(unit, number, sub, data)
+                    .map_err(|r| r.abort)
             }
         }
     }

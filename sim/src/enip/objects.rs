@@ -13,9 +13,9 @@ use proto::wire::Error;
 
 use super::{connections, malformed, Adapter, ClientId};
 use crate::link::Unit;
-use crate::objects::abort_of;
+use crate::objects::{abort, Refused};
 use crate::store::{AccessError, ParamStore, Persist};
-use crate::system_bus::Access;
+use proto::nord::errors::SdoAbort;
 
 /// The MAC address the simulator shows: NORD's prefix F0:5F:5A (BU 0620 §4.4.1, BU 2100
 /// §7.1.4) and a suffix from the product code.
@@ -500,20 +500,17 @@ fn parameter(a: &mut Adapter, class: u16, req: &MrRequest) -> MrResponse {
         Width::Word => 2,
         Width::Dword => 4,
     };
+    // The instance's set and element as the parameter object's sub-index: behind a bus
+    // module (and the SK 550P's FI 2…8) the gateway reads and writes it on the inverter's
+    // node over the system bus.
     let sub = proto::nord::addr::sdo_subindex(set, element);
     if get {
         if !req.data.is_empty() {
             return MrResponse::error(s, GS::TOO_MUCH_DATA);
         }
-        let read = store
-            .read(number, set, element)
-            .map(|v| v.to_le_bytes()[..width].to_vec());
-        let carried = read.as_deref().map_err(|e| abort_of(*e, 0, Some(def)));
-        a.device
-            .gateway_parameter(unit, number, sub, Access::Read(carried));
-        return match read {
+        return match a.device.gateway_read(unit, number, sub) {
             Ok(bytes) => MrResponse::ok(s, bytes),
-            Err(e) => MrResponse::error(s, access_status(e)),
+            Err(r) => MrResponse::error(s, refusal_status(r)),
         };
     }
     // BU 0620 §4.2.2 P853: "Writing only possible via USS or USB".
@@ -523,32 +520,43 @@ fn parameter(a: &mut Adapter, class: u16, req: &MrRequest) -> MrResponse {
     if def.access == ParamAccess::ReadOnly {
         return MrResponse::error(s, GS::ATTRIBUTE_NOT_SETTABLE);
     }
-    let value = match req.data.len() {
+    match req.data.len() {
         n if n < width => return MrResponse::error(s, GS::NOT_ENOUGH_DATA),
         n if n > width => return MrResponse::error(s, GS::TOO_MUCH_DATA),
-        2 => {
-            let raw = u16::from_le_bytes([req.data[0], req.data[1]]);
-            if def.min < 0 {
-                i32::from(raw as i16)
-            } else {
-                i32::from(raw)
-            }
-        }
-        _ => i32::from_le_bytes([req.data[0], req.data[1], req.data[2], req.data[3]]),
-    };
-    let written = store.write(number, set, element, value, Persist::Eeprom);
-    a.device.gateway_parameter(
-        unit,
-        number,
-        sub,
-        Access::Write(
-            &req.data,
-            written.map_err(|e| abort_of(e, value, Some(def))),
-        ),
-    );
-    match written {
+        _ => {}
+    }
+    // The INT or DINT as it came, little-endian: the parameter object's INTEGER16 (UNSIGNED16
+    // for a range above 7FFFh) or INTEGER32 (`proto::nord::ecat::parameter_data_type`).
+    match a.device.gateway_write(unit, number, sub, &req.data) {
         Ok(()) => MrResponse::ok(s, Vec::new()),
-        Err(e) => MrResponse::error(s, access_status(e)),
+        Err(r) => MrResponse::error(s, refusal_status(r)),
+    }
+}
+
+/// The CIP general status of a parameter access refused on the inverter's node or store: the
+/// store's own reason where it refused ([`access_status`]), else the abort code's
+/// ([`abort_status`]). Both give one status for a store's refusal: the reason is finer than
+/// the code, the status coarser than either.
+fn refusal_status(r: Refused) -> GS {
+    r.cause.map_or_else(|| abort_status(r.abort), access_status)
+}
+
+/// The CIP general status of an SDO abort code from the system bus: the status
+/// [`access_status`] gives the store's refusal that the node answers with that code
+/// (`crate::objects::abort_of`), the data length's codes as CIP's own length statuses, and
+/// a transfer that failed (time-out, protocol, an inverter not reached) "device state
+/// conflict".
+fn abort_status(code: SdoAbort) -> GS {
+    match code {
+        abort::NO_OBJECT => GS::ATTRIBUTE_NOT_SUPPORTED,
+        abort::READ_ONLY => GS::ATTRIBUTE_NOT_SETTABLE,
+        abort::VALUE_RANGE | abort::VALUE_TOO_HIGH | abort::VALUE_TOO_LOW => {
+            GS::INVALID_ATTRIBUTE_VALUE
+        }
+        abort::NO_SUBINDEX => GS::PATH_DESTINATION_UNKNOWN,
+        abort::TOO_LONG => GS::TOO_MUCH_DATA,
+        abort::TOO_SHORT => GS::NOT_ENOUGH_DATA,
+        _ => GS::DEVICE_STATE_CONFLICT,
     }
 }
 
@@ -559,5 +567,92 @@ pub(crate) fn access_status(e: AccessError) -> GS {
         AccessError::ReadOnly => GS::ATTRIBUTE_NOT_SETTABLE,
         AccessError::OutOfRange | AccessError::OnlyResettable => GS::INVALID_ATTRIBUTE_VALUE,
         AccessError::BadSubIndex | AccessError::NotAnArray => GS::PATH_DESTINATION_UNKNOWN,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::objects::abort_of;
+
+    /// Every refusal a parameter store gives today has one CIP status, whether the gateway
+    /// answers from the store's reason or from the node's abort code alone.
+    #[test]
+    fn a_stores_refusal_gives_one_status_through_its_abort_code() {
+        let errors = [
+            AccessError::NoSuchParameter,
+            AccessError::ReadOnly,
+            AccessError::OutOfRange,
+            AccessError::BadSubIndex,
+            AccessError::NotAnArray,
+            AccessError::OnlyResettable,
+        ];
+        for def in proto::nord::params::CATALOGUE {
+            for e in errors {
+                for value in [def.min - 1, def.min, def.max, def.max + 1] {
+                    let code = abort_of(e, value, Some(def));
+                    assert_eq!(abort_status(code), access_status(e), "{e:?} as {code:?}");
+                    let r = Refused {
+                        abort: code,
+                        cause: Some(e),
+                    };
+                    assert_eq!(refusal_status(r), access_status(e));
+                }
+            }
+        }
+        // Refusals of the object layout or the transfer, no store's reason beside them.
+        assert_eq!(abort_status(abort::TOO_SHORT), GS::NOT_ENOUGH_DATA);
+        assert_eq!(abort_status(abort::TIMEOUT), GS::DEVICE_STATE_CONFLICT);
+    }
+
+    /// A CIP instance's set and element, as the parameter object's sub-index the gateway
+    /// sends, name the same value again on the node; and a CIP INT the node reads as its
+    /// INTEGER16 or UNSIGNED16 is the same value wherever the parameter's range has it (CIP
+    /// takes an INT as signed where the range is, the node where its type is).
+    #[test]
+    fn the_gateways_sub_index_and_data_name_what_the_cip_instance_and_value_do() {
+        use proto::nord::addr::{cip_instance, sdo_subindex};
+        use proto::nord::ecat::{parameter_data_type, parameter_subindex, DataType, ParamSub};
+        use proto::nord::{ArrayElement, ParamSet};
+        for def in proto::nord::params::CATALOGUE {
+            let sets: Vec<Option<ParamSet>> = match def.set_dependent {
+                true => (1..=4).map(|s| ParamSet::new(s).ok()).collect(),
+                false => vec![None],
+            };
+            let elements: Vec<Option<ArrayElement>> = match def.array {
+                Some(n) => (1..=i64::from(n))
+                    .map(|e| ArrayElement::new(e).ok())
+                    .collect(),
+                None => vec![None],
+            };
+            for &set in &sets {
+                for &element in &elements {
+                    let instance = u32::from(cip_instance(set, element));
+                    let decoded = cip_decode_instance(instance, def.set_dependent, def.array);
+                    assert_eq!(decoded, Some((set, element)), "P{}", def.number);
+                    let sub = sdo_subindex(set, element);
+                    assert_eq!(
+                        parameter_subindex(sub, def.set_dependent, def.array),
+                        Some(ParamSub::Value(set, element)),
+                        "P{} sub {sub}",
+                        def.number
+                    );
+                }
+            }
+            if def.width == Width::Word {
+                let node_signed = parameter_data_type(def) == DataType::I16;
+                let cip_signed = def.min < 0;
+                // Where they differ, only values outside the range read differently.
+                if node_signed != cip_signed {
+                    assert!(
+                        def.min >= 0 && def.max <= i32::from(i16::MAX),
+                        "P{} {}..{}",
+                        def.number,
+                        def.min,
+                        def.max
+                    );
+                }
+            }
+        }
     }
 }

@@ -1409,3 +1409,50 @@ fn p873_p874_show_the_words_of_the_assemblies() {
     );
     assert_eq!(iface(&mut b, 874, 7) as u16 & 0x00FF, 0x31);
 }
+
+/// A parameter of FI 3 behind an SK TU4-EIP, written and read over CIP, is an SDO transfer
+/// with FI 3's node on the system bus: the node's server answers it, and a refusal of the
+/// node comes back as CIP's own status.
+#[test]
+fn inverter_parameters_go_through_the_nodes_sdo_server() {
+    let mut b = Bench::new(Product::Tu4Eip);
+    let fi3 = Inverter::new(3).unwrap();
+    let served = |b: &Bench| b.a.device.node_server(fi3).map(|s| s.counts());
+    assert!(b.a.device.tap_system_bus().is_empty());
+    let c = addr::cip(Product::Tu4Eip, param(3, 102, set_of(1), None)).unwrap();
+    let ok = b.set(
+        c.class,
+        u32::from(c.instance),
+        c.attribute,
+        &250i16.to_le_bytes(),
+    );
+    assert_eq!(ok.status(), GS::SUCCESS);
+    assert_eq!(served(&b), Some((1, 0)));
+    assert_eq!(word(&b.inverter_param(3, 102, set_of(1), None)), 250);
+    assert_eq!(served(&b), Some((2, 0)));
+    // P102 above its 32000: the node aborts 06090031h, CIP answers "invalid attribute value".
+    let refused = b.set(
+        c.class,
+        u32::from(c.instance),
+        c.attribute,
+        &32001i16.to_le_bytes(),
+    );
+    assert_eq!(refused.status(), GS::INVALID_ATTRIBUTE_VALUE);
+    assert_eq!(served(&b), Some((3, 1)));
+    let frames: Vec<String> =
+        b.a.device
+            .tap_system_bus()
+            .iter()
+            .map(|(_, f)| format!("{:03X} {:02X?}", f.id(), f.data()))
+            .collect();
+    assert_eq!(
+        frames[4..],
+        [
+            "624 [2B, 66, 20, 01, 01, 7D, 00, 00]",
+            "5A4 [80, 66, 20, 01, 31, 00, 09, 06]",
+        ]
+    );
+    // The module's own parameters stay the module's: no node answers them.
+    assert_eq!(b.module_param(150, None).status(), GS::SUCCESS);
+    assert_eq!(served(&b), Some((3, 1)));
+}

@@ -8,7 +8,6 @@
 //! Refusals are the abort codes of BU 0620 §2.4.7 / BU 2200 §6.4.1 (DS 301's, which are
 //! CiA 301's): [`crate::objects`] maps a store's refusal to one.
 
-use crate::system_bus::Access as GatewayAccess;
 use proto::epl::asnd::ErrorEntry;
 use proto::epl::NmtState;
 use proto::nord::ecat::Object;
@@ -21,7 +20,7 @@ use crate::device::Device;
 use crate::ecat::od::upload_standard;
 use crate::ecat::pdo::ProcessWords;
 use crate::link::Unit;
-use crate::objects::{abort, decode_number, read_sub, write_sub};
+use crate::objects::{abort, decode_number};
 
 /// What the node itself holds that the dictionary shows.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -186,14 +185,13 @@ impl Dictionary {
         if let Some(o) = self.object(index) {
             return upload_standard(o, cx.words, sub, false);
         }
-        let (unit, number, d) = self.parameter(cx.device, index)?;
+        let (unit, number, _) = self.parameter(cx.device, index)?;
         reachable(cx.vars, unit)?;
-        let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
-        let r = read_sub(store, number, d, sub);
-        let carried = r.as_deref().map_err(|e| *e);
+        cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
+        // Behind the gateway, an SDO upload from the inverter's node.
         cx.device
-            .gateway_parameter(unit, number, sub, GatewayAccess::Read(carried));
-        r
+            .gateway_read(unit, number, sub)
+            .map_err(|r| r.abort)
     }
 
     /// SDO write of `data` to `index`:`sub`.
@@ -263,13 +261,13 @@ impl Dictionary {
             o.entry(sub).ok_or(abort::NO_SUBINDEX)?;
             return Err(abort::READ_ONLY);
         }
-        let (unit, number, d) = self.parameter(cx.device, index)?;
+        let (unit, number, _) = self.parameter(cx.device, index)?;
         reachable(cx.vars, unit)?;
-        let store = cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
-        let r = write_sub(store, number, d, sub, data);
+        cx.device.store(unit).map_err(|_| abort::NO_INVERTER)?;
+        // Behind the gateway, an SDO download through the inverter's node.
         cx.device
-            .gateway_parameter(unit, number, sub, GatewayAccess::Write(data, r));
-        r?;
+            .gateway_write(unit, number, sub, data)
+            .map_err(|r| r.abort)?;
         if unit == Unit::Interface {
             // P150 / P152 act at once (BU 2200 §7.1.1).
             cx.device.settle_interface();

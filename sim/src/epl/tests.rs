@@ -228,6 +228,11 @@ fn sdo_over_udp_reads_writes_and_refuses() {
         Some(Command::read_by_index(3, 0x3866, 1)),
     );
     assert_eq!(r.command.unwrap().payload, 500i16.to_le_bytes());
+    // FI 5 is on the system bus: its node's SDO server answered all three, the first with its
+    // abort 06070012h.
+    let fi5 = proto::nord::Inverter::new(5).unwrap();
+    let served = n.device_mut().node_server(fi5).map(|s| s.counts());
+    assert_eq!(served, Some((3, 1)));
     // Identity is read-only.
     let w = udp(
         &mut n,

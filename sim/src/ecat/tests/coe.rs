@@ -293,3 +293,23 @@ fn an_inverter_fault_sends_an_emergency() {
     assert_eq!(r[5] & 0x0F, 3);
     assert_eq!(r[6..15], [0x00, 0x10, 0x92, 0x75, 0x11, 103, 0, 2, 0]);
 }
+
+/// Behind the SK 550P, FI 2…8 are on the system bus: a CoE transfer of FI 3's P102 is an SDO
+/// transfer with FI 3's node, whose abort comes back as the CoE abort; FI 1's own parameters
+/// (2066h) are the device's, no node's.
+#[test]
+fn fi3s_parameters_are_served_by_its_node_on_the_system_bus() {
+    let mut m = Master::new(3);
+    m.preop();
+    let fi = |n| proto::nord::Inverter::new(n).unwrap();
+    let served = |m: &Master, n| m.slave.device().node_server(fi(n)).map(|s| s.counts());
+    assert_eq!(m.download(P102_FI3, 3, &[0xE8, 0x03]), Ok(()));
+    assert_eq!(m.upload(P102_FI3, 3), Ok(vec![0xE8, 0x03]));
+    assert_eq!(served(&m, 3), Some((2, 0)));
+    // 32001 (7D01h) is above P102's 32000: the node's 06090031h.
+    assert_eq!(code(&mut m, P102_FI3, 3, &[0x01, 0x7D]), 0x0609_0031);
+    assert_eq!(served(&m, 3), Some((3, 1)));
+    assert_eq!(m.upload(0x2066, 1), Ok(vec![200, 0]));
+    assert_eq!(served(&m, 2), Some((0, 0)));
+    assert_eq!(served(&m, 1), Some((0, 0)));
+}

@@ -1,19 +1,20 @@
-//! The bus interface's side of the NORD system bus: the CANopen frames its gateway exchanges
-//! with the inverters' nodes for each field-bus request, recorded while a tap is attached
-//! ([`crate::device::Device::tap_system_bus`]), so that a run can see both sides of the
-//! gateway (`observe: { what: system-bus }`).
-//!
-//! The simulator's inverters are in-process: a parameter access and a process-data cycle act on
-//! them directly, and this module writes the frames a gateway following the project's CANopen
-//! layout puts on the wire for them (`proto::nord::can`; none of it is stated by the manuals):
-//! - a parameter of FI n read or written over the field bus: an expedited SDO upload or
-//!   download of object 2000h + P, sub-index from set and element, at node 32 + 2·(n − 1), and
-//!   the node's answer, a refusal its CiA 301 abort code;
-//! - process data: per system-bus cycle, each inverter's RPDO1 (and RPDO2 for five values),
-//!   one SYNC, and each inverter's TPDOs. A cycle starts when the field bus brings an
-//!   inverter's words and the last cycle is at least the update cycle of the inverters it
-//!   carried old (`proto::nord::can::cycle_period_us`): a field bus faster than the system bus
-//!   (an RPI of 4 ms) has its words carried every other time.
+//! The recorder of the system bus's frames, while a tap is attached
+//! ([`crate::device::Device::tap_system_bus`]), so that a run can see both sides of the gateway
+//! (`observe: { what: system-bus }`):
+//! - a parameter of FI n read or written over CIP, CoE or POWERLINK SDO, and a PKW order to
+//!   FI n that reads or changes a value kept in EEPROM (a PPO or a parameter data record): the
+//!   frames the gateway ([`super::Gateway`]) and FI n's node actually exchanged
+//!   ([`Tap::exchanged`]);
+//! - a PKW order the gateway does not carry (a change in RAM only, labels 11–14): an image
+//!   ([`Tap::parameter`]), the expedited SDO download a gateway following the project's CANopen
+//!   layout would send for it and the node's answer, a refusal abort 0800 0000h "general
+//!   error" (the manuals map no PKW error number to an abort code). The order itself is served
+//!   on the inverter's store by the parameter channel: a node has no RAM-only download;
+//! - process data: an image too. Per system-bus cycle, each inverter's RPDO1 (and RPDO2 for
+//!   five values), one SYNC, and each inverter's TPDOs. A cycle starts when the field bus
+//!   brings an inverter's words and the last cycle is at least the update cycle of the
+//!   inverters it carried old (`proto::nord::can::cycle_period_us`): a field bus faster than
+//!   the system bus (an RPI of 4 ms) has its words carried every other time.
 //!
 //! Behind the SK 550P, FI 1 is the device itself (BU 0620 §2.1): only FI 2…8 are on the
 //! system bus. The interface's own parameters never are.
@@ -28,7 +29,7 @@ use proto::nord::can::{pdo_data, process_values, InverterSeries, SystemBusAddres
 use proto::nord::errors::SdoAbort;
 use proto::nord::{Family, Inverter, Product};
 
-/// What a field-bus request did to a parameter, as the system bus carries it.
+/// What a PKW order did to a parameter, as the image of the system bus shows it.
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Access<'a> {
     /// Read: the value's bytes, or the refusal.
@@ -99,7 +100,17 @@ impl Tap {
         Some(SystemBusAddress::inverter(fi).get())
     }
 
-    /// A parameter access of FI `fi` at `index`:`sub`, at `now`.
+    /// Frames the gateway and a node exchanged at `now`, in order.
+    pub(crate) fn exchanged(&mut self, frames: &[CanFrame], now: Duration) {
+        if frames.is_empty() {
+            return;
+        }
+        self.close_cycle(now);
+        self.frames.extend(frames.iter().map(|f| (now, *f)));
+    }
+
+    /// The image of the parameter access of a PKW order the gateway does not carry, to FI `fi`
+    /// at `index`:`sub`, at `now`.
     pub(crate) fn parameter(
         &mut self,
         fi: Inverter,

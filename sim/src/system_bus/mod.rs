@@ -1,0 +1,23 @@
+//! The bus interface's side of the NORD system bus (CANopen on CAN between the interface and
+//! its inverters, `proto::nord::can`): the gateway that reaches the inverters' parameters
+//! through their nodes' SDO servers ([`Gateway`]; PKW orders through it, [`serve_order`]), and
+//! the recorder of the frames on the bus ([`Tap`]). Process data still reach the inverters'
+//! drives directly, the tap recording an image of the PDOs and SYNC a cycle would carry.
+//!
+//! A field-bus refusal after the system bus: the node answers a CiA 301 abort code, which the
+//! field bus turns back into its own error. For CoE and POWERLINK SDO that is the code itself;
+//! for CIP the general status the parameter store's reason gives (`sim::enip`'s
+//! `access_status`; one status per abort code, so the code alone would do); for PKW the error
+//! number the store's reason gives (`pkw::error_of`). Where a field bus is
+//! finer than the code (the parameter channel's error numbers tell "no array" from "faulty
+//! sub-index", one abort 06090011h for both), the store's own reason travels beside the code
+//! ([`crate::objects::Refused`]): a real gateway would have the code only, but the simulated
+//! device keeps what it knows rather than report a coarser error than the field bus could.
+
+mod gateway;
+mod pkw;
+mod tap;
+
+pub(crate) use gateway::Gateway;
+pub(crate) use pkw::{carries, serve_order};
+pub(crate) use tap::{Access, Tap};
