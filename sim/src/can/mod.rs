@@ -35,7 +35,13 @@
 //! - The inverters' series: SK 5x0P behind the SK 550P (BU 0620 §2.1); behind a bus module
 //!   SK 54xE, whose five setpoints and actual values (BU 2100 §6.2.5, BU 2200 §6.3.4) the
 //!   simulator's drives take on the modules' other buses too.
+//! - Faults of the bus a case injects (`inject: { inverter: N, error: … }`): [`OFF_BUS`] (the
+//!   node's cable pulled), and its CAN controller's: [`BUS_OFF`], [`ERROR_PASSIVE`] and
+//!   [`ERROR_FRAMES`] by ISO 11898-1's fault confinement, with CiA 301's EMCY 8120h and 8140h
+//!   (`controller`, with the choices the standards leave open). The error frames a listener
+//!   sees are kept apart from the frames ([`Segment::take_error_frames`]).
 
+mod controller;
 mod endpoint;
 mod node;
 mod sdo;
@@ -44,13 +50,21 @@ mod tests;
 
 use std::time::Duration;
 
+use proto::can::socketcan::ErrorFrame;
 use proto::can::CanFrame;
 use proto::nord::can::{InverterSeries, SystemBusAddress};
 use proto::nord::{ArrayElement, Family, Inverter, ParamNumber, Product};
 
 use crate::device::{Device, DeviceConfig};
 use crate::link::Unit;
+use controller::Controller;
+pub use controller::{
+    bus_error, BURST, BUS_OFF, ERROR_FRAMES, ERROR_PASSIVE, MIN_RECOVERY, RECOVERY,
+};
 use node::Node;
+
+/// The most error frames the segment keeps for [`Segment::take_error_frames`].
+const MAX_ERROR_FRAMES: usize = 1024;
 
 /// Why a segment cannot be built.
 #[derive(Debug, thiserror::Error)]
@@ -86,6 +100,12 @@ pub struct Segment {
     nodes: Vec<Node>,
     /// The inverters whose nodes are off the segment ([`OFF_BUS`]).
     off_bus: Vec<Inverter>,
+    /// Each node's CAN controller, in node order.
+    controllers: Vec<Controller>,
+    /// The error frames since [`Segment::take_error_frames`], with their time.
+    errors: Vec<(Duration, ErrorFrame)>,
+    /// The latest time the segment was given.
+    now: Duration,
     /// P700 [-01] of each inverter as last seen, for EMCY.
     faults: [i32; 8],
 }
@@ -106,33 +126,62 @@ impl Segment {
             .collect::<Result<Vec<_>, SegmentError>>()?;
         Ok(Segment {
             device: Device::new(config),
+            controllers: vec![Controller::default(); nodes.len()],
+            errors: Vec::new(),
+            now: Duration::ZERO,
             nodes,
             off_bus: Vec::new(),
             faults: [0; 8],
         })
     }
 
-    /// Raises `error` on `inverter`: [`OFF_BUS`] takes its node off the segment, anything else
-    /// is the device's fault ([`Device::inject_fault`]).
+    /// Raises `error` on `inverter`: [`OFF_BUS`] takes its node off the segment, [`BUS_OFF`],
+    /// [`ERROR_PASSIVE`] and [`ERROR_FRAMES`] are its controller's, anything else is the
+    /// device's fault ([`Device::inject_fault`]: an inverter error, or the interface's own
+    /// controller, `bus-off`, `bus-warning`).
     pub fn inject_fault(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
-        if error != OFF_BUS {
+        if ![OFF_BUS, BUS_OFF, ERROR_PASSIVE, ERROR_FRAMES].contains(&error) {
             return self.device.inject_fault(inverter, error);
         }
-        if !self.nodes.iter().any(|n| n.inverter() == inverter) {
+        let Some(i) = self.nodes.iter().position(|n| n.inverter() == inverter) else {
             return Err(format!("FI {} is not on the system bus", inverter.get()));
-        }
-        if !self.off_bus.contains(&inverter) {
+        };
+        if error != OFF_BUS {
+            self.controllers[i].inject(error, self.now);
+        } else if !self.off_bus.contains(&inverter) {
             self.off_bus.push(inverter);
         }
         Ok(())
     }
 
-    /// The nodes still on the segment.
-    fn on_bus(&mut self) -> impl Iterator<Item = &mut Node> {
-        let off = &self.off_bus;
-        self.nodes
-            .iter_mut()
-            .filter(move |n| !off.contains(&n.inverter()))
+    /// The error frames the segment's faults caused since the last call, with their time, as a
+    /// listener's controller reports them (`CAN_ERR_FLAG` frames of SocketCAN; none unless a
+    /// case injected [`ERROR_FRAMES`]). At most the last 1024 are kept.
+    pub fn take_error_frames(&mut self) -> Vec<(Duration, ErrorFrame)> {
+        std::mem::take(&mut self.errors)
+    }
+
+    /// Whether node `i` takes part in the bus: on it, and not bus off.
+    fn takes_part(&self, i: usize) -> bool {
+        !self.off_bus.contains(&self.nodes[i].inverter()) && !self.controllers[i].is_bus_off()
+    }
+
+    /// `frames` node `i` transmits at `now`, through its controller: those that reach the bus
+    /// go to `out`.
+    fn transmit(
+        &mut self,
+        i: usize,
+        frames: Vec<CanFrame>,
+        now: Duration,
+        out: &mut Vec<CanFrame>,
+    ) {
+        for f in frames {
+            out.extend(self.controllers[i].transmit(f, now, &mut self.errors));
+        }
+        if self.errors.len() > MAX_ERROR_FRAMES {
+            let extra = self.errors.len() - MAX_ERROR_FRAMES;
+            self.errors.drain(..extra);
+        }
     }
 
     /// The node ids on the segment.
@@ -154,15 +203,14 @@ impl Segment {
     /// nodes answer to them, in order, the segment's monitoring run once for all of them.
     pub fn receive_all(&mut self, frames: &[CanFrame], now: Duration) -> Vec<CanFrame> {
         let mut out = self.poll(now);
-        let off = &self.off_bus;
         for frame in frames {
-            for node in self
-                .nodes
-                .iter_mut()
-                .filter(|n| !off.contains(&n.inverter()))
-            {
-                node.overhear(frame, now);
-                out.extend(node.receive(frame, &mut self.device, now));
+            for i in 0..self.nodes.len() {
+                if !self.takes_part(i) {
+                    continue;
+                }
+                self.nodes[i].overhear(frame, now);
+                let answers = self.nodes[i].receive(frame, &mut self.device, now);
+                self.transmit(i, answers, now, &mut out);
             }
         }
         self.overheard(&out, now);
@@ -173,10 +221,22 @@ impl Segment {
 
     /// What the nodes send on their own at `now`: boot-up messages, heartbeats, EMCY.
     pub fn poll(&mut self, now: Duration) -> Vec<CanFrame> {
+        self.now = self.now.max(now);
         self.device.tick(now);
         let mut out = Vec::new();
-        for node in self.on_bus() {
-            out.extend(node.poll(now));
+        for i in 0..self.nodes.len() {
+            if self.off_bus.contains(&self.nodes[i].inverter()) {
+                continue;
+            }
+            // Back from bus off, or error passive: CiA 301's EMCY first.
+            if let Some(code) = self.controllers[i].wake(now) {
+                let emcy = self.nodes[i].communication_error(code);
+                self.transmit(i, emcy.into_iter().collect(), now, &mut out);
+            }
+            if self.takes_part(i) {
+                let frames = self.nodes[i].poll(now);
+                self.transmit(i, frames, now, &mut out);
+            }
         }
         self.overheard(&out, now);
         self.look(now);
@@ -193,8 +253,13 @@ impl Segment {
                 .ok()
                 .and_then(|s| s.read(P700, None, ArrayElement::new(4).ok()).ok())
                 .and_then(|x| u16::try_from(x).ok());
-            if let Some(node) = self.on_bus().find(|n| n.inverter() == fi) {
-                out.extend(node.emergency(value, extended));
+            let Some(i) = self.nodes.iter().position(|n| n.inverter() == fi) else {
+                continue;
+            };
+            // Off the bus or bus off, the node still keeps its error register.
+            let emcy = self.nodes[i].emergency(value, extended);
+            if self.takes_part(i) {
+                self.transmit(i, emcy.into_iter().collect(), self.now, out);
             }
         }
     }
@@ -202,8 +267,10 @@ impl Segment {
     /// Every node hears what the others sent, as on a real bus.
     fn overheard(&mut self, frames: &[CanFrame], now: Duration) {
         for frame in frames {
-            for node in self.on_bus() {
-                node.overhear(frame, now);
+            for i in 0..self.nodes.len() {
+                if self.takes_part(i) {
+                    self.nodes[i].overhear(frame, now);
+                }
             }
         }
     }
@@ -217,10 +284,23 @@ impl Segment {
 
     /// When a node next sends on its own (`None`: nothing scheduled).
     pub fn next_due(&self) -> Option<Duration> {
-        self.nodes
-            .iter()
-            .filter(|n| !self.off_bus.contains(&n.inverter()))
-            .filter_map(Node::next_due)
+        (0..self.nodes.len())
+            .filter(|&i| !self.off_bus.contains(&self.nodes[i].inverter()))
+            .filter_map(|i| match self.takes_part(i) {
+                true => min(
+                    self.nodes[i].next_due(),
+                    self.controllers[i].next_due(self.now),
+                ),
+                false => self.controllers[i].next_due(self.now),
+            })
             .min()
+    }
+}
+
+/// The earlier of two times, either of which may be missing.
+fn min(a: Option<Duration>, b: Option<Duration>) -> Option<Duration> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
     }
 }

@@ -712,3 +712,113 @@ fn p748_shows_the_nodes_nmt_state() {
     s.receive(&frame(0, &[NmtCommand::ENTER_PRE_OPERATIONAL.0, 36]), MS);
     assert_eq!(p748(&mut s), 127);
 }
+
+/// Node `node`'s heartbeat every 10 ms (1017h), then the segment polled up to 50 ms.
+fn heartbeat_every_10ms(s: &mut Segment, node: u8) {
+    let heartbeat = [0x2B, 0x17, 0x10, 0x00, 10, 0, 0, 0];
+    assert!(matches!(
+        sdo(s, node, heartbeat),
+        SdoResponse::InitiateDownload { .. }
+    ));
+}
+
+/// What the segment sends on its own from `from` to `to` ms, polled every ms.
+fn sent(s: &mut Segment, from: u32, to: u32) -> Vec<CanFrame> {
+    (from..to).flat_map(|t| s.poll(t * MS)).collect()
+}
+
+/// ISO 11898-1 fault confinement: a node bus off takes no part in the bus (no heartbeat, no
+/// SDO answer) while the others serve on; after the recovery time it sends CiA 301's EMCY
+/// 8140h "recovered from bus off" and its heartbeat again.
+#[test]
+fn a_node_bus_off_is_silent_then_recovers_with_emcy_8140h() {
+    let mut s = segment();
+    heartbeat_every_10ms(&mut s, 34);
+    assert!(sent(&mut s, 2, 30).iter().any(|f| f.id() == 0x722));
+    let fi2 = Inverter::new(2).unwrap();
+    assert_eq!(s.inject_fault(fi2, super::BUS_OFF), Ok(()));
+    // Bus off from 29 ms (the last time the segment was given) to 229 ms.
+    let quiet = sent(&mut s, 30, 150);
+    assert!(!quiet.iter().any(|f| f.id() & 0x7F == 34), "{quiet:?}");
+    let request = frame(0x622, &upload(0x1000, 0));
+    assert!(s.receive(&request, 150 * MS).is_empty(), "no SDO answer");
+    assert!(matches!(
+        sdo(&mut s, 32, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+    assert_eq!(s.next_due(), Some(29 * MS + super::RECOVERY));
+    assert!(s.take_error_frames().is_empty(), "bus off is silent");
+    let back = sent(&mut s, 150, 260);
+    let from_34: Vec<&CanFrame> = back.iter().filter(|f| f.id() & 0x7F == 34).collect();
+    // EMCY 0A2h: 8140h, error register generic + communication (11h), then the heartbeat.
+    assert_eq!(
+        from_34[0],
+        &frame(0x0A2, &[0x40, 0x81, 0x11, 0, 0, 0, 0, 0])
+    );
+    assert_eq!(from_34[1], &frame(0x722, &[0x7F]));
+    assert!(from_34.len() >= 3, "heartbeats again: {from_34:?}");
+    assert_eq!(
+        from_34.iter().filter(|f| f.id() == 0x0A2).count(),
+        1,
+        "one EMCY"
+    );
+    assert!(matches!(
+        sdo(&mut s, 34, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+}
+
+/// A transceiver that destroys FI 3's frames: every other node, and a listener, sees error
+/// frames; the frame goes through once retransmitted, and the nodes serve on.
+#[test]
+fn error_frames_are_kept_apart_and_the_nodes_serve_on() {
+    let mut s = segment();
+    let fi3 = Inverter::new(3).unwrap();
+    assert_eq!(s.inject_fault(fi3, super::ERROR_FRAMES), Ok(()));
+    assert!(s.take_error_frames().is_empty(), "nothing sent yet");
+    // Its SDO answer is destroyed 8 times, then goes through.
+    assert!(matches!(
+        sdo(&mut s, 36, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+    let errors = s.take_error_frames();
+    assert_eq!(errors.len(), usize::from(super::BURST));
+    assert!(errors
+        .iter()
+        .all(|(t, e)| *t == MS && *e == super::bus_error()));
+    assert_eq!(super::bus_error().class.0, 0x088);
+    // The next frames go through untouched, the other nodes' too.
+    sdo(&mut s, 36, upload(0x1000, 0));
+    sdo(&mut s, 32, upload(0x1000, 0));
+    assert!(s.take_error_frames().is_empty());
+}
+
+/// Error passive: CiA 301's EMCY 8120h "CAN in error passive mode"; the node keeps
+/// communicating.
+#[test]
+fn error_passive_sends_emcy_8120h_and_serves_on() {
+    let mut s = segment();
+    let fi3 = Inverter::new(3).unwrap();
+    assert_eq!(s.inject_fault(fi3, super::ERROR_PASSIVE), Ok(()));
+    assert_eq!(s.next_due(), Some(Duration::ZERO), "the EMCY is due");
+    let out = s.poll(MS);
+    assert_eq!(out, vec![frame(0x0A4, &[0x20, 0x81, 0x11, 0, 0, 0, 0, 0])]);
+    assert!(s.poll(2 * MS).is_empty(), "once");
+    assert!(matches!(
+        sdo(&mut s, 36, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+    // An unknown node's fault is refused; the interface's own `bus-off` is not the node's.
+    let mut config = DeviceConfig::new(Product::Tu3Eip);
+    config.inverters = 1;
+    let mut one = Segment::new(config).unwrap();
+    one.poll(Duration::ZERO);
+    let e = one.inject_fault(Inverter::new(2).unwrap(), super::BUS_OFF);
+    assert_eq!(e, Err("FI 2 is not on the system bus".into()));
+    assert_eq!(
+        one.inject_fault(Inverter::new(1).unwrap(), "bus-off"),
+        Ok(())
+    );
+    let request = frame(0x620, &upload(0x1000, 0));
+    assert_eq!(one.receive(&request, MS).len(), 1, "node 32 still answers");
+}
