@@ -9,11 +9,15 @@ use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
+use proto::can::socketcan::ErrorFrame;
 use proto::can::socketcand::{Framed, Message, MAX_MESSAGE_LEN};
 use proto::can::CanFrame;
 use sim::can::Segment;
 
 use crate::pcap::{SharedTap, Stamper};
+
+/// The most error frames a link keeps for [`CanLink::take_error_frames`].
+const MAX_ERROR_FRAMES: usize = 1024;
 
 /// Why a link failed.
 #[derive(Debug, thiserror::Error)]
@@ -57,6 +61,13 @@ pub(crate) trait CanLink {
     /// on its clock.
     fn segment(&mut self) -> Option<(&mut Segment, Duration)> {
         None
+    }
+    /// The error frames the link reported since the last call (SocketCAN's `CAN_ERR_FLAG`
+    /// frames: a controller's report of a bus error, no node's frame; socketcand forwards them
+    /// as `< error CLASS TIME >`, the simulated segment keeps them apart). [`CanLink::recv`]
+    /// never returns one: they are reported here and otherwise ignored. At most the last 1024.
+    fn take_error_frames(&mut self) -> Vec<ErrorFrame> {
+        Vec::new()
     }
 }
 
@@ -129,6 +140,12 @@ impl CanLink for Embedded {
         self.deliver();
         Some((&mut self.segment, self.now))
     }
+
+    fn take_error_frames(&mut self) -> Vec<ErrorFrame> {
+        self.deliver();
+        let errors = self.segment.take_error_frames();
+        errors.into_iter().map(|(_, e)| e).collect()
+    }
 }
 
 /// A link whose frames also go to the run's capture (`--pcap`), both ways, on its CAN
@@ -173,6 +190,10 @@ impl<L: CanLink> CanLink for Tapped<L> {
     fn segment(&mut self) -> Option<(&mut Segment, Duration)> {
         self.inner.segment()
     }
+
+    fn take_error_frames(&mut self) -> Vec<ErrorFrame> {
+        self.inner.take_error_frames()
+    }
 }
 
 /// A socketcand server's channel in raw mode: every frame on that bus comes to the harness.
@@ -181,6 +202,8 @@ pub(crate) struct Socketcand {
     stream: TcpStream,
     buf: Vec<u8>,
     since: Instant,
+    /// The error frames the server forwarded since [`CanLink::take_error_frames`].
+    errors: Vec<ErrorFrame>,
 }
 
 impl Socketcand {
@@ -203,6 +226,7 @@ impl Socketcand {
             stream,
             buf: Vec::new(),
             since: Instant::now(),
+            errors: Vec::new(),
         };
         link.expect(Message::Hi, limit, "the greeting `< hi >`")?;
         link.write(&Message::Open {
@@ -292,6 +316,10 @@ impl CanLink for Socketcand {
         Ok(self.recv_stamped(limit)?.map(|(_, f)| f))
     }
 
+    fn take_error_frames(&mut self) -> Vec<ErrorFrame> {
+        std::mem::take(&mut self.errors)
+    }
+
     fn recv_stamped(
         &mut self,
         limit: Duration,
@@ -305,7 +333,20 @@ impl CanLink for Socketcand {
                         Duration::from_secs(time.secs) + Duration::from_micros(time.usecs.into());
                     return Ok(Some((at, frame)));
                 }
-                // Error frames and replies to nothing the harness asked are not frames.
+                // An error frame is reported, not taken for a frame (raw mode gives its class
+                // alone; BCM mode adds the data).
+                Some(Message::ErrorFrame { class, data, .. }) => {
+                    let mut bytes = [0; 8];
+                    bytes
+                        .iter_mut()
+                        .zip(&data)
+                        .for_each(|(to, from)| *to = *from);
+                    if self.errors.len() == MAX_ERROR_FRAMES {
+                        self.errors.remove(0);
+                    }
+                    self.errors.push(ErrorFrame { class, data: bytes });
+                }
+                // Replies to nothing the harness asked are not frames.
                 Some(_) => continue,
                 None => return Ok(None),
             }

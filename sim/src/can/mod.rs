@@ -154,6 +154,18 @@ impl Segment {
         Ok(())
     }
 
+    /// [`Segment::inject_fault`] at `now` (a master's clock may run ahead of the last time the
+    /// segment was given: a fault of the controller starts then, bus off included).
+    pub fn inject_fault_at(
+        &mut self,
+        inverter: Inverter,
+        error: &str,
+        now: Duration,
+    ) -> Result<(), String> {
+        self.now = self.now.max(now);
+        self.inject_fault(inverter, error)
+    }
+
     /// The error frames the segment's faults caused since the last call, with their time, as a
     /// listener's controller reports them (`CAN_ERR_FLAG` frames of SocketCAN; none unless a
     /// case injected [`ERROR_FRAMES`]). At most the last 1024 are kept.
