@@ -357,7 +357,83 @@ impl CanLink for Socketcand {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proto::can::socketcan::ErrorClass;
     use sim::device::DeviceConfig;
+
+    /// Reads `stream` up to the end of the next message.
+    fn read_message(stream: &mut TcpStream) -> String {
+        let mut text = Vec::new();
+        let mut byte = [0u8; 1];
+        while !text.ends_with(b">") {
+            assert_eq!(stream.read(&mut byte).unwrap(), 1, "the client went");
+            text.push(byte[0]);
+        }
+        String::from_utf8(text).unwrap()
+    }
+
+    /// A socketcand server on a port of its own: the greeting, `< ok >` to `open` and
+    /// `rawmode`, then for the first `send` the harness writes, `answer`.
+    fn server(answer: &'static str) -> std::net::SocketAddr {
+        let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap();
+        std::thread::spawn(move || {
+            let (mut s, _) = listener.accept().unwrap();
+            s.write_all(b"< hi >").unwrap();
+            for _ in 0..2 {
+                read_message(&mut s);
+                s.write_all(b"< ok >").unwrap();
+            }
+            assert!(read_message(&mut s).contains("send"));
+            s.write_all(answer.as_bytes()).unwrap();
+            // Held open until the client goes.
+            let _ = s.read(&mut [0u8; 16]);
+        });
+        addr
+    }
+
+    #[test]
+    fn an_error_frame_is_reported_apart_and_the_sdo_client_reads_on() {
+        // A bus error (class 088h) before the node's answer, and one in BCM form after it.
+        let addr = server(
+            "< error 088 1.000000 >< frame 5A0 1.000100 4300100000000000 >\
+             < error 20000004 1.000200 00 20 00 00 00 00 00 00 >",
+        );
+        let limit = Duration::from_secs(5);
+        let link = Socketcand::connect(addr, "can0", limit).unwrap();
+        let mut client = super::super::sdo::Client::new(link, limit);
+        assert_eq!(client.upload(32, 0x1000, 0).unwrap(), [0, 0, 0, 0]);
+        // Nothing more comes as a frame; both error frames are reported.
+        assert_eq!(client.link.recv(Duration::from_millis(200)).unwrap(), None);
+        let errors = client.link.take_error_frames();
+        assert_eq!(errors.len(), 2, "{errors:?}");
+        assert_eq!(errors[0].class, ErrorClass(0x088));
+        assert_eq!(errors[0].data, [0; 8], "raw mode gives the class alone");
+        assert_eq!(errors[1].controller(), Some(0x20));
+        assert!(client.link.take_error_frames().is_empty());
+    }
+
+    #[test]
+    fn the_embedded_segment_reports_its_error_frames_apart() {
+        let segment = Segment::new(DeviceConfig::new(proto::nord::Product::Sk550p)).unwrap();
+        let mut link = Embedded::new(segment);
+        while link.recv(Duration::ZERO).unwrap().is_some() {}
+        let fi2 = proto::nord::Inverter::new(2).unwrap();
+        let (segment, now) = link.segment().unwrap();
+        segment
+            .inject_fault_at(fi2, sim::can::ERROR_FRAMES, now)
+            .unwrap();
+        let req = CanFrame::new(0x600 + 34, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]).unwrap();
+        link.send(&req).unwrap();
+        let answer = link.recv(Duration::ZERO).unwrap().unwrap();
+        assert_eq!(answer.id(), 0x580 + 34);
+        let errors = link.take_error_frames();
+        assert_eq!(errors.len(), usize::from(sim::can::BURST));
+        assert!(errors.iter().all(|e| *e == sim::can::bus_error()));
+        assert_eq!(
+            super::super::binding::error_frame_hex(&errors[0]),
+            "error 088 00 00 04 0A 00 00 00 00"
+        );
+    }
 
     #[test]
     fn the_embedded_segment_boots_and_answers_on_its_clock() {
