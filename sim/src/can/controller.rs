@@ -23,7 +23,9 @@
 //!   (the node's software restarts its controller after 200 ms, as Linux's `restart-ms` or a
 //!   CANopen stack's timer would; ISO 11898-1's 5.632 ms is the least it could be). On recovery
 //!   the node sends EMCY 8140h and its heartbeat resumes; what it missed meanwhile it missed
-//!   (the consumed heartbeat too: its inverter's P120 monitoring counts that silence).
+//!   (the consumed heartbeat too: its inverter's P120 monitoring counts that silence), and
+//!   what it had to send meanwhile is lost (no transmit queue is kept: an EMCY of an error
+//!   that came while bus off is not sent; 8140h carries the error register with it).
 //! - [`ERROR_FRAMES`]: the node's transceiver destroys its next [`BURST`] transmission attempts
 //!   (the first frame it sends after the injection, retransmitted each time), then the frame
 //!   goes through: TEC + 8 · 8 − 1. Each destroyed attempt is reported by every other node's

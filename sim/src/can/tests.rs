@@ -822,3 +822,43 @@ fn error_passive_sends_emcy_8120h_and_serves_on() {
     let request = frame(0x620, &upload(0x1000, 0));
     assert_eq!(one.receive(&request, MS).len(), 1, "node 32 still answers");
 }
+
+/// Bus off, a node hears nothing either: its inverter's P120 monitoring counts that silence
+/// as it counts any (BU 0620 §5.3: E10.0 with 7583h behind the SK 550P), here where the
+/// consumer time is shorter than the time bus off; with the factory 600 ms it does not trip.
+#[test]
+fn a_node_bus_off_hears_nothing_and_its_p120_monitoring_counts_the_silence() {
+    let mut s = segment();
+    // FI 3 (node 36) watches FI 1's heartbeat (node 32) for 150 ms (1016h:01), FI 2 (node 34)
+    // for the factory 600 ms; both P120 [-01] = 1 "Auto". FI 1 beats every 50 ms.
+    let consumer = [0x23, 0x16, 0x10, 0x01, 150, 0, 32, 0];
+    assert!(matches!(
+        sdo(&mut s, 36, consumer),
+        SdoResponse::InitiateDownload { .. }
+    ));
+    assert!(matches!(
+        sdo(&mut s, 32, [0x2B, 0x17, 0x10, 0, 50, 0, 0, 0]),
+        SdoResponse::InitiateDownload { .. }
+    ));
+    run(&mut s, 2, 300);
+    assert_eq!(p700(&mut s, 3), (0, 0), "heartbeats keep it quiet");
+    for fi in [2, 3] {
+        let fi = Inverter::new(fi).unwrap();
+        assert_eq!(s.inject_fault(fi, super::BUS_OFF), Ok(()));
+    }
+    let out = run(&mut s, 301, 700);
+    assert_eq!(p700(&mut s, 3), (100, 0x7583), "E10.0 after 150 ms unheard");
+    assert_eq!(p700(&mut s, 2), (0, 0), "200 ms bus off < 600 ms");
+    // Neither sent anything while bus off; back at 500 ms each sends EMCY 8140h, FI 3's
+    // error register with its error (generic) and the communication bit.
+    let emcy: Vec<&(u64, CanFrame)> = out
+        .iter()
+        .filter(|(_, f)| [0x0A2, 0x0A4].contains(&f.id()))
+        .collect();
+    assert_eq!(emcy.len(), 2, "{emcy:?}");
+    assert!(emcy
+        .iter()
+        .all(|(t, f)| *t == 500 && f.data()[..2] == [0x40, 0x81]));
+    assert_eq!(emcy[0].1.data()[2], 0x11);
+    assert_eq!(emcy[1].1.data()[2] & 0x11, 0x11);
+}
