@@ -24,8 +24,8 @@
 //!   CANopen stack's timer would; ISO 11898-1's 5.632 ms is the least it could be). On recovery
 //!   the node sends EMCY 8140h and its heartbeat resumes; what it missed meanwhile it missed
 //!   (the consumed heartbeat too: its inverter's P120 monitoring counts that silence), and
-//!   what it had to send meanwhile is lost (no transmit queue is kept: an EMCY of an error
-//!   that came while bus off is not sent; 8140h carries the error register with it).
+//!   what it had to send meanwhile is lost (its heartbeats, answers), except the EMCY of an
+//!   inverter error that came while bus off: sent once it is back, after its 8140h.
 //! - [`ERROR_FRAMES`]: the node's transceiver destroys its next [`BURST`] transmission attempts
 //!   (the first frame it sends after the injection, retransmitted each time), then the frame
 //!   goes through: TEC + 8 · 8 − 1. Each destroyed attempt is reported by every other node's
@@ -37,6 +37,12 @@
 //!   bring it back to error active); EMCY 8120h at once. No EMCY when it is error active again
 //!   (CiA 301 leaves it open).
 //! - [`BUS_OFF`]: the TEC above 255 at once: the node is bus off from the injection on.
+//!
+//! What the manuals state: an SK 5x0P inverter (the SK 550P's FI 1…8) whose CAN is bus off
+//! reports E10.0 with P700 [-04] 7585h "CAN in Bus Off state" (BU 0620 §5.3 p. 94), when it
+//! goes bus off (`Segment`; unless an error is present or P513 ignores communication errors).
+//! For the SK 54xE behind a module the manuals here do not say: the simulated one reports
+//! nothing for its own bus off (only its P120 monitoring of the silence).
 
 use std::time::Duration;
 
@@ -96,6 +102,8 @@ pub(super) struct Controller {
     passive: bool,
     /// An EMCY to send (8120h, 8140h) at the node's next chance.
     emcy: Option<u16>,
+    /// Went bus off since [`Controller::went_bus_off`] last said so.
+    went_off: bool,
 }
 
 impl Controller {
@@ -112,6 +120,11 @@ impl Controller {
             _ => return false,
         }
         true
+    }
+
+    /// Whether the controller went bus off since the last call (once per bus off).
+    pub(super) fn went_bus_off(&mut self) -> bool {
+        std::mem::take(&mut self.went_off)
     }
 
     /// Bus off: takes no part in the bus.
@@ -174,7 +187,10 @@ impl Controller {
         self.tec = BUS_OFF_FROM;
         self.corrupt = 0;
         self.emcy = None;
-        self.off_since.get_or_insert(now);
+        if self.off_since.is_none() {
+            self.off_since = Some(now);
+            self.went_off = true;
+        }
     }
 
     /// Error passive or active as the TEC stands; entering error passive makes EMCY 8120h due.
@@ -251,6 +267,10 @@ mod tests {
         let mut errors = Vec::new();
         assert!(c.inject(BUS_OFF, 10 * MS));
         assert!(c.is_bus_off());
+        assert!(c.went_bus_off());
+        assert!(!c.went_bus_off(), "once");
+        c.inject(BUS_OFF, 20 * MS);
+        assert!(!c.went_bus_off(), "still the same bus off");
         assert_eq!(c.transmit(frame(), 11 * MS, &mut errors), None);
         assert!(
             errors.is_empty(),

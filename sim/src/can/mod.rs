@@ -56,6 +56,7 @@ use proto::nord::can::{InverterSeries, SystemBusAddress};
 use proto::nord::{ArrayElement, Family, Inverter, ParamNumber, Product};
 
 use crate::device::{Device, DeviceConfig};
+use crate::drive::FaultCode;
 use crate::link::Unit;
 use controller::Controller;
 pub use controller::{
@@ -108,6 +109,8 @@ pub struct Segment {
     now: Duration,
     /// P700 [-01] of each inverter as last seen, for EMCY.
     faults: [i32; 8],
+    /// Its inverters report their own bus off (E10.0, 7585h: the SK 550P's SK 5x0P).
+    reports_bus_off: bool,
 }
 
 impl Segment {
@@ -129,6 +132,7 @@ impl Segment {
             controllers: vec![Controller::default(); nodes.len()],
             errors: Vec::new(),
             now: Duration::ZERO,
+            reports_bus_off: series(config.product) == InverterSeries::Sk5x0p,
             nodes,
             off_bus: Vec::new(),
             faults: [0; 8],
@@ -148,10 +152,39 @@ impl Segment {
         };
         if error != OFF_BUS {
             self.controllers[i].inject(error, self.now);
+            self.bus_off_errors();
         } else if !self.off_bus.contains(&inverter) {
             self.off_bus.push(inverter);
         }
         Ok(())
+    }
+
+    /// An SK 5x0P whose node went bus off reports E10.0 with P700 [-04] 7585h "CAN in Bus Off
+    /// state" (BU 0620 §5.3 p. 94), unless an error is present or P513 ignores communication
+    /// errors ([`Device::raise`]); the node, bus off, cannot send its EMCY.
+    fn bus_off_errors(&mut self) {
+        for i in 0..self.nodes.len() {
+            if !self.controllers[i].went_bus_off() || !self.reports_bus_off {
+                continue;
+            }
+            let fi = self.nodes[i].inverter();
+            let cause = proto::nord::can::CanCause::BusOff;
+            let code = FaultCode { group: 10, sub: 0 };
+            let p700 = |d: &mut Device| {
+                d.store(Unit::Inverter(fi))
+                    .ok()
+                    .and_then(|s| s.read(P700, None, ArrayElement::new(1).ok()).ok())
+            };
+            let before = p700(&mut self.device);
+            if self.device.raise(fi, code).is_err() {
+                continue;
+            }
+            if before == Some(0) && p700(&mut self.device) == Some(i32::from(cause.p700())) {
+                if let Ok(store) = self.device.store(Unit::Inverter(fi)) {
+                    store.set_info(700, 4, i32::from(cause.ds402()));
+                }
+            }
+        }
     }
 
     /// [`Segment::inject_fault`] at `now` (a master's clock may run ahead of the last time the
@@ -225,6 +258,7 @@ impl Segment {
                 self.transmit(i, answers, now, &mut out);
             }
         }
+        self.bus_off_errors();
         self.overheard(&out, now);
         self.look(now);
         self.emergencies(&mut out);
@@ -250,6 +284,7 @@ impl Segment {
                 self.transmit(i, frames, now, &mut out);
             }
         }
+        self.bus_off_errors();
         self.overheard(&out, now);
         self.look(now);
         self.emergencies(&mut out);
@@ -257,7 +292,10 @@ impl Segment {
     }
 
     /// An EMCY for each inverter error that appeared or went.
+    /// A node bus off sends its EMCY once it is back (after its 8140h): the change is left
+    /// unseen until then. Off the bus (its cable pulled) the EMCY is lost.
     fn emergencies(&mut self, out: &mut Vec<CanFrame>) {
+        let before = self.faults;
         for (fi, value) in self.device.fault_changes(&mut self.faults) {
             let extended = self
                 .device
@@ -268,7 +306,12 @@ impl Segment {
             let Some(i) = self.nodes.iter().position(|n| n.inverter() == fi) else {
                 continue;
             };
-            // Off the bus or bus off, the node still keeps its error register.
+            if self.controllers[i].is_bus_off() {
+                let k = usize::from(fi.get() - 1);
+                self.faults[k] = before[k];
+                continue;
+            }
+            // Off the bus, the node still keeps its error register.
             let emcy = self.nodes[i].emergency(value, extended);
             if self.takes_part(i) {
                 self.transmit(i, emcy.into_iter().collect(), self.now, out);

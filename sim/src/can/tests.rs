@@ -756,11 +756,15 @@ fn a_node_bus_off_is_silent_then_recovers_with_emcy_8140h() {
         &frame(0x0A2, &[0x40, 0x81, 0x11, 0, 0, 0, 0, 0])
     );
     assert_eq!(from_34[1], &frame(0x722, &[0x7F]));
-    assert!(from_34.len() >= 3, "heartbeats again: {from_34:?}");
+    assert!(from_34.len() >= 4, "heartbeats again: {from_34:?}");
+    // And the EMCY of the E10.0 the SK 5x0P reported when it went bus off (7585h, BU 0620
+    // §5.3), held back until then.
+    assert_eq!(from_34[2].id(), 0x0A2);
+    assert_eq!(from_34[2].data()[..2], [0x85, 0x75]);
     assert_eq!(
         from_34.iter().filter(|f| f.id() == 0x0A2).count(),
-        1,
-        "one EMCY"
+        2,
+        "two EMCY"
     );
     assert!(matches!(
         sdo(&mut s, 34, upload(0x1000, 0)),
@@ -824,41 +828,78 @@ fn error_passive_sends_emcy_8120h_and_serves_on() {
 }
 
 /// Bus off, a node hears nothing either: its inverter's P120 monitoring counts that silence
-/// as it counts any (BU 0620 §5.3: E10.0 with 7583h behind the SK 550P), here where the
-/// consumer time is shorter than the time bus off; with the factory 600 ms it does not trip.
+/// as it counts any, here where the consumer time (150 ms) is shorter than the time bus off;
+/// with the factory 600 ms it does not trip. Behind a module (SK TU3-EIP: E10.8), whose SK 54xE
+/// reports nothing for its own bus off.
 #[test]
 fn a_node_bus_off_hears_nothing_and_its_p120_monitoring_counts_the_silence() {
-    let mut s = segment();
-    // FI 3 (node 36) watches FI 1's heartbeat (node 32) for 150 ms (1016h:01), FI 2 (node 34)
-    // for the factory 600 ms; both P120 [-01] = 1 "Auto". FI 1 beats every 50 ms.
-    let consumer = [0x23, 0x16, 0x10, 0x01, 150, 0, 32, 0];
+    let mut s = Segment::new(DeviceConfig::new(Product::Tu3Eip)).unwrap();
+    s.poll(Duration::ZERO);
+    // FI 1 (node 32) watches the module's heartbeat (node 1) for 150 ms (1016h:01), FI 2
+    // (node 34) for the factory 600 ms; both P120 [-01] = 1 "Auto". The module beats every
+    // 50 ms (operational, 05h).
+    let consumer = [0x23, 0x16, 0x10, 0x01, 150, 0, 1, 0];
     assert!(matches!(
-        sdo(&mut s, 36, consumer),
+        sdo(&mut s, 32, consumer),
         SdoResponse::InitiateDownload { .. }
     ));
-    assert!(matches!(
-        sdo(&mut s, 32, [0x2B, 0x17, 0x10, 0, 50, 0, 0, 0]),
-        SdoResponse::InitiateDownload { .. }
-    ));
-    run(&mut s, 2, 300);
-    assert_eq!(p700(&mut s, 3), (0, 0), "heartbeats keep it quiet");
-    for fi in [2, 3] {
+    let mut out = Vec::new();
+    let beat_until = |s: &mut Segment, from: u64, to: u64, out: &mut Vec<(u64, CanFrame)>| {
+        for t in from..=to {
+            if t % 50 == 0 {
+                out.extend(
+                    s.receive(&frame(0x701, &[0x05]), Duration::from_millis(t))
+                        .into_iter()
+                        .map(|f| (t, f)),
+                );
+            }
+            out.extend(s.poll(Duration::from_millis(t)).into_iter().map(|f| (t, f)));
+        }
+    };
+    beat_until(&mut s, 2, 300, &mut out);
+    assert!(out.is_empty(), "{out:?}");
+    for fi in [1, 2] {
         let fi = Inverter::new(fi).unwrap();
         assert_eq!(s.inject_fault(fi, super::BUS_OFF), Ok(()));
     }
-    let out = run(&mut s, 301, 700);
-    assert_eq!(p700(&mut s, 3), (100, 0x7583), "E10.0 after 150 ms unheard");
+    assert_eq!(
+        p700(&mut s, 1),
+        (0, 0),
+        "an SK 54xE reports nothing for bus off"
+    );
+    beat_until(&mut s, 301, 700, &mut out);
+    assert_eq!(p700(&mut s, 1).0, 108, "E10.8 after 150 ms unheard");
     assert_eq!(p700(&mut s, 2), (0, 0), "200 ms bus off < 600 ms");
-    // Neither sent anything while bus off; back at 500 ms each sends EMCY 8140h, FI 3's
-    // error register with its error (generic) and the communication bit.
-    let emcy: Vec<&(u64, CanFrame)> = out
-        .iter()
-        .filter(|(_, f)| [0x0A2, 0x0A4].contains(&f.id()))
-        .collect();
-    assert_eq!(emcy.len(), 2, "{emcy:?}");
-    assert!(emcy
-        .iter()
-        .all(|(t, f)| *t == 500 && f.data()[..2] == [0x40, 0x81]));
-    assert_eq!(emcy[0].1.data()[2], 0x11);
-    assert_eq!(emcy[1].1.data()[2] & 0x11, 0x11);
+    // Neither sent anything while bus off; back at 500 ms each sends EMCY 8140h (FI 1's error
+    // register with its error and the communication bit), then FI 1 the EMCY of E10.8.
+    assert!(out.iter().all(|(t, _)| *t == 500), "{out:?}");
+    let ids: Vec<u16> = out.iter().map(|(_, f)| f.id()).collect();
+    assert_eq!(ids, [0x0A0, 0x0A2, 0x0A0]);
+    assert!(out[..2].iter().all(|(_, f)| f.data()[..2] == [0x40, 0x81]));
+    assert_eq!(out[1].1.data()[2], 0x11);
+    assert_eq!(out[0].1.data()[2] & 0x11, 0x11);
+    assert_ne!(out[2].1.data()[..2], [0x40, 0x81]);
+    assert_eq!(&out[2].1.data()[3..5], &108u16.to_le_bytes());
+}
+
+/// BU 0620 §5.3 (p. 94): an SK 5x0P whose CAN is bus off reports E10.0 with 7585h "CAN in Bus
+/// Off state"; its EMCY cannot go while bus off: it follows 8140h once the node is back.
+#[test]
+fn behind_the_sk_550p_an_inverter_bus_off_reports_e10_0_with_7585h() {
+    let mut s = segment();
+    let fi2 = Inverter::new(2).unwrap();
+    assert_eq!(s.inject_fault(fi2, super::BUS_OFF), Ok(()));
+    assert_eq!(p700(&mut s, 2), (100, 0x7585));
+    assert_eq!(p700(&mut s, 3), (0, 0));
+    let out = run(&mut s, 1, 300);
+    let from_34: Vec<&(u64, CanFrame)> = out.iter().filter(|(_, f)| f.id() == 0x0A2).collect();
+    assert_eq!(from_34.len(), 2, "{out:?}");
+    assert!(from_34.iter().all(|(t, _)| *t == 200));
+    assert_eq!(from_34[0].1.data()[..2], [0x40, 0x81]);
+    assert_eq!(from_34[0].1.data()[2] & 0x11, 0x11);
+    // 7585h, error register, then P700 = 100 and FI 2 (the EMCY of `objects::emergency_of`).
+    assert_eq!(from_34[1].1.data()[..2], [0x85, 0x75]);
+    // A second bus off while the error stands changes nothing in P700.
+    s.inject_fault(fi2, super::BUS_OFF).unwrap();
+    assert_eq!(p700(&mut s, 2), (100, 0x7585));
 }
