@@ -38,7 +38,8 @@
 //! - Faults of the bus a case injects (`inject: { inverter: N, error: … }`): [`OFF_BUS`] (the
 //!   node's cable pulled), and its CAN controller's: [`BUS_OFF`], [`ERROR_PASSIVE`] and
 //!   [`ERROR_FRAMES`] by ISO 11898-1's fault confinement, with CiA 301's EMCY 8120h and 8140h
-//!   (`controller`, with the choices the standards leave open). The error frames a listener
+//!   (`controller`, with the choices the standards leave open), and an SK 5x0P's E10.0 with
+//!   7585h "CAN in Bus Off state" when its node goes bus off (BU 0620 §5.3 p. 94). The error frames a listener
 //!   sees are kept apart from the frames ([`Segment::take_error_frames`]).
 
 mod controller;
