@@ -32,6 +32,7 @@ use crate::hex::hex;
 use crate::outcome::{Exchange, Identity, Refusal};
 use crate::profile::Capability;
 use crate::suite::{Action, OrderSpec};
+use proto::can::socketcan::ErrorFrame;
 use proto::can::CanFrame;
 
 /// What the embedded segment offers: parameters over SDO, process data over PDOs, `can:`
@@ -378,6 +379,8 @@ impl<L: CanLink> CanBinding<L> {
 
     /// A `can:` step: its frame on the bus, then every frame for its time.
     fn can_step(&mut self, step: &CanStep) -> Result<Value, StepError> {
+        // Error frames from before the step (an SDO read's time) are not this step's.
+        let _ = self.client.link.take_error_frames();
         let sent = match &step.send {
             Some(s) => {
                 let f = s.frame(self.node).map_err(StepError::Suite)?;
@@ -406,6 +409,7 @@ impl<L: CanLink> CanBinding<L> {
                 break;
             }
         }
+        let errors = self.client.link.take_error_frames();
         let abort = frames.iter().find_map(|f| {
             let d = f.data();
             ((0x581..=0x5FF).contains(&f.id()) && d.len() == 8 && d[0] == 0x80)
@@ -425,23 +429,38 @@ impl<L: CanLink> CanBinding<L> {
                     .to_string()
             })
             .collect();
+        let error_frames: Vec<String> = errors.iter().map(error_frame_hex).collect();
+        let with_errors = |text: String, each: fn(&ErrorFrame) -> String| {
+            let errors = errors.iter().map(each);
+            std::iter::once(text)
+                .filter(|t| !t.is_empty())
+                .chain(errors)
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
         self.client.record(Exchange {
             sent_hex: sent.as_ref().map(can_frame).unwrap_or_default(),
             sent: sent.as_ref().map_or_else(|| "(listening)".into(), describe),
-            received_hex: joined(can_frame),
-            received: if frames.is_empty() {
+            received_hex: with_errors(joined(can_frame), error_frame_hex),
+            received: if frames.is_empty() && errors.is_empty() {
                 "(nothing received)".into()
             } else {
-                joined(describe)
+                with_errors(joined(describe), |e| format!("error frame {:?}", e.class))
             },
         });
-        Ok(json!({
+        let mut fields = json!({
             "answered": !frames.is_empty(),
             "count": frames.len(),
             "frames": joined(can_frame),
             "from_node": from_node.join("; "),
             "abort": abort,
-        }))
+        });
+        // Only when there were any: a step on a bus without errors shows what it always did.
+        if !errors.is_empty() {
+            fields["error_frames"] = json!(error_frames.join("; "));
+            fields["error_count"] = json!(errors.len());
+        }
+        Ok(fields)
     }
 
     /// FI 1's identity object 1018h (vendor, product code, revision, serial) and its device
@@ -516,9 +535,9 @@ impl<L: CanLink> Binding for CanBinding<L> {
             }
             Action::Process { .. } | Action::Wait(_) => self.process(action)?,
             Action::Inject { inverter, error } => {
-                self.simulated()?
-                    .0
-                    .inject_fault(*inverter, error)
+                let (segment, now) = self.simulated()?;
+                segment
+                    .inject_fault_at(*inverter, error, now)
                     .map_err(StepError::Refused)?;
                 json!({})
             }
@@ -570,4 +589,11 @@ impl<L: CanLink> Binding for CanBinding<L> {
         self.ledger = Some(Ledger::default());
         account.into_result().map_err(CleanupError)
     }
+}
+
+/// An error frame as a `can:` step shows it, apart from the frames: `error`, its class
+/// (`can_id` & `CAN_ERR_MASK`, hex, as socketcand writes it: `< error 088 … >`) and its 8 data
+/// bytes (zero where raw-mode socketcand leaves them out): `error 088 00 00 04 0A 00 00 00 00`.
+pub(super) fn error_frame_hex(e: &ErrorFrame) -> String {
+    format!("error {:03X} {}", e.class.0, hex(&e.data))
 }

@@ -9,11 +9,15 @@ use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
+use proto::can::socketcan::ErrorFrame;
 use proto::can::socketcand::{Framed, Message, MAX_MESSAGE_LEN};
 use proto::can::CanFrame;
 use sim::can::Segment;
 
 use crate::pcap::{SharedTap, Stamper};
+
+/// The most error frames a link keeps for [`CanLink::take_error_frames`].
+const MAX_ERROR_FRAMES: usize = 1024;
 
 /// Why a link failed.
 #[derive(Debug, thiserror::Error)]
@@ -57,6 +61,13 @@ pub(crate) trait CanLink {
     /// on its clock.
     fn segment(&mut self) -> Option<(&mut Segment, Duration)> {
         None
+    }
+    /// The error frames the link reported since the last call (SocketCAN's `CAN_ERR_FLAG`
+    /// frames: a controller's report of a bus error, no node's frame; socketcand forwards them
+    /// as `< error CLASS TIME >`, the simulated segment keeps them apart). [`CanLink::recv`]
+    /// never returns one: they are reported here and otherwise ignored. At most the last 1024.
+    fn take_error_frames(&mut self) -> Vec<ErrorFrame> {
+        Vec::new()
     }
 }
 
@@ -129,6 +140,12 @@ impl CanLink for Embedded {
         self.deliver();
         Some((&mut self.segment, self.now))
     }
+
+    fn take_error_frames(&mut self) -> Vec<ErrorFrame> {
+        self.deliver();
+        let errors = self.segment.take_error_frames();
+        errors.into_iter().map(|(_, e)| e).collect()
+    }
 }
 
 /// A link whose frames also go to the run's capture (`--pcap`), both ways, on its CAN
@@ -173,6 +190,10 @@ impl<L: CanLink> CanLink for Tapped<L> {
     fn segment(&mut self) -> Option<(&mut Segment, Duration)> {
         self.inner.segment()
     }
+
+    fn take_error_frames(&mut self) -> Vec<ErrorFrame> {
+        self.inner.take_error_frames()
+    }
 }
 
 /// A socketcand server's channel in raw mode: every frame on that bus comes to the harness.
@@ -181,6 +202,8 @@ pub(crate) struct Socketcand {
     stream: TcpStream,
     buf: Vec<u8>,
     since: Instant,
+    /// The error frames the server forwarded since [`CanLink::take_error_frames`].
+    errors: Vec<ErrorFrame>,
 }
 
 impl Socketcand {
@@ -203,6 +226,7 @@ impl Socketcand {
             stream,
             buf: Vec::new(),
             since: Instant::now(),
+            errors: Vec::new(),
         };
         link.expect(Message::Hi, limit, "the greeting `< hi >`")?;
         link.write(&Message::Open {
@@ -292,6 +316,10 @@ impl CanLink for Socketcand {
         Ok(self.recv_stamped(limit)?.map(|(_, f)| f))
     }
 
+    fn take_error_frames(&mut self) -> Vec<ErrorFrame> {
+        std::mem::take(&mut self.errors)
+    }
+
     fn recv_stamped(
         &mut self,
         limit: Duration,
@@ -305,7 +333,20 @@ impl CanLink for Socketcand {
                         Duration::from_secs(time.secs) + Duration::from_micros(time.usecs.into());
                     return Ok(Some((at, frame)));
                 }
-                // Error frames and replies to nothing the harness asked are not frames.
+                // An error frame is reported, not taken for a frame (raw mode gives its class
+                // alone; BCM mode adds the data).
+                Some(Message::ErrorFrame { class, data, .. }) => {
+                    let mut bytes = [0; 8];
+                    bytes
+                        .iter_mut()
+                        .zip(&data)
+                        .for_each(|(to, from)| *to = *from);
+                    if self.errors.len() == MAX_ERROR_FRAMES {
+                        self.errors.remove(0);
+                    }
+                    self.errors.push(ErrorFrame { class, data: bytes });
+                }
+                // Replies to nothing the harness asked are not frames.
                 Some(_) => continue,
                 None => return Ok(None),
             }
@@ -316,7 +357,83 @@ impl CanLink for Socketcand {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proto::can::socketcan::ErrorClass;
     use sim::device::DeviceConfig;
+
+    /// Reads `stream` up to the end of the next message.
+    fn read_message(stream: &mut TcpStream) -> String {
+        let mut text = Vec::new();
+        let mut byte = [0u8; 1];
+        while !text.ends_with(b">") {
+            assert_eq!(stream.read(&mut byte).unwrap(), 1, "the client went");
+            text.push(byte[0]);
+        }
+        String::from_utf8(text).unwrap()
+    }
+
+    /// A socketcand server on a port of its own: the greeting, `< ok >` to `open` and
+    /// `rawmode`, then for the first `send` the harness writes, `answer`.
+    fn server(answer: &'static str) -> std::net::SocketAddr {
+        let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap();
+        std::thread::spawn(move || {
+            let (mut s, _) = listener.accept().unwrap();
+            s.write_all(b"< hi >").unwrap();
+            for _ in 0..2 {
+                read_message(&mut s);
+                s.write_all(b"< ok >").unwrap();
+            }
+            assert!(read_message(&mut s).contains("send"));
+            s.write_all(answer.as_bytes()).unwrap();
+            // Held open until the client goes.
+            let _ = s.read(&mut [0u8; 16]);
+        });
+        addr
+    }
+
+    #[test]
+    fn an_error_frame_is_reported_apart_and_the_sdo_client_reads_on() {
+        // A bus error (class 088h) before the node's answer, and one in BCM form after it.
+        let addr = server(
+            "< error 088 1.000000 >< frame 5A0 1.000100 4300100000000000 >\
+             < error 20000004 1.000200 00 20 00 00 00 00 00 00 >",
+        );
+        let limit = Duration::from_secs(5);
+        let link = Socketcand::connect(addr, "can0", limit).unwrap();
+        let mut client = super::super::sdo::Client::new(link, limit);
+        assert_eq!(client.upload(32, 0x1000, 0).unwrap(), [0, 0, 0, 0]);
+        // Nothing more comes as a frame; both error frames are reported.
+        assert_eq!(client.link.recv(Duration::from_millis(200)).unwrap(), None);
+        let errors = client.link.take_error_frames();
+        assert_eq!(errors.len(), 2, "{errors:?}");
+        assert_eq!(errors[0].class, ErrorClass(0x088));
+        assert_eq!(errors[0].data, [0; 8], "raw mode gives the class alone");
+        assert_eq!(errors[1].controller(), Some(0x20));
+        assert!(client.link.take_error_frames().is_empty());
+    }
+
+    #[test]
+    fn the_embedded_segment_reports_its_error_frames_apart() {
+        let segment = Segment::new(DeviceConfig::new(proto::nord::Product::Sk550p)).unwrap();
+        let mut link = Embedded::new(segment);
+        while link.recv(Duration::ZERO).unwrap().is_some() {}
+        let fi2 = proto::nord::Inverter::new(2).unwrap();
+        let (segment, now) = link.segment().unwrap();
+        segment
+            .inject_fault_at(fi2, sim::can::ERROR_FRAMES, now)
+            .unwrap();
+        let req = CanFrame::new(0x600 + 34, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]).unwrap();
+        link.send(&req).unwrap();
+        let answer = link.recv(Duration::ZERO).unwrap().unwrap();
+        assert_eq!(answer.id(), 0x580 + 34);
+        let errors = link.take_error_frames();
+        assert_eq!(errors.len(), usize::from(sim::can::BURST));
+        assert!(errors.iter().all(|e| *e == sim::can::bus_error()));
+        assert_eq!(
+            super::super::binding::error_frame_hex(&errors[0]),
+            "error 088 00 00 04 0A 00 00 00 00"
+        );
+    }
 
     #[test]
     fn the_embedded_segment_boots_and_answers_on_its_clock() {

@@ -533,3 +533,61 @@ fn close(hub: &Hub, id: u64, stream: &TcpStream) -> std::io::Result<()> {
     hub.clients().retain(|c| c.id != id);
     stream.shutdown(Shutdown::Both)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The next message of `stream`, skipping the frames of the bus.
+    fn next_reply(stream: &mut TcpStream, buf: &mut Vec<u8>) -> Message {
+        let mut chunk = [0u8; 256];
+        loop {
+            if let Ok(Framed::Complete { message, consumed }) = Message::parse(buf) {
+                buf.drain(..consumed);
+                return message;
+            }
+            let n = stream.read(&mut chunk).unwrap();
+            assert!(n > 0, "the server closed the connection");
+            buf.extend_from_slice(&chunk[..n]);
+        }
+    }
+
+    #[test]
+    fn an_error_frame_from_a_client_is_refused_and_the_segment_serves_on() {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let served =
+            Served::start(listener, config(Product::Sk550p, Some(2)), "can0".into()).unwrap();
+        let mut s = TcpStream::connect(served.addr).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+        let mut buf = Vec::new();
+        assert_eq!(next_reply(&mut s, &mut buf), Message::Hi);
+        s.write_all(b"< open can0 >< rawmode >").unwrap();
+        assert_eq!(next_reply(&mut s, &mut buf), Message::Ok);
+        assert_eq!(next_reply(&mut s, &mut buf), Message::Ok);
+        // An error frame is no frame a client can put on the bus (socketcand has no command
+        // for it): refused, the connection kept.
+        s.write_all(b"< error 088 1.000000 >").unwrap();
+        let reply = loop {
+            match next_reply(&mut s, &mut buf) {
+                Message::Frame { .. } => continue,
+                other => break other,
+            }
+        };
+        assert_eq!(
+            reply,
+            Message::Error {
+                text: "unknown command".into()
+            }
+        );
+        // Node 32 still answers an SDO upload of 1000h.
+        s.write_all(b"< send 620 8 40 0 10 0 0 0 0 0 >").unwrap();
+        let answer = loop {
+            match next_reply(&mut s, &mut buf) {
+                Message::Frame { frame, .. } if frame.id() == 0x5A0 => break frame,
+                _ => continue,
+            }
+        };
+        assert_eq!(answer.data()[..4], [0x43, 0x00, 0x10, 0x00]);
+        served.stop();
+    }
+}

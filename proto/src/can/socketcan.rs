@@ -183,6 +183,26 @@ pub mod crtl {
     pub const ACTIVE: u8 = 0x40;
 }
 
+/// Protocol violations in data\[2\] (type) and data\[3\] (location) of a [`ErrorClass::PROT`]
+/// error frame (`linux/can/error.h`, `CAN_ERR_PROT_*` and `CAN_ERR_PROT_LOC_*`); the ones the
+/// project names.
+pub mod prot {
+    /// data\[2\]: single bit error.
+    pub const BIT: u8 = 0x01;
+    /// data\[2\]: frame format error.
+    pub const FORM: u8 = 0x02;
+    /// data\[2\]: bit stuffing error.
+    pub const STUFF: u8 = 0x04;
+    /// data\[2\]: error occurred on transmission.
+    pub const TX: u8 = 0x80;
+    /// data\[3\]: in the CRC sequence.
+    pub const LOC_CRC_SEQ: u8 = 0x08;
+    /// data\[3\]: in the data field.
+    pub const LOC_DATA: u8 = 0x0A;
+    /// data\[3\]: in the ACK slot.
+    pub const LOC_ACK: u8 = 0x19;
+}
+
 /// An error frame: the class from `can_id`, the 8 data bytes (`CAN_ERR_DLC` = 8) whose meaning
 /// the class bits give.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -199,6 +219,14 @@ impl ErrorFrame {
         self.class
             .contains(ErrorClass::CRTL)
             .then_some(self.data[1])
+    }
+
+    /// data\[2\] and data\[3\], the protocol violation's type and location ([`prot`]), when
+    /// the class has [`ErrorClass::PROT`].
+    pub fn protocol(&self) -> Option<(u8, u8)> {
+        self.class
+            .contains(ErrorClass::PROT)
+            .then_some((self.data[2], self.data[3]))
     }
 
     /// data\[6\] and data\[7\], the TX and RX error counters, when the class has
@@ -394,6 +422,23 @@ mod tests {
             data: [0, 0, 0, 0, 0, 0, 96, 128],
         };
         assert_eq!(e.counters(), Some((96, 128)));
+        // A bus error: a stuff error in the data field, as a listener reports another node's
+        // destroyed frame; can_id 20000088h, data[2] 04h, data[3] 0Ah.
+        let bus = ErrorFrame {
+            class: ErrorClass(ErrorClass::PROT.0 | ErrorClass::BUSERROR.0),
+            data: [0, 0, prot::STUFF, prot::LOC_DATA, 0, 0, 0, 0],
+        };
+        let bytes = SocketCanRepr::Error(bus).to_bytes();
+        assert_eq!(
+            bytes,
+            [0x88, 0, 0, 0x20, 8, 0, 0, 0, 0, 0, 0x04, 0x0A, 0, 0, 0, 0]
+        );
+        assert_eq!(
+            SocketCanRepr::parse_bytes(&bytes),
+            Ok(SocketCanRepr::Error(bus))
+        );
+        assert_eq!(bus.protocol(), Some((prot::STUFF, prot::LOC_DATA)));
+        assert_eq!(e.protocol(), None);
         // The error flag wins over EFF and RTR.
         b[3] |= 0xC0;
         assert!(matches!(

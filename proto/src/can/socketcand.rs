@@ -565,6 +565,22 @@ mod tests {
             m.emit().unwrap(),
             "< error 004 1.000002 00 20 00 00 00 00 00 00  >"
         );
+        // Raw mode: a bus error (CAN_ERR_PROT | CAN_ERR_BUSERROR), as a listener reports
+        // another node's destroyed frame; the details stay behind in raw mode.
+        let bus = ErrorClass(ErrorClass::PROT.0 | ErrorClass::BUSERROR.0);
+        let m = one("< error 088 3.000250 >");
+        assert_eq!(
+            m,
+            Message::ErrorFrame {
+                class: bus,
+                time: Timestamp {
+                    secs: 3,
+                    usecs: 250
+                },
+                data: vec![],
+            }
+        );
+        assert_eq!(m.emit().unwrap(), "< error 088 3.000250 >");
         // A refusal whose first word happens to be hex is still text.
         assert_eq!(
             one("< error add failed >"),

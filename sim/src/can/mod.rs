@@ -35,7 +35,14 @@
 //! - The inverters' series: SK 5x0P behind the SK 550P (BU 0620 §2.1); behind a bus module
 //!   SK 54xE, whose five setpoints and actual values (BU 2100 §6.2.5, BU 2200 §6.3.4) the
 //!   simulator's drives take on the modules' other buses too.
+//! - Faults of the bus a case injects (`inject: { inverter: N, error: … }`): [`OFF_BUS`] (the
+//!   node's cable pulled), and its CAN controller's: [`BUS_OFF`], [`ERROR_PASSIVE`] and
+//!   [`ERROR_FRAMES`] by ISO 11898-1's fault confinement, with CiA 301's EMCY 8120h and 8140h
+//!   (`controller`, with the choices the standards leave open), and an SK 5x0P's E10.0 with
+//!   7585h "CAN in Bus Off state" when its node goes bus off (BU 0620 §5.3 p. 94). The error frames a listener
+//!   sees are kept apart from the frames ([`Segment::take_error_frames`]).
 
+mod controller;
 mod endpoint;
 mod node;
 #[cfg(test)]
@@ -43,13 +50,22 @@ mod tests;
 
 use std::time::Duration;
 
+use proto::can::socketcan::ErrorFrame;
 use proto::can::CanFrame;
 use proto::nord::can::{InverterSeries, SystemBusAddress};
 use proto::nord::{ArrayElement, Family, Inverter, ParamNumber, Product};
 
 use crate::device::{Device, DeviceConfig};
+use crate::drive::FaultCode;
 use crate::link::Unit;
+use controller::Controller;
+pub use controller::{
+    bus_error, BURST, BUS_OFF, ERROR_FRAMES, ERROR_PASSIVE, MIN_RECOVERY, RECOVERY,
+};
 use node::Node;
+
+/// The most error frames the segment keeps for [`Segment::take_error_frames`].
+const MAX_ERROR_FRAMES: usize = 1024;
 
 /// Why a segment cannot be built.
 #[derive(Debug, thiserror::Error)]
@@ -85,8 +101,16 @@ pub struct Segment {
     nodes: Vec<Node>,
     /// The inverters whose nodes are off the segment ([`OFF_BUS`]).
     off_bus: Vec<Inverter>,
+    /// Each node's CAN controller, in node order.
+    controllers: Vec<Controller>,
+    /// The error frames since [`Segment::take_error_frames`], with their time.
+    errors: Vec<(Duration, ErrorFrame)>,
+    /// The latest time the segment was given.
+    now: Duration,
     /// P700 [-01] of each inverter as last seen, for EMCY.
     faults: [i32; 8],
+    /// Its inverters report their own bus off (E10.0, 7585h: the SK 550P's SK 5x0P).
+    reports_bus_off: bool,
 }
 
 impl Segment {
@@ -105,33 +129,104 @@ impl Segment {
             .collect::<Result<Vec<_>, SegmentError>>()?;
         Ok(Segment {
             device: Device::new(config),
+            controllers: vec![Controller::default(); nodes.len()],
+            errors: Vec::new(),
+            now: Duration::ZERO,
+            reports_bus_off: series(config.product) == InverterSeries::Sk5x0p,
             nodes,
             off_bus: Vec::new(),
             faults: [0; 8],
         })
     }
 
-    /// Raises `error` on `inverter`: [`OFF_BUS`] takes its node off the segment, anything else
-    /// is the device's fault ([`Device::inject_fault`]).
+    /// Raises `error` on `inverter`: [`OFF_BUS`] takes its node off the segment, [`BUS_OFF`],
+    /// [`ERROR_PASSIVE`] and [`ERROR_FRAMES`] are its controller's, anything else is the
+    /// device's fault ([`Device::inject_fault`]: an inverter error, or the interface's own
+    /// controller, `bus-off`, `bus-warning`).
     pub fn inject_fault(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
-        if error != OFF_BUS {
+        if ![OFF_BUS, BUS_OFF, ERROR_PASSIVE, ERROR_FRAMES].contains(&error) {
             return self.device.inject_fault(inverter, error);
         }
-        if !self.nodes.iter().any(|n| n.inverter() == inverter) {
+        let Some(i) = self.nodes.iter().position(|n| n.inverter() == inverter) else {
             return Err(format!("FI {} is not on the system bus", inverter.get()));
-        }
-        if !self.off_bus.contains(&inverter) {
+        };
+        if error != OFF_BUS {
+            self.controllers[i].inject(error, self.now);
+            self.bus_off_errors();
+        } else if !self.off_bus.contains(&inverter) {
             self.off_bus.push(inverter);
         }
         Ok(())
     }
 
-    /// The nodes still on the segment.
-    fn on_bus(&mut self) -> impl Iterator<Item = &mut Node> {
-        let off = &self.off_bus;
-        self.nodes
-            .iter_mut()
-            .filter(move |n| !off.contains(&n.inverter()))
+    /// An SK 5x0P whose node went bus off reports E10.0 with P700 [-04] 7585h "CAN in Bus Off
+    /// state" (BU 0620 §5.3 p. 94), unless an error is present or P513 ignores communication
+    /// errors ([`Device::raise`]); the node, bus off, cannot send its EMCY.
+    fn bus_off_errors(&mut self) {
+        for i in 0..self.nodes.len() {
+            if !self.controllers[i].went_bus_off() || !self.reports_bus_off {
+                continue;
+            }
+            let fi = self.nodes[i].inverter();
+            let cause = proto::nord::can::CanCause::BusOff;
+            let code = FaultCode { group: 10, sub: 0 };
+            let p700 = |d: &mut Device| {
+                d.store(Unit::Inverter(fi))
+                    .ok()
+                    .and_then(|s| s.read(P700, None, ArrayElement::new(1).ok()).ok())
+            };
+            let before = p700(&mut self.device);
+            if self.device.raise(fi, code).is_err() {
+                continue;
+            }
+            if before == Some(0) && p700(&mut self.device) == Some(i32::from(cause.p700())) {
+                if let Ok(store) = self.device.store(Unit::Inverter(fi)) {
+                    store.set_info(700, 4, i32::from(cause.ds402()));
+                }
+            }
+        }
+    }
+
+    /// [`Segment::inject_fault`] at `now` (a master's clock may run ahead of the last time the
+    /// segment was given: a fault of the controller starts then, bus off included).
+    pub fn inject_fault_at(
+        &mut self,
+        inverter: Inverter,
+        error: &str,
+        now: Duration,
+    ) -> Result<(), String> {
+        self.now = self.now.max(now);
+        self.inject_fault(inverter, error)
+    }
+
+    /// The error frames the segment's faults caused since the last call, with their time, as a
+    /// listener's controller reports them (`CAN_ERR_FLAG` frames of SocketCAN; none unless a
+    /// case injected [`ERROR_FRAMES`]). At most the last 1024 are kept.
+    pub fn take_error_frames(&mut self) -> Vec<(Duration, ErrorFrame)> {
+        std::mem::take(&mut self.errors)
+    }
+
+    /// Whether node `i` takes part in the bus: on it, and not bus off.
+    fn takes_part(&self, i: usize) -> bool {
+        !self.off_bus.contains(&self.nodes[i].inverter()) && !self.controllers[i].is_bus_off()
+    }
+
+    /// `frames` node `i` transmits at `now`, through its controller: those that reach the bus
+    /// go to `out`.
+    fn transmit(
+        &mut self,
+        i: usize,
+        frames: Vec<CanFrame>,
+        now: Duration,
+        out: &mut Vec<CanFrame>,
+    ) {
+        for f in frames {
+            out.extend(self.controllers[i].transmit(f, now, &mut self.errors));
+        }
+        if self.errors.len() > MAX_ERROR_FRAMES {
+            let extra = self.errors.len() - MAX_ERROR_FRAMES;
+            self.errors.drain(..extra);
+        }
     }
 
     /// The node ids on the segment.
@@ -153,17 +248,17 @@ impl Segment {
     /// nodes answer to them, in order, the segment's monitoring run once for all of them.
     pub fn receive_all(&mut self, frames: &[CanFrame], now: Duration) -> Vec<CanFrame> {
         let mut out = self.poll(now);
-        let off = &self.off_bus;
         for frame in frames {
-            for node in self
-                .nodes
-                .iter_mut()
-                .filter(|n| !off.contains(&n.inverter()))
-            {
-                node.overhear(frame, now);
-                out.extend(node.receive(frame, &mut self.device, now));
+            for i in 0..self.nodes.len() {
+                if !self.takes_part(i) {
+                    continue;
+                }
+                self.nodes[i].overhear(frame, now);
+                let answers = self.nodes[i].receive(frame, &mut self.device, now);
+                self.transmit(i, answers, now, &mut out);
             }
         }
+        self.bus_off_errors();
         self.overheard(&out, now);
         self.look(now);
         self.emergencies(&mut out);
@@ -172,11 +267,24 @@ impl Segment {
 
     /// What the nodes send on their own at `now`: boot-up messages, heartbeats, EMCY.
     pub fn poll(&mut self, now: Duration) -> Vec<CanFrame> {
+        self.now = self.now.max(now);
         self.device.tick(now);
         let mut out = Vec::new();
-        for node in self.on_bus() {
-            out.extend(node.poll(now));
+        for i in 0..self.nodes.len() {
+            if self.off_bus.contains(&self.nodes[i].inverter()) {
+                continue;
+            }
+            // Back from bus off, or error passive: CiA 301's EMCY first.
+            if let Some(code) = self.controllers[i].wake(now) {
+                let emcy = self.nodes[i].communication_error(code);
+                self.transmit(i, emcy.into_iter().collect(), now, &mut out);
+            }
+            if self.takes_part(i) {
+                let frames = self.nodes[i].poll(now);
+                self.transmit(i, frames, now, &mut out);
+            }
         }
+        self.bus_off_errors();
         self.overheard(&out, now);
         self.look(now);
         self.emergencies(&mut out);
@@ -184,7 +292,10 @@ impl Segment {
     }
 
     /// An EMCY for each inverter error that appeared or went.
+    /// A node bus off sends its EMCY once it is back (after its 8140h): the change is left
+    /// unseen until then. Off the bus (its cable pulled) the EMCY is lost.
     fn emergencies(&mut self, out: &mut Vec<CanFrame>) {
+        let before = self.faults;
         for (fi, value) in self.device.fault_changes(&mut self.faults) {
             let extended = self
                 .device
@@ -192,8 +303,18 @@ impl Segment {
                 .ok()
                 .and_then(|s| s.read(P700, None, ArrayElement::new(4).ok()).ok())
                 .and_then(|x| u16::try_from(x).ok());
-            if let Some(node) = self.on_bus().find(|n| n.inverter() == fi) {
-                out.extend(node.emergency(value, extended));
+            let Some(i) = self.nodes.iter().position(|n| n.inverter() == fi) else {
+                continue;
+            };
+            if self.controllers[i].is_bus_off() {
+                let k = usize::from(fi.get() - 1);
+                self.faults[k] = before[k];
+                continue;
+            }
+            // Off the bus, the node still keeps its error register.
+            let emcy = self.nodes[i].emergency(value, extended);
+            if self.takes_part(i) {
+                self.transmit(i, emcy.into_iter().collect(), self.now, out);
             }
         }
     }
@@ -201,8 +322,10 @@ impl Segment {
     /// Every node hears what the others sent, as on a real bus.
     fn overheard(&mut self, frames: &[CanFrame], now: Duration) {
         for frame in frames {
-            for node in self.on_bus() {
-                node.overhear(frame, now);
+            for i in 0..self.nodes.len() {
+                if self.takes_part(i) {
+                    self.nodes[i].overhear(frame, now);
+                }
             }
         }
     }
@@ -216,10 +339,23 @@ impl Segment {
 
     /// When a node next sends on its own (`None`: nothing scheduled).
     pub fn next_due(&self) -> Option<Duration> {
-        self.nodes
-            .iter()
-            .filter(|n| !self.off_bus.contains(&n.inverter()))
-            .filter_map(Node::next_due)
+        (0..self.nodes.len())
+            .filter(|&i| !self.off_bus.contains(&self.nodes[i].inverter()))
+            .filter_map(|i| match self.takes_part(i) {
+                true => min(
+                    self.nodes[i].next_due(),
+                    self.controllers[i].next_due(self.now),
+                ),
+                false => self.controllers[i].next_due(self.now),
+            })
             .min()
+    }
+}
+
+/// The earlier of two times, either of which may be missing.
+fn min(a: Option<Duration>, b: Option<Duration>) -> Option<Duration> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
     }
 }

@@ -291,6 +291,15 @@ impl Node {
         }
     }
 
+    /// The EMCY of a communication error `code` of its CAN controller (CiA 301 8120h, 8140h):
+    /// none in Stopped or Initialisation, where EMCY is not sent (CiA 301 §7.3.2.2).
+    pub(super) fn communication_error(&self, code: u16) -> Option<CanFrame> {
+        if matches!(self.state, NmtState::Stopped | NmtState::Initialisation) {
+            return None;
+        }
+        self.pdo_length_error(code)
+    }
+
     /// The EMCY of an RPDO of the wrong length.
     fn pdo_length_error(&self, code: u16) -> Option<CanFrame> {
         let emcy = Emergency {

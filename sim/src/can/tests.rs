@@ -712,3 +712,194 @@ fn p748_shows_the_nodes_nmt_state() {
     s.receive(&frame(0, &[NmtCommand::ENTER_PRE_OPERATIONAL.0, 36]), MS);
     assert_eq!(p748(&mut s), 127);
 }
+
+/// Node `node`'s heartbeat every 10 ms (1017h), then the segment polled up to 50 ms.
+fn heartbeat_every_10ms(s: &mut Segment, node: u8) {
+    let heartbeat = [0x2B, 0x17, 0x10, 0x00, 10, 0, 0, 0];
+    assert!(matches!(
+        sdo(s, node, heartbeat),
+        SdoResponse::InitiateDownload { .. }
+    ));
+}
+
+/// What the segment sends on its own from `from` to `to` ms, polled every ms.
+fn sent(s: &mut Segment, from: u32, to: u32) -> Vec<CanFrame> {
+    (from..to).flat_map(|t| s.poll(t * MS)).collect()
+}
+
+/// ISO 11898-1 fault confinement: a node bus off takes no part in the bus (no heartbeat, no
+/// SDO answer) while the others serve on; after the recovery time it sends CiA 301's EMCY
+/// 8140h "recovered from bus off" and its heartbeat again.
+#[test]
+fn a_node_bus_off_is_silent_then_recovers_with_emcy_8140h() {
+    let mut s = segment();
+    heartbeat_every_10ms(&mut s, 34);
+    assert!(sent(&mut s, 2, 30).iter().any(|f| f.id() == 0x722));
+    let fi2 = Inverter::new(2).unwrap();
+    assert_eq!(s.inject_fault(fi2, super::BUS_OFF), Ok(()));
+    // Bus off from 29 ms (the last time the segment was given) to 229 ms.
+    let quiet = sent(&mut s, 30, 150);
+    assert!(!quiet.iter().any(|f| f.id() & 0x7F == 34), "{quiet:?}");
+    let request = frame(0x622, &upload(0x1000, 0));
+    assert!(s.receive(&request, 150 * MS).is_empty(), "no SDO answer");
+    assert!(matches!(
+        sdo(&mut s, 32, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+    assert_eq!(s.next_due(), Some(29 * MS + super::RECOVERY));
+    assert!(s.take_error_frames().is_empty(), "bus off is silent");
+    let back = sent(&mut s, 150, 260);
+    let from_34: Vec<&CanFrame> = back.iter().filter(|f| f.id() & 0x7F == 34).collect();
+    // EMCY 0A2h: 8140h, error register generic + communication (11h), then the heartbeat.
+    assert_eq!(
+        from_34[0],
+        &frame(0x0A2, &[0x40, 0x81, 0x11, 0, 0, 0, 0, 0])
+    );
+    assert_eq!(from_34[1], &frame(0x722, &[0x7F]));
+    assert!(from_34.len() >= 4, "heartbeats again: {from_34:?}");
+    // And the EMCY of the E10.0 the SK 5x0P reported when it went bus off (7585h, BU 0620
+    // §5.3), held back until then.
+    assert_eq!(from_34[2].id(), 0x0A2);
+    assert_eq!(from_34[2].data()[..2], [0x85, 0x75]);
+    assert_eq!(
+        from_34.iter().filter(|f| f.id() == 0x0A2).count(),
+        2,
+        "two EMCY"
+    );
+    assert!(matches!(
+        sdo(&mut s, 34, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+}
+
+/// A transceiver that destroys FI 3's frames: every other node, and a listener, sees error
+/// frames; the frame goes through once retransmitted, and the nodes serve on.
+#[test]
+fn error_frames_are_kept_apart_and_the_nodes_serve_on() {
+    let mut s = segment();
+    let fi3 = Inverter::new(3).unwrap();
+    assert_eq!(s.inject_fault(fi3, super::ERROR_FRAMES), Ok(()));
+    assert!(s.take_error_frames().is_empty(), "nothing sent yet");
+    // Its SDO answer is destroyed 8 times, then goes through.
+    assert!(matches!(
+        sdo(&mut s, 36, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+    let errors = s.take_error_frames();
+    assert_eq!(errors.len(), usize::from(super::BURST));
+    assert!(errors
+        .iter()
+        .all(|(t, e)| *t == MS && *e == super::bus_error()));
+    assert_eq!(super::bus_error().class.0, 0x088);
+    // The next frames go through untouched, the other nodes' too.
+    sdo(&mut s, 36, upload(0x1000, 0));
+    sdo(&mut s, 32, upload(0x1000, 0));
+    assert!(s.take_error_frames().is_empty());
+}
+
+/// Error passive: CiA 301's EMCY 8120h "CAN in error passive mode"; the node keeps
+/// communicating.
+#[test]
+fn error_passive_sends_emcy_8120h_and_serves_on() {
+    let mut s = segment();
+    let fi3 = Inverter::new(3).unwrap();
+    assert_eq!(s.inject_fault(fi3, super::ERROR_PASSIVE), Ok(()));
+    assert_eq!(s.next_due(), Some(Duration::ZERO), "the EMCY is due");
+    let out = s.poll(MS);
+    assert_eq!(out, vec![frame(0x0A4, &[0x20, 0x81, 0x11, 0, 0, 0, 0, 0])]);
+    assert!(s.poll(2 * MS).is_empty(), "once");
+    assert!(matches!(
+        sdo(&mut s, 36, upload(0x1000, 0)),
+        SdoResponse::InitiateUpload { .. }
+    ));
+    // An unknown node's fault is refused; the interface's own `bus-off` is not the node's.
+    let mut config = DeviceConfig::new(Product::Tu3Eip);
+    config.inverters = 1;
+    let mut one = Segment::new(config).unwrap();
+    one.poll(Duration::ZERO);
+    let e = one.inject_fault(Inverter::new(2).unwrap(), super::BUS_OFF);
+    assert_eq!(e, Err("FI 2 is not on the system bus".into()));
+    assert_eq!(
+        one.inject_fault(Inverter::new(1).unwrap(), "bus-off"),
+        Ok(())
+    );
+    let request = frame(0x620, &upload(0x1000, 0));
+    assert_eq!(one.receive(&request, MS).len(), 1, "node 32 still answers");
+}
+
+/// Bus off, a node hears nothing either: its inverter's P120 monitoring counts that silence
+/// as it counts any, here where the consumer time (150 ms) is shorter than the time bus off;
+/// with the factory 600 ms it does not trip. Behind a module (SK TU3-EIP: E10.8), whose SK 54xE
+/// reports nothing for its own bus off.
+#[test]
+fn a_node_bus_off_hears_nothing_and_its_p120_monitoring_counts_the_silence() {
+    let mut s = Segment::new(DeviceConfig::new(Product::Tu3Eip)).unwrap();
+    s.poll(Duration::ZERO);
+    // FI 1 (node 32) watches the module's heartbeat (node 1) for 150 ms (1016h:01), FI 2
+    // (node 34) for the factory 600 ms; both P120 [-01] = 1 "Auto". The module beats every
+    // 50 ms (operational, 05h).
+    let consumer = [0x23, 0x16, 0x10, 0x01, 150, 0, 1, 0];
+    assert!(matches!(
+        sdo(&mut s, 32, consumer),
+        SdoResponse::InitiateDownload { .. }
+    ));
+    let mut out = Vec::new();
+    let beat_until = |s: &mut Segment, from: u64, to: u64, out: &mut Vec<(u64, CanFrame)>| {
+        for t in from..=to {
+            if t % 50 == 0 {
+                out.extend(
+                    s.receive(&frame(0x701, &[0x05]), Duration::from_millis(t))
+                        .into_iter()
+                        .map(|f| (t, f)),
+                );
+            }
+            out.extend(s.poll(Duration::from_millis(t)).into_iter().map(|f| (t, f)));
+        }
+    };
+    beat_until(&mut s, 2, 300, &mut out);
+    assert!(out.is_empty(), "{out:?}");
+    for fi in [1, 2] {
+        let fi = Inverter::new(fi).unwrap();
+        assert_eq!(s.inject_fault(fi, super::BUS_OFF), Ok(()));
+    }
+    assert_eq!(
+        p700(&mut s, 1),
+        (0, 0),
+        "an SK 54xE reports nothing for bus off"
+    );
+    beat_until(&mut s, 301, 700, &mut out);
+    assert_eq!(p700(&mut s, 1).0, 108, "E10.8 after 150 ms unheard");
+    assert_eq!(p700(&mut s, 2), (0, 0), "200 ms bus off < 600 ms");
+    // Neither sent anything while bus off; back at 500 ms each sends EMCY 8140h (FI 1's error
+    // register with its error and the communication bit), then FI 1 the EMCY of E10.8.
+    assert!(out.iter().all(|(t, _)| *t == 500), "{out:?}");
+    let ids: Vec<u16> = out.iter().map(|(_, f)| f.id()).collect();
+    assert_eq!(ids, [0x0A0, 0x0A2, 0x0A0]);
+    assert!(out[..2].iter().all(|(_, f)| f.data()[..2] == [0x40, 0x81]));
+    assert_eq!(out[1].1.data()[2], 0x11);
+    assert_eq!(out[0].1.data()[2] & 0x11, 0x11);
+    assert_ne!(out[2].1.data()[..2], [0x40, 0x81]);
+    assert_eq!(&out[2].1.data()[3..5], &108u16.to_le_bytes());
+}
+
+/// BU 0620 §5.3 (p. 94): an SK 5x0P whose CAN is bus off reports E10.0 with 7585h "CAN in Bus
+/// Off state"; its EMCY cannot go while bus off: it follows 8140h once the node is back.
+#[test]
+fn behind_the_sk_550p_an_inverter_bus_off_reports_e10_0_with_7585h() {
+    let mut s = segment();
+    let fi2 = Inverter::new(2).unwrap();
+    assert_eq!(s.inject_fault(fi2, super::BUS_OFF), Ok(()));
+    assert_eq!(p700(&mut s, 2), (100, 0x7585));
+    assert_eq!(p700(&mut s, 3), (0, 0));
+    let out = run(&mut s, 1, 300);
+    let from_34: Vec<&(u64, CanFrame)> = out.iter().filter(|(_, f)| f.id() == 0x0A2).collect();
+    assert_eq!(from_34.len(), 2, "{out:?}");
+    assert!(from_34.iter().all(|(t, _)| *t == 200));
+    assert_eq!(from_34[0].1.data()[..2], [0x40, 0x81]);
+    assert_eq!(from_34[0].1.data()[2] & 0x11, 0x11);
+    // 7585h, error register, then P700 = 100 and FI 2 (the EMCY of `objects::emergency_of`).
+    assert_eq!(from_34[1].1.data()[..2], [0x85, 0x75]);
+    // A second bus off while the error stands changes nothing in P700.
+    s.inject_fault(fi2, super::BUS_OFF).unwrap();
+    assert_eq!(p700(&mut s, 2), (100, 0x7585));
+}
