@@ -14,6 +14,7 @@ use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::thread;
 use std::time::{Duration, Instant};
 
+use harness::can_bench::Reads;
 use harness::stats::Rate;
 
 /// The upload request of P102 set 1 of FI 3 (node 36, 2066h:01h) as the harness writes it.
@@ -65,7 +66,7 @@ fn serve(mut stream: TcpStream) -> std::io::Result<()> {
 /// `count` round trips of the minimal client to the socketcand server at `addr` (channel
 /// `can0`): [`REQUEST`] written, then read until the answer of node 36 (`< frame 5A4 … >`)
 /// is in, each after the last.
-pub(crate) fn minimal_client(addr: SocketAddr, count: u32) -> Result<Rate, String> {
+pub(crate) fn minimal_client(addr: SocketAddr, count: u32) -> Result<Reads, String> {
     let e = |e: std::io::Error| format!("minimal client to {addr}: {e}");
     let mut s = TcpStream::connect_timeout(&addr, Duration::from_secs(2)).map_err(e)?;
     s.set_nodelay(true).map_err(e)?;
@@ -101,12 +102,18 @@ pub(crate) fn minimal_client(addr: SocketAddr, count: u32) -> Result<Rate, Strin
     for _ in 0..WARM_UP {
         one(&mut s)?;
     }
+    let mut each_us = Vec::with_capacity(count as usize);
     let start = Instant::now();
     for _ in 0..count {
+        let t = Instant::now();
         one(&mut s)?;
+        each_us.push(t.elapsed().as_secs_f64() * 1e6);
     }
-    Ok(Rate {
-        count: u64::from(count),
-        secs: start.elapsed().as_secs_f64(),
+    Ok(Reads {
+        rate: Rate {
+            count: u64::from(count),
+            secs: start.elapsed().as_secs_f64(),
+        },
+        each_us,
     })
 }
