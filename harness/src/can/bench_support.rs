@@ -20,10 +20,20 @@ pub const SUB: u8 = 1;
 /// Reads made before the timed ones.
 const WARM_UP: u32 = 100;
 
+/// Reads timed one by one.
+#[derive(Debug, Clone)]
+pub struct Reads {
+    /// All of them: how many in how long.
+    pub rate: Rate,
+    /// Each one's time, µs.
+    pub each_us: Vec<f64>,
+}
+
 /// `count` complete SDO reads of [`INDEX`]:[`SUB`] of [`NODE`] on the bus `channel` of the
 /// socketcand server at `addr`: each one the upload request sent and the node's answer with the
-/// value received, one after the other.
-pub fn sdo_reads(addr: SocketAddr, channel: &str, count: u32) -> Result<Rate, String> {
+/// value received (its transcript lines rendered and dropped, as a run renders them), one after
+/// the other.
+pub fn sdo_reads(addr: SocketAddr, channel: &str, count: u32) -> Result<Reads, String> {
     let limit = Duration::from_secs(2);
     let link = Socketcand::connect(addr, channel, limit).map_err(|e| e.to_string())?;
     let mut client = Client::new(link, limit);
@@ -35,16 +45,22 @@ pub fn sdo_reads(addr: SocketAddr, channel: &str, count: u32) -> Result<Rate, St
     for _ in 0..WARM_UP {
         read(&mut client)?;
     }
+    let mut each_us = Vec::with_capacity(count as usize);
     let start = Instant::now();
     for _ in 0..count {
+        let t = Instant::now();
         let value = read(&mut client)?;
+        each_us.push(t.elapsed().as_secs_f64() * 1e6);
         if value.len() != 2 {
             return Err(format!("P102 came back as {} bytes", value.len()));
         }
     }
-    Ok(Rate {
-        count: u64::from(count),
-        secs: start.elapsed().as_secs_f64(),
+    Ok(Reads {
+        rate: Rate {
+            count: u64::from(count),
+            secs: start.elapsed().as_secs_f64(),
+        },
+        each_us,
     })
 }
 

@@ -201,10 +201,20 @@ pub(crate) struct Socketcand {
     peer: String,
     stream: TcpStream,
     buf: Vec<u8>,
+    /// The message being written (kept between writes: a frame costs no allocation).
+    out: String,
+    /// The read time-out the socket has (`None`: none set yet).
+    timeout: Option<Duration>,
     since: Instant,
     /// The error frames the server forwarded since [`CanLink::take_error_frames`].
     errors: Vec<ErrorFrame>,
 }
+
+/// How far the socket's read time-out may be from the time left before a read sets it anew
+/// (a system call per read otherwise). The kernel counts the time-out in ticks, rounded up
+/// (1–10 ms), so a read may already wait that much longer than asked; one that times out
+/// before the deadline reads again with the time left.
+const TIMEOUT_SLACK: Duration = Duration::from_micros(500);
 
 impl Socketcand {
     /// Connects to `host:port`, opens `channel` and switches to raw mode, each answer
@@ -225,6 +235,8 @@ impl Socketcand {
             peer: peer.clone(),
             stream,
             buf: Vec::new(),
+            out: String::new(),
+            timeout: None,
             since: Instant::now(),
             errors: Vec::new(),
         };
@@ -250,9 +262,11 @@ impl Socketcand {
     }
 
     fn write(&mut self, m: &Message) -> Result<(), CanLinkError> {
-        let text = m.emit().map_err(|e| self.protocol(e.to_string()))?;
+        self.out.clear();
+        m.emit_into(&mut self.out)
+            .map_err(|e| self.protocol(e.to_string()))?;
         self.stream
-            .write_all(text.as_bytes())
+            .write_all(self.out.as_bytes())
             .map_err(|source| CanLinkError::Io {
                 peer: self.peer.clone(),
                 source,
@@ -283,10 +297,20 @@ impl Socketcand {
                 peer: self.peer.clone(),
                 source,
             };
-            self.stream.set_read_timeout(Some(left)).map_err(io)?;
+            if self
+                .timeout
+                .is_none_or(|t| t.abs_diff(left) > TIMEOUT_SLACK)
+            {
+                self.stream.set_read_timeout(Some(left)).map_err(io)?;
+                self.timeout = Some(left);
+            }
             match self.stream.read(&mut chunk) {
                 Ok(0) => return Err(self.protocol("the server closed the connection".into())),
                 Ok(n) => self.buf.extend_from_slice(&chunk[..n]),
+                // Before the deadline, a time-out set a little short: the time left, again.
+                Err(e) if crate::net::timed_out(&e) && Instant::now() < deadline => {
+                    self.timeout = None;
+                }
                 Err(e) if crate::net::timed_out(&e) => return Ok(None),
                 Err(e) => return Err(io(e)),
             }

@@ -249,20 +249,33 @@ impl Hub {
         self.clients.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    /// `frames` to every raw-mode client but `except`; a client that cannot take them is
-    /// dropped.
-    fn broadcast(&self, frames: &[CanFrame], except: Option<u64>) {
+    /// `frames` to every raw-mode client but `except`, stamped now; a client that cannot take
+    /// them is dropped. `text` is the caller's buffer for the messages (kept between calls,
+    /// so that a frame costs no allocation).
+    fn broadcast<'a>(
+        &self,
+        frames: impl IntoIterator<Item = &'a CanFrame>,
+        except: Option<u64>,
+        text: &mut String,
+    ) {
         let now = self.now();
-        let stamped: Vec<(Duration, CanFrame)> = frames.iter().map(|f| (now, *f)).collect();
-        self.broadcast_at(&stamped, except);
+        self.broadcast_at(frames.into_iter().map(|f| (now, f)), except, text);
     }
 
-    /// [`Hub::broadcast`] with each frame's own time (a relayed bus's, when it was on it).
-    fn broadcast_at(&self, frames: &[(Duration, CanFrame)], except: Option<u64>) {
-        if frames.is_empty() {
+    /// [`Hub::broadcast`] with each frame's own time (a relayed bus's, when it was on it): the
+    /// frames' messages written one after the other, in one write to each client. Nothing is
+    /// written (or formatted) when no client but `except` is in raw mode.
+    fn broadcast_at<'a>(
+        &self,
+        frames: impl IntoIterator<Item = (Duration, &'a CanFrame)>,
+        except: Option<u64>,
+        text: &mut String,
+    ) {
+        let mut clients = self.clients();
+        if !clients.iter().any(|c| c.raw && Some(c.id) != except) {
             return;
         }
-        let mut text = String::new();
+        text.clear();
         for (at, frame) in frames {
             let m = Message::Frame {
                 frame: *frame,
@@ -272,11 +285,12 @@ impl Hub {
                 },
             };
             // A frame of the segment is a data frame of at most 8 bytes: always writable.
-            if let Ok(s) = m.emit() {
-                text.push_str(&s);
-            }
+            let _ = m.emit_into(text);
         }
-        self.clients().retain_mut(|c| {
+        if text.is_empty() {
+            return;
+        }
+        clients.retain_mut(|c| {
             if !c.raw || Some(c.id) == except {
                 return true;
             }
@@ -285,27 +299,24 @@ impl Hub {
     }
 
     /// A client put `frame` on the bus: the others see it, the nodes take it and answer.
-    fn transmit(&self, from: u64, frame: &CanFrame) {
-        self.broadcast(std::slice::from_ref(frame), Some(from));
-        let answers: Vec<CanFrame> = self
-            .segment
-            .as_ref()
-            .map(|s| s.input(Input::Can(frame)))
-            .unwrap_or_default()
-            .into_iter()
-            .filter_map(|o| match o {
-                Output::Can(f) => Some(f),
-                _ => None,
-            })
-            .collect();
-        self.broadcast(&answers, None);
+    fn transmit(&self, from: u64, frame: &CanFrame, text: &mut String) {
+        self.broadcast(std::slice::from_ref(frame), Some(from), text);
+        let Some(segment) = &self.segment else {
+            return;
+        };
+        let answers = segment.input(Input::Can(frame));
+        let frames = answers.iter().filter_map(|o| match o {
+            Output::Can(f) => Some(f),
+            _ => None,
+        });
+        self.broadcast(frames, None, text);
     }
 }
 
 /// The socketcand server as the port of the thread that runs the segment's timers: what the
 /// nodes send on their own goes to every client; nothing comes in (the clients' threads hand
 /// their frames over themselves).
-struct Clients(Arc<Hub>);
+struct Clients(Arc<Hub>, String);
 
 impl Port for Clients {
     type Error = std::convert::Infallible;
@@ -323,7 +334,8 @@ impl Port for Clients {
         let Output::Can(frame) = out else {
             return Ok(false);
         };
-        self.0.broadcast(std::slice::from_ref(frame), None);
+        self.0
+            .broadcast(std::slice::from_ref(frame), None, &mut self.1);
         Ok(true)
     }
 }
@@ -354,7 +366,7 @@ impl Served {
                 return;
             };
             let counters = Counters::default();
-            let mut port = Clients(h.clone());
+            let mut port = Clients(h.clone(), String::new());
             let Ok(()) = driver::run(&segment, &mut port, &Options::new(IDLE), &counters, &h.stop);
         });
         Ok(served)
@@ -428,6 +440,8 @@ fn serve_client(hub: &Hub, mut stream: TcpStream) -> std::io::Result<()> {
     let mut opened = false;
     let mut buf = Vec::new();
     let mut chunk = [0u8; 1024];
+    // The messages this client's frames make for the others and for it (the nodes' answers).
+    let mut text = String::new();
     loop {
         let n = stream.read(&mut chunk)?;
         if n == 0 {
@@ -471,7 +485,7 @@ fn serve_client(hub: &Hub, mut stream: TcpStream) -> std::io::Result<()> {
                     }
                 }
                 Message::Echo => stream.write_all(b"< echo >")?,
-                Message::Send { frame } if opened => hub.transmit(id, &frame),
+                Message::Send { frame } if opened => hub.transmit(id, &frame, &mut text),
                 _ => stream.write_all(b"< error unknown command >")?,
             }
         }
@@ -499,8 +513,10 @@ pub(crate) fn relay_system_bus(
     take();
     let hub = served.hub.clone();
     thread::spawn(move || {
+        let mut text = String::new();
         while !hub.stop.load(Ordering::Relaxed) {
-            hub.broadcast_at(&take(), None);
+            let frames = take();
+            hub.broadcast_at(frames.iter().map(|(at, f)| (*at, f)), None, &mut text);
             thread::sleep(RELAY_PERIOD);
         }
     });

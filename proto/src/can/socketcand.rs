@@ -36,6 +36,9 @@ use crate::wire::Error;
 /// (socketcand's own buffer is about 8 KiB, for ISO-TP PDUs this codec does not carry).
 pub const MAX_MESSAGE_LEN: usize = 512;
 
+/// The words of a message [`Message::parse`] splits without allocating.
+const WORDS: usize = 16;
+
 /// A socketcand timestamp: seconds and microseconds (`%lld.%06lld`) of the host's clock.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct Timestamp {
@@ -155,8 +158,26 @@ impl Message {
                     "holds a non-ASCII byte or a second '<'",
                 )
             })?;
+        // The words on the stack: a frame or a send has at most 11 (a BCM frame 11 too); a
+        // longer message (some `Other`) takes a vector.
+        let mut words = [""; WORDS];
+        let mut n = 0;
+        let mut split = text.split_ascii_whitespace();
+        for (slot, word) in words.iter_mut().zip(split.by_ref()) {
+            *slot = word;
+            n += 1;
+        }
+        let message = match split.next() {
+            None => Message::from_words(&words[..n])?,
+            Some(more) => {
+                let mut all = words.to_vec();
+                all.push(more);
+                all.extend(split);
+                Message::from_words(&all)?
+            }
+        };
         Ok(Framed::Complete {
-            message: Message::from_words(&text.split_ascii_whitespace().collect::<Vec<_>>())?,
+            message,
             consumed: start + end + 1,
         })
     }
@@ -188,7 +209,10 @@ impl Message {
                 text: rest.join(" "),
             })),
             ["frame", id, time, data @ ..] => Ok(Message::Frame {
-                frame: CanFrame::new(identifier(id)?, &hex_data(data)?)?,
+                frame: {
+                    let (bytes, len) = hex_data(data)?;
+                    CanFrame::new(identifier(id)?, &bytes[..len])?
+                },
                 time: timestamp(time)?,
             }),
             ["frame", ..] => Err(Error::syntax(
@@ -244,28 +268,82 @@ impl Message {
                 }
                 s
             }
-            Message::Frame { frame, time } => {
-                no_remote(frame)?;
-                let data: String = frame.data().iter().map(|b| format!("{b:02X}")).collect();
-                format!(
-                    "< frame {:03X} {}.{:06} {data} >",
-                    frame.id(),
-                    time.secs,
-                    time.usecs
-                )
-            }
-            Message::Send { frame } => {
-                no_remote(frame)?;
-                let mut s = format!("< send {:03X} {}", frame.id(), frame.dlc());
-                frame
-                    .data()
-                    .iter()
-                    .for_each(|b| s.push_str(&format!(" {b:x}")));
-                s.push_str(" >");
+            Message::Frame { .. } | Message::Send { .. } => {
+                let mut s = String::with_capacity(48);
+                self.emit_into(&mut s)?;
                 s
             }
             Message::Other { text } => format!("< {} >", plain("message", text)?),
         })
+    }
+
+    /// [`Message::emit`] appended to `out`: the same text, written without allocating for a
+    /// frame and a send (what a server and a client write for every frame); `out` is left as
+    /// it was when the message cannot be written.
+    pub fn emit_into(&self, out: &mut String) -> Result<(), Error> {
+        match self {
+            Message::Frame { frame, time } => {
+                no_remote(frame)?;
+                out.push_str("< frame ");
+                push_id(out, frame.id());
+                out.push(' ');
+                push_decimal(out, time.secs, 1);
+                out.push('.');
+                push_decimal(out, time.usecs.into(), 6);
+                out.push(' ');
+                for b in frame.data() {
+                    out.push(char::from(HEX_UPPER[usize::from(b >> 4)]));
+                    out.push(char::from(HEX_UPPER[usize::from(b & 0x0F)]));
+                }
+                out.push_str(" >");
+            }
+            Message::Send { frame } => {
+                no_remote(frame)?;
+                out.push_str("< send ");
+                push_id(out, frame.id());
+                out.push(' ');
+                push_decimal(out, frame.dlc().into(), 1);
+                for b in frame.data() {
+                    out.push(' ');
+                    if *b > 0x0F {
+                        out.push(char::from(HEX_LOWER[usize::from(b >> 4)]));
+                    }
+                    out.push(char::from(HEX_LOWER[usize::from(b & 0x0F)]));
+                }
+                out.push_str(" >");
+            }
+            other => out.push_str(&other.emit()?),
+        }
+        Ok(())
+    }
+}
+
+const HEX_UPPER: &[u8; 16] = b"0123456789ABCDEF";
+const HEX_LOWER: &[u8; 16] = b"0123456789abcdef";
+
+/// An identifier as `%03X`: upper-case hex, at least 3 digits.
+fn push_id(out: &mut String, id: u16) {
+    let digits = (1..=4)
+        .rev()
+        .find(|&n| id >> (4 * (n - 1)) != 0)
+        .unwrap_or(1)
+        .max(3);
+    for n in (0..digits).rev() {
+        out.push(char::from(HEX_UPPER[usize::from((id >> (4 * n)) & 0x0F)]));
+    }
+}
+
+/// `value` in decimal, zero-padded to `width` digits at least.
+fn push_decimal(out: &mut String, mut value: u64, width: usize) {
+    let mut digits = [b'0'; 20];
+    let mut n = 0;
+    while value > 0 || n < width.max(1) {
+        digits[n] = b'0' + (value % 10) as u8;
+        value /= 10;
+        n += 1;
+    }
+    for d in digits[..n].iter().rev() {
+        out.push(char::from(*d));
     }
 }
 
@@ -293,12 +371,12 @@ fn error_frame(words: &[&str]) -> Result<Option<Message>, Error> {
     let (Some(class), Ok(time)) = (hex_u32(class), timestamp(time)) else {
         return Ok(None);
     };
-    let data = hex_data(data)?;
-    check_len(data.len())?;
+    let (bytes, len) = hex_data(data)?;
+    check_len(len)?;
     Ok(Some(Message::ErrorFrame {
         class: ErrorClass(class & EFF_MASK),
         time,
-        data,
+        data: bytes[..len].to_vec(),
     }))
 }
 
@@ -335,22 +413,36 @@ fn timestamp(word: &str) -> Result<Timestamp, Error> {
     })
 }
 
-/// Data words: pairs of hex digits, in one word (raw mode) or several (BCM mode).
-fn hex_data(words: &[&str]) -> Result<Vec<u8>, Error> {
-    let hex: String = words.concat();
-    if hex.len() & 1 != 0 || !hex.bytes().all(|b| b.is_ascii_hexdigit()) {
-        return Err(Error::syntax("data", &hex, "is not pairs of hex digits"));
+/// Data words: pairs of hex digits, in one word (raw mode) or several (BCM mode), a pair
+/// possibly across two words; the bytes and how many.
+fn hex_data(words: &[&str]) -> Result<([u8; MAX_LEN], usize), Error> {
+    let digits: usize = words.iter().map(|w| w.len()).sum();
+    let bad = || Error::syntax("data", &words.concat(), "is not pairs of hex digits");
+    let mut all = words.iter().flat_map(|w| w.bytes());
+    if digits & 1 != 0 || !all.clone().all(|b| b.is_ascii_hexdigit()) {
+        return Err(bad());
     }
-    if hex.len() > 2 * MAX_LEN {
-        return Err(Error::CanDataLength { len: hex.len() / 2 });
+    if digits > 2 * MAX_LEN {
+        return Err(Error::CanDataLength { len: digits / 2 });
     }
-    (0..hex.len())
-        .step_by(2)
-        .map(|i| {
-            u8::from_str_radix(&hex[i..i + 2], 16)
-                .map_err(|_| Error::syntax("data", &hex, "is not pairs of hex digits"))
-        })
-        .collect()
+    let mut bytes = [0u8; MAX_LEN];
+    for byte in bytes.iter_mut().take(digits / 2) {
+        let (Some(hi), Some(lo)) = (all.next(), all.next()) else {
+            return Err(bad());
+        };
+        *byte = (hex_digit(hi) << 4) | hex_digit(lo);
+    }
+    Ok((bytes, digits / 2))
+}
+
+/// The value of a hex digit (checked before).
+fn hex_digit(b: u8) -> u8 {
+    match b {
+        b'0'..=b'9' => b - b'0',
+        b'a'..=b'f' => b - b'a' + 10,
+        b'A'..=b'F' => b - b'A' + 10,
+        _ => 0,
+    }
 }
 
 /// `send ID LEN B0 …`: a decimal length 0..8 and exactly that many 1- or 2-digit hex words.
@@ -370,18 +462,14 @@ fn send_frame(id: &str, len: &str, bytes: &[&str]) -> Result<CanFrame, Error> {
             "does not have as many bytes as the length says",
         ));
     }
-    let data = bytes
-        .iter()
-        .map(|w| {
-            if (1..=2).contains(&w.len()) && w.bytes().all(|b| b.is_ascii_hexdigit()) {
-                u8::from_str_radix(w, 16)
-                    .map_err(|_| Error::syntax("send data", w, "is not a hex byte"))
-            } else {
-                Err(Error::syntax("send data", w, "is not a hex byte"))
-            }
-        })
-        .collect::<Result<Vec<u8>, Error>>()?;
-    CanFrame::new(id, &data)
+    let mut data = [0u8; MAX_LEN];
+    for (byte, w) in data.iter_mut().zip(bytes) {
+        if !(1..=2).contains(&w.len()) || !w.bytes().all(|b| b.is_ascii_hexdigit()) {
+            return Err(Error::syntax("send data", w, "is not a hex byte"));
+        }
+        *byte = w.bytes().fold(0, |v, b| (v << 4) | hex_digit(b));
+    }
+    CanFrame::new(id, &data[..n])
 }
 
 #[cfg(test)]
@@ -588,6 +676,84 @@ mod tests {
                 text: "add failed".into()
             }
         );
+    }
+
+    #[test]
+    fn frames_and_sends_are_written_as_format_writes_them() {
+        // What `emit` wrote with `format!` before it wrote by hand.
+        let by_format = |m: &Message| match m {
+            Message::Frame { frame, time } => {
+                let data: String = frame.data().iter().map(|b| format!("{b:02X}")).collect();
+                format!(
+                    "< frame {:03X} {}.{:06} {data} >",
+                    frame.id(),
+                    time.secs,
+                    time.usecs
+                )
+            }
+            Message::Send { frame } => {
+                let mut s = format!("< send {:03X} {}", frame.id(), frame.dlc());
+                frame
+                    .data()
+                    .iter()
+                    .for_each(|b| s.push_str(&format!(" {b:x}")));
+                s + " >"
+            }
+            _ => unreachable!(),
+        };
+        let data = [0x00, 0x0F, 0x10, 0xF1, 0xAB, 0x7F, 0x80, 0xFF];
+        for id in [0, 1, 0xF, 0x10, 0xFF, 0x100, 0x5A4, 0x7FF] {
+            for len in 0..=MAX_LEN {
+                let frame = CanFrame::new(id, &data[..len]).unwrap();
+                for (secs, usecs) in [
+                    (0, 0),
+                    (7, 5),
+                    (23, 424_242),
+                    (u64::MAX, 999_999),
+                    (1, 1_234_567),
+                ] {
+                    let m = Message::Frame {
+                        frame,
+                        time: Timestamp { secs, usecs },
+                    };
+                    assert_eq!(m.emit().unwrap(), by_format(&m));
+                }
+                let m = Message::Send { frame };
+                assert_eq!(m.emit().unwrap(), by_format(&m));
+                assert_eq!(one(&m.emit().unwrap()), m);
+                // Appended to what is there.
+                let mut out = String::from("x");
+                m.emit_into(&mut out).unwrap();
+                assert_eq!(out, format!("x{}", by_format(&m)));
+            }
+        }
+        // A remote frame leaves `out` as it was.
+        let mut out = String::from("x");
+        let r = CanFrame::remote(0x705, 1).unwrap();
+        assert!(Message::Send { frame: r }.emit_into(&mut out).is_err());
+        assert_eq!(out, "x");
+    }
+
+    #[test]
+    fn long_messages_and_data_across_words() {
+        // More words than are split on the stack.
+        let words: Vec<String> = (0..40).map(|n| format!("w{n}")).collect();
+        let text = format!("< stat {} >", words.join(" "));
+        assert_eq!(
+            one(&text),
+            Message::Other {
+                text: format!("stat {}", words.join(" "))
+            }
+        );
+        // Pairs of digits across words, as the words are joined before pairing.
+        assert_eq!(
+            one("< frame 123 1.000000 1 23 4 >"),
+            Message::Frame {
+                frame: frame(0x123, &[0x12, 0x34]),
+                time: Timestamp { secs: 1, usecs: 0 }
+            }
+        );
+        assert!(Message::parse(b"< frame 123 1.000000 1 23 >").is_err());
     }
 
     #[test]
