@@ -17,7 +17,8 @@
 //! - the objects whose value lives in the node (DS 301: 1001h, 1003h, 1006h, 1F8Ch, 1F93h,
 //!   1F99h), with the types and access the simulator answers them with;
 //! - the NORD parameter objects at device id + parameter number (BU 0620 §2.4.6, BU 2200 §6.4)
-//!   for FI 1…`inverters`, and for the modules their own parameters at 2000h + P; on the
+//!   for FI 1…`inverters` that have one (the SK TU3-POL's FU5…FU8 have none,
+//!   [`def::device_id_inverters`]), and for the modules their own parameters at 2000h + P; on the
 //!   SK 550P the interface parameters (P85x…P89x) answer at FI 1's ids, as the simulator does.
 //!   A parameter with sets or elements is an ARRAY whose sub-index 0 is the count
 //!   (`proto::nord::ecat::parameter_subindex`, shared with EtherCAT).
@@ -181,7 +182,8 @@ fn node_objects(product: Product) -> Vec<ObjectDoc> {
     ]
 }
 
-/// The parameter objects of FI 1…`inverters` (and of a module itself).
+/// The parameter objects of FI 1…`inverters` that have a device id (and of a module itself):
+/// BU 2200 §6.4 lists none for FU5..FU8 of the SK TU3-POL, whose process data carry them.
 fn parameter_objects(product: Product, inverters: u8) -> Vec<ObjectDoc> {
     let mut out = Vec::new();
     if product.family() == Family::Module {
@@ -193,7 +195,9 @@ fn parameter_objects(product: Product, inverters: u8) -> Vec<ObjectDoc> {
         let Ok(fi) = Inverter::new(i64::from(n)) else {
             continue;
         };
-        let base = def::device_id(product, fi);
+        let Some(base) = def::device_id(product, fi) else {
+            continue;
+        };
         let prefix = format!("FI {n} ");
         let ds = inverter_parameters(product, fi);
         out.extend(ds.into_iter().map(|d| parameter(base, &prefix, d)));
@@ -662,6 +666,12 @@ mod tests {
             .to_string()
             .contains("no POWERLINK"));
         assert!(xdd(Product::Tu4Pol, 5).is_err());
+        // The SK TU3-POL carries FU1..FU8 (BU 2200 §6.3.5), the parameter objects stop at FU4
+        // (§6.4): 5000h…5003h stay the process-data objects, FU5's mapped there.
+        let tu3 = elements(&xdd(Product::Tu3Pol, 8).unwrap());
+        assert!(object(&tu3, "4066").is_some() && object(&tu3, "4866").is_none());
+        assert!(attr(object(&tu3, "5000").unwrap(), "name").starts_with("PDO_"));
+        assert!(attr(sub(&tu3, "5000", "05").unwrap(), "name").contains("FI 5 control word"));
         assert!(xdd(Product::Sk550p, 0).is_err());
     }
 }

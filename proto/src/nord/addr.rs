@@ -4,7 +4,7 @@
 //! |---|---|---|
 //! | EtherCAT CoE | index 2000h + 800h·(FI−1) + P | BU 0620 §2.2.7 p. 20 |
 //! | POWERLINK SDO (SK 550P) | index 2000h + 600h·(FI−1) + P | BU 0620 §2.4.6 p. 36 |
-//! | POWERLINK SDO (modules) | index 2000h (interface) / 2000h + 800h·FI + P | BU 2200 §6 (German) |
+//! | POWERLINK SDO (modules) | index 2000h (interface) / 2000h + 800h·FI + P, FU1..FU4 only | BU 2200 §6.4 (German) |
 //! | EtherNet/IP CIP | class 100 + FI (100 = module), attribute P, instance from set and element | BU 0620 §2.3.5, BU 2100 §6 |
 //! | PROFINET | data record 100 + FI (100 = interface), PNU P + 1000 | BU 0620 §2.5.6.2, BU 0590 §4.2.2 |
 //! | System bus | CAN ID 32 + 2·(FI−1), absolute encoder + 1 | BU 0620 §3.1 p. 61 |
@@ -18,7 +18,7 @@ use std::fmt;
 use serde::Serialize;
 
 use super::pkw::Ind;
-use super::product::{Family, Product, Protocol};
+use super::product::{Product, Protocol};
 use super::types::{ArrayElement, Inverter, ParamAddress, ParamNumber, ParamSet};
 
 /// An address that cannot be formed.
@@ -33,6 +33,18 @@ pub enum AddrError {
         inverter: u8,
         /// Its maximum.
         max: u8,
+    },
+    /// The product carries the inverter, but the manual's SDO device-id table has no row for
+    /// it: BU 2200 §6.4 lists FU1..FU4, the SK TU3-POL carries FU1..FU8
+    /// ([`super::epl::device_id_inverters`]).
+    #[error("BU 2200 §6.4 lists no SDO device id for FU{inverter}: its table ends at FU{last} (the {product} carries FU{inverter} in process data and on its system bus only)")]
+    NoDeviceId {
+        /// Product name.
+        product: &'static str,
+        /// Inverter asked for.
+        inverter: u8,
+        /// The last inverter the table lists.
+        last: u8,
     },
     /// The product does not speak the protocol.
     #[error("{product} does not speak {protocol:?}")]
@@ -129,14 +141,18 @@ pub fn coe(product: Product, a: ParamAddress) -> Result<SdoAddress, AddrError> {
 }
 
 /// POWERLINK SDO of an inverter parameter: the SK 550P's device-id table (600h steps) or the
-/// modules' (interface 2000h, FU n at 2000h + 800h·n).
+/// modules' (interface 2000h, FU n at 2000h + 800h·n), [`super::epl::device_id`]. An inverter
+/// the product carries but the table lists no id for (FU5..FU8 of the SK TU3-POL) is
+/// [`AddrError::NoDeviceId`], not the table's rule continued: 4800h, 5000h, … would fall on the
+/// process-data objects 5000h–5003h.
 pub fn powerlink(product: Product, a: ParamAddress) -> Result<SdoAddress, AddrError> {
     check(product, Protocol::Powerlink, a.inverter)?;
-    let fi = u16::from(a.inverter.get());
-    let device = match product.family() {
-        Family::Integrated => 0x2000 + 0x600 * (fi - 1),
-        Family::Module => 0x2000 + 0x800 * fi,
-    };
+    let device =
+        super::epl::device_id(product, a.inverter).ok_or_else(|| AddrError::NoDeviceId {
+            product: product.name(),
+            inverter: a.inverter.get(),
+            last: super::epl::device_id_inverters(product),
+        })?;
     Ok(SdoAddress {
         index: device + a.number.get(),
         subindex: sdo_subindex(a.set, a.element),
@@ -221,6 +237,10 @@ pub struct Addresses {
     pub ethercat: Option<SdoAddress>,
     /// POWERLINK SDO.
     pub powerlink: Option<SdoAddress>,
+    /// Why a product that speaks POWERLINK has no SDO for the parameter (FU5..FU8 of the
+    /// SK TU3-POL, [`AddrError::NoDeviceId`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub powerlink_none: Option<String>,
     /// CIP path.
     pub ethernetip: Option<CipAddress>,
     /// PROFINET record and PKW.
@@ -250,6 +270,10 @@ pub fn all(product: Product, a: ParamAddress) -> Result<Addresses, AddrError> {
         parameter,
         ethercat: coe(product, a).ok(),
         powerlink: powerlink(product, a).ok(),
+        powerlink_none: match powerlink(product, a) {
+            Err(e @ AddrError::NoDeviceId { .. }) => Some(e.to_string()),
+            _ => None,
+        },
         ethernetip: cip(product, a).ok(),
         profinet: profinet(product, a).ok(),
         systembus: can(a.inverter),
@@ -272,6 +296,9 @@ impl fmt::Display for Addresses {
                 "  POWERLINK SDO     index {:04X}h ({}) sub-index {}",
                 p.index, p.index, p.subindex
             )?;
+        }
+        if let Some(why) = &self.powerlink_none {
+            writeln!(f, "  POWERLINK SDO     none: {why}")?;
         }
         if let Some(e) = self.ethernetip {
             writeln!(
@@ -337,6 +364,39 @@ mod tests {
                 .unwrap()
                 .index,
             0x2866
+        );
+        // §6.4's last row: FU4 at 4000h. The SK TU3-POL carries FU5..FU8 (§6.3.5), the table
+        // gives them no device id; the SK TU4-POL has no FU5 at all.
+        assert_eq!(
+            powerlink(Product::Tu3Pol, a(4, 102, None, None))
+                .unwrap()
+                .index,
+            0x4066
+        );
+        let e = powerlink(Product::Tu3Pol, a(5, 102, None, None)).unwrap_err();
+        assert_eq!(
+            e,
+            AddrError::NoDeviceId {
+                product: "tu3-pol",
+                inverter: 5,
+                last: 4
+            }
+        );
+        assert!(
+            e.to_string()
+                .starts_with("BU 2200 §6.4 lists no SDO device id for FU5"),
+            "{e}"
+        );
+        assert!(matches!(
+            powerlink(Product::Tu4Pol, a(5, 102, None, None)),
+            Err(AddrError::NoSuchInverter { max: 4, .. })
+        ));
+        let all = all(Product::Tu3Pol, a(8, 102, None, None)).unwrap();
+        assert_eq!(all.powerlink, None);
+        assert!(
+            all.to_string()
+                .contains("POWERLINK SDO     none: BU 2200 §6.4 lists no SDO device id for FU8"),
+            "{all}"
         );
     }
 

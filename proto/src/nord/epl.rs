@@ -17,6 +17,10 @@
 //! - BU 2200 §6.3.5, SK TU3-POL table: FU3 setpoint 4 printed "5502.Fh" (5002.Fh by the
 //!   table's own rule, 4 sub-indices per setpoint), FU8 setpoint 5 printed "5002.29h" (5002.28h),
 //!   FU8 status word printed "5001.8" (5001.8h).
+//! - BU 2200 §6.4's device-id table stops at FU4 (4000h) although the SK TU3-POL carries FU1..FU8
+//!   (§4.1, §6.3.5, P176/P177): a table that leaves rows out. Its rule continued (4800h,
+//!   5000h, …) would collide with the process-data objects 5000h–5003h from FU6 on, so the ids
+//!   of FU5..FU8 are not known: the code gives them none ([`device_id_inverters`]).
 //! - BU 0620 §5.4.1.1 reads P700 at "3000h" + "700" = "32BC"; 3000h is no device id of
 //!   §2.4.6's table (FI 1 is 2000h, so P700 of FI 1 is 22BCh), and 32BCh addresses P188 of
 //!   FI 4 there (3200h + BCh).
@@ -114,18 +118,37 @@ pub enum ParamOwner {
     Inverter(Inverter),
 }
 
-/// The device id of FI `inverter` (BU 0620 §2.4.6: 2000h + 600h·(FI−1); BU 2200 §6.4: 2800h +
-/// 800h·(FU−1), the module itself at 2000h).
-pub fn device_id(product: Product, inverter: Inverter) -> u16 {
-    let n = u16::from(inverter.get());
-    match product.family() {
-        Family::Integrated => 0x2000 + 0x600 * (n - 1),
-        Family::Module => 0x2000 + 0x800 * n,
+/// How many inverters have an SDO device id, i.e. whose parameters are reached over
+/// POWERLINK: the SK 550P's FI 1..8 (BU 0620 §2.4.6, 2000h…4FFFh); the modules' FU1..FU4
+/// (BU 2200 §6.4: 2800h, 3000h, 3800h, 4000h). The SK TU3-POL carries FU5..FU8 in its process
+/// data ([`Product::max_inverters`], §6.3.5) but §6.4's table has no row for them, and its
+/// rule continued (4800h, 5000h, …) would put FU6..FU8 on the process-data objects
+/// 5000h–5003h: their parameters have no SDO object here. 0 for a product without POWERLINK.
+pub fn device_id_inverters(product: Product) -> u8 {
+    match product {
+        Product::Sk550p => 8,
+        Product::Tu3Pol | Product::Tu4Pol | Product::Cu4Pol => 4,
+        _ => 0,
     }
 }
 
+/// The device id of FI `inverter` (BU 0620 §2.4.6: 2000h + 600h·(FI−1); BU 2200 §6.4: 2800h +
+/// 800h·(FU−1), the module itself at 2000h); `None` for an inverter the product's table has no
+/// row for ([`device_id_inverters`]).
+pub fn device_id(product: Product, inverter: Inverter) -> Option<u16> {
+    let n = u16::from(inverter.get());
+    if inverter.get() > device_id_inverters(product) {
+        return None;
+    }
+    Some(match product.family() {
+        Family::Integrated => 0x2000 + 0x600 * (n - 1),
+        Family::Module => 0x2000 + 0x800 * n,
+    })
+}
+
 /// The parameter an SDO index addresses: its owner and number, `None` outside the device-id
-/// tables (index below 2000h, above the last device's range, or an FI beyond the product's).
+/// tables (index below 2000h, above the last device's range: for the modules 47FFh, FU4's
+/// last, also on the SK TU3-POL that carries FU5..FU8 — see [`device_id_inverters`]).
 pub fn parameter_object(product: Product, index: u16) -> Option<(ParamOwner, u16)> {
     let offset = index.checked_sub(0x2000)?;
     let (owner, number) = match product.family() {
@@ -137,7 +160,7 @@ pub fn parameter_object(product: Product, index: u16) -> Option<(ParamOwner, u16
         Family::Module => (ParamOwner::Inverter(fi_of(offset / 0x800)?), offset % 0x800),
     };
     match owner {
-        ParamOwner::Inverter(i) if i.get() > product.max_inverters() => None,
+        ParamOwner::Inverter(i) if i.get() > device_id_inverters(product) => None,
         _ => Some((owner, number)),
     }
 }
@@ -191,10 +214,10 @@ fn tu3_sub(n: u8, k: u8) -> u8 {
 
 /// The words of the PReq (`outputs`) or PRes payload of a product, in order (BU 0620 §2.4.5:
 /// 8 FIs, 96 bytes, 5000h+FI−1 / 5010h+FI−1 sub-indices 1..6; BU 2200 §6.3.5: SK TU3-POL
-/// "12 Byte" per FU — its table restarts the word count at every FU — for the FU1..8 it lists
-/// (its device-id table, §6.4, reaches FU 1..4 only: the words of FU5..8 stay 0), control/
-/// status word 5000h/5001h sub FU, values 5002h/5003h; SK TU4-POL/CU4-POL 50 bytes: the I/O
-/// word 5005h.0/5001h.0, then FU1..4 with values at 5·(FU−1) + k).
+/// "12 Byte" per FU — its table restarts the word count at every FU — for FU1..8, control/
+/// status word 5000h/5001h sub FU, values 5002h/5003h (the words of an FU not on the system
+/// bus stay 0); SK TU4-POL/CU4-POL 50 bytes: the I/O word 5005h.0/5001h.0, then FU1..4 with
+/// values at 5·(FU−1) + k).
 pub fn process_map(product: Product, outputs: bool) -> Vec<MappedWord> {
     let (word0, values) = if outputs {
         (0x5000, 0x5002)
@@ -392,7 +415,8 @@ mod tests {
     #[test]
     fn device_ids_of_both_tables() {
         // BU 0620 §2.4.6 example: P102 of FI 5 = 3800h + 66h = 3866h.
-        assert_eq!(device_id(Product::Sk550p, fi(5)) + 102, 0x3866);
+        assert_eq!(device_id(Product::Sk550p, fi(5)), Some(0x3800));
+        assert_eq!(device_id(Product::Sk550p, fi(8)), Some(0x4A00));
         assert_eq!(
             parameter_object(Product::Sk550p, 0x3866),
             Some((ParamOwner::Inverter(fi(5)), 102))
@@ -403,7 +427,7 @@ mod tests {
         );
         assert_eq!(parameter_object(Product::Sk550p, 0x5000), None);
         // BU 2200 §6.4 example: P102 of FU1 = 2800h + 66h = 2866h; the module at 2000h.
-        assert_eq!(device_id(Product::Tu4Pol, fi(1)) + 102, 0x2866);
+        assert_eq!(device_id(Product::Tu4Pol, fi(1)), Some(0x2800));
         assert_eq!(
             parameter_object(Product::Tu4Pol, 0x2866),
             Some((ParamOwner::Inverter(fi(1)), 102))
@@ -412,7 +436,18 @@ mod tests {
             parameter_object(Product::Cu4Pol, 0x20A0),
             Some((ParamOwner::Interface, 160))
         );
+        // §6.4's table ends at FU4 (4000h…47FFh), though the SK TU3-POL carries FU1..FU8
+        // (§6.3.5): no device id for FU5..FU8, and 4800h addresses nothing.
+        assert_eq!(Product::Tu3Pol.max_inverters(), 8);
+        assert_eq!(device_id_inverters(Product::Tu3Pol), 4);
+        assert_eq!(device_id(Product::Tu3Pol, fi(4)), Some(0x4000));
+        assert_eq!(device_id(Product::Tu3Pol, fi(5)), None);
+        assert_eq!(
+            parameter_object(Product::Tu3Pol, 0x47FF),
+            Some((ParamOwner::Inverter(fi(4)), 0x7FF))
+        );
         assert_eq!(parameter_object(Product::Tu3Pol, 0x4800), None);
+        assert_eq!(parameter_object(Product::Tu3Pol, 0x5000), None);
         assert_eq!(parameter_object(Product::Tu3Pol, 0x1FFF), None);
     }
 

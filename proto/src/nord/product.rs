@@ -146,19 +146,21 @@ impl Product {
         }
     }
 
-    /// How many inverters the interface can address (FI 1 plus those on the system bus).
+    /// How many inverters the interface carries: FI 1 plus those on the system bus, each with
+    /// its process data (control/status word, setpoints/actual values).
     ///
     /// BU 0620 §2.1.1: up to 8 on the SK 550P's system bus. BU 2100 §6: classes 105–108 (FI 5..8)
-    /// "only bus interface SK TU3-EIP", so TU4/CU4-EIP reach 4. BU 2200 §6: SDO device ids for
-    /// FU1..FU4. BU 0590 §4.2.2.1: data record 101 is "the frequency inverter" — one.
+    /// "only bus interface SK TU3-EIP", so TU4/CU4-EIP reach 4. BU 2200: the SK TU3-POL carries
+    /// FU1..FU8 — §4.1 p. 20 (8 inverters SK 500–535E / SK 54xE on one system bus), §6.3.5 (its
+    /// PDO table lists FU5..FU8), §7.1.3 P176/P177 (arrays [-26]…[-49] "an/von FU5…FU8",
+    /// footnote "Nur Busschnittstelle SK TU3-POL"); SK TU4/CU4-POL FU1..FU4 (§6.3.5's 50-byte
+    /// table, §4.1's SK 1x0E/2xxE column). Parameter access over POWERLINK reaches fewer: BU 2200
+    /// §6.4 lists SDO device ids for FU1..FU4 only ([`crate::nord::epl::device_id_inverters`]).
+    /// BU 0590 §4.2.2.1: data record 101 is "the frequency inverter" — one.
     pub fn max_inverters(self) -> u8 {
         match self {
-            Product::Sk550p | Product::Tu3Eip => 8,
-            Product::Tu4Eip
-            | Product::Cu4Eip
-            | Product::Tu3Pol
-            | Product::Tu4Pol
-            | Product::Cu4Pol => 4,
+            Product::Sk550p | Product::Tu3Eip | Product::Tu3Pol => 8,
+            Product::Tu4Eip | Product::Cu4Eip | Product::Tu4Pol | Product::Cu4Pol => 4,
             Product::Tu3Pnt => 1,
         }
     }

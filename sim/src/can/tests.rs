@@ -684,13 +684,15 @@ fn behind_a_module_p120_loses_node_1_as_e10_9_or_e10_8() {
             }
         );
         s.receive(&frame(0x701, &[0x05]), 10 * MS);
-        // Each of its four inverters (nodes 32…38) reports it, 600 ms after the beat.
+        // Each of its inverters reports it, 600 ms after the beat: the SK TU4-EIP's four
+        // (nodes 32…38), the SK TU3-POL's eight (32…46, BU 2200 §4.1).
         let out = run(&mut s, 11, 700);
         let ids: Vec<(u64, u16)> = out.iter().map(|(t, f)| (*t, f.id())).collect();
-        assert_eq!(
-            ids,
-            [(610, 0x0A0), (610, 0x0A2), (610, 0x0A4), (610, 0x0A6)]
-        );
+        let want: Vec<(u64, u16)> = (0..u16::from(product.max_inverters()))
+            .map(|k| (610, 0x0A0 + 2 * k))
+            .collect();
+        assert_eq!(want.len(), if product == Product::Tu3Pol { 8 } else { 4 });
+        assert_eq!(ids, want);
         assert_eq!(&out[0].1.data()[3..5], &error.to_le_bytes());
         assert_eq!(p700(&mut s, 1).0, i32::from(error));
     }

@@ -119,9 +119,8 @@ impl SystemBusAddress {
 /// SK CU4/TU4 "32, 34, 36 or 38", SK TU3 "32, 34, …46" when more than one inverter is connected,
 /// SK 550P 32 and "34, 36, 38 … 46" (BU 2100 §7.2 p. 54 with its §4.3 table, BU 2200 §7.2
 /// p. 59, BU 0620 §4.5 p. 90). BU 0590 names no P515: the SK TU3-PNT's one inverter is given
-/// FI 1's. The SK TU3-POL's list reaches FI 8 although BU 2200's device-id table (§6.4) and
-/// therefore [`Product::max_inverters`] stop at FU 4; [`SystemBusAddress::for_inverter`] follows
-/// the latter.
+/// FI 1's. The SK TU3-POL's list reaches FI 8, as do its process data (BU 2200 §6.3.5) and
+/// [`Product::max_inverters`]; only its SDO device ids (§6.4) stop at FU 4.
 pub fn p515_addresses(product: Product) -> Vec<SystemBusAddress> {
     let count = match product {
         Product::Sk550p | Product::Tu3Eip | Product::Tu3Pol => 8,
@@ -258,6 +257,11 @@ mod tests {
         assert_eq!(p515_addresses(Product::Tu3Eip).len(), 8);
         assert_eq!(p515_addresses(Product::Tu3Pol).len(), 8);
         assert_eq!(p515_addresses(Product::Tu3Pnt).len(), 1);
+        // BU 2200 §4.1 p. 20: the SK TU3-POL's system bus carries 8 inverters, FU 8 at 46.
+        assert_eq!(
+            SystemBusAddress::for_inverter(Product::Tu3Pol, fi(8)).map(|a| a.get()),
+            Ok(46)
+        );
         for n in 1..=8 {
             let ids = addr::can(fi(n));
             assert_eq!(SystemBusAddress::inverter(fi(n)).get(), ids.inverter);
