@@ -788,6 +788,10 @@ enum Timed {
     Limit(Duration),
     /// It ran process data this long against the drive's own clock.
     Run(Duration),
+    /// A bus's own step ran this long: the bus's cycles against the device's watchdogs (a
+    /// POWERLINK node falls back to PRE_OPERATIONAL_2 when the SoCs stop), which a host that
+    /// lost much of that time stopped.
+    Bus(Duration),
 }
 
 /// Why step `n`, whose outcome depended on the host over `window`, says nothing of the device:
@@ -799,6 +803,7 @@ fn excuse(n: usize, timed: Timed, window: (Instant, Instant)) -> Option<String> 
         Timed::Limit(l) if l.is_zero() => (l, String::new()),
         Timed::Limit(l) => (l, format!(", against the device's limit of {}", ms(l))),
         Timed::Run(d) => (d, format!(", of its {} of process data", ms(d))),
+        Timed::Bus(d) => (d, format!(", of its {} on the bus", ms(d))),
     };
     crate::timing::excuses(lost, time)
         .then(|| format!("host late by {} in step {n}{against}", ms(lost)))
@@ -941,6 +946,7 @@ fn run_step(
         // Process data run for a time is judged on what the drive did meanwhile, on its own
         // clock: a host that lost much of that time sent and read it late.
         (Ok(_), Action::Process { .. } | Action::Wait(_)) => Some(Timed::Run(window.1 - window.0)),
+        (Ok(_), Action::Bus(_)) => Some(Timed::Bus(window.1 - window.0)),
         _ => None,
     };
     let (verdict, observed, refusal, message) = match outcome {
@@ -1690,6 +1696,10 @@ cases:
                 // The drive, seen late, still "switch-on disabled".
                 return Ok(crate::binding::process_fields(0x0B40, &[0, 0, 0]).into());
             }
+            if matches!(action, Action::Bus(_)) {
+                // A POWERLINK node whose SoCs stopped: back in PRE_OPERATIONAL_2.
+                return Ok(serde_json::json!({ "state": "PRE_OPERATIONAL_2" }).into());
+            }
             Err(StepError::Late {
                 what: "read P102".into(),
                 limit: Duration::from_millis(20),
@@ -1725,6 +1735,18 @@ cases:
 
     /// [`run_late`] for case `id`.
     fn run_late_case(id: &str, late: usize, host_late: Duration, real_time: bool) -> CaseResult {
+        let sk550p = Profile::builtin(Product::Sk550p);
+        run_late_in((SUITE, sk550p), id, late, host_late, real_time)
+    }
+
+    /// [`run_late_case`] of `suite` for `profile`.
+    fn run_late_in(
+        (suite, profile): (&str, Profile),
+        id: &str,
+        late: usize,
+        host_late: Duration,
+        real_time: bool,
+    ) -> CaseResult {
         let _one = crate::timing::TESTS
             .lock()
             .unwrap_or_else(|e| e.into_inner());
@@ -1734,13 +1756,16 @@ cases:
                 allow_motion: true,
                 max_eeprom_writes: 20,
             }),
-            ..sk550p_options()
+            ..RunOptions {
+                retries: 25,
+                ..RunOptions::new(vec![profile])
+            }
         };
         let mut f = LateFactory {
             late: late + 1,
             host_late,
         };
-        let r = run(&load_text_for_tests(SUITE), &opts, &mut f);
+        let r = run(&load_text_for_tests(suite), &opts, &mut f);
         r.cases.into_iter().next().unwrap()
     }
 
@@ -1780,6 +1805,39 @@ cases:
         // With the host on time the drive's answer stands.
         let c = run_late_case("process", 1, Duration::ZERO, true);
         assert_eq!(c.verdict, Verdict::Fail, "{}", c.message);
+    }
+
+    /// A bus's own step: a POWERLINK NMT command whose answer is judged by the node's state.
+    const BUS_SUITE: &str = r#"
+doc: BU 0620
+edition: "2020-03 en"
+cases:
+  - id: start-node
+    title: start the node
+    ref: { section: "2.4.3.3", page: 30 }
+    steps:
+      - epl: { nmt: start-node }
+        expect: { state: OPERATIONAL }
+"#;
+
+    #[test]
+    fn a_bus_step_judged_while_the_host_was_late_is_run_again() {
+        let epl = || {
+            (
+                BUS_SUITE,
+                crate::buses::catalog().by_name("sk550p@epl").unwrap(),
+            )
+        };
+        let c = run_late_in(epl(), "start-node", 1, Duration::from_millis(40), true);
+        assert_eq!(c.discarded.len(), 1, "{:?} {}", c.verdict, c.message);
+        let why = &c.discarded[0].why;
+        assert!(why.starts_with("host late by "), "{why}");
+        assert!(why.contains(" in step 1, of its "), "{why}");
+        assert!(why.ends_with(" on the bus; the case runs again"), "{why}");
+        // With the host on time the node's state stands.
+        let c = run_late_in(epl(), "start-node", 1, Duration::ZERO, true);
+        assert_eq!(c.verdict, Verdict::Fail, "{}", c.message);
+        assert!(c.discarded.is_empty());
     }
 
     #[test]
