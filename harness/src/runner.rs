@@ -788,9 +788,8 @@ enum Timed {
     Limit(Duration),
     /// It ran process data this long against the drive's own clock.
     Run(Duration),
-    /// A bus's own step ran this long: the bus's cycles against the device's watchdogs (a
-    /// POWERLINK node falls back to PRE_OPERATIONAL_2 when the SoCs stop), which a host that
-    /// lost much of that time stopped.
+    /// A bus's own step ran this long: the bus's cycles against the device's watchdogs, which
+    /// fire when a host that lost much of that time stopped the cycles.
     Bus(Duration),
 }
 
