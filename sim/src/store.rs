@@ -56,6 +56,19 @@ pub enum AccessError {
     OnlyResettable,
 }
 
+#[cfg(test)]
+impl AccessError {
+    /// Every refusal a store gives, for the tests that map each one.
+    pub(crate) const ALL: [AccessError; 6] = [
+        AccessError::NoSuchParameter,
+        AccessError::ReadOnly,
+        AccessError::OutOfRange,
+        AccessError::BadSubIndex,
+        AccessError::NotAnArray,
+        AccessError::OnlyResettable,
+    ];
+}
+
 /// A unit's parameters.
 #[derive(Debug, Clone)]
 pub struct ParamStore {

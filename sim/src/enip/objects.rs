@@ -579,14 +579,7 @@ mod tests {
     /// answers from the store's reason or from the node's abort code alone.
     #[test]
     fn a_stores_refusal_gives_one_status_through_its_abort_code() {
-        let errors = [
-            AccessError::NoSuchParameter,
-            AccessError::ReadOnly,
-            AccessError::OutOfRange,
-            AccessError::BadSubIndex,
-            AccessError::NotAnArray,
-            AccessError::OnlyResettable,
-        ];
+        let errors = AccessError::ALL;
         for def in proto::nord::params::CATALOGUE {
             for e in errors {
                 for value in [def.min - 1, def.min, def.max, def.max + 1] {

@@ -189,14 +189,7 @@ mod tests {
 
     #[test]
     fn the_stores_reason_keeps_the_error_numbers_finer_than_the_abort_codes() {
-        let errors = [
-            AccessError::NoSuchParameter,
-            AccessError::ReadOnly,
-            AccessError::OutOfRange,
-            AccessError::BadSubIndex,
-            AccessError::NotAnArray,
-            AccessError::OnlyResettable,
-        ];
+        let errors = AccessError::ALL;
         for e in errors {
             let code = abort_of(e, 0, None);
             let with = Refused {
