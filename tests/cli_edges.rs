@@ -221,7 +221,7 @@ fn coverage_counts_the_inventories_and_names_what_keeps_them_dishonest() {
     .unwrap();
     std::fs::write(
         dir.join("inventory/floors.yaml"),
-        "\"BU 0620 2020-03 en\": 1\n",
+        "\"BU 0620 2020-03 en\": { asserted: 1, checked: 0 }\n",
     )
     .unwrap();
     let o = harness(&["coverage", "--suites", dir.to_str().unwrap()]);
@@ -233,6 +233,19 @@ fn coverage_counts_the_inventories_and_names_what_keeps_them_dishonest() {
     );
     assert!(
         stdout.contains("case `p102/read` cites BU 0620 §2.5.6 and no statement names it"),
+        "{stdout}"
+    );
+    // A hollow claim: P102 is what the step reads, not what it expects.
+    std::fs::write(
+        dir.join("inventory/bu0620.yaml"),
+        "doc: BU 0620\nedition: \"2020-03 en\"\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/read]\n    values: [{ case: p102/read, step: 1, value: 102 }]\n",
+    )
+    .unwrap();
+    let o = harness(&["coverage", "--suites", dir.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("value `102` is not asserted by case `p102/read` step 1: the case step 1 expects nothing"),
         "{stdout}"
     );
     let _ = std::fs::remove_dir_all(&dir);
@@ -254,7 +267,7 @@ fn coverage_gates_on_a_share_per_section_and_counts_errata_by_check() {
     .unwrap();
     std::fs::write(
         dir.join("inventory/floors.yaml"),
-        "\"BU 0620 2020-03 en\": 1\n",
+        "\"BU 0620 2020-03 en\": { asserted: 1, checked: 0 }\n",
     )
     .unwrap();
     let suites = dir.to_str().unwrap();

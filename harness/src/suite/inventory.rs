@@ -3,25 +3,43 @@
 //! that assert it, or `untestable:` with the reason, or `pending:` with the bus whose binding
 //! is not there yet (an entry with none of them is testable and not asserted yet: the gap).
 //!
+//! A statement's `values:` name, for each value it states, the case and step whose expectation
+//! carries it (`{ case, step, value }`, steps counted from 1 as the transcripts count them):
+//! a claim the loader can check ([`super::claim`]). An asserted statement with values is
+//! *checked*; one that names cases only is a claim nobody has checked yet, counted apart.
+//!
 //! [`coverage`] counts them per manual and section (`harness coverage`, the run's summary and
 //! HTML report); [`check`] keeps an inventory honest against the loaded suites: every case id
-//! it names exists, every case citing an inventoried manual is named by a statement, and the
-//! asserted statements of a manual do not fall below the floor checked in beside them
-//! (`floors.yaml`), so the count can only grow.
+//! it names exists, every value is carried by the step it names, every case citing an
+//! inventoried manual is named by a statement, and the asserted and checked statements of a
+//! manual do not fall below the floors checked in beside them (`floors.yaml`), so the counts
+//! can only grow.
 
 use serde::Deserialize;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
+use super::claim::carries;
 use super::load::{LoadError, Loaded};
+use crate::notation::Matcher;
 use crate::outcome::{CaseKind, StatementCoverage};
 
 /// The folder below the suites that holds the inventories (the suite loader skips it).
 pub(crate) const DIR: &str = "inventory";
 
-/// The floors file in [`DIR`]: per manual (`"<doc> <edition>"`), the fewest asserted
-/// statements allowed.
+/// The floors file in [`DIR`]: per manual (`"<doc> <edition>"`), the fewest asserted and
+/// checked statements allowed.
 const FLOORS: &str = "floors.yaml";
+
+/// A manual's floors.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct Floor {
+    /// The fewest statements cases assert.
+    pub(crate) asserted: usize,
+    /// The fewest of them whose values the loader checked.
+    pub(crate) checked: usize,
+}
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -41,9 +59,32 @@ struct StatementDoc {
     #[serde(default)]
     cases: Vec<String>,
     #[serde(default)]
+    values: Vec<ValueDoc>,
+    #[serde(default)]
     untestable: Option<String>,
     #[serde(default)]
     pending: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ValueDoc {
+    case: String,
+    step: usize,
+    value: serde_json::Value,
+}
+
+/// One value of a statement and the step whose expectation carries it.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Carrier {
+    /// The case's full id, one of the statement's cases.
+    pub(crate) case: String,
+    /// The step, from 1.
+    pub(crate) step: usize,
+    /// The value, parsed as an expectation is.
+    pub(crate) value: Matcher,
+    /// As written, for messages.
+    pub(crate) text: String,
 }
 
 /// Where a statement stands.
@@ -60,16 +101,26 @@ pub(crate) enum Status {
 }
 
 /// One testable statement of a manual.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Statement {
     pub(crate) section: String,
     pub(crate) page: Option<u32>,
     pub(crate) says: String,
     pub(crate) status: Status,
+    /// Its values and the steps that carry them (only an asserted statement has any).
+    pub(crate) values: Vec<Carrier>,
+}
+
+impl Statement {
+    /// Asserted, with every value's step named (whether the steps carry them is
+    /// [`check`]'s).
+    pub(crate) fn checked(&self) -> bool {
+        matches!(self.status, Status::Asserted(_)) && !self.values.is_empty()
+    }
 }
 
 /// One manual's inventory.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Inventory {
     pub(crate) file: PathBuf,
     pub(crate) doc: String,
@@ -125,11 +176,18 @@ pub(crate) fn parse_inventory(file: &Path, text: &str) -> Result<Inventory, Load
                 ))
             }
         };
+        let values = s
+            .values
+            .into_iter()
+            .map(|v| carrier(v, &status))
+            .collect::<Result<_, String>>()
+            .map_err(|e| error(file, None, format!("§{} \"{}\": {e}", s.section, s.says)))?;
         statements.push(Statement {
             section: s.section,
             page: s.page,
             says: s.says,
             status,
+            values,
         });
     }
     Ok(Inventory {
@@ -137,6 +195,34 @@ pub(crate) fn parse_inventory(file: &Path, text: &str) -> Result<Inventory, Load
         doc: doc.doc,
         edition: doc.edition,
         statements,
+    })
+}
+
+/// One `values:` entry: its case must be one the statement names, its step counted from 1,
+/// its value written as an expectation is.
+fn carrier(v: ValueDoc, status: &Status) -> Result<Carrier, String> {
+    let Status::Asserted(cases) = status else {
+        return Err("`values` name the steps of the statement's `cases`; it has none".into());
+    };
+    if !cases.contains(&v.case) {
+        return Err(format!(
+            "a value names case `{}`, which is not among its `cases`",
+            v.case
+        ));
+    }
+    if v.step == 0 {
+        return Err(format!("case `{}`: steps count from 1", v.case));
+    }
+    let text = match &v.value {
+        serde_json::Value::String(t) => t.clone(),
+        other => other.to_string(),
+    };
+    let value = Matcher::parse(&v.value).map_err(|e| format!("value `{text}`: {e}"))?;
+    Ok(Carrier {
+        case: v.case,
+        step: v.step,
+        value,
+        text,
     })
 }
 
@@ -164,8 +250,8 @@ pub(crate) fn load(suites: &Path) -> Result<Vec<Inventory>, LoadError> {
         .collect()
 }
 
-/// The floors: manual → fewest asserted statements.
-pub(crate) fn floors(suites: &Path) -> Result<BTreeMap<String, usize>, LoadError> {
+/// The floors: manual → fewest asserted and checked statements.
+pub(crate) fn floors(suites: &Path) -> Result<BTreeMap<String, Floor>, LoadError> {
     let file = suites.join(DIR).join(FLOORS);
     match std::fs::read_to_string(&file) {
         Ok(text) => parse(&file, &text),
@@ -204,6 +290,7 @@ pub(crate) fn coverage(inventories: &[Inventory], loaded: &Loaded) -> Vec<Statem
                     ..StatementCoverage::default()
                 });
             c.statements += 1;
+            c.checked += usize::from(s.checked());
             match s.status {
                 Status::Asserted(ref cases)
                     if cases.iter().any(|id| device.contains(id.as_str())) =>
@@ -222,31 +309,55 @@ pub(crate) fn coverage(inventories: &[Inventory], loaded: &Loaded) -> Vec<Statem
 }
 
 /// What keeps the inventories honest, as messages (none: all is well): case ids that do not
-/// exist, cases of an inventoried manual no statement names, a manual whose asserted
-/// statements fell below its floor, a floor for a manual without an inventory.
+/// exist, a value the step it names does not carry, cases of an inventoried manual no
+/// statement names, a manual whose asserted or checked statements fell below its floor, a floor
+/// for a manual without an inventory.
 pub(crate) fn check(
     inventories: &[Inventory],
     loaded: &Loaded,
-    floors: &BTreeMap<String, usize>,
+    floors: &BTreeMap<String, Floor>,
 ) -> Vec<String> {
-    let ids: BTreeSet<&str> = loaded.cases.iter().map(|c| c.id.as_str()).collect();
+    let cases: BTreeMap<&str, &super::Case> =
+        loaded.cases.iter().map(|c| (c.id.as_str(), c)).collect();
     let mut problems = Vec::new();
     for inv in inventories {
         let mut named = BTreeSet::new();
-        let mut asserted = 0;
+        let mut counted = Floor::default();
         for s in &inv.statements {
-            if let Status::Asserted(cases) = &s.status {
-                asserted += 1;
-                for id in cases {
-                    if !ids.contains(id.as_str()) {
+            let place = || format!("{}: §{} \"{}\"", inv.file.display(), s.section, s.says);
+            if let Status::Asserted(ids) = &s.status {
+                counted.asserted += 1;
+                counted.checked += usize::from(s.checked());
+                for id in ids {
+                    if !cases.contains_key(id.as_str()) {
                         problems.push(format!(
-                            "{}: §{} names case `{id}`, which no suite has",
-                            inv.file.display(),
-                            s.section
+                            "{}: names case `{id}`, which no suite has",
+                            place()
                         ));
                     }
                     named.insert(id.as_str());
                 }
+            }
+            for v in &s.values {
+                let Some(case) = cases.get(v.case.as_str()) else {
+                    continue;
+                };
+                let expect = case.steps.get(v.step - 1).map(|step| step.expect.as_ref());
+                let why = match expect {
+                    None => format!("has {} steps", case.steps.len()),
+                    Some(None) => format!("step {} expects nothing", v.step),
+                    Some(Some(m)) if !carries(m, &v.value) => {
+                        format!("step {}'s expectation `{m}` does not carry it", v.step)
+                    }
+                    Some(Some(_)) => continue,
+                };
+                problems.push(format!(
+                    "{}: value `{}` is not asserted by case `{}` step {}: the case {why}",
+                    place(),
+                    v.text,
+                    v.case,
+                    v.step
+                ));
             }
         }
         for c in loaded
@@ -265,15 +376,20 @@ pub(crate) fn check(
             }
         }
         match floors.get(&inv.manual()) {
-            Some(floor) if asserted < *floor => problems.push(format!(
-                "{}: {asserted} asserted statements, fewer than the floor of {floor} (floors.yaml): the count may only grow",
-                inv.manual()
-            )),
-            None => problems.push(format!(
-                "{}: no floor in {DIR}/{FLOORS}",
-                inv.manual()
-            )),
-            Some(_) => {}
+            Some(floor) => {
+                for (what, n, least) in [
+                    ("asserted", counted.asserted, floor.asserted),
+                    ("checked", counted.checked, floor.checked),
+                ] {
+                    if n < least {
+                        problems.push(format!(
+                            "{}: {n} {what} statements, fewer than the floor of {least} (floors.yaml): the count may only grow",
+                            inv.manual()
+                        ));
+                    }
+                }
+            }
+            None => problems.push(format!("{}: no floor in {DIR}/{FLOORS}", inv.manual())),
         }
     }
     for manual in floors.keys() {
@@ -300,6 +416,7 @@ statements:
   - section: "2.5.6"
     says: P102 counts in 0.01 s
     cases: [test/resolution]
+    values: [{ case: test/resolution, step: 1, value: 2 }]
   - section: "2.5.6"
     says: the LED is green
     untestable: "hardware: a colour"
@@ -405,10 +522,14 @@ cases:
     #[test]
     fn the_check_names_unknown_ids_unnamed_cases_and_a_fallen_floor() {
         let loaded = load_text_for_tests(SUITE);
-        let floors: BTreeMap<String, usize> = [("BU 0620 2020-03 en".to_string(), 3)].into();
+        let floor = Floor {
+            asserted: 3,
+            checked: 1,
+        };
+        let floors: BTreeMap<String, Floor> = [("BU 0620 2020-03 en".to_string(), floor)].into();
         let problems = check(&[inventory()], &loaded, &floors);
         // `process` cites BU 0620 and no statement names it (the 6.1.3 one is open); 2 asserted
-        // is below the floor of 3.
+        // is below the floor of 3; the one checked statement meets its floor.
         assert_eq!(problems.len(), 2, "{problems:?}");
         assert!(
             problems[0]
@@ -435,6 +556,63 @@ cases:
             problems.iter().any(|p| p.contains("no floor")),
             "{problems:?}"
         );
+    }
+
+    /// The issue's own example of a hollow claim: P161 written, P186 read back. Its value is
+    /// not in the step the claim names, and the check says so.
+    const HOLLOW: &str = r#"
+doc: BU 2100
+edition: en
+cases:
+  - id: p161
+    title: P161 read in at restart
+    ref: { section: "5.1", page: 20 }
+    steps:
+      - write: { param: 161, element: 3, value: 0, target: interface }
+      - read: { param: 186, element: 2, target: interface }
+        expect: { value: 255 }
+"#;
+
+    fn hollow(values: &str) -> Vec<String> {
+        let text = format!(
+            "doc: BU 2100\nedition: en\nstatements:\n  - section: \"5.1\"\n    says: P161 [-03] = 0 is read in at restart\n    cases: [test/p161]\n    values: {values}\n"
+        );
+        let inv = parse_inventory(Path::new("bu2100.yaml"), &text).unwrap();
+        let floors = [("BU 2100 en".to_string(), Floor::default())].into();
+        check(&[inv], &load_text_for_tests(HOLLOW), &floors)
+    }
+
+    #[test]
+    fn a_value_the_named_step_does_not_carry_is_refused() {
+        let p = hollow("[{ case: test/p161, step: 2, value: 0 }]");
+        assert_eq!(p.len(), 1, "{p:?}");
+        assert!(
+            p[0].contains("value `0` is not asserted by case `test/p161` step 2")
+                && p[0].contains("does not carry it"),
+            "{p:?}"
+        );
+        // A step without an expectation carries nothing, nor does a step the case lacks.
+        let p = hollow("[{ case: test/p161, step: 1, value: 0 }]");
+        assert!(p[0].contains("step 1 expects nothing"), "{p:?}");
+        let p = hollow("[{ case: test/p161, step: 3, value: 0 }]");
+        assert!(p[0].contains("the case has 2 steps"), "{p:?}");
+        // Made real, the claim holds.
+        assert!(hollow("[{ case: test/p161, step: 2, value: 255 }]").is_empty());
+    }
+
+    #[test]
+    fn values_name_the_statements_own_cases() {
+        let text = INVENTORY.replace(
+            "values: [{ case: test/resolution, step: 1, value: 2 }]",
+            "values: [{ case: test/read, step: 1, value: 2 }]",
+        );
+        let e = parse_inventory(Path::new("x.yaml"), &text).unwrap_err();
+        assert!(e.message.contains("not among its `cases`"), "{e}");
+        let text = INVENTORY.replace("step: 1, value: 2", "step: 0, value: 2");
+        let e = parse_inventory(Path::new("x.yaml"), &text).unwrap_err();
+        assert!(e.message.contains("steps count from 1"), "{e}");
+        let c = coverage(&[inventory()], &load_text_for_tests(SUITE));
+        assert_eq!(c[0].checked, 1);
     }
 
     #[test]

@@ -2,6 +2,7 @@
 
 mod bus_step;
 mod case;
+mod claim;
 pub(crate) mod fields;
 pub(crate) mod inventory;
 mod load;
