@@ -93,8 +93,8 @@ fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_runs_pdos_an
 
 /// Every frame of a system-bus run's capture decodes as CANopen (a remote frame as CAN), none
 /// malformed, and tshark finds in it what the cases say they did: the SDO read of P102 of FI 3
-/// (node 36, 2066h sub-index 1) and the nodes' abort codes for the bad requests, each in the
-/// frame its case and step label.
+/// (node 36, 2066h sub-index 1), the nodes' abort codes for the bad requests and the error
+/// frames of a faulty controller, each in the frame its case and step label.
 #[test]
 fn tshark_decodes_the_capture_of_a_system_bus_run_as_canopen() {
     if !require_tshark("tshark as the independent reader of the system bus's capture") {
@@ -120,7 +120,15 @@ fn tshark_decodes_the_capture_of_a_system_bus_run_as_canopen() {
         .args(["-e", "_ws.col.Protocol", "-e", "canopen.cob_id"])
         .args(["-e", "canopen.sdo.main_idx", "-e", "canopen.sdo.sub_idx"])
         .args(["-e", "canopen.sdo.abort_code", "-e", "_ws.expert.severity"])
-        .args(["-e", "frame.comment", "-e", "can.flags.rtr"])
+        .args([
+            "-e",
+            "frame.comment",
+            "-e",
+            "can.flags.rtr",
+            "-e",
+            "can.flags.err",
+        ])
+        .args(["-e", "_ws.col.Info"])
         .output()
         .expect("tshark runs");
     assert!(out.status.success(), "{out:?}");
@@ -128,14 +136,27 @@ fn tshark_decodes_the_capture_of_a_system_bus_run_as_canopen() {
     let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split('|').collect()).collect();
     assert!(rows.len() > 300, "{} frames", rows.len());
     for r in &rows {
-        // CANopen's dissector leaves remote frames (a bad-input case's) to CAN's.
-        let protocol = if r[7] == "1" { "CAN" } else { "CANopen" };
+        // CANopen's dissector leaves remote frames (a bad-input case's) and the controllers'
+        // error frames (a bus-errors case's) to CAN's.
+        let protocol = if r[7] == "1" || r[8] == "1" {
+            "CAN"
+        } else {
+            "CANopen"
+        };
         assert_eq!(r[0], protocol, "{r:?}");
         // Expert severity, in decimal: a comment (the frame's label) is 0x00100000; warnings
         // start at 0x00600000 (malformed frames are errors).
         let severity: u32 = r[5].parse().unwrap_or(0);
         assert!(severity < 0x0060_0000, "tshark flags {r:?}");
     }
+    // The error frames of a node's faulty controller, as SocketCAN reports them (CAN_ERR_FLAG,
+    // class 088h), each in its step.
+    assert!(
+        rows.iter().any(|r| r[8] == "1"
+            && r[9].contains("Protocol violation")
+            && r[6].contains("can/bus-errors/error-frames-are-seen-as-such")),
+        "no error frame of the bus-errors case"
+    );
     let has = |cob: &str, index: &str, sub: &str, abort: &str, case: &str| {
         rows.iter().any(|r| {
             r[1] == cob && r[2] == index && r[3] == sub && r[4] == abort && r[6].contains(case)

@@ -111,10 +111,10 @@ impl Capture {
         });
     }
 
-    /// A frame of the NORD system bus, captured at `at` on the capture's CAN interface, with
-    /// the current label as its comment.
-    pub(crate) fn can(&mut self, frame: &proto::can::CanFrame, at: Duration) {
-        let record = proto::can::socketcan::SocketCanRepr::Frame(*frame).to_pcap_record();
+    /// A frame of the NORD system bus, or an error frame its controller reported, captured at
+    /// `at` on the capture's CAN interface, with the current label as its comment.
+    pub(crate) fn can(&mut self, frame: &proto::can::socketcan::SocketCanRepr, at: Duration) {
+        let record = frame.to_pcap_record();
         self.packets.push(Packet {
             at,
             frame: record.to_vec(),
@@ -371,6 +371,7 @@ pub(crate) mod testing {
 mod tests {
     use super::testing::{description, read_pcapng, tempdir};
     use super::*;
+    use proto::can::socketcan::{ErrorClass, ErrorFrame, SocketCanRepr};
 
     fn ms(n: u64) -> Duration {
         Duration::from_millis(n)
@@ -396,7 +397,7 @@ mod tests {
         c.frame(&ecat_frame(1), ms(1));
         c.label(Some("sk550p@can step 1"));
         let sdo = proto::can::CanFrame::new(0x624, &[0x40, 0x66, 0x20, 0x01, 0, 0, 0, 0]).unwrap();
-        c.can(&sdo, ms(2));
+        c.can(&SocketCanRepr::Frame(sdo), ms(2));
         let bytes = c.write_to(Vec::new()).unwrap();
         let (_, interfaces, packets) = read_pcapng(&bytes);
         let types: Vec<DataLink> = interfaces.iter().map(|i| i.linktype).collect();
@@ -410,6 +411,17 @@ mod tests {
         );
         assert_eq!(record[8..], [0x40, 0x66, 0x20, 0x01, 0, 0, 0, 0]);
         assert_eq!(comments, &["sk550p@can step 1"]);
+        // An error frame a controller reported: CAN_ERR_FLAG and its class in the identifier.
+        let error = ErrorFrame {
+            class: ErrorClass(0x088),
+            data: [0, 0, 0x08, 0, 0, 0, 0x08, 0],
+        };
+        let mut c = Capture::default();
+        c.can(&SocketCanRepr::Error(error), ms(3));
+        let (_, _, packets) = read_pcapng(&c.write_to(Vec::new()).unwrap());
+        let (_, record, _) = &packets[0];
+        assert_eq!(record[..5], [0x20, 0, 0, 0x88, 8], "CAN_ERR_FLAG | 088h");
+        assert_eq!(record[8..], error.data);
         let mut ethernet_only = Capture::default();
         ethernet_only.frame(&ecat_frame(1), ms(1));
         let (_, interfaces, _) = read_pcapng(&ethernet_only.write_to(Vec::new()).unwrap());

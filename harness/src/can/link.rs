@@ -9,7 +9,7 @@ use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
-use proto::can::socketcan::ErrorFrame;
+use proto::can::socketcan::{ErrorFrame, SocketCanRepr};
 use proto::can::socketcand::{Framed, Message, MAX_MESSAGE_LEN};
 use proto::can::CanFrame;
 use sim::can::Segment;
@@ -18,6 +18,14 @@ use crate::pcap::{SharedTap, Stamper};
 
 /// The most error frames a link keeps for [`CanLink::take_error_frames`].
 const MAX_ERROR_FRAMES: usize = 1024;
+
+/// Keeps `e` among a link's error frames, dropping the oldest beyond [`MAX_ERROR_FRAMES`].
+pub(super) fn keep_error_frame(errors: &mut Vec<ErrorFrame>, e: ErrorFrame) {
+    if errors.len() == MAX_ERROR_FRAMES {
+        errors.remove(0);
+    }
+    errors.push(e);
+}
 
 /// Why a link failed.
 #[derive(Debug, thiserror::Error)]
@@ -162,23 +170,23 @@ impl<L: CanLink> Tapped<L> {
         Tapped { inner, stamper }
     }
 
-    fn record(&self, frame: &CanFrame) {
+    fn record(&self, frame: SocketCanRepr) {
         self.stamper
-            .record(self.inner.now(), |c, at| c.can(frame, at));
+            .record(self.inner.now(), |c, at| c.can(&frame, at));
     }
 }
 
 impl<L: CanLink> CanLink for Tapped<L> {
     fn send(&mut self, frame: &CanFrame) -> Result<(), CanLinkError> {
         self.inner.send(frame)?;
-        self.record(frame);
+        self.record(SocketCanRepr::Frame(*frame));
         Ok(())
     }
 
     fn recv(&mut self, limit: Duration) -> Result<Option<CanFrame>, CanLinkError> {
         let frame = self.inner.recv(limit)?;
-        if let Some(f) = &frame {
-            self.record(f);
+        if let Some(f) = frame {
+            self.record(SocketCanRepr::Frame(f));
         }
         Ok(frame)
     }
@@ -191,8 +199,14 @@ impl<L: CanLink> CanLink for Tapped<L> {
         self.inner.segment()
     }
 
+    /// The error frames, recorded in the capture too when they are taken (a step's end): the
+    /// link reports them apart and keeps no time of their own.
     fn take_error_frames(&mut self) -> Vec<ErrorFrame> {
-        self.inner.take_error_frames()
+        let errors = self.inner.take_error_frames();
+        for e in &errors {
+            self.record(SocketCanRepr::Error(*e));
+        }
+        errors
     }
 }
 
@@ -365,10 +379,7 @@ impl CanLink for Socketcand {
                         .iter_mut()
                         .zip(&data)
                         .for_each(|(to, from)| *to = *from);
-                    if self.errors.len() == MAX_ERROR_FRAMES {
-                        self.errors.remove(0);
-                    }
-                    self.errors.push(ErrorFrame { class, data: bytes });
+                    keep_error_frame(&mut self.errors, ErrorFrame { class, data: bytes });
                 }
                 // Replies to nothing the harness asked are not frames.
                 Some(_) => continue,

@@ -1,15 +1,17 @@
 //! SocketCAN: a CAN interface of this host as the system bus (`can0` on a PEAK, Kvaser or
 //! gs_usb/CANable adapter; `vcan0` for tests), through the `socketcan` crate. The harness's
 //! `--dut can://IFACE` and `harness serve can --iface IFACE` use it. Frames with a 29-bit
-//! identifier and error frames are not the system bus's (CAN 2.0A, CiA 301) and are passed
-//! over.
+//! identifier are not the system bus's (CAN 2.0A, CiA 301) and are passed over; the
+//! controller's error frames (the socket asks the kernel for every class) are reported apart
+//! ([`CanLink::take_error_frames`]), as the socketcand link reports them.
 
 use std::time::{Duration, Instant};
 
+use proto::can::socketcan::{ErrorClass, ErrorFrame};
 use proto::can::CanFrame;
-use socketcan::{CanSocket, EmbeddedFrame, Id, Socket, StandardId};
+use socketcan::{CanSocket, EmbeddedFrame, Id, Socket, SocketOptions, StandardId};
 
-use super::link::{CanLink, CanLinkError};
+use super::link::{keep_error_frame, CanLink, CanLinkError};
 
 /// One CAN interface, opened raw.
 pub(crate) struct SocketCan {
@@ -17,6 +19,8 @@ pub(crate) struct SocketCan {
     /// `CAN interface IFACE`, for errors.
     iface: String,
     since: Instant,
+    /// The error frames read since [`CanLink::take_error_frames`].
+    errors: Vec<ErrorFrame>,
 }
 
 impl SocketCan {
@@ -27,10 +31,18 @@ impl SocketCan {
             peer: peer.clone(),
             source,
         })?;
+        // The kernel passes error frames to a raw socket only when asked (CAN_RAW_ERR_FILTER).
+        socket
+            .set_error_filter_accept_all()
+            .map_err(|source| CanLinkError::Io {
+                peer: peer.clone(),
+                source,
+            })?;
         Ok(SocketCan {
             socket,
             iface: peer,
             since: Instant::now(),
+            errors: Vec::new(),
         })
     }
 
@@ -49,6 +61,21 @@ pub(crate) fn to_socketcan(f: &CanFrame) -> Option<socketcan::CanFrame> {
         true => socketcan::CanFrame::new_remote(id, usize::from(f.dlc())),
         false => socketcan::CanFrame::new(id, f.data()),
     }
+}
+
+/// The error frame of a kernel frame, if it is one: its class bits and 8 data bytes.
+pub(crate) fn error_of(f: &socketcan::CanFrame) -> Option<ErrorFrame> {
+    let socketcan::CanFrame::Error(e) = f else {
+        return None;
+    };
+    let mut data = [0; 8];
+    data.iter_mut()
+        .zip(e.data())
+        .for_each(|(to, from)| *to = *from);
+    Some(ErrorFrame {
+        class: ErrorClass(e.error_bits()),
+        data,
+    })
 }
 
 /// The system-bus frame of a kernel frame; `None` for an extended or error frame.
@@ -90,11 +117,18 @@ impl CanLink for SocketCan {
                     if let Some(frame) = from_socketcan(&f) {
                         return Ok(Some(frame));
                     }
+                    if let Some(e) = error_of(&f) {
+                        keep_error_frame(&mut self.errors, e);
+                    }
                 }
                 Err(e) if crate::net::timed_out(&e) => return Ok(None),
                 Err(e) => return Err(self.io(e)),
             }
         }
+    }
+
+    fn take_error_frames(&mut self) -> Vec<ErrorFrame> {
+        std::mem::take(&mut self.errors)
     }
 }
 
@@ -117,5 +151,22 @@ mod tests {
             socketcan::CanFrame::new(socketcan::ExtendedId::new(0x1234_5678).unwrap(), &[1, 2])
                 .unwrap();
         assert_eq!(from_socketcan(&ext), None);
+    }
+
+    #[test]
+    fn an_error_frame_is_no_frame_and_is_read_as_one() {
+        // A controller gone error passive after a protocol violation: class CRTL | PROT (00Ch),
+        // data[1] 10h CAN_ERR_CRTL_RX_PASSIVE.
+        let k = socketcan::CanFrame::Error(
+            socketcan::CanErrorFrame::new_error(0x0C, &[0, 0x10, 0, 0, 0, 0, 0, 0]).unwrap(),
+        );
+        assert_eq!(from_socketcan(&k), None);
+        let e = error_of(&k).unwrap();
+        assert_eq!(e.class, ErrorClass(0x0C));
+        assert_eq!(e.controller(), Some(0x10));
+        assert_eq!(
+            error_of(&to_socketcan(&CanFrame::new(0x080, &[]).unwrap()).unwrap()),
+            None
+        );
     }
 }
