@@ -272,6 +272,9 @@ struct InverterUnit {
     p700: Option<i32>,
     /// The drive's settings as the store held them last.
     settings: Option<Settings>,
+    /// Its own node's CAN controller on the system bus, as the segment last reported it
+    /// ([`Device::set_node_bus`]).
+    node_bus: led::BusState,
 }
 
 impl InverterUnit {
@@ -465,6 +468,7 @@ impl Device {
                 extended: None,
                 p700: None,
                 settings: None,
+                node_bus: led::BusState::Active,
             })
             .collect();
         // The XU5 extension of the SK 550P (BU 0620 §4.5, p. 91): FI 1 carries the Industrial
@@ -1389,22 +1393,46 @@ impl Device {
     }
 
     /// The "DEV" and "BUS" LEDs of an inverter at `now` (BU 0620 §5.5.1): process data counts as
-    /// active while valid control words arrived within [`PROCESS_DATA_WINDOW`].
+    /// active while valid control words arrived within [`PROCESS_DATA_WINDOW`]; the system bus's
+    /// state is its node's controller ([`Device::set_node_bus`]), and for FI 1 of the SK 550P,
+    /// whose integrated interface is FI 1's own controller, also the interface's
+    /// (`inject: { error: bus-warning | bus-off }`).
     pub fn leds(
         &mut self,
         inverter: Inverter,
         now: Duration,
     ) -> Result<(led::Row, led::Row), String> {
+        let own =
+            self.config.product.family() == proto::nord::Family::Integrated && inverter.get() == 1;
+        let interface = match (self.can_state.off_since, self.can_state.warning) {
+            _ if !own => led::BusState::Active,
+            (Some(_), _) => led::BusState::Off,
+            (None, true) => led::BusState::Warning,
+            (None, false) => led::BusState::Active,
+        };
         let unit = self.inverter_mut(inverter).map_err(|e| e.to_string())?;
-        let active = unit
-            .last_process
-            .is_some_and(|t| now.saturating_sub(t) <= PROCESS_DATA_WINDOW);
         let fault = unit.drive.fault();
-        let timeout = fault.is_some_and(|f| f.group == 10 && matches!(f.sub, 2 | 3));
+        let e10 = |subs: &[u8]| fault.is_some_and(|f| f.group == 10 && subs.contains(&f.sub));
+        let bus = led::BusLed {
+            process_data: unit
+                .last_process
+                .is_some_and(|t| now.saturating_sub(t) <= PROCESS_DATA_WINDOW),
+            telegram_timeout: e10(&[2, 3]),
+            monitoring_error: e10(&[0, 9]),
+            bus: interface.max(unit.node_bus),
+        };
         Ok((
             led::dev(unit.drive.state(), fault.map(|f| f.group)),
-            led::bus(active, timeout),
+            led::bus(bus),
         ))
+    }
+
+    /// FI `inverter`'s own node's CAN controller as the segment it is on found it
+    /// (`sim::can`): the "BUS" LED shows it.
+    pub(crate) fn set_node_bus(&mut self, inverter: Inverter, state: led::BusState) {
+        if let Ok(unit) = self.inverter_mut(inverter) {
+            unit.node_bus = state;
+        }
     }
 
     /// EEPROM writes of an inverter's parameter store (the bus interface's for `None`).

@@ -14,7 +14,8 @@
 //! - bytes: the value's bytes as a run within them;
 //! - text (`contains:` too): the value's letters and digits within the leaf's, case and
 //!   punctuation aside (`Pre-Operational 1` is in `PRE_OPERATIONAL_1`); a number written as
-//!   text is a whole token of the leaf (`10.0` is in `E10.0`, `1.3` not in `P1300`).
+//!   text is a whole token of the leaf (`10.0` is in `E10.0`, `1.3` not in `P1300`), and bytes
+//!   compare as their text (`60 00` is in a reply containing `FD 00 60 00`).
 //!
 //! `not:` carries nothing: it says what the value is not.
 
@@ -77,7 +78,7 @@ fn leaf_carries(leaf: &Matcher, value: &Matcher) -> bool {
             (Some(_), _) => t
                 .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
                 .any(|token| number(&Matcher::Text(token.into())).is_some_and(same_number)),
-            (None, Matcher::Text(v)) => text_contains(t, v),
+            (None, Matcher::Text(v) | Matcher::Bytes(_, v)) => text_contains(t, v),
             (None, _) => false,
         },
         (Matcher::Bool(b), Matcher::Bool(v)) => b == v,
@@ -114,6 +115,7 @@ mod tests {
     #[case(json!({"enabled": true}), json!(true))]
     #[case(json!({"shown": "E10.0 / 7585h"}), json!("10.0"))]
     #[case(json!({"rule": {"contains": "63"}}), json!(63))]
+    #[case(json!({"reply": {"contains": "FD 00 60 00"}}), json!("60 00"))]
     fn an_expectation_carries_the_value_it_names(#[case] expect: Value, #[case] value: Value) {
         assert!(
             carries(&m(expect.clone()), &m(value.clone())),

@@ -273,12 +273,59 @@ pub fn dev(state: State, error_group: Option<u16>) -> Row {
     }
 }
 
-/// The "BUS" LED: process data flowing or not, and a telegram timeout (E10.2/E10.3).
-pub fn bus(process_data: bool, telegram_timeout: bool) -> Row {
-    match (telegram_timeout, process_data) {
-        (true, _) => BUS[4],
-        (false, true) => BUS[1],
-        (false, false) => BUS[0],
+/// A CAN controller on the system bus as the "BUS" LED tells it apart (ISO 11898-1 fault
+/// confinement): active, past the error warning limit (a transmit or receive error counter at
+/// 96 or more, error passive included: "Bus warning"), or bus off.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord)]
+pub enum BusState {
+    /// Error active, below the warning limit.
+    #[default]
+    Active,
+    /// At or past the warning limit, not bus off.
+    Warning,
+    /// Bus off: takes no part in the bus.
+    Off,
+}
+
+/// What the "BUS" LED looks at (BU 0620 §5.5.1.2).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BusLed {
+    /// Process data flowing.
+    pub process_data: bool,
+    /// A field bus telegram timeout (E10.2/E10.3).
+    pub telegram_timeout: bool,
+    /// A monitoring error of P120 or P513 (E10.0/E10.9).
+    pub monitoring_error: bool,
+    /// The inverter's controller on the system bus.
+    pub bus: BusState,
+}
+
+/// The "BUS" LED. Where several rows apply the manual does not say which shows (not stated by
+/// the manuals); the most severe does: the system bus off, then the monitoring of the system
+/// bus (E10.0/E10.9), then the field bus's telegram timeout, then a bus warning, then process
+/// data. The table's row "Flashing green (0.5 Hz): FI is in standby but not enabled" is the
+/// DEV LED's, repeated (an erratum the suites record): no system-bus condition gives it.
+pub fn bus(s: BusLed) -> Row {
+    match s {
+        BusLed {
+            bus: BusState::Off, ..
+        } => BUS[5],
+        BusLed {
+            monitoring_error: true,
+            ..
+        } => BUS[3],
+        BusLed {
+            telegram_timeout: true,
+            ..
+        } => BUS[4],
+        BusLed {
+            bus: BusState::Warning,
+            ..
+        } => BUS[2],
+        BusLed {
+            process_data: true, ..
+        } => BUS[1],
+        _ => BUS[0],
     }
 }
 
@@ -319,14 +366,41 @@ mod tests {
 
     #[test]
     fn bus_led() {
+        let flowing = BusLed {
+            process_data: true,
+            ..BusLed::default()
+        };
+        assert_eq!(bus(flowing).meaning, "Process data communication active");
+        assert_eq!(bus(BusLed::default()).pattern, Pattern::Off);
+        let timeout = BusLed {
+            telegram_timeout: true,
+            ..flowing
+        };
+        assert_eq!(bus(timeout).pattern, Pattern::FlashingRed { tenths_hz: 10 });
+        let warning = BusLed {
+            bus: BusState::Warning,
+            ..flowing
+        };
         assert_eq!(
-            bus(true, false).meaning,
-            "Process data communication active"
+            (bus(warning).pattern, bus(warning).meaning),
+            (Pattern::FlashingGreen { tenths_hz: 40 }, "Bus warning")
         );
-        assert_eq!(bus(false, false).pattern, Pattern::Off);
+        let monitoring = BusLed {
+            monitoring_error: true,
+            ..timeout
+        };
         assert_eq!(
-            bus(true, true).pattern,
-            Pattern::FlashingRed { tenths_hz: 10 }
+            bus(monitoring).pattern,
+            Pattern::FlashingRed { tenths_hz: 40 }
+        );
+        // Bus off outranks everything else.
+        let off = BusLed {
+            bus: BusState::Off,
+            ..monitoring
+        };
+        assert_eq!(
+            (bus(off).pattern, bus(off).meaning),
+            (Pattern::Red, "System bus in state \"Bus off\"")
         );
     }
 }

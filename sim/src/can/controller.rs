@@ -48,6 +48,7 @@ use std::time::Duration;
 
 use proto::can::socketcan::{prot, ErrorClass, ErrorFrame};
 use proto::can::CanFrame;
+use proto::nord::led::BusState;
 
 /// The fault that puts a node's controller bus off (`inject: { inverter: N, error:
 /// node-bus-off }`). Not `bus-off`: that name, with no inverter or any, is the interface's own
@@ -58,6 +59,9 @@ pub const ERROR_PASSIVE: &str = "error-passive";
 /// The fault of a transceiver that destroys the node's frames (`error: error-frames`).
 pub const ERROR_FRAMES: &str = "error-frames";
 
+/// The error warning limit (ISO 11898-1 leaves it to the implementation; 96 is the usual one,
+/// SocketCAN's CAN_ERR_CRTL_TX_WARNING): the "Bus warning" of BU 0620 §5.5.1.2.
+const WARNING_FROM: u16 = 96;
 /// Error passive from this TEC on (ISO 11898-1: "greater than 127").
 const PASSIVE_FROM: u16 = 128;
 /// Bus off from this TEC on (ISO 11898-1: "greater than 255").
@@ -130,6 +134,16 @@ impl Controller {
     /// Bus off: takes no part in the bus.
     pub(super) fn is_bus_off(&self) -> bool {
         self.off_since.is_some()
+    }
+
+    /// Its state as the "BUS" LED tells it apart: bus off, past the error warning limit (a
+    /// counter at [`WARNING_FROM`] or more, error passive included), or active.
+    pub(super) fn bus_state(&self) -> BusState {
+        match (self.off_since, self.tec) {
+            (Some(_), _) => BusState::Off,
+            (None, tec) if tec >= WARNING_FROM => BusState::Warning,
+            _ => BusState::Active,
+        }
     }
 
     /// When the controller wants the node polled: its recovery from bus off, or now for an

@@ -152,7 +152,7 @@ impl Segment {
         };
         if error != OFF_BUS {
             self.controllers[i].inject(error, self.now);
-            self.bus_off_errors();
+            self.report_controllers();
         } else if !self.off_bus.contains(&inverter) {
             self.off_bus.push(inverter);
         }
@@ -162,7 +162,13 @@ impl Segment {
     /// An SK 5x0P whose node went bus off reports E10.0 with P700 [-04] 7585h "CAN in Bus Off
     /// state" (BU 0620 §5.3 p. 94), unless an error is present or P513 ignores communication
     /// errors ([`Device::raise`]); the node, bus off, cannot send its EMCY.
-    fn bus_off_errors(&mut self) {
+    ///
+    /// Each inverter's "BUS" LED is told its node's controller state here too.
+    fn report_controllers(&mut self) {
+        for (node, controller) in self.nodes.iter().zip(&self.controllers) {
+            self.device
+                .set_node_bus(node.inverter(), controller.bus_state());
+        }
         for i in 0..self.nodes.len() {
             if !self.controllers[i].went_bus_off() || !self.reports_bus_off {
                 continue;
@@ -258,7 +264,7 @@ impl Segment {
                 self.transmit(i, answers, now, &mut out);
             }
         }
-        self.bus_off_errors();
+        self.report_controllers();
         self.overheard(&out, now);
         self.look(now);
         self.emergencies(&mut out);
@@ -284,7 +290,7 @@ impl Segment {
                 self.transmit(i, frames, now, &mut out);
             }
         }
-        self.bus_off_errors();
+        self.report_controllers();
         self.overheard(&out, now);
         self.look(now);
         self.emergencies(&mut out);
