@@ -411,10 +411,6 @@ pub struct StatementCoverage {
     pub pending: usize,
     /// Not testable here.
     pub untestable: usize,
-    /// Asserted (on the device or by the model) with each value's step named, and the loader
-    /// found every value in the expectation of the step named for it.
-    #[serde(default)]
-    pub checked: usize,
 }
 
 impl StatementCoverage {
@@ -454,12 +450,6 @@ impl StatementCoverage {
         self.model_only += other.model_only;
         self.pending += other.pending;
         self.untestable += other.untestable;
-        self.checked += other.checked;
-    }
-
-    /// Checked of the testable, in per cent; none when none is testable.
-    pub fn checked_percent(&self) -> Option<f64> {
-        self.share(self.checked)
     }
 }
 

@@ -205,7 +205,6 @@ pub(super) fn sample_run() -> RunResult {
                 model_only: 1,
                 pending: 1,
                 untestable: 0,
-                checked: 1,
             },
             StatementCoverage {
                 doc: "BU 0620".into(),
@@ -216,7 +215,6 @@ pub(super) fn sample_run() -> RunResult {
                 model_only: 0,
                 pending: 0,
                 untestable: 0,
-                checked: 2,
             },
             StatementCoverage {
                 doc: "BU 0620".into(),
@@ -227,7 +225,6 @@ pub(super) fn sample_run() -> RunResult {
                 model_only: 0,
                 pending: 0,
                 untestable: 1,
-                checked: 0,
             },
         ],
         load_errors: vec![],

@@ -34,7 +34,7 @@ fn rows(sections: &[StatementCoverage]) -> Vec<StatementCoverage> {
     out
 }
 
-const COLUMNS: [&str; 10] = [
+const COLUMNS: [&str; 9] = [
     "doc",
     "edition",
     "section",
@@ -44,22 +44,17 @@ const COLUMNS: [&str; 10] = [
     "pending",
     "untestable",
     "open",
-    "checked",
 ];
 
-/// The shares' headings: asserted on the device, by any case, and checked, of the testable.
-const SHARES: [&str; 3] = [
-    "on device / testable",
-    "asserted / testable",
-    "checked / testable",
-];
+/// The two shares' headings: asserted on the device, and by any case, of the testable.
+const SHARES: [&str; 2] = ["on device / testable", "asserted / testable"];
 
 /// A share in whole per cent; `—` when the section has nothing testable.
 fn share(p: Option<f64>) -> String {
     p.map_or("—".into(), |p| format!("{p:.0} %"))
 }
 
-fn cells(r: &StatementCoverage) -> [String; 13] {
+fn cells(r: &StatementCoverage) -> [String; 11] {
     [
         r.doc.clone(),
         r.edition.clone(),
@@ -70,10 +65,8 @@ fn cells(r: &StatementCoverage) -> [String; 13] {
         r.pending.to_string(),
         r.untestable.to_string(),
         r.open().to_string(),
-        r.checked.to_string(),
         share(r.device_percent()),
         share(r.percent()),
-        share(r.checked_percent()),
     ]
 }
 
@@ -83,8 +76,8 @@ pub(crate) fn text_table(sections: &[StatementCoverage]) -> String {
     let line = |s: &mut String, c: &[&str]| {
         let _ = writeln!(
             s,
-            "{:<8} {:<11} {:<10} {:>10} {:>9} {:>10} {:>7} {:>10} {:>5} {:>7} {:>20} {:>19} {:>18}",
-            c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], c[11], c[12]
+            "{:<8} {:<11} {:<10} {:>10} {:>9} {:>10} {:>7} {:>10} {:>5} {:>20} {:>19}",
+            c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10]
         );
     };
     let head: Vec<&str> = COLUMNS.iter().chain(&SHARES).copied().collect();
@@ -97,7 +90,7 @@ pub(crate) fn text_table(sections: &[StatementCoverage]) -> String {
 }
 
 /// What the columns mean, for `summary.md` and `index.html`.
-const LEGEND: &str = "*on device*: a case that reaches the DUT asserts it; *model only*: only reference-model checks (`compute`, never the DUT) do; *open*: testable and not asserted yet; *checked*: asserted, and each value the statement states is found in the expectation of the case step its inventory entry names (the rest of the asserted ones name their cases only); — : nothing testable in the section.";
+const LEGEND: &str = "*on device*: a case that reaches the DUT asserts it; *model only*: only reference-model checks (`compute`, never the DUT) do; *open*: testable and not asserted yet; — : nothing testable in the section.";
 
 /// `## Statement coverage by manual section` for `summary.md` (nothing without inventories).
 pub(super) fn markdown(s: &mut String, sections: &[StatementCoverage]) {
@@ -298,29 +291,24 @@ mod tests {
             t.lines()
                 .last()
                 .unwrap()
-                .ends_with("67 %                83 %               50 %"),
+                .ends_with("67 %                83 %"),
             "{t}"
         );
         // Nothing testable in §2.6.1: a dash, not 100 %.
         let untestable = t.lines().find(|l| l.contains("2.6.1")).unwrap();
-        assert!(
-            untestable.ends_with("—                   —                  —"),
-            "{t}"
-        );
+        assert!(untestable.ends_with("—                   —"), "{t}");
         let mut md = String::new();
         markdown(&mut md, &sections);
         assert!(
-            md.contains("| doc | edition | section | statements | on device | model only | pending | untestable | open | checked | on device / testable | asserted / testable | checked / testable |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"),
+            md.contains("| doc | edition | section | statements | on device | model only | pending | untestable | open | on device / testable | asserted / testable |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n"),
             "{md}"
         );
         assert!(
-            md.contains(
-                "| BU 0620 | 2020-03 en | 2.2.7 | 4 | 1 | 1 | 1 | 0 | 1 | 1 | 33 % | 67 % | 33 % |"
-            ),
+            md.contains("| BU 0620 | 2020-03 en | 2.2.7 | 4 | 1 | 1 | 1 | 0 | 1 | 33 % | 67 % |"),
             "{md}"
         );
         assert!(
-            md.contains("| BU 0620 | 2020-03 en | 2.6.1 | 1 | 0 | 0 | 0 | 1 | 0 | 0 | — | — | — |"),
+            md.contains("| BU 0620 | 2020-03 en | 2.6.1 | 1 | 0 | 0 | 0 | 1 | 0 | — | — |"),
             "{md}"
         );
         assert!(
@@ -336,9 +324,7 @@ mod tests {
             "{h}"
         );
         assert!(
-            h.contains(
-                "<td class=\"n\">67 %</td><td class=\"n\">83 %</td><td class=\"n\">50 %</td></tr>"
-            ),
+            h.contains("<td class=\"n\">67 %</td><td class=\"n\">83 %</td></tr>"),
             "{h}"
         );
         assert!(

@@ -17,7 +17,8 @@
 //!   text is a whole token of the leaf (`10.0` is in `E10.0`, `1.3` not in `P1300`), and bytes
 //!   compare as their text (`60 00` is in a reply containing `FD 00 60 00`).
 //!
-//! `not:` carries nothing: it says what the value is not.
+//! `not:` carries nothing: it says what the value is not. `null` (the field must be absent)
+//! carries only the value `null`: a statement that there is none ("no error, no alarm").
 
 use crate::notation::Matcher;
 
@@ -26,7 +27,9 @@ pub(crate) fn carries(expect: &Matcher, value: &Matcher) -> bool {
     match expect {
         Matcher::Object(fields) => fields.iter().any(|(_, m)| carries(m, value)),
         Matcher::List(items) | Matcher::OneOf(items) => items.iter().any(|m| carries(m, value)),
-        Matcher::Not(_) | Matcher::Null => false,
+        Matcher::Not(_) => false,
+        // "None": a field that must be absent carries the statement that there is none.
+        Matcher::Null => matches!(value, Matcher::Null),
         leaf => leaf_carries(leaf, value),
     }
 }
@@ -113,6 +116,7 @@ mod tests {
     #[case(json!({"frames": [{"cob": "0624h"}, {"cob": "05A4h"}]}), json!("05A4h"))]
     #[case(json!({"value": {"one_of": [1, 4, 5]}}), json!(4))]
     #[case(json!({"enabled": true}), json!(true))]
+    #[case(json!({"alarm": null}), json!(null))]
     #[case(json!({"shown": "E10.0 / 7585h"}), json!("10.0"))]
     #[case(json!({"rule": {"contains": "63"}}), json!(63))]
     #[case(json!({"reply": {"contains": "FD 00 60 00"}}), json!("60 00"))]
@@ -132,6 +136,7 @@ mod tests {
     #[case(json!({"text": "Operation enabled"}), json!("Switched on"))]
     #[case(json!({"bytes": "70 66 00 00"}), json!("66 70"))]
     #[case(json!({"value": null}), json!(0))]
+    #[case(json!({"value": 0}), json!(null))]
     #[case(json!({"enabled": true}), json!(1))]
     #[case(json!({"name": "P1300"}), json!("1.3"))]
     fn an_expectation_does_not_carry_another_value(#[case] expect: Value, #[case] value: Value) {

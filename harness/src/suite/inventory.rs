@@ -3,17 +3,16 @@
 //! that assert it, or `untestable:` with the reason, or `pending:` with the bus whose binding
 //! is not there yet (an entry with none of them is testable and not asserted yet: the gap).
 //!
-//! A statement's `values:` name, for each value it states, the case and step whose expectation
-//! carries it (`{ case, step, value }`, steps counted from 1 as the transcripts count them):
-//! a claim the loader can check ([`super::claim`]). An asserted statement with values is
-//! *checked*; one that names cases only is a claim nobody has checked yet, counted apart.
+//! An asserted statement's `values:` name, for each value it states, the case and step whose
+//! expectation carries it (`{ case, step, value }`, steps counted from 1 as the transcripts
+//! count them): a claim the loader can check ([`super::claim`]). A statement that names cases
+//! without values is refused: a case that merely touches the topic asserts nothing.
 //!
 //! [`coverage`] counts them per manual and section (`harness coverage`, the run's summary and
 //! HTML report); [`check`] keeps an inventory honest against the loaded suites: every case id
 //! it names exists, every value is carried by the step it names, every case citing an
-//! inventoried manual is named by a statement, and the asserted and checked statements of a
-//! manual do not fall below the floors checked in beside them (`floors.yaml`), so the counts
-//! can only grow.
+//! inventoried manual is named by a statement, and the asserted statements of a manual do not
+//! fall below the floor checked in beside them (`floors.yaml`), so the count can only grow.
 
 use serde::Deserialize;
 use std::collections::{BTreeMap, BTreeSet};
@@ -27,19 +26,9 @@ use crate::outcome::{CaseKind, StatementCoverage};
 /// The folder below the suites that holds the inventories (the suite loader skips it).
 pub(crate) const DIR: &str = "inventory";
 
-/// The floors file in [`DIR`]: per manual (`"<doc> <edition>"`), the fewest asserted and
-/// checked statements allowed.
+/// The floors file in [`DIR`]: per manual (`"<doc> <edition>"`), the fewest asserted
+/// statements allowed.
 const FLOORS: &str = "floors.yaml";
-
-/// A manual's floors.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct Floor {
-    /// The fewest statements cases assert.
-    pub(crate) asserted: usize,
-    /// The fewest of them whose values the loader checked.
-    pub(crate) checked: usize,
-}
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -107,16 +96,8 @@ pub(crate) struct Statement {
     pub(crate) page: Option<u32>,
     pub(crate) says: String,
     pub(crate) status: Status,
-    /// Its values and the steps that carry them (only an asserted statement has any).
+    /// Its values and the steps that carry them (an asserted statement has at least one).
     pub(crate) values: Vec<Carrier>,
-}
-
-impl Statement {
-    /// Asserted, with every value's step named (whether the steps carry them is
-    /// [`check`]'s).
-    pub(crate) fn checked(&self) -> bool {
-        matches!(self.status, Status::Asserted(_)) && !self.values.is_empty()
-    }
 }
 
 /// One manual's inventory.
@@ -176,12 +157,22 @@ pub(crate) fn parse_inventory(file: &Path, text: &str) -> Result<Inventory, Load
                 ))
             }
         };
-        let values = s
+        let values: Vec<Carrier> = s
             .values
             .into_iter()
             .map(|v| carrier(v, &status))
             .collect::<Result<_, String>>()
             .map_err(|e| error(file, None, format!("§{} \"{}\": {e}", s.section, s.says)))?;
+        if matches!(status, Status::Asserted(_)) && values.is_empty() {
+            return Err(error(
+                file,
+                None,
+                format!(
+                    "§{} \"{}\": names cases but no `values`: name the step whose expectation carries each value it states",
+                    s.section, s.says
+                ),
+            ));
+        }
         statements.push(Statement {
             section: s.section,
             page: s.page,
@@ -250,8 +241,8 @@ pub(crate) fn load(suites: &Path) -> Result<Vec<Inventory>, LoadError> {
         .collect()
 }
 
-/// The floors: manual → fewest asserted and checked statements.
-pub(crate) fn floors(suites: &Path) -> Result<BTreeMap<String, Floor>, LoadError> {
+/// The floors: manual → fewest asserted statements.
+pub(crate) fn floors(suites: &Path) -> Result<BTreeMap<String, usize>, LoadError> {
     let file = suites.join(DIR).join(FLOORS);
     match std::fs::read_to_string(&file) {
         Ok(text) => parse(&file, &text),
@@ -290,7 +281,6 @@ pub(crate) fn coverage(inventories: &[Inventory], loaded: &Loaded) -> Vec<Statem
                     ..StatementCoverage::default()
                 });
             c.statements += 1;
-            c.checked += usize::from(s.checked());
             match s.status {
                 Status::Asserted(ref cases)
                     if cases.iter().any(|id| device.contains(id.as_str())) =>
@@ -310,24 +300,23 @@ pub(crate) fn coverage(inventories: &[Inventory], loaded: &Loaded) -> Vec<Statem
 
 /// What keeps the inventories honest, as messages (none: all is well): case ids that do not
 /// exist, a value the step it names does not carry, cases of an inventoried manual no
-/// statement names, a manual whose asserted or checked statements fell below its floor, a floor
+/// statement names, a manual whose asserted statements fell below its floor, a floor
 /// for a manual without an inventory.
 pub(crate) fn check(
     inventories: &[Inventory],
     loaded: &Loaded,
-    floors: &BTreeMap<String, Floor>,
+    floors: &BTreeMap<String, usize>,
 ) -> Vec<String> {
     let cases: BTreeMap<&str, &super::Case> =
         loaded.cases.iter().map(|c| (c.id.as_str(), c)).collect();
     let mut problems = Vec::new();
     for inv in inventories {
         let mut named = BTreeSet::new();
-        let mut counted = Floor::default();
+        let mut asserted = 0;
         for s in &inv.statements {
             let place = || format!("{}: §{} \"{}\"", inv.file.display(), s.section, s.says);
             if let Status::Asserted(ids) = &s.status {
-                counted.asserted += 1;
-                counted.checked += usize::from(s.checked());
+                asserted += 1;
                 for id in ids {
                     if !cases.contains_key(id.as_str()) {
                         problems.push(format!(
@@ -376,20 +365,15 @@ pub(crate) fn check(
             }
         }
         match floors.get(&inv.manual()) {
-            Some(floor) => {
-                for (what, n, least) in [
-                    ("asserted", counted.asserted, floor.asserted),
-                    ("checked", counted.checked, floor.checked),
-                ] {
-                    if n < least {
-                        problems.push(format!(
-                            "{}: {n} {what} statements, fewer than the floor of {least} (floors.yaml): the count may only grow",
-                            inv.manual()
-                        ));
-                    }
-                }
-            }
-            None => problems.push(format!("{}: no floor in {DIR}/{FLOORS}", inv.manual())),
+            Some(floor) if asserted < *floor => problems.push(format!(
+                "{}: {asserted} asserted statements, fewer than the floor of {floor} (floors.yaml): the count may only grow",
+                inv.manual()
+            )),
+            None => problems.push(format!(
+                "{}: no floor in {DIR}/{FLOORS}",
+                inv.manual()
+            )),
+            Some(_) => {}
         }
     }
     for manual in floors.keys() {
@@ -413,6 +397,7 @@ statements:
     page: 51
     says: P102 reads
     cases: [test/read]
+    values: [{ case: test/read, step: 1, value: 250 }]
   - section: "2.5.6"
     says: P102 counts in 0.01 s
     cases: [test/resolution]
@@ -436,6 +421,7 @@ cases:
     ref: { section: "2.5.6", page: 51 }
     steps:
       - read: { param: 102 }
+        expect: { value: 250 }
   - id: resolution
     title: P102 resolution
     ref: { section: "2.5.6", page: 51 }
@@ -522,14 +508,10 @@ cases:
     #[test]
     fn the_check_names_unknown_ids_unnamed_cases_and_a_fallen_floor() {
         let loaded = load_text_for_tests(SUITE);
-        let floor = Floor {
-            asserted: 3,
-            checked: 1,
-        };
-        let floors: BTreeMap<String, Floor> = [("BU 0620 2020-03 en".to_string(), floor)].into();
+        let floors: BTreeMap<String, usize> = [("BU 0620 2020-03 en".to_string(), 3)].into();
         let problems = check(&[inventory()], &loaded, &floors);
         // `process` cites BU 0620 and no statement names it (the 6.1.3 one is open); 2 asserted
-        // is below the floor of 3; the one checked statement meets its floor.
+        // is below the floor of 3.
         assert_eq!(problems.len(), 2, "{problems:?}");
         assert!(
             problems[0]
@@ -542,7 +524,9 @@ cases:
         );
         let wrong = parse_inventory(
             Path::new("x.yaml"),
-            &INVENTORY.replace("cases: [test/read]", "cases: [nope]"),
+            &INVENTORY
+                .replace("[test/read]", "[nope]")
+                .replace("case: test/read", "case: nope"),
         )
         .unwrap();
         let problems = check(&[wrong], &loaded, &BTreeMap::new());
@@ -578,7 +562,7 @@ cases:
             "doc: BU 2100\nedition: en\nstatements:\n  - section: \"5.1\"\n    says: P161 [-03] = 0 is read in at restart\n    cases: [test/p161]\n    values: {values}\n"
         );
         let inv = parse_inventory(Path::new("bu2100.yaml"), &text).unwrap();
-        let floors = [("BU 2100 en".to_string(), Floor::default())].into();
+        let floors = [("BU 2100 en".to_string(), 0)].into();
         check(&[inv], &load_text_for_tests(HOLLOW), &floors)
     }
 
@@ -611,8 +595,20 @@ cases:
         let text = INVENTORY.replace("step: 1, value: 2", "step: 0, value: 2");
         let e = parse_inventory(Path::new("x.yaml"), &text).unwrap_err();
         assert!(e.message.contains("steps count from 1"), "{e}");
-        let c = coverage(&[inventory()], &load_text_for_tests(SUITE));
-        assert_eq!(c[0].checked, 1);
+    }
+
+    #[test]
+    fn a_statement_naming_cases_without_values_is_refused() {
+        let text = INVENTORY.replace(
+            "    values: [{ case: test/read, step: 1, value: 250 }]\n",
+            "",
+        );
+        let e = parse_inventory(Path::new("x.yaml"), &text).unwrap_err();
+        assert!(
+            e.message
+                .contains("§2.5.6 \"P102 reads\": names cases but no `values`"),
+            "{e}"
+        );
     }
 
     #[test]
