@@ -216,7 +216,7 @@ fn coverage_counts_the_inventories_and_names_what_keeps_them_dishonest() {
     .unwrap();
     std::fs::write(
         dir.join("inventory/bu0620.yaml"),
-        "doc: BU 0620\nedition: \"2020-03 en\"\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/gone]\n",
+        "doc: BU 0620\nedition: \"2020-03 en\"\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/gone]\n    values: [{ case: p102/gone, step: 1, value: 250 }]\n",
     )
     .unwrap();
     std::fs::write(
@@ -257,12 +257,12 @@ fn coverage_gates_on_a_share_per_section_and_counts_errata_by_check() {
     std::fs::create_dir_all(dir.join("inventory")).unwrap();
     std::fs::write(
         dir.join("p102.yaml"),
-        "doc: BU 0620\nedition: \"2020-03 en\"\ncases:\n  - id: read\n    title: P102 reads\n    ref: { section: \"2.5.6\", page: 51 }\n    manual_says: { printed: \"06020002h\", correct: \"06010002h\", why: \"w\", check: standard, standard: \"CiA 301 4.2.0 §7.2.4.3.17\" }\n    steps:\n      - read: { param: 102 }\n",
+        "doc: BU 0620\nedition: \"2020-03 en\"\ncases:\n  - id: read\n    title: P102 reads\n    ref: { section: \"2.5.6\", page: 51 }\n    manual_says: { printed: \"06020002h\", correct: \"06010002h\", why: \"w\", check: standard, standard: \"CiA 301 4.2.0 §7.2.4.3.17\" }\n    steps:\n      - read: { param: 102 }\n        expect: { value: 250 }\n",
     )
     .unwrap();
     std::fs::write(
         dir.join("inventory/bu0620.yaml"),
-        "doc: BU 0620\nedition: \"2020-03 en\"\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/read]\n  - section: \"2.5.6\"\n    says: P102 writes\n",
+        "doc: BU 0620\nedition: \"2020-03 en\"\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/read]\n    values: [{ case: p102/read, step: 1, value: 250 }]\n  - section: \"2.5.6\"\n    says: P102 writes\n",
     )
     .unwrap();
     std::fs::write(
