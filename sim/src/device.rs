@@ -570,7 +570,7 @@ impl Device {
     /// and returns none (nothing is recorded without one).
     pub fn tap_system_bus(&mut self) -> Vec<(Duration, proto::can::CanFrame)> {
         match self.tap.as_mut() {
-            Some(tap) => tap.take(self.now),
+            Some(tap) => tap.take(),
             None => {
                 self.tap = Some(crate::system_bus::Tap::new(self.config.product));
                 Vec::new()
@@ -908,14 +908,9 @@ impl Device {
         let (pkw, pzd) = match link.unit {
             Unit::Interface => (pkw, vec![0; ppo.pzd.len()]),
             Unit::Inverter(i) => {
-                let unit = self.inverter_mut(i)?;
                 let control = ppo.pzd.first().copied().unwrap_or(0);
                 let setpoints = ppo.pzd.get(1..).unwrap_or_default();
-                let answer = unit.process(control, setpoints, now);
-                let pause = self.pdo_pause_us();
-                if let (Some(tap), None) = (self.tap.as_mut(), self.can_state.off_since) {
-                    tap.process(i, &ppo.pzd, &answer, pause, now);
-                }
+                let answer = self.process_monitored(i, control, setpoints, now)?;
                 let mut pzd = answer.to_vec();
                 pzd.resize(ppo.pzd.len(), 0);
                 self.show_process_data(i, Some(ppo_type), &ppo.pzd, &pzd);
@@ -1147,6 +1142,20 @@ impl Device {
     /// [`Device::process`] for one of several inverters whose words one frame carries: the
     /// caller has run the monitoring for the frame ([`Device::tick`]) once, not per inverter
     /// (it looks at every inverter, and runs on every bus cycle).
+    ///
+    /// The words of an inverter the gateway reaches over the system bus go as CAN frames
+    /// through its node, at the system bus's pace ([`crate::system_bus::ProcessData`]): what
+    /// comes back is what the node's last TPDOs carried, recorded while a tap is attached. The
+    /// SK 550P's own FI 1 takes them directly.
+    ///
+    /// While the interface's CAN controller is off the bus (`inject: { error: bus-off }`) no
+    /// PDO gets through and nothing is recorded (as the tap recorded nothing then before): the
+    /// inverters keep the words they had (and lose the interface once their monitoring of its
+    /// heartbeat trips, [`Device::tick`]), and the field bus gets the status of the last TPDOs
+    /// received, 0 if none came yet. The parameter access still reaches the nodes then (see
+    /// `Device::gateway_access`), because the cases that inject it read the inverters' errors
+    /// through it; what they see of the process data is the status only, which they do not
+    /// assert.
     pub(crate) fn process_monitored(
         &mut self,
         inverter: Inverter,
@@ -1154,19 +1163,48 @@ impl Device {
         setpoints: &[u16],
         now: Duration,
     ) -> Result<[u16; 6], DeviceError> {
-        let answer = self
-            .inverter_mut(inverter)?
-            .process(control, setpoints, now);
-        let pause = self.pdo_pause_us();
-        if let (Some(tap), None) = (self.tap.as_mut(), self.can_state.off_since) {
-            let mut sent = [0u16; 6];
-            sent[0] = control;
-            for (d, w) in sent[1..].iter_mut().zip(setpoints) {
-                *d = *w;
-            }
-            tap.process(inverter, &sent, &answer, pause, now);
+        if !self.gateway.reaches(inverter) {
+            return self.drive_process(inverter, control, setpoints, now);
         }
-        Ok(answer)
+        let pause = self.pdo_pause_us();
+        let off_bus = self.can_state.off_since.is_some();
+        let count = self.config.inverters;
+        let unit = self
+            .inverters
+            .get_mut(usize::from(inverter.get()) - 1)
+            .ok_or(DeviceError::NoSuchInverter(inverter.get(), count))?;
+        let process = self.gateway.process_data();
+        if off_bus {
+            return Ok(process.received(inverter));
+        }
+        let mut words = [0u16; 6];
+        words[0] = control;
+        for (d, w) in words[1..].iter_mut().zip(setpoints) {
+            *d = *w;
+        }
+        let exchange = process.exchange(inverter, &words, pause, now, |control, setpoints, at| {
+            unit.process(control, setpoints, at)
+        });
+        if let (Some(tap), Some(share)) = (self.tap.as_mut(), &exchange.share) {
+            tap.cycle(share);
+        }
+        Ok(exchange.answer)
+    }
+
+    /// One process-data cycle of inverter `inverter`'s drive itself: the control word and
+    /// setpoints in, the status word and actual values out. For its node on a CAN segment
+    /// (`crate::can`), which is the inverter; the field buses go through
+    /// [`Device::process_monitored`].
+    pub(crate) fn drive_process(
+        &mut self,
+        inverter: Inverter,
+        control: u16,
+        setpoints: &[u16],
+        now: Duration,
+    ) -> Result<[u16; 6], DeviceError> {
+        Ok(self
+            .inverter_mut(inverter)?
+            .process(control, setpoints, now))
     }
 
     /// Time passes without a frame: telegram monitoring runs.
@@ -1874,5 +1912,46 @@ mod tests {
         // BU 2200 §7.1.1 P150 table; 0 leaves the outputs to the bus.
         let got: Vec<_> = (0..=4).map(relays_of).collect();
         assert_eq!(got, [None, Some(0), Some(1), Some(2), Some(3)]);
+    }
+
+    #[test]
+    fn process_data_on_the_system_bus_are_the_frames_the_node_answered() {
+        // FI 2 behind the SK 550P: its words go as RPDOs to node 34, its status comes back in
+        // its TPDO1. FI 1 is the SK 550P itself: no system-bus frame.
+        let mut d = Device::new(DeviceConfig {
+            inverters: 2,
+            ..DeviceConfig::new(Product::Sk550p)
+        });
+        let (fi1, fi2) = (Inverter::new(1).unwrap(), Inverter::new(2).unwrap());
+        assert!(d.tap_system_bus().is_empty());
+        d.process(fi1, 0x047E, &[0x2000], ms(0)).unwrap();
+        let status = d.process(fi2, 0x047E, &[0x2000], ms(0)).unwrap()[0];
+        let frames = d.tap_system_bus();
+        let ids: Vec<u16> = frames.iter().map(|(_, f)| f.id()).collect();
+        assert_eq!(ids, [0x222, 0x322, 0x080, 0x1A2, 0x2A2]);
+        assert_eq!(frames[0].1.data()[..4], [0x7E, 0x04, 0x00, 0x20]);
+        assert_eq!(frames[3].1.data()[..2], status.to_le_bytes());
+        // 2 ms later, within the 5 ms update cycle: no frame, the drive keeps the words it had
+        // (P740 [-01] shows them), the field bus gets the last TPDO's status.
+        let lagging = d.process(fi2, 0x0406, &[], ms(2)).unwrap()[0];
+        assert_eq!(lagging, status);
+        assert!(d.tap_system_bus().is_empty());
+        let p740 = |d: &mut Device| {
+            let first = proto::nord::ArrayElement::new(1).ok();
+            d.store(Unit::Inverter(fi2))
+                .unwrap()
+                .read(ParamNumber::new(740).unwrap(), None, first)
+        };
+        assert_eq!(p740(&mut d), Ok(0x047E));
+        // At the next cycle the words reach the drive.
+        d.process(fi2, 0x0406, &[], ms(6)).unwrap();
+        assert_eq!(p740(&mut d), Ok(0x0406));
+        assert_eq!(d.tap_system_bus()[0].1.data()[..2], [0x06, 0x04]);
+        // Off the bus, nothing gets through.
+        d.inject_fault(fi2, "bus-off").unwrap();
+        let off = d.process(fi2, 0x047E, &[], ms(20)).unwrap();
+        assert_eq!(p740(&mut d), Ok(0x0406));
+        assert!(d.tap_system_bus().is_empty());
+        assert_eq!(d.process(fi2, 0x047E, &[], ms(40)).unwrap(), off);
     }
 }

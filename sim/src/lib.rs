@@ -16,6 +16,7 @@ pub mod enip;
 pub mod epl;
 pub mod link;
 mod objects;
+mod pdo_image;
 pub mod pkw_server;
 pub mod pnio;
 mod sdo_server;

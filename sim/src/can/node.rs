@@ -9,15 +9,14 @@ use proto::canopen::cob_id::{Cob, Function};
 use proto::canopen::emcy::{register, Emergency};
 use proto::canopen::nmt::{ErrorControl, NmtFrame, NmtState};
 use proto::canopen::sync::SyncFrame;
-use proto::nord::can::{
-    interface_watch, p748_status, pdo_data, pdo_words, process_values, InverterSeries,
-};
+use proto::nord::can::{interface_watch, p748_status, InverterSeries};
 use proto::nord::errors::SdoAbort;
 use proto::nord::{Family, Inverter, ParamNumber, Product};
 
 use crate::device::Device;
 use crate::link::Unit;
 use crate::objects::{abort, decode_number, emergency_of};
+use crate::pdo_image::{PdoError, PdoImage, Read};
 use crate::sdo_server::{Objects, ParameterObjects, SdoServer, LAST_PARAMETER, PARAMETERS};
 
 /// Communication objects (CiA 301 §7.5.2).
@@ -50,12 +49,8 @@ pub(super) struct Node {
     sdo: SdoServer,
     /// The error register (1001h) as the last EMCY set it.
     error_register: u8,
-    /// Its inverter's series: how many process values its PDOs carry.
-    series: InverterSeries,
-    /// The control word and setpoints 1–5 as the RPDOs last brought them, taken at each SYNC
-    /// once an RPDO1 came in Operational (`started`).
-    outputs: [u16; 6],
-    started: bool,
+    /// Its process image: what the RPDOs brought, taken at each SYNC (in Operational).
+    pdo: PdoImage,
     /// 1016h:01, the heartbeat the node consumes: node-ID in bits 16–23, time (ms) in 0–15.
     consumer: u32,
     /// Its P120 monitoring of the interface (`proto::nord::can::InterfaceWatch`).
@@ -91,9 +86,7 @@ impl Node {
             guard_toggle: false,
             sdo: SdoServer::default(),
             error_register: 0,
-            series,
-            outputs: [0; 6],
-            started: false,
+            pdo: PdoImage::new(series),
             consumer: factory_consumer(product),
             watch: Watch::default(),
             shown_status: None,
@@ -263,29 +256,18 @@ impl Node {
                 self.sdo = sdo;
                 self.frame(Function::SdoTx, &answer?.emit())
             }
-            Function::Rpdo { number } if cob.node == self.id => {
+            Function::Rpdo { .. } if cob.node == self.id => {
                 // PDOs only in Operational; a remote frame requests no RPDO.
                 if self.state != NmtState::Operational || frame.is_remote() {
                     return None;
                 }
-                let (first, count) = pdo_words(cob.function, self.series)?;
-                let (first, count) = (usize::from(first), usize::from(count));
-                let data = frame.data();
                 // Fewer bytes than mapped: not processed; more: processed. An EMCY says which
                 // (CiA 301).
-                if data.len() < 2 * count {
-                    return self.pdo_length_error(PDO_TOO_SHORT);
+                match self.pdo.receive(cob.function, frame.data()) {
+                    Ok(Read::Exact) | Err(PdoError::NotMapped) => None,
+                    Ok(Read::Longer) => self.pdo_length_error(PDO_TOO_LONG),
+                    Err(PdoError::TooShort) => self.pdo_length_error(PDO_TOO_SHORT),
                 }
-                for (w, b) in self.outputs[first..first + count]
-                    .iter_mut()
-                    .zip(data.chunks_exact(2))
-                {
-                    *w = u16::from_le_bytes([b[0], b[1]]);
-                }
-                self.started |= number == 1;
-                (data.len() > 2 * count)
-                    .then(|| self.pdo_length_error(PDO_TOO_LONG))
-                    .flatten()
             }
             _ => None,
         }
@@ -311,25 +293,16 @@ impl Node {
     }
 
     /// SYNC: the inverter takes the control word and setpoints the RPDOs brought and answers
-    /// with its TPDOs, once its process data started (an RPDO1 in Operational).
+    /// with its TPDOs, once its process data started (an RPDO1 in Operational). The node is
+    /// the inverter itself: the words go to its drive ([`Device::drive_process`]).
     fn sync(&mut self, device: &mut Device, now: Duration) -> Vec<CanFrame> {
-        if self.state != NmtState::Operational || !self.started {
+        if self.state != NmtState::Operational {
             return Vec::new();
         }
-        let values = usize::from(process_values(self.series));
-        let [control, setpoints @ ..] = self.outputs;
-        let Ok(answer) = device.process_monitored(self.fi, control, &setpoints[..values], now)
-        else {
-            return Vec::new();
-        };
-        [1, 2]
-            .into_iter()
-            .filter_map(|number| {
-                let tpdo = Function::Tpdo { number };
-                let data = pdo_data(tpdo, self.series, &answer)?;
-                self.frame(tpdo, &data)
-            })
-            .collect()
+        let fi = self.fi;
+        self.pdo.sync(self.id, |control, setpoints| {
+            device.drive_process(fi, control, setpoints, now).ok()
+        })
     }
 
     fn command(&mut self, nmt: NmtFrame, now: Duration) {
@@ -347,7 +320,7 @@ impl Node {
         }
         if to != NmtState::Operational {
             // Out of Operational no PDO: the process data start again with an RPDO1.
-            self.started = false;
+            self.pdo.stop();
         }
         self.state = to;
     }

@@ -1083,11 +1083,12 @@ fn o_t_data_drives_the_inverter_once_per_sequence_count_and_idle_clears_it() {
     b.now = ms(2);
     assert_eq!(b.io(&io(id, 1, Some(1), outputs(CONTROL | 1))), Ok(()));
     assert_eq!(p740(&mut b), CONTROL);
-    // Idle (run/idle bit 0 clear): an invalid control word reaches the inverter.
-    b.now = ms(3);
+    // Idle (run/idle bit 0 clear): an invalid control word reaches the inverter, at the next
+    // system-bus cycle (5 ms after the last: `crate::system_bus::ProcessData`).
+    b.now = ms(10);
     assert_eq!(b.io(&io(id, 2, Some(0), outputs(CONTROL | 1))), Ok(()));
     assert_eq!(p740(&mut b), 0);
-    b.now = ms(4);
+    b.now = ms(20);
     assert_eq!(b.io(&io(id, 3, Some(1), outputs(CONTROL | 1))), Ok(()));
     assert_eq!(p740(&mut b), CONTROL | 1);
     // The assembly shows the data consumed last.

@@ -36,14 +36,18 @@ use crate::objects::{abort, Refused};
 use crate::sdo_server::{ParameterObjects, SdoServer};
 use crate::store::ParamStore;
 
+use super::ProcessData;
+
 /// The longest transfer the gateway starts: the node's server takes no longer download.
 const MAX_TRANSFER: usize = 256;
 
-/// The gateway: the SDO server of each inverter's node, FI 1 first.
+/// The gateway: the SDO server of each inverter's node, FI 1 first, and the process data with
+/// the nodes ([`super::ProcessData`]).
 #[derive(Debug)]
 pub(crate) struct Gateway {
     product: Product,
     servers: Vec<SdoServer>,
+    process: ProcessData,
 }
 
 impl Gateway {
@@ -52,7 +56,13 @@ impl Gateway {
         Gateway {
             product,
             servers: (0..inverters).map(|_| SdoServer::default()).collect(),
+            process: ProcessData::new(product, inverters),
         }
+    }
+
+    /// The process data with the nodes: for the inverters it reaches ([`Gateway::reaches`]).
+    pub(crate) fn process_data(&mut self) -> &mut ProcessData {
+        &mut self.process
     }
 
     /// Whether FI `fi` is reached over the system bus: every inverter behind a bus module;

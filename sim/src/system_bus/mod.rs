@@ -1,8 +1,11 @@
 //! The bus interface's side of the NORD system bus (CANopen on CAN between the interface and
 //! its inverters, `proto::nord::can`): the gateway that reaches the inverters' parameters
-//! through their nodes' SDO servers ([`Gateway`]; PKW orders through it, [`serve_order`]), and
-//! the recorder of the frames on the bus ([`Tap`]). Process data still reach the inverters'
-//! drives directly, the tap recording an image of the PDOs and SYNC a cycle would carry.
+//! through their nodes' SDO servers ([`Gateway`]; PKW orders through it, [`serve_order`]) and
+//! their drives through their nodes' PDOs ([`ProcessData`]: RPDOs, a SYNC, TPDOs per
+//! system-bus cycle, at the system bus's pace), and the recorder of the frames on the bus
+//! ([`Tap`]). Both are real CAN frames, in process: what the field bus gets back is read from
+//! the nodes' answer frames. Behind the SK 550P, FI 1 is the device itself and no system-bus
+//! traffic (BU 0620 §2.1).
 //!
 //! A field-bus refusal after the system bus: the node answers a CiA 301 abort code, which the
 //! field bus turns back into its own error. For CoE and POWERLINK SDO that is the code itself;
@@ -16,8 +19,10 @@
 
 mod gateway;
 mod pkw;
+mod process;
 mod tap;
 
 pub(crate) use gateway::Gateway;
 pub(crate) use pkw::{carries, serve_order};
+pub(crate) use process::ProcessData;
 pub(crate) use tap::{Access, Tap};

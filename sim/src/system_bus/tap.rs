@@ -10,11 +10,11 @@
 //!   layout would send for it and the node's answer, a refusal abort 0800 0000h "general
 //!   error" (the manuals map no PKW error number to an abort code). The order itself is served
 //!   on the inverter's store by the parameter channel: a node has no RAM-only download;
-//! - process data: an image too. Per system-bus cycle, each inverter's RPDO1 (and RPDO2 for
-//!   five values), one SYNC, and each inverter's TPDOs. A cycle starts when the field bus
-//!   brings an inverter's words and the last cycle is at least the update cycle of the
-//!   inverters it carried old (`proto::nord::can::cycle_period_us`): a field bus faster than
-//!   the system bus (an RPI of 4 ms) has its words carried every other time.
+//! - process data: the frames the gateway ([`super::ProcessData`]) and the nodes actually
+//!   exchanged ([`Tap::cycle`]), per system-bus cycle each inverter's RPDO1 (and RPDO2 for
+//!   five values), the one SYNC, and each inverter's TPDOs, in that order. When the cycles run
+//!   (at the system bus's pace, a field bus faster than it having its words carried only at
+//!   the next cycle) is the gateway's to say, not the tap's.
 //!
 //! Behind the SK 550P, FI 1 is the device itself (BU 0620 §2.1): only FI 2…8 are on the
 //! system bus. The interface's own parameters never are.
@@ -25,9 +25,11 @@ use proto::can::CanFrame;
 use proto::canopen::cob_id::Function;
 use proto::canopen::sdo::{Abort, Expedited, InitiateData, SdoRequest, SdoResponse};
 use proto::canopen::SdoAbortCode;
-use proto::nord::can::{pdo_data, process_values, InverterSeries, SystemBusAddress};
+use proto::nord::can::SystemBusAddress;
 use proto::nord::errors::SdoAbort;
 use proto::nord::{Family, Inverter, Product};
+
+use super::process::Share;
 
 /// What a PKW order did to a parameter, as the image of the system bus shows it.
 #[derive(Debug, Clone, Copy)]
@@ -38,41 +40,34 @@ pub(crate) enum Access<'a> {
     Write(&'a [u8], Result<(), SdoAbort>),
 }
 
-/// The frames recorded so far, and the cycle under way.
+/// The frames recorded so far, and the process-data cycle under way.
 #[derive(Debug)]
 pub(crate) struct Tap {
     product: Product,
-    series: InverterSeries,
     frames: Vec<(Duration, CanFrame)>,
-    /// The cycle being gathered: when it started, the RPDOs and TPDOs so far.
+    /// The cycle being gathered: when it went, the RPDOs, SYNC and TPDOs so far.
     cycle: Option<Cycle>,
-    /// When the last cycle started, and how many inverters it carried.
-    last_cycle: Option<(Duration, u8)>,
     /// The last PKW order and answer recorded, per inverter (a PKW order repeats every
     /// field-bus cycle).
     orders: Vec<(Inverter, [u8; 8], [u8; 8])>,
 }
 
+/// The frames of one process-data cycle, gathered as the field bus hands the inverters' words
+/// one by one: on the bus, all RPDOs go before the one SYNC, the TPDOs after it.
 #[derive(Debug)]
 struct Cycle {
     at: Duration,
-    inverters: Vec<Inverter>,
     rpdos: Vec<CanFrame>,
+    sync: Option<CanFrame>,
     tpdos: Vec<CanFrame>,
 }
 
 impl Tap {
     pub(crate) fn new(product: Product) -> Tap {
-        let series = match product.family() {
-            Family::Integrated => InverterSeries::Sk5x0p,
-            Family::Module => InverterSeries::Sk54xe,
-        };
         Tap {
             product,
-            series,
             frames: Vec::new(),
             cycle: None,
-            last_cycle: None,
             orders: Vec::new(),
         }
     }
@@ -105,7 +100,7 @@ impl Tap {
         if frames.is_empty() {
             return;
         }
-        self.close_cycle(now);
+        self.close_cycle();
         self.frames.extend(frames.iter().map(|f| (now, *f)));
     }
 
@@ -122,7 +117,7 @@ impl Tap {
         let Some(node) = self.node(fi) else {
             return;
         };
-        self.close_cycle(now);
+        self.close_cycle();
         let refuse = |code: SdoAbort| {
             SdoResponse::Abort(Abort {
                 index,
@@ -159,86 +154,33 @@ impl Tap {
         self.push(Function::SdoTx, node, &response.emit(), now);
     }
 
-    /// FI `fi`'s words of one field-bus cycle at `now`: the control word and setpoints it
-    /// got, the status word and actual values it answered. `pause_us`: the module's P153 [-02]
-    /// "TxPDO Inhibit Time" (0 without one), a least time between two cycles beside the
-    /// update cycle.
-    pub(crate) fn process(
-        &mut self,
-        fi: Inverter,
-        sent: &[u16],
-        answer: &[u16],
-        pause_us: u32,
-        now: Duration,
-    ) {
-        let Some(node) = self.node(fi) else {
-            return;
-        };
-        if self.cycle.as_ref().is_some_and(|c| c.at != now) {
-            self.close_cycle(now);
+    /// One inverter's share of a process-data cycle, as the gateway and its node exchanged it.
+    pub(crate) fn cycle(&mut self, share: &Share) {
+        let at = share.at;
+        if self.cycle.as_ref().is_some_and(|c| c.at != at) {
+            self.close_cycle();
         }
-        if self.cycle.is_none() {
-            if let Some((t, carried)) = self.last_cycle {
-                let period = proto::nord::can::cycle_period_us(self.product, self.series, carried)
-                    .max(pause_us);
-                if now < t + Duration::from_micros(u64::from(period)) {
-                    return;
-                }
-            }
-            self.last_cycle = Some((now, 1));
-            self.cycle = Some(Cycle {
-                at: now,
-                inverters: Vec::new(),
-                rpdos: Vec::new(),
-                tpdos: Vec::new(),
-            });
-        }
-        let series = self.series;
-        let Some(cycle) = self.cycle.as_mut() else {
-            return;
-        };
-        if cycle.inverters.contains(&fi) {
-            return;
-        }
-        cycle.inverters.push(fi);
-        if let Some((_, carried)) = self.last_cycle.as_mut() {
-            *carried = cycle.inverters.len() as u8;
-        }
-        let values = usize::from(process_values(series));
-        let mut out = [0u16; 6];
-        let mut back = [0u16; 6];
-        for (d, w) in out.iter_mut().zip(sent).take(1 + values) {
-            *d = *w;
-        }
-        for (d, w) in back.iter_mut().zip(answer).take(1 + values) {
-            *d = *w;
-        }
-        for number in [1, 2] {
-            for (function, words, to) in [
-                (Function::Rpdo { number }, &out, &mut cycle.rpdos),
-                (Function::Tpdo { number }, &back, &mut cycle.tpdos),
-            ] {
-                let Some(data) = pdo_data(function, series, words) else {
-                    continue;
-                };
-                if let Some(f) = frame(function, node, &data) {
-                    to.push(f);
-                }
-            }
-        }
+        let cycle = self.cycle.get_or_insert_with(|| Cycle {
+            at,
+            rpdos: Vec::new(),
+            sync: None,
+            tpdos: Vec::new(),
+        });
+        cycle.rpdos.extend_from_slice(&share.rpdos);
+        cycle.sync = cycle.sync.or(share.sync);
+        cycle.tpdos.extend_from_slice(&share.tpdos);
     }
 
     /// The cycle gathered so far onto the bus: its RPDOs, the SYNC, its TPDOs.
-    fn close_cycle(&mut self, _now: Duration) {
+    fn close_cycle(&mut self) {
         let Some(c) = self.cycle.take() else {
             return;
         };
-        let sync = CanFrame::new(0x080, &[]).ok();
         let at = c.at;
         self.frames.extend(
             c.rpdos
                 .into_iter()
-                .chain(sync)
+                .chain(c.sync)
                 .chain(c.tpdos)
                 .map(|f| (at, f)),
         );
@@ -251,8 +193,8 @@ impl Tap {
     }
 
     /// The frames recorded since the last call, each with its time.
-    pub(crate) fn take(&mut self, now: Duration) -> Vec<(Duration, CanFrame)> {
-        self.close_cycle(now);
+    pub(crate) fn take(&mut self) -> Vec<(Duration, CanFrame)> {
+        self.close_cycle();
         std::mem::take(&mut self.frames)
     }
 }
@@ -300,7 +242,7 @@ mod tests {
             ms(2),
         );
         assert_eq!(
-            hex(&tap.take(ms(3))),
+            hex(&tap.take()),
             [
                 "624 2B 66 20 01 FA 00 00 00",
                 "5A4 60 66 20 01 00 00 00 00",
@@ -311,47 +253,28 @@ mod tests {
     }
 
     #[test]
-    fn process_data_are_rpdos_a_sync_and_tpdos_once_per_update_cycle() {
+    fn a_cycles_frames_are_the_rpdos_the_sync_and_the_tpdos() {
+        // Two FIs' shares of one cycle, as the gateway hands them one by one, then the next
+        // cycle's.
+        let f = |id: u16| CanFrame::new(id, &[0; 2]).unwrap();
+        let share = |node: u16, sync: bool, at: Duration| Share {
+            at,
+            rpdos: vec![f(0x200 + node), f(0x300 + node)],
+            sync: sync.then(|| CanFrame::new(0x080, &[]).unwrap()),
+            tpdos: vec![f(0x180 + node), f(0x280 + node)],
+        };
         let mut tap = Tap::new(Product::Tu4Pol);
         let ms = Duration::from_millis;
-        let sent = [0x047E, 0x2000, 0, 0, 0, 0];
-        let back = [0x0B31, 0, 0, 0, 0, 0];
-        // Two FIs in one field-bus cycle, the next field-bus cycle 4 ms later (too soon), the
-        // one after at 8 ms.
-        for t in [0, 4, 8] {
-            tap.process(fi(1), &sent, &back, 5000, ms(t));
-            tap.process(fi(2), &sent, &back, 5000, ms(t));
+        for t in [0, 8] {
+            tap.cycle(&share(0x20, true, ms(t)));
+            tap.cycle(&share(0x22, false, ms(t)));
         }
-        let frames = tap.take(ms(9));
+        let frames = tap.take();
         let ids: Vec<u16> = frames.iter().map(|(_, f)| f.id()).collect();
         let cycle = [
             0x220, 0x320, 0x222, 0x322, 0x080, 0x1A0, 0x2A0, 0x1A2, 0x2A2,
         ];
         assert_eq!(ids, [cycle, cycle].concat());
         assert_eq!(frames[9].0, ms(8));
-        assert_eq!(hex(&frames[..1]), ["220 7E 04 00 20 00 00 00 00"]);
-        // Behind the SK 550P, FI 1 is the device itself.
-        let mut tap = Tap::new(Product::Sk550p);
-        tap.process(fi(1), &sent, &back, 0, ms(0));
-        assert!(tap.take(ms(1)).is_empty());
-    }
-
-    #[test]
-    fn p153_spaces_the_cycles() {
-        // P153 [-02] = 20 ms on an SK TU4: field-bus cycles every 4 ms, a system-bus cycle every
-        // 20 ms (BU 2100 §7.1.1 p. 46).
-        let mut tap = Tap::new(Product::Tu4Eip);
-        let ms = Duration::from_millis;
-        let words = [0x047E, 0, 0, 0, 0, 0];
-        for t in (0..=44).step_by(4) {
-            tap.process(fi(1), &words, &words, 20_000, ms(t));
-        }
-        let syncs: Vec<Duration> = tap
-            .take(ms(45))
-            .into_iter()
-            .filter(|(_, f)| f.id() == 0x080)
-            .map(|(t, _)| t)
-            .collect();
-        assert_eq!(syncs, [ms(0), ms(20), ms(40)]);
     }
 }
