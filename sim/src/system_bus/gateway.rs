@@ -284,19 +284,10 @@ impl Client<'_> {
 mod tests {
     use super::*;
     use crate::store::{AccessError, Target};
+    use crate::system_bus::hex;
 
     fn fi(n: i64) -> Inverter {
         Inverter::new(n).unwrap()
-    }
-
-    fn hex(frames: &[CanFrame]) -> Vec<String> {
-        frames
-            .iter()
-            .map(|f| {
-                let data: Vec<String> = f.data().iter().map(|b| format!("{b:02X}")).collect();
-                format!("{:03X} {}", f.id(), data.join(" "))
-            })
-            .collect()
     }
 
     /// FI 3 behind an SK TU4-EIP: its store and the gateway to it.

@@ -26,3 +26,27 @@ pub(crate) use gateway::Gateway;
 pub(crate) use pkw::{carries, serve_order};
 pub(crate) use process::ProcessData;
 pub(crate) use tap::{Access, Tap};
+
+/// The frame of `function` of node `node` with `data`; none for a COB-ID or length CAN 2.0A
+/// has not.
+fn frame(
+    function: proto::canopen::cob_id::Function,
+    node: u8,
+    data: &[u8],
+) -> Option<proto::can::CanFrame> {
+    proto::can::CanFrame::new(function.cob_id(node).ok()?, data).ok()
+}
+
+/// Frames as the tests compare them: `ID DATA` in hex.
+#[cfg(test)]
+fn hex(frames: &[proto::can::CanFrame]) -> Vec<String> {
+    frames
+        .iter()
+        .map(|f| {
+            let data: Vec<String> = f.data().iter().map(|b| format!("{b:02X}")).collect();
+            format!("{:03X} {}", f.id(), data.join(" "))
+                .trim()
+                .to_string()
+        })
+        .collect()
+}

@@ -42,6 +42,7 @@ use proto::canopen::sync::SyncFrame;
 use proto::nord::can::{cycle_period_us, pdo_data, InverterSeries, SystemBusAddress};
 use proto::nord::{Family, Inverter, Product};
 
+use super::frame;
 use crate::pdo_image::{read_words, PdoImage};
 
 /// How early, in parts of the cycle, words may come and still be carried: a tenth (see the
@@ -273,13 +274,10 @@ impl ProcessData {
     }
 }
 
-fn frame(function: Function, node: u8, data: &[u8]) -> Option<CanFrame> {
-    CanFrame::new(function.cob_id(node).ok()?, data).ok()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::system_bus::hex;
 
     fn fi(n: i64) -> Inverter {
         Inverter::new(n).unwrap()
@@ -287,18 +285,6 @@ mod tests {
 
     fn ms(t: u64) -> Duration {
         Duration::from_millis(t)
-    }
-
-    fn hex(frames: &[CanFrame]) -> Vec<String> {
-        frames
-            .iter()
-            .map(|f| {
-                let data: Vec<String> = f.data().iter().map(|b| format!("{b:02X}")).collect();
-                format!("{:03X} {}", f.id(), data.join(" "))
-                    .trim()
-                    .to_string()
-            })
-            .collect()
     }
 
     /// A drive that answers the control word + 1 as its status and the setpoints as actual

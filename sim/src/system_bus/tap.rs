@@ -29,6 +29,7 @@ use proto::nord::can::SystemBusAddress;
 use proto::nord::errors::SdoAbort;
 use proto::nord::{Family, Inverter, Product};
 
+use super::frame;
 use super::process::Share;
 
 /// What a PKW order did to a parameter, as the image of the system bus shows it.
@@ -197,10 +198,6 @@ impl Tap {
         self.close_cycle();
         std::mem::take(&mut self.frames)
     }
-}
-
-fn frame(function: Function, node: u8, data: &[u8]) -> Option<CanFrame> {
-    CanFrame::new(function.cob_id(node).ok()?, data).ok()
 }
 
 #[cfg(test)]
