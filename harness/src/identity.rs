@@ -34,8 +34,8 @@ pub(crate) fn identify(dut: &mut dyn Binding, profile: &Profile) -> Result<Ident
 
 /// The information parameters the product catalogues, read over the parameter channel.
 fn by_parameters(dut: &mut dyn Binding, product: Product) -> Result<Identity, StepError> {
-    let number = ParamNumber::new(i64::from(SOFTWARE_VERSION))
-        .map_err(|e| StepError::Suite(e.to_string()))?;
+    let number =
+        ParamNumber::new(i64::from(SOFTWARE_VERSION)).map_err(|e| StepError::Suite(e.into()))?;
     if params::lookup(product, Owner::Interface, number).is_none() {
         return Ok(Identity {
             source: format!(
@@ -47,17 +47,15 @@ fn by_parameters(dut: &mut dyn Binding, product: Product) -> Result<Identity, St
     }
     let mut element = |n: u8| -> Result<i64, StepError> {
         let order = OrderSpec {
-            element: Some(
-                ArrayElement::new(i64::from(n)).map_err(|e| StepError::Suite(e.to_string()))?,
-            ),
+            element: Some(ArrayElement::new(i64::from(n)).map_err(|e| StepError::Suite(e.into()))?),
             ..OrderSpec::read(Target::Interface, number)
         };
         let seen = dut.perform(&Action::Read(order))?;
         if let Some(r) = seen.refusal {
-            return Err(StepError::Refused(format!("P171 [-{n:02}]: {r}")));
+            return Err(StepError::Refused(format!("P171 [-{n:02}]: {r}").into()));
         }
         seen.fields["value"].as_i64().ok_or_else(|| {
-            StepError::Protocol(format!("P171 [-{n:02}] has no value: {}", seen.fields))
+            StepError::Protocol(format!("P171 [-{n:02}] has no value: {}", seen.fields).into())
         })
     };
     let (version, revision) = (element(1)?, element(2)?);

@@ -923,7 +923,7 @@ fn run_step(
             let out = match (func.run)(&ctx, &Args(args.clone())) {
                 Ok(v) => Ok(Observation::from(v)),
                 Err(ComputeError::Refused(m)) => Ok(json!({ "error": m }).into()),
-                Err(e @ ComputeError::BadArg { .. }) => Err(StepError::Suite(e.to_string())),
+                Err(e @ ComputeError::BadArg { .. }) => Err(StepError::Suite(e.into())),
             };
             (out, Vec::new())
         }

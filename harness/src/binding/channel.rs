@@ -18,6 +18,12 @@ use crate::outcome::{Exchange, Verdict};
 use crate::suite::{Action, OrderSpec, Target};
 use crate::timing::cycles_for;
 
+/// What a [`StepError`] says past its kind. An error the step met (a link's, a codec's, a
+/// simulator's) is kept whole, not its text, so that `source()` reaches its own chain (the
+/// I/O error under a link error); where the harness found the problem itself, its own words
+/// (`"…".into()`, `format!(…).into()`). Boxed: each bus has its own link and codec errors.
+pub(crate) type Cause = Box<dyn std::error::Error + Send + Sync>;
+
 /// Why a DUT step produced no observation.
 #[derive(Debug, thiserror::Error)]
 pub(crate) enum StepError {
@@ -35,30 +41,32 @@ pub(crate) enum StepError {
         /// The last answer, decoded.
         last: String,
     },
-    /// The DUT answered with bytes that break the protocol.
+    /// The DUT answered with bytes that break the protocol (the codec's error, or what breaks).
     #[error("malformed answer from the DUT: {0}")]
-    Protocol(String),
+    Protocol(#[source] Cause),
     /// The DUT's answer `what` does not parse: the codec's own error, naming the field.
     #[error("malformed answer from the DUT: {what}: {error}")]
     Malformed {
         /// What was parsed (`Forward_Open reply`).
         what: &'static str,
         /// Why it does not parse.
+        #[source]
         error: proto::wire::Error,
     },
     /// The DUT (simulator) refused a harness request (`inject`, `observe`).
     #[error("the DUT refused: {0}")]
-    Refused(String),
+    Refused(#[source] Cause),
     /// The suite asked for something impossible.
     #[error("suite error: {0}")]
-    Suite(String),
-    /// The link to the DUT broke or a request went unanswered (a hung, closing or silent DUT).
+    Suite(#[source] Cause),
+    /// The link to the DUT broke or a request went unanswered (a hung, closing or silent DUT):
+    /// the link's own error, where it gave one.
     #[error("link error: {0}")]
-    Link(String),
+    Link(#[source] Cause),
     /// The device closed (or reset) a connection it had accepted, in the middle of a request:
     /// a departure of the device's, judged (a device that never accepts one is unreachable).
     #[error("the device closed the connection: {0}")]
-    Closed(String),
+    Closed(#[source] Cause),
     /// The device did not answer within its limit (the manual's or the standard's), the wait
     /// moved by the time the host lost meanwhile (`crate::timing::Deadline`).
     #[error(
@@ -76,7 +84,7 @@ pub(crate) enum StepError {
     },
     /// The DUT answered with something that is not the protocol at all.
     #[error("the DUT does not speak the protocol: {0}")]
-    Garbage(String),
+    Garbage(#[source] Cause),
     /// The binding cannot perform this step over its bus (a PKW telegram over EtherCAT).
     #[error("{0}")]
     NotApplicable(String),
@@ -187,7 +195,7 @@ impl Channel {
             }
             Action::Pkw { inverter, bytes } => {
                 let order = PkwRepr::parse(bytes)
-                    .map_err(|e| StepError::Suite(format!("pkw bytes: {e}")))?;
+                    .map_err(|e| StepError::Suite(format!("pkw bytes: {e}").into()))?;
                 let (resp, cycles) = self.param_order(Unit::Inverter(*inverter), order)?;
                 let extra = json!({
                     "bytes": hex(&resp.emit_bytes()),
@@ -219,13 +227,13 @@ impl Channel {
             Action::Inject { inverter, error } => {
                 self.dut
                     .inject(*inverter, error)
-                    .map_err(|e| StepError::Refused(e.0))?;
+                    .map_err(|e| StepError::Refused(e.into()))?;
                 json!({}).into()
             }
             Action::Observe { what, inverter } => self
                 .dut
                 .observe(what, *inverter)
-                .map_err(|e| StepError::Refused(e.0))?
+                .map_err(|e| StepError::Refused(e.into()))?
                 .into(),
             Action::Bus(step) => {
                 return Err(StepError::NotApplicable(format!(
@@ -251,7 +259,7 @@ impl Channel {
         };
         let value = o.value.unwrap_or(0);
         let pwe = i32::try_from(value)
-            .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
+            .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits").into()))?;
         Ok(PkwRepr {
             ak: ak.0,
             spm: false,
@@ -302,10 +310,9 @@ impl Channel {
     /// returns the answer and the bus cycles it took (1: the first answer carried it).
     fn param_order(&mut self, unit: Unit, order: PkwRepr) -> Result<(PkwRepr, u32), StepError> {
         if !self.ppo.has_pkw() {
-            return Err(StepError::Suite(format!(
-                "PPO type {} has no parameter channel",
-                self.ppo.0
-            )));
+            return Err(StepError::Suite(
+                format!("PPO type {} has no parameter channel", self.ppo.0).into(),
+            ));
         }
         let mut last = None;
         for cycle in 1..=self.retries {
@@ -393,22 +400,24 @@ fn unit(target: Target) -> Unit {
     }
 }
 
-fn decode_answer(bytes: &[u8], sent_to: Unit, ppo: PpoType) -> Result<PpoRepr, String> {
-    let frame = LinkRepr::parse(bytes).map_err(|e| e.to_string())?;
+fn decode_answer(bytes: &[u8], sent_to: Unit, ppo: PpoType) -> Result<PpoRepr, Cause> {
+    let frame = LinkRepr::parse(bytes)?;
     if frame.unit != sent_to {
         return Err(format!(
             "answer from data record {}, the order went to {}",
             frame.unit.record(),
             sent_to.record()
-        ));
+        )
+        .into());
     }
     if frame.ppo_type != ppo.0 {
         return Err(format!(
             "answer is PPO type {}, the order was PPO type {}",
             frame.ppo_type, ppo.0
-        ));
+        )
+        .into());
     }
-    PpoRepr::parse(&frame.payload, ppo).map_err(|e| e.to_string())
+    Ok(PpoRepr::parse(&frame.payload, ppo)?)
 }
 
 /// A parameter response as step result fields (suites/README.md).
@@ -452,5 +461,23 @@ mod tests {
             e.to_string(),
             "malformed answer from the DUT: Forward_Open reply: Forward_Open reply: truncated, need 26 bytes, got 4"
         );
+        let source = std::error::Error::source(&e).expect("the codec's error");
+        assert_eq!(source.downcast_ref::<proto::wire::Error>(), Some(&error));
+    }
+
+    #[test]
+    fn a_step_error_keeps_the_error_it_met_and_says_the_same() {
+        let io = std::io::Error::new(std::io::ErrorKind::TimedOut, "no frame within 10 ms");
+        let e = StepError::Link(io.into());
+        assert_eq!(e.to_string(), "link error: no frame within 10 ms");
+        let source = std::error::Error::source(&e).expect("the link's error");
+        assert_eq!(
+            source
+                .downcast_ref::<std::io::Error>()
+                .map(std::io::Error::kind),
+            Some(std::io::ErrorKind::TimedOut)
+        );
+        let own = StepError::Suite("compute is not a DUT step".into());
+        assert_eq!(own.to_string(), "suite error: compute is not a DUT step");
     }
 }

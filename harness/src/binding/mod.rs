@@ -101,7 +101,7 @@ pub(crate) fn process_run(
             Ok((*inverter, Some(words), cycles))
         }
         Action::Wait(d) => Ok((
-            Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?,
+            Inverter::new(1).map_err(|e| StepError::Suite(e.into()))?,
             None,
             crate::timing::cycles_for(*d, cycle),
         )),

@@ -86,7 +86,7 @@ pub(crate) fn address(product: Product, o: &OrderSpec) -> Result<Address, StepEr
     let iface = || params::lookup(product, Owner::Interface, o.number);
     let (unit, def) = match o.target {
         Target::Interface if integrated => (
-            Unit::Inverter(Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?),
+            Unit::Inverter(Inverter::new(1).map_err(|e| StepError::Suite(e.into()))?),
             iface(),
         ),
         Target::Interface => (Unit::Interface, iface()),
@@ -117,10 +117,13 @@ pub(crate) fn value_of(obj: Object, data: &[u8], def: Option<&ParamDef>) -> Resu
         ([a, b], _) => i64::from(i16::from_le_bytes([*a, *b])),
         ([a, b, c, d], _) => i64::from(i32::from_le_bytes([*a, *b, *c, *d])),
         (other, _) => {
-            return Err(StepError::Protocol(format!(
-                "{obj}: a parameter value of {} bytes (2 or 4 expected)",
-                other.len()
-            )))
+            return Err(StepError::Protocol(
+                format!(
+                    "{obj}: a parameter value of {} bytes (2 or 4 expected)",
+                    other.len()
+                )
+                .into(),
+            ))
         }
     })
 }
@@ -130,7 +133,7 @@ pub(crate) fn value_of(obj: Object, data: &[u8], def: Option<&ParamDef>) -> Resu
 pub(crate) fn bytes_of(o: &OrderSpec, def: Option<&ParamDef>) -> Result<Vec<u8>, StepError> {
     let value = o.value.unwrap_or(0);
     let v = i32::try_from(value)
-        .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
+        .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits").into()))?;
     let width = def.map_or(2, |d| parameter_data_type(d).bytes());
     Ok(v.to_le_bytes()[..width].to_vec())
 }

@@ -107,21 +107,21 @@ fn abort(code: SdoAbortCode) -> Observation {
 
 fn step_error(e: SdoError) -> StepError {
     match e {
-        SdoError::Abort(code) => StepError::Refused(format!("SDO abort {code}")),
+        SdoError::Abort(code) => StepError::Refused(format!("SDO abort {code}").into()),
         SdoError::Silent { node, what, limit } => StepError::Late {
             what: format!("node {node}, {what}"),
             limit,
             waited: limit,
         },
-        e @ SdoError::Protocol { .. } => StepError::Garbage(e.to_string()),
-        SdoError::Link(l) => StepError::Link(l.to_string()),
+        e @ SdoError::Protocol { .. } => StepError::Garbage(e.into()),
+        SdoError::Link(l) => StepError::Link(l.into()),
     }
 }
 
 fn pdo_error(e: PdoError) -> StepError {
     match e {
-        PdoError::Link(l) => StepError::Link(l.to_string()),
-        e @ PdoError::Frame(_) => StepError::Suite(e.to_string()),
+        PdoError::Link(l) => StepError::Link(l.into()),
+        e @ PdoError::Frame(_) => StepError::Suite(e.into()),
         e @ PdoError::NoNode(_) => StepError::NotApplicable(e.to_string()),
         PdoError::Silent {
             fi,
@@ -301,7 +301,7 @@ impl<L: CanLink> CanBinding<L> {
         self.client
             .link
             .send(&stop)
-            .map_err(|e| Problem::step("NMT pre-operational", StepError::Link(e.to_string())))?;
+            .map_err(|e| Problem::step("NMT pre-operational", StepError::Link(e.into())))?;
         let inverters = self.pdos.as_ref().map_or(1, Pdos::len);
         self.pdos = Some(Pdos::new(product, inverters));
         Ok(())
@@ -383,11 +383,11 @@ impl<L: CanLink> CanBinding<L> {
         let _ = self.client.link.take_error_frames();
         let sent = match &step.send {
             Some(s) => {
-                let f = s.frame(self.node).map_err(StepError::Suite)?;
+                let f = s.frame(self.node).map_err(|e| StepError::Suite(e.into()))?;
                 self.client
                     .link
                     .send(&f)
-                    .map_err(|e| StepError::Link(e.to_string()))?;
+                    .map_err(|e| StepError::Link(e.into()))?;
                 Some(f)
             }
             None => None,
@@ -400,7 +400,7 @@ impl<L: CanLink> CanBinding<L> {
                 .client
                 .link
                 .recv(left)
-                .map_err(|e| StepError::Link(e.to_string()))?
+                .map_err(|e| StepError::Link(e.into()))?
             {
                 Some(f) => frames.push(f),
                 None => break,
@@ -475,7 +475,7 @@ impl<L: CanLink> CanBinding<L> {
         for (sub, v) in (1u8..=count).zip(subs.iter_mut()) {
             let d = self.client.upload(node, 0x1018, sub).map_err(step_error)?;
             let b: [u8; 4] = d.as_slice().try_into().map_err(|_| {
-                StepError::Protocol(format!("1018h:{sub:02X}h is {} bytes, not 4", d.len()))
+                StepError::Protocol(format!("1018h:{sub:02X}h is {} bytes, not 4", d.len()).into())
             })?;
             *v = Some(format!("{:08X}h", u32::from_le_bytes(b)));
         }
@@ -538,19 +538,22 @@ impl<L: CanLink> Binding for CanBinding<L> {
                 let (segment, now) = self.simulated()?;
                 segment
                     .inject_fault_at(*inverter, error, now)
-                    .map_err(StepError::Refused)?;
+                    .map_err(|e| StepError::Refused(e.into()))?;
                 json!({})
             }
             Action::Observe { what, inverter } => {
                 let (segment, now) = self.simulated()?;
                 match observe_device(segment.device_mut(), what, *inverter, now)
-                    .map_err(StepError::Refused)?
+                    .map_err(|e| StepError::Refused(e.into()))?
                 {
                     Some(v) => v,
                     None => {
-                        return Err(StepError::Suite(format!(
-                            "cannot observe `{what}` over the system bus (can: {OBSERVABLE})"
-                        )))
+                        return Err(StepError::Suite(
+                            format!(
+                                "cannot observe `{what}` over the system bus (can: {OBSERVABLE})"
+                            )
+                            .into(),
+                        ))
                     }
                 }
             }

@@ -180,7 +180,7 @@ impl<S: DutSegment> EcatBinding<S> {
                 element: a.element,
             },
         )
-        .map_err(|e| StepError::Suite(e.to_string()))?;
+        .map_err(|e| StepError::Suite(e.into()))?;
         Ok((
             Object {
                 index: coe.index,
@@ -228,18 +228,20 @@ impl<S: DutSegment> EcatBinding<S> {
         let r = self
             .master
             .sdo_download(self.station, obj.index, obj.sub, data, complete);
+        // A refusal is the slave's answer (an observation); any other error the step's.
+        let r = match r {
+            Err(e) if e.kind() != ErrorKind::Refused => Err(step_error(e)),
+            r => Ok(r),
+        };
         if let Some(l) = self.ledger.as_mut() {
             let outcome = match &r {
-                Ok(()) => Ok(true),
-                Err(e) if e.kind() == ErrorKind::Refused => Ok(false),
-                Err(e) => Err(step_error(e)),
+                Ok(Ok(())) => Ok(true),
+                Ok(Err(_)) => Ok(false),
+                Err(e) => Err(e),
             };
-            l.wrote(
-                &obj,
-                ledger::may_have_taken_effect(outcome.as_ref().copied()),
-            );
+            l.wrote(&obj, ledger::may_have_taken_effect(outcome));
         }
-        match r {
+        match r? {
             Ok(()) => Ok(json!({ "abort": null }).into()),
             Err(e) => refused_or(e),
         }
@@ -247,10 +249,7 @@ impl<S: DutSegment> EcatBinding<S> {
 
     /// Brings the slave to Operational with the cycle running, unless it is there.
     fn operational(&mut self) -> Result<(), StepError> {
-        let s = self
-            .master
-            .al_status(self.station)
-            .map_err(|e| step_error(&e))?;
+        let s = self.master.al_status(self.station).map_err(step_error)?;
         if s.state() == Some(EcState::Operational) && !s.error() && self.master.is_cycling() {
             return Ok(());
         }
@@ -258,8 +257,10 @@ impl<S: DutSegment> EcatBinding<S> {
         let r = self.enter(EcState::Operational);
         self.master.set_recording(true);
         r.map_err(|e| match e.refusal() {
-            Some(r) => StepError::Refused(format!("the slave did not enter Operational: {r}")),
-            None => step_error(&e),
+            Some(r) => {
+                StepError::Refused(format!("the slave did not enter Operational: {r}").into())
+            }
+            None => step_error(e),
         })
     }
 
@@ -333,7 +334,7 @@ impl<S: DutSegment> EcatBinding<S> {
             }
             self.master
                 .set_inverter_outputs(self.station, fi, w)
-                .map_err(|e| step_error(&e))?;
+                .map_err(step_error)?;
         }
         // The inputs of a cycle were written by the slave before it saw that cycle's outputs:
         // one more cycle brings the inverter's answer to the last of them.
@@ -341,11 +342,11 @@ impl<S: DutSegment> EcatBinding<S> {
             Some(d) => self.cycles_for(d),
             None => self.cycles(u64::from(cycles) + 1),
         }
-        .map_err(|e| step_error(&e))?;
+        .map_err(step_error)?;
         let i = self
             .master
             .inverter_inputs(self.station, fi)
-            .map_err(|e| step_error(&e))?;
+            .map_err(step_error)?;
         Ok(crate::binding::process_fields(i[0], &i[1..]))
     }
 }
@@ -359,18 +360,15 @@ impl<S: DutSegment> EcatBinding<S> {
             EcatStep::State { state, ack } => {
                 let target = EcState::from_code(*state);
                 if let Some(t) = target {
-                    let now = m.al_status(st).map_err(|e| step_error(&e))?;
+                    let now = m.al_status(st).map_err(step_error)?;
                     if !now.error() {
                         // Set up what the state needs, as a master does; the request itself
                         // is sent as written, so invalid transitions are refused as such.
-                        self.prepare(now.state(), t).map_err(|e| step_error(&e))?;
+                        self.prepare(now.state(), t).map_err(step_error)?;
                     }
                 }
                 let control = u16::from(*state) | if *ack { 0x10 } else { 0 };
-                let s = self
-                    .master
-                    .request_state(st, control)
-                    .map_err(|e| step_error(&e))?;
+                let s = self.master.request_state(st, control).map_err(step_error)?;
                 let fields = al_fields(s.state_bits(), s.error(), s.code.0);
                 if s.error() {
                     let r = Refusal::Al(super::master::AlRefused {
@@ -393,7 +391,7 @@ impl<S: DutSegment> EcatBinding<S> {
                 Ok(()) => json!({}),
                 Err(e) => return refused_or(e),
             },
-            EcatStep::Frame { bytes } => match m.raw_frame(bytes).map_err(|e| step_error(&e))? {
+            EcatStep::Frame { bytes } => match m.raw_frame(bytes).map_err(step_error)? {
                 None => json!({ "answered": false, "reply": null }),
                 Some(reply) => {
                     let mut f = json!({ "answered": true, "reply": hex(&reply) });
@@ -420,7 +418,7 @@ impl<S: DutSegment> EcatBinding<S> {
                     *ado,
                     data.clone(),
                 );
-                match m.raw_datagrams(&[d]).map_err(|e| step_error(&e))? {
+                match m.raw_datagrams(&[d]).map_err(step_error)? {
                     None => json!({ "answered": false }),
                     Some(r) => {
                         let mut f = r.first().map(datagram_fields).unwrap_or_else(|| json!({}));
@@ -461,17 +459,15 @@ impl<S: DutSegment> EcatBinding<S> {
                 };
                 return self.download(obj, data, *complete);
             }
-            EcatStep::Mailbox { bytes } => {
-                match m.mailbox_raw(st, bytes).map_err(|e| step_error(&e))? {
-                    None => json!({ "answered": false, "reply": null }),
-                    Some(reply) => mailbox_fields(&reply),
-                }
-            }
+            EcatStep::Mailbox { bytes } => match m.mailbox_raw(st, bytes).map_err(step_error)? {
+                None => json!({ "answered": false, "reply": null }),
+                Some(reply) => mailbox_fields(&reply),
+            },
             EcatStep::StopPdo { time } => {
                 let was = m.is_cycling();
                 m.stop_cycling();
                 m.idle(*time);
-                let s = m.al_status(st).map_err(|e| step_error(&e))?;
+                let s = m.al_status(st).map_err(step_error)?;
                 if was {
                     m.start_cycling();
                 }
@@ -482,7 +478,7 @@ impl<S: DutSegment> EcatBinding<S> {
                 Err(e) => return refused_or(e),
             },
             EcatStep::Emergencies => {
-                let list = m.collect_emergencies(st).map_err(|e| step_error(&e))?;
+                let list = m.collect_emergencies(st).map_err(step_error)?;
                 let each: Vec<Value> = list
                     .iter()
                     .map(
@@ -513,9 +509,9 @@ impl<S: DutSegment> EcatBinding<S> {
         }
         let (run, err) = (slave.run_led(), slave.err_led());
         let mut v = observe_device(slave.device_mut(), what, inverter, now)
-            .map_err(StepError::Refused)?
+            .map_err(|e| StepError::Refused(e.into()))?
             .ok_or_else(|| {
-                StepError::Refused(format!("cannot observe `{what}` ({OBSERVABLE}, al)"))
+                StepError::Refused(format!("cannot observe `{what}` ({OBSERVABLE}, al)").into())
             })?;
         if what == "leds" {
             v["run"] = json!(run);
@@ -544,11 +540,11 @@ impl<S: DutSegment> EcatBinding<S> {
         ledger.restore(&mut account, |obj, before| {
             self.master
                 .sdo_download(st, obj.index, obj.sub, before, false)
-                .map_err(|e| Problem::step(format!("setting back {obj}"), step_error(&e)))
+                .map_err(|e| Problem::step(format!("setting back {obj}"), step_error(e)))
         });
         if account.attempt(|| "back to Pre-Operational".into()) {
             let r = self.enter(EcState::PreOperational);
-            account.note(r.map_err(|e| Problem::step("back to Pre-Operational", step_error(&e))));
+            account.note(r.map_err(|e| Problem::step("back to Pre-Operational", step_error(e))));
         }
         if drove && account.attempt(|| "waiting for the end of cyclic communication".into()) {
             account.note(self.quiet());
@@ -578,7 +574,7 @@ impl<S: DutSegment> EcatBinding<S> {
 
     /// Cycles the drives back to "Switch-on block".
     fn settle(&mut self) -> Result<(), Problem> {
-        let what = |e: MasterError| Problem::step("settling the drives", step_error(&e));
+        let what = |e: MasterError| Problem::step("settling the drives", step_error(e));
         self.enter(EcState::Operational).map_err(what)?;
         let inverters = (self.master.inputs().len() / usize::from(BYTES_PER_INVERTER)) as u8;
         let period = self.master.config().cycle;
@@ -607,7 +603,7 @@ impl<S: DutSegment> EcatBinding<S> {
             let v = self
                 .master
                 .sdo_upload(self.station, p872.index, p872.subindex, false)
-                .map_err(|e| Problem::step("reading P872", step_error(&e)))?;
+                .map_err(|e| Problem::step("reading P872", step_error(e)))?;
             let bits = v.first().copied().unwrap_or(0);
             if bits & CYCLIC == 0 {
                 return Ok(());
@@ -632,9 +628,9 @@ impl<S: DutSegment> EcatBinding<S> {
             let d = self
                 .master
                 .sdo_upload(self.station, 0x1018, sub, false)
-                .map_err(|e| step_error(&e))?;
+                .map_err(step_error)?;
             let b: [u8; 4] = d.get(..4).and_then(|b| b.try_into().ok()).ok_or_else(|| {
-                StepError::Protocol(format!("1018h:{sub:02X}h is {} bytes, not 4", d.len()))
+                StepError::Protocol(format!("1018h:{sub:02X}h is {} bytes, not 4", d.len()).into())
             })?;
             *v = u32::from_le_bytes(b);
         }
@@ -697,7 +693,7 @@ impl<S: DutSegment> Binding for EcatBinding<S> {
                 slave
                     .device_mut()
                     .inject_fault(*inverter, error)
-                    .map_err(StepError::Refused)?;
+                    .map_err(|e| StepError::Refused(e.into()))?;
                 json!({})
             }
             Action::Observe { what, inverter } => self.observe(what, *inverter)?,
@@ -769,17 +765,17 @@ fn rank(s: EcState) -> u8 {
 /// EtherCAT replies at all (unparsable, or other datagrams than were sent) are garbage, an
 /// error verdict like silence — nothing can be judged; a slave that answers but breaks the
 /// rules (working counter, mailbox, CoE) fails.
-fn step_error(e: &MasterError) -> StepError {
+fn step_error(e: MasterError) -> StepError {
     match e.kind() {
-        ErrorKind::Protocol => match e {
+        ErrorKind::Protocol => match &e {
             MasterError::Protocol(ProtocolError::Malformed(_) | ProtocolError::Mismatch { .. }) => {
-                StepError::Garbage(e.to_string())
+                StepError::Garbage(e.into())
             }
-            _ => StepError::Protocol(e.to_string()),
+            _ => StepError::Protocol(e.into()),
         },
-        ErrorKind::Refused => StepError::Refused(e.to_string()),
-        ErrorKind::Link => match e {
-            MasterError::Usage(_) => StepError::Suite(e.to_string()),
+        ErrorKind::Refused => StepError::Refused(e.into()),
+        ErrorKind::Link => match &e {
+            MasterError::Usage(_) => StepError::Suite(e.into()),
             // The slave's limit passed: late unless the host was (the runner judges that).
             MasterError::Link(LinkFailure::Timeout {
                 awaited,
@@ -790,7 +786,7 @@ fn step_error(e: &MasterError) -> StepError {
                 limit: *limit,
                 waited: *waited,
             },
-            _ => StepError::Link(e.to_string()),
+            _ => StepError::Link(e.into()),
         },
     }
 }
@@ -799,7 +795,7 @@ fn step_error(e: &MasterError) -> StepError {
 /// `mailbox_error`); any other error as the step's error.
 fn refused_or(e: MasterError) -> Result<Observation, StepError> {
     let Some(r) = e.refusal() else {
-        return Err(step_error(&e));
+        return Err(step_error(e));
     };
     let fields = match r {
         Refusal::SdoAbort { code, .. } => json!({ "abort": code.0 }),

@@ -74,9 +74,9 @@ impl From<LinkError> for StepError {
             )
         };
         match &e {
-            LinkError::Closed { .. } => StepError::Closed(e.to_string()),
-            LinkError::Io { source, .. } if reset(source) => StepError::Closed(e.to_string()),
-            _ => StepError::Link(e.to_string()),
+            LinkError::Closed { .. } => StepError::Closed(e.into()),
+            LinkError::Io { source, .. } if reset(source) => StepError::Closed(e.into()),
+            _ => StepError::Link(e.into()),
         }
     }
 }

@@ -165,7 +165,7 @@ impl Scanner {
     fn no_reply(&self, what: &str, wait: &Deadline) -> StepError {
         match self.link.timeout() {
             Some(_) => StepError::late(wait, what),
-            None => StepError::Link(format!("no reply to {what}")),
+            None => StepError::Link(format!("no reply to {what}").into()),
         }
     }
 
@@ -191,14 +191,17 @@ impl Scanner {
         what: String,
         wait: &Deadline,
     ) -> Result<Option<EncapRepr>, StepError> {
-        let bytes = msg.emit().map_err(|e| StepError::Suite(e.to_string()))?;
+        let bytes = msg.emit().map_err(|e| StepError::Suite(e.into()))?;
         let reply = self.send_bytes(client, &bytes, what, wait)?;
         match reply {
-            Some(r) if r.command != msg.command => Err(StepError::Garbage(format!(
-                "the reply to {} is command {:04X}h",
-                Command(msg.command),
-                r.command
-            ))),
+            Some(r) if r.command != msg.command => Err(StepError::Garbage(
+                format!(
+                    "the reply to {} is command {:04X}h",
+                    Command(msg.command),
+                    r.command
+                )
+                .into(),
+            )),
             _ => Ok(reply),
         }
     }
@@ -229,9 +232,9 @@ impl Scanner {
                 Err(e) => (
                     hex(&b),
                     format!("malformed: {e}"),
-                    Err(StepError::Protocol(format!(
-                        "malformed encapsulation reply: {e}"
-                    ))),
+                    Err(StepError::Protocol(
+                        format!("malformed encapsulation reply: {e}").into(),
+                    )),
                 ),
             },
         };
@@ -262,10 +265,9 @@ impl Scanner {
         };
         let reply = self.send(client, msg, "RegisterSession".into(), "RegisterSession")?;
         if reply.status != 0 || reply.session == 0 {
-            return Err(StepError::Protocol(format!(
-                "RegisterSession refused: {}",
-                EncapStatus(reply.status)
-            )));
+            return Err(StepError::Protocol(
+                format!("RegisterSession refused: {}", EncapStatus(reply.status)).into(),
+            ));
         }
         self.sessions.insert(client, reply.session);
         Ok(reply.session)
@@ -277,10 +279,13 @@ impl Scanner {
         let what = format!("{} {}", Service(req.service), req.path);
         let resp = self.unconnected(1, req.emit(), what)?;
         if resp.service != req.service {
-            return Err(StepError::Protocol(format!(
-                "reply to service {:02X}h answers service {:02X}h",
-                req.service, resp.service
-            )));
+            return Err(StepError::Protocol(
+                format!(
+                    "reply to service {:02X}h answers service {:02X}h",
+                    req.service, resp.service
+                )
+                .into(),
+            ));
         }
         Ok(resp)
     }
@@ -300,7 +305,7 @@ impl Scanner {
             cpf: Cpf::new(vec![Item::Null, Item::UnconnectedData(request)]),
         }
         .emit()
-        .map_err(|e| StepError::Suite(e.to_string()))?;
+        .map_err(|e| StepError::Suite(e.into()))?;
         let msg = EncapRepr {
             command: Command::SEND_RR_DATA.0,
             session,
@@ -310,10 +315,13 @@ impl Scanner {
         };
         let reply = self.send(client, msg, what, &Service(service).to_string())?;
         if reply.status != 0 {
-            return Err(StepError::Protocol(format!(
-                "SendRRData answered with encapsulation status {}",
-                EncapStatus(reply.status)
-            )));
+            return Err(StepError::Protocol(
+                format!(
+                    "SendRRData answered with encapsulation status {}",
+                    EncapStatus(reply.status)
+                )
+                .into(),
+            ));
         }
         let sd = SendData::parse(&reply.data).map_err(StepError::malformed("SendRRData reply"))?;
         let Some(Item::UnconnectedData(payload)) = sd.cpf.items.get(1) else {
@@ -371,10 +379,13 @@ impl Scanner {
             [a, b] => i64::from(u16::from_le_bytes([*a, *b])),
             [a, b, c, d] => i64::from(i32::from_le_bytes([*a, *b, *c, *d])),
             other => {
-                return Err(StepError::Protocol(format!(
-                    "a parameter value of {} bytes (INT or DINT expected)",
-                    other.len()
-                )))
+                return Err(StepError::Protocol(
+                    format!(
+                        "a parameter value of {} bytes (INT or DINT expected)",
+                        other.len()
+                    )
+                    .into(),
+                ))
             }
         };
         Ok(json!({ "value": value, "cip_status": 0, "bytes": hex(&resp.data) }).into())
@@ -384,7 +395,7 @@ impl Scanner {
         let (path, def) = self.param_path(o)?;
         let value = o.value.unwrap_or(0);
         let v = i32::try_from(value)
-            .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits")))?;
+            .map_err(|_| StepError::Suite(format!("value {value} does not fit 32 bits").into()))?;
         let width = match def.map(|d| d.width) {
             Some(Width::Dword) => 4,
             _ => 2,
@@ -434,11 +445,14 @@ impl Scanner {
         };
         match self.forward_open(&spec)? {
             (_, Some(_)) => Ok(()),
-            (resp, None) => Err(StepError::Protocol(format!(
-                "Forward_Open refused: {} extended {:04X?}",
-                GeneralStatus(resp.general),
-                resp.extended
-            ))),
+            (resp, None) => Err(StepError::Protocol(
+                format!(
+                    "Forward_Open refused: {} extended {:04X?}",
+                    GeneralStatus(resp.general),
+                    resp.extended
+                )
+                .into(),
+            )),
         }
     }
 
@@ -454,8 +468,9 @@ impl Scanner {
             )
         })?;
         let size = |data: u16, header: u16, delta: i32| -> Result<u16, StepError> {
-            u16::try_from(i32::from(data) + i32::from(header) + delta)
-                .map_err(|_| StepError::Suite(format!("a size change of {delta} leaves no size")))
+            u16::try_from(i32::from(data) + i32::from(header) + delta).map_err(|_| {
+                StepError::Suite(format!("a size change of {delta} leaves no size").into())
+            })
         };
         // Network sizes: the 2-byte sequence count, and O→T the run/idle header.
         let run_idle = if c.run_idle { 4 } else { 0 };
@@ -574,7 +589,7 @@ impl Scanner {
             run_idle: io.run_idle.then_some(u32::from(self.run)),
             data,
         };
-        let bytes = frame.emit().map_err(|e| StepError::Suite(e.to_string()))?;
+        let bytes = frame.emit().map_err(|e| StepError::Suite(e.into()))?;
         let t_o_id = io.t_o_id;
         let received = self
             .link
@@ -676,9 +691,9 @@ impl Scanner {
             None => StepError::Silent { cycles: n },
         })?;
         let off = io.t_o.and_then(|a| a.offset(inverter)).ok_or_else(|| {
-            StepError::Suite(format!(
-                "{inverter} is not in the input assembly of the connection"
-            ))
+            StepError::Suite(
+                format!("{inverter} is not in the input assembly of the connection").into(),
+            )
         })?;
         let words: Vec<u16> = data
             .get(off..)
@@ -724,9 +739,11 @@ impl Scanner {
                     Ok(None) => json!({ "reply": false, "closed": false }),
                     Ok(Some(r)) => reply_fields(&r),
                     Err(StepError::Link(e) | StepError::Closed(e)) => {
-                        json!({ "reply": false, "closed": true, "link": e })
+                        json!({ "reply": false, "closed": true, "link": e.to_string() })
                     }
-                    Err(StepError::Protocol(e)) => json!({ "reply": true, "malformed": e }),
+                    Err(StepError::Protocol(e)) => {
+                        json!({ "reply": true, "malformed": e.to_string() })
+                    }
                     Err(e) => return Err(e),
                 })
             }
@@ -743,8 +760,8 @@ impl Scanner {
                 data,
                 client,
             } => {
-                let path =
-                    EPath::parse(path).map_err(|e| StepError::Suite(format!("path: {e}")))?;
+                let path = EPath::parse(path)
+                    .map_err(|e| StepError::Suite(format!("path: {e}").into()))?;
                 let what = format!("{} {path}", Service(*service));
                 let req = MrRequest {
                     service: *service,
@@ -787,7 +804,7 @@ impl Scanner {
                                 run_idle: io.run_idle.then_some(u32::from(self.run)),
                                 data: vec![0; io.o_t_len],
                             };
-                            Some(frame.emit().map_err(|e| StepError::Suite(e.to_string()))?)
+                            Some(frame.emit().map_err(|e| StepError::Suite(e.into()))?)
                         }
                         _ => None,
                     };
@@ -1053,11 +1070,14 @@ impl Scanner {
         let reply = self
             .send_within(1, msg, "ListIdentity".into(), &reach)?
             .ok_or_else(|| match self.link.timeout() {
-                Some(_) => StepError::Link(format!(
-                    "no reply to ListIdentity within {} ({} times the limit of one request)",
-                    crate::timing::ms(reach.limit()),
-                    crate::net::wait::REACH
-                )),
+                Some(_) => StepError::Link(
+                    format!(
+                        "no reply to ListIdentity within {} ({} times the limit of one request)",
+                        crate::timing::ms(reach.limit()),
+                        crate::net::wait::REACH
+                    )
+                    .into(),
+                ),
                 None => self.no_reply("ListIdentity", &reach),
             })?;
         let late = (self.link.timeout().is_some() && on_time.passed()).then(|| {
@@ -1133,7 +1153,7 @@ impl Binding for Scanner {
                 }
             }
             Action::Wait(d) => {
-                let fi = Inverter::new(1).map_err(|e| StepError::Suite(e.to_string()))?;
+                let fi = Inverter::new(1).map_err(|e| StepError::Suite(e.into()))?;
                 self.run_for(fi, *d)
             }
             Action::Inject { inverter, error } => {
@@ -1143,14 +1163,14 @@ impl Binding for Scanner {
                 adapter
                     .device_mut()
                     .inject_fault(*inverter, error)
-                    .map_err(StepError::Refused)?;
+                    .map_err(|e| StepError::Refused(e.into()))?;
                 Ok(json!({}))
             }
             Action::Observe { what, inverter } => {
                 let (adapter, now) = self.link.adapter().ok_or_else(|| {
                     StepError::Refused("observation needs the embedded adapter".into())
                 })?;
-                observe(adapter, what, *inverter, now).map_err(StepError::Refused)
+                observe(adapter, what, *inverter, now).map_err(|e| StepError::Refused(e.into()))
             }
             Action::Bus(step) => {
                 let step = crate::binding::own_step::<EnipStep>(step.as_ref(), "EtherNet/IP")?;

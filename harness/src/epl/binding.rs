@@ -92,7 +92,7 @@ fn abort(code: u32) -> Observation {
 /// runner finds the host was late meanwhile), not a broken link.
 fn step_error(e: MnError) -> StepError {
     match e {
-        MnError::Link(l) => StepError::Link(l.to_string()),
+        MnError::Link(l) => StepError::Link(l.into()),
         MnError::NoReply {
             node,
             what,
@@ -103,9 +103,9 @@ fn step_error(e: MnError) -> StepError {
             limit,
             waited,
         },
-        e @ MnError::Malformed { .. } => StepError::Garbage(e.to_string()),
-        e @ MnError::State { .. } => StepError::Refused(e.to_string()),
-        MnError::Abort(code) => StepError::Refused(format!("SDO abort {code:08X}h")),
+        e @ MnError::Malformed { .. } => StepError::Garbage(e.into()),
+        e @ MnError::State { .. } => StepError::Refused(e.into()),
+        MnError::Abort(code) => StepError::Refused(format!("SDO abort {code:08X}h").into()),
     }
 }
 
@@ -202,7 +202,7 @@ impl<L: Link> EplBinding<L> {
                         element: a.element,
                     },
                 )
-                .map_err(|e| StepError::Suite(e.to_string()))?
+                .map_err(|e| StepError::Suite(e.into()))?
                 .index
             }
         };
@@ -263,7 +263,7 @@ impl<L: Link> EplBinding<L> {
         self.mn.set_recording(true);
         r.map(|_| ()).map_err(|e| match e {
             MnError::State { .. } => {
-                StepError::Refused(format!("the node did not enter OPERATIONAL: {e}"))
+                StepError::Refused(format!("the node did not enter OPERATIONAL: {e}").into())
             }
             other => step_error(other),
         })
@@ -541,9 +541,9 @@ impl<L: Link> EplBinding<L> {
         }
         let (bs, be) = node.leds();
         let mut v = observe_device(node.device_mut(), what, inverter, now)
-            .map_err(StepError::Refused)?
+            .map_err(|e| StepError::Refused(e.into()))?
             .ok_or_else(|| {
-                StepError::Refused(format!("cannot observe `{what}` ({OBSERVABLE}, nmt)"))
+                StepError::Refused(format!("cannot observe `{what}` ({OBSERVABLE}, nmt)").into())
             })?;
         if what == "leds" {
             v["bs"] = json!(bs);
@@ -812,7 +812,7 @@ impl<L: Link> Binding for EplBinding<L> {
                 } else {
                     node.device_mut()
                         .inject_fault(*inverter, error)
-                        .map_err(StepError::Refused)?;
+                        .map_err(|e| StepError::Refused(e.into()))?;
                 }
                 json!({})
             }

@@ -110,7 +110,7 @@ fn status_hex(s: PnioStatus) -> String {
 
 pub(super) fn step_error(e: PnioError) -> StepError {
     match e {
-        PnioError::Link(l) => StepError::Link(l.to_string()),
+        PnioError::Link(l) => StepError::Link(l.into()),
         // The device's limit passed: late unless the host was (the runner judges that).
         PnioError::NoReply {
             what,
@@ -121,12 +121,12 @@ pub(super) fn step_error(e: PnioError) -> StepError {
             limit,
             waited,
         },
-        e @ (PnioError::NoInput | PnioError::NotFound(_)) => StepError::Link(e.to_string()),
+        e @ (PnioError::NoInput | PnioError::NotFound(_)) => StepError::Link(e.into()),
         // A PROFINET answer that breaks its own rules (an RPC response without its PNIO
         // status) is the device's departure, judged; open_error keeps garbage at bring-up an
         // error.
-        e @ PnioError::Malformed { .. } => StepError::Protocol(e.to_string()),
-        e @ (PnioError::Nca { .. } | PnioError::NotConnected) => StepError::Refused(e.to_string()),
+        e @ PnioError::Malformed { .. } => StepError::Protocol(e.into()),
+        e @ (PnioError::Nca { .. } | PnioError::NotConnected) => StepError::Refused(e.into()),
     }
 }
 
@@ -592,7 +592,7 @@ pub(super) fn bus_step<L: Link>(
             reduction_ratio,
         } => {
             ctl.set_reduction_ratio(*reduction_ratio);
-            let subs = (plan.connect)(modules).map_err(StepError::Suite)?;
+            let subs = (plan.connect)(modules).map_err(|e| StepError::Suite(e.into()))?;
             connect_result(ctl.connect(&subs).map_err(step_error)?)
         }
         PnioStep::Release => {
@@ -672,7 +672,7 @@ pub(super) fn bus_step<L: Link>(
             let du = last.as_deref().map(proto::lldp::Lldpdu::parse);
             let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
             match du {
-                Some(Err(e)) => return Err(StepError::Protocol(format!("LLDP: {e}"))),
+                Some(Err(e)) => return Err(StepError::Protocol(format!("LLDP: {e}").into())),
                 Some(Ok(du)) => json!({
                     "frames": frames,
                     "chassis": text(&du.chassis.1),
@@ -702,7 +702,9 @@ pub(super) fn bus_step<L: Link>(
         } => {
             let interface = match interface {
                 None => Uuid::PNIO_DEVICE_INTERFACE,
-                Some(text) => text.parse().map_err(|e| StepError::Suite(format!("{e}")))?,
+                Some(text) => text
+                    .parse::<Uuid>()
+                    .map_err(|e| StepError::Suite(e.into()))?,
             };
             match ctl.call(
                 Opnum(*opnum),
