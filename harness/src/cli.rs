@@ -56,6 +56,10 @@ enum Command {
     /// The manuals' statements per section and how many the cases assert (the inventories in
     /// `suites/inventory/`), and the check that keeps them honest.
     Coverage(crate::cli_reports::CoverageArgs),
+    /// The mutation score of the manuals as code: changes one datum the manuals state at a
+    /// time (a default, a range, an error number, an abort code, an LED row, a bit, a
+    /// formula's constant) and runs the cases that cite it; lists the changes no case notices.
+    Mutants(crate::mutants::MutantsArgs),
 }
 
 #[derive(ClapArgs, Debug)]
@@ -288,6 +292,7 @@ pub fn main() -> i32 {
         Command::Diff(a) => crate::cli_reports::diff(a),
         Command::Merge(a) => crate::cli_reports::merge(a),
         Command::Coverage(a) => crate::cli_reports::coverage(a),
+        Command::Mutants(a) => crate::mutants::command(a),
     };
     match outcome {
         Ok(code) => code,
@@ -496,6 +501,8 @@ fn run(a: RunArgs) -> Result<i32, String> {
         }
         Err(e) => run.load_errors.push(e.to_string()),
     }
+    // The score `harness mutants` measured into this report folder.
+    run.mutation = crate::mutants::score_in(&a.out)?;
     // Every link is closed by now, its FIN exchange recorded.
     if let (Some(path), Some(tap)) = (&a.pcap, &tap) {
         let tap = tap.borrow();

@@ -24,6 +24,7 @@ mod can;
 pub mod cli;
 mod cli_reports;
 mod cli_tools;
+
 mod description;
 mod dictionary;
 mod ecat;
@@ -52,6 +53,7 @@ mod hex;
 mod identity;
 mod interrupt;
 mod model;
+mod mutants;
 mod net;
 mod notation;
 pub mod outcome;

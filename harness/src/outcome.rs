@@ -473,9 +473,50 @@ pub struct RunResult {
     pub statements: Vec<StatementCoverage>,
     /// Suite files that failed to load, with the error (file, line, what is wrong).
     pub load_errors: Vec<String>,
+    /// The mutation score `harness mutants` last measured into the report folder, if any.
+    #[serde(default)]
+    pub mutation: Option<MutationScore>,
     /// Wall time of the run.
     #[serde(serialize_with = "ser_secs", deserialize_with = "de_secs")]
     pub duration: Duration,
+}
+
+/// How many of the manuals-as-code mutants the cases kill (`harness mutants`, its
+/// `mutants.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MutationScore {
+    /// Mutants run.
+    pub mutants: usize,
+    /// Mutants some case noticed.
+    pub killed: usize,
+    /// When they were run (RFC 3339).
+    pub measured: String,
+    /// Only some mutants ran (`--only`, `--every`).
+    pub sample: bool,
+}
+
+impl MutationScore {
+    /// Killed, in per cent of those run.
+    pub fn percent(&self) -> f64 {
+        match self.mutants {
+            0 => 0.0,
+            n => 100.0 * self.killed as f64 / n as f64,
+        }
+    }
+}
+
+impl std::fmt::Display for MutationScore {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "mutation score: {} of {} mutants of the manuals as code killed ({:.1} %), measured {}{}",
+            self.killed,
+            self.mutants,
+            self.percent(),
+            self.measured,
+            if self.sample { ", a sample" } else { "" }
+        )
+    }
 }
 
 impl RunResult {

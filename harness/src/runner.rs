@@ -30,6 +30,8 @@ pub(crate) struct RunOptions {
     pub(crate) profiles: Vec<Profile>,
     /// Only cases whose id contains this text.
     pub(crate) filter: Option<String>,
+    /// Only the cases of these ids (`harness mutants` runs the cases that cite a datum).
+    pub(crate) only: Option<std::collections::BTreeSet<String>>,
     /// Bus cycles a parameter order is repeated before the step times out.
     pub(crate) retries: u32,
     /// The run's capture (`--pcap`), if any: the runner labels its packets with the profile,
@@ -58,6 +60,7 @@ impl RunOptions {
         RunOptions {
             profiles,
             filter: None,
+            only: None,
             retries: 250,
             tap: None,
             progress: RefCell::new(Box::new(crate::progress::Silent)),
@@ -117,7 +120,10 @@ pub(crate) fn run_shard(
     factory: &mut dyn DutFactory,
 ) -> RunResult {
     let start = Instant::now();
-    let selected = |case: &&Case| opts.filter.as_deref().is_none_or(|f| case.id.contains(f));
+    let selected = |case: &&Case| {
+        opts.filter.as_deref().is_none_or(|f| case.id.contains(f))
+            && opts.only.as_ref().is_none_or(|ids| ids.contains(&case.id))
+    };
     let mut meta = RunMeta::default();
     let mut cases = Vec::new();
     let seq;
@@ -194,6 +200,7 @@ pub(crate) fn run_shard(
         cases,
         errata: loaded.errata.clone(),
         statements: Vec::new(),
+        mutation: None,
         load_errors: loaded.errors.iter().map(|e| e.to_string()).collect(),
         duration: start.elapsed(),
     };

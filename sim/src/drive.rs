@@ -248,7 +248,7 @@ impl Drive {
         params: &dyn DriveParams,
         now: Duration,
     ) -> DriveOutput {
-        let control = ControlWord(control);
+        let control = ControlWord(proto::nord::mutant::CONTROL_BITS.apply(control));
         let dt = self
             .last
             .map_or(Duration::ZERO, |l| now.saturating_sub(l))
@@ -269,7 +269,7 @@ impl Drive {
             self.take(&EMERGENCY_STOP_COMPLETE, now);
         }
         DriveOutput {
-            status: self.status_word(control),
+            status: proto::nord::mutant::STATUS_BITS.apply(self.status_word(control)),
             actuals: self.actuals(params, max_hz),
         }
     }

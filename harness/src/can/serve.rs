@@ -116,7 +116,7 @@ pub(super) fn command(args: &[String]) -> Result<i32, ServeError> {
     outln!(
         "a process-data cycle of the {inverters} inverters takes up to {:.2} ms of the bus at 250 kBaud (worst-case bit stuffing; the manuals allow cycles from {} ms)",
         f64::from(cycle) / 1000.0,
-        proto::nord::can::MIN_CYCLE_US / 1000
+        proto::nord::can::MIN_CYCLE_US.get() / 1000
     );
     match a.seconds {
         Some(s) => thread::sleep(Duration::from_secs(s)),

@@ -61,19 +61,19 @@ fn ethertype(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
 
 fn led_table(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
     let rows = match a.str("led")? {
-        "dev" => led::DEV,
-        "bus" => led::BUS,
-        "ethercat-run" => led::ETHERCAT_RUN,
-        "ethercat-err" => led::ETHERCAT_ERR,
-        "ethernetip-ms" => led::ETHERNETIP_MS,
-        "ethernetip-ns" => led::ETHERNETIP_NS,
-        "powerlink-bs" => led::POWERLINK_BS,
-        "powerlink-be" => led::POWERLINK_BE,
-        "profinet-run" => led::PROFINET_RUN,
-        "profinet-bf" => led::PROFINET_BF,
-        "tu3-pnt-err" => led::TU3_PNT_ERR,
-        "tu3-pnt-ds" => led::TU3_PNT_DS,
-        "tu3-pnt-de" => led::TU3_PNT_DE,
+        "dev" => &led::DEV,
+        "bus" => &led::BUS,
+        "ethercat-run" => &led::ETHERCAT_RUN,
+        "ethercat-err" => &led::ETHERCAT_ERR,
+        "ethernetip-ms" => &led::ETHERNETIP_MS,
+        "ethernetip-ns" => &led::ETHERNETIP_NS,
+        "powerlink-bs" => &led::POWERLINK_BS,
+        "powerlink-be" => &led::POWERLINK_BE,
+        "profinet-run" => &led::PROFINET_RUN,
+        "profinet-bf" => &led::PROFINET_BF,
+        "tu3-pnt-err" => &led::TU3_PNT_ERR,
+        "tu3-pnt-ds" => &led::TU3_PNT_DS,
+        "tu3-pnt-de" => &led::TU3_PNT_DE,
         other => {
             return Err(ComputeError::BadArg {
                 arg: "led".into(),
@@ -81,7 +81,7 @@ fn led_table(_: &Ctx, a: &Args) -> Result<Value, ComputeError> {
             })
         }
     };
-    serde_json::to_value(rows)
+    serde_json::to_value(&rows[..])
         .map(|rows| json!({ "rows": rows }))
         .map_err(|e| ComputeError::Refused(e.to_string()))
 }
@@ -283,7 +283,7 @@ pub(super) const FNS: &[ComputeFn] = &[
         doc: "PROFINET alarm number of a P700 value: 100h + P700 (BU 0620 §5.4.2)",
         run: |_: &Ctx, a: &Args| {
             let p700 = match a.opt_str("event")? {
-                Some("lost-inverter") => errors::LOST_INVERTER,
+                Some("lost-inverter") => errors::LOST_INVERTER.get(),
                 Some(e) => {
                     return Err(bad(
                         "event",

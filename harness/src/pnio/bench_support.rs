@@ -42,7 +42,7 @@ pub fn order() -> PkwRepr {
     PkwRepr {
         ak: 1,
         spm: false,
-        pnu: PARAMETER + proto::nord::pkw::PNU_OFFSET,
+        pnu: PARAMETER + proto::nord::pkw::PNU_OFFSET.get(),
         ind: 0,
         pwe: 0,
     }

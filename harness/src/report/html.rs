@@ -301,6 +301,13 @@ pub(super) fn render(run: &RunResult) -> String {
     super::statements::html_map(&mut s, &run.statements);
     coverage(&mut s, run);
     super::statements::html(&mut s, &run.statements);
+    if let Some(m) = &run.mutation {
+        let _ = writeln!(
+            s,
+            "<section id=\"mutation\"><h2>Mutation score</h2>\n<p>{}: one datum the manuals state changed at a time (<code>harness mutants</code>).</p></section>",
+            text(&m.to_string())
+        );
+    }
     errata(&mut s, run);
     s.push_str("<section id=\"record-section\"><h2>Record</h2>\n");
     record_table(&mut s, run);

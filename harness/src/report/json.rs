@@ -11,8 +11,8 @@ use std::collections::BTreeMap;
 use super::summary::Counts;
 use super::write::transcript_file;
 use crate::outcome::{
-    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, StatementCoverage,
-    Verdict,
+    CaseKind, CaseResult, Erratum, ManualRef, MutationScore, Refusal, RunMeta, RunResult,
+    StatementCoverage, Verdict,
 };
 
 /// One case in `run.json`.
@@ -93,6 +93,9 @@ struct Doc<'a> {
     errata: &'a [Erratum],
     /// The manuals' statements per section, as the inventories count them.
     statements: &'a [StatementCoverage],
+    /// The mutation score `harness mutants` left in the report folder, if it ran there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mutation: Option<&'a MutationScore>,
     cases: Vec<Case<'a>>,
 }
 
@@ -111,6 +114,7 @@ pub(super) fn write(run: &RunResult, out: &mut dyn std::io::Write) -> std::io::R
         load_errors: &run.load_errors,
         errata: &run.errata,
         statements: &run.statements,
+        mutation: run.mutation.as_ref(),
         cases: run.cases.iter().map(Case::from).collect(),
     };
     serde_json::to_writer_pretty(out, &doc).map_err(std::io::Error::from)

@@ -10,8 +10,8 @@ use std::path::{Component, Path, PathBuf};
 use std::time::Duration;
 
 use crate::outcome::{
-    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, StatementCoverage,
-    StepResult, Verdict,
+    CaseKind, CaseResult, Erratum, ManualRef, MutationScore, Refusal, RunMeta, RunResult,
+    StatementCoverage, StepResult, Verdict,
 };
 
 /// A report folder or `run.json` that cannot be read back. Every variant names the file.
@@ -131,6 +131,8 @@ struct Doc {
     errata: Vec<Erratum>,
     #[serde(default)]
     statements: Vec<StatementCoverage>,
+    #[serde(default)]
+    mutation: Option<MutationScore>,
     cases: Vec<Case>,
 }
 
@@ -245,6 +247,7 @@ pub(crate) fn read(given: &Path) -> Result<RunResult, ReadError> {
         errata: doc.errata,
         statements: doc.statements,
         load_errors: doc.load_errors,
+        mutation: doc.mutation,
         duration: secs(&path, doc.duration)?,
     })
 }

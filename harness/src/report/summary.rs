@@ -326,6 +326,9 @@ pub(super) fn markdown(run: &RunResult) -> String {
     super::signoff::markdown_na(&mut s, run);
     coverage(&mut s, run);
     super::statements::markdown(&mut s, &run.statements);
+    if let Some(m) = &run.mutation {
+        let _ = writeln!(s, "\n{m} (`harness mutants`).");
+    }
     errata(&mut s, run);
     let _ = writeln!(s, "\n## Record\n");
     for (label, value) in record::lines(run) {

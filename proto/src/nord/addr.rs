@@ -17,6 +17,8 @@ use std::fmt;
 
 use serde::Serialize;
 
+use super::mutant::Constant;
+
 use super::pkw::Ind;
 use super::product::{Product, Protocol};
 use super::types::{ArrayElement, Inverter, ParamAddress, ParamNumber, ParamSet};
@@ -133,9 +135,9 @@ pub struct SdoAddress {
 /// EtherCAT CoE object of a parameter (SK 550P).
 pub fn coe(product: Product, a: ParamAddress) -> Result<SdoAddress, AddrError> {
     check(product, Protocol::Ethercat, a.inverter)?;
-    let device = 0x800 * u16::from(a.inverter.get() - 1);
+    let device = COE_DEVICE_STEP.get() * u16::from(a.inverter.get() - 1);
     Ok(SdoAddress {
-        index: 0x2000 + device + a.number.get(),
+        index: COE_INDEX.get() + device + a.number.get(),
         subindex: sdo_subindex(a.set, a.element),
     })
 }
@@ -174,7 +176,7 @@ pub struct CipAddress {
 pub fn cip(product: Product, a: ParamAddress) -> Result<CipAddress, AddrError> {
     check(product, Protocol::Ethernetip, a.inverter)?;
     Ok(CipAddress {
-        class: 100 + u16::from(a.inverter.get()),
+        class: CIP_CLASS_BASE.get() + u16::from(a.inverter.get()),
         instance: cip_instance(a.set, a.element),
         attribute: a.number.get(),
     })
@@ -183,7 +185,7 @@ pub fn cip(product: Product, a: ParamAddress) -> Result<CipAddress, AddrError> {
 /// PNU of a parameter order in a data record: P + 1000 (BU 0620 §2.5.6.2 "1000 must be added";
 /// BU 0590 §4.2.2.1, e.g. P508 → 1508).
 pub fn profinet_pnu(_product: Product, number: ParamNumber) -> u16 {
-    number.get() + 1000
+    number.get() + super::pkw::PNU_OFFSET.get()
 }
 
 /// A PROFINET parameter order's address.
@@ -201,7 +203,7 @@ pub struct ProfinetAddress {
 pub fn profinet(product: Product, a: ParamAddress) -> Result<ProfinetAddress, AddrError> {
     check(product, Protocol::Profinet, a.inverter)?;
     Ok(ProfinetAddress {
-        record: 100 + u16::from(a.inverter.get()),
+        record: PNIO_RECORD_BASE.get() + u16::from(a.inverter.get()),
         pnu: profinet_pnu(product, a.number),
         ind: Ind::for_address(a.set, a.element).raw(),
     })
@@ -219,12 +221,44 @@ pub struct CanIds {
 /// CAN IDs on the NORD system bus (BU 0620 §3.1: "P515[1] = 32", further inverters 34, 36, …;
 /// "Absolute encoder address = CAN ID of the frequency inverter + 1").
 pub fn can(inverter: Inverter) -> CanIds {
-    let id = 32 + 2 * (inverter.get() - 1);
+    let id = super::can::SystemBusAddress::inverter(inverter);
     CanIds {
-        inverter: id,
-        encoder: id + 1,
+        inverter: id.get(),
+        encoder: super::can::SystemBusAddress::encoder(inverter).get(),
     }
 }
+
+/// The CoE index of P0 of FI 1 (BU 0620 §2.2.7: "2000h + parameter number").
+pub static COE_INDEX: Constant<u16> = Constant::new(
+    "coe-index",
+    0x2000,
+    "CoE index of P0",
+    "BU 0620 §2.2.7 CoE object index",
+);
+
+/// From one inverter's CoE objects to the next's (BU 0620 §2.2.7: FI n at 2000h + 800h·(n−1)).
+pub static COE_DEVICE_STEP: Constant<u16> = Constant::new(
+    "coe-device-step",
+    0x800,
+    "CoE index step per inverter",
+    "BU 0620 §2.2.7 CoE object index",
+);
+
+/// The CIP class of FI n is this + n (BU 0620 §2.3.5, BU 2100 §6.3: 100 + FI).
+pub static CIP_CLASS_BASE: Constant<u16> = Constant::new(
+    "cip-class-base",
+    100,
+    "CIP class base",
+    "BU 0620 §2.3.5 CIP parameter classes",
+);
+
+/// The PROFINET data record of FI n is this + n (BU 0620 §2.5.6.2, BU 0590 §4.2.2).
+pub static PNIO_RECORD_BASE: Constant<u16> = Constant::new(
+    "pnio-record-base",
+    100,
+    "PROFINET data record base",
+    "BU 0620 §2.5.6.2 data records",
+);
 
 /// Every protocol address of one parameter, for `harness addr`.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]

@@ -4,6 +4,7 @@
 
 use std::fmt;
 
+use super::mutant::{hex, Constant, Row, Table};
 use super::product::Protocol;
 
 /// A communication error as P700 [-01] shows it and its DS402 extended code (P700 [-04]).
@@ -18,125 +19,145 @@ pub struct CommError {
 }
 
 /// BU 0620 §5.3 "Error messages – general communication errors" (p. 94).
-pub const COMM_ERRORS: &[CommError] = &[
-    CommError {
-        p700: 100,
-        ds402: 0x7580,
-        text: "CAN /CANopen connection error",
-    },
-    CommError {
-        p700: 100,
-        ds402: 0x7581,
-        text: "CAN Broadcast telegram timeout",
-    },
-    CommError {
-        p700: 100,
-        ds402: 0x7582,
-        text: "CANopen NodeGuard telegram timeout",
-    },
-    CommError {
-        p700: 100,
-        ds402: 0x7583,
-        text: "CANopen HeartBeat monitoring telegram timeout",
-    },
-    CommError {
-        p700: 100,
-        ds402: 0x7584,
-        text: "USS telegram timeout",
-    },
-    CommError {
-        p700: 100,
-        ds402: 0x7585,
-        text: "CAN in Bus Off state",
-    },
-    CommError {
-        p700: 100,
-        ds402: 0x7586,
-        text: "USB telegram timeout",
-    },
-    CommError {
-        p700: 100,
-        ds402: 0x7587,
-        text: "Ini CAN Hardware Problem",
-    },
-    CommError {
-        p700: 101,
-        ds402: 0x7590,
-        text: "Reserve",
-    },
-    CommError {
-        p700: 102,
-        ds402: 0x7591,
-        text: "Telegram timeout for field bus interface (Time-out through PLC)",
-    },
-    CommError {
-        p700: 103,
-        ds402: 0x7592,
-        text: "Telegram timeout for field bus interface (Time-out through P513)",
-    },
-    CommError {
-        p700: 104,
-        ds402: 0x7593,
-        text: "External bus module initialisation failure",
-    },
-    CommError {
-        p700: 105,
-        ds402: 0x7594,
-        text: "External Bus module system failure",
-    },
-    CommError {
-        p700: 105,
-        ds402: 0x7595,
-        text: "System error; netX and controller not compatible",
-    },
-    CommError {
-        p700: 105,
-        ds402: 0x7596,
-        text: "Error when changing the field bus protocol",
-    },
-    CommError {
-        p700: 105,
-        ds402: 0x7597,
-        text: "System errors: Package to field bus interface too long",
-    },
-    CommError {
-        p700: 105,
-        ds402: 0x7598,
-        text: "Condition for change of field bus protocol not present",
-    },
-    CommError {
-        p700: 106,
-        ds402: 0x7599,
-        text: "Ethernet cable not connected",
-    },
-    CommError {
-        p700: 107,
-        ds402: 0x759A,
-        text: "Reserve",
-    },
-    CommError {
-        p700: 108,
-        ds402: 0x759B,
-        text: "Communication error to field bus interface",
-    },
-];
+pub static COMM_ERRORS: Table<CommError> = Table::new(
+    "comm-errors",
+    "BU 0620 §5.3 error messages, general communication errors",
+    &[
+        CommError {
+            p700: 100,
+            ds402: 0x7580,
+            text: "CAN /CANopen connection error",
+        },
+        CommError {
+            p700: 100,
+            ds402: 0x7581,
+            text: "CAN Broadcast telegram timeout",
+        },
+        CommError {
+            p700: 100,
+            ds402: 0x7582,
+            text: "CANopen NodeGuard telegram timeout",
+        },
+        CommError {
+            p700: 100,
+            ds402: 0x7583,
+            text: "CANopen HeartBeat monitoring telegram timeout",
+        },
+        CommError {
+            p700: 100,
+            ds402: 0x7584,
+            text: "USS telegram timeout",
+        },
+        CommError {
+            p700: 100,
+            ds402: 0x7585,
+            text: "CAN in Bus Off state",
+        },
+        CommError {
+            p700: 100,
+            ds402: 0x7586,
+            text: "USB telegram timeout",
+        },
+        CommError {
+            p700: 100,
+            ds402: 0x7587,
+            text: "Ini CAN Hardware Problem",
+        },
+        CommError {
+            p700: 101,
+            ds402: 0x7590,
+            text: "Reserve",
+        },
+        CommError {
+            p700: 102,
+            ds402: 0x7591,
+            text: "Telegram timeout for field bus interface (Time-out through PLC)",
+        },
+        CommError {
+            p700: 103,
+            ds402: 0x7592,
+            text: "Telegram timeout for field bus interface (Time-out through P513)",
+        },
+        CommError {
+            p700: 104,
+            ds402: 0x7593,
+            text: "External bus module initialisation failure",
+        },
+        CommError {
+            p700: 105,
+            ds402: 0x7594,
+            text: "External Bus module system failure",
+        },
+        CommError {
+            p700: 105,
+            ds402: 0x7595,
+            text: "System error; netX and controller not compatible",
+        },
+        CommError {
+            p700: 105,
+            ds402: 0x7596,
+            text: "Error when changing the field bus protocol",
+        },
+        CommError {
+            p700: 105,
+            ds402: 0x7597,
+            text: "System errors: Package to field bus interface too long",
+        },
+        CommError {
+            p700: 105,
+            ds402: 0x7598,
+            text: "Condition for change of field bus protocol not present",
+        },
+        CommError {
+            p700: 106,
+            ds402: 0x7599,
+            text: "Ethernet cable not connected",
+        },
+        CommError {
+            p700: 107,
+            ds402: 0x759A,
+            text: "Reserve",
+        },
+        CommError {
+            p700: 108,
+            ds402: 0x759B,
+            text: "Communication error to field bus interface",
+        },
+    ],
+);
 
 /// The PROFINET diagnostic alarm of an inverter error: 100h + P700 value (BU 0620 §5.4.2: E10.3
 /// → "359 (100h + 103 = 256 + 103)").
 pub fn profinet_alarm(p700: u16) -> u16 {
-    0x100 + p700
+    PROFINET_ALARM_BASE.get() + p700
 }
+
+/// The 100h an inverter error's PROFINET alarm adds to its P700 number.
+pub static PROFINET_ALARM_BASE: Constant<u16> = Constant::new(
+    "profinet-alarm-base",
+    0x100,
+    "PROFINET alarm offset",
+    "BU 0620 §5.4.2 PROFINET diagnostic alarms",
+);
 
 /// The error number reported when an inverter on the system bus is lost (BU 0620 §5.4.2
 /// "Information": alarm 256 + 1000 = 1256).
-pub const LOST_INVERTER: u16 = 1000;
+pub static LOST_INVERTER: Constant<u16> = Constant::new(
+    "lost-inverter",
+    1000,
+    "error number of a lost inverter",
+    "BU 0620 §5.4.2 PROFINET diagnostic alarms",
+);
 
 /// An SDO abort code (open: unknown codes are kept).
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 pub struct SdoAbort(pub u32);
 
 /// BU 0620 §2.2.7.2 (p. 21): EtherCAT SDO error codes.
-pub const ETHERCAT_ABORTS: &[(u32, &str)] = &[
+pub static ETHERCAT_ABORTS: Table<(u32, &str)> = Table::new(
+    "ethercat-aborts",
+    "BU 0620 §2.2.7.2 EtherCAT SDO error codes",
+    &[
     (0x0503_0000, "Toggle bit unchanged"),
     (0x0504_0000, "Timeout SDO message (timeout for the SDO response of the bus interface)"),
     (0x0504_0001, "SDO command invalid/unknown"),
@@ -157,10 +178,14 @@ pub const ETHERCAT_ABORTS: &[(u32, &str)] = &[
     (0x0609_0036, "Maximum value smaller than the minimum value"),
     (0x0800_0000, "General error"),
     (0x0800_0020, "Data transfer or saving not possible, as there is no communication between the bus interface and the frequency inverter"),
-];
+    ],
+);
 
 /// BU 0620 §2.4.7 (p. 38): POWERLINK SDO error codes (EPSG DS-301).
-pub const POWERLINK_ABORTS: &[(u32, &str)] = &[
+pub static POWERLINK_ABORTS: Table<(u32, &str)> = Table::new(
+    "powerlink-aborts",
+    "BU 0620 §2.4.7 POWERLINK SDO error codes",
+    &[
     (0x0504_0000, "Timeout SDO message (timeout for the SD response from the bus interface)"),
     (0x0504_0001, "SDO command invalid/unknown"),
     (0x0504_0002, "Impermissible size of transferred data"),
@@ -184,14 +209,15 @@ pub const POWERLINK_ABORTS: &[(u32, &str)] = &[
     (0x0800_0000, "General error"),
     (0x0800_0020, "Data transfer or saving not possible, as there is no communication between the bus interface and the frequency inverter"),
     (0x0800_0021, "Bus interface does not respond"),
-];
+    ],
+);
 
 impl SdoAbort {
     /// The manual's description for the protocol, if its list has the code.
     pub fn describe(self, protocol: Protocol) -> Option<&'static str> {
         let list = match protocol {
-            Protocol::Ethercat => ETHERCAT_ABORTS,
-            Protocol::Powerlink => POWERLINK_ABORTS,
+            Protocol::Ethercat => &*ETHERCAT_ABORTS,
+            Protocol::Powerlink => &*POWERLINK_ABORTS,
             _ => return None,
         };
         list.iter().find(|(c, _)| *c == self.0).map(|(_, t)| *t)
@@ -236,97 +262,101 @@ const fn pl(code: u16, register: u8, p700: &'static [(u16, u16)], text: &'static
 /// must be read from P700. Rows 7332h, 7334h, 8612h and 8711h print no meaning of their own:
 /// the meaning stands in a cell merged with the row above (the extractions of BU 0620 and of
 /// BU 2200 §8.3.2, whose table is row for row the same, place it between the two rows).
-pub const POWERLINK_ERRORS: &[PlError] = &[
-    pl(0x0000, 0, &[(0, 0)], "No error"),
-    pl(
-        0x1000,
-        1,
-        &[],
-        "The error number must be read out via parameter P700 or an actual value.",
-    ),
-    pl(
-        0x2200,
-        3,
-        &[(40, 41)],
-        "Overcurrent frequency inverter/current measurement",
-    ),
-    pl(0x2310, 3, &[(30, 30)], "Overcurrent I2t-limit"),
-    pl(0x2311, 3, &[(32, 32)], "IGBT overcurrent 125 %"),
-    pl(0x2312, 3, &[(33, 33)], "IGBT overcurrent 150 %"),
-    pl(0x3110, 5, &[(51, 51)], "Mains voltage too high"),
-    pl(0x3120, 5, &[(61, 61)], "Mains voltage too low"),
-    pl(0x3130, 5, &[(70, 70)], "Mains connection failure"),
-    pl(0x3210, 5, &[(50, 50)], "Link circuit voltage too high"),
-    pl(0x3230, 5, &[(60, 60)], "Link circuit voltage too low"),
-    pl(
-        0x4210,
-        9,
-        &[(11, 11)],
-        "Overtemperature in frequency inverter",
-    ),
-    pl(0x4310, 9, &[(20, 22)], "Motor overtemperature"),
-    pl(
-        0x5000,
-        1,
-        &[(108, 108)],
-        "Bus interface communication error",
-    ),
-    pl(0x5110, 1, &[(110, 110)], "External bus error"),
-    pl(0x5300, 1, &[(170, 170)], "EMC fault"),
-    pl(0x5510, 1, &[(200, 200)], "Reserved"),
-    pl(0x5520, 1, &[(208, 208)], "EEPROM error"),
-    pl(0x5530, 1, &[(82, 82)], "External copy error"),
-    pl(
-        0x6000,
-        1,
-        &[(150, 158), (201, 207), (213, 213)],
-        "System error",
-    ),
-    pl(
-        0x6310,
-        1,
-        &[(80, 80)],
-        "Parameter loss (maximum EEPROM value exceeded)",
-    ),
-    pl(0x7112, 3, &[(31, 31)], "Brake chopper overcurrent"),
-    pl(0x7120, 1, &[(160, 161)], "Motor error"),
-    pl(0x7300, 1, &[(143, 143)], "Absolute encoder error"),
-    pl(0x7305, 1, &[(130, 130)], "Encoder error"),
-    pl(0x7306, 1, &[(144, 144)], "Absolute encoder error"),
-    pl(0x7310, 1, &[(145, 145)], "Position difference"),
-    pl(0x7320, 1, &[(146, 148)], "Position error"),
-    pl(0x7330, 1, &[(250, 250)], "Position deviation"),
-    pl(
-        0x7331,
-        1,
-        &[(251, 251)],
-        "Universal encoder communication error",
-    ),
-    pl(
-        0x7332,
-        1,
-        &[(252, 252)],
-        "Universal encoder communication error",
-    ),
-    pl(0x7333, 1, &[(253, 253)], "Universal encoder error"),
-    pl(0x7334, 1, &[(254, 254)], "Universal encoder error"),
-    pl(0x8100, 17, &[(100, 102)], "Bus timeout"),
-    pl(
-        0x8111,
-        17,
-        &[(103, 107), (109, 109)],
-        "Bus interface communication error",
-    ),
-    pl(0x8300, 1, &[(132, 132)], "Slip error switch-off monitoring"),
-    pl(0x8400, 1, &[(131, 131)], "Speed slip error"),
-    pl(0x8600, 1, &[(140, 141)], "Reference point error"),
-    pl(0x8612, 1, &[(142, 142)], "Reference point error"),
-    pl(0x8710, 1, &[(135, 135)], "Acceleration path error"),
-    pl(0x8711, 1, &[(136, 136)], "Acceleration path error"),
-    pl(0x9000, 1, &[(120, 122)], "External watchdog"),
-    pl(0xFF10, 129, &[(180, 180)], "Reserved"),
-    pl(0xFF11, 129, &[(190, 190)], "Connected motor not identified"),
-];
+pub static POWERLINK_ERRORS: Table<PlError> = Table::new(
+    "powerlink-errors",
+    "BU 0620 §5.4.1.2 allocation of frequency inverter error codes",
+    &[
+        pl(0x0000, 0, &[(0, 0)], "No error"),
+        pl(
+            0x1000,
+            1,
+            &[],
+            "The error number must be read out via parameter P700 or an actual value.",
+        ),
+        pl(
+            0x2200,
+            3,
+            &[(40, 41)],
+            "Overcurrent frequency inverter/current measurement",
+        ),
+        pl(0x2310, 3, &[(30, 30)], "Overcurrent I2t-limit"),
+        pl(0x2311, 3, &[(32, 32)], "IGBT overcurrent 125 %"),
+        pl(0x2312, 3, &[(33, 33)], "IGBT overcurrent 150 %"),
+        pl(0x3110, 5, &[(51, 51)], "Mains voltage too high"),
+        pl(0x3120, 5, &[(61, 61)], "Mains voltage too low"),
+        pl(0x3130, 5, &[(70, 70)], "Mains connection failure"),
+        pl(0x3210, 5, &[(50, 50)], "Link circuit voltage too high"),
+        pl(0x3230, 5, &[(60, 60)], "Link circuit voltage too low"),
+        pl(
+            0x4210,
+            9,
+            &[(11, 11)],
+            "Overtemperature in frequency inverter",
+        ),
+        pl(0x4310, 9, &[(20, 22)], "Motor overtemperature"),
+        pl(
+            0x5000,
+            1,
+            &[(108, 108)],
+            "Bus interface communication error",
+        ),
+        pl(0x5110, 1, &[(110, 110)], "External bus error"),
+        pl(0x5300, 1, &[(170, 170)], "EMC fault"),
+        pl(0x5510, 1, &[(200, 200)], "Reserved"),
+        pl(0x5520, 1, &[(208, 208)], "EEPROM error"),
+        pl(0x5530, 1, &[(82, 82)], "External copy error"),
+        pl(
+            0x6000,
+            1,
+            &[(150, 158), (201, 207), (213, 213)],
+            "System error",
+        ),
+        pl(
+            0x6310,
+            1,
+            &[(80, 80)],
+            "Parameter loss (maximum EEPROM value exceeded)",
+        ),
+        pl(0x7112, 3, &[(31, 31)], "Brake chopper overcurrent"),
+        pl(0x7120, 1, &[(160, 161)], "Motor error"),
+        pl(0x7300, 1, &[(143, 143)], "Absolute encoder error"),
+        pl(0x7305, 1, &[(130, 130)], "Encoder error"),
+        pl(0x7306, 1, &[(144, 144)], "Absolute encoder error"),
+        pl(0x7310, 1, &[(145, 145)], "Position difference"),
+        pl(0x7320, 1, &[(146, 148)], "Position error"),
+        pl(0x7330, 1, &[(250, 250)], "Position deviation"),
+        pl(
+            0x7331,
+            1,
+            &[(251, 251)],
+            "Universal encoder communication error",
+        ),
+        pl(
+            0x7332,
+            1,
+            &[(252, 252)],
+            "Universal encoder communication error",
+        ),
+        pl(0x7333, 1, &[(253, 253)], "Universal encoder error"),
+        pl(0x7334, 1, &[(254, 254)], "Universal encoder error"),
+        pl(0x8100, 17, &[(100, 102)], "Bus timeout"),
+        pl(
+            0x8111,
+            17,
+            &[(103, 107), (109, 109)],
+            "Bus interface communication error",
+        ),
+        pl(0x8300, 1, &[(132, 132)], "Slip error switch-off monitoring"),
+        pl(0x8400, 1, &[(131, 131)], "Speed slip error"),
+        pl(0x8600, 1, &[(140, 141)], "Reference point error"),
+        pl(0x8612, 1, &[(142, 142)], "Reference point error"),
+        pl(0x8710, 1, &[(135, 135)], "Acceleration path error"),
+        pl(0x8711, 1, &[(136, 136)], "Acceleration path error"),
+        pl(0x9000, 1, &[(120, 122)], "External watchdog"),
+        pl(0xFF10, 129, &[(180, 180)], "Reserved"),
+        pl(0xFF11, 129, &[(190, 190)], "Connected motor not identified"),
+    ],
+);
 
 /// The POWERLINK error row of a P700 error (tenths).
 pub fn powerlink_error(p700: u16) -> Option<&'static PlError> {
@@ -356,37 +386,149 @@ pub fn extended_code(p700: u16) -> u16 {
 /// meaning: BU 2200 §8.4 (p. 67), BU 2100 §8.3. Ranges are inclusive. BU 2200 prints "560.1
 /// Allgemeiner Netzwerkfehler" inside its own 560.0…560.9 "Interner Fehler"; BU 2100 prints
 /// 561.0, which the 561.x network group (watchdog, cable, IP address) confirms: 561.0 here.
-pub const MODULE_ERRORS: &[(u16, u16, &str)] = &[
-    (1000, 1000, "EEPROM error"),
-    (1020, 1020, "Bus timeout P151"),
-    (1030, 1030, "System bus off"),
-    (1040, 1040, "Overtemperature bus interface"),
-    (5501, 5501, "DIP switch error"),
-    (5600, 5609, "Internal error"),
-    (5610, 5610, "General network error"),
-    (5611, 5611, "Ethernet watchdog timeout"),
-    (5612, 5612, "Bus cable fault"),
-    (5613, 5613, "IP address error"),
-    (5630, 5630, "Firmware version incompatible"),
-    (5640, 5640, "MAC address error"),
-];
+pub static MODULE_ERRORS: Table<(u16, u16, &str)> = Table::new(
+    "module-errors",
+    "BU 2200 §8.4 and BU 2100 §8.3 bus interface errors (P170)",
+    &[
+        (1000, 1000, "EEPROM error"),
+        (1020, 1020, "Bus timeout P151"),
+        (1030, 1030, "System bus off"),
+        (1040, 1040, "Overtemperature bus interface"),
+        (5501, 5501, "DIP switch error"),
+        (5600, 5609, "Internal error"),
+        (5610, 5610, "General network error"),
+        (5611, 5611, "Ethernet watchdog timeout"),
+        (5612, 5612, "Bus cable fault"),
+        (5613, 5613, "IP address error"),
+        (5630, 5630, "Firmware version incompatible"),
+        (5640, 5640, "MAC address error"),
+    ],
+);
 
 /// The inverter's errors caused by a POWERLINK bus interface (E010, P700 in tenths): BU 2200
 /// §8.4 (p. 67).
-pub const POWERLINK_MODULE_E10: &[(u16, &str)] = &[
-    (100, "Connection error"),
-    (101, "Temperature too high"),
-    (102, "Timeout POWERLINK watchdog"),
-    (103, "Timeout by P151/P513"),
-    (104, "IP address error"),
-    (105, "Internal error"),
-    (106, "Bus cable fault"),
-    (108, "Connection error timeout (SK TU3-POL)"),
-    (
-        109,
-        "Connection error timeout between inverter and bus interface (SK CU4/TU4-POL)",
-    ),
-];
+pub static POWERLINK_MODULE_E10: Table<(u16, &str)> = Table::new(
+    "powerlink-module-e10",
+    "BU 2200 §8.4 inverter errors caused by the bus interface (E010)",
+    &[
+        (100, "Connection error"),
+        (101, "Temperature too high"),
+        (102, "Timeout POWERLINK watchdog"),
+        (103, "Timeout by P151/P513"),
+        (104, "IP address error"),
+        (105, "Internal error"),
+        (106, "Bus cable fault"),
+        (108, "Connection error timeout (SK TU3-POL)"),
+        (
+            109,
+            "Connection error timeout between inverter and bus interface (SK CU4/TU4-POL)",
+        ),
+    ],
+);
+
+impl Row for CommError {
+    fn changes(&self) -> Vec<(&'static str, String, CommError)> {
+        vec![
+            (
+                "ds402",
+                format!(
+                    "{} DS402 {} → {}",
+                    self.text,
+                    hex(self.ds402.into(), 4),
+                    hex((self.ds402 + 1).into(), 4)
+                ),
+                CommError {
+                    ds402: self.ds402 + 1,
+                    ..*self
+                },
+            ),
+            (
+                "p700",
+                format!(
+                    "{} P700 {} → {}",
+                    self.text,
+                    tenths(self.p700),
+                    tenths(self.p700 + 1)
+                ),
+                CommError {
+                    p700: self.p700 + 1,
+                    ..*self
+                },
+            ),
+        ]
+    }
+}
+
+/// An SDO abort code and its meaning.
+impl Row for (u32, &'static str) {
+    fn changes(&self) -> Vec<(&'static str, String, Self)> {
+        vec![(
+            "code",
+            format!("{} {} → {}", self.1, hex(self.0, 8), hex(self.0 + 1, 8)),
+            (self.0 + 1, self.1),
+        )]
+    }
+}
+
+impl Row for PlError {
+    fn changes(&self) -> Vec<(&'static str, String, PlError)> {
+        vec![
+            (
+                "code",
+                format!(
+                    "{} {} → {}",
+                    self.text,
+                    hex(self.code.into(), 4),
+                    hex(u32::from(self.code) + 1, 4)
+                ),
+                PlError {
+                    code: self.code.wrapping_add(1),
+                    ..*self
+                },
+            ),
+            (
+                "register",
+                format!(
+                    "{} error register {} → {}",
+                    self.text,
+                    self.register,
+                    self.register + 1
+                ),
+                PlError {
+                    register: self.register + 1,
+                    ..*self
+                },
+            ),
+        ]
+    }
+}
+
+/// A module error range (P170) and its meaning: the range moved up by one.
+impl Row for (u16, u16, &'static str) {
+    fn changes(&self) -> Vec<(&'static str, String, Self)> {
+        vec![(
+            "number",
+            format!("{} {} → {}", self.2, tenths(self.0), tenths(self.0 + 1)),
+            (self.0 + 1, self.1 + 1, self.2),
+        )]
+    }
+}
+
+/// An inverter error (E010, P700) and its meaning.
+impl Row for (u16, &'static str) {
+    fn changes(&self) -> Vec<(&'static str, String, Self)> {
+        vec![(
+            "number",
+            format!("{} {} → {}", self.1, tenths(self.0), tenths(self.0 + 1)),
+            (self.0 + 1, self.1),
+        )]
+    }
+}
+
+/// An error number in tenths as the manuals print it: 103 → "10.3".
+fn tenths(n: u16) -> String {
+    format!("{}.{}", n / 10, n % 10)
+}
 
 /// The meaning of a module's P170 error (tenths).
 pub fn module_error(p170: u16) -> Option<&'static str> {
@@ -480,7 +622,7 @@ mod tests {
         let e = COMM_ERRORS.iter().find(|e| e.ds402 == 0x7592).unwrap();
         assert_eq!(e.p700, 103);
         assert_eq!(profinet_alarm(e.p700), 359);
-        assert_eq!(profinet_alarm(LOST_INVERTER), 1256);
+        assert_eq!(profinet_alarm(LOST_INVERTER.get()), 1256);
     }
 
     #[test]

@@ -8,6 +8,7 @@
 
 use serde::Serialize;
 
+use super::mutant::{self, Table};
 use super::nmt::PlState;
 use super::state_machine::State;
 
@@ -75,116 +76,148 @@ const fn row(pattern: Pattern, meaning: &'static str) -> Row {
 /// "DEV" LED (§5.5.1.1): the rows the simulator shows ([`dev`]), then the warning and update
 /// rows (the simulator has no warnings and no update mode). "Flashing red (2 Hz/1 Hz)", the
 /// error number, is [`Pattern::ErrorCode`], made by [`dev`].
-pub const DEV: &[Row] = &[
-    row(
-        Pattern::Off,
-        "FI not ready for operation, no mains or control voltage",
-    ),
-    row(Pattern::Green, "FI is enabled"),
-    row(
-        Pattern::FlashingGreen { tenths_hz: 40 },
-        "FI is in switch-on block",
-    ),
-    row(
-        Pattern::FlashingGreen { tenths_hz: 5 },
-        "FI is in standby but not enabled",
-    ),
-    row(Pattern::AlternatingGreenRed { tenths_hz: 40 }, "Warning"),
-    row(Pattern::FlashingGreenRed, "FI in Update mode"),
-    row(
-        Pattern::SimultaneousGreenRed,
-        "Update data are communicated",
-    ),
-];
+pub static DEV: Table<Row> = Table::new(
+    "led-dev",
+    "BU 0620 §5.5.1.1 DEV LED",
+    &[
+        row(
+            Pattern::Off,
+            "FI not ready for operation, no mains or control voltage",
+        ),
+        row(Pattern::Green, "FI is enabled"),
+        row(
+            Pattern::FlashingGreen { tenths_hz: 40 },
+            "FI is in switch-on block",
+        ),
+        row(
+            Pattern::FlashingGreen { tenths_hz: 5 },
+            "FI is in standby but not enabled",
+        ),
+        row(Pattern::AlternatingGreenRed { tenths_hz: 40 }, "Warning"),
+        row(Pattern::FlashingGreenRed, "FI in Update mode"),
+        row(
+            Pattern::SimultaneousGreenRed,
+            "Update data are communicated",
+        ),
+    ],
+);
 
 /// "BUS" LED (§5.5.1.2).
-pub const BUS: &[Row] = &[
-    row(Pattern::Off, "No process data communication"),
-    row(Pattern::Green, "Process data communication active"),
-    row(Pattern::FlashingGreen { tenths_hz: 40 }, "Bus warning"),
-    row(
-        Pattern::FlashingRed { tenths_hz: 40 },
-        "Monitoring error P120 or P513 (E10.0/E10.9)",
-    ),
-    row(
-        Pattern::FlashingRed { tenths_hz: 10 },
-        "Field bus interface telegram timeout (E10.2/E10.3)",
-    ),
-    row(Pattern::Red, "System bus in state \"Bus off\""),
-];
+pub static BUS: Table<Row> = Table::new(
+    "led-bus",
+    "BU 0620 §5.5.1.2 BUS LED",
+    &[
+        row(Pattern::Off, "No process data communication"),
+        row(Pattern::Green, "Process data communication active"),
+        row(Pattern::FlashingGreen { tenths_hz: 40 }, "Bus warning"),
+        row(
+            Pattern::FlashingRed { tenths_hz: 40 },
+            "Monitoring error P120 or P513 (E10.0/E10.9)",
+        ),
+        row(
+            Pattern::FlashingRed { tenths_hz: 10 },
+            "Field bus interface telegram timeout (E10.2/E10.3)",
+        ),
+        row(Pattern::Red, "System bus in state \"Bus off\""),
+    ],
+);
 
 /// EtherCAT LED A "RUN" per EtherCAT state (§5.5.2.1). The manual gives no flashing rate; 2.5 Hz
 /// is the EtherCAT indicator rate (ETG.1300) and is an assumption here.
-pub const ETHERCAT_RUN: &[Row] = &[
-    row(Pattern::Off, "Init"),
-    row(Pattern::FlashingGreen { tenths_hz: 25 }, "Pre-Operational"),
-    row(Pattern::SingleFlashGreen, "Safe Operational"),
-    row(Pattern::Green, "Operational"),
-];
+pub static ETHERCAT_RUN: Table<Row> = Table::new(
+    "led-ethercat-run",
+    "BU 0620 §5.5.2.1 EtherCAT RUN LED",
+    &[
+        row(Pattern::Off, "Init"),
+        row(Pattern::FlashingGreen { tenths_hz: 25 }, "Pre-Operational"),
+        row(Pattern::SingleFlashGreen, "Safe Operational"),
+        row(Pattern::Green, "Operational"),
+    ],
+);
 
 /// EtherCAT LED B "ERR" (§5.5.2.1).
-pub const ETHERCAT_ERR: &[Row] = &[
-    row(Pattern::Off, "No Error"),
-    row(
-        Pattern::FlashingRed { tenths_hz: 25 },
-        "Invalid Configuration",
-    ),
-    row(Pattern::SingleFlashRed, "Unsolicited State Change"),
-    row(Pattern::DoubleFlashRed, "Application Watchdog Timeout"),
-];
+pub static ETHERCAT_ERR: Table<Row> = Table::new(
+    "led-ethercat-err",
+    "BU 0620 §5.5.2.1 EtherCAT ERR LED",
+    &[
+        row(Pattern::Off, "No Error"),
+        row(
+            Pattern::FlashingRed { tenths_hz: 25 },
+            "Invalid Configuration",
+        ),
+        row(Pattern::SingleFlashRed, "Unsolicited State Change"),
+        row(Pattern::DoubleFlashRed, "Application Watchdog Timeout"),
+    ],
+);
 
 /// EtherNet/IP LED A "MS" (module state, §5.5.2.2). The manual gives no flashing rate; 1 Hz is
 /// the CIP indicator rate (Vol. 1 §9-4) and is an assumption here, as for "NS".
-pub const ETHERNETIP_MS: &[Row] = &[
-    row(Pattern::Off, "No operating voltage"),
-    row(
-        Pattern::FlashingGreen { tenths_hz: 10 },
-        "Bus interface not configured in FI",
-    ),
-    row(Pattern::Green, "Bus interface in FI working correctly"),
-    row(
-        Pattern::FlashingRed { tenths_hz: 10 },
-        "Insignificant error Incorrect configuration",
-    ),
-    row(Pattern::Red, "Error cannot be corrected"),
-    row(Pattern::FlashingGreenRed, "Power up, self test"),
-];
+pub static ETHERNETIP_MS: Table<Row> = Table::new(
+    "led-ethernetip-ms",
+    "BU 0620 §5.5.2.2 EtherNet/IP MS LED",
+    &[
+        row(Pattern::Off, "No operating voltage"),
+        row(
+            Pattern::FlashingGreen { tenths_hz: 10 },
+            "Bus interface not configured in FI",
+        ),
+        row(Pattern::Green, "Bus interface in FI working correctly"),
+        row(
+            Pattern::FlashingRed { tenths_hz: 10 },
+            "Insignificant error Incorrect configuration",
+        ),
+        row(Pattern::Red, "Error cannot be corrected"),
+        row(Pattern::FlashingGreenRed, "Power up, self test"),
+    ],
+);
 
 /// EtherNet/IP LED B "NS" (network state, §5.5.2.2).
-pub const ETHERNETIP_NS: &[Row] = &[
-    row(Pattern::Off, "No operating voltage"),
-    row(
-        Pattern::FlashingGreen { tenths_hz: 10 },
-        "IP address configured but no CIP connection available",
-    ),
-    row(Pattern::Green, "CIP connection(s) available"),
-    row(
-        Pattern::FlashingRed { tenths_hz: 10 },
-        "Time-out, an \"exclusive owner connection\" has a time-out error",
-    ),
-    row(
-        Pattern::Red,
-        "Dual IP. The IP address is already being used",
-    ),
-    row(Pattern::FlashingGreenRed, "Power up, self test"),
-];
+pub static ETHERNETIP_NS: Table<Row> = Table::new(
+    "led-ethernetip-ns",
+    "BU 0620 §5.5.2.2 EtherNet/IP NS LED",
+    &[
+        row(Pattern::Off, "No operating voltage"),
+        row(
+            Pattern::FlashingGreen { tenths_hz: 10 },
+            "IP address configured but no CIP connection available",
+        ),
+        row(Pattern::Green, "CIP connection(s) available"),
+        row(
+            Pattern::FlashingRed { tenths_hz: 10 },
+            "Time-out, an \"exclusive owner connection\" has a time-out error",
+        ),
+        row(
+            Pattern::Red,
+            "Dual IP. The IP address is already being used",
+        ),
+        row(Pattern::FlashingGreenRed, "Power up, self test"),
+    ],
+);
 
 /// POWERLINK LED A "BS" per NMT state (§5.5.2.3).
-pub const POWERLINK_BS: &[Row] = &[
-    row(Pattern::Off, "No communication"),
-    row(Pattern::FlashesGreen { count: 1 }, "Pre-Operational 1"),
-    row(Pattern::FlashesGreen { count: 2 }, "Pre-Operational 2"),
-    row(Pattern::FlashesGreen { count: 3 }, "Ready To Operate"),
-    row(Pattern::Green, "Operational"),
-    row(Pattern::FlashingGreen { tenths_hz: 100 }, "Basic Ethernet"),
-    row(Pattern::FlashingGreen { tenths_hz: 25 }, "Stopped"),
-];
+pub static POWERLINK_BS: Table<Row> = Table::new(
+    "led-powerlink-bs",
+    "BU 0620 §5.5.2.3 POWERLINK BS LED",
+    &[
+        row(Pattern::Off, "No communication"),
+        row(Pattern::FlashesGreen { count: 1 }, "Pre-Operational 1"),
+        row(Pattern::FlashesGreen { count: 2 }, "Pre-Operational 2"),
+        row(Pattern::FlashesGreen { count: 3 }, "Ready To Operate"),
+        row(Pattern::Green, "Operational"),
+        row(Pattern::FlashingGreen { tenths_hz: 100 }, "Basic Ethernet"),
+        row(Pattern::FlashingGreen { tenths_hz: 25 }, "Stopped"),
+    ],
+);
 
 /// POWERLINK LED B "BE" (§5.5.2.3).
-pub const POWERLINK_BE: &[Row] = &[
-    row(Pattern::Off, "No POWERLINK error"),
-    row(Pattern::Red, "General POWERLINK error"),
-];
+pub static POWERLINK_BE: Table<Row> = Table::new(
+    "led-powerlink-be",
+    "BU 0620 §5.5.2.3 POWERLINK BE LED",
+    &[
+        row(Pattern::Off, "No POWERLINK error"),
+        row(Pattern::Red, "General POWERLINK error"),
+    ],
+);
 
 /// What a lit red "BE" LED of a POWERLINK module (SK TU3/TU4/CU4-POL) means in an NMT state
 /// (BU 2200 §6.2, p. 30): in "Pre-Operational 1", "Pre-Operational 2", "Ready To Operate" and
@@ -204,15 +237,22 @@ pub fn powerlink_module_be_red(state: PlState) -> Row {
 /// connection", against PROFINET practice and BU 0590 table 4 (off: initialisation, flashing:
 /// waiting for AR, on: AR established), which this table follows; the erratum is recorded in
 /// suites/bu0620/leds.yaml. Neither manual gives the flashing rate (2 Hz assumed).
-pub const PROFINET_RUN: &[Row] = &[
-    row(Pattern::Off, "Device switched off or initialisation"),
-    row(Pattern::FlashingGreen { tenths_hz: 20 }, "Waiting for AR"),
-    row(Pattern::Green, "AR established"),
-];
+pub static PROFINET_RUN: Table<Row> = Table::new(
+    "led-profinet-run",
+    "BU 0590 §2.2.4 table 4 PROFINET RUN LED",
+    &[
+        row(Pattern::Off, "Device switched off or initialisation"),
+        row(Pattern::FlashingGreen { tenths_hz: 20 }, "Waiting for AR"),
+        row(Pattern::Green, "AR established"),
+    ],
+);
 
 /// SK TU3-PNT red "ERR" LED (BU 0590 §2.2.4 table 5): off, double flash (2 × 0.25 s, pause
 /// 1 s) on an IO-controller timeout (P151 or P513), on for an Ethernet error.
-pub const TU3_PNT_ERR: &[Row] = &[
+pub static TU3_PNT_ERR: Table<Row> = Table::new(
+    "led-tu3-pnt-err",
+    "BU 0590 §2.2.4 table 5 ERR LED",
+    &[
     row(Pattern::Off, "No error PROFINET IO functioning normally"),
     row(
         Pattern::DoubleFlashRed,
@@ -222,29 +262,37 @@ pub const TU3_PNT_ERR: &[Row] = &[
         Pattern::Red,
         "Ethernet error, no mains: TU3-PNT not connected to any Ethernet participant",
     ),
-];
+    ],
+);
 
 /// SK TU3-PNT green "DS" LED (BU 0590 §2.2.4 table 7, the module's own state; cycle 0.5 s =
 /// 2 Hz).
-pub const TU3_PNT_DS: &[Row] = &[
-    row(
-        Pattern::Off,
-        "The technology unit does not have a power supply (DE off)",
-    ),
-    row(
-        Pattern::FlashingGreen { tenths_hz: 20 },
-        "The technology unit has a fatal system error (DE off)",
-    ),
-    row(
-        Pattern::Green,
-        "Technology unit OK (DE tells the FI's state)",
-    ),
-];
+pub static TU3_PNT_DS: Table<Row> = Table::new(
+    "led-tu3-pnt-ds",
+    "BU 0590 §2.2.4 table 7 DS LED",
+    &[
+        row(
+            Pattern::Off,
+            "The technology unit does not have a power supply (DE off)",
+        ),
+        row(
+            Pattern::FlashingGreen { tenths_hz: 20 },
+            "The technology unit has a fatal system error (DE off)",
+        ),
+        row(
+            Pattern::Green,
+            "Technology unit OK (DE tells the FI's state)",
+        ),
+    ],
+);
 
 /// SK TU3-PNT red "DE" LED with DS on (BU 0590 §2.2.4 table 7; cycle 0.25 s, pause 1 s). The
 /// table prints one flash both for "no FI detected" and as the first of the FI's "1…7" error
 /// flashes.
-pub const TU3_PNT_DE: &[Row] = &[
+pub static TU3_PNT_DE: Table<Row> = Table::new(
+    "led-tu3-pnt-de",
+    "BU 0590 §2.2.4 table 7 DE LED",
+    &[
     row(Pattern::Off, "Technology unit OK and FI detected"),
     row(
         Pattern::SingleFlashRed,
@@ -254,10 +302,44 @@ pub const TU3_PNT_DE: &[Row] = &[
         Pattern::FlashingRed { tenths_hz: 40 },
         "Flashing 1...7x (cycle 0.25 s, pause 1 s): the FI is in an error condition",
     ),
-];
+    ],
+);
 
 /// PROFINET LED A "BF" (Ethernet error, §5.5.2.4).
-pub const PROFINET_BF: &[Row] = &[row(Pattern::Off, "No error"), row(Pattern::Red, "Alarm")];
+pub static PROFINET_BF: Table<Row> = Table::new(
+    "led-profinet-bf",
+    "BU 0620 §5.5.2.4 PROFINET BF LED",
+    &[row(Pattern::Off, "No error"), row(Pattern::Red, "Alarm")],
+);
+
+impl mutant::Row for Row {
+    /// A flashing rate doubled, one flash more, or a steady light swapped for dark (dark for
+    /// green).
+    fn changes(&self) -> Vec<(&'static str, String, Row)> {
+        let pattern = match self.pattern {
+            Pattern::FlashingGreen { tenths_hz } => Pattern::FlashingGreen {
+                tenths_hz: tenths_hz * 2,
+            },
+            Pattern::FlashingRed { tenths_hz } => Pattern::FlashingRed {
+                tenths_hz: tenths_hz * 2,
+            },
+            Pattern::AlternatingGreenRed { tenths_hz } => Pattern::AlternatingGreenRed {
+                tenths_hz: tenths_hz * 2,
+            },
+            Pattern::ErrorCode { flashes } => Pattern::ErrorCode {
+                flashes: flashes + 1,
+            },
+            Pattern::FlashesGreen { count } => Pattern::FlashesGreen { count: count + 1 },
+            Pattern::Off => Pattern::Green,
+            _ => Pattern::Off,
+        };
+        vec![(
+            "pattern",
+            format!("\"{}\": {:?} → {pattern:?}", self.meaning, self.pattern),
+            Row { pattern, ..*self },
+        )]
+    }
+}
 
 /// The "DEV" LED of an inverter in `state`; a present error is flashed as its group number.
 pub fn dev(state: State, error_group: Option<u16>) -> Row {

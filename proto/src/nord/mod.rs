@@ -17,6 +17,7 @@ pub mod eip;
 pub mod epl;
 pub mod errors;
 pub mod led;
+pub mod mutant;
 pub mod nmt;
 pub mod params;
 pub mod pkw;

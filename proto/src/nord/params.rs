@@ -6,6 +6,7 @@
 //! manuals the entry's `source` says which value was assumed. Bus-interface parameters of the
 //! SK 550P come from BU 0620 §4.2–§4.4 (the protocol-independent ones and the IP parameters).
 
+use super::mutant::{Row, Table};
 use super::product::{Family, Product};
 use super::types::ParamNumber;
 
@@ -81,6 +82,28 @@ pub struct ParamDef {
     pub text_from: i32,
     /// Where the manuals state it, and what was assumed.
     pub source: &'static str,
+    /// The fields no manual of the five states (the `source` says where they come from: an
+    /// inverter manual outside the specification, or a choice). `harness mutants` changes only
+    /// the stated fields: a wrong assumed value is no error of the manuals' data.
+    #[serde(skip)]
+    pub assumed: &'static [Field],
+}
+
+/// A field of a catalogue entry, as a mutant changes it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Field {
+    /// `default` and `element_defaults`.
+    Default,
+    /// `min` and `max`.
+    Range,
+    /// `decimals`.
+    Decimals,
+    /// `array`.
+    Array,
+    /// `access`.
+    Access,
+    /// `set_dependent`.
+    Sets,
 }
 
 const fn inv(
@@ -109,6 +132,15 @@ const fn inv(
         access: Access::ReadWrite,
         text_from: 0,
         source,
+        assumed: &[],
+    }
+}
+
+/// An entry whose `fields` no manual of the five states.
+const fn assumed(p: ParamDef, fields: &'static [Field]) -> ParamDef {
+    ParamDef {
+        assumed: fields,
+        ..p
     }
 }
 
@@ -209,9 +241,9 @@ const EIP_POL_ALL: &[Product] = &[
 ];
 
 /// Every catalogued parameter.
-pub const CATALOGUE: &[ParamDef] = &[
-    sets(inv(102, "Acceleration time", 0, 32000, 200, 2, "BU 0620 §2.5.6.4 (P102 set 2 = 2.5 s = 250); range 0–320.00 s and default 2.00 s assumed from BU 0600")),
-    sets(inv(103, "Deceleration time", 0, 32000, 200, 2, "BU 0620 §2.5.6.3 (99.99 s run-up → 9999); range/default assumed from BU 0600")),
+pub static CATALOGUE: Table<ParamDef> = Table::new("params", "BU 0620 §4", &[
+    assumed(sets(inv(102, "Acceleration time", 0, 32000, 200, 2, "BU 0620 §2.5.6.4 (P102 set 2 = 2.5 s = 250); range 0–320.00 s and default 2.00 s assumed from BU 0600")), &[Field::Range, Field::Default]),
+    assumed(sets(inv(103, "Deceleration time", 0, 32000, 200, 2, "BU 0620 §2.5.6.3 (99.99 s run-up → 9999); range/default assumed from BU 0600")), &[Field::Range, Field::Default]),
     sets(inv(105, "Maximum frequency", 1, 4000, 500, 1, "BU 0620 §6.1.3 (P105 = 50 Hz); range 0.1–400.0 Hz assumed from BU 0600")),
     sets(inv(112, "Torque current limit", 25, 400, 400, 0, "BU 0620 §6.1.2.4 (100 % of currents); range 25–400 % assumed")),
     sets(array(inv(400, "Function setpoint inputs", 0, 80, 0, 0, "BU 0620 §2.3.5 (array depending on parameter sets); range assumed"), 9)),
@@ -329,7 +361,7 @@ pub const CATALOGUE: &[ParamDef] = &[
     module(elements(inv(160, "IP address", 0, 255, 0, 0, "BU 0590 §5.1.2: factory 192.168.20.200"), &[192, 168, 20, 200]), PNT),
     module(elements(inv(161, "IP sub-net mask", 0, 255, 0, 0, "BU 0590 §5.1.2: factory 255.255.255.0"), MASK_DEFAULT), PNT),
     module(array(inv(163, "Test alarm", 0, 255, 0, 0, "BU 0590 §5.1.2: [-01]..[-07] slots, all {0}"), 7), PNT),
-];
+]);
 
 /// IP address factory setting 192.168.1.100 (BU 0620 §4.2.2, BU 2100 §7.1.2).
 const IP_DEFAULT: &[i32] = &[192, 168, 1, 100];
@@ -365,6 +397,121 @@ impl ParamDef {
     pub fn applies_to(&self, product: Product) -> bool {
         self.family.is_none_or(|f| f == product.family())
             && (self.products.is_empty() || self.products.contains(&product))
+    }
+}
+
+impl Row for ParamDef {
+    /// A default one off (the first element's, for an array whose elements have their own), a
+    /// range narrowed by one at either end, one decimal more, one array element fewer, the
+    /// writability and the set dependence swapped: each where the manuals state the field.
+    fn changes(&self) -> Vec<(&'static str, String, ParamDef)> {
+        let p = format!("P{} ({})", self.number, owner_name(self.owner));
+        let mut out = Vec::new();
+        let mut add = |field: Field, key: &'static str, what: String, def: ParamDef| {
+            if !self.assumed.contains(&field) {
+                out.push((key, format!("{p} {what}"), def));
+            }
+        };
+        let bumped = |v: i32| if v < self.max { v + 1 } else { v - 1 };
+        match self.element_defaults.split_first() {
+            Some((&first, rest)) => {
+                let mut defaults = vec![bumped(first)];
+                defaults.extend_from_slice(rest);
+                let what = format!("[-01] default {first} → {}", defaults[0]);
+                let element_defaults = Vec::leak(defaults);
+                add(
+                    Field::Default,
+                    "default",
+                    what,
+                    ParamDef {
+                        element_defaults,
+                        ..*self
+                    },
+                );
+            }
+            None => {
+                let default = bumped(self.default);
+                let what = format!("default {} → {default}", self.default);
+                add(
+                    Field::Default,
+                    "default",
+                    what,
+                    ParamDef { default, ..*self },
+                );
+            }
+        }
+        if self.min < self.max {
+            let (min, max) = (self.min + 1, self.max - 1);
+            let what = format!("minimum {} → {min}", self.min);
+            add(Field::Range, "min", what, ParamDef { min, ..*self });
+            let what = format!("maximum {} → {max}", self.max);
+            add(Field::Range, "max", what, ParamDef { max, ..*self });
+        }
+        let decimals = self.decimals + 1;
+        let what = format!("decimals {} → {decimals}", self.decimals);
+        add(
+            Field::Decimals,
+            "decimals",
+            what,
+            ParamDef { decimals, ..*self },
+        );
+        if let Some(n) = self.array.filter(|n| *n > 1) {
+            let what = format!("array of {n} → {}", n - 1);
+            add(
+                Field::Array,
+                "array",
+                what,
+                ParamDef {
+                    array: Some(n - 1),
+                    ..*self
+                },
+            );
+        }
+        let access = match self.access {
+            Access::ReadWrite => Access::ReadOnly,
+            Access::ReadOnly | Access::ResetOnly => Access::ReadWrite,
+        };
+        let what = format!("{:?} → {access:?}", self.access);
+        add(Field::Access, "access", what, ParamDef { access, ..*self });
+        let set_dependent = !self.set_dependent;
+        let what = format!(
+            "{} → {}",
+            set_name(self.set_dependent),
+            set_name(set_dependent)
+        );
+        add(
+            Field::Sets,
+            "sets",
+            what,
+            ParamDef {
+                set_dependent,
+                ..*self
+            },
+        );
+        out
+    }
+
+    fn source(&self) -> Option<&'static str> {
+        Some(self.source)
+    }
+
+    fn parameter(&self) -> Option<u16> {
+        Some(self.number)
+    }
+}
+
+fn owner_name(owner: Owner) -> &'static str {
+    match owner {
+        Owner::Interface => "bus interface",
+        Owner::Inverter => "inverter",
+    }
+}
+
+fn set_name(dependent: bool) -> &'static str {
+    if dependent {
+        "per parameter set"
+    } else {
+        "one for all sets"
     }
 }
 
@@ -558,7 +705,7 @@ mod tests {
 
     #[test]
     fn lookup_finds_every_entry_of_the_catalogue() {
-        for d in CATALOGUE {
+        for d in CATALOGUE.iter() {
             let n = ParamNumber::new(i64::from(d.number)).unwrap();
             for product in Product::ALL.into_iter().filter(|p| d.applies_to(*p)) {
                 let found = lookup(product, d.owner, n).unwrap();
@@ -573,7 +720,7 @@ mod tests {
 
     #[test]
     fn catalogue_is_consistent() {
-        for d in CATALOGUE {
+        for d in CATALOGUE.iter() {
             assert!(d.accepts(d.default), "P{} default outside range", d.number);
             assert!(d.number <= 999 && !d.source.is_empty());
             for product in Product::ALL {

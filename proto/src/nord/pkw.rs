@@ -16,6 +16,7 @@ use std::fmt;
 
 use serde::Serialize;
 
+use super::mutant::Constant;
 use super::product::{Family, Product};
 use super::types::{ArrayElement, ParamSet};
 
@@ -174,12 +175,12 @@ impl PkwRepr {
     /// (BU 0620 §2.5.6.2: "The parameter number plus '1000'"), else PNU as it stands (BU 0590
     /// §4.2.4.4: `70 66 …` for P102 in the cyclic PKW).
     pub fn parameter(&self) -> u16 {
-        self.pnu.checked_sub(PNU_OFFSET).unwrap_or(self.pnu)
+        self.pnu.checked_sub(PNU_OFFSET.get()).unwrap_or(self.pnu)
     }
 
     fn common(&self, label: &str) -> String {
         let mut s = format!("AK {} {label}, PNU {}", self.ak, self.pnu);
-        if self.pnu >= PNU_OFFSET {
+        if self.pnu >= PNU_OFFSET.get() {
             s += &format!(" = P{:03}", self.parameter());
         }
         s += &format!(", IND {:04X}h ({})", self.ind, Ind(self.ind).describe());
@@ -262,7 +263,12 @@ impl PkwRepr {
 
 /// The offset PNU carries over the parameter number in data records and acyclic services
 /// (BU 0620 §2.5.6.2 "PKE").
-pub const PNU_OFFSET: u16 = 1000;
+pub static PNU_OFFSET: Constant<u16> = Constant::new(
+    "pnu-offset",
+    1000,
+    "PNU offset",
+    "BU 0620 §2.5.6.2 PNU = P + 1000",
+);
 
 /// A PKW telegram's readings as typed fields (`harness decode pkw --json`): every part of the
 /// sentence of [`PkwRepr::describe_order`] / [`PkwRepr::describe_response`] as a value of its

@@ -580,7 +580,7 @@ mod tests {
     #[test]
     fn a_stores_refusal_gives_one_status_through_its_abort_code() {
         let errors = AccessError::ALL;
-        for def in proto::nord::params::CATALOGUE {
+        for def in proto::nord::params::CATALOGUE.iter() {
             for e in errors {
                 for value in [def.min - 1, def.min, def.max, def.max + 1] {
                     let code = abort_of(e, value, Some(def));
@@ -607,7 +607,7 @@ mod tests {
         use proto::nord::addr::{cip_instance, sdo_subindex};
         use proto::nord::ecat::{parameter_data_type, parameter_subindex, DataType, ParamSub};
         use proto::nord::{ArrayElement, ParamSet};
-        for def in proto::nord::params::CATALOGUE {
+        for def in proto::nord::params::CATALOGUE.iter() {
             let sets: Vec<Option<ParamSet>> = match def.set_dependent {
                 true => (1..=4).map(|s| ParamSet::new(s).ok()).collect(),
                 false => vec![None],

@@ -2,6 +2,7 @@
 
 use serde::Serialize;
 
+use super::super::mutant::Constant;
 use super::super::product::Product;
 use super::super::types::{Inverter, RangeError};
 use super::{check_inverter, CanError};
@@ -22,13 +23,28 @@ pub fn baud_rate(p514: i32) -> Option<u32> {
 }
 
 /// P515 [-01] "Slave Address" of FI 1: 32 (BU 0620 §3.1 p. 61 `P515[1] = 32`, §4.5 p. 90).
-pub const FIRST_INVERTER_ADDRESS: u8 = 32;
+pub static FIRST_INVERTER_ADDRESS: Constant<u8> = Constant::new(
+    "can-first-inverter",
+    32,
+    "P515 [-01] of FI 1",
+    "BU 0620 §3.1 system bus addresses",
+);
 /// From one inverter's address to the next: 2 (BU 0620 §4.5 "34, 36, 38 … 46"; BU 2100 §4.3
 /// table FI 1…8 = 32…46).
-pub const ADDRESS_STEP: u8 = 2;
+pub static ADDRESS_STEP: Constant<u8> = Constant::new(
+    "can-address-step",
+    2,
+    "system bus address step per inverter",
+    "BU 0620 §4.5 P515",
+);
 /// "Absolute encoder address = CAN ID of the frequency inverter + 1" (BU 0620 §2.1.2 p. 15,
 /// §3.1 p. 61; BU 2100 §4.1 p. 19; BU 2200 §4.1 p. 20).
-pub const ENCODER_OFFSET: u8 = 1;
+pub static ENCODER_OFFSET: Constant<u8> = Constant::new(
+    "can-encoder-offset",
+    1,
+    "absolute encoder address offset",
+    "BU 0620 §2.1.2 absolute encoder address",
+);
 
 /// The bus interface's own node-ID. BU 2100 §4.1 (p. 19) and BU 2200 §4.1 (p. 20): "The
 /// address of the bus interface is pre-set at the factory and cannot be changed" (also step 3
@@ -67,12 +83,12 @@ impl SystemBusAddress {
 
     /// The address of FI n: 32 + 2·(n−1) (see the module's errata for BU 0620 §3.1).
     pub fn inverter(fi: Inverter) -> Self {
-        Self(FIRST_INVERTER_ADDRESS + ADDRESS_STEP * (fi.get() - 1))
+        Self(FIRST_INVERTER_ADDRESS.get() + ADDRESS_STEP.get() * (fi.get() - 1))
     }
 
     /// The address of FI n's absolute encoder: the inverter's + 1.
     pub fn encoder(fi: Inverter) -> Self {
-        Self(Self::inverter(fi).0 + ENCODER_OFFSET)
+        Self(Self::inverter(fi).0 + ENCODER_OFFSET.get())
     }
 
     /// The address FI n has behind `product`, refused beyond the inverters the product serves.
@@ -102,12 +118,12 @@ impl SystemBusAddress {
 
     /// The inverter or encoder at this address behind `product`, `None` for any other.
     pub fn participant(self, product: Product) -> Option<Participant> {
-        let offset = self.0.checked_sub(FIRST_INVERTER_ADDRESS)?;
-        let fi = Inverter::new(i64::from(offset / ADDRESS_STEP + 1)).ok()?;
+        let offset = self.0.checked_sub(FIRST_INVERTER_ADDRESS.get())?;
+        let fi = Inverter::new(i64::from(offset / ADDRESS_STEP.get() + 1)).ok()?;
         if fi.get() > product.max_inverters() {
             return None;
         }
-        Some(if offset % ADDRESS_STEP == 0 {
+        Some(if offset % ADDRESS_STEP.get() == 0 {
             Participant::Inverter(fi)
         } else {
             Participant::Encoder(fi)

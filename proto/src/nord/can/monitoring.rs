@@ -182,7 +182,7 @@ pub const HEARTBEAT_CONSUMER_MS_CHOICE: u16 = 600;
 /// The heartbeat the inverters behind `product` watch (see [`InterfaceWatch`]).
 pub fn interface_watch(product: Product) -> InterfaceWatch {
     let node = match product {
-        Product::Sk550p => super::FIRST_INVERTER_ADDRESS,
+        Product::Sk550p => super::FIRST_INVERTER_ADDRESS.get(),
         _ => super::INTERFACE_NODE_ID_CHOICE,
     };
     InterfaceWatch {

@@ -2,6 +2,7 @@
 
 use serde::Serialize;
 
+use super::super::mutant::Constant;
 use super::super::product::Product;
 use super::super::types::{Inverter, RangeError};
 use super::{check_inverter, CanError};
@@ -9,7 +10,12 @@ use super::{check_inverter, CanError};
 /// The shortest process-data cycle on the system bus, µs: "≥ 5 ms" (BU 0620 §2.5.1 p. 39
 /// "Update interval ≥ 5 ms (exchange of process data with the frequency inverter)", §2.5.3
 /// p. 44 "System bus … cycle time ≥ 5 ms"; P153 [-02] factory 5 ms).
-pub const MIN_CYCLE_US: u32 = 5000;
+pub static MIN_CYCLE_US: Constant<u32> = Constant::new(
+    "can-min-cycle",
+    5000,
+    "shortest system bus process-data cycle, µs,",
+    "BU 0620 §2.5.1 update interval",
+);
 
 /// The process-data update cycle over the system bus.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -29,9 +35,9 @@ pub fn update_cycle(product: Product, inverters: u8) -> Result<UpdateCycle, CanE
     check_inverter(product, fi)?;
     Ok(match product {
         Product::Tu3Eip => UpdateCycle::Table(
-            super::super::eip::tu3_update_cycle_us(inverters).unwrap_or(MIN_CYCLE_US),
+            super::super::eip::tu3_update_cycle_us(inverters).unwrap_or(MIN_CYCLE_US.get()),
         ),
-        _ => UpdateCycle::AtLeast(MIN_CYCLE_US),
+        _ => UpdateCycle::AtLeast(MIN_CYCLE_US.get()),
     })
 }
 
@@ -62,7 +68,7 @@ pub fn cycle_bus_time_us(series: super::InverterSeries, inverters: u8) -> u32 {
 pub fn cycle_period_us(product: Product, series: super::InverterSeries, inverters: u8) -> u32 {
     let stated = match update_cycle(product, inverters) {
         Ok(UpdateCycle::Table(us) | UpdateCycle::AtLeast(us)) => us,
-        Err(_) => MIN_CYCLE_US,
+        Err(_) => MIN_CYCLE_US.get(),
     };
     stated.max(cycle_bus_time_us(series, inverters).div_ceil(1000) * 1000)
 }
@@ -110,8 +116,8 @@ mod tests {
         // Five values (SK 54xE, SK 5x0P): a second PDO of 4 bytes each way, 1.84 ms each;
         // eight of them need 14.94 ms, three times the 5 ms the manuals allow as the least.
         assert_eq!(cycle_bus_time_us(Sk5x0p, 8), 220 + 8 * 1840);
-        assert!(cycle_bus_time_us(Sk5x0p, 8) > 2 * MIN_CYCLE_US);
-        assert!(cycle_bus_time_us(Sk54xe, 2) < MIN_CYCLE_US);
+        assert!(cycle_bus_time_us(Sk5x0p, 8) > 2 * MIN_CYCLE_US.get());
+        assert!(cycle_bus_time_us(Sk54xe, 2) < MIN_CYCLE_US.get());
     }
 
     use super::*;
@@ -138,7 +144,7 @@ mod tests {
             Err(CanError::Range(_))
         ));
         // P153 [-02] factory 5 ms = the 5 ms floor; as a CiA 301 inhibit time 50 × 100 µs.
-        assert_eq!(u32::from(P153_FACTORY_MS[1]) * 1000, MIN_CYCLE_US);
+        assert_eq!(u32::from(P153_FACTORY_MS[1]) * 1000, MIN_CYCLE_US.get());
         assert_eq!(p153_inhibit_time(5), Ok(50));
         assert_eq!(p153_inhibit_time(250), Ok(2500));
         assert!(p153_inhibit_time(251).is_err() && p153_inhibit_time(-1).is_err());

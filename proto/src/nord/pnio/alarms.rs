@@ -23,7 +23,7 @@ pub fn fi_error_alarm(p700: u16) -> u16 {
 
 /// The alarm of an inverter lost from the system bus: 256 + 1000 = 1256 (BU 0620 §5.4.2).
 pub fn lost_inverter_alarm() -> u16 {
-    errors::profinet_alarm(errors::LOST_INVERTER)
+    errors::profinet_alarm(errors::LOST_INVERTER.get())
 }
 
 /// The alarm of an SK TU3-PNT module error: P170 + 100h (BU 0590 §6.1 p. 44 "Error number
