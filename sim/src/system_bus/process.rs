@@ -450,7 +450,10 @@ mod tests {
             Some([0x0033, 0x2000, 1, 2, 3, 4])
         );
         assert_eq!(read_back(series, 32, &[tpdo1.clone()]), None);
-        assert_eq!(read_back(series, 32, &[tpdo1.clone(), tpdo(2, &[3, 0])]), None);
+        assert_eq!(
+            read_back(series, 32, &[tpdo1.clone(), tpdo(2, &[3, 0])]),
+            None
+        );
         assert_eq!(read_back(series, 32, &[tpdo2.clone()]), None);
         // Another node's TPDO2 is not this node's.
         let other = frame(Function::Tpdo { number: 2 }, 34, &[3, 0, 4, 0]).unwrap();
