@@ -39,7 +39,7 @@ use std::time::Duration;
 use proto::can::CanFrame;
 use proto::canopen::cob_id::{Cob, Function};
 use proto::canopen::sync::SyncFrame;
-use proto::nord::can::{cycle_period_us, pdo_data, InverterSeries, SystemBusAddress};
+use proto::nord::can::{cycle_period_us, pdo_data, pdo_words, InverterSeries, SystemBusAddress};
 use proto::nord::{Family, Inverter, Product};
 
 use super::frame;
@@ -251,20 +251,7 @@ impl ProcessData {
             Some(drive(control, setpoints, at))
         });
         // The gateway reads the status word and actual values from the TPDOs' bytes.
-        let mut got = link.received;
-        let mut status = false;
-        for tpdo in &share.tpdos {
-            let Some(cob) = Cob::classify(tpdo.id()).filter(|c| c.node == node) else {
-                continue;
-            };
-            if !matches!(cob.function, Function::Tpdo { .. }) {
-                continue;
-            }
-            if read_words(cob.function, series, tpdo.data(), &mut got).is_ok() {
-                status |= cob.function == Function::Tpdo { number: 1 };
-            }
-        }
-        if status {
+        if let Some(got) = read_back(series, node, &share.tpdos) {
             link.received = got;
         }
         Exchange {
@@ -272,6 +259,33 @@ impl ProcessData {
             answer: link.received,
         }
     }
+}
+
+/// The status word and actual values node `node`'s TPDOs of one cycle carry, `None` unless
+/// every TPDO that carries words of `series` (PDO 1, and PDO 2 for five values) was read from
+/// them: the field bus gets one cycle's words or keeps the last ones, never the status and
+/// values 1–3 of one cycle beside values 4–5 of an earlier one.
+fn read_back(series: InverterSeries, node: u8, tpdos: &[CanFrame]) -> Option<[u16; 6]> {
+    let mut got = [0; 6];
+    let mut read = [false; 2];
+    for tpdo in tpdos {
+        let Some(cob) = Cob::classify(tpdo.id()).filter(|c| c.node == node) else {
+            continue;
+        };
+        let Function::Tpdo {
+            number: number @ (1 | 2),
+        } = cob.function
+        else {
+            continue;
+        };
+        if read_words(cob.function, series, tpdo.data(), &mut got).is_ok() {
+            read[usize::from(number) - 1] = true;
+        }
+    }
+    let mapped = |number: u8| pdo_words(Function::Tpdo { number }, series).is_some();
+    (1..=2u8)
+        .all(|number| !mapped(number) || read[usize::from(number) - 1])
+        .then_some(got)
 }
 
 #[cfg(test)]
@@ -420,5 +434,35 @@ mod tests {
             })
             .collect();
         assert_eq!(syncs, [0, 20, 40]);
+    }
+
+    #[test]
+    fn the_field_bus_gets_one_cycles_tpdo_set_or_the_last_one() {
+        // SK 54xE behind a module, node 32: the status word and values 1–3 in TPDO1, values 4–5
+        // in TPDO2. A cycle whose TPDO2 did not come (or came short) is not half taken: its
+        // status and values 1–3 beside the values 4–5 of an earlier cycle would be two cycles'.
+        let series = InverterSeries::Sk54xe;
+        let tpdo = |number, data: &[u8]| frame(Function::Tpdo { number }, 32, data).unwrap();
+        let tpdo1 = tpdo(1, &[0x33, 0x00, 0x00, 0x20, 1, 0, 2, 0]);
+        let tpdo2 = tpdo(2, &[3, 0, 4, 0]);
+        assert_eq!(
+            read_back(series, 32, &[tpdo1.clone(), tpdo2.clone()]),
+            Some([0x0033, 0x2000, 1, 2, 3, 4])
+        );
+        assert_eq!(read_back(series, 32, &[tpdo1.clone()]), None);
+        assert_eq!(
+            read_back(series, 32, &[tpdo1.clone(), tpdo(2, &[3, 0])]),
+            None
+        );
+        assert_eq!(read_back(series, 32, &[tpdo2.clone()]), None);
+        // Another node's TPDO2 is not this node's.
+        let other = frame(Function::Tpdo { number: 2 }, 34, &[3, 0, 4, 0]).unwrap();
+        assert_eq!(read_back(series, 32, &[tpdo1, other]), None);
+        // Three values: TPDO1 is the whole set.
+        let three = tpdo(1, &[0x37, 0x00, 0x00, 0x20, 1, 0, 2, 0]);
+        assert_eq!(
+            read_back(InverterSeries::Sk2xxe, 32, &[three]),
+            Some([0x0037, 0x2000, 1, 2, 0, 0])
+        );
     }
 }
