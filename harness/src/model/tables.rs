@@ -376,6 +376,20 @@ pub(super) const FNS: &[ComputeFn] = &[
         },
     },
     ComputeFn {
+        name: "tables.update_cycle",
+        doc: "Process-data update cycle over the system bus of the product with `inverters` inverters: the SK TU3-EIP's table, else at least 5 ms (kind table|at_least, us; BU 0620 §2.5.1, BU 2100 §4.3)",
+        run: |c: &Ctx, a: &Args| {
+            let n = a.int("inverters")?;
+            let cycle = u8::try_from(n)
+                .map_err(|_| bad("inverters", format!("{n}: give 1…8")))
+                .and_then(|n| {
+                    proto::nord::can::update_cycle(c.product, n)
+                        .map_err(|e| ComputeError::Refused(e.to_string()))
+                })?;
+            serde_json::to_value(cycle).map_err(|e| ComputeError::Refused(e.to_string()))
+        },
+    },
+    ComputeFn {
         name: "tables.ethernet_frame",
         doc: "The Ethernet II frame a bus travels in: EtherType, data 46…1500 bytes, frame 64…1518 bytes with FCS (IEEE 802.3; BU 2100 §3.3)",
         run: |_: &Ctx, a: &Args| {

@@ -313,22 +313,15 @@ pub static PROFINET_BF: Table<Row> = Table::new(
 );
 
 impl mutant::Row for Row {
-    /// A flashing rate doubled, one flash more, or a steady light swapped for dark (dark for
-    /// green).
+    /// A flashing light steady (several manuals give no rate, so the rate is no datum to
+    /// change), one flash more, or a steady light swapped for dark (dark for green).
     fn changes(&self) -> Vec<(&'static str, String, Row)> {
         let pattern = match self.pattern {
-            Pattern::FlashingGreen { tenths_hz } => Pattern::FlashingGreen {
-                tenths_hz: tenths_hz * 2,
-            },
-            Pattern::FlashingRed { tenths_hz } => Pattern::FlashingRed {
-                tenths_hz: tenths_hz * 2,
-            },
-            Pattern::AlternatingGreenRed { tenths_hz } => Pattern::AlternatingGreenRed {
-                tenths_hz: tenths_hz * 2,
-            },
-            Pattern::ErrorCode { flashes } => Pattern::ErrorCode {
-                flashes: flashes + 1,
-            },
+            Pattern::FlashingGreen { .. } | Pattern::SingleFlashGreen => Pattern::Green,
+            Pattern::FlashingRed { .. }
+            | Pattern::SingleFlashRed
+            | Pattern::DoubleFlashRed
+            | Pattern::ErrorCode { .. } => Pattern::Red,
             Pattern::FlashesGreen { count } => Pattern::FlashesGreen { count: count + 1 },
             Pattern::Off => Pattern::Green,
             _ => Pattern::Off,

@@ -205,6 +205,8 @@ impl<T: Row> Site for Table<T> {
 pub trait Value: Copy + fmt::Display + Send + Sync + 'static {
     /// The value one up (wrapping).
     fn plus_one(self) -> Self;
+    /// The value one down (wrapping).
+    fn minus_one(self) -> Self;
 }
 
 macro_rules! value {
@@ -213,17 +215,22 @@ macro_rules! value {
             fn plus_one(self) -> Self {
                 self.wrapping_add(1)
             }
+            fn minus_one(self) -> Self {
+                self.wrapping_sub(1)
+            }
         }
     )*};
 }
 value!(u8, u16, u32);
 
-/// A formula's constant or a time the manuals state; the mutant adds one.
+/// A formula's constant or a time the manuals state; the mutant adds one, or, for a lower
+/// bound ("≥ 5 ms"), takes one away: a value above a lower bound still keeps to it.
 pub struct Constant<T: Value> {
     name: &'static str,
     value: T,
     what: &'static str,
     source: &'static str,
+    lower_bound: bool,
 }
 
 impl<T: Value> Constant<T> {
@@ -240,13 +247,29 @@ impl<T: Value> Constant<T> {
             value,
             what,
             source,
+            lower_bound: false,
+        }
+    }
+
+    /// The constant is a lower bound the manuals state.
+    pub const fn lower_bound(self) -> Constant<T> {
+        Constant {
+            lower_bound: true,
+            ..self
+        }
+    }
+
+    fn mutated(&self) -> T {
+        match self.lower_bound {
+            true => self.value.minus_one(),
+            false => self.value.plus_one(),
         }
     }
 
     /// The value in this process.
     pub fn get(&self) -> T {
         match installed(self.name, 0) {
-            Some(_) => self.value.plus_one(),
+            Some(_) => self.mutated(),
             None => self.value,
         }
     }
@@ -261,8 +284,12 @@ impl<T: Value> Site for Constant<T> {
     }
     fn changes(&self, _: usize) -> Vec<(&'static str, String)> {
         vec![(
-            "plus-one",
-            format!("{} {} → {}", self.what, self.value, self.value.plus_one()),
+            if self.lower_bound {
+                "minus-one"
+            } else {
+                "plus-one"
+            },
+            format!("{} {} → {}", self.what, self.value, self.mutated()),
         )]
     }
     fn source(&self, _: usize) -> &'static str {

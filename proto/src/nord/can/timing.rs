@@ -15,7 +15,8 @@ pub static MIN_CYCLE_US: Constant<u32> = Constant::new(
     5000,
     "shortest system bus process-data cycle, µs,",
     "BU 0620 §2.5.1 update interval",
-);
+)
+.lower_bound();
 
 /// The process-data update cycle over the system bus.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
