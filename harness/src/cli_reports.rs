@@ -123,7 +123,8 @@ pub(crate) struct CoverageArgs {
 
 /// Prints the statements per manual and section (statements, asserted on the device, by
 /// reference-model cases only, pending, untestable, open; the shares of the testable asserted
-/// on the device and by any case, `—` where nothing is testable), the errata per manual by the
+/// on the device and by any case, `—` where nothing is testable), each manual's sections (in
+/// its table of contents, with statements, with nothing testable), the errata per manual by the
 /// check that found them, then
 /// what keeps the inventories honest: a case id that no
 /// suite has, a case of an inventoried manual that no statement names, an asserted count below
@@ -147,6 +148,8 @@ pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
     let mut out = std::io::stdout().lock();
     let sections = inventory::coverage(&inventories, &loaded);
     let _ = out.write_all(report::statements_table(&sections).as_bytes());
+    let _ = writeln!(out);
+    let _ = out.write_all(report::sections_text(&inventory::sections(&inventories)).as_bytes());
     let _ = writeln!(out);
     let _ = out.write_all(report::errata_table(&loaded.errata).as_bytes());
     let mut problems = inventory::check(&inventories, &loaded, &floors);

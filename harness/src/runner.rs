@@ -194,6 +194,7 @@ pub(crate) fn run_shard(
         cases,
         errata: loaded.errata.clone(),
         statements: Vec::new(),
+        sections: Vec::new(),
         load_errors: loaded.errors.iter().map(|e| e.to_string()).collect(),
         duration: start.elapsed(),
     };

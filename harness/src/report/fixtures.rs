@@ -227,6 +227,13 @@ pub(super) fn sample_run() -> RunResult {
                 untestable: 1,
             },
         ],
+        sections: vec![SectionCount {
+            doc: "BU 0620".into(),
+            edition: "2020-03 en".into(),
+            contents: 5,
+            with_statements: 3,
+            nothing: 2,
+        }],
         load_errors: vec![],
         duration: Duration::from_millis(15),
     };

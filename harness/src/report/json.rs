@@ -11,8 +11,8 @@ use std::collections::BTreeMap;
 use super::summary::Counts;
 use super::write::transcript_file;
 use crate::outcome::{
-    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, StatementCoverage,
-    Verdict,
+    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, SectionCount,
+    StatementCoverage, Verdict,
 };
 
 /// One case in `run.json`.
@@ -93,6 +93,8 @@ struct Doc<'a> {
     errata: &'a [Erratum],
     /// The manuals' statements per section, as the inventories count them.
     statements: &'a [StatementCoverage],
+    /// The manuals' tables of contents: sections, with statements, with nothing testable.
+    sections: &'a [SectionCount],
     cases: Vec<Case<'a>>,
 }
 
@@ -111,6 +113,7 @@ pub(super) fn write(run: &RunResult, out: &mut dyn std::io::Write) -> std::io::R
         load_errors: &run.load_errors,
         errata: &run.errata,
         statements: &run.statements,
+        sections: &run.sections,
         cases: run.cases.iter().map(Case::from).collect(),
     };
     serde_json::to_writer_pretty(out, &doc).map_err(std::io::Error::from)
@@ -193,6 +196,10 @@ mod tests {
         assert_eq!(v["dut"], "embedded simulator");
         assert_eq!(v["profiles"], json!(["sk550p", "tu3-eip"]));
         assert_eq!(v["load_errors"], json!([]));
+        assert_eq!(
+            v["sections"],
+            json!([{"doc": "BU 0620", "edition": "2020-03 en", "contents": 5, "with_statements": 3, "nothing": 2}])
+        );
         assert_eq!(v["duration"], 0.015);
     }
 }

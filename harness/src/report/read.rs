@@ -10,8 +10,8 @@ use std::path::{Component, Path, PathBuf};
 use std::time::Duration;
 
 use crate::outcome::{
-    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, StatementCoverage,
-    StepResult, Verdict,
+    CaseKind, CaseResult, Erratum, ManualRef, Refusal, RunMeta, RunResult, SectionCount,
+    StatementCoverage, StepResult, Verdict,
 };
 
 /// A report folder or `run.json` that cannot be read back. Every variant names the file.
@@ -131,6 +131,8 @@ struct Doc {
     errata: Vec<Erratum>,
     #[serde(default)]
     statements: Vec<StatementCoverage>,
+    #[serde(default)]
+    sections: Vec<SectionCount>,
     cases: Vec<Case>,
 }
 
@@ -244,6 +246,7 @@ pub(crate) fn read(given: &Path) -> Result<RunResult, ReadError> {
         cases,
         errata: doc.errata,
         statements: doc.statements,
+        sections: doc.sections,
         load_errors: doc.load_errors,
         duration: secs(&path, doc.duration)?,
     })

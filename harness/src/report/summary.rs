@@ -326,6 +326,7 @@ pub(super) fn markdown(run: &RunResult) -> String {
     super::signoff::markdown_na(&mut s, run);
     coverage(&mut s, run);
     super::statements::markdown(&mut s, &run.statements);
+    super::statements::sections_markdown(&mut s, &run.sections);
     errata(&mut s, run);
     let _ = writeln!(s, "\n## Record\n");
     for (label, value) in record::lines(run) {
