@@ -205,6 +205,13 @@ fn coverage_counts_the_inventories_and_names_what_keeps_them_dishonest() {
                 .any(|l| l.starts_with(manual) && l.contains(" all ")),
             "{manual}: {stdout}"
         );
+        // Every section of its table of contents is accounted for (item 5 of issue 23).
+        assert!(
+            stdout.lines().any(|l| l.starts_with(manual)
+                && l.contains(" sections: ")
+                && l.ends_with("with nothing testable (reasons given)")),
+            "{manual}: {stdout}"
+        );
     }
     // A suite folder whose inventory names a case no suite has, and misses the one there is.
     let dir = scratch("coverage");
@@ -216,7 +223,7 @@ fn coverage_counts_the_inventories_and_names_what_keeps_them_dishonest() {
     .unwrap();
     std::fs::write(
         dir.join("inventory/bu0620.yaml"),
-        "doc: BU 0620\nedition: \"2020-03 en\"\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/gone]\n    values: [{ case: p102/gone, step: 1, value: 250 }]\n",
+        "doc: BU 0620\nedition: \"2020-03 en\"\ncontents: [{ section: \"2.5.6\", title: Parameter data transmission }]\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/gone]\n    values: [{ case: p102/gone, step: 1, value: 250 }]\n",
     )
     .unwrap();
     std::fs::write(
@@ -238,7 +245,7 @@ fn coverage_counts_the_inventories_and_names_what_keeps_them_dishonest() {
     // A hollow claim: P102 is what the step reads, not what it expects.
     std::fs::write(
         dir.join("inventory/bu0620.yaml"),
-        "doc: BU 0620\nedition: \"2020-03 en\"\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/read]\n    values: [{ case: p102/read, step: 1, value: 102 }]\n",
+        "doc: BU 0620\nedition: \"2020-03 en\"\ncontents: [{ section: \"2.5.6\", title: Parameter data transmission }]\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/read]\n    values: [{ case: p102/read, step: 1, value: 102 }]\n",
     )
     .unwrap();
     let o = harness(&["coverage", "--suites", dir.to_str().unwrap()]);
@@ -247,6 +254,21 @@ fn coverage_counts_the_inventories_and_names_what_keeps_them_dishonest() {
     assert!(
         stdout.contains("value `102` is not asserted by case `p102/read` step 1: the case step 1 expects nothing"),
         "{stdout}"
+    );
+    // A section of the table of contents without statements and without a reason: the
+    // inventory does not load, and the error names the file and the section.
+    std::fs::write(
+        dir.join("inventory/bu0620.yaml"),
+        "doc: BU 0620\nedition: \"2020-03 en\"\ncontents:\n  - { section: \"2.5.6\", title: Parameter data transmission }\n  - { section: \"2.5.7\", title: Forgotten }\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/read]\n    values: [{ case: p102/read, step: 1, value: 250 }]\n",
+    )
+    .unwrap();
+    let o = harness(&["coverage", "--suites", dir.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("bu0620.yaml")
+            && err.contains("§2.5.7 \"Forgotten\": no statement lies in it"),
+        "{err}"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -262,7 +284,7 @@ fn coverage_gates_on_a_share_per_section_and_counts_errata_by_check() {
     .unwrap();
     std::fs::write(
         dir.join("inventory/bu0620.yaml"),
-        "doc: BU 0620\nedition: \"2020-03 en\"\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/read]\n    values: [{ case: p102/read, step: 1, value: 250 }]\n  - section: \"2.5.6\"\n    says: P102 writes\n",
+        "doc: BU 0620\nedition: \"2020-03 en\"\ncontents: [{ section: \"2.5.6\", title: Parameter data transmission }]\nstatements:\n  - section: \"2.5.6\"\n    says: P102 reads\n    cases: [p102/read]\n    values: [{ case: p102/read, step: 1, value: 250 }]\n  - section: \"2.5.6\"\n    says: P102 writes\n",
     )
     .unwrap();
     std::fs::write(

@@ -497,7 +497,8 @@ fn run(a: RunArgs) -> Result<i32, String> {
     // load error, as a suite file's is).
     match crate::suite::inventory::load(&dir) {
         Ok(inventories) => {
-            run.statements = crate::suite::inventory::coverage(&inventories, &loaded)
+            run.statements = crate::suite::inventory::coverage(&inventories, &loaded);
+            run.sections = crate::suite::inventory::sections(&inventories);
         }
         Err(e) => run.load_errors.push(e.to_string()),
     }

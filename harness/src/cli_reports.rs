@@ -119,11 +119,16 @@ pub(crate) struct CoverageArgs {
     /// nothing testable has no share and passes.
     #[arg(long, value_name = "PERCENT", value_parser = clap::value_parser!(u8).range(0..=100))]
     min: Option<u8>,
+    /// The report folder whose `mutants.json` (`harness mutants --out`) gives the mutation
+    /// score of the manuals as code.
+    #[arg(long, default_value = "reports")]
+    reports: PathBuf,
 }
 
 /// Prints the statements per manual and section (statements, asserted on the device, by
 /// reference-model cases only, pending, untestable, open; the shares of the testable asserted
-/// on the device and by any case, `—` where nothing is testable), the errata per manual by the
+/// on the device and by any case, `—` where nothing is testable), each manual's sections (in
+/// its table of contents, with statements, with nothing testable), the errata per manual by the
 /// check that found them, then
 /// what keeps the inventories honest: a case id that no
 /// suite has, a case of an inventoried manual that no statement names, an asserted count below
@@ -148,7 +153,22 @@ pub(crate) fn coverage(a: CoverageArgs) -> Result<i32, String> {
     let sections = inventory::coverage(&inventories, &loaded);
     let _ = out.write_all(report::statements_table(&sections).as_bytes());
     let _ = writeln!(out);
+    let _ = out.write_all(report::sections_text(&inventory::sections(&inventories)).as_bytes());
+    let _ = writeln!(out);
     let _ = out.write_all(report::errata_table(&loaded.errata).as_bytes());
+    let _ = writeln!(out);
+    let _ = match crate::mutants::score_in(&a.reports)? {
+        Some(m) => writeln!(
+            out,
+            "{m} ({})",
+            a.reports.join(crate::mutants::FILE).display()
+        ),
+        None => writeln!(
+            out,
+            "mutation score: not measured (`harness mutants --out {}` measures it)",
+            a.reports.display()
+        ),
+    };
     let mut problems = inventory::check(&inventories, &loaded, &floors);
     if let Some(min) = a.min {
         problems.extend(

@@ -453,6 +453,22 @@ impl StatementCoverage {
     }
 }
 
+/// One manual's table of contents as its inventory lists it: how many sections, how many hold
+/// statements, how many state nothing testable (each with the reason in the inventory).
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SectionCount {
+    /// Manual.
+    pub doc: String,
+    /// Edition.
+    pub edition: String,
+    /// Sections in the table of contents.
+    pub contents: usize,
+    /// Sections with at least one statement in them or below them.
+    pub with_statements: usize,
+    /// Sections with nothing testable (`nothing:`).
+    pub nothing: usize,
+}
+
 /// A whole run: every case under every profile it ran with.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
@@ -471,6 +487,10 @@ pub struct RunResult {
     /// inventories).
     #[serde(default)]
     pub statements: Vec<StatementCoverage>,
+    /// The manuals' tables of contents as the inventories count them (none without
+    /// inventories).
+    #[serde(default)]
+    pub sections: Vec<SectionCount>,
     /// Suite files that failed to load, with the error (file, line, what is wrong).
     pub load_errors: Vec<String>,
     /// The mutation score `harness mutants` last measured into the report folder, if any.

@@ -201,6 +201,7 @@ pub(crate) fn run_shard(
         errata: loaded.errata.clone(),
         statements: Vec::new(),
         mutation: None,
+        sections: Vec::new(),
         load_errors: loaded.errors.iter().map(|e| e.to_string()).collect(),
         duration: start.elapsed(),
     };

@@ -75,6 +75,12 @@ pub(super) fn sample_run() -> RunResult {
         ..p102_write()
     };
     let mut run = RunResult {
+        mutation: Some(crate::outcome::MutationScore {
+            mutants: 1000,
+            killed: 962,
+            measured: "2026-11-27T05:00:00Z".into(),
+            sample: false,
+        }),
         dut: "embedded simulator".into(),
         meta: RunMeta {
             harness_version: "0.1.0".into(),
@@ -227,6 +233,13 @@ pub(super) fn sample_run() -> RunResult {
                 untestable: 1,
             },
         ],
+        sections: vec![SectionCount {
+            doc: "BU 0620".into(),
+            edition: "2020-03 en".into(),
+            contents: 5,
+            with_statements: 3,
+            nothing: 2,
+        }],
         load_errors: vec![],
         duration: Duration::from_millis(15),
     };

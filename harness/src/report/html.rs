@@ -326,6 +326,14 @@ mod tests {
     }
 
     #[test]
+    fn the_mutation_score_is_shown_where_harness_mutants_measured_it() {
+        assert!(page().contains("<section id=\"mutation\"><h2>Mutation score</h2>\n<p>mutation score: 962 of 1000 mutants of the manuals as code killed (96.2 %), measured 2026-11-27T05:00:00Z: one datum"));
+        let mut run = sample_run();
+        run.mutation = None;
+        assert!(!render(&run).contains("id=\"mutation\""));
+    }
+
+    #[test]
     fn the_verdict_comes_first_then_motion_then_the_failures_then_the_tables() {
         let h = page();
         let at = |needle: &str| h.find(needle).unwrap_or_else(|| panic!("{needle}\n{h}"));

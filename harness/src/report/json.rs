@@ -12,7 +12,7 @@ use super::summary::Counts;
 use super::write::transcript_file;
 use crate::outcome::{
     CaseKind, CaseResult, Erratum, ManualRef, MutationScore, Refusal, RunMeta, RunResult,
-    StatementCoverage, Verdict,
+    SectionCount, StatementCoverage, Verdict,
 };
 
 /// One case in `run.json`.
@@ -96,6 +96,8 @@ struct Doc<'a> {
     /// The mutation score `harness mutants` left in the report folder, if it ran there.
     #[serde(skip_serializing_if = "Option::is_none")]
     mutation: Option<&'a MutationScore>,
+    /// The manuals' tables of contents: sections, with statements, with nothing testable.
+    sections: &'a [SectionCount],
     cases: Vec<Case<'a>>,
 }
 
@@ -115,6 +117,7 @@ pub(super) fn write(run: &RunResult, out: &mut dyn std::io::Write) -> std::io::R
         errata: &run.errata,
         statements: &run.statements,
         mutation: run.mutation.as_ref(),
+        sections: &run.sections,
         cases: run.cases.iter().map(Case::from).collect(),
     };
     serde_json::to_writer_pretty(out, &doc).map_err(std::io::Error::from)
@@ -195,8 +198,16 @@ mod tests {
         assert_eq!(v["errata"][0]["why"], "FI 2 is class 102");
         assert_eq!(v["errata"][0]["section"], "2.3.5");
         assert_eq!(v["dut"], "embedded simulator");
+        assert_eq!(
+            v["mutation"],
+            json!({"mutants": 1000, "killed": 962, "measured": "2026-11-27T05:00:00Z", "sample": false})
+        );
         assert_eq!(v["profiles"], json!(["sk550p", "tu3-eip"]));
         assert_eq!(v["load_errors"], json!([]));
+        assert_eq!(
+            v["sections"],
+            json!([{"doc": "BU 0620", "edition": "2020-03 en", "contents": 5, "with_statements": 3, "nothing": 2}])
+        );
         assert_eq!(v["duration"], 0.015);
     }
 }

@@ -31,6 +31,7 @@ pub(crate) use errata_counts::text_table as errata_table;
 pub(crate) use merge::merge;
 pub(crate) use read::{read, run_json};
 pub(crate) use snapshot::{apply_snapshots, SnapshotMode};
+pub(crate) use statements::sections_text;
 pub(crate) use statements::text_table as statements_table;
 pub(crate) use summary::{quiet, terminal};
 #[cfg(test)]

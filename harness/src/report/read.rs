@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use crate::outcome::{
     CaseKind, CaseResult, Erratum, ManualRef, MutationScore, Refusal, RunMeta, RunResult,
-    StatementCoverage, StepResult, Verdict,
+    SectionCount, StatementCoverage, StepResult, Verdict,
 };
 
 /// A report folder or `run.json` that cannot be read back. Every variant names the file.
@@ -133,6 +133,7 @@ struct Doc {
     statements: Vec<StatementCoverage>,
     #[serde(default)]
     mutation: Option<MutationScore>,
+    sections: Vec<SectionCount>,
     cases: Vec<Case>,
 }
 
@@ -246,6 +247,7 @@ pub(crate) fn read(given: &Path) -> Result<RunResult, ReadError> {
         cases,
         errata: doc.errata,
         statements: doc.statements,
+        sections: doc.sections,
         load_errors: doc.load_errors,
         mutation: doc.mutation,
         duration: secs(&path, doc.duration)?,

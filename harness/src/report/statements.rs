@@ -6,7 +6,7 @@
 use std::fmt::Write;
 
 use super::markup::text;
-use crate::outcome::StatementCoverage;
+use crate::outcome::{SectionCount, StatementCoverage};
 
 /// The section rows, each manual followed by its total (section `all`), in the inventories'
 /// order.
@@ -87,6 +87,35 @@ pub(crate) fn text_table(sections: &[StatementCoverage]) -> String {
         line(&mut s, &c.each_ref().map(String::as_str));
     }
     s
+}
+
+/// A manual's table of contents in one sentence, the same for the terminal and `summary.md`.
+fn sections_sentence(c: &SectionCount) -> String {
+    format!(
+        "sections: {} in the table of contents, {} with statements, {} with nothing testable (reasons given)",
+        c.contents, c.with_statements, c.nothing
+    )
+}
+
+/// `harness coverage`: one line per manual on its table of contents, so a section the
+/// inventory forgot cannot hide (every section holds statements or says why it has none).
+pub(crate) fn sections_text(counts: &[SectionCount]) -> String {
+    let mut s = String::new();
+    for c in counts {
+        let _ = writeln!(s, "{:<8} {:<11} {}", c.doc, c.edition, sections_sentence(c));
+    }
+    s
+}
+
+/// The same lines for `summary.md`, below the statement table (nothing without inventories).
+pub(super) fn sections_markdown(s: &mut String, counts: &[SectionCount]) {
+    if counts.is_empty() {
+        return;
+    }
+    let _ = writeln!(s);
+    for c in counts {
+        let _ = writeln!(s, "- {} {}: {}", c.doc, c.edition, sections_sentence(c));
+    }
 }
 
 /// What the columns mean, for `summary.md` and `index.html`.
@@ -276,6 +305,22 @@ mod tests {
         );
         assert_eq!(share(last.device_percent()), "67 %");
         assert_eq!(share(last.percent()), "83 %");
+    }
+
+    #[test]
+    fn each_manual_counts_its_table_of_contents() {
+        let counts = sample_run().sections;
+        let line = "BU 0620  2020-03 en  sections: 5 in the table of contents, 3 with statements, 2 with nothing testable (reasons given)\n";
+        assert_eq!(sections_text(&counts), line);
+        let mut md = String::new();
+        sections_markdown(&mut md, &counts);
+        assert_eq!(
+            md,
+            "\n- BU 0620 2020-03 en: sections: 5 in the table of contents, 3 with statements, 2 with nothing testable (reasons given)\n"
+        );
+        let mut none = String::new();
+        sections_markdown(&mut none, &[]);
+        assert!(none.is_empty());
     }
 
     #[test]

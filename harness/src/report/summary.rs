@@ -329,6 +329,7 @@ pub(super) fn markdown(run: &RunResult) -> String {
     if let Some(m) = &run.mutation {
         let _ = writeln!(s, "\n{m} (`harness mutants`).");
     }
+    super::statements::sections_markdown(&mut s, &run.sections);
     errata(&mut s, run);
     let _ = writeln!(s, "\n## Record\n");
     for (label, value) in record::lines(run) {

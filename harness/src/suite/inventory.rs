@@ -8,6 +8,11 @@
 //! count them): a claim the loader can check ([`super::claim`]). A statement that names cases
 //! without values is refused: a case that merely touches the topic asserts nothing.
 //!
+//! Its `contents:` list the manual's whole table of contents (front matter and index
+//! included), so that "every section" can be checked: each statement lies in a listed section,
+//! and a listed section in which no statement lies says why with `nothing:` (a heading, a
+//! safety note, an index), so a forgotten section cannot pass for an empty one.
+//!
 //! [`coverage`] counts them per manual and section (`harness coverage`, the run's summary and
 //! HTML report); [`check`] keeps an inventory honest against the loaded suites: every case id
 //! it names exists, every value is carried by the step it names, every case citing an
@@ -21,7 +26,7 @@ use std::path::{Path, PathBuf};
 use super::claim::carries;
 use super::load::{LoadError, Loaded};
 use crate::notation::Matcher;
-use crate::outcome::{CaseKind, StatementCoverage};
+use crate::outcome::{CaseKind, SectionCount, StatementCoverage};
 
 /// The folder below the suites that holds the inventories (the suite loader skips it).
 pub(crate) const DIR: &str = "inventory";
@@ -35,7 +40,17 @@ const FLOORS: &str = "floors.yaml";
 struct FileDoc {
     doc: String,
     edition: String,
+    contents: Vec<SectionDoc>,
     statements: Vec<StatementDoc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SectionDoc {
+    section: String,
+    title: String,
+    #[serde(default)]
+    nothing: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -100,12 +115,35 @@ pub(crate) struct Statement {
     pub(crate) values: Vec<Carrier>,
 }
 
+/// One section of a manual's table of contents.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Section {
+    /// Its number (`2.5.6.4`), or for an unnumbered one (the index) its title.
+    pub(crate) section: String,
+    /// As the table of contents prints it.
+    pub(crate) title: String,
+    /// Why no testable statement lies in it; only for a section without statements.
+    pub(crate) nothing: Option<String>,
+}
+
+impl Section {
+    /// Whether a statement citing `section` lies in this one: the same number or one below
+    /// it (`2.5` holds `2.5.6.4`, not `2.50`).
+    fn holds(&self, section: &str) -> bool {
+        section
+            .strip_prefix(self.section.as_str())
+            .is_some_and(|rest| rest.is_empty() || rest.starts_with('.'))
+    }
+}
+
 /// One manual's inventory.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Inventory {
     pub(crate) file: PathBuf,
     pub(crate) doc: String,
     pub(crate) edition: String,
+    /// The manual's table of contents, in its order.
+    pub(crate) contents: Vec<Section>,
     pub(crate) statements: Vec<Statement>,
 }
 
@@ -181,12 +219,91 @@ pub(crate) fn parse_inventory(file: &Path, text: &str) -> Result<Inventory, Load
             values,
         });
     }
+    let contents: Vec<Section> = doc
+        .contents
+        .into_iter()
+        .map(|c| Section {
+            section: c.section,
+            title: c.title,
+            nothing: c.nothing,
+        })
+        .collect();
+    check_contents(&contents, &statements).map_err(|e| error(file, None, e))?;
     Ok(Inventory {
         file: file.to_path_buf(),
         doc: doc.doc,
         edition: doc.edition,
+        contents,
         statements,
     })
+}
+
+/// Holds the statements against the table of contents: a section listed once, every
+/// statement in a listed section, and `nothing:` exactly on the sections no statement lies
+/// in (one on a section with statements is stale: the section has something testable now).
+fn check_contents(contents: &[Section], statements: &[Statement]) -> Result<(), String> {
+    let mut seen = BTreeSet::new();
+    for c in contents {
+        if !seen.insert(c.section.as_str()) {
+            return Err(format!(
+                "`contents`: §{} \"{}\" is listed twice",
+                c.section, c.title
+            ));
+        }
+    }
+    if let Some(s) = statements
+        .iter()
+        .find(|s| !contents.iter().any(|c| c.holds(&s.section)))
+    {
+        return Err(format!(
+            "§{} \"{}\": no section of `contents` holds it: list the section as the manual's table of contents prints it",
+            s.section, s.says
+        ));
+    }
+    for c in contents {
+        let inside = statements.iter().filter(|s| c.holds(&s.section)).count();
+        match (&c.nothing, inside) {
+            (None, 0) => {
+                return Err(format!(
+                    "`contents`: §{} \"{}\": no statement lies in it: add the statements it makes, or `nothing:` with why it makes none",
+                    c.section, c.title
+                ))
+            }
+            (Some(why), 0) if why.trim().is_empty() => {
+                return Err(format!(
+                    "`contents`: §{} \"{}\": `nothing:` gives no reason: say why it states nothing testable",
+                    c.section, c.title
+                ))
+            }
+            (Some(_), n) if n > 0 => {
+                return Err(format!(
+                    "`contents`: §{} \"{}\": `nothing:` though {n} statement(s) lie in it: drop the stale `nothing:`",
+                    c.section, c.title
+                ))
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// A manual's sections counted: listed in its table of contents, holding statements, and
+/// with nothing testable (`nothing:`, the reason given). [`check_contents`] makes the last
+/// two add up to the first.
+pub(crate) fn sections(inventories: &[Inventory]) -> Vec<SectionCount> {
+    inventories
+        .iter()
+        .map(|inv| {
+            let nothing = inv.contents.iter().filter(|c| c.nothing.is_some()).count();
+            SectionCount {
+                doc: inv.doc.clone(),
+                edition: inv.edition.clone(),
+                contents: inv.contents.len(),
+                with_statements: inv.contents.len() - nothing,
+                nothing,
+            }
+        })
+        .collect()
 }
 
 /// One `values:` entry: its case must be one the statement names, its step counted from 1,
@@ -392,6 +509,13 @@ mod tests {
     const INVENTORY: &str = r#"
 doc: BU 0620
 edition: "2020-03 en"
+contents:
+  - { section: "1", title: Introduction, nothing: "a heading" }
+  - { section: "2.5", title: PROFINET IO basics }
+  - { section: "2.5.6", title: Parameter data transmission }
+  - { section: "4.2.5", title: CANopen }
+  - { section: "6.1", title: Data transmission }
+  - { section: Index, title: Index, nothing: "an index: page numbers" }
 statements:
   - section: "2.5.6"
     page: 51
@@ -559,7 +683,7 @@ cases:
 
     fn hollow(values: &str) -> Vec<String> {
         let text = format!(
-            "doc: BU 2100\nedition: en\nstatements:\n  - section: \"5.1\"\n    says: P161 [-03] = 0 is read in at restart\n    cases: [test/p161]\n    values: {values}\n"
+            "doc: BU 2100\nedition: en\ncontents: [{{ section: \"5\", title: Parameters }}]\nstatements:\n  - section: \"5.1\"\n    says: P161 [-03] = 0 is read in at restart\n    cases: [test/p161]\n    values: {values}\n"
         );
         let inv = parse_inventory(Path::new("bu2100.yaml"), &text).unwrap();
         let floors = [("BU 2100 en".to_string(), 0)].into();
@@ -622,6 +746,66 @@ cases:
         let unknown = INVENTORY.replace("says: P102 reads", "says: P102 reads\n    said: x");
         let e = parse_inventory(Path::new("x.yaml"), &unknown).unwrap_err();
         assert!(e.line.is_some(), "{e}");
+    }
+
+    #[test]
+    fn every_section_of_the_contents_holds_statements_or_says_why_not() {
+        let e = |text: String| parse_inventory(Path::new("bu0620.yaml"), &text).unwrap_err();
+        let counts = sections(&[inventory()]);
+        assert_eq!(
+            (
+                counts[0].contents,
+                counts[0].with_statements,
+                counts[0].nothing
+            ),
+            (6, 4, 2)
+        );
+        // A statement outside the table of contents: §6.1 does not hold §6.10.
+        let outside = e(INVENTORY.replace("section: \"6.1.3\"", "section: \"6.10\""));
+        assert_eq!(outside.file, Path::new("bu0620.yaml"));
+        assert!(
+            outside.message.contains(
+                "§6.10 \"047Eh makes the drive ready\": no section of `contents` holds it"
+            ),
+            "{outside}"
+        );
+        // A section without statements and without `nothing:`: forgotten, not empty.
+        let forgotten = e(INVENTORY.replace(", nothing: \"a heading\"", ""));
+        assert!(
+            forgotten
+                .message
+                .contains("§1 \"Introduction\": no statement lies in it"),
+            "{forgotten}"
+        );
+        // `nothing:` on a section that has statements (below it, too) is stale.
+        let stale = e(INVENTORY.replace(
+            "title: PROFINET IO basics }",
+            "title: PROFINET IO basics, nothing: \"a heading\" }",
+        ));
+        assert!(
+            stale.message.contains(
+                "§2.5 \"PROFINET IO basics\": `nothing:` though 3 statement(s) lie in it"
+            ),
+            "{stale}"
+        );
+        let silent = e(INVENTORY.replace("nothing: \"a heading\"", "nothing: \" \""));
+        assert!(
+            silent
+                .message
+                .contains("§1 \"Introduction\": `nothing:` gives no reason"),
+            "{silent}"
+        );
+        let twice = e(INVENTORY.replace(
+            "  - { section: \"6.1\"",
+            "  - { section: \"4.2.5\", title: CANopen }\n  - { section: \"6.1\"",
+        ));
+        assert!(
+            twice.message.contains("§4.2.5 \"CANopen\" is listed twice"),
+            "{twice}"
+        );
+        // The table of contents is required: without it no section can be checked.
+        let none = e(INVENTORY.replace("contents:", "old_contents:"));
+        assert!(none.line.is_some(), "{none}");
     }
 
     #[test]
