@@ -2,27 +2,20 @@
 //! so the command runs each in a child process of its own, and these tests run the command, never
 //! a mutant in their own process (it would change the data under every test beside them).
 
+#[allow(dead_code)] // what the other tests share
+mod common;
+
+use common::cli::harness;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn harness(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_harness"))
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .args(args)
-        .output()
-        .expect("the harness binary runs")
-}
+use std::process::Output;
 
 fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
 fn scratch(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("harness-mutants-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::cli::scratch("mutants", tag)
 }
 
 fn mutants_json(dir: &Path) -> Value {

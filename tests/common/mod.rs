@@ -6,6 +6,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 pub(crate) mod addr;
+pub(crate) mod cli;
 pub(crate) mod ecat_wire;
 pub(crate) mod hog;
 pub(crate) mod netns;

@@ -81,20 +81,64 @@ fn without_tests(text: &str) -> String {
     out
 }
 
-/// The index of the brace closing the one at `open`.
+/// The index of the brace closing the one at `open`. Braces inside string and character
+/// literals do not count: a test's YAML text or format string may hold one alone.
 fn closing(text: &str, open: usize) -> Option<usize> {
+    let b = text.as_bytes();
     let mut depth = 0usize;
-    for (i, c) in text[open..].char_indices() {
-        match c {
-            '{' => depth += 1,
-            '}' => {
+    let mut i = open;
+    while i < b.len() {
+        match b[i] {
+            b'{' => depth += 1,
+            b'}' => {
                 depth -= 1;
                 if depth == 0 {
-                    return Some(open + i);
+                    return Some(i);
                 }
+            }
+            b'"' => i = string_end(b, i + 1, None)?,
+            b'r' if !b[..i]
+                .last()
+                .is_some_and(|c| c.is_ascii_alphanumeric() || *c == b'_') =>
+            {
+                let hashes = b[i + 1..].iter().take_while(|c| **c == b'#').count();
+                if b.get(i + 1 + hashes) == Some(&b'"') {
+                    i = string_end(b, i + 2 + hashes, Some(hashes))?;
+                }
+            }
+            // A character literal ('{', '\''); a lifetime ('a) has no closing quote.
+            b'\'' => match (b.get(i + 1), b.get(i + 2), b.get(i + 3)) {
+                (Some(b'\\'), _, _) => i = i + 2 + b[i + 2..].iter().position(|c| *c == b'\'')?,
+                (Some(_), Some(b'\''), _) => i += 2,
+                _ => {}
+            },
+            _ => {}
+        }
+        i += 1;
+    }
+    None
+}
+
+/// The index of the last character ending a string literal whose text starts at `from`: a raw
+/// string's (`raw`: its number of `#`) takes no escapes and ends at a quote and as many `#`.
+fn string_end(b: &[u8], from: usize, raw: Option<usize>) -> Option<usize> {
+    let hashes = raw.unwrap_or(0);
+    let mut i = from;
+    while i < b.len() {
+        match b[i] {
+            b'\\' if raw.is_none() => i += 1,
+            b'"' if b[i + 1..]
+                .iter()
+                .take(hashes)
+                .filter(|c| **c == b'#')
+                .count()
+                == hashes =>
+            {
+                return Some(i + hashes);
             }
             _ => {}
         }
+        i += 1;
     }
     None
 }
@@ -256,6 +300,14 @@ mod tests {
         let mut found = crate_paths(&text);
         found.sort();
         assert_eq!(found, ["a", "b", "c", "d"]);
+    }
+
+    #[test]
+    fn a_brace_in_a_literal_does_not_end_a_test_module() {
+        let text = "#[cfg(test)]\nmod tests {\n  const Y: &str = r#\"x: [{ a\"#;\n  \
+                    const Z: &str = \"{\\\"\";\n  const C: char = '{';\n  \
+                    fn f<'a>(x: &'a str) { crate::t::g(x) }\n}\nfn h() { crate::e::k() }";
+        assert_eq!(crate_paths(&without_tests(text)), ["e"]);
     }
 
     #[test]
