@@ -408,9 +408,12 @@ fn spawn(
     if let Some(m) = mutant {
         cmd.arg("--mutant").arg(m);
     }
+    // A file, not a pipe: a child that writes much (a panic's backtrace) never blocks on it.
+    let log = work.join(format!("{name}.stderr"));
+    let stderr = std::fs::File::create(&log).map_err(|e| failed(e.to_string()))?;
     let mut child = cmd
         .stdout(Stdio::null())
-        .stderr(Stdio::piped())
+        .stderr(stderr)
         .spawn()
         .map_err(|e| failed(e.to_string()))?;
     let deadline = Instant::now() + timeout;
@@ -426,10 +429,7 @@ fn spawn(
         }
     };
     if !status.success() {
-        let mut stderr = String::new();
-        if let Some(mut e) = child.stderr.take() {
-            let _ = std::io::Read::read_to_string(&mut e, &mut stderr);
-        }
+        let stderr = std::fs::read_to_string(&log).unwrap_or_default();
         let last = stderr.lines().last().unwrap_or("").to_string();
         return Err(failed(format!("exit {status}: {last}")));
     }
