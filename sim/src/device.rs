@@ -686,9 +686,10 @@ impl Device {
     ///
     /// - P513 [-04] "Telegram timeout time" (Ethernet, 0.1 s; 0 = off): an inverter that had
     ///   valid process data and gets none for longer raises E10.3 (BU 0620 §5.1, §5.3: 7592h).
-    /// - P151 "Timeout for external bus" of a module (ms; 0 = control-word monitoring off, -1 =
-    ///   all monitoring off): the same for the module's telegrams, E10.3 "Timeout by P151/P513"
-    ///   (BU 2100 §7.1.1: "Invalid control word set (e.g. PLC to Stop)", 1 s → E10.3).
+    /// - P151 "Timeout for external bus" of a module (ms; EtherNet/IP: 0 = control-word
+    ///   monitoring off, -1 = all monitoring off, BU 2100 §7.1.1; POWERLINK: 0 = monitoring
+    ///   off, BU 2200 §7.1.1): the same for the module's telegrams, E10.3 "Timeout by
+    ///   P151/P513" (BU 2100 §7.1.1: "Invalid control word set (e.g. PLC to Stop)", 1 s → E10.3).
     /// - the bus status (P872 of the SK 550P, P173 and P170 of the modules; see
     ///   [`bus_status`]): ready, cyclic communication, field-bus timeout, timeout P513/P151
     ///   (while an inverter shows E10.3), the inverters online.
@@ -704,12 +705,20 @@ impl Device {
             ..BusFlags::default()
         };
         self.lose_behind_bus_off(now);
-        let p151 = match self.config.product.family() {
-            proto::nord::Family::Module => self.interface.store.read(P151, None, None).ok(),
-            proto::nord::Family::Integrated => None,
-        }
-        .filter(|ms| *ms > 0)
-        .map(|ms| Duration::from_millis(ms as u64));
+        // Each product's P151 by its own manual (`proto::nord::can::p151_monitoring`): only a
+        // time-out in ms watches the telegrams.
+        let p151_monitoring = self.p151_monitoring();
+        let p151 = match p151_monitoring {
+            Some(proto::nord::can::P151Monitoring::Timeout(ms)) => {
+                Some(Duration::from_millis(u64::from(ms)))
+            }
+            _ => None,
+        };
+        // P151 switching all monitoring off (BU 2100 -1, BU 2200 0 "Überwachung Aus") leaves the
+        // field bus unwatched: on the SK CU4/TU4 the field-bus timeout is P151, "the inverter
+        // itself does not monitor the communication on the field-bus level" (BU 2200 §8.1,
+        // BU 2100 §8.1), so the inverters' P513 raises no E10.3 for it either.
+        let fieldbus_off = p151_monitoring == Some(proto::nord::can::P151Monitoring::Off);
         if p151 != self.p151_seen.0 {
             self.p151_seen = (p151, now);
         }
@@ -727,7 +736,7 @@ impl Device {
             if silent <= PROCESS_DATA_WINDOW {
                 flags.cyclic = true;
             }
-            let p513 = ethernet_timeout(&unit.params.store);
+            let p513 = ethernet_timeout(&unit.params.store).filter(|_| !fieldbus_off);
             if p513 != unit.p513_seen.0 {
                 unit.p513_seen = (p513, now);
             }
@@ -1366,6 +1375,22 @@ impl Device {
             self.interface.store.set_info(number, element, value);
         }
         self.shown = Some(flags);
+    }
+
+    /// What the module's P151 switches, by its product's manual (`None` without a P151: the
+    /// SK TU3-* and the SK 550P, whose field-bus monitoring is the inverters' P513).
+    pub fn p151_monitoring(&self) -> Option<proto::nord::can::P151Monitoring> {
+        let value = match self.config.product.family() {
+            proto::nord::Family::Module => self.interface.store.read(P151, None, None).ok()?,
+            proto::nord::Family::Integrated => return None,
+        };
+        proto::nord::can::p151_monitoring(self.config.product, value)
+    }
+
+    /// The module's P151 has switched all monitoring off (BU 2100 §7.1.1 -1 "Monitoring Off",
+    /// BU 2200 §7.1.1 0 "Überwachung Aus"): a lost master raises no inverter error.
+    pub fn fieldbus_monitoring_off(&self) -> bool {
+        self.p151_monitoring() == Some(proto::nord::can::P151Monitoring::Off)
     }
 
     /// Marks the field-bus watchdog (P872/P173 bit 2) as tripped or clear.
