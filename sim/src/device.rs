@@ -1528,6 +1528,7 @@ fn relays_of(p150: i32) -> Option<i32> {
 mod tests {
     use super::*;
     use proto::nord::pkw::PkwRepr;
+    use rstest::rstest;
 
     fn ms(n: u64) -> Duration {
         Duration::from_millis(n)
@@ -1914,6 +1915,48 @@ mod tests {
             vec![(fi1, 103)],
             "E10.3 after 200 ms"
         );
+    }
+
+    /// P151 by each product's manual with the inverter's P513 [-04] at 0.5 s: BU 2200 §7.1.1
+    /// "0 = Überwachung Aus" leaves the SK TU4-POL's field bus unwatched (no E10.3 from
+    /// P513 either, §8.1), BU 2100 §7.1.1's 0 only switches the control-word monitoring off
+    /// (the inverter's P513 still trips), and -1 switches everything off.
+    #[rstest]
+    #[case::pol_0_off(Product::Tu4Pol, 0, vec![])]
+    #[case::pol_time_out(Product::Tu4Pol, 2000, vec![(Inverter::new(1).unwrap(), 103)])]
+    #[case::eip_0_bus_only(Product::Tu4Eip, 0, vec![(Inverter::new(1).unwrap(), 103)])]
+    #[case::eip_minus_1_off(Product::Tu4Eip, -1, vec![])]
+    fn p151_follows_each_products_manual(
+        #[case] product: Product,
+        #[case] p151: i32,
+        #[case] faults: Vec<(Inverter, i32)>,
+    ) {
+        let mut d = Device::new(DeviceConfig::new(product));
+        d.store(Unit::Interface)
+            .unwrap()
+            .write(P151, None, None, p151, crate::store::Persist::Eeprom)
+            .unwrap();
+        d.store(Unit::Inverter(Inverter::new(1).unwrap()))
+            .unwrap()
+            .write(
+                P513,
+                None,
+                ELEMENT_ETHERNET,
+                5,
+                crate::store::Persist::Eeprom,
+            )
+            .unwrap();
+        let ppo = PpoRepr {
+            pkw: None,
+            pzd: vec![0x047E, 0],
+        };
+        // A time-out just set watches from the next valid telegram on: two telegrams, then
+        // silence.
+        let valid = frame(101, 3, &ppo.emit(PpoType::TYPE_3));
+        d.handle(&valid, ms(10)).unwrap();
+        d.handle(&valid, ms(20)).unwrap();
+        d.monitor(ms(1000));
+        assert_eq!(d.fault_changes(&mut [0; 8]), faults);
     }
 
     #[test]
