@@ -686,9 +686,10 @@ impl Device {
     ///
     /// - P513 [-04] "Telegram timeout time" (Ethernet, 0.1 s; 0 = off): an inverter that had
     ///   valid process data and gets none for longer raises E10.3 (BU 0620 §5.1, §5.3: 7592h).
-    /// - P151 "Timeout for external bus" of a module (ms; 0 = control-word monitoring off, -1 =
-    ///   all monitoring off): the same for the module's telegrams, E10.3 "Timeout by P151/P513"
-    ///   (BU 2100 §7.1.1: "Invalid control word set (e.g. PLC to Stop)", 1 s → E10.3).
+    /// - P151 "Timeout for external bus" of a module (ms; EtherNet/IP: 0 = control-word
+    ///   monitoring off, -1 = all monitoring off, BU 2100 §7.1.1; POWERLINK: 0 = monitoring
+    ///   off, BU 2200 §7.1.1): the same for the module's telegrams, E10.3 "Timeout by
+    ///   P151/P513" (BU 2100 §7.1.1: "Invalid control word set (e.g. PLC to Stop)", 1 s → E10.3).
     /// - the bus status (P872 of the SK 550P, P173 and P170 of the modules; see
     ///   [`bus_status`]): ready, cyclic communication, field-bus timeout, timeout P513/P151
     ///   (while an inverter shows E10.3), the inverters online.
@@ -704,12 +705,20 @@ impl Device {
             ..BusFlags::default()
         };
         self.lose_behind_bus_off(now);
-        let p151 = match self.config.product.family() {
-            proto::nord::Family::Module => self.interface.store.read(P151, None, None).ok(),
-            proto::nord::Family::Integrated => None,
-        }
-        .filter(|ms| *ms > 0)
-        .map(|ms| Duration::from_millis(ms as u64));
+        // Each product's P151 by its own manual (`proto::nord::can::p151_monitoring`): only a
+        // time-out in ms watches the telegrams.
+        let p151_monitoring = self.p151_monitoring();
+        let p151 = match p151_monitoring {
+            Some(proto::nord::can::P151Monitoring::Timeout(ms)) => {
+                Some(Duration::from_millis(u64::from(ms)))
+            }
+            _ => None,
+        };
+        // P151 switching all monitoring off (BU 2100 -1, BU 2200 0 "Überwachung Aus") leaves the
+        // field bus unwatched: on the SK CU4/TU4 the field-bus timeout is P151, "the inverter
+        // itself does not monitor the communication on the field-bus level" (BU 2200 §8.1,
+        // BU 2100 §8.1), so the inverters' P513 raises no E10.3 for it either.
+        let fieldbus_off = p151_monitoring == Some(proto::nord::can::P151Monitoring::Off);
         if p151 != self.p151_seen.0 {
             self.p151_seen = (p151, now);
         }
@@ -727,7 +736,7 @@ impl Device {
             if silent <= PROCESS_DATA_WINDOW {
                 flags.cyclic = true;
             }
-            let p513 = ethernet_timeout(&unit.params.store);
+            let p513 = ethernet_timeout(&unit.params.store).filter(|_| !fieldbus_off);
             if p513 != unit.p513_seen.0 {
                 unit.p513_seen = (p513, now);
             }
@@ -1368,6 +1377,22 @@ impl Device {
         self.shown = Some(flags);
     }
 
+    /// What the module's P151 switches, by its product's manual (`None` without a P151: the
+    /// SK TU3-* and the SK 550P, whose field-bus monitoring is the inverters' P513).
+    pub fn p151_monitoring(&self) -> Option<proto::nord::can::P151Monitoring> {
+        let value = match self.config.product.family() {
+            proto::nord::Family::Module => self.interface.store.read(P151, None, None).ok()?,
+            proto::nord::Family::Integrated => return None,
+        };
+        proto::nord::can::p151_monitoring(self.config.product, value)
+    }
+
+    /// The module's P151 has switched all monitoring off (BU 2100 §7.1.1 -1 "Monitoring Off",
+    /// BU 2200 §7.1.1 0 "Überwachung Aus"): a lost master raises no inverter error.
+    pub fn fieldbus_monitoring_off(&self) -> bool {
+        self.p151_monitoring() == Some(proto::nord::can::P151Monitoring::Off)
+    }
+
     /// Marks the field-bus watchdog (P872/P173 bit 2) as tripped or clear.
     pub fn set_fieldbus_timeout(&mut self, tripped: bool) {
         self.fieldbus_timeout = tripped;
@@ -1503,6 +1528,7 @@ fn relays_of(p150: i32) -> Option<i32> {
 mod tests {
     use super::*;
     use proto::nord::pkw::PkwRepr;
+    use rstest::rstest;
 
     fn ms(n: u64) -> Duration {
         Duration::from_millis(n)
@@ -1889,6 +1915,48 @@ mod tests {
             vec![(fi1, 103)],
             "E10.3 after 200 ms"
         );
+    }
+
+    /// P151 by each product's manual with the inverter's P513 [-04] at 0.5 s: BU 2200 §7.1.1
+    /// "0 = Überwachung Aus" leaves the SK TU4-POL's field bus unwatched (no E10.3 from
+    /// P513 either, §8.1), BU 2100 §7.1.1's 0 only switches the control-word monitoring off
+    /// (the inverter's P513 still trips), and -1 switches everything off.
+    #[rstest]
+    #[case::pol_0_off(Product::Tu4Pol, 0, vec![])]
+    #[case::pol_time_out(Product::Tu4Pol, 2000, vec![(Inverter::new(1).unwrap(), 103)])]
+    #[case::eip_0_bus_only(Product::Tu4Eip, 0, vec![(Inverter::new(1).unwrap(), 103)])]
+    #[case::eip_minus_1_off(Product::Tu4Eip, -1, vec![])]
+    fn p151_follows_each_products_manual(
+        #[case] product: Product,
+        #[case] p151: i32,
+        #[case] faults: Vec<(Inverter, i32)>,
+    ) {
+        let mut d = Device::new(DeviceConfig::new(product));
+        d.store(Unit::Interface)
+            .unwrap()
+            .write(P151, None, None, p151, crate::store::Persist::Eeprom)
+            .unwrap();
+        d.store(Unit::Inverter(Inverter::new(1).unwrap()))
+            .unwrap()
+            .write(
+                P513,
+                None,
+                ELEMENT_ETHERNET,
+                5,
+                crate::store::Persist::Eeprom,
+            )
+            .unwrap();
+        let ppo = PpoRepr {
+            pkw: None,
+            pzd: vec![0x047E, 0],
+        };
+        // A time-out just set watches from the next valid telegram on: two telegrams, then
+        // silence.
+        let valid = frame(101, 3, &ppo.emit(PpoType::TYPE_3));
+        d.handle(&valid, ms(10)).unwrap();
+        d.handle(&valid, ms(20)).unwrap();
+        d.monitor(ms(1000));
+        assert_eq!(d.fault_changes(&mut [0; 8]), faults);
     }
 
     #[test]

@@ -6,9 +6,10 @@
 //! responds with the corresponding response telegram"), bounded by `retries`; process data
 //! keeps the last control word and setpoints of each inverter running.
 
+use proto::nord::params::{self, Owner};
 use proto::nord::pkw::{Ind, OrderLabel, PkwRepr};
 use proto::nord::ppo::{PpoRepr, PpoType};
-use proto::nord::{Inverter, Product};
+use proto::nord::{Inverter, ParamSet, Product};
 use serde_json::{json, Value};
 use sim::link::{LinkRepr, Unit};
 
@@ -244,6 +245,24 @@ impl Channel {
         })
     }
 
+    /// The parameter set an order addresses: the step's, else set 1 for an array element of a
+    /// parameter the product's catalogue marks set-dependent — its IND carries the element in
+    /// bits 10–15 and the set in bits 8–9, where a set-independent array's carries the
+    /// sub-index in bits 8–15 (BU 0590 §4.2.3.2, BU 0620 §2.5.6.3). Without an element IND 0 is
+    /// set 1 either way.
+    fn set_for(&self, o: &OrderSpec) -> Option<ParamSet> {
+        if o.set.is_some() || o.element.is_none() {
+            return o.set;
+        }
+        let owner = match o.target {
+            Target::Interface => Owner::Interface,
+            Target::Inverter(_) => Owner::Inverter,
+        };
+        params::lookup(self.product, owner, o.number)
+            .filter(|d| d.set_dependent)
+            .and(ParamSet::new(1).ok())
+    }
+
     /// Builds the order for a `read`/`write` step (BU 0620 §2.5.6.3: array elements need the
     /// array labels 6/7/8 (11/12 RAM only); RAM-only writes use 11–14).
     fn order_for(&self, o: &OrderSpec) -> Result<PkwRepr, StepError> {
@@ -264,7 +283,7 @@ impl Channel {
             ak: ak.0,
             spm: false,
             pnu: proto::nord::addr::profinet_pnu(self.product, o.number),
-            ind: Ind::for_address(o.set, o.element).raw(),
+            ind: Ind::for_address(self.set_for(o), o.element).raw(),
             pwe: pwe as u32,
         })
     }

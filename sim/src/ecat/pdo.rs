@@ -101,10 +101,15 @@ fn show(device: &mut Device, i: usize, words: &ProcessWords) {
     }
 }
 
-/// The SM watchdog expired in Operational: P872 bit 2, and E10.2 on every inverter whose
-/// monitoring (P513 [-04]) is on.
+/// The SM watchdog expired in Operational (the POWERLINK node: the SoC lost): P872/P173 bit 2,
+/// and E10.2 on every inverter whose monitoring (P513 [-04]) is on — none where the module's
+/// P151 switches all monitoring off (SK TU4/CU4-POL: P151 = 0 "Überwachung Aus", BU 2200
+/// §7.1.1; "the inverter itself does not monitor the field bus", §8.1).
 pub(crate) fn watchdog_expired(device: &mut Device) {
     device.set_fieldbus_timeout(true);
+    if device.fieldbus_monitoring_off() {
+        return;
+    }
     for (_, fi) in inverters(device.config().inverters) {
         if device.ethernet_timeout(fi).is_some() {
             let _ = device.raise(fi, E10_2);

@@ -20,7 +20,7 @@ use proto::enip::io::{IoFrame, IO_PORT};
 use proto::nord::eip::{
     self, Assembly, Direction, LISTEN_ONLY_POINT, RPI_RANGE, WORDS_PER_INVERTER,
 };
-use proto::nord::{Family, Inverter, ParamNumber};
+use proto::nord::{Family, Inverter};
 use proto::wire::Error;
 
 use super::objects;
@@ -603,15 +603,9 @@ fn owner_timed_out(a: &mut Adapter) {
     a.device.set_fieldbus_timeout(true);
     objects::show_active_assembly(a, 0, 0);
     let module = a.product().family() == Family::Module;
-    let p151 = ParamNumber::new(151).ok();
-    let interface_off = module
-        && p151.and_then(|n| {
-            a.device
-                .store(Unit::Interface)
-                .ok()?
-                .read(n, None, None)
-                .ok()
-        }) == Some(-1);
+    // BU 2100 §7.1.1: P151 = -1 "Monitoring Off"; 0 keeps the bus-communication monitoring
+    // ("Connection to EtherNet/IP-Busmaster lost | 0 sec | Error E10.2").
+    let interface_off = module && a.device.fieldbus_monitoring_off();
     for n in 1..=a.device.config().inverters {
         let Some(fi) = slot(usize::from(n)) else {
             continue;

@@ -90,6 +90,39 @@ pub fn fieldbus_timeout_parameter(product: Product) -> u16 {
     }
 }
 
+/// What a module's P151 "Timeout for external bus" switches, each product by its own manual.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum P151Monitoring {
+    /// All monitoring off: neither an invalid control word nor a lost master or cable raises an
+    /// inverter error (BU 2100 §7.1.1 "-1 = Monitoring Off"; BU 2200 §7.1.1 "0 = Überwachung
+    /// Aus").
+    Off,
+    /// "Control word monitoring Off, bus-communication monitoring active" (BU 2100 §7.1.1, 0):
+    /// a lost master is E10.2, an invalid control word (PLC to Stop) leaves the inverter running.
+    BusCommunication,
+    /// A telegram time-out in ms: no valid telegram for longer raises E10.3 "Timeout by
+    /// P151/P513"; the bus-communication monitoring stays on.
+    Timeout(u16),
+}
+
+/// P151's meaning on `product` for `value`, by the product's own manual; `None` where the
+/// product has no P151 (SK TU3-*, SK TU3-PNT, SK 550P) or the manual gives the value no
+/// meaning. BU 2100 §7.1.1 (p. 45, SK TU4/CU4-EIP): -1 = Monitoring Off, 0 = Control word
+/// monitoring Off, bus-communication monitoring active, 1…32767 ms a time-out. BU 2200 §7.1.1
+/// (p. 48, SK TU4/CU4-POL): 0…32767 ms, 0 = Überwachung Aus, no -1.
+pub fn p151_monitoring(product: Product, value: i32) -> Option<P151Monitoring> {
+    let eip = matches!(product, Product::Tu4Eip | Product::Cu4Eip);
+    let pol = matches!(product, Product::Tu4Pol | Product::Cu4Pol);
+    match value {
+        -1 if eip => Some(P151Monitoring::Off),
+        0 if eip => Some(P151Monitoring::BusCommunication),
+        0 if pol => Some(P151Monitoring::Off),
+        1..=32767 if eip || pol => Some(P151Monitoring::Timeout(value as u16)),
+        _ => None,
+    }
+}
+
 /// A system-bus error the inverter shows in P700 [-01] (tenths: 10.0 → 100).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct FiError {
@@ -348,6 +381,31 @@ mod tests {
 
     fn fi(n: i64) -> Inverter {
         Inverter::new(n).unwrap()
+    }
+
+    #[test]
+    fn p151_follows_each_products_manual() {
+        use P151Monitoring::*;
+        // BU 2100 §7.1.1: -1 off, 0 bus communication only, ms a time-out.
+        for p in [Product::Tu4Eip, Product::Cu4Eip] {
+            assert_eq!(p151_monitoring(p, -1), Some(Off));
+            assert_eq!(p151_monitoring(p, 0), Some(BusCommunication));
+            assert_eq!(p151_monitoring(p, 200), Some(Timeout(200)));
+        }
+        // BU 2200 §7.1.1: 0 "Überwachung Aus", no -1.
+        for p in [Product::Tu4Pol, Product::Cu4Pol] {
+            assert_eq!(p151_monitoring(p, -1), None);
+            assert_eq!(p151_monitoring(p, 0), Some(Off));
+            assert_eq!(p151_monitoring(p, 32767), Some(Timeout(32767)));
+        }
+        for p in [
+            Product::Tu3Eip,
+            Product::Tu3Pol,
+            Product::Tu3Pnt,
+            Product::Sk550p,
+        ] {
+            assert_eq!(p151_monitoring(p, 0), None);
+        }
     }
 
     #[test]
