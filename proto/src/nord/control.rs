@@ -311,6 +311,24 @@ mod tests {
         assert_eq!(c.fields().commands, ["Shut down"]);
         assert!(c.describe().contains("in effect Enable operation"));
         assert!(!c.describe().contains("Disable voltage"));
+        // "10001111110b": bits 0..15 as 0/1, bit 0 first.
+        assert_eq!(
+            c.fields().bits,
+            [0, 1, 1, 1, 1, 1, 1, 0, 0, 0, 1, 0, 0, 0, 0, 0]
+        );
+        // Bit 10 set: the inverter evaluates the telegram, so no "NOT valid" note.
+        assert!(!c.describe().contains("NOT valid"));
+    }
+
+    #[test]
+    fn bit_10_clear_is_said_not_valid() {
+        // BU 0620 §6.1.2.1 bit 10 "Control data valid", at 0: "The transmitted process data are
+        // invalid."
+        let text = ControlWord(0x007E).describe();
+        assert!(
+            text.contains("control data NOT valid (bit 10 = 0)"),
+            "{text}"
+        );
     }
 
     #[rstest]

@@ -493,4 +493,16 @@ mod tests {
         let tu4 = object_dictionary(Product::Tu4Pol);
         assert!(tu4.windows(2).all(|w| w[0].index < w[1].index));
     }
+
+    #[test]
+    fn io_word_objects_of_the_modules() {
+        // BU 2200 §6.3.5: the I/O word at sub-index 0 of 5005h (PReq) and 5001h (PRes); 5005h
+        // holds nothing else, 5001h holds the status words beside it.
+        let od = object_dictionary(Product::Tu4Pol);
+        let out = od.iter().find(|o| o.index == 0x5005).unwrap();
+        assert_eq!((out.code, out.entries.len()), (ObjectCode::Var, 1));
+        let inp = od.iter().find(|o| o.index == 0x5001).unwrap();
+        assert_eq!(inp.code, ObjectCode::Record);
+        assert!(inp.entries.len() > 1 && inp.entries[0].sub == 0);
+    }
 }

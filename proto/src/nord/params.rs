@@ -708,6 +708,41 @@ mod tests {
     }
 
     #[test]
+    fn tu3_pnt_device_name_refuses_1_to_44() {
+        // BU 0590 §5.1.2 (p. 35) P162: ASCII characters 45…122, and the 0 that ends the name.
+        let d = lookup(Product::Tu3Pnt, Owner::Interface, p(162)).unwrap();
+        let taken: Vec<i32> = [0, 1, 44, 45, 122]
+            .into_iter()
+            .filter(|v| value_allowed(d, Product::Tu3Pnt, *v))
+            .collect();
+        assert_eq!(taken, [0, 45, 122]);
+        // No other parameter has the gap: BU 2200's P162 prints 0…122, and P102 takes 1…44
+        // where its range does.
+        let pol = lookup(Product::Tu3Pol, Owner::Interface, p(162)).unwrap();
+        assert!(value_allowed(pol, Product::Tu3Pol, 10));
+        let other = lookup(Product::Sk550p, Owner::Inverter, p(102)).unwrap();
+        assert!(value_allowed(other, Product::Sk550p, 10));
+    }
+
+    #[test]
+    fn every_parameter_mutant_changes_its_row() {
+        // `harness mutants` (`super::super::mutant`): each mutant changes one datum the manual
+        // states. A change that leaves the row as printed could survive every case, and the
+        // range is narrowed (a value the manual allows refused), never widened.
+        use crate::nord::mutant::Row;
+        for d in CATALOGUE.iter() {
+            for (field, what, new) in d.changes() {
+                assert_ne!(new, *d, "P{} {field}: {what}", d.number);
+                match field {
+                    "min" => assert_eq!(new.min, d.min + 1, "P{}: {what}", d.number),
+                    "max" => assert_eq!(new.max, d.max - 1, "P{}: {what}", d.number),
+                    _ => {}
+                }
+            }
+        }
+    }
+
+    #[test]
     fn lookup_finds_every_entry_of_the_catalogue() {
         for d in CATALOGUE.iter() {
             let n = ParamNumber::new(i64::from(d.number)).unwrap();
