@@ -435,4 +435,51 @@ mod tests {
         );
         assert_eq!(MacAddr::from_bytes(&[1, 2, 3]), None);
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn header() -> impl Strategy<Value = EthernetRepr> {
+            (any::<[u8; 6]>(), any::<[u8; 6]>(), any::<u16>()).prop_map(|(dst, src, ethertype)| {
+                EthernetRepr {
+                    dst: MacAddr(dst),
+                    src: MacAddr(src),
+                    ethertype,
+                }
+            })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(h in header(), payload in vec(any::<u8>(), 0..=100)) {
+                let b = h.emit(&payload);
+                prop_assert_eq!(b.len(), h.buffer_len(payload.len()));
+                let f = EthernetFrame::new_checked(&b[..]).unwrap();
+                prop_assert_eq!(EthernetRepr::parse(&f), Ok(h));
+                prop_assert_eq!(&f.payload()[..payload.len()], &payload[..]);
+                prop_assert!(f.payload()[payload.len()..].iter().all(|&x| x == 0));
+            }
+
+            #[test]
+            fn emit_header_round_trips(h in header(), extra in 0usize..8) {
+                let mut b = vec![0u8; HEADER_LEN + 4 + extra];
+                h.emit_header(&mut b).unwrap();
+                let f = EthernetFrame::new_checked(&b[..]).unwrap();
+                prop_assert_eq!(EthernetRepr::parse(&f), Ok(h));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..40)) {
+                if let Ok(f) = EthernetFrame::new_checked(&bytes[..]) {
+                    let _ = EthernetRepr::parse(&f);
+                    let _ = (f.vlan_tci(), f.inner_ethertype(), f.header_len());
+                    let _ = (f.payload(), f.inner_payload());
+                }
+            }
+        }
+    }
 }

@@ -98,4 +98,30 @@ mod tests {
         assert!(Lldpdu::parse(&b[..5]).is_err());
         assert!(Lldpdu::parse(&[]).is_err());
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// IEEE 802.1AB: chassis and port ID values of 1..=255 bytes with their subtype.
+        fn id() -> impl Strategy<Value = (u8, Vec<u8>)> {
+            (any::<u8>(), vec(any::<u8>(), 1..=255))
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(chassis in id(), port in id(), ttl in any::<u16>()) {
+                let du = Lldpdu { chassis, port, ttl };
+                prop_assert_eq!(Lldpdu::parse(&du.emit()), Ok(du));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..64)) {
+                let _ = Lldpdu::parse(&bytes);
+            }
+        }
+    }
 }

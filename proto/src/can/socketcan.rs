@@ -471,4 +471,50 @@ mod tests {
             })
         );
     }
+
+    mod properties {
+        use super::*;
+        use crate::can::frame::{MAX_ID, MAX_LEN};
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// Every CAN 2.0A frame: data frames of 0..8 bytes and remote frames.
+        fn can_frame() -> impl Strategy<Value = CanFrame> {
+            prop_oneof![
+                (0..=MAX_ID, vec(any::<u8>(), 0..=MAX_LEN))
+                    .prop_map(|(id, data)| CanFrame::new(id, &data).unwrap()),
+                (0..=MAX_ID, 0..=MAX_LEN as u8)
+                    .prop_map(|(id, dlc)| CanFrame::remote(id, dlc).unwrap()),
+            ]
+        }
+
+        fn repr() -> impl Strategy<Value = SocketCanRepr> {
+            prop_oneof![
+                can_frame().prop_map(SocketCanRepr::Frame),
+                (0..=EFF_MASK, any::<[u8; 8]>()).prop_map(|(class, data)| {
+                    SocketCanRepr::Error(ErrorFrame {
+                        class: ErrorClass(class),
+                        data,
+                    })
+                }),
+            ]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(r in repr()) {
+                let mut buf = vec![0xAAu8; r.buffer_len()];
+                r.emit(&mut SocketCanFrame::new_unchecked(&mut buf[..]));
+                prop_assert_eq!(&buf[..], &r.to_bytes()[..]);
+                prop_assert_eq!(SocketCanRepr::parse_bytes(&buf), Ok(r));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..24)) {
+                let _ = SocketCanRepr::parse_bytes(&bytes);
+            }
+        }
+    }
 }

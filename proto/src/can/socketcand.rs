@@ -830,4 +830,68 @@ mod tests {
             );
         }
     }
+
+    mod properties {
+        use super::*;
+        use crate::can::frame::MAX_ID;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// Data frames: socketcand carries no remote frame.
+        fn can_frame() -> impl Strategy<Value = CanFrame> {
+            (0..=MAX_ID, vec(any::<u8>(), 0..=MAX_LEN))
+                .prop_map(|(id, data)| CanFrame::new(id, &data).unwrap())
+        }
+
+        fn timestamp() -> impl Strategy<Value = Timestamp> {
+            (any::<u64>(), 0u32..=999_999).prop_map(|(secs, usecs)| Timestamp { secs, usecs })
+        }
+
+        /// Every message but `Other`: the fixed ones, a one-word bus name, a refusal whose
+        /// words cannot read as an error frame (no hex digit), error frames, frames and sends.
+        fn message() -> impl Strategy<Value = Message> {
+            prop_oneof![
+                Just(Message::Hi),
+                Just(Message::Ok),
+                Just(Message::RawMode),
+                Just(Message::BcmMode),
+                Just(Message::Echo),
+                "[a-z][a-z0-9_.-]{0,12}".prop_map(|channel| Message::Open { channel }),
+                vec("[g-z]{1,8}", 1..4).prop_map(|w| Message::Error { text: w.join(" ") }),
+                (0..=EFF_MASK, timestamp(), vec(any::<u8>(), 0..=MAX_LEN)).prop_map(
+                    |(class, time, data)| Message::ErrorFrame {
+                        class: ErrorClass(class),
+                        time,
+                        data
+                    }
+                ),
+                (can_frame(), timestamp()).prop_map(|(frame, time)| Message::Frame { frame, time }),
+                can_frame().prop_map(|frame| Message::Send { frame }),
+            ]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(m in message(), lead in "[ \\t\\n]{0,3}") {
+                let s = format!("{lead}{}", m.emit().unwrap());
+                prop_assert_eq!(
+                    Message::parse(s.as_bytes()),
+                    Ok(Framed::Complete { message: m, consumed: s.len() })
+                );
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..64)) {
+                let _ = Message::parse(&bytes);
+            }
+
+            #[test]
+            fn parsing_arbitrary_words_never_panics(words in vec("[a-z0-9.]{0,10}", 0..12)) {
+                let s = format!("< {} >", words.join(" "));
+                let _ = Message::parse(s.as_bytes());
+            }
+        }
+    }
 }

@@ -622,4 +622,108 @@ mod tests {
         assert!(SubBlock::new(0).is_err());
         assert!(SubBlock::new(128).is_err());
     }
+
+    mod properties {
+        use super::*;
+        use crate::canopen::{SdoRequest, SdoResponse};
+        use proptest::prelude::*;
+
+        fn request() -> impl Strategy<Value = BlockRequest> {
+            prop_oneof![
+                (
+                    any::<u16>(),
+                    any::<u8>(),
+                    any::<bool>(),
+                    proptest::option::of(any::<u32>())
+                )
+                    .prop_map(|(index, sub, crc, size)| {
+                        BlockRequest::InitiateDownload {
+                            index,
+                            sub,
+                            crc,
+                            size,
+                        }
+                    }),
+                (0u8..=6, any::<u16>())
+                    .prop_map(|(unused, crc)| BlockRequest::EndDownload { unused, crc }),
+                (
+                    any::<u16>(),
+                    any::<u8>(),
+                    any::<bool>(),
+                    1..=MAX_BLOCK_SIZE,
+                    any::<u8>()
+                )
+                    .prop_map(|(index, sub, crc, blksize, pst)| {
+                        BlockRequest::InitiateUpload {
+                            index,
+                            sub,
+                            crc,
+                            blksize,
+                            pst,
+                        }
+                    }),
+                Just(BlockRequest::EndUpload),
+                (0..=MAX_BLOCK_SIZE, 1..=MAX_BLOCK_SIZE)
+                    .prop_map(|(ackseq, blksize)| BlockRequest::UploadAck { ackseq, blksize }),
+                Just(BlockRequest::StartUpload),
+            ]
+        }
+
+        fn response() -> impl Strategy<Value = BlockResponse> {
+            prop_oneof![
+                (any::<u16>(), any::<u8>(), any::<bool>(), 1..=MAX_BLOCK_SIZE).prop_map(
+                    |(index, sub, crc, blksize)| BlockResponse::InitiateDownload {
+                        index,
+                        sub,
+                        crc,
+                        blksize
+                    }
+                ),
+                Just(BlockResponse::EndDownload),
+                (0..=MAX_BLOCK_SIZE, 1..=MAX_BLOCK_SIZE)
+                    .prop_map(|(ackseq, blksize)| BlockResponse::DownloadAck { ackseq, blksize }),
+                (
+                    any::<u16>(),
+                    any::<u8>(),
+                    any::<bool>(),
+                    proptest::option::of(any::<u32>())
+                )
+                    .prop_map(|(index, sub, crc, size)| {
+                        BlockResponse::InitiateUpload {
+                            index,
+                            sub,
+                            crc,
+                            size,
+                        }
+                    }),
+                (0u8..=6, any::<u16>())
+                    .prop_map(|(unused, crc)| BlockResponse::EndUpload { unused, crc }),
+            ]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn request_round_trips(r in request()) {
+                prop_assert_eq!(SdoRequest::parse(&r.emit()), Ok(SdoRequest::Block(r)));
+            }
+
+            #[test]
+            fn response_round_trips(r in response()) {
+                prop_assert_eq!(SdoResponse::parse(&r.emit()), Ok(SdoResponse::Block(r)));
+            }
+
+            #[test]
+            fn segment_round_trips(seqno in 1..=MAX_BLOCK_SIZE, last in any::<bool>(), data in any::<[u8; SEGMENT_DATA]>()) {
+                let s = BlockSegment { seqno, last, data };
+                prop_assert_eq!(BlockSegment::parse(&s.emit()), Ok(s));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..10)) {
+                let _ = BlockSegment::parse(&bytes);
+            }
+        }
+    }
 }

@@ -99,4 +99,35 @@ mod tests {
             );
         }
     }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        fn emergency() -> impl Strategy<Value = Emergency> {
+            (any::<u16>(), any::<u8>(), any::<[u8; 5]>()).prop_map(|(code, register, data)| {
+                Emergency {
+                    code,
+                    register,
+                    data,
+                }
+            })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(e in emergency()) {
+                let bytes = e.emit();
+                prop_assert_eq!(bytes.len(), Emergency::LEN);
+                prop_assert_eq!(Emergency::parse(&bytes), Ok(e));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..12)) {
+                let _ = Emergency::parse(&bytes);
+            }
+        }
+    }
 }

@@ -392,4 +392,55 @@ mod tests {
             Err(Error::Trailing { .. })
         ));
     }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        fn nmt_frame() -> impl Strategy<Value = NmtFrame> {
+            (
+                proptest::sample::select(
+                    NMT_TRANSITIONS
+                        .iter()
+                        .map(|t| t.command)
+                        .collect::<Vec<_>>(),
+                ),
+                0..=MAX_NODE,
+            )
+                .prop_map(|(command, node)| NmtFrame { command, node })
+        }
+
+        fn error_control() -> impl Strategy<Value = ErrorControl> {
+            (
+                proptest::sample::select(vec![
+                    StateCode::BOOT_UP,
+                    StateCode::STOPPED,
+                    StateCode::OPERATIONAL,
+                    StateCode::PRE_OPERATIONAL,
+                ]),
+                any::<bool>(),
+            )
+                .prop_map(|(state, toggle)| ErrorControl { state, toggle })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn nmt_frame_round_trips(f in nmt_frame()) {
+                prop_assert_eq!(NmtFrame::parse(&f.emit()), Ok(f));
+            }
+
+            #[test]
+            fn error_control_round_trips(e in error_control()) {
+                prop_assert_eq!(ErrorControl::parse(&e.emit()), Ok(e));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..4)) {
+                let _ = NmtFrame::parse(&bytes);
+                let _ = ErrorControl::parse(&bytes);
+            }
+        }
+    }
 }

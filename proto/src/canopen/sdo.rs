@@ -655,4 +655,93 @@ mod tests {
             })
         );
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn expedited() -> impl Strategy<Value = Expedited> {
+            prop_oneof![
+                vec(any::<u8>(), 1..=4).prop_map(|d| Expedited::new(&d).unwrap()),
+                any::<[u8; 4]>().prop_map(Expedited::without_size),
+            ]
+        }
+
+        fn initiate_data() -> impl Strategy<Value = InitiateData> {
+            prop_oneof![
+                expedited().prop_map(InitiateData::Expedited),
+                proptest::option::of(any::<u32>())
+                    .prop_map(|size| InitiateData::Segmented { size }),
+            ]
+        }
+
+        fn segment_data() -> impl Strategy<Value = SegmentData> {
+            vec(any::<u8>(), 0..=SEGMENT_DATA).prop_map(|d| SegmentData::new(&d).unwrap())
+        }
+
+        fn abort() -> impl Strategy<Value = Abort> {
+            (any::<u16>(), any::<u8>(), any::<u32>()).prop_map(|(index, sub, code)| Abort {
+                index,
+                sub,
+                code: SdoAbortCode(code),
+            })
+        }
+
+        /// Every request but block transfers (those are `block`'s).
+        fn request() -> impl Strategy<Value = SdoRequest> {
+            prop_oneof![
+                (any::<u16>(), any::<u8>(), initiate_data()).prop_map(|(index, sub, data)| {
+                    SdoRequest::InitiateDownload { index, sub, data }
+                }),
+                (any::<bool>(), any::<bool>(), segment_data()).prop_map(|(toggle, last, data)| {
+                    SdoRequest::DownloadSegment { toggle, last, data }
+                }),
+                (any::<u16>(), any::<u8>())
+                    .prop_map(|(index, sub)| SdoRequest::InitiateUpload { index, sub }),
+                any::<bool>().prop_map(|toggle| SdoRequest::UploadSegment { toggle }),
+                abort().prop_map(SdoRequest::Abort),
+            ]
+        }
+
+        /// Every response but block transfers.
+        fn response() -> impl Strategy<Value = SdoResponse> {
+            prop_oneof![
+                (any::<u16>(), any::<u8>())
+                    .prop_map(|(index, sub)| SdoResponse::InitiateDownload { index, sub }),
+                any::<bool>().prop_map(|toggle| SdoResponse::DownloadSegment { toggle }),
+                (any::<u16>(), any::<u8>(), initiate_data()).prop_map(|(index, sub, data)| {
+                    SdoResponse::InitiateUpload { index, sub, data }
+                }),
+                (any::<bool>(), any::<bool>(), segment_data()).prop_map(|(toggle, last, data)| {
+                    SdoResponse::UploadSegment { toggle, last, data }
+                }),
+                abort().prop_map(SdoResponse::Abort),
+            ]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn request_round_trips(r in request()) {
+                let bytes = r.emit();
+                prop_assert_eq!(bytes.len(), FRAME_LEN);
+                prop_assert_eq!(SdoRequest::parse(&bytes), Ok(r));
+            }
+
+            #[test]
+            fn response_round_trips(r in response()) {
+                let bytes = r.emit();
+                prop_assert_eq!(bytes.len(), FRAME_LEN);
+                prop_assert_eq!(SdoResponse::parse(&bytes), Ok(r));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..12)) {
+                let _ = SdoRequest::parse(&bytes);
+                let _ = SdoResponse::parse(&bytes);
+            }
+        }
+    }
 }

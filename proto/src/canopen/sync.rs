@@ -66,4 +66,24 @@ mod tests {
             })
         );
     }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(counter in proptest::option::of(1..=MAX_COUNTER)) {
+                let s = SyncFrame { counter };
+                prop_assert_eq!(SyncFrame::parse(&s.emit()), Ok(s));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..4)) {
+                let _ = SyncFrame::parse(&bytes);
+            }
+        }
+    }
 }

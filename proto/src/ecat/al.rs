@@ -405,4 +405,32 @@ mod tests {
         assert_eq!(v.len(), n);
         assert!(v.windows(2).all(|w| w[0] < w[1]));
     }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn al_control_round_trips(state in 0..=STATE_MASK, ack in any::<bool>(), device_id in any::<bool>(), app in any::<u8>()) {
+                let c = AlControl { state, ack, device_id, app };
+                prop_assert_eq!(AlControl::parse(&c.emit()), Ok(c));
+            }
+
+            #[test]
+            fn al_status_round_trips(state in 0..=STATE_MASK, error in any::<bool>(), device_id in any::<bool>(), app in any::<u8>()) {
+                let s = AlStatus { state, error, device_id, app };
+                prop_assert_eq!(AlStatus::parse(&s.emit()), Ok(s));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..8)) {
+                let _ = AlControl::parse(&bytes);
+                let _ = AlStatus::parse(&bytes);
+                let _ = AlStatus::parse_with_code(&bytes);
+            }
+        }
+    }
 }

@@ -1496,4 +1496,159 @@ mod tests {
         assert!(SdoRequest::parse_lenient(&[0xA0, 0, 0x20, 1, 0, 0, 0, 0]).is_err());
         assert!(SdoRequest::parse_lenient(&[0x40, 0, 0x20, 1, 0, 0, 0]).is_err());
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn sdo_data() -> impl Strategy<Value = SdoData> {
+            prop_oneof![
+                vec(any::<u8>(), 1..=4).prop_map(|data| SdoData::Expedited { sized: true, data }),
+                vec(any::<u8>(), 4).prop_map(|data| SdoData::Expedited { sized: false, data }),
+                // Normal: the complete size is at least the bytes carried.
+                (vec(any::<u8>(), 0..=32), any::<u32>()).prop_map(|(data, extra)| {
+                    SdoData::Normal {
+                        size: (data.len() as u32).saturating_add(extra % 1024),
+                        data,
+                    }
+                }),
+            ]
+        }
+
+        fn abort_code() -> impl Strategy<Value = SdoAbortCode> {
+            any::<u32>().prop_map(SdoAbortCode)
+        }
+
+        fn request() -> impl Strategy<Value = SdoRequest> {
+            prop_oneof![
+                (any::<u16>(), any::<u8>(), any::<bool>(), sdo_data()).prop_map(
+                    |(index, sub, complete_access, data)| SdoRequest::Download {
+                        index,
+                        sub,
+                        complete_access,
+                        data
+                    }
+                ),
+                (any::<bool>(), any::<bool>(), vec(any::<u8>(), 0..=32)).prop_map(
+                    |(toggle, last, data)| SdoRequest::DownloadSegment { toggle, last, data }
+                ),
+                (any::<u16>(), any::<u8>(), any::<bool>()).prop_map(
+                    |(index, sub, complete_access)| SdoRequest::Upload {
+                        index,
+                        sub,
+                        complete_access
+                    }
+                ),
+                any::<bool>().prop_map(|toggle| SdoRequest::UploadSegment { toggle }),
+                (any::<u16>(), any::<u8>(), abort_code())
+                    .prop_map(|(index, sub, code)| SdoRequest::Abort { index, sub, code }),
+            ]
+        }
+
+        fn response() -> impl Strategy<Value = SdoResponse> {
+            prop_oneof![
+                (any::<u16>(), any::<u8>(), any::<bool>()).prop_map(
+                    |(index, sub, complete_access)| SdoResponse::Download {
+                        index,
+                        sub,
+                        complete_access
+                    }
+                ),
+                any::<bool>().prop_map(|toggle| SdoResponse::DownloadSegment { toggle }),
+                (any::<u16>(), any::<u8>(), any::<bool>(), sdo_data()).prop_map(
+                    |(index, sub, complete_access, data)| SdoResponse::Upload {
+                        index,
+                        sub,
+                        complete_access,
+                        data
+                    }
+                ),
+                (any::<bool>(), any::<bool>(), vec(any::<u8>(), 0..=32)).prop_map(
+                    |(toggle, last, data)| SdoResponse::UploadSegment { toggle, last, data }
+                ),
+                (any::<u16>(), any::<u8>(), abort_code())
+                    .prop_map(|(index, sub, code)| SdoResponse::Abort { index, sub, code }),
+            ]
+        }
+
+        fn sdo_info() -> impl Strategy<Value = SdoInfo> {
+            (
+                0u8..=0x7F,
+                any::<bool>(),
+                any::<u16>(),
+                vec(any::<u8>(), 0..=32),
+            )
+                .prop_map(|(op, incomplete, fragments_left, data)| SdoInfo {
+                    opcode: SdoInfoOpcode(op),
+                    incomplete,
+                    fragments_left,
+                    data,
+                })
+        }
+
+        fn coe_header() -> impl Strategy<Value = CoeHeader> {
+            (0u16..=0x01FF, 0u8..=7, 0u8..=0x0F).prop_map(|(number, reserved, service)| CoeHeader {
+                number,
+                reserved,
+                service: CoeService(service),
+            })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn request_round_trips(r in request()) {
+                let b = r.emit().unwrap();
+                prop_assert_eq!(SdoRequest::parse(&b), Ok(r.clone()));
+                prop_assert_eq!(SdoRequest::parse_lenient(&b), Ok(r.clone()));
+                let coe = r.emit_coe().unwrap();
+                prop_assert_eq!(SdoRequest::parse_coe(&coe), Ok(r.clone()));
+                prop_assert_eq!(CoeMessage::parse(&coe), Ok(CoeMessage::SdoRequest(r)));
+            }
+
+            #[test]
+            fn response_round_trips(r in response()) {
+                let b = r.emit().unwrap();
+                prop_assert_eq!(SdoResponse::parse(&b), Ok(r.clone()));
+                let coe = r.emit_coe().unwrap();
+                prop_assert_eq!(SdoResponse::parse_coe(&coe), Ok(r));
+            }
+
+            #[test]
+            fn sdo_info_round_trips(i in sdo_info()) {
+                prop_assert_eq!(SdoInfo::parse(&i.emit()), Ok(i.clone()));
+                prop_assert_eq!(CoeMessage::parse(&i.emit_coe()), Ok(CoeMessage::SdoInfo(i)));
+            }
+
+            #[test]
+            fn header_round_trips(h in coe_header()) {
+                prop_assert_eq!(CoeHeader::from_word(h.to_word()), h);
+                let bytes = h.emit();
+                let (back, rest) = CoeHeader::split(&bytes).unwrap();
+                prop_assert_eq!(back, h);
+                prop_assert!(rest.is_empty());
+            }
+
+            #[test]
+            fn emergency_round_trips(code in any::<u16>(), register in any::<u8>(), data in any::<[u8; 5]>()) {
+                let e = Emergency { code, register, data };
+                prop_assert_eq!(Emergency::parse_coe(&e.emit_coe()), Ok(e));
+                prop_assert_eq!(CoeMessage::parse(&e.emit_coe()), Ok(CoeMessage::Emergency(e)));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..24)) {
+                let _ = CoeMessage::parse(&bytes);
+                let _ = SdoRequest::parse(&bytes);
+                let _ = SdoRequest::parse_lenient(&bytes);
+                let _ = SdoRequest::parse_coe(&bytes);
+                let _ = SdoResponse::parse(&bytes);
+                let _ = SdoResponse::parse_coe(&bytes);
+                let _ = SdoInfo::parse(&bytes);
+                let _ = Emergency::parse_coe(&bytes);
+            }
+        }
+    }
 }

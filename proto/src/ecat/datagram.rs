@@ -698,4 +698,60 @@ mod tests {
             Err(Error::Length { .. })
         ));
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// Any header, data of 0 to 64 bytes or the longest the length field holds.
+        fn datagram() -> impl Strategy<Value = DatagramRepr> {
+            let data = prop_oneof![
+                4 => vec(any::<u8>(), 0..=64),
+                1 => vec(any::<u8>(), MAX_DATA_LEN),
+            ];
+            (
+                any::<u8>(),
+                any::<u8>(),
+                any::<u32>(),
+                any::<bool>(),
+                any::<bool>(),
+                any::<u16>(),
+                data,
+                any::<u16>(),
+            )
+                .prop_map(
+                    |(command, index, address, circulating, more, irq, data, wkc)| DatagramRepr {
+                        command: Command(command),
+                        index,
+                        address,
+                        circulating,
+                        more,
+                        irq,
+                        data,
+                        wkc,
+                    },
+                )
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(r in datagram()) {
+                let mut buf = vec![0u8; r.buffer_len()];
+                r.emit_into(&mut buf).unwrap();
+                prop_assert_eq!(DatagramRepr::parse_bytes(&buf), Ok(r.clone()));
+                prop_assert_eq!(DatagramRepr::parse(&Datagram::new_checked(&buf[..]).unwrap()), Ok(r));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..40)) {
+                let _ = DatagramRepr::parse_bytes(&bytes);
+                if let Ok(d) = Datagram::new_checked(&bytes[..]) {
+                    let _ = DatagramRepr::parse(&d);
+                }
+            }
+        }
+    }
 }

@@ -548,4 +548,69 @@ mod tests {
         ]);
         assert!(matches!(r.emit(), Err(Error::TooLong { max: 2047, .. })));
     }
+
+    mod properties {
+        use super::*;
+        use crate::ecat::datagram::Command;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn datagram() -> impl Strategy<Value = DatagramRepr> {
+            (
+                any::<(u8, u8, u32, bool, u16, u16)>(),
+                vec(any::<u8>(), 0..=64),
+            )
+                .prop_map(
+                    |((command, index, address, circulating, irq, wkc), data)| DatagramRepr {
+                        command: Command(command),
+                        index,
+                        address,
+                        circulating,
+                        more: false,
+                        irq,
+                        data,
+                        wkc,
+                    },
+                )
+        }
+
+        /// A frame as emitted: "more follows" on every datagram but the last.
+        fn frame() -> impl Strategy<Value = EcatFrameRepr> {
+            vec(datagram(), 0..5).prop_map(|mut ds| {
+                let last = ds.len().saturating_sub(1);
+                for (i, d) in ds.iter_mut().enumerate() {
+                    d.more = i != last;
+                }
+                EcatFrameRepr::new(ds)
+            })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(f in frame(), padding in 0usize..16) {
+                let mut b = f.emit().unwrap();
+                prop_assert_eq!(b.len(), f.buffer_len());
+                prop_assert_eq!(EcatFrameRepr::parse_bytes(&b), Ok(f.clone()));
+                b.resize(b.len() + padding, 0);
+                prop_assert_eq!(EcatFrameRepr::parse_bytes(&b), Ok(f));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(mut bytes in vec(any::<u8>(), 0..48)) {
+                let _ = EcatFrameRepr::parse_bytes(&bytes);
+                if let Ok(mut f) = EcatFrame::new_checked(&mut bytes[..]) {
+                    let _ = f.datagram_ranges();
+                    let _ = f.datagrams().count();
+                    let _ = (f.payload().len(), f.padding().len());
+                    if let Ok(ds) = f.datagrams_mut() {
+                        for mut d in ds {
+                            let _ = d.data_mut().len();
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

@@ -533,4 +533,57 @@ mod tests {
         assert_eq!(MailboxType::COE.sii_protocol_bit(), Some(0x04));
         assert_eq!(MailboxType::ERR.sii_protocol_bit(), None);
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// Every header the codec represents: channel 6 bits, priority 2, type 4, counter 3.
+        fn mailbox() -> impl Strategy<Value = MailboxRepr> {
+            (
+                any::<u16>(),
+                0u8..=0x3F,
+                0u8..=3,
+                0u8..=0x0F,
+                0u8..=7,
+                vec(any::<u8>(), 0..=64),
+            )
+                .prop_map(|(address, channel, priority, kind, counter, data)| {
+                    MailboxRepr {
+                        address,
+                        channel,
+                        priority,
+                        kind: MailboxType(kind),
+                        counter,
+                        data,
+                    }
+                })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(r in mailbox(), pad in 0usize..16) {
+                let bytes = r.emit().unwrap();
+                prop_assert_eq!(bytes.len(), r.buffer_len());
+                prop_assert_eq!(MailboxRepr::parse_bytes(&bytes), Ok(r.clone()));
+                let padded = r.emit_padded(r.buffer_len() + pad).unwrap();
+                prop_assert_eq!(MailboxRepr::parse_bytes(&padded), Ok(r));
+            }
+
+            #[test]
+            fn error_reply_round_trips(service in any::<u16>(), detail in any::<u16>()) {
+                let e = MailboxError { service, detail: MailboxErrorCode(detail) };
+                prop_assert_eq!(MailboxError::parse(&e.emit()), Ok(e));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..40)) {
+                let _ = MailboxRepr::parse_bytes(&bytes);
+                let _ = MailboxError::parse(&bytes);
+            }
+        }
+    }
 }

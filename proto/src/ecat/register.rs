@@ -793,4 +793,76 @@ mod tests {
             (Some(true), Some(false))
         );
     }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        fn sm() -> impl Strategy<Value = SmRepr> {
+            any::<(u16, u16, u8, u8, u8, u8)>().prop_map(
+                |(start, length, control, status, activate, pdi_control)| SmRepr {
+                    start,
+                    length,
+                    control,
+                    status,
+                    activate,
+                    pdi_control,
+                },
+            )
+        }
+
+        fn fmmu() -> impl Strategy<Value = FmmuRepr> {
+            (
+                any::<u32>(),
+                any::<u16>(),
+                any::<u8>(),
+                any::<u8>(),
+                any::<u16>(),
+                any::<u8>(),
+                any::<u8>(),
+                any::<u8>(),
+            )
+                .prop_map(
+                    |(
+                        logical_start,
+                        length,
+                        logical_start_bit,
+                        logical_stop_bit,
+                        physical_start,
+                        physical_start_bit,
+                        kind,
+                        activate,
+                    )| FmmuRepr {
+                        logical_start,
+                        length,
+                        logical_start_bit,
+                        logical_stop_bit,
+                        physical_start,
+                        physical_start_bit,
+                        kind,
+                        activate,
+                    },
+                )
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn sm_round_trips(s in sm()) {
+                prop_assert_eq!(SmRepr::parse(&s.emit()), Ok(s));
+            }
+
+            #[test]
+            fn fmmu_round_trips(f in fmmu()) {
+                prop_assert_eq!(FmmuRepr::parse(&f.emit()), Ok(f));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..20)) {
+                let _ = SmRepr::parse(&bytes);
+                let _ = FmmuRepr::parse(&bytes);
+            }
+        }
+    }
 }

@@ -1099,4 +1099,90 @@ mod tests {
         assert_eq!(format!("{:?}", SmType::INPUTS), "SmType(inputs)");
         assert_eq!(format!("{:?}", FmmuUsage(9)), "FmmuUsage(09h)");
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn mailbox_config() -> impl Strategy<Value = MailboxConfig> {
+            any::<(u16, u16, u16, u16)>().prop_map(|(rx_offset, rx_size, tx_offset, tx_size)| {
+                MailboxConfig {
+                    rx_offset,
+                    rx_size,
+                    tx_offset,
+                    tx_size,
+                }
+            })
+        }
+
+        fn header() -> impl Strategy<Value = SiiHeader> {
+            (
+                any::<(u16, u16, u16, u16, u16)>(),
+                any::<(u32, u32, u32, u32)>(),
+                any::<(u16, u16, u16)>(),
+                (mailbox_config(), mailbox_config()),
+                any::<(u16, u16, u16)>(),
+            )
+                .prop_map(
+                    |(p, ids, delays, (bootstrap_mailbox, standard_mailbox), tail)| SiiHeader {
+                        pdi_control: p.0,
+                        pdi_config: p.1,
+                        sync_impulse: p.2,
+                        pdi_config2: p.3,
+                        station_alias: p.4,
+                        vendor_id: ids.0,
+                        product_code: ids.1,
+                        revision: ids.2,
+                        serial: ids.3,
+                        execution_delay: delays.0,
+                        port0_delay: delays.1,
+                        port1_delay: delays.2,
+                        bootstrap_mailbox,
+                        standard_mailbox,
+                        mailbox_protocols: tail.0,
+                        eeprom_size: tail.1,
+                        version: tail.2,
+                    },
+                )
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn header_round_trips(h in header()) {
+                prop_assert_eq!(SiiHeader::parse(&h.emit()), Ok(h));
+                let image = SiiRepr { header: h, categories: Vec::new() };
+                prop_assert_eq!(SiiRepr::parse(&image.emit().unwrap()), Ok(image));
+            }
+
+            /// Whatever the image parser accepts (a valid header, then arbitrary category words)
+            /// emits to an image that parses to the same value; no category parser panics.
+            #[test]
+            fn parsed_images_reparse_to_themselves(
+                h in header(),
+                kinds in vec(prop_oneof![0u16..=60, any::<u16>()], 0..4),
+                data in vec(vec(any::<u8>(), 0..24), 0..4),
+            ) {
+                let mut b = h.emit().to_vec();
+                for (k, d) in kinds.iter().zip(&data) {
+                    b.extend(k.to_le_bytes());
+                    b.extend(((d.len() / 2) as u16).to_le_bytes());
+                    b.extend(&d[..d.len() / 2 * 2]);
+                }
+                b.extend(CategoryType::END.0.to_le_bytes());
+                if let Ok(image) = SiiRepr::parse(&b) {
+                    let again = image.emit().unwrap();
+                    prop_assert_eq!(SiiRepr::parse(&again), Ok(image));
+                }
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..160)) {
+                let _ = SiiHeader::parse(&bytes);
+                let _ = SiiRepr::parse(&bytes);
+            }
+        }
+    }
 }

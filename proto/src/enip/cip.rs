@@ -337,4 +337,56 @@ mod tests {
         assert!(MrResponse::parse(&[0x0E, 0, 0, 0]).is_err());
         assert!(MrResponse::parse(&[0x8E, 0, 0, 2, 1]).is_err());
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// Request paths as clients send them (the path codec has its own properties in
+        /// `epath`): class/instance/attribute or class/instance, 8- to 32-bit instances.
+        fn path() -> impl Strategy<Value = EPath> {
+            (
+                any::<u16>(),
+                any::<u32>(),
+                proptest::option::of(any::<u16>()),
+            )
+                .prop_map(|(class, instance, attribute)| match attribute {
+                    Some(a) => EPath::attribute(class, instance, a),
+                    None => EPath::object(class, instance),
+                })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            /// A request: a service without the reply bit.
+            #[test]
+            fn request_round_trips(service in 0u8..=0x7F, path in path(), data in vec(any::<u8>(), 0..24)) {
+                let r = MrRequest { service, path, data };
+                prop_assert_eq!(request_service(&r.emit()), Some(service));
+                prop_assert_eq!(MrRequest::parse(&r.emit()), Ok(r));
+            }
+
+            /// A response: the service without the reply bit, at most 255 extended status
+            /// words (the size is one byte).
+            #[test]
+            fn response_round_trips(
+                service in 0u8..=0x7F,
+                general in any::<u8>(),
+                extended in vec(any::<u16>(), 0..4),
+                data in vec(any::<u8>(), 0..24),
+            ) {
+                let r = MrResponse { service, general, extended, data };
+                prop_assert_eq!(MrResponse::parse(&r.emit()), Ok(r));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..32)) {
+                let _ = MrRequest::parse(&bytes);
+                let _ = MrResponse::parse(&bytes);
+                let _ = request_service(&bytes);
+            }
+        }
+    }
 }

@@ -575,4 +575,140 @@ mod tests {
         };
         assert_eq!(ForwardClose::parse(&fc.emit()).unwrap(), fc);
     }
+
+    mod properties {
+        use super::*;
+        use crate::enip::epath::Segment;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// Network parameters that fit the field: sizes up to 511 in the 16-bit form.
+        fn net(large: bool) -> impl Strategy<Value = NetParams> {
+            let max = if large { u16::MAX } else { 0x01FF };
+            (0..=max, any::<bool>(), 0u8..=3, 0u8..=3, any::<bool>()).prop_map(
+                |(size, variable, priority, kind, redundant_owner)| NetParams {
+                    size,
+                    variable,
+                    priority,
+                    kind,
+                    redundant_owner,
+                },
+            )
+        }
+
+        fn connection_path() -> impl Strategy<Value = EPath> {
+            any::<(u16, u16, u16)>().prop_map(|(c, o, t)| EPath::io_connection_configured(c, o, t))
+        }
+
+        fn forward_open() -> impl Strategy<Value = ForwardOpen> {
+            any::<bool>().prop_flat_map(|large| {
+                (
+                    any::<(u8, u8, u32, u32, u16, u16, u32, u8)>(),
+                    (any::<u32>(), net(large), any::<u32>(), net(large)),
+                    any::<u8>(),
+                    connection_path(),
+                )
+                    .prop_map(
+                        move |(
+                            (
+                                priority_tick,
+                                timeout_ticks,
+                                o_t_id,
+                                t_o_id,
+                                serial,
+                                vendor,
+                                originator_serial,
+                                timeout_multiplier,
+                            ),
+                            (o_t_rpi, o_t, t_o_rpi, t_o),
+                            transport,
+                            path,
+                        )| ForwardOpen {
+                            large,
+                            priority_tick,
+                            timeout_ticks,
+                            o_t_id,
+                            t_o_id,
+                            serial,
+                            vendor,
+                            originator_serial,
+                            timeout_multiplier,
+                            o_t_rpi,
+                            o_t,
+                            t_o_rpi,
+                            t_o,
+                            transport: Transport(transport),
+                            path,
+                        },
+                    )
+            })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn forward_open_round_trips(f in forward_open()) {
+                prop_assert_eq!(ForwardOpen::parse(&f.emit(), f.large), Ok(f));
+            }
+
+            #[test]
+            fn forward_open_reply_round_trips(v in any::<(u32, u32, u16, u16, u32, u32, u32)>()) {
+                let r = ForwardOpenReply {
+                    o_t_id: v.0,
+                    t_o_id: v.1,
+                    serial: v.2,
+                    vendor: v.3,
+                    originator_serial: v.4,
+                    o_t_api: v.5,
+                    t_o_api: v.6,
+                };
+                prop_assert_eq!(ForwardOpenReply::parse(&r.emit()), Ok(r));
+            }
+
+            #[test]
+            fn forward_close_round_trips(v in any::<(u8, u8, u16, u16, u32)>(), path in connection_path()) {
+                let c = ForwardClose {
+                    priority_tick: v.0,
+                    timeout_ticks: v.1,
+                    serial: v.2,
+                    vendor: v.3,
+                    originator_serial: v.4,
+                    path,
+                };
+                prop_assert_eq!(ForwardClose::parse(&c.emit()), Ok(c));
+            }
+
+            /// Any embedded bytes (odd lengths padded), a route of port segments.
+            #[test]
+            fn unconnected_send_round_trips(
+                ticks in any::<(u8, u8)>(),
+                request in vec(any::<u8>(), 0..24),
+                route in vec((1u16..=20, vec(any::<u8>(), 0..4)), 0..3),
+            ) {
+                let u = UnconnectedSend {
+                    priority_tick: ticks.0,
+                    timeout_ticks: ticks.1,
+                    request,
+                    route: EPath {
+                        segments: route
+                            .into_iter()
+                            .map(|(port, link)| Segment::Port { port, link })
+                            .collect(),
+                    },
+                };
+                prop_assert_eq!(UnconnectedSend::parse(&u.emit()), Ok(u));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..64), large in any::<bool>()) {
+                let _ = ForwardOpen::parse(&bytes, large);
+                let _ = ForwardOpenReply::parse(&bytes);
+                let _ = ForwardClose::parse(&bytes);
+                if let Ok(u) = UnconnectedSend::parse(&bytes) {
+                    let _ = u.embedded();
+                }
+            }
+        }
+    }
 }

@@ -278,4 +278,81 @@ mod tests {
             Err(Error::Trailing { .. })
         ));
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn sockaddr() -> impl Strategy<Value = SocketAddrV4> {
+            (any::<[u8; 4]>(), any::<u16>())
+                .prop_map(|(ip, port)| SocketAddrV4::new(Ipv4Addr::from(ip), port))
+        }
+
+        const KNOWN: [u16; 7] = [
+            item_type::NULL,
+            item_type::CONNECTED_ADDRESS,
+            item_type::SEQUENCED_ADDRESS,
+            item_type::UNCONNECTED_DATA,
+            item_type::CONNECTED_DATA,
+            item_type::SOCKADDR_O_T,
+            item_type::SOCKADDR_T_O,
+        ];
+
+        fn item() -> impl Strategy<Value = Item> {
+            prop_oneof![
+                Just(Item::Null),
+                any::<u32>().prop_map(Item::ConnectedAddress),
+                (any::<u32>(), any::<u32>()).prop_map(|(connection, sequence)| {
+                    Item::SequencedAddress {
+                        connection,
+                        sequence,
+                    }
+                }),
+                vec(any::<u8>(), 0..=32).prop_map(Item::UnconnectedData),
+                vec(any::<u8>(), 0..=32).prop_map(Item::ConnectedData),
+                sockaddr().prop_map(Item::SockaddrOT),
+                sockaddr().prop_map(Item::SockaddrTO),
+                // Types the codec does not interpret are kept as bytes.
+                (
+                    any::<u16>().prop_filter("interpreted type", |t| !KNOWN.contains(t)),
+                    vec(any::<u8>(), 0..=32)
+                )
+                    .prop_map(|(type_id, data)| Item::Other { type_id, data }),
+            ]
+        }
+
+        fn cpf() -> impl Strategy<Value = Cpf> {
+            vec(item(), 0..5).prop_map(Cpf::new)
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(c in cpf()) {
+                let b = c.emit().unwrap();
+                prop_assert_eq!(Cpf::parse(&b), Ok(c));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..48)) {
+                let _ = Cpf::parse(&bytes);
+            }
+
+            #[test]
+            fn parsing_arbitrary_items_never_panics(
+                items in vec((prop_oneof![proptest::sample::select(KNOWN.to_vec()), any::<u16>()], vec(any::<u8>(), 0..20)), 0..4),
+            ) {
+                // Well-framed items of any type and content: only the item's own check may fail.
+                let mut b = (items.len() as u16).to_le_bytes().to_vec();
+                for (t, d) in &items {
+                    b.extend(t.to_le_bytes());
+                    b.extend((d.len() as u16).to_le_bytes());
+                    b.extend(d);
+                }
+                let _ = Cpf::parse(&b);
+            }
+        }
+    }
 }

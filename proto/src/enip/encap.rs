@@ -369,4 +369,106 @@ mod tests {
             "0064h (invalid session handle)"
         );
     }
+
+    mod properties {
+        use super::*;
+        use crate::enip::cpf::{item_type, Cpf, Item};
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+        use std::net::{Ipv4Addr, SocketAddrV4};
+
+        fn sockaddr() -> impl Strategy<Value = SocketAddrV4> {
+            (any::<[u8; 4]>(), any::<u16>())
+                .prop_map(|(ip, port)| SocketAddrV4::new(Ipv4Addr::from(ip), port))
+        }
+
+        const KNOWN: [u16; 7] = [
+            item_type::NULL,
+            item_type::CONNECTED_ADDRESS,
+            item_type::SEQUENCED_ADDRESS,
+            item_type::UNCONNECTED_DATA,
+            item_type::CONNECTED_DATA,
+            item_type::SOCKADDR_O_T,
+            item_type::SOCKADDR_T_O,
+        ];
+
+        fn item() -> impl Strategy<Value = Item> {
+            prop_oneof![
+                Just(Item::Null),
+                any::<u32>().prop_map(Item::ConnectedAddress),
+                (any::<u32>(), any::<u32>()).prop_map(|(connection, sequence)| {
+                    Item::SequencedAddress {
+                        connection,
+                        sequence,
+                    }
+                }),
+                vec(any::<u8>(), 0..=32).prop_map(Item::UnconnectedData),
+                vec(any::<u8>(), 0..=32).prop_map(Item::ConnectedData),
+                sockaddr().prop_map(Item::SockaddrOT),
+                sockaddr().prop_map(Item::SockaddrTO),
+                // Types the codec does not interpret are kept as bytes.
+                (
+                    any::<u16>().prop_filter("interpreted type", |t| !KNOWN.contains(t)),
+                    vec(any::<u8>(), 0..=32)
+                )
+                    .prop_map(|(type_id, data)| Item::Other { type_id, data }),
+            ]
+        }
+
+        fn cpf() -> impl Strategy<Value = Cpf> {
+            vec(item(), 0..5).prop_map(Cpf::new)
+        }
+
+        fn encap() -> impl Strategy<Value = EncapRepr> {
+            (
+                any::<u16>(),
+                any::<u32>(),
+                any::<u32>(),
+                any::<[u8; 8]>(),
+                any::<u32>(),
+                vec(any::<u8>(), 0..=64),
+            )
+                .prop_map(|(command, session, status, context, options, data)| {
+                    EncapRepr {
+                        command,
+                        session,
+                        status,
+                        context,
+                        options,
+                        data,
+                    }
+                })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(e in encap()) {
+                let b = e.emit().unwrap();
+                prop_assert_eq!(frame_len(&b), Some(b.len()));
+                prop_assert_eq!(EncapRepr::parse(&b), Ok(e));
+            }
+
+            #[test]
+            fn register_session_round_trips(version in any::<u16>(), options in any::<u16>()) {
+                let r = RegisterSession { version, options };
+                prop_assert_eq!(RegisterSession::parse(&r.emit()), Ok(r));
+            }
+
+            #[test]
+            fn send_data_round_trips(interface in any::<u32>(), timeout in any::<u16>(), cpf in cpf()) {
+                let s = SendData { interface, timeout, cpf };
+                prop_assert_eq!(SendData::parse(&s.emit().unwrap()), Ok(s));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..48)) {
+                let _ = EncapRepr::parse(&bytes);
+                let _ = frame_len(&bytes);
+                let _ = RegisterSession::parse(&bytes);
+                let _ = SendData::parse(&bytes);
+            }
+        }
+    }
 }

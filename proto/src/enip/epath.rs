@@ -407,4 +407,67 @@ mod tests {
     fn malformed_paths_are_errors(#[case] bytes: &[u8]) {
         assert!(EPath::parse(bytes).is_err(), "{bytes:02X?}");
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// Segments the codec carries: port 1.. (0 is reserved) with a link address of at most
+        /// 255 bytes (its size is one byte), data segments of whole words (at most 255).
+        fn segment() -> impl Strategy<Value = Segment> {
+            prop_oneof![
+                any::<u16>().prop_map(Segment::Class),
+                prop_oneof![0u32..=0xFF, 0u32..=0xFFFF, any::<u32>()].prop_map(Segment::Instance),
+                any::<u16>().prop_map(Segment::Attribute),
+                any::<u16>().prop_map(Segment::ConnectionPoint),
+                any::<u16>().prop_map(Segment::Member),
+                (
+                    prop_oneof![1u16..=16, 1u16..=u16::MAX],
+                    vec(any::<u8>(), 0..=8)
+                )
+                    .prop_map(|(port, link)| Segment::Port { port, link }),
+                (
+                    any::<u16>(),
+                    any::<u16>(),
+                    any::<u16>(),
+                    any::<u8>(),
+                    any::<u8>()
+                )
+                    .prop_map(
+                        |(vendor, device_type, product_code, major, minor)| {
+                            Segment::Key(ElectronicKey {
+                                vendor,
+                                device_type,
+                                product_code,
+                                major,
+                                minor,
+                            })
+                        }
+                    ),
+                vec(any::<[u8; 2]>(), 0..=8).prop_map(|words| Segment::Data(words.concat())),
+            ]
+        }
+
+        fn epath() -> impl Strategy<Value = EPath> {
+            vec(segment(), 0..6).prop_map(|segments| EPath { segments })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(p in epath()) {
+                let b = p.emit();
+                prop_assert_eq!(b.len() % 2, 0, "a padded path has whole words");
+                prop_assert_eq!(p.words() * 2, b.len());
+                prop_assert_eq!(EPath::parse(&b), Ok(p));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..32)) {
+                let _ = EPath::parse(&bytes);
+            }
+        }
+    }
 }

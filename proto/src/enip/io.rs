@@ -178,4 +178,42 @@ mod tests {
             Err(Error::Truncated { .. })
         ));
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn io_frame() -> impl Strategy<Value = IoFrame> {
+            (
+                any::<(u32, u32, u16)>(),
+                proptest::option::of(any::<u32>()),
+                vec(any::<u8>(), 0..=32),
+            )
+                .prop_map(|((connection, sequence, count), run_idle, data)| IoFrame {
+                    connection,
+                    sequence,
+                    count,
+                    run_idle,
+                    data,
+                })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(f in io_frame()) {
+                let b = f.emit().unwrap();
+                prop_assert_eq!(IoFrame::connection_of(&b), Ok(f.connection));
+                prop_assert_eq!(IoFrame::parse(&b, f.run_idle.is_some()), Ok(f));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..48), run_idle in any::<bool>()) {
+                let _ = IoFrame::parse(&bytes, run_idle);
+                let _ = IoFrame::connection_of(&bytes);
+            }
+        }
+    }
 }

@@ -480,4 +480,189 @@ mod tests {
         );
         assert_eq!(q.emit(), [0x24, 1]);
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn flags() -> impl Strategy<Value = Flags> {
+            (any::<bool>(), any::<bool>(), 0u8..=7, 0u8..=7).prop_map(|(en, ec, pr, rs)| Flags {
+                en,
+                ec,
+                pr,
+                rs,
+            })
+        }
+
+        fn ip() -> impl Strategy<Value = Ipv4Addr> {
+            any::<[u8; 4]>().prop_map(Ipv4Addr::from)
+        }
+
+        /// A host name the field carries: no NUL (the padding), at most 32 bytes of UTF-8.
+        fn hostname() -> impl Strategy<Value = String> {
+            vec(
+                any::<char>().prop_filter("NUL pads the field", |c| *c != '\0'),
+                0..=32,
+            )
+            .prop_map(|cs| {
+                let mut s = String::new();
+                for c in cs {
+                    if s.len() + c.len_utf8() > HOSTNAME_LEN {
+                        break;
+                    }
+                    s.push(c);
+                }
+                s
+            })
+        }
+
+        fn ident() -> impl Strategy<Value = IdentResponse> {
+            (
+                (
+                    flags(),
+                    any::<u8>(),
+                    any::<u8>(),
+                    any::<u32>(),
+                    any::<u16>(),
+                    any::<u16>(),
+                    any::<u16>(),
+                ),
+                (
+                    any::<u32>(),
+                    any::<u32>(),
+                    any::<u32>(),
+                    any::<u32>(),
+                    any::<u32>(),
+                    any::<u32>(),
+                ),
+                (
+                    any::<u64>(),
+                    any::<[u32; 4]>(),
+                    ip(),
+                    ip(),
+                    ip(),
+                    hostname(),
+                    vec(any::<u8>(), 48),
+                ),
+            )
+                .prop_map(
+                    |(
+                        (
+                            flags,
+                            state,
+                            epl_version,
+                            feature_flags,
+                            mtu,
+                            poll_in_size,
+                            poll_out_size,
+                        ),
+                        (response_time, device_type, vendor_id, product_code, revision, serial),
+                        (vendor_ext1, dates, ip, subnet, gateway, hostname, ext2),
+                    )| {
+                        let mut vendor_ext2 = [0u8; 48];
+                        vendor_ext2.copy_from_slice(&ext2);
+                        IdentResponse {
+                            flags,
+                            state: NmtState(state),
+                            epl_version,
+                            feature_flags,
+                            mtu,
+                            poll_in_size,
+                            poll_out_size,
+                            response_time,
+                            device_type,
+                            vendor_id,
+                            product_code,
+                            revision,
+                            serial,
+                            vendor_ext1,
+                            dates,
+                            ip,
+                            subnet,
+                            gateway,
+                            hostname,
+                            vendor_ext2,
+                        }
+                    },
+                )
+        }
+
+        fn entry() -> impl Strategy<Value = ErrorEntry> {
+            (any::<u16>(), any::<u16>(), any::<u64>(), any::<u64>()).prop_map(
+                |(entry_type, code, time, info)| ErrorEntry {
+                    entry_type,
+                    code,
+                    time,
+                    info,
+                },
+            )
+        }
+
+        /// A StatusResponse; an all-zero entry ends the list (it is Ethernet padding), so the
+        /// entries carried are not all zero.
+        fn status() -> impl Strategy<Value = StatusResponse> {
+            (
+                flags(),
+                any::<u8>(),
+                any::<u8>(),
+                any::<[u8; 6]>(),
+                vec(
+                    entry().prop_filter("zero entry is padding", |e| *e != ErrorEntry::default()),
+                    0..4,
+                ),
+            )
+                .prop_map(|(flags, state, error_register, specific, entries)| {
+                    StatusResponse {
+                        flags,
+                        state: NmtState(state),
+                        error_register,
+                        specific,
+                        entries,
+                    }
+                })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn ident_response_round_trips(i in ident()) {
+                let b = i.emit().unwrap();
+                prop_assert_eq!(b.len(), IDENT_RESPONSE_LEN);
+                prop_assert_eq!(IdentResponse::parse(&b), Ok(i));
+            }
+
+            #[test]
+            fn error_entry_round_trips(e in entry()) {
+                prop_assert_eq!(ErrorEntry::parse(&e.emit()), Ok(e));
+            }
+
+            #[test]
+            fn status_response_round_trips(s in status(), padding in 0usize..24) {
+                let mut b = s.emit();
+                prop_assert_eq!(b.len(), STATUS_RESPONSE_HEADER + ERROR_ENTRY_LEN * s.entries.len());
+                prop_assert_eq!(StatusResponse::parse(&b), Ok(s.clone()));
+                b.resize(b.len() + padding, 0);
+                prop_assert_eq!(StatusResponse::parse(&b), Ok(s));
+            }
+
+            #[test]
+            fn nmt_frames_round_trip(command in any::<u8>(), target in any::<u8>(), data in vec(any::<u8>(), 0..16)) {
+                let c = NmtCommandFrame { command: NmtCommand(command), data: data.clone() };
+                prop_assert_eq!(NmtCommandFrame::parse(&c.emit()), Ok(c));
+                let r = NmtRequestFrame { command: NmtCommand(command), target, data };
+                prop_assert_eq!(NmtRequestFrame::parse(&r.emit()), Ok(r));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..200)) {
+                let _ = IdentResponse::parse(&bytes);
+                let _ = ErrorEntry::parse(&bytes);
+                let _ = StatusResponse::parse(&bytes);
+                let _ = NmtCommandFrame::parse(&bytes);
+                let _ = NmtRequestFrame::parse(&bytes);
+            }
+        }
+    }
 }

@@ -473,4 +473,84 @@ mod tests {
             })
         ));
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn body() -> impl Strategy<Value = Body> {
+            prop_oneof![
+                any::<(bool, bool, u64, u64)>().prop_map(|(mc, ps, net_time, relative_time)| {
+                    Body::Soc(Soc {
+                        mc,
+                        ps,
+                        net_time,
+                        relative_time,
+                    })
+                }),
+                (any::<(bool, bool, bool, u8)>(), vec(any::<u8>(), 0..=48)).prop_map(
+                    |((ms, ea, rd, pdo_version), payload)| Body::Preq(Preq {
+                        ms,
+                        ea,
+                        rd,
+                        pdo_version,
+                        payload
+                    })
+                ),
+                (
+                    any::<(u8, bool, bool, bool, u8)>(),
+                    0u8..=7,
+                    0u8..=7,
+                    vec(any::<u8>(), 0..=48)
+                )
+                    .prop_map(
+                        |((state, ms, en, rd, pdo_version), pr, rs, payload)| {
+                            Body::Pres(Pres {
+                                state: NmtState(state),
+                                ms,
+                                en,
+                                rd,
+                                pr,
+                                rs,
+                                pdo_version,
+                                payload,
+                            })
+                        }
+                    ),
+                any::<(u8, bool, bool, u8, u8, u8)>().prop_map(
+                    |(state, ea, er, service, target, epl_version)| Body::Soa(Soa {
+                        state: NmtState(state),
+                        ea,
+                        er,
+                        service: RequestedService(service),
+                        target,
+                        epl_version,
+                    })
+                ),
+                (any::<u8>(), vec(any::<u8>(), 0..=48)).prop_map(|(service, payload)| {
+                    Body::Asnd(Asnd {
+                        service: ServiceId(service),
+                        payload,
+                    })
+                }),
+            ]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(dst in any::<u8>(), src in any::<u8>(), body in body()) {
+                let r = EplRepr { dst, src, body };
+                let b = r.emit().unwrap();
+                prop_assert_eq!(EplRepr::parse_bytes(&b), Ok(r));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..48)) {
+                let _ = EplRepr::parse_bytes(&bytes);
+            }
+        }
+    }
 }

@@ -475,4 +475,103 @@ mod tests {
             Err(Error::Unknown { .. })
         ));
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn con() -> impl Strategy<Value = Con> {
+            prop_oneof![
+                Just(Con::None),
+                Just(Con::Init),
+                Just(Con::Valid),
+                Just(Con::ErrorOrAckRequest),
+            ]
+        }
+
+        fn seq() -> impl Strategy<Value = Seq> {
+            (0..SEQ_MODULO, con(), 0..SEQ_MODULO, con()).prop_map(|(rsnr, rcon, ssnr, scon)| Seq {
+                rsnr,
+                rcon,
+                ssnr,
+                scon,
+            })
+        }
+
+        fn segmentation() -> impl Strategy<Value = Segmentation> {
+            prop_oneof![
+                Just(Segmentation::Expedited),
+                Just(Segmentation::Initiate),
+                Just(Segmentation::Segment),
+                Just(Segmentation::Complete),
+            ]
+        }
+
+        /// A command as the codec carries it: a DataSize exactly on an initiate that is not an
+        /// abort. An all-zero command without payload (NIL, TransactionID 0, expedited request)
+        /// is left out: its bytes are those of Ethernet padding, which `parse` reads as "no
+        /// command" by design.
+        fn command() -> impl Strategy<Value = Command> {
+            (
+                any::<u8>(),
+                any::<bool>(),
+                any::<bool>(),
+                segmentation(),
+                any::<u8>(),
+                any::<u32>(),
+                vec(any::<u8>(), 0..=48),
+            )
+                .prop_map(
+                    |(transaction, response, abort, segmentation, command, size, payload)| {
+                        Command {
+                            transaction,
+                            response,
+                            abort,
+                            segmentation,
+                            command: CommandId(command),
+                            data_size: (segmentation == Segmentation::Initiate && !abort)
+                                .then_some(size),
+                            payload,
+                        }
+                    },
+                )
+                .prop_filter("all-zero command reads as padding", |c| {
+                    c.transaction != 0
+                        || c.response
+                        || c.abort
+                        || c.segmentation != Segmentation::Expedited
+                        || c.command != CommandId::NIL
+                        || !c.payload.is_empty()
+                })
+        }
+
+        fn frame() -> impl Strategy<Value = SdoFrame> {
+            (seq(), proptest::option::of(command()))
+                .prop_map(|(seq, command)| SdoFrame { seq, command })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(f in frame(), padding in 0usize..8) {
+                let mut b = f.emit().unwrap();
+                prop_assert_eq!(SdoFrame::parse(&b), Ok(f.clone()));
+                // Ethernet padding after the frame is ignored.
+                b.resize(b.len() + padding, 0);
+                prop_assert_eq!(SdoFrame::parse(&b), Ok(f.clone()));
+                let udp = f.emit_udp().unwrap();
+                prop_assert_eq!(SdoFrame::parse(SdoFrame::strip_udp(&udp).unwrap()), Ok(f));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..32)) {
+                let _ = SdoFrame::parse(&bytes);
+                if let Ok(rest) = SdoFrame::strip_udp(&bytes) {
+                    let _ = SdoFrame::parse(rest);
+                }
+            }
+        }
+    }
 }

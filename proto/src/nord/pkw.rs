@@ -805,4 +805,44 @@ mod tests {
             "{e}"
         );
     }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        /// Every telegram the codec represents: AK 4 bits, PNU 11 bits, IND and PWE whole.
+        fn pkw_repr() -> impl Strategy<Value = PkwRepr> {
+            (
+                0u8..=15,
+                any::<bool>(),
+                0u16..=0x07FF,
+                any::<u16>(),
+                any::<u32>(),
+            )
+                .prop_map(|(ak, spm, pnu, ind, pwe)| PkwRepr {
+                    ak,
+                    spm,
+                    pnu,
+                    ind,
+                    pwe,
+                })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(r in pkw_repr()) {
+                let mut buf = vec![0u8; r.buffer_len()];
+                r.emit(&mut buf).unwrap();
+                prop_assert_eq!(PkwRepr::parse(&buf).unwrap(), r);
+                prop_assert_eq!(&r.emit_bytes()[..], &buf[..]);
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..16)) {
+                let _ = PkwRepr::parse(&bytes);
+            }
+        }
+    }
 }

@@ -247,4 +247,62 @@ mod tests {
             }
         }
     }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        fn pkw_repr() -> impl Strategy<Value = PkwRepr> {
+            (
+                0u8..=15,
+                any::<bool>(),
+                0u16..=0x07FF,
+                any::<u16>(),
+                any::<u32>(),
+            )
+                .prop_map(|(ak, spm, pnu, ind, pwe)| PkwRepr {
+                    ak,
+                    spm,
+                    pnu,
+                    ind,
+                    pwe,
+                })
+        }
+
+        /// A type and a telegram of exactly that type: PKW present iff the type has one, as many
+        /// PZD words as the type carries.
+        fn typed_repr() -> impl Strategy<Value = (PpoType, PpoRepr)> {
+            proptest::sample::select(PpoType::ALL.to_vec()).prop_flat_map(|t| {
+                let pkw = if t.has_pkw() {
+                    pkw_repr().prop_map(Some).boxed()
+                } else {
+                    Just(None).boxed()
+                };
+                let pzd = proptest::collection::vec(any::<u16>(), t.pzd_words());
+                (
+                    Just(t),
+                    (pkw, pzd).prop_map(|(pkw, pzd)| PpoRepr { pkw, pzd }),
+                )
+            })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips((t, r) in typed_repr()) {
+                let bytes = r.emit(t);
+                prop_assert_eq!(bytes.len(), t.byte_len());
+                prop_assert_eq!(PpoRepr::parse(&bytes, t).unwrap(), r);
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(
+                n in any::<u8>(),
+                bytes in proptest::collection::vec(any::<u8>(), 0..24),
+            ) {
+                let _ = PpoRepr::parse(&bytes, PpoType(n));
+            }
+        }
+    }
 }

@@ -1036,4 +1036,188 @@ mod tests {
             })
         );
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn status() -> impl Strategy<Value = PnioStatus> {
+            any::<[u8; 4]>().prop_map(|s| PnioStatus::new(s[0], s[1], s[2], s[3]))
+        }
+
+        fn channel() -> impl Strategy<Value = ChannelDiagnosis> {
+            any::<(u16, u16, u16)>().prop_map(|(channel, p, error_type)| ChannelDiagnosis {
+                channel,
+                properties: ChannelProperties(p),
+                error_type,
+            })
+        }
+
+        fn ext() -> impl Strategy<Value = ExtChannelDiagnosis> {
+            (channel(), any::<u16>(), any::<u32>()).prop_map(
+                |(channel, ext_error_type, add_value)| ExtChannelDiagnosis {
+                    channel,
+                    ext_error_type,
+                    add_value,
+                },
+            )
+        }
+
+        fn typed_item() -> impl Strategy<Value = AlarmItem> {
+            prop_oneof![
+                channel().prop_map(AlarmItem::ChannelDiagnosis),
+                ext().prop_map(AlarmItem::ExtChannelDiagnosis),
+                (ext(), any::<u32>()).prop_map(|(diagnosis, qualifier)| {
+                    AlarmItem::QualifiedChannelDiagnosis {
+                        diagnosis,
+                        qualifier,
+                    }
+                }),
+                any::<u32>().prop_map(AlarmItem::Maintenance),
+            ]
+        }
+
+        /// Typed items, then at most one item of another USI (its data runs to the block's end).
+        fn items() -> impl Strategy<Value = Vec<AlarmItem>> {
+            const TYPED: [u16; 4] = [
+                usi::CHANNEL_DIAGNOSIS,
+                usi::EXT_CHANNEL_DIAGNOSIS,
+                usi::QUALIFIED_CHANNEL_DIAGNOSIS,
+                usi::MAINTENANCE,
+            ];
+            (
+                vec(typed_item(), 0..4),
+                proptest::option::of((
+                    any::<u16>().prop_filter("typed USI", |u| !TYPED.contains(u)),
+                    vec(any::<u8>(), 0..12),
+                )),
+            )
+                .prop_map(|(mut items, other)| {
+                    if let Some((usi, data)) = other {
+                        items.push(AlarmItem::Other { usi, data });
+                    }
+                    items
+                })
+        }
+
+        fn notification() -> impl Strategy<Value = AlarmNotification> {
+            (
+                any::<(bool, u16, u32, u16, u16)>(),
+                any::<(u32, u32, u16)>(),
+                items(),
+            )
+                .prop_map(
+                    |(
+                        (high, alarm_type, api, slot, subslot),
+                        (module_ident, submodule_ident, spec),
+                        items,
+                    )| {
+                        AlarmNotification {
+                            high,
+                            alarm_type: AlarmType(alarm_type),
+                            api,
+                            slot,
+                            subslot,
+                            module_ident,
+                            submodule_ident,
+                            specifier: AlarmSpecifier(spec),
+                            items,
+                        }
+                    },
+                )
+        }
+
+        fn ack() -> impl Strategy<Value = AlarmAck> {
+            (any::<(bool, u16, u32, u16, u16, u16)>(), status()).prop_map(
+                |((high, alarm_type, api, slot, subslot, spec), status)| AlarmAck {
+                    high,
+                    alarm_type: AlarmType(alarm_type),
+                    api,
+                    slot,
+                    subslot,
+                    specifier: AlarmSpecifier(spec),
+                    status,
+                },
+            )
+        }
+
+        /// A PDU type with a body it carries: DATA a notification or an acknowledge, ERR its
+        /// status and vendor bytes, ACK/NACK nothing or raw bytes, other types raw bytes.
+        fn pdu() -> impl Strategy<Value = (RtaPduType, RtaBody)> {
+            prop_oneof![
+                notification().prop_map(|n| (RtaPduType::DATA, RtaBody::Notification(n))),
+                ack().prop_map(|a| (RtaPduType::DATA, RtaBody::Ack(a))),
+                (status(), vec(any::<u8>(), 0..8)).prop_map(|(status, vendor)| (
+                    RtaPduType::ERR,
+                    RtaBody::Error { status, vendor }
+                )),
+                prop_oneof![Just(RtaPduType::ACK), Just(RtaPduType::NACK)]
+                    .prop_map(|t| (t, RtaBody::Empty)),
+                (
+                    prop_oneof![Just(RtaPduType::ACK), Just(RtaPduType::NACK)],
+                    vec(any::<u8>(), 1..8)
+                )
+                    .prop_map(|(t, v)| (t, RtaBody::Raw(v))),
+                (prop_oneof![Just(0u8), 5u8..=15], vec(any::<u8>(), 0..8))
+                    .prop_map(|(t, v)| (RtaPduType(t), RtaBody::Raw(v))),
+            ]
+        }
+
+        fn repr() -> impl Strategy<Value = AlarmRepr> {
+            (
+                any::<(u16, u16, u16)>(),
+                pdu(),
+                (0u8..=15, 0u8..=15, any::<bool>()),
+                any::<(u16, u16)>(),
+            )
+                .prop_map(
+                    |(
+                        (frame_id, dst_endpoint, src_endpoint),
+                        (pdu_type, body),
+                        (version, window_size, tack),
+                        (send_seq, ack_seq),
+                    )| {
+                        AlarmRepr {
+                            frame_id: FrameId(frame_id),
+                            dst_endpoint,
+                            src_endpoint,
+                            pdu_type,
+                            version,
+                            window_size,
+                            tack,
+                            send_seq,
+                            ack_seq,
+                            body,
+                        }
+                    },
+                )
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(r in repr(), padding in 0usize..8) {
+                let mut b = r.emit().unwrap();
+                prop_assert_eq!(AlarmRepr::parse(&b), Ok(r.clone()));
+                b.resize(b.len() + padding, 0);
+                prop_assert_eq!(AlarmRepr::parse(&b), Ok(r));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..64)) {
+                let _ = AlarmRepr::parse(&bytes);
+            }
+
+            #[test]
+            fn parsing_an_arbitrary_var_part_never_panics(pdu in 0u8..=0x1F, var in vec(any::<u8>(), 0..64)) {
+                // A valid RTA header over an arbitrary RTA-SDU (reaches the block parsers).
+                let mut b = vec![0xFE, 0x01, 0, 1, 0, 2, pdu, 0x11, 0, 0, 0, 0];
+                b.extend((var.len() as u16).to_be_bytes());
+                b.extend(&var);
+                let _ = AlarmRepr::parse(&b);
+            }
+        }
+    }
 }

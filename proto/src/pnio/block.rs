@@ -831,4 +831,86 @@ mod tests {
             })
         );
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// The block types parsed into typed blocks.
+        fn typed_types() -> Vec<u16> {
+            let mut t = vec![
+                0x0008, 0x0009, 0x8008, 0x8009, 0x0101, 0x8101, 0x0102, 0x8102, 0x0103, 0x8103,
+                0x0104, 0x8104, 0x8106,
+            ];
+            for c in (0x0110..=0x0114).chain(0x0116..=0x0118) {
+                t.extend([c, c | 0x8000]);
+            }
+            t
+        }
+
+        fn is_typed(t: u16) -> bool {
+            typed_types().contains(&t)
+        }
+
+        /// A block as it travels: header (BlockLength from the body) and body.
+        fn framed(t: u16, version: (u8, u8), body: &[u8]) -> Vec<u8> {
+            let mut b = t.to_be_bytes().to_vec();
+            b.extend(((body.len() + 2) as u16).to_be_bytes());
+            b.extend([version.0, version.1]);
+            b.extend(body);
+            b
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            /// Blocks of types not typed here keep type, version and body.
+            #[test]
+            fn unknown_blocks_round_trip(
+                blocks in vec(
+                    (
+                        any::<u16>().prop_filter("typed block type", |t| !is_typed(*t)),
+                        any::<(u8, u8)>(),
+                        vec(any::<u8>(), 0..24),
+                    ),
+                    0..4,
+                ),
+            ) {
+                let blocks: Vec<Block> = blocks
+                    .into_iter()
+                    .map(|(t, version, body)| Block::Unknown { block_type: BlockType(t), version, body })
+                    .collect();
+                let b = Block::emit_all(&blocks).unwrap();
+                prop_assert_eq!(Block::parse_all(&b), Ok(blocks));
+            }
+
+            /// Whatever a typed block's parser accepts emits to bytes that parse to the same
+            /// block (parse ∘ emit is the identity on parsed blocks); no parser panics on an
+            /// arbitrary body under its header.
+            #[test]
+            fn typed_blocks_reparse_to_themselves(
+                t in proptest::sample::select(typed_types()),
+                body in vec(any::<u8>(), 0..96),
+                tail in vec(any::<u8>(), 0..8),
+            ) {
+                let mut b = framed(t, (VERSION_HIGH, VERSION_LOW), &body);
+                b.extend(tail);
+                if let Ok((block, n)) = Block::parse(&b) {
+                    prop_assert!(n <= b.len());
+                    let again = block.to_bytes().unwrap();
+                    prop_assert_eq!(Block::parse(&again), Ok((block, again.len())));
+                }
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..64)) {
+                let _ = Block::parse(&bytes);
+                let _ = Block::parse_all(&bytes);
+                if let Ok(v) = BlockView::new_checked(&bytes[..]) {
+                    let _ = (v.header(), v.body().len(), v.total_len());
+                }
+            }
+        }
+    }
 }

@@ -1762,4 +1762,162 @@ mod tests {
             Err(NameError::EmptyLabel { at: 0 })
         );
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn ip4() -> impl Strategy<Value = Ipv4Addr> {
+            any::<[u8; 4]>().prop_map(Ipv4Addr::from)
+        }
+
+        fn ip_parameter() -> impl Strategy<Value = IpParameter> {
+            (ip4(), ip4(), ip4()).prop_map(|(ip, mask, gateway)| IpParameter { ip, mask, gateway })
+        }
+
+        fn option() -> impl Strategy<Value = DcpOption> {
+            any::<(u8, u8)>().prop_map(|(o, s)| DcpOption::new(o, s))
+        }
+
+        /// A value of every typed option, or a raw block of an option not typed here.
+        fn value() -> impl Strategy<Value = BlockValue> {
+            let text = || "\\PC{0,16}";
+            prop_oneof![
+                any::<[u8; 6]>().prop_map(|m| BlockValue::Mac(MacAddr(m))),
+                ip_parameter().prop_map(BlockValue::IpParameter),
+                (ip_parameter(), [ip4(), ip4(), ip4(), ip4()])
+                    .prop_map(|(ip, dns)| BlockValue::FullIpSuite { ip, dns }),
+                text().prop_map(BlockValue::DeviceVendor),
+                text().prop_map(BlockValue::NameOfStation),
+                any::<(u16, u16)>().prop_map(|(vendor_id, device_id)| BlockValue::DeviceId {
+                    vendor_id,
+                    device_id
+                }),
+                any::<u8>().prop_map(BlockValue::DeviceRole),
+                vec(option(), 0..6).prop_map(BlockValue::DeviceOptions),
+                text().prop_map(BlockValue::AliasName),
+                any::<(u8, u8)>().prop_map(|(high, low)| BlockValue::DeviceInstance { high, low }),
+                any::<(u16, u16)>().prop_map(|(vendor_id, device_id)| BlockValue::OemDeviceId {
+                    vendor_id,
+                    device_id
+                }),
+                (any::<u8>(), vec(any::<u8>(), 0..12))
+                    .prop_map(|(suboption, data)| BlockValue::Dhcp { suboption, data }),
+                Just(BlockValue::Start),
+                Just(BlockValue::Stop),
+                any::<u16>().prop_map(BlockValue::Signal),
+                (option(), any::<u8>()).prop_map(|(option, e)| BlockValue::Response {
+                    option,
+                    error: BlockError(e)
+                }),
+                Just(BlockValue::FactoryReset),
+                Just(BlockValue::ResetToFactory),
+                any::<u16>().prop_map(BlockValue::DeviceInitiative),
+                Just(BlockValue::All),
+                (
+                    option().prop_filter("typed option", |o| !BlockValue::is_typed(*o)),
+                    vec(any::<u8>(), 0..12)
+                )
+                    .prop_map(|(option, data)| BlockValue::Raw { option, data }),
+            ]
+        }
+
+        /// The block with the prefix its telegram gives it (none for a raw block).
+        fn block(
+            service: ServiceId,
+            service_type: ServiceType,
+            value: BlockValue,
+            v: u16,
+        ) -> DcpBlock {
+            let head = if matches!(value, BlockValue::Raw { .. }) {
+                BlockHead::None
+            } else {
+                match HeadKind::of(service, service_type, value.option()) {
+                    HeadKind::None => BlockHead::None,
+                    HeadKind::Info => BlockHead::Info(BlockInfo(v)),
+                    HeadKind::Qualifier => BlockHead::Qualifier(BlockQualifier(v)),
+                }
+            };
+            DcpBlock { head, value }
+        }
+
+        fn repr() -> impl Strategy<Value = DcpRepr> {
+            (
+                FrameId::DCP_HELLO.0..=FrameId::DCP_IDENTIFY_RES.0,
+                prop_oneof![3 => 3u8..=6, 1 => any::<u8>()],
+                prop_oneof![Just(0u8), Just(1), Just(5), any::<u8>()],
+                any::<u32>(),
+                any::<u16>(),
+            )
+                .prop_flat_map(
+                    |(frame_id, service, service_type, xid, response_delay)| {
+                        let (service, service_type) =
+                            (ServiceId(service), ServiceType(service_type));
+                        let data = match service {
+                            ServiceId::GET if !service_type.is_response() => {
+                                vec(option(), 0..6).prop_map(DcpData::Selectors).boxed()
+                            }
+                            ServiceId::GET
+                            | ServiceId::SET
+                            | ServiceId::IDENTIFY
+                            | ServiceId::HELLO => vec((value(), any::<u16>()), 0..5)
+                                .prop_map(move |vs| {
+                                    DcpData::Blocks(
+                                        vs.into_iter()
+                                            .map(|(value, v)| {
+                                                block(service, service_type, value, v)
+                                            })
+                                            .collect(),
+                                    )
+                                })
+                                .boxed(),
+                            _ => vec(any::<u8>(), 0..24).prop_map(DcpData::Opaque).boxed(),
+                        };
+                        data.prop_map(move |data| DcpRepr {
+                            frame_id: FrameId(frame_id),
+                            service,
+                            service_type,
+                            xid,
+                            response_delay,
+                            data,
+                        })
+                    },
+                )
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(r in repr(), padding in 0usize..8) {
+                let mut b = r.emit().unwrap();
+                prop_assert_eq!(b.len(), r.buffer_len());
+                prop_assert_eq!(DcpRepr::parse(&b), Ok(r.clone()));
+                // Ethernet padding after DCPDataLength is ignored.
+                b.resize(b.len() + padding, 0);
+                prop_assert_eq!(DcpRepr::parse(&b), Ok(r));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(
+                head in (0xFEFCu16..=0xFEFF, 0u8..=8, any::<u8>(), any::<u32>(), any::<u16>()),
+                data in vec(any::<u8>(), 0..48),
+                len_delta in -2i32..=2,
+            ) {
+                // A plausible header (so the blocks get parsed) over arbitrary data, and the
+                // arbitrary bytes on their own.
+                let (id, service, service_type, xid, delay) = head;
+                let len = (data.len() as i32 + len_delta).clamp(0, 0xFFFF) as u16;
+                let mut b = id.to_be_bytes().to_vec();
+                b.extend([service, service_type]);
+                b.extend(xid.to_be_bytes());
+                b.extend(delay.to_be_bytes());
+                b.extend(len.to_be_bytes());
+                b.extend(&data);
+                let _ = DcpRepr::parse(&b);
+                let _ = DcpRepr::parse(&data);
+            }
+        }
+    }
 }

@@ -258,4 +258,78 @@ mod tests {
         };
         assert!(matches!(too_long.emit(), Err(Error::TooLong { .. })));
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// Visible strings (20h..7Eh) that fit their field; the padding is trimmed on reading,
+        /// so the text does not end in a space.
+        fn im0() -> impl Strategy<Value = Im0Repr> {
+            (
+                any::<u16>(),
+                "([ -~]{0,19}[!-~])?",
+                "([ -~]{0,15}[!-~])?",
+                any::<u16>(),
+                any::<[u8; 4]>(),
+                any::<(u16, u16, u16, u8, u8, u16)>(),
+            )
+                .prop_map(
+                    |(vendor_id, order_id, serial, hardware_revision, sw, rest)| {
+                        let (
+                            revision_counter,
+                            profile_id,
+                            profile_specific_type,
+                            major,
+                            minor,
+                            supported,
+                        ) = rest;
+                        Im0Repr {
+                            vendor_id,
+                            order_id,
+                            serial,
+                            hardware_revision,
+                            software_revision: SoftwareRevision {
+                                prefix: sw[0],
+                                functional: sw[1],
+                                bug_fix: sw[2],
+                                internal: sw[3],
+                            },
+                            revision_counter,
+                            profile_id,
+                            profile_specific_type,
+                            version: (major, minor),
+                            supported,
+                        }
+                    },
+                )
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(im in im0()) {
+                let b = im.emit().unwrap();
+                prop_assert_eq!(b.len(), LEN);
+                prop_assert_eq!(Im0Repr::parse(&b), Ok(im));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..64)) {
+                let _ = Im0Repr::parse(&bytes);
+            }
+
+            #[test]
+            fn parsing_an_arbitrary_body_never_panics(body in vec(any::<u8>(), LEN - 6)) {
+                // A valid header over arbitrary field bytes (reaches the string checks).
+                let mut b = BLOCK_TYPE.to_be_bytes().to_vec();
+                b.extend(((LEN - 4) as u16).to_be_bytes());
+                b.extend([VERSION_HIGH, VERSION_LOW]);
+                b.extend(body);
+                let _ = Im0Repr::parse(&b);
+            }
+        }
+    }
 }

@@ -854,4 +854,83 @@ mod tests {
         assert_eq!(format!("{:?}", r.opnum), "Opnum(0009h)");
         assert_eq!(r.packet_type.to_string(), "Ping");
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        /// Any header the PDU carries: PTYPE 5 bits, any data representation (the integers
+        /// and UUIDs follow its byte order), a body up to 64 bytes.
+        fn repr() -> impl Strategy<Value = RpcRepr> {
+            (
+                (
+                    0u8..=0x1F,
+                    any::<u8>(),
+                    any::<u8>(),
+                    any::<[u8; 3]>(),
+                    any::<u16>(),
+                ),
+                any::<([u8; 16], [u8; 16], [u8; 16])>(),
+                any::<(u32, u32, u32, u16, u16, u16, u16, u8)>(),
+                vec(any::<u8>(), 0..64),
+            )
+                .prop_map(|((ptype, f1, flags2, drep, serial), (o, i, a), n, body)| {
+                    RpcRepr {
+                        packet_type: PacketType(ptype),
+                        flags1: Flags1(f1),
+                        flags2,
+                        drep: Drep(drep),
+                        serial,
+                        object: Uuid(o),
+                        interface: Uuid(i),
+                        activity: Uuid(a),
+                        server_boot_time: n.0,
+                        interface_version: n.1,
+                        sequence_number: n.2,
+                        opnum: Opnum(n.3),
+                        interface_hint: n.4,
+                        activity_hint: n.5,
+                        fragment_number: n.6,
+                        auth_proto: n.7,
+                        body,
+                    }
+                })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(r in repr()) {
+                let b = r.emit().unwrap();
+                prop_assert_eq!(b.len(), r.buffer_len());
+                prop_assert_eq!(RpcRepr::parse_bytes(&b), Ok(r));
+            }
+
+            #[test]
+            fn nca_status_round_trips(v in any::<u32>(), le in any::<bool>()) {
+                let drep = if le { Drep::LITTLE_ENDIAN } else { Drep::BIG_ENDIAN };
+                let s = NcaStatus(v);
+                prop_assert_eq!(NcaStatus::parse(&s.emit(drep), drep), Ok(s));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..120)) {
+                let _ = RpcRepr::parse_bytes(&bytes);
+            }
+
+            #[test]
+            fn parsing_an_arbitrary_header_never_panics(
+                head in vec(any::<u8>(), HEADER_LEN - 1),
+                body in vec(any::<u8>(), 0..16),
+            ) {
+                // rpc_vers 4 first, so the header fields are read.
+                let mut b = vec![RPC_VERSION];
+                b.extend(head);
+                b.extend(body);
+                let _ = RpcRepr::parse_bytes(&b);
+            }
+        }
+    }
 }

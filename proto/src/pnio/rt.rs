@@ -366,4 +366,57 @@ mod tests {
             "DataStatus(A5h primary valid stop ok ignore)"
         );
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn rt(data: impl Strategy<Value = Vec<u8>>) -> impl Strategy<Value = RtRepr> {
+            (any::<u16>(), data, any::<u16>(), any::<u8>(), any::<u8>()).prop_map(
+                |(frame_id, data, cycle_counter, status, transfer_status)| RtRepr {
+                    frame_id: FrameId(frame_id),
+                    data,
+                    cycle_counter,
+                    data_status: DataStatus(status),
+                    transfer_status,
+                },
+            )
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            /// Without a known DataLength: C_SDUs of 40..=1440 bytes.
+            #[test]
+            fn emit_then_parse_round_trips(r in rt(vec(any::<u8>(), MIN_C_SDU..=MAX_C_SDU))) {
+                let b = r.emit();
+                prop_assert_eq!(b.len(), r.buffer_len());
+                prop_assert_eq!(RtRepr::parse(&b, None), Ok(r.clone()));
+                prop_assert_eq!(RtRepr::parse(&b, Some(r.data.len())), Ok(r));
+            }
+
+            /// A short C_SDU is sent padded to 40 (the standard's minimum) and read back so: the
+            /// padding belongs to the C_SDU, the status follows it. (`parse` with `Some(n)`,
+            /// n < 40, models a sender that leaves the padding to the Ethernet layer instead,
+            /// `short_data_is_padded_to_forty`, so it is no inverse of `emit` there.)
+            #[test]
+            fn short_c_sdu_is_read_back_padded(r in rt(vec(any::<u8>(), 0..MIN_C_SDU))) {
+                let b = r.emit();
+                prop_assert_eq!(b.len(), r.buffer_len());
+                let mut padded = r.clone();
+                padded.data.resize(MIN_C_SDU, 0);
+                prop_assert_eq!(RtRepr::parse(&b, None), Ok(padded.clone()));
+                prop_assert_eq!(RtRepr::parse(&b, Some(MIN_C_SDU)), Ok(padded));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(
+                bytes in vec(any::<u8>(), 0..64),
+                n in proptest::option::of(prop_oneof![0usize..64, Just(usize::MAX)]),
+            ) {
+                let _ = RtRepr::parse(&bytes, n);
+            }
+        }
+    }
 }

@@ -341,4 +341,38 @@ mod tests {
         }
         assert!(r.emit(&mut [0u8; 10]).is_err());
     }
+
+    mod properties {
+        use super::*;
+        use proptest::prelude::*;
+
+        fn record47() -> impl Strategy<Value = Record47Repr> {
+            any::<(u8, u8, u8, u16, u16, u32)>().prop_map(
+                |(reference, label, axis, pnu, ind, pwe)| Record47Repr {
+                    reference,
+                    label,
+                    axis,
+                    pnu,
+                    ind,
+                    pwe,
+                },
+            )
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(r in record47(), extra in 0usize..4) {
+                let mut buf = vec![0u8; r.buffer_len() + extra];
+                r.emit(&mut buf).unwrap();
+                prop_assert_eq!(Record47Repr::parse(&buf[..r.buffer_len()]), Ok(r));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..16)) {
+                let _ = Record47Repr::parse(&bytes);
+            }
+        }
+    }
 }

@@ -827,4 +827,113 @@ mod tests {
             })
         );
     }
+
+    mod properties {
+        use super::*;
+        use crate::pnio::block::Block;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn uuid() -> impl Strategy<Value = Uuid> {
+            any::<[u8; 16]>().prop_map(Uuid)
+        }
+
+        /// The fixed-layout Connect blocks (the AR block request with a station name of any
+        /// bytes up to 240); IOCR requests, expected submodules and module diffs remain.
+        fn block() -> impl Strategy<Value = Block> {
+            prop_oneof![
+                (
+                    any::<u16>(),
+                    uuid(),
+                    any::<u16>(),
+                    any::<[u8; 6]>(),
+                    uuid(),
+                    any::<(u32, u16, u16)>(),
+                    vec(any::<u8>(), 0..=240),
+                )
+                    .prop_map(
+                        |(
+                            t,
+                            ar_uuid,
+                            session_key,
+                            mac,
+                            initiator_object,
+                            (properties, f, port),
+                            station_name,
+                        )| {
+                            Block::ArReq(ArBlockReq {
+                                ar_type: ArType(t),
+                                ar_uuid,
+                                session_key,
+                                initiator_mac: MacAddr(mac),
+                                initiator_object,
+                                properties,
+                                activity_timeout_factor: f,
+                                udp_rt_port: port,
+                                station_name,
+                            })
+                        }
+                    ),
+                (
+                    any::<u16>(),
+                    uuid(),
+                    any::<u16>(),
+                    any::<[u8; 6]>(),
+                    any::<u16>()
+                )
+                    .prop_map(|(t, ar_uuid, session_key, mac, udp_rt_port)| {
+                        Block::ArRes(ArBlockRes {
+                            ar_type: ArType(t),
+                            ar_uuid,
+                            session_key,
+                            responder_mac: MacAddr(mac),
+                            udp_rt_port,
+                        })
+                    }),
+                any::<(u16, u16, u16)>().prop_map(|(t, reference, frame_id)| {
+                    Block::IocrRes(IocrBlockRes {
+                        iocr_type: IocrType(t),
+                        reference,
+                        frame_id,
+                    })
+                }),
+                (
+                    any::<(u16, u16, u32, u16, u16)>(),
+                    any::<(u16, u16, u16, u16)>()
+                )
+                    .prop_map(
+                        |((t, lt, properties, rta_timeout_factor, rta_retries), (l, m, h, lo))| {
+                            Block::AlarmCrReq(AlarmCrBlockReq {
+                                alarm_cr_type: AlarmCrType(t),
+                                lt,
+                                properties,
+                                rta_timeout_factor,
+                                rta_retries,
+                                local_alarm_reference: l,
+                                max_alarm_data_length: m,
+                                tag_header_high: h,
+                                tag_header_low: lo,
+                            })
+                        }
+                    ),
+                any::<(u16, u16, u16)>().prop_map(|(t, l, m)| {
+                    Block::AlarmCrRes(AlarmCrBlockRes {
+                        alarm_cr_type: AlarmCrType(t),
+                        local_alarm_reference: l,
+                        max_alarm_data_length: m,
+                    })
+                }),
+            ]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(b in block()) {
+                let bytes = b.to_bytes().unwrap();
+                prop_assert_eq!(Block::parse(&bytes), Ok((b, bytes.len())));
+            }
+        }
+    }
 }

@@ -345,4 +345,102 @@ mod tests {
         assert!(BlockType(0x8118).is_control() && !BlockType(0x0115).is_control());
         assert_eq!(BlockType::RELEASE_RES.to_string(), "IODReleaseRes");
     }
+
+    mod properties {
+        use super::*;
+        use crate::pnio::block::Block;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn uuid() -> impl Strategy<Value = Uuid> {
+            any::<[u8; 16]>().prop_map(Uuid)
+        }
+
+        fn status() -> impl Strategy<Value = PnioStatus> {
+            any::<[u8; 4]>().prop_map(|s| PnioStatus::new(s[0], s[1], s[2], s[3]))
+        }
+
+        fn addr() -> impl Strategy<Value = RecordAddress> {
+            (any::<u16>(), uuid(), any::<(u32, u16, u16, u16)>()).prop_map(
+                |(seq_number, ar_uuid, (api, slot, subslot, index))| RecordAddress {
+                    seq_number,
+                    ar_uuid,
+                    api,
+                    slot,
+                    subslot,
+                    index,
+                },
+            )
+        }
+
+        fn control_type() -> impl Strategy<Value = BlockType> {
+            let mut t: Vec<u16> = (0x0110..=0x0114).chain(0x0116..=0x0118).collect();
+            t.extend(t.clone().into_iter().map(|c| c | 0x8000));
+            proptest::sample::select(t).prop_map(BlockType)
+        }
+
+        /// The record blocks and the control blocks, with their record data.
+        fn block() -> impl Strategy<Value = Block> {
+            prop_oneof![
+                (addr(), vec(any::<u8>(), 0..32))
+                    .prop_map(|(addr, data)| Block::WriteReq(IodWriteReq { addr, data })),
+                (addr(), any::<u32>(), uuid()).prop_map(
+                    |(addr, record_data_length, target_ar_uuid)| {
+                        Block::ReadReq(IodReadReq {
+                            addr,
+                            record_data_length,
+                            target_ar_uuid,
+                        })
+                    }
+                ),
+                (addr(), any::<(u32, u16, u16)>(), status()).prop_map(
+                    |(addr, (len, v1, v2), status)| {
+                        Block::WriteRes(IodWriteRes {
+                            addr,
+                            record_data_length: len,
+                            additional_value1: v1,
+                            additional_value2: v2,
+                            status,
+                        })
+                    }
+                ),
+                (addr(), any::<(u16, u16)>(), vec(any::<u8>(), 0..32)).prop_map(
+                    |(addr, (v1, v2), data)| {
+                        Block::ReadRes(IodReadRes {
+                            addr,
+                            additional_value1: v1,
+                            additional_value2: v2,
+                            data,
+                        })
+                    }
+                ),
+                (control_type(), uuid(), any::<(u16, u16, u16, u16)>()).prop_map(
+                    |(
+                        block_type,
+                        ar_uuid,
+                        (session_key, alarm_sequence_number, command, properties),
+                    )| {
+                        Block::Control(IodControl {
+                            block_type,
+                            ar_uuid,
+                            session_key,
+                            alarm_sequence_number,
+                            command: ControlCommand(command),
+                            properties,
+                        })
+                    }
+                ),
+            ]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            #[test]
+            fn emit_then_parse_round_trips(b in block()) {
+                let bytes = b.to_bytes().unwrap();
+                prop_assert_eq!(Block::parse(&bytes), Ok((b, bytes.len())));
+            }
+        }
+    }
 }

@@ -253,4 +253,64 @@ mod tests {
             Err(Error::Truncated { .. })
         ));
     }
+
+    mod properties {
+        use super::*;
+        use proptest::collection::vec;
+        use proptest::prelude::*;
+
+        fn drep() -> impl Strategy<Value = Drep> {
+            prop_oneof![Just(Drep::LITTLE_ENDIAN), Just(Drep::BIG_ENDIAN)]
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(256))]
+
+            /// The counts travel as they are, ActualCount saying how many bytes follow.
+            #[test]
+            fn request_round_trips(
+                counts in any::<(u32, u32, u32, u32)>(),
+                data in vec(any::<u8>(), 0..32),
+                drep in drep(),
+            ) {
+                let r = NdrRequest {
+                    args_maximum: counts.0,
+                    args_length: counts.1,
+                    maximum_count: counts.2,
+                    offset: counts.3,
+                    actual_count: data.len() as u32,
+                    data,
+                };
+                let b = r.emit(drep);
+                prop_assert_eq!(b.len(), r.buffer_len());
+                prop_assert_eq!(NdrRequest::parse(&b, drep), Ok(r));
+            }
+
+            #[test]
+            fn response_round_trips(
+                status in any::<[u8; 4]>(),
+                counts in any::<(u32, u32, u32)>(),
+                data in vec(any::<u8>(), 0..32),
+                drep in drep(),
+            ) {
+                let r = NdrResponse {
+                    status: PnioStatus::from_bytes(status),
+                    args_length: counts.0,
+                    maximum_count: counts.1,
+                    offset: counts.2,
+                    actual_count: data.len() as u32,
+                    data,
+                };
+                let b = r.emit(drep);
+                prop_assert_eq!(b.len(), r.buffer_len());
+                prop_assert_eq!(NdrResponse::parse(&b, drep), Ok(r));
+            }
+
+            #[test]
+            fn parsing_arbitrary_bytes_never_panics(bytes in vec(any::<u8>(), 0..48), drep in drep()) {
+                let _ = NdrRequest::parse(&bytes, drep);
+                let _ = NdrResponse::parse(&bytes, drep);
+            }
+        }
+    }
 }
