@@ -446,15 +446,12 @@ mod tests {
         let tpdo1 = tpdo(1, &[0x33, 0x00, 0x00, 0x20, 1, 0, 2, 0]);
         let tpdo2 = tpdo(2, &[3, 0, 4, 0]);
         assert_eq!(
-            read_back(series, 32, &[tpdo1.clone(), tpdo2.clone()]),
+            read_back(series, 32, &[tpdo1, tpdo2]),
             Some([0x0033, 0x2000, 1, 2, 3, 4])
         );
-        assert_eq!(read_back(series, 32, &[tpdo1.clone()]), None);
-        assert_eq!(
-            read_back(series, 32, &[tpdo1.clone(), tpdo(2, &[3, 0])]),
-            None
-        );
-        assert_eq!(read_back(series, 32, &[tpdo2.clone()]), None);
+        assert_eq!(read_back(series, 32, &[tpdo1]), None);
+        assert_eq!(read_back(series, 32, &[tpdo1, tpdo(2, &[3, 0])]), None);
+        assert_eq!(read_back(series, 32, &[tpdo2]), None);
         // Another node's TPDO2 is not this node's.
         let other = frame(Function::Tpdo { number: 2 }, 34, &[3, 0, 4, 0]).unwrap();
         assert_eq!(read_back(series, 32, &[tpdo1, other]), None);
