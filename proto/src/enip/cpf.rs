@@ -225,7 +225,7 @@ impl Cpf {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -279,7 +279,8 @@ mod tests {
         ));
     }
 
-    mod properties {
+    /// The strategies of a CPF, also for the encapsulation's properties that carry one.
+    pub(crate) mod properties {
         use super::*;
         use proptest::collection::vec;
         use proptest::prelude::*;
@@ -322,7 +323,7 @@ mod tests {
             ]
         }
 
-        fn cpf() -> impl Strategy<Value = Cpf> {
+        pub(crate) fn cpf() -> impl Strategy<Value = Cpf> {
             vec(item(), 0..5).prop_map(Cpf::new)
         }
 

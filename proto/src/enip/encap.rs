@@ -372,52 +372,9 @@ mod tests {
 
     mod properties {
         use super::*;
-        use crate::enip::cpf::{item_type, Cpf, Item};
+        use crate::enip::cpf::tests::properties::cpf;
         use proptest::collection::vec;
         use proptest::prelude::*;
-        use std::net::{Ipv4Addr, SocketAddrV4};
-
-        fn sockaddr() -> impl Strategy<Value = SocketAddrV4> {
-            (any::<[u8; 4]>(), any::<u16>())
-                .prop_map(|(ip, port)| SocketAddrV4::new(Ipv4Addr::from(ip), port))
-        }
-
-        const KNOWN: [u16; 7] = [
-            item_type::NULL,
-            item_type::CONNECTED_ADDRESS,
-            item_type::SEQUENCED_ADDRESS,
-            item_type::UNCONNECTED_DATA,
-            item_type::CONNECTED_DATA,
-            item_type::SOCKADDR_O_T,
-            item_type::SOCKADDR_T_O,
-        ];
-
-        fn item() -> impl Strategy<Value = Item> {
-            prop_oneof![
-                Just(Item::Null),
-                any::<u32>().prop_map(Item::ConnectedAddress),
-                (any::<u32>(), any::<u32>()).prop_map(|(connection, sequence)| {
-                    Item::SequencedAddress {
-                        connection,
-                        sequence,
-                    }
-                }),
-                vec(any::<u8>(), 0..=32).prop_map(Item::UnconnectedData),
-                vec(any::<u8>(), 0..=32).prop_map(Item::ConnectedData),
-                sockaddr().prop_map(Item::SockaddrOT),
-                sockaddr().prop_map(Item::SockaddrTO),
-                // Types the codec does not interpret are kept as bytes.
-                (
-                    any::<u16>().prop_filter("interpreted type", |t| !KNOWN.contains(t)),
-                    vec(any::<u8>(), 0..=32)
-                )
-                    .prop_map(|(type_id, data)| Item::Other { type_id, data }),
-            ]
-        }
-
-        fn cpf() -> impl Strategy<Value = Cpf> {
-            vec(item(), 0..5).prop_map(Cpf::new)
-        }
 
         fn encap() -> impl Strategy<Value = EncapRepr> {
             (

@@ -631,7 +631,7 @@ impl fmt::Debug for Ind {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use rstest::rstest;
 
@@ -806,12 +806,13 @@ mod tests {
         );
     }
 
-    mod properties {
+    /// The strategy of a PKW telegram, also for the PPO's properties that carry one.
+    pub(crate) mod properties {
         use super::*;
         use proptest::prelude::*;
 
         /// Every telegram the codec represents: AK 4 bits, PNU 11 bits, IND and PWE whole.
-        fn pkw_repr() -> impl Strategy<Value = PkwRepr> {
+        pub(crate) fn pkw_repr() -> impl Strategy<Value = PkwRepr> {
             (
                 0u8..=15,
                 any::<bool>(),

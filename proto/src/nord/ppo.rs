@@ -250,24 +250,8 @@ mod tests {
 
     mod properties {
         use super::*;
+        use crate::nord::pkw::tests::properties::pkw_repr;
         use proptest::prelude::*;
-
-        fn pkw_repr() -> impl Strategy<Value = PkwRepr> {
-            (
-                0u8..=15,
-                any::<bool>(),
-                0u16..=0x07FF,
-                any::<u16>(),
-                any::<u32>(),
-            )
-                .prop_map(|(ak, spm, pnu, ind, pwe)| PkwRepr {
-                    ak,
-                    spm,
-                    pnu,
-                    ind,
-                    pwe,
-                })
-        }
 
         /// A type and a telegram of exactly that type: PKW present iff the type has one, as many
         /// PZD words as the type carries.
