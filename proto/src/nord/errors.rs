@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use super::mutant::{hex, Constant, Row, Table};
+use super::mutant::{Constant, Row, Table};
 use super::product::Protocol;
 
 /// A communication error as P700 [-01] shows it and its DS402 extended code (P700 [-04]).
@@ -432,10 +432,10 @@ impl Row for CommError {
             (
                 "ds402",
                 format!(
-                    "{} DS402 {} → {}",
+                    "{} DS402 {:04X}h → {:04X}h",
                     self.text,
-                    hex(self.ds402.into(), 4),
-                    hex((self.ds402 + 1).into(), 4)
+                    self.ds402,
+                    self.ds402 + 1
                 ),
                 CommError {
                     ds402: self.ds402 + 1,
@@ -464,7 +464,7 @@ impl Row for (u32, &'static str) {
     fn changes(&self) -> Vec<(&'static str, String, Self)> {
         vec![(
             "code",
-            format!("{} {} → {}", self.1, hex(self.0, 8), hex(self.0 + 1, 8)),
+            format!("{} {:08X}h → {:08X}h", self.1, self.0, self.0 + 1),
             (self.0 + 1, self.1),
         )]
     }
@@ -476,10 +476,10 @@ impl Row for PlError {
             (
                 "code",
                 format!(
-                    "{} {} → {}",
+                    "{} {:04X}h → {:04X}h",
                     self.text,
-                    hex(self.code.into(), 4),
-                    hex(u32::from(self.code) + 1, 4)
+                    self.code,
+                    u32::from(self.code) + 1
                 ),
                 PlError {
                     code: self.code.wrapping_add(1),
@@ -527,7 +527,7 @@ impl Row for (u16, &'static str) {
 
 /// An error number in tenths as the manuals print it: 103 → "10.3".
 fn tenths(n: u16) -> String {
-    format!("{}.{}", n / 10, n % 10)
+    super::scaling::from_raw(i64::from(n), 1)
 }
 
 /// The meaning of a module's P170 error (tenths).

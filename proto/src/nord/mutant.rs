@@ -385,17 +385,6 @@ static SITES: &[&dyn Site] = &[
     &can::MIN_CYCLE_US,
 ];
 
-/// A hexadecimal code as the manuals print it.
-pub(crate) fn hex(code: u32, digits: usize) -> impl fmt::Display {
-    struct Hex(u32, usize);
-    impl fmt::Display for Hex {
-        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-            write!(f, "{:0w$X}h", self.0, w = self.1)
-        }
-    }
-    Hex(code, digits)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
