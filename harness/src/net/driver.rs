@@ -5,11 +5,14 @@
 //! (EtherNet/IP's TCP clients, socketcand's).
 //!
 //! One pass of the loop: the answers held back by `--reply-delay` whose time has come go out;
-//! the device is polled (it runs what is due, [`Endpoint::poll`]) and what that makes goes
-//! out; the port is waited on until the device's next deadline, the next held answer or
+//! unless inputs are still queued, the device is polled (it runs what is due,
+//! [`Endpoint::poll`]) and what that makes goes out; the port is waited on until the device's next deadline, the next held answer or
 //! [`Options::idle`], whichever is first; an input is handed to the device with the time, and
 //! what it answers goes out at once, or its delay later when it is an answer the delay holds
-//! ([`Options::answers`]). The device sits behind a mutex ([`Shared`]) so that other threads
+//! ([`Options::answers`]). Inputs that queued while the process was held back (a loaded host)
+//! reach the device before its timers run: a POWERLINK node descheduled for 100 ms must see
+//! the SoCs waiting in its socket before it judges the MN lost, or it blames the MN for its
+//! own host ([`DRAIN`]). The device sits behind a mutex ([`Shared`]) so that other threads
 //! (other ports, a handle asking its state) reach the same device on the same clock.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -195,6 +198,10 @@ fn bump(c: &AtomicU64) {
     c.fetch_add(1, Ordering::Relaxed);
 }
 
+/// How many inputs in a row a pass hands over before the device is polled again: enough for
+/// what queues in a descheduled moment, few enough that a flood cannot starve the timers.
+const DRAIN: u32 = 64;
+
 /// Serves `shared`'s device on `port` until `stop` is set or the port fails (see the module's
 /// documentation for one pass).
 pub(crate) fn run<S: Endpoint, P: Port>(
@@ -205,6 +212,8 @@ pub(crate) fn run<S: Endpoint, P: Port>(
     stop: &AtomicBool,
 ) -> Result<(), P::Error> {
     let mut held: Held<Output> = Held::new(opts.reply_delay);
+    // Inputs handed over since the last poll.
+    let mut backlog = 0;
     let send = |port: &mut P, out: &Output| -> Result<(), P::Error> {
         let sent = port.send(out)?;
         counters.sent(out, sent);
@@ -214,24 +223,32 @@ pub(crate) fn run<S: Endpoint, P: Port>(
         while let Some(out) = held.due() {
             send(port, &out)?;
         }
-        let (outs, next) = shared.poll();
-        for out in &outs {
-            send(port, out)?;
-        }
-        let mut until = Instant::now() + opts.idle;
-        if let Some(next) = next {
-            until = until.min(shared.start + next);
-        }
-        if let Some(next) = held.next() {
-            until = until.min(next);
+        // After an input, whatever else is already queued goes first (`until` has passed:
+        // the port returns it or nothing at once).
+        let mut until = Instant::now();
+        if backlog == 0 || backlog >= DRAIN {
+            backlog = 0;
+            let (outs, next) = shared.poll();
+            for out in &outs {
+                send(port, out)?;
+            }
+            until += opts.idle;
+            if let Some(next) = next {
+                until = until.min(shared.start + next);
+            }
+            if let Some(next) = held.next() {
+                until = until.min(next);
+            }
         }
         let outs: Vec<(bool, Output)> = {
             let Some(input) = port.recv(until)? else {
+                backlog = 0;
                 counters
                     .oversized
                     .store(port.oversized(), Ordering::Relaxed);
                 continue;
             };
+            backlog += 1;
             counters.input(&input);
             let outs = shared.input(input);
             if outs.is_empty() {
@@ -317,9 +334,10 @@ mod tests {
     use std::collections::VecDeque;
 
     /// A device that answers each frame with its bytes reversed and, on its own, sends one
-    /// frame `[n]` every 5 ms (its deadline).
+    /// frame `[n]` every `period` (its deadline; zero: at every poll).
     struct Mirror {
         next: Duration,
+        period: Duration,
         n: u8,
     }
 
@@ -335,7 +353,7 @@ mod tests {
             if now < self.next {
                 return Vec::new();
             }
-            self.next = now + Duration::from_millis(5);
+            self.next = now + self.period;
             self.n += 1;
             vec![Output::Frame(vec![self.n])]
         }
@@ -380,6 +398,10 @@ mod tests {
     }
 
     fn serve(delay: Duration) -> (Script, Counts) {
+        serve_every(Duration::from_millis(5), delay)
+    }
+
+    fn serve_every(period: Duration, delay: Duration) -> (Script, Counts) {
         let stop = Arc::new(AtomicBool::new(false));
         let start = Instant::now();
         let mut port = Script {
@@ -392,6 +414,7 @@ mod tests {
         let shared = Shared::since(
             Mirror {
                 next: Duration::ZERO,
+                period,
                 n: 0,
             },
             start,
@@ -415,6 +438,16 @@ mod tests {
             (2, 0, 0)
         );
         assert_eq!(counts.frames_out as usize, frames.len());
+    }
+
+    #[test]
+    fn queued_inputs_reach_the_device_before_its_timers_run_again() {
+        // A device whose timer is due at every poll: the two frames already queued are both
+        // handed over before the second poll, as frames that queued while a loaded host held
+        // the process back must be (a node would otherwise judge its MN lost).
+        let (port, _) = serve_every(Duration::ZERO, Duration::ZERO);
+        let frames: Vec<&[u8]> = port.sent.iter().map(|(_, f)| f.as_slice()).collect();
+        assert_eq!(frames[..4], [&[1u8][..], &[3, 2, 1], &[5, 4], &[2]]);
     }
 
     #[test]
