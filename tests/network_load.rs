@@ -92,7 +92,8 @@ fn run(ns: Option<&Netns>, profile: &str, dut: &str, seed: u64, out: &Path) -> V
 }
 
 /// [`RUNS`] shuffled runs of `profile` against one served device, from seed `base` on;
-/// `first`, when given, holds the verdicts of the first run, already made. What went wrong, if anything.
+/// `first`, when given, holds the verdicts of the first run, already made. What went wrong,
+/// if anything.
 fn shuffled_runs(
     ns: Option<&Netns>,
     profile: &str,
