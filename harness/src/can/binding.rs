@@ -600,3 +600,21 @@ impl<L: CanLink> Binding for CanBinding<L> {
 pub(super) fn error_frame_hex(e: &ErrorFrame) -> String {
     format!("error {:03X} {}", e.class.0, hex(&e.data))
 }
+
+#[cfg(test)]
+mod identity_tests {
+    use proto::nord::Product;
+
+    #[test]
+    fn the_identity_is_fi_1s_objects_1018h_and_1008h() {
+        let id = crate::embedded::identity_over(Product::Sk550p, "can");
+        assert!(
+            id.source.starts_with("objects 1018h and 1008h of node "),
+            "{id:?}"
+        );
+        assert!(id.vendor.is_some(), "{id:?}");
+        // A node's 1018h need hold only the vendor id (CiA 301); the simulated inverters'
+        // name is their 1008h.
+        assert!(id.product_name.is_some(), "{id:?}");
+    }
+}

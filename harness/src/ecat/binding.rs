@@ -911,6 +911,7 @@ mod tests {
         let id = crate::embedded::identity_over(Product::Sk550p, "ecat");
         assert_eq!(id.source, "object 1018h (the SII header agrees)");
         assert_eq!(id.vendor.as_deref(), Some("00000538h"));
+        assert!(id.product_code.is_some() && id.revision.is_some() && id.serial.is_some());
     }
 
     fn binding() -> EcatBinding<Faulty<EmbeddedSegment>> {

@@ -140,5 +140,6 @@ mod identity_tests {
         let id = crate::embedded::identity_over(Product::Tu3Eip, "enip");
         assert_eq!(id.source, "ListIdentity");
         assert_eq!(id.product_name.as_deref(), Some("SK TU3-EIP"));
+        assert!(id.product_code.is_some() && id.revision.is_some() && id.serial.is_some());
     }
 }

@@ -853,6 +853,7 @@ mod tests {
         let id = crate::embedded::identity_over(Product::Tu3Pol, "epl");
         assert!(id.source.starts_with("IdentResponse of node 1"), "{id:?}");
         assert_eq!(id.product_code.as_deref(), Some("00002203h"));
+        assert!(id.revision.is_some() && id.serial.is_some(), "{id:?}");
     }
 
     use super::super::mn::link::{EmbeddedLink, NetLink, EMBEDDED_PEER};

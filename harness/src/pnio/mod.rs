@@ -283,5 +283,6 @@ mod identity_tests {
             "DCP Identify of station \"nord-device\" and I&M0"
         );
         assert_eq!(id.serial.as_deref(), Some("000ECF036000"));
+        assert!(id.product_code.is_some() && id.revision.is_some(), "{id:?}");
     }
 }
