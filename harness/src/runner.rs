@@ -749,7 +749,9 @@ fn recover(dut: &mut dyn Binding, profile: &Profile, opts: &RunOptions) -> StepR
 }
 
 /// The case's steps in order, up to the first that does not pass; with it, why that step's
-/// outcome says nothing of the device, if the host was late while it waited (see [`excuse`]).
+/// outcome says nothing of the device, if the host was late while it waited (see [`excuse`]),
+/// or, for a state the device reached on the bus, stalled at any time since the first step
+/// ([`stalled`]).
 fn run_steps(
     case: &Case,
     profile: &Profile,
@@ -758,6 +760,7 @@ fn run_steps(
     start: Instant,
 ) -> (CaseResult, Option<String>) {
     let mut steps = Vec::new();
+    let began = Instant::now();
     for (n, step) in (1..).zip(&case.steps) {
         if n > 1 && opts.stopping() {
             let message = format!(
@@ -776,9 +779,9 @@ fn run_steps(
         let message = r.message.clone();
         steps.push(r);
         if verdict != Verdict::Pass {
-            let excuse = timed
-                .filter(|_| opts.real_time())
-                .and_then(|timed| excuse(n, timed, window));
+            let excuse = timed.filter(|_| opts.real_time()).and_then(|timed| {
+                excuse(n, timed, window).or_else(|| stalled(n, timed, (began, window.1)))
+            });
             return (
                 result(case, profile, verdict, message, steps, start),
                 excuse,
@@ -814,6 +817,30 @@ fn excuse(n: usize, timed: Timed, window: (Instant, Instant)) -> Option<String> 
     };
     crate::timing::excuses(lost, time)
         .then(|| format!("host late by {} in step {n}{against}", ms(lost)))
+}
+
+/// Why step `n`'s outcome, a state the device reached through the bus's cycles (a bus step's,
+/// or process data's), says nothing of the device: the host stalled at some time in `span`,
+/// since the case's first step, long enough to stop the cycles the state came from
+/// ([`crate::timing::STALL_EXCUSE`]). A node that lost its MN's SoCs during an earlier step, or
+/// between two steps, shows it only in a later one.
+fn stalled(n: usize, timed: Timed, span: (Instant, Instant)) -> Option<String> {
+    if matches!(timed, Timed::Limit(_)) {
+        return None;
+    }
+    let stall = crate::timing::host_stall(span.0, span.1);
+    let ms = crate::timing::ms;
+    (stall >= crate::timing::STALL_EXCUSE).then(|| {
+        let steps = if n == 1 {
+            "in step 1".to_string()
+        } else {
+            format!("during steps 1–{n}")
+        };
+        format!(
+            "host stalled {} at once {steps}, whose bus cycles the device's state came from",
+            ms(stall)
+        )
+    })
 }
 
 /// What every case with a DUT ends with, whatever its verdict: the binding leaves the DUT as
@@ -1837,6 +1864,36 @@ cases:
         let c = run_late_in(epl(), "start-node", 1, Duration::ZERO, true);
         assert_eq!(c.verdict, Verdict::Fail, "{}", c.message);
         assert!(c.discarded.is_empty());
+    }
+
+    #[test]
+    fn a_state_after_a_stall_in_an_earlier_step_is_excused_a_time_out_is_not() {
+        let _one = crate::timing::TESTS
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        crate::timing::start_watch();
+        let began = Instant::now();
+        // Step 1's cycles stalled for 30 ms; step 2, on time, finds the node fallen back.
+        crate::timing::pretend_host_late(Duration::from_millis(30));
+        let step2 = (Instant::now(), Instant::now() + Duration::from_millis(2));
+        let bus = Timed::Bus(Duration::from_millis(2));
+        assert_eq!(excuse(2, bus, step2), None, "nothing late in step 2 itself");
+        let why = stalled(2, bus, (began, step2.1)).expect("excused");
+        assert!(why.starts_with("host stalled "), "{why}");
+        assert!(
+            why.ends_with(
+                " at once during steps 1–2, whose bus cycles the device's state came from"
+            ),
+            "{why}"
+        );
+        assert!(stalled(2, Timed::Run(Duration::from_secs(2)), (began, step2.1)).is_some());
+        // A time-out is the device's limit against its own window only.
+        let limit = Timed::Limit(Duration::from_millis(20));
+        assert_eq!(stalled(2, limit, (began, step2.1)), None);
+        // A stall shorter than the bound excuses nothing.
+        let later = Instant::now();
+        crate::timing::pretend_host_late(Duration::from_millis(10));
+        assert_eq!(stalled(2, bus, (later, Instant::now())), None);
     }
 
     #[test]

@@ -8,8 +8,11 @@
 //! moves by the time the host lost meanwhile. A step that still timed out while the host lost
 //! a large part of the device's limit ([`excuses`]) says nothing about the device: the runner
 //! discards that attempt and runs the case again, and when no attempt runs on time the verdict
-//! is inconclusive, "host late by N ms" (see `crate::runner`). A device that answers late while
-//! the host was on time fails, with both times.
+//! is inconclusive, "host late by N ms" (see `crate::runner`). A state the device reached
+//! through the bus's cycles is excused the same way when the host stalled for
+//! [`STALL_EXCUSE`] at once at any time since the case's first step: the harness's cycles
+//! stopped meanwhile, and the state shows it only in a later step. A device that answers late
+//! while the host was on time fails, with both times.
 //!
 //! Against the embedded simulator (a virtual clock) the watch never runs and nothing here
 //! changes a verdict.
@@ -30,6 +33,12 @@ const MEMORY: Duration = Duration::from_secs(120);
 const EXCUSE_MIN: Duration = Duration::from_millis(5);
 /// The least a wait moves for the host's lost time, however short its limit (a PRes's 500 µs).
 const MIN_ROOM: Duration = Duration::from_millis(50);
+/// A stall of the host at least this long, anywhere in an attempt, excuses a device state that
+/// came from the bus's cycles meanwhile: the harness sent no cycle for twenty of the fastest
+/// (1 ms), longer than the tolerances a case's steps leave (a ramp's ±60 ms) and enough for a
+/// watchdog that counts lost cycles. A busy host that only slows the harness down stalls it
+/// for a few milliseconds at a time (the scheduler's slices).
+pub(crate) const STALL_EXCUSE: Duration = Duration::from_millis(20);
 /// Of a limit, the share the host must have lost to excuse a time-out: a device given at least
 /// three quarters of its time with the host on time and still silent is late.
 const EXCUSE_SHARE: u32 = 4;
@@ -114,8 +123,19 @@ pub(crate) fn pretend_host_late(by: Duration) {
 /// The time the host lost between `from` and `to`: the watch's lateness past its floor, added
 /// up over the wake-ups it delayed in that span (zero when the watch does not run).
 pub(crate) fn host_lost(from: Instant, to: Instant) -> Duration {
+    lates(from, to).into_iter().sum()
+}
+
+/// The longest the host held the harness back at once between `from` and `to`: a stall that
+/// stopped the bus's cycles for that long (zero when the watch does not run).
+pub(crate) fn host_stall(from: Instant, to: Instant) -> Duration {
+    lates(from, to).into_iter().max().unwrap_or_default()
+}
+
+/// The watch's late wake-ups held back during the span from `from` to `to`.
+fn lates(from: Instant, to: Instant) -> Vec<Duration> {
     let Some(w) = WATCH.get() else {
-        return Duration::ZERO;
+        return Vec::new();
     };
     let w = w.lock().unwrap_or_else(|e| e.into_inner());
     w.iter()
@@ -124,7 +144,7 @@ pub(crate) fn host_lost(from: Instant, to: Instant) -> Duration {
         // A wake-up just after `to` was held back during the span.
         .filter(|l| l.woke.checked_sub(l.by).is_some_and(|s| s < to))
         .map(|l| l.by)
-        .sum()
+        .collect()
 }
 
 /// Whether `lost`, the time the host lost while a step waited on a device's `limit`, excuses
@@ -230,6 +250,10 @@ mod tests {
         assert!(lost >= Duration::from_millis(30), "lost {lost:?}");
         assert!(d.end() >= before + Duration::from_millis(30));
         assert!(excuses(lost, d.limit()));
+        assert!(
+            host_stall(d.start, Instant::now()) >= STALL_EXCUSE,
+            "one stall"
+        );
         // By no more than the limit again, and 50 ms however short the limit.
         assert!(d.end() <= d.start + d.limit + MIN_ROOM);
     }
