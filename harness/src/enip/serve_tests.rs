@@ -16,6 +16,7 @@ use proto::nord::Product;
 use sim::device::DeviceConfig;
 
 use super::serve::{start_enip, Limits};
+use crate::net::misbehave::Misbehaviour;
 
 /// How long a test waits for any one reply.
 const REPLY: Duration = Duration::from_secs(3);
@@ -24,10 +25,15 @@ fn serve(last_octet: u8, limits: Limits) -> SocketAddr {
     serve_late(last_octet, limits, Duration::ZERO)
 }
 
-/// An adapter whose replies leave `delay` late (`--reply-delay`).
+/// An adapter whose replies leave `delay` late (`--misbehave late=…`; none when zero).
 fn serve_late(last_octet: u8, limits: Limits, delay: Duration) -> SocketAddr {
     let listen = SocketAddr::from((Ipv4Addr::new(127, 0, 7, last_octet), 44818));
-    start_enip(listen, DeviceConfig::new(Product::Tu3Eip), limits, delay)
+    let misbehave = if delay.is_zero() {
+        Misbehaviour::default()
+    } else {
+        Misbehaviour::late(delay)
+    };
+    start_enip(listen, DeviceConfig::new(Product::Tu3Eip), limits, misbehave)
         .expect("serve on a loopback address of its own")
         .listen
 }
