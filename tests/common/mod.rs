@@ -103,9 +103,8 @@ pub(crate) fn cases_of_run(
         .output()
         .expect("harness run starts");
     let report: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("run.json")).unwrap_or_else(|e| {
-            panic!("run.json: {e}: {}", String::from_utf8_lossy(&run.stderr))
-        }),
+        &std::fs::read_to_string(dir.join("run.json"))
+            .unwrap_or_else(|e| panic!("run.json: {e}: {}", String::from_utf8_lossy(&run.stderr))),
     )
     .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&run.stdout)));
     let _ = std::fs::remove_dir_all(&dir);

@@ -63,7 +63,11 @@ mod tests {
 
     fn parsed(out: &Output) -> Result<EcatFrameRepr, proto::wire::Error> {
         let Output::Frame(b) = out else { panic!() };
-        EcatFrameRepr::parse_bytes(EthernetFrame::new_checked(b.as_slice()).unwrap().inner_payload())
+        EcatFrameRepr::parse_bytes(
+            EthernetFrame::new_checked(b.as_slice())
+                .unwrap()
+                .inner_payload(),
+        )
     }
 
     #[test]
@@ -77,7 +81,10 @@ mod tests {
         let after = parsed(&out).unwrap();
         assert!(after.datagrams.iter().all(|d| d.wkc == 0));
         let same = |r: &EcatFrameRepr| -> Vec<_> {
-            r.datagrams.iter().map(|d| (d.command, d.address, d.data.clone())).collect()
+            r.datagrams
+                .iter()
+                .map(|d| (d.command, d.address, d.data.clone()))
+                .collect()
         };
         assert_eq!(same(&after), same(&before));
     }
@@ -89,7 +96,11 @@ mod tests {
             corrupt(Field::Length, &mut out).as_deref(),
             Some("EtherCAT length 28 → 2047")
         );
-        assert!(matches!(parsed(&out), Err(proto::wire::Error::Length { .. })), "{:?}", parsed(&out));
+        assert!(
+            matches!(parsed(&out), Err(proto::wire::Error::Length { .. })),
+            "{:?}",
+            parsed(&out)
+        );
     }
 
     #[test]

@@ -74,10 +74,14 @@ mod tests {
     }
 
     fn mr(out: &Output, at: usize) -> MrResponse {
-        let Output::Message { bytes, .. } = out else { panic!() };
+        let Output::Message { bytes, .. } = out else {
+            panic!()
+        };
         let send = SendData::parse(&EncapRepr::parse(bytes).unwrap().data).unwrap();
         match &send.cpf.items[1] {
-            Item::UnconnectedData(d) | Item::ConnectedData(d) => MrResponse::parse(&d[at..]).unwrap(),
+            Item::UnconnectedData(d) | Item::ConnectedData(d) => {
+                MrResponse::parse(&d[at..]).unwrap()
+            }
             other => panic!("{other:?}"),
         }
     }
@@ -90,7 +94,13 @@ mod tests {
             corrupt(Field::GeneralStatus, &mut out).as_deref(),
             Some("general status 00h → 08h")
         );
-        assert_eq!(mr(&out, 0), MrResponse { general: 0x08, ..ok.clone() });
+        assert_eq!(
+            mr(&out, 0),
+            MrResponse {
+                general: 0x08,
+                ..ok.clone()
+            }
+        );
         // Connected: after the sequence count, which stays.
         let mut data = vec![5, 0];
         data.extend(ok.emit());

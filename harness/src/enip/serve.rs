@@ -192,8 +192,13 @@ pub(crate) fn start_enip_tapped(
                 woken,
                 buf: [0; 2048],
             };
-            if let Err(e) = driver::run(&shared.adapter, &mut port, &opts, &shared.counters, &serving)
-            {
+            if let Err(e) = driver::run(
+                &shared.adapter,
+                &mut port,
+                &opts,
+                &shared.counters,
+                &serving,
+            ) {
                 eprintln!("EtherNet/IP class-1 I/O stopped: cannot wait on UDP {io_addr}: {e}");
             }
         });

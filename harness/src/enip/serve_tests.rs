@@ -33,9 +33,14 @@ fn serve_late(last_octet: u8, limits: Limits, delay: Duration) -> SocketAddr {
     } else {
         Misbehaviour::late(delay)
     };
-    start_enip(listen, DeviceConfig::new(Product::Tu3Eip), limits, misbehave)
-        .expect("serve on a loopback address of its own")
-        .listen
+    start_enip(
+        listen,
+        DeviceConfig::new(Product::Tu3Eip),
+        limits,
+        misbehave,
+    )
+    .expect("serve on a loopback address of its own")
+    .listen
 }
 
 /// A bare encapsulation client on a blocking socket.

@@ -249,10 +249,10 @@ pub(crate) fn run<S: Endpoint, P: Port>(
     };
     // An output on its way out through the injector: now, held, or not at all.
     let leave = |port: &mut P,
-                     held: &mut Held<Output>,
-                     inject: &mut Injector,
-                     out: Output,
-                     answer: bool|
+                 held: &mut Held<Output>,
+                 inject: &mut Injector,
+                 out: Output,
+                 answer: bool|
      -> Result<(), P::Error> {
         for (due, out) in inject.outgoing(out, answer, Instant::now(), &counters.misbehaved) {
             match due {

@@ -187,7 +187,7 @@ impl Injector {
         match p {
             Pick::All => true,
             Pick::Percent(pc) => self.rng.u8(0..100) < pc,
-            Pick::Every(n) => self.seen[slot] % u64::from(n.get()) == 0,
+            Pick::Every(n) => self.seen[slot].is_multiple_of(u64::from(n.get())),
         }
     }
 }
@@ -238,7 +238,11 @@ mod tests {
         (1..=n).map(|i| Output::Frame(vec![i])).collect()
     }
 
-    fn run(spec: &str, outs: Vec<Output>, answer: bool) -> (Vec<(Option<Instant>, Output)>, Touched) {
+    fn run(
+        spec: &str,
+        outs: Vec<Output>,
+        answer: bool,
+    ) -> (Vec<(Option<Instant>, Output)>, Touched) {
         let spec: Misbehaviour = spec.parse().unwrap();
         let tally = Tally::default();
         let start = Instant::now();
@@ -277,7 +281,10 @@ mod tests {
 
     #[test]
     fn dup_and_reorder_change_what_leaves() {
-        assert_eq!(bytes(&run("dup=every:2", frames(4), false).0), [1, 2, 2, 3, 4, 4]);
+        assert_eq!(
+            bytes(&run("dup=every:2", frames(4), false).0),
+            [1, 2, 2, 3, 4, 4]
+        );
         // Each picked frame waits for the next one.
         assert_eq!(bytes(&run("reorder", frames(4), false).0), [2, 1, 4, 3]);
     }
@@ -309,12 +316,24 @@ mod tests {
         let start = Instant::now();
         let mut inj = Injector::new(spec, |_, _| None, start);
         // Before anything was heard, outputs leave.
-        assert_eq!(inj.outgoing(Output::Frame(vec![1]), false, start, &tally).len(), 1);
+        assert_eq!(
+            inj.outgoing(Output::Frame(vec![1]), false, start, &tally)
+                .len(),
+            1
+        );
         inj.heard(start + Duration::from_secs(1));
         let at = |ms: u64| start + Duration::from_millis(1000 + ms);
-        assert!(inj.outgoing(Output::Frame(vec![2]), false, at(0), &tally).is_empty());
-        assert!(inj.outgoing(Output::Frame(vec![3]), false, at(199), &tally).is_empty());
-        assert_eq!(inj.outgoing(Output::Frame(vec![4]), false, at(200), &tally).len(), 1);
+        assert!(inj
+            .outgoing(Output::Frame(vec![2]), false, at(0), &tally)
+            .is_empty());
+        assert!(inj
+            .outgoing(Output::Frame(vec![3]), false, at(199), &tally)
+            .is_empty());
+        assert_eq!(
+            inj.outgoing(Output::Frame(vec![4]), false, at(200), &tally)
+                .len(),
+            1
+        );
         assert_eq!(tally.snapshot().silenced, 2);
     }
 

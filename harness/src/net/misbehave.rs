@@ -276,7 +276,10 @@ impl FromStr for Misbehaviour {
                 ("close", None) => m.close = true,
                 ("close", Some(_)) => return Err(err("`close` takes no value".into())),
                 ("late" | "drop" | "silent" | "corrupt", None) => {
-                    return Err(err(format!("`{mode}` needs a value, e.g. {}", example(mode))))
+                    return Err(err(format!(
+                        "`{mode}` needs a value, e.g. {}",
+                        example(mode)
+                    )))
                 }
                 _ => {
                     return Err(err(
@@ -514,7 +517,9 @@ mod tests {
         ] {
             assert_eq!(parse(spec).unwrap_err(), want, "{spec}");
         }
-        assert!(parse("late=soon").unwrap_err().starts_with("`late=soon`: `soon` is not a duration"));
+        assert!(parse("late=soon")
+            .unwrap_err()
+            .starts_with("`late=soon`: `soon` is not a duration"));
     }
 
     #[test]
@@ -526,11 +531,19 @@ mod tests {
         };
         assert!(parse("corrupt=wkc,drop=5%").unwrap().check(&ecat).is_ok());
         assert_eq!(
-            parse("corrupt=state").unwrap().check(&ecat).unwrap_err().to_string(),
+            parse("corrupt=state")
+                .unwrap()
+                .check(&ecat)
+                .unwrap_err()
+                .to_string(),
             "`corrupt=state`: EtherCAT has no such field (its fields: wkc, length)"
         );
         assert_eq!(
-            parse("close").unwrap().check(&ecat).unwrap_err().to_string(),
+            parse("close")
+                .unwrap()
+                .check(&ecat)
+                .unwrap_err()
+                .to_string(),
             "`close`: EtherCAT has no session to close (raw Ethernet): use silent= or drop="
         );
     }

@@ -38,7 +38,10 @@ pub(crate) fn corrupt(field: Field, out: &mut Output) -> Option<String> {
         } else {
             let was = rt.data_status;
             rt.data_status = was.with(DataStatus::DATA_VALID, false);
-            format!("data status {:02X}h → {:02X}h (DataValid off)", was.0, rt.data_status.0)
+            format!(
+                "data status {:02X}h → {:02X}h (DataValid off)",
+                was.0, rt.data_status.0
+            )
         };
         Some((rt.emit(), what))
     })
@@ -102,7 +105,13 @@ mod tests {
         );
         let after = parsed(&out);
         assert!(!after.data_status.data_valid());
-        assert_eq!(after, RtRepr { data_status: DataStatus(0x31), ..rt() });
+        assert_eq!(
+            after,
+            RtRepr {
+                data_status: DataStatus(0x31),
+                ..rt()
+            }
+        );
     }
 
     #[test]
