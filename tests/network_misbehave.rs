@@ -43,6 +43,22 @@ fn check(cases: &[serde_json::Value], verdict: &str, says: &[&str]) {
     }
 }
 
+/// Runs the cases whose id contains `filter` for `profile` against `dut` from inside `ns`,
+/// then stops the served device (`stop`: what it touched), and checks the first case.
+fn judged(
+    ns: &Netns,
+    (profile, dut, filter): (&str, String, &str),
+    stop: impl FnOnce() -> Touched,
+    verdict: &str,
+    says: &[&str],
+) -> Touched {
+    let harness = ns.command(env!("CARGO_BIN_EXE_harness"));
+    let cases = common::cases_of_run(harness, profile, &dut, filter);
+    let touched = stop();
+    check(&cases, verdict, says);
+    touched
+}
+
 /// EtherCAT: `s` on a slave, the AL start-up case from the namespace; what the slave touched.
 fn ecat(tag: &str, s: &str, verdict: &str, says: &[&str]) -> Touched {
     let ns = Netns::new(tag);
@@ -51,18 +67,18 @@ fn ecat(tag: &str, s: &str, verdict: &str, says: &[&str]) -> Touched {
         ..harness::ecat_serve::ServeOptions::new(ns.root_if())
     };
     let served = harness::ecat_serve::start(&options).expect("serve ecat");
-    let cases = common::cases_of_run(
-        ns.command(env!("CARGO_BIN_EXE_harness")),
+    let run = (
         "sk550p@ecat",
-        &format!("ecat://{}", ns.ns_if()),
+        format!("ecat://{}", ns.ns_if()),
         "bu0620/ecat-al/start-up-sequence",
     );
-    let touched = served
-        .stop()
-        .expect("the slave served to the end")
-        .misbehaved;
-    check(&cases, verdict, says);
-    touched
+    let stop = || {
+        served
+            .stop()
+            .expect("the slave served to the end")
+            .misbehaved
+    };
+    judged(&ns, run, stop, verdict, says)
 }
 
 #[test]
@@ -102,18 +118,19 @@ fn epl(tag: &str, s: &str, case: &str, verdict: &str, says: &[&str]) -> Touched 
         ..harness::epl_serve::ServeOptions::new(ns.root_if())
     };
     let served = harness::epl_serve::start(&options).expect("serve epl");
-    let cases = common::cases_of_run(
-        ns.command(env!("CARGO_BIN_EXE_harness")),
+    let filter = format!("bu0620/epl-nmt/{case}");
+    let run = (
         "sk550p@epl",
-        &format!("epl://{}", ns.ns_if()),
-        &format!("bu0620/epl-nmt/{case}"),
+        format!("epl://{}", ns.ns_if()),
+        filter.as_str(),
     );
-    let touched = served
-        .stop()
-        .expect("the node served to the end")
-        .misbehaved;
-    check(&cases, verdict, says);
-    touched
+    let stop = || {
+        served
+            .stop()
+            .expect("the node served to the end")
+            .misbehaved
+    };
+    judged(&ns, run, stop, verdict, says)
 }
 
 #[test]
@@ -154,18 +171,18 @@ fn pnio(tag: &str, s: &str, verdict: &str, says: &[&str]) -> Touched {
         ..harness::pnio_serve::ServeOptions::new(ns.root_if())
     };
     let served = harness::pnio_serve::start(&options).expect("serve pnio");
-    let cases = common::cases_of_run(
-        ns.command(env!("CARGO_BIN_EXE_harness")),
+    let run = (
         "sk550p@pnio",
-        &format!("pnio://{}/{NAME}", ns.ns_if()),
+        format!("pnio://{}/{NAME}", ns.ns_if()),
         "pnio/connect/",
     );
-    let touched = served
-        .stop()
-        .expect("the device served to the end")
-        .misbehaved;
-    check(&cases, verdict, says);
-    touched
+    let stop = || {
+        served
+            .stop()
+            .expect("the device served to the end")
+            .misbehaved
+    };
+    judged(&ns, run, stop, verdict, says)
 }
 
 #[test]

@@ -254,6 +254,9 @@ pub(crate) fn run<S: Endpoint, P: Port>(
                  out: Output,
                  answer: bool|
      -> Result<(), P::Error> {
+        if !inject.is_active() {
+            return send(port, &out);
+        }
         for (due, out) in inject.outgoing(out, answer, Instant::now(), &counters.misbehaved) {
             match due {
                 Some(at) => held.hold(at, out),
