@@ -119,8 +119,8 @@ fn hung_closing_and_garbage_targets_are_error_verdicts() {
     }
 }
 
-/// A served adapter whose every reply leaves 500 ms late (`--misbehave late=500ms`), against a run
-/// whose limit for one request is 200 ms: the connection check finds it (it answers, late,
+/// A served adapter whose every reply leaves 500 ms late (`--misbehave late=500ms`), against a
+/// run whose limit for one request is 200 ms: the connection check finds it (it answers, late,
 /// and the identity says so) and every case that reaches it fails, naming the limit and how
 /// long the harness waited; none is an error or inconclusive.
 #[test]

@@ -365,7 +365,7 @@ fn idle_clients_cost_no_thread() {
 }
 
 #[test]
-fn with_a_reply_delay_every_encapsulation_reply_leaves_late_and_the_request_acts_at_once() {
+fn with_late_every_encapsulation_reply_leaves_late_and_the_request_acts_at_once() {
     let delay = Duration::from_millis(150);
     let at = serve_late(28, Limits::default(), delay);
     let mut c = Client::connect(at);
