@@ -119,8 +119,8 @@ fn hung_closing_and_garbage_targets_are_error_verdicts() {
     }
 }
 
-/// A served adapter whose every reply leaves 500 ms late (`--reply-delay`), against a run
-/// whose limit for one request is 200 ms: the connection check finds it (it answers, late,
+/// A served adapter whose every reply leaves 500 ms late (`--misbehave late=500ms`), against a
+/// run whose limit for one request is 200 ms: the connection check finds it (it answers, late,
 /// and the identity says so) and every case that reaches it fails, naming the limit and how
 /// long the harness waited; none is an error or inconclusive.
 #[test]
@@ -128,7 +128,7 @@ fn a_device_that_answers_past_the_limit_fails_the_cases_that_reach_it() {
     let late = format!("{}:44818", free_loopback());
     let mut server = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args(["serve", "enip", "--listen", &late, "--profile", "tu3-eip"])
-        .args(["--reply-delay", "500", "--seconds", "120"])
+        .args(["--misbehave", "late=500ms", "--seconds", "120"])
         .stdout(std::process::Stdio::null())
         .spawn()
         .expect("harness serve starts");

@@ -13,28 +13,6 @@ use harness::ecat_serve::{start, ServeOptions};
 mod common;
 use common::netns::{require_root_or_skip, Netns};
 
-/// `harness run` of the cases whose id contains `filter` for `profile` against `dut` from
-/// inside `ns`: the report's cases (the connection check's, when the run stopped there).
-fn cases_of_run(ns: &Netns, profile: &str, dut: &str, filter: &str) -> Vec<serde_json::Value> {
-    let dir = std::env::temp_dir().join(format!("harness-late-{}-{profile}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let suites = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../suites");
-    let run = ns
-        .command(env!("CARGO_BIN_EXE_harness"))
-        .args(["run", "--profile", profile, "--suites"])
-        .arg(&suites)
-        .args(["--filter", filter, "--dut", dut, "--allow-motion", "--out"])
-        .arg(&dir)
-        .output()
-        .expect("harness run starts");
-    let report: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("run.json")).expect("run.json written"),
-    )
-    .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&run.stdout)));
-    let _ = std::fs::remove_dir_all(&dir);
-    report["cases"].as_array().expect("cases").clone()
-}
-
 /// A slave whose frames come back later than the master's limit for a frame (50 ms; ETG.1000
 /// prints none) is late, and the report says so with both times — the limit and how long the
 /// harness waited — while the host was on time: never "host late", never a pass, and a fail,
@@ -42,18 +20,19 @@ fn cases_of_run(ns: &Netns, profile: &str, dut: &str, filter: &str) -> Vec<serde
 /// absent. The frames are late from the scan on, so the run ends at its connection check.
 #[test]
 fn a_slave_whose_frames_come_back_past_the_limit_is_late_with_both_times() {
-    let why = "a late EtherCAT slave (serve ecat --reply-delay) over a veth pair";
+    let why = "a late EtherCAT slave (serve ecat --misbehave late=…) over a veth pair";
     if !require_root_or_skip(why) {
         return;
     }
     let ns = Netns::new("eclate");
     let options = ServeOptions {
-        reply_delay: std::time::Duration::from_millis(80),
+        misbehave: harness::misbehave::Misbehaviour::late(std::time::Duration::from_millis(80)),
         ..ServeOptions::new(ns.root_if())
     };
     let served = start(&options).expect("serve ecat");
     let dut = format!("ecat://{}", ns.ns_if());
-    let cases = cases_of_run(&ns, "sk550p@ecat", &dut, "bu0620/ecat-al/");
+    let harness = ns.command(env!("CARGO_BIN_EXE_harness"));
+    let cases = common::cases_of_run(harness, "sk550p@ecat", &dut, "bu0620/ecat-al/");
     served.stop().expect("the slave served to the end");
     assert_eq!(cases.len(), 1, "{cases:?}");
     let (verdict, message) = (&cases[0]["verdict"], cases[0]["message"].as_str().unwrap());

@@ -160,7 +160,7 @@ fn a_silent_or_garbage_sending_device_is_an_error_verdict_within_the_timeout() {
 /// absent. Identify comes first, so the run ends at its connection check.
 #[test]
 fn a_device_whose_answers_leave_past_the_limit_is_late_with_both_times() {
-    let why = "a late PROFINET IO device (serve pnio --reply-delay) over a veth pair";
+    let why = "a late PROFINET IO device (serve pnio --misbehave late=…) over a veth pair";
     if !require_root_or_skip(why) {
         return;
     }
@@ -168,30 +168,17 @@ fn a_device_whose_answers_leave_past_the_limit_is_late_with_both_times() {
     ns.add_ipv4("192.168.20.200/24", "192.168.20.1/24");
     let options = ServeOptions {
         name: NAME.to_string(),
-        reply_delay: std::time::Duration::from_millis(600),
+        misbehave: harness::misbehave::Misbehaviour::late(std::time::Duration::from_millis(600)),
         ..ServeOptions::new(ns.root_if())
     };
     let served = start(&options).expect("serve pnio");
-    let dir = std::env::temp_dir().join(format!("harness-late-pnio-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let suites = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../suites");
-    let run = ns
-        .command(env!("CARGO_BIN_EXE_harness"))
-        .args(["run", "--profile", "sk550p@pnio", "--suites"])
-        .arg(&suites)
-        .args(["--filter", "pnio/records/", "--dut"])
-        .arg(format!("pnio://{}/{NAME}", ns.ns_if()))
-        .arg("--out")
-        .arg(&dir)
-        .output()
-        .expect("harness run starts");
+    let cases = common::cases_of_run(
+        ns.command(env!("CARGO_BIN_EXE_harness")),
+        "sk550p@pnio",
+        &format!("pnio://{}/{NAME}", ns.ns_if()),
+        "pnio/records/",
+    );
     served.stop().expect("the device served to the end");
-    let report: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("run.json")).expect("run.json written"),
-    )
-    .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&run.stdout)));
-    let _ = std::fs::remove_dir_all(&dir);
-    let cases = report["cases"].as_array().expect("cases");
     assert_eq!(cases.len(), 1, "{cases:?}");
     let (verdict, message) = (&cases[0]["verdict"], cases[0]["message"].as_str().unwrap());
     assert_eq!(verdict, "fail", "{message}");

@@ -55,6 +55,7 @@ mod interrupt;
 mod model;
 mod mutants;
 mod net;
+pub use net::misbehave;
 mod notation;
 pub mod outcome;
 mod pcap;

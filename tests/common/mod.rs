@@ -80,6 +80,37 @@ pub(crate) fn case_verdict<'a>(run: &'a serde_json::Value, id: &str) -> (&'a str
     )
 }
 
+/// `harness run` (made by `harness`, in a namespace or not) of the cases whose id contains
+/// `filter` for `profile` against `dut`: the report's cases (the connection check's, when the
+/// run stopped there).
+pub(crate) fn cases_of_run(
+    harness: Command,
+    profile: &str,
+    dut: &str,
+    filter: &str,
+) -> Vec<serde_json::Value> {
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let mut harness = harness;
+    let n = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("harness-run-{}-{n}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let suites = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../suites");
+    let run = harness
+        .args(["run", "--profile", profile, "--suites"])
+        .arg(&suites)
+        .args(["--filter", filter, "--dut", dut, "--allow-motion", "--out"])
+        .arg(&dir)
+        .output()
+        .expect("harness run starts");
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("run.json"))
+            .unwrap_or_else(|e| panic!("run.json: {e}: {}", String::from_utf8_lossy(&run.stderr))),
+    )
+    .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&run.stdout)));
+    let _ = std::fs::remove_dir_all(&dir);
+    report["cases"].as_array().expect("cases").clone()
+}
+
 /// `harness serve BUS --iface IFACE --profile PROFILE EXTRA… --system-bus RELAY` for three
 /// minutes at most, once the relay (socketcand, the served device's gateway frames) listens.
 pub(crate) fn serve_on_iface_with_relay(

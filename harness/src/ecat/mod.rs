@@ -5,6 +5,7 @@ pub mod bench_support;
 mod binding;
 mod effect;
 mod esi;
+mod faults;
 pub(crate) mod master;
 mod pcap;
 pub mod serve;

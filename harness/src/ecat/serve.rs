@@ -8,12 +8,15 @@
 //! it processed (ETG.1000.4 §5, "processing and forwarding"). The slave sets the locally
 //! administered bit in the source address of what it sends. Between frames the thread waits
 //! at most until the slave's next timer (watchdogs) and lets it run with the real clock since
-//! start. With a reply delay (`--reply-delay MS`) each processed frame goes back that much
-//! later, the slave serving on meanwhile.
+//! start. Misbehaving on purpose (`--misbehave`, [`crate::net::misbehave`]), `late=` holds
+//! every processed frame back, the slave serving on meanwhile, and `corrupt=` knows the
+//! working counter and the length ([`super::faults`]).
 
 use std::time::Duration;
 
+use super::faults;
 use crate::net::driver::{Counts, Options, Serving, Shared};
+use crate::net::misbehave::{Misbehaviour, Touched};
 use crate::net::raw_port::RawPort;
 use crate::net::serve_args::{RawServeArgs, SystemBusArg};
 pub use crate::net::LinkError;
@@ -41,8 +44,8 @@ pub struct ServeOptions {
     pub profile: String,
     /// Inverters behind the interface (`--inverters`; default the product's maximum).
     pub inverters: Option<u8>,
-    /// How much later than processed each frame goes back (`--reply-delay`; none by default).
-    pub reply_delay: Duration,
+    /// What the slave does wrong on purpose (`--misbehave`; nothing by default).
+    pub misbehave: Misbehaviour,
 }
 
 impl ServeOptions {
@@ -53,7 +56,7 @@ impl ServeOptions {
             iface: iface.into(),
             profile: "sk550p".into(),
             inverters: None,
-            reply_delay: Duration::ZERO,
+            misbehave: Misbehaviour::default(),
         }
     }
 }
@@ -84,6 +87,8 @@ pub struct Stats {
     pub dropped: u64,
     /// Frames skipped because they were longer than a standard Ethernet frame.
     pub oversized: u64,
+    /// What `--misbehave` did.
+    pub misbehaved: Touched,
 }
 
 impl From<Counts> for Stats {
@@ -92,6 +97,7 @@ impl From<Counts> for Stats {
             frames: c.frames_out,
             dropped: c.unanswered + c.lost,
             oversized: c.oversized,
+            misbehaved: c.misbehaved,
         }
     }
 }
@@ -142,7 +148,7 @@ impl Drop for Served {
 /// this process, until the returned handle is stopped or dropped.
 pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     let config = device_config(opts)?;
-    start_endpoint(&opts.iface, slave(config)?, opts.reply_delay)
+    start_endpoint(&opts.iface, slave(config)?, opts.misbehave)
 }
 
 /// Serves until `duration` has passed (forever when `None`), after a line on stdout that says
@@ -155,7 +161,7 @@ pub(crate) fn serve(
 ) -> Result<(), ServeError> {
     let config = device_config(opts)?;
     let shared = Shared::new(slave(config)?);
-    let served = start_shared(&opts.iface, shared.clone(), opts.reply_delay)?;
+    let served = start_shared(&opts.iface, shared.clone(), opts.misbehave)?;
     let relay = system_bus
         .map(|addr| crate::can::relay_served(addr, shared, Slave::device_mut))
         .transpose()
@@ -174,8 +180,11 @@ pub(crate) fn serve(
         m[5]
     );
     crate::can::announce_relay(relay.as_ref());
+    crate::net::misbehave::announce(&opts.misbehave);
     crate::net::workers::serve_for(duration, STOP_CHECK * 10, || served.is_running());
-    served.stop().map(|_| ())
+    let stats = served.stop()?;
+    crate::net::misbehave::summarize(&opts.misbehave, stats.misbehaved);
+    Ok(())
 }
 
 /// `harness serve ecat` arguments.
@@ -197,11 +206,15 @@ pub(crate) fn command(args: &[String]) -> Result<i32, crate::net::serve_error::S
         Ok(a) => a,
         Err(code) => return Ok(code),
     };
+    let misbehave = match a.common.misbehave.for_bus(&faults::FAULTS) {
+        Ok(m) => m,
+        Err(code) => return Ok(code),
+    };
     let opts = ServeOptions {
         iface: a.common.iface,
         profile: a.common.profile,
         inverters: a.common.inverters,
-        reply_delay: Duration::from_millis(a.common.reply_delay),
+        misbehave,
     };
     let seconds = a.common.seconds.map(Duration::from_secs);
     serve(&opts, seconds, a.system_bus.system_bus.as_deref())
@@ -226,27 +239,27 @@ fn slave(config: sim::device::DeviceConfig) -> Result<Slave, ServeError> {
 }
 
 /// Opens the interface and serves `slave` on it in a thread (the serve driver,
-/// [`crate::net::driver`]), each processed frame back `delay` after it was processed.
+/// [`crate::net::driver`]), misbehaving as `misbehave` says.
 pub(crate) fn start_endpoint(
     iface: &str,
     slave: impl Endpoint + Send + 'static,
-    delay: Duration,
+    misbehave: Misbehaviour,
 ) -> Result<Served, ServeError> {
-    start_shared(iface, Shared::new(slave), delay)
+    start_shared(iface, Shared::new(slave), misbehave)
 }
 
 /// [`start_endpoint`] for a slave already shared (with the `--system-bus` relay).
 fn start_shared<S: Endpoint + Send + 'static>(
     iface: &str,
     shared: std::sync::Arc<Shared<S>>,
-    delay: Duration,
+    misbehave: Misbehaviour,
 ) -> Result<Served, ServeError> {
     let mut link = RawLink::open(iface, Some(ETHERTYPE))?;
     link.set_spin(FRAME_POLL);
     let mac = link.mac().0;
     let mut serving = Serving::new();
     // Every frame the slave sends back is its answer to one that came.
-    let opts = Options::new(STOP_CHECK).late(delay, |_, _| true);
+    let opts = Options::new(STOP_CHECK).misbehaving(misbehave, |_, _| true, faults::corrupt);
     serving
         .spawn(
             format!("ecat-slave-{iface}"),
@@ -324,7 +337,7 @@ mod tests {
             polls: polls.clone(),
             next: Duration::ZERO,
         };
-        let served = start_endpoint(&v.0, core, Duration::ZERO).expect("serve");
+        let served = start_endpoint(&v.0, core, Misbehaviour::default()).expect("serve");
         assert!(served.is_running());
         let mut master = RawLink::open(&v.1, Some(ETHERTYPE)).unwrap();
         let mut buf = [0u8; MAX_FRAME];
@@ -355,7 +368,7 @@ mod tests {
             polls: Default::default(),
             next: Duration::ZERO,
         };
-        let served = start_endpoint(&v.0, core, Duration::ZERO).expect("serve");
+        let served = start_endpoint(&v.0, core, Misbehaviour::default()).expect("serve");
         drop(v);
         let t = Instant::now();
         while served.is_running() && t.elapsed() < Duration::from_secs(2) {
@@ -373,7 +386,7 @@ mod tests {
             polls: Default::default(),
             next: Duration::ZERO,
         };
-        match start_endpoint("no-such-if0", core, Duration::ZERO) {
+        match start_endpoint("no-such-if0", core, Misbehaviour::default()) {
             Err(ServeError::Link(LinkError::NoSuchInterface { .. })) => {}
             other => panic!("{other:?}"),
         }

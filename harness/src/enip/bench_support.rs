@@ -28,7 +28,7 @@ pub struct ServedAdapter {
 /// that serve until it ends (the process's soft limit of open files raised to its hard
 /// limit). An error says which socket could not be bound.
 pub fn serve(listen: SocketAddr, config: DeviceConfig) -> Result<ServedAdapter, String> {
-    let served = super::serve::start_enip(listen, config, Default::default(), Duration::ZERO)
+    let served = super::serve::start_enip(listen, config, Default::default(), Default::default())
         .map_err(|e| e.to_string())?;
     Ok(ServedAdapter {
         listen: served.listen,

@@ -6,6 +6,7 @@ pub mod bench_support;
 mod cleanup;
 mod eds;
 mod effect;
+mod faults;
 mod link;
 mod pcap;
 mod scanner;

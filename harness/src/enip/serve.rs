@@ -11,9 +11,12 @@
 //! each O→T frame as soon as it waits again, so the T→O frames cannot run ahead of O→T frames
 //! queued for a receiving thread that a loaded host holds back.
 
-//! `--reply-delay MS` makes the adapter late on purpose: the adapter acts on each request at
-//! once, and its encapsulation reply (TCP, and UDP ListIdentity) leaves MS later, so that a
-//! run against it shows how the harness judges a device that answers past its limit.
+//! `--misbehave` ([`crate::net::misbehave`]) makes the adapter misbehave on purpose, so that a
+//! run against it shows how the harness judges it: `late=` acts on each request at once and
+//! sends its encapsulation reply (TCP, and UDP ListIdentity) late; `drop`, `dup`, `reorder`,
+//! `silent` touch those replies and the class-1 T→O frames alike (the same injector as the
+//! serve driver's, [`crate::net::inject`]); `corrupt=status` and `close` are
+//! [`super::faults`]'s.
 
 use std::net::{SocketAddr, TcpListener, UdpSocket};
 use std::os::fd::AsFd;
@@ -33,7 +36,10 @@ use sim::device::{Device, DeviceConfig};
 use sim::endpoint::{Input, Output};
 use sim::enip::{Adapter, MAX_SESSIONS};
 
+use super::faults;
 use crate::net::driver::{self, Counters, Options, Port};
+use crate::net::inject::Injector;
+use crate::net::misbehave::Misbehaviour;
 use crate::net::serve_error::ServeError;
 
 /// How long a partial message may wait for its rest.
@@ -68,13 +74,20 @@ pub(super) struct Shared {
     /// Wakes the I/O thread to look at the adapter's next due time again: one byte to the
     /// other end, which the thread waits on beside the I/O socket.
     wake: UnixDatagram,
-    /// How long after its request an encapsulation reply leaves (`--reply-delay`).
-    pub(super) reply_delay: Duration,
+    /// What the adapter does wrong on purpose (`--misbehave`).
+    pub(super) misbehave: Misbehaviour,
+    /// What every thread counted, the misbehaviour's touched outputs among it.
+    pub(super) counters: Counters,
 }
 
 impl Shared {
     pub(super) fn lock(&self) -> MutexGuard<'_, Adapter> {
         self.adapter.lock().0
+    }
+
+    /// A fault injector for one thread or client, on the adapter's clock.
+    pub(super) fn injector(&self) -> Injector {
+        Injector::new(self.misbehave, faults::corrupt, self.adapter.start())
     }
 
     /// Wakes the I/O thread to look at the adapter's next due time again (a wake-up already
@@ -103,7 +116,7 @@ impl Default for Limits {
 }
 
 /// The addresses of an adapter that [`start_enip`] put on the network.
-#[derive(Debug, Clone, Copy)]
+#[derive(Clone)]
 pub(crate) struct Served {
     /// Encapsulation messages, TCP and UDP.
     pub(crate) listen: SocketAddr,
@@ -112,19 +125,21 @@ pub(crate) struct Served {
     /// TCP clients served at once (`--max-connections`, less where the open-files limit
     /// leaves no room for so many).
     pub(crate) connections: usize,
+    /// The adapter and its threads' counts.
+    shared: Arc<Shared>,
 }
 
 /// Binds the sockets and starts the adapter's threads, then returns; they serve until the
 /// process ends. The process's soft limit of open files is raised to its hard limit first,
 /// and the TCP clients served at once are as many as `limits` says and that limit leaves room
-/// for. Every encapsulation reply leaves `reply_delay` after its request.
+/// for. The adapter misbehaves as `misbehave` says.
 pub(crate) fn start_enip(
     listen: SocketAddr,
     config: DeviceConfig,
     limits: Limits,
-    reply_delay: Duration,
+    misbehave: Misbehaviour,
 ) -> Result<Served, ServeError> {
-    start_enip_tapped(listen, config, limits, reply_delay, None)
+    start_enip_tapped(listen, config, limits, misbehave, None)
 }
 
 /// [`start_enip`], and with `system_bus` (HOST[:PORT]) a socketcand server carrying what the
@@ -133,7 +148,7 @@ pub(crate) fn start_enip_tapped(
     listen: SocketAddr,
     config: DeviceConfig,
     limits: Limits,
-    reply_delay: Duration,
+    misbehave: Misbehaviour,
     system_bus: Option<&str>,
 ) -> Result<Served, ServeError> {
     let SocketAddr::V4(v4) = listen else {
@@ -161,27 +176,35 @@ pub(crate) fn start_enip_tapped(
     let shared = Arc::new(Shared {
         adapter: driver::Shared::new(adapter),
         wake,
-        reply_delay,
+        misbehave,
+        counters: Counters::default(),
     });
     {
-        let adapter = shared.adapter.clone();
+        let shared = shared.clone();
         thread::spawn(move || {
             // Served until the process ends.
             let serving = AtomicBool::new(false);
-            let opts = Options::new(IO_IDLE);
+            // No T→O frame is an answer: `late=` leaves them be.
+            let opts =
+                Options::new(IO_IDLE).misbehaving(shared.misbehave, |_, _| false, faults::corrupt);
             let mut port = IoPort {
                 io,
                 woken,
                 buf: [0; 2048],
             };
-            if let Err(e) = driver::run(&adapter, &mut port, &opts, &Counters::default(), &serving)
-            {
+            if let Err(e) = driver::run(
+                &shared.adapter,
+                &mut port,
+                &opts,
+                &shared.counters,
+                &serving,
+            ) {
                 eprintln!("EtherNet/IP class-1 I/O stopped: cannot wait on UDP {io_addr}: {e}");
             }
         });
     }
     super::serve_tcp::start(tcp, shared.clone(), connections)?;
-    let late = late_sender(&udp, reply_delay)?;
+    let late = late_sender(&udp, misbehave.late.is_some())?;
     {
         let s = shared.clone();
         thread::spawn(move || discovery(udp, s, late));
@@ -195,6 +218,7 @@ pub(crate) fn start_enip_tapped(
         listen,
         io: io_addr,
         connections,
+        shared,
     })
 }
 
@@ -252,11 +276,8 @@ struct ServeArgs {
     /// memory" and closed.
     #[arg(long, default_value_t = MAX_CONNECTIONS, value_parser = at_least_one)]
     max_connections: usize,
-    /// Answer every encapsulation request (TCP, and UDP ListIdentity) this many milliseconds
-    /// late: a device late on purpose, to test that the harness fails it (and does not blame
-    /// its own host).
-    #[arg(long, value_name = "MS", default_value_t = 0)]
-    reply_delay: u64,
+    #[command(flatten)]
+    misbehave: crate::net::serve_args::MisbehaveArgs,
     /// Also serve the adapter's system bus over socketcand on HOST[:PORT] (channel `can0`):
     /// the CANopen frames its gateway exchanges with the inverters, for `harness run --tap
     /// socketcand://HOST:PORT/can0` or any CAN tool.
@@ -297,14 +318,15 @@ pub(super) fn command(args: &[String]) -> Result<i32, ServeError> {
         sessions: a.max_sessions,
         connections: a.max_connections,
     };
+    let misbehave = match a.misbehave.for_bus(&faults::FAULTS) {
+        Ok(m) => m,
+        Err(code) => return Ok(code),
+    };
     serve_enip(
         parse_addr(&a.listen).map_err(ServeError::Address)?,
         config,
         limits,
-        (
-            Duration::from_millis(a.reply_delay),
-            a.system_bus.as_deref(),
-        ),
+        (misbehave, a.system_bus.as_deref()),
         a.seconds.map(Duration::from_secs),
     )?;
     Ok(crate::exit::EXIT_PASS)
@@ -315,20 +337,15 @@ pub(crate) fn serve_enip(
     listen: SocketAddr,
     config: DeviceConfig,
     limits: Limits,
-    (reply_delay, system_bus): (Duration, Option<&str>),
+    (misbehave, system_bus): (Misbehaviour, Option<&str>),
     duration: Option<Duration>,
 ) -> Result<(), ServeError> {
     let product = config.product;
     let inverters = config.inverters;
-    let served = start_enip_tapped(listen, config, limits, reply_delay, system_bus)?;
-    let late = if reply_delay.is_zero() {
-        String::new()
-    } else {
-        format!("; every reply {} ms late", reply_delay.as_millis())
-    };
+    let served = start_enip_tapped(listen, config, limits, misbehave, system_bus)?;
     let late = match system_bus {
-        Some(addr) => format!("{late}; its system bus over socketcand on {addr}, channel can0"),
-        None => late,
+        Some(addr) => format!("; its system bus over socketcand on {addr}, channel can0"),
+        None => String::new(),
     };
     outln!(
         "serving EtherNet/IP adapter ({}, {inverters} inverters) on {} (TCP, UDP) and {} (class-1 I/O); at most {} sessions, {} TCP connections{late}",
@@ -338,12 +355,15 @@ pub(crate) fn serve_enip(
         limits.sessions,
         served.connections
     );
+    crate::net::misbehave::announce(&misbehave);
     match duration {
         Some(d) => thread::sleep(d),
         None => loop {
             thread::sleep(Duration::from_secs(3600));
         },
     }
+    let touched = served.shared.counters.snapshot().misbehaved;
+    crate::net::misbehave::summarize(&misbehave, touched);
     Ok(())
 }
 
@@ -352,21 +372,26 @@ fn discovery(udp: UdpSocket, shared: Arc<Shared>, late: Option<Sender<LateReply>
     let Ok(port) = udp.local_addr().map(|a| a.port()) else {
         return;
     };
+    let mut inject = shared.injector();
     loop {
         let Ok((n, from)) = udp.recv_from(&mut buf) else {
             continue;
         };
         let bytes = &buf[..n];
+        inject.heard(Instant::now());
         for out in shared.adapter.input(Input::Datagram { port, from, bytes }) {
-            let Output::Datagram { to, bytes, .. } = out else {
-                continue;
-            };
-            match &late {
-                None => {
-                    let _ = udp.send_to(&bytes, to);
-                }
-                Some(late) => {
-                    let _ = late.send((Instant::now() + shared.reply_delay, bytes, to));
+            let tally = shared.counters.misbehaved();
+            for (due, out) in inject.outgoing(out, true, Instant::now(), tally) {
+                let Output::Datagram { to, bytes, .. } = out else {
+                    continue;
+                };
+                match (due, &late) {
+                    (Some(due), Some(late)) => {
+                        let _ = late.send((due, bytes, to));
+                    }
+                    _ => {
+                        let _ = udp.send_to(&bytes, to);
+                    }
                 }
             }
         }
@@ -376,11 +401,11 @@ fn discovery(udp: UdpSocket, shared: Arc<Shared>, late: Option<Sender<LateReply>
 /// A UDP reply held back: when it leaves, its bytes, where to.
 type LateReply = (Instant, Vec<u8>, SocketAddr);
 
-/// With a reply delay, a thread that sends each UDP reply handed to it when it is due (in the
-/// order handed over: with one delay for all, the order they fall due), so that the discovery
-/// thread goes on receiving meanwhile; none without a delay.
-fn late_sender(udp: &UdpSocket, delay: Duration) -> Result<Option<Sender<LateReply>>, ServeError> {
-    if delay.is_zero() {
+/// With `late=`, a thread that sends each UDP reply handed to it when it is due (in the order
+/// handed over, which the injector keeps), so that the discovery thread goes on receiving
+/// meanwhile; none without it.
+fn late_sender(udp: &UdpSocket, late: bool) -> Result<Option<Sender<LateReply>>, ServeError> {
+    if !late {
         return Ok(None);
     }
     let at = udp

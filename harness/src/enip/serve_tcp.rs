@@ -218,6 +218,11 @@ async fn client(mut stream: TcpStream, peer: SocketAddr, slot: Slot) {
     let mut framer = Framer::new();
     let mut last = Instant::now();
     let mut pending_since: Option<Instant> = None;
+    let mut inject = slot.l.shared.injector();
+    // `close`: the connection ends, unanswered, at its second request (the first after
+    // RegisterSession).
+    let closes = slot.l.shared.misbehave.close;
+    let mut requests = 0u32;
     loop {
         let inactive_at = timeouts.borrow_and_update().map(|t| last + t);
         let stall_at = pending_since.map(|t| t + STALL);
@@ -255,21 +260,34 @@ async fn client(mut stream: TcpStream, peer: SocketAddr, slot: Slot) {
                 }
                 Read::Messages(messages) => {
                     last = Instant::now();
-                    // `--reply-delay`: the adapter acts at once, its replies leave late.
-                    let due = last + slot.l.shared.reply_delay;
+                    // `--misbehave`: the adapter acts on them all at once; the injector says
+                    // what of its replies leaves, and when (`late=`).
+                    let mut leave = Vec::new();
                     for m in messages {
+                        requests += 1;
+                        if closes && requests == 2 {
+                            misbehaved_close(&slot, peer);
+                            return;
+                        }
+                        inject.heard(last.into_std());
                         for out in handle(&slot, peer, &m) {
-                            match out {
-                                Output::Message { bytes, .. } => {
-                                    sleep_until(due).await;
-                                    match timeout(STALL, stream.write_all(&bytes)).await {
-                                        Ok(Ok(())) => {}
-                                        _ => return,
-                                    }
+                            let tally = slot.l.shared.counters.misbehaved();
+                            leave.extend(inject.outgoing(out, true, last.into_std(), tally));
+                        }
+                    }
+                    for (due, out) in leave {
+                        match out {
+                            Output::Message { bytes, .. } => {
+                                if let Some(due) = due {
+                                    sleep_until(Instant::from_std(due)).await;
                                 }
-                                Output::Close(_) => return,
-                                _ => {}
+                                match timeout(STALL, stream.write_all(&bytes)).await {
+                                    Ok(Ok(())) => {}
+                                    _ => return,
+                                }
                             }
+                            Output::Close(_) => return,
+                            _ => {}
                         }
                     }
                     polled = std::time::Instant::now();
@@ -282,6 +300,14 @@ async fn client(mut stream: TcpStream, peer: SocketAddr, slot: Slot) {
             (_, None) => Some(Instant::now()),
         };
     }
+}
+
+/// `close`: the line on stderr and the count for a connection closed on purpose.
+fn misbehaved_close(slot: &Slot, peer: SocketAddr) {
+    let shared = &slot.l.shared;
+    shared.counters.misbehaved().closed();
+    let t = shared.adapter.now().as_secs_f64();
+    eprintln!("misbehave {t:9.3}s close   TCP connection of {peer} at its second request");
 }
 
 /// One message through the adapter: its reply, and its close when the adapter ends the

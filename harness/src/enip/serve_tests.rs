@@ -16,6 +16,7 @@ use proto::nord::Product;
 use sim::device::DeviceConfig;
 
 use super::serve::{start_enip, Limits};
+use crate::net::misbehave::Misbehaviour;
 
 /// How long a test waits for any one reply.
 const REPLY: Duration = Duration::from_secs(3);
@@ -24,12 +25,22 @@ fn serve(last_octet: u8, limits: Limits) -> SocketAddr {
     serve_late(last_octet, limits, Duration::ZERO)
 }
 
-/// An adapter whose replies leave `delay` late (`--reply-delay`).
+/// An adapter whose replies leave `delay` late (`--misbehave late=…`; none when zero).
 fn serve_late(last_octet: u8, limits: Limits, delay: Duration) -> SocketAddr {
     let listen = SocketAddr::from((Ipv4Addr::new(127, 0, 7, last_octet), 44818));
-    start_enip(listen, DeviceConfig::new(Product::Tu3Eip), limits, delay)
-        .expect("serve on a loopback address of its own")
-        .listen
+    let misbehave = if delay.is_zero() {
+        Misbehaviour::default()
+    } else {
+        Misbehaviour::late(delay)
+    };
+    start_enip(
+        listen,
+        DeviceConfig::new(Product::Tu3Eip),
+        limits,
+        misbehave,
+    )
+    .expect("serve on a loopback address of its own")
+    .listen
 }
 
 /// A bare encapsulation client on a blocking socket.
@@ -354,7 +365,7 @@ fn idle_clients_cost_no_thread() {
 }
 
 #[test]
-fn with_a_reply_delay_every_encapsulation_reply_leaves_late_and_the_request_acts_at_once() {
+fn with_late_every_encapsulation_reply_leaves_late_and_the_request_acts_at_once() {
     let delay = Duration::from_millis(150);
     let at = serve_late(28, Limits::default(), delay);
     let mut c = Client::connect(at);

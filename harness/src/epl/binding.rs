@@ -951,7 +951,7 @@ mod tests {
     }
 
     /// The served node (`harness serve epl`) on one end of a veth pair, its SDO answers 300 ms
-    /// late (`--reply-delay 300`); the MN on the other end. Within the MN's SDO limit the read
+    /// late (`--misbehave late=300ms`); the MN on the other end. Within the MN's SDO limit the read
     /// passes; past it the step fails, naming the node's limit and the time waited.
     #[test]
     fn a_served_node_late_past_its_sdo_limit_fails_naming_both_times() {
@@ -960,7 +960,7 @@ mod tests {
             return;
         };
         let served = start(&ServeOptions {
-            reply_delay: Duration::from_millis(300),
+            misbehave: crate::net::misbehave::Misbehaviour::late(Duration::from_millis(300)),
             ..ServeOptions::new(&v.0)
         })
         .expect("serve");

@@ -6,6 +6,7 @@ mod address;
 pub mod bench_support;
 mod binding;
 mod effect;
+mod faults;
 pub(crate) mod mn;
 pub mod serve;
 mod step;

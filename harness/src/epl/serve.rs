@@ -21,12 +21,13 @@
 //! node is kept under a mutex for [`Served::state`], and the time handed to it (since start)
 //! is read with the lock held, so it never goes backwards.
 //!
-//! `--reply-delay MS` makes the node late on purpose: its SDO answers (ASnd and UDP) leave MS
-//! late, held back without stopping the loop. Its IdentResponse and StatusResponse do not:
+//! `--misbehave late=…` ([`crate::net::misbehave`]) makes the node late on purpose: its SDO
+//! answers (ASnd and UDP) leave late, held back without stopping the loop. Its IdentResponse and StatusResponse do not:
 //! they carry the state of the moment they are asked, and one held back would show a state
 //! the node has left (a wrong answer, not a late one; nothing in them tells the MN which
 //! request they answer). Its PRes stay in their cycle: they are the isochronous phase, whose
-//! timing the cyclic steps check.
+//! timing the cyclic steps check (`drop=`, `silent=` and `corrupt=state`, [`super::faults`],
+//! are what the PRes can be made to do wrong).
 
 use std::net::{SocketAddr, UdpSocket};
 use std::sync::Arc;
@@ -40,7 +41,9 @@ use sim::endpoint::{Input, Output};
 use sim::epl::{Node, NodeConfig, NodeError};
 
 use super::address;
+use super::faults;
 use crate::net::driver::{Options, Serving, Shared};
+use crate::net::misbehave::Misbehaviour;
 use crate::net::raw_port::RawPort;
 use crate::net::serve_args::{RawServeArgs, SystemBusArg};
 use crate::net::udp::ipv4s_of;
@@ -66,9 +69,9 @@ pub struct ServeOptions {
     pub node_id: u8,
     /// Inverters behind the interface (`--inverters`; default the product's maximum).
     pub inverters: Option<u8>,
-    /// How late the node's SDO answers leave, over ASnd and UDP (`--reply-delay`, default
-    /// none).
-    pub reply_delay: Duration,
+    /// What the node does wrong on purpose (`--misbehave`; nothing by default): `late=` holds
+    /// its SDO answers back, over ASnd and UDP.
+    pub misbehave: Misbehaviour,
 }
 
 impl ServeOptions {
@@ -79,7 +82,7 @@ impl ServeOptions {
             profile: "sk550p".into(),
             node_id: 1,
             inverters: None,
-            reply_delay: Duration::ZERO,
+            misbehave: Misbehaviour::default(),
         }
     }
 }
@@ -213,7 +216,7 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
             format!("epl-node-{}", opts.iface),
             node.clone(),
             port,
-            Options::new(STOP_CHECK).late(opts.reply_delay, late),
+            Options::new(STOP_CHECK).misbehaving(opts.misbehave, late, faults::corrupt),
         )
         .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))?;
     Ok(Served {
@@ -225,7 +228,7 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     })
 }
 
-/// What `--reply-delay` holds back: the node's SDO answers, over ASnd and UDP (its PRes,
+/// What `late=` holds back: the node's SDO answers, over ASnd and UDP (its PRes,
 /// IdentResponse and StatusResponse carry the state of the moment: see the module's
 /// documentation).
 fn late(_: &Input<'_>, out: &Output) -> bool {
@@ -267,11 +270,6 @@ pub(crate) fn serve(
         Some(a) => format!(", SDO over UDP on {a}"),
         None => String::new(),
     };
-    let late = if opts.reply_delay.is_zero() {
-        String::new()
-    } else {
-        format!(", SDO answers {} late", crate::timing::ms(opts.reply_delay))
-    };
     outln!(
         "serving POWERLINK node {} ({}, {} inverters) on {} (node MAC {:02x}:{:02x}:{:02x}:{:02x}:{:02x}:{:02x}){udp}",
         opts.node_id,
@@ -285,10 +283,8 @@ pub(crate) fn serve(
         m[4],
         m[5]
     );
-    if !late.is_empty() {
-        outln!("the node is late on purpose{late} (--reply-delay)");
-    }
     crate::can::announce_relay(relay.as_ref());
+    crate::net::misbehave::announce(&opts.misbehave);
     if served.udp_addr().is_none() {
         eprintln!(
             "note: {} has no IPv4 address: serving raw Ethernet only (SDO over ASnd); give it \
@@ -297,7 +293,9 @@ pub(crate) fn serve(
         );
     }
     serve_for(duration, STOP_CHECK * 10, || served.is_running());
-    served.stop().map(|_| ())
+    let stats = served.stop()?;
+    crate::net::misbehave::summarize(&opts.misbehave, stats.misbehaved);
+    Ok(())
 }
 
 /// `harness serve epl` arguments.
@@ -343,12 +341,16 @@ pub(crate) fn command(args: &[String]) -> Result<i32, crate::net::serve_error::S
         Ok(a) => a,
         Err(code) => return Ok(code),
     };
+    let misbehave = match a.common.misbehave.for_bus(&faults::FAULTS) {
+        Ok(m) => m,
+        Err(code) => return Ok(code),
+    };
     let opts = ServeOptions {
         iface: a.common.iface,
         profile: a.common.profile,
         node_id: a.node_id,
         inverters: a.common.inverters,
-        reply_delay: Duration::from_millis(a.common.reply_delay),
+        misbehave,
     };
     let seconds = a.common.seconds.map(Duration::from_secs);
     serve(&opts, seconds, a.system_bus.system_bus.as_deref())

@@ -4,12 +4,14 @@
 //! nothing but the clock for a thread that only runs the device's timers while others feed it
 //! (EtherNet/IP's TCP clients, socketcand's).
 //!
-//! One pass of the loop: the answers held back by `--reply-delay` whose time has come go out;
+//! One pass of the loop: the answers held back late (`--misbehave late=…`) whose time has come go out;
 //! unless inputs are still queued, the device is polled (it runs what is due,
 //! [`Endpoint::poll`]) and what that makes goes out; the port is waited on until the device's next deadline, the next held answer or
 //! [`Options::idle`], whichever is first; an input is handed to the device with the time, and
 //! what it answers goes out at once, or its delay later when it is an answer the delay holds
-//! ([`Options::answers`]). Inputs that queued while the process was held back (a loaded host)
+//! ([`Options::answers`]). Every output passes the fault injector on its way out
+//! ([`super::inject`], `--misbehave`): so every bus served here can drop, duplicate, reorder,
+//! delay or hold back in silence what its device sends, and corrupt a field its bus knows. Inputs that queued while the process was held back (a loaded host)
 //! reach the device before its timers run: a POWERLINK node descheduled for 100 ms must see
 //! the SoCs waiting in its socket before it judges the MN lost, or it blames the MN for its
 //! own host ([`DRAIN`]). The device sits behind a mutex ([`Shared`]) so that other threads
@@ -22,6 +24,8 @@ use std::time::{Duration, Instant};
 use sim::endpoint::{Endpoint, Input, Output};
 
 use super::held::Held;
+use super::inject::{Corrupt, Injector, Tally};
+use super::misbehave::{Misbehaviour, Touched};
 use super::workers::Workers;
 
 /// A device and its clock, shared by the threads that serve it.
@@ -44,6 +48,11 @@ impl<S: Endpoint> Shared<S> {
             station: Mutex::new(station),
             start,
         })
+    }
+
+    /// When the device's clock started.
+    pub(crate) fn start(&self) -> Instant {
+        self.start
     }
 
     /// The device's clock: the real time since the start.
@@ -100,13 +109,14 @@ pub(crate) struct Options {
     /// The longest wait between two passes: how late the stop flag is seen, and how often a
     /// device without a deadline is polled.
     pub(crate) idle: Duration,
-    /// `--reply-delay`: how much later than made an answer leaves (the device serving on
-    /// meanwhile).
-    pub(crate) reply_delay: Duration,
-    /// Which outputs the device made of an input are answers that the reply delay holds back
+    /// `--misbehave`: what the device does wrong on purpose (nothing by default).
+    pub(crate) misbehave: Misbehaviour,
+    /// Which outputs the device made of an input are answers that `late=` holds back
     /// (the bus says: an EtherCAT frame, a POWERLINK SDO, a PROFINET DCP response or RPC
     /// answer); what it makes on its own time never is.
     pub(crate) answers: fn(&Input<'_>, &Output) -> bool,
+    /// `corrupt=`: the bus's corruptor (none by default: nothing to corrupt).
+    pub(crate) corrupt: Corrupt,
 }
 
 impl Options {
@@ -114,16 +124,24 @@ impl Options {
     pub(crate) fn new(idle: Duration) -> Options {
         Options {
             idle,
-            reply_delay: Duration::ZERO,
+            misbehave: Misbehaviour::default(),
             answers: |_, _| false,
+            corrupt: |_, _| None,
         }
     }
 
-    /// These options, with the outputs `answers` picks leaving `delay` late.
-    pub(crate) fn late(self, delay: Duration, answers: fn(&Input<'_>, &Output) -> bool) -> Options {
+    /// These options, with the device misbehaving as `misbehave` says: `answers` picks the
+    /// outputs `late=` holds back, `corrupt` sets a field wrong.
+    pub(crate) fn misbehaving(
+        self,
+        misbehave: Misbehaviour,
+        answers: fn(&Input<'_>, &Output) -> bool,
+        corrupt: Corrupt,
+    ) -> Options {
         Options {
-            reply_delay: delay,
+            misbehave,
             answers,
+            corrupt,
             ..self
         }
     }
@@ -139,6 +157,7 @@ pub(crate) struct Counters {
     unanswered: AtomicU64,
     lost: AtomicU64,
     oversized: AtomicU64,
+    misbehaved: Tally,
 }
 
 /// What the threads serving a device counted, at one moment (the POWERLINK node's and the
@@ -159,9 +178,16 @@ pub struct Counts {
     pub lost: u64,
     /// Frames skipped because they were longer than a standard Ethernet frame.
     pub oversized: u64,
+    /// What `--misbehave` did to the outputs.
+    pub misbehaved: Touched,
 }
 
 impl Counters {
+    /// Where the fault injector counts what it touched (threads outside [`run`]).
+    pub(crate) fn misbehaved(&self) -> &Tally {
+        &self.misbehaved
+    }
+
     /// The counts now.
     pub(crate) fn snapshot(&self) -> Counts {
         let get = |c: &AtomicU64| c.load(Ordering::Relaxed);
@@ -173,6 +199,7 @@ impl Counters {
             unanswered: get(&self.unanswered),
             lost: get(&self.lost),
             oversized: get(&self.oversized),
+            misbehaved: self.misbehaved.snapshot(),
         }
     }
 
@@ -211,12 +238,31 @@ pub(crate) fn run<S: Endpoint, P: Port>(
     counters: &Counters,
     stop: &AtomicBool,
 ) -> Result<(), P::Error> {
-    let mut held: Held<Output> = Held::new(opts.reply_delay);
+    let mut held: Held<Output> = Held::new();
+    let mut inject = Injector::new(opts.misbehave, opts.corrupt, shared.start);
     // Inputs handed over since the last poll.
     let mut backlog = 0;
     let send = |port: &mut P, out: &Output| -> Result<(), P::Error> {
         let sent = port.send(out)?;
         counters.sent(out, sent);
+        Ok(())
+    };
+    // An output on its way out through the injector: now, held, or not at all.
+    let leave = |port: &mut P,
+                 held: &mut Held<Output>,
+                 inject: &mut Injector,
+                 out: Output,
+                 answer: bool|
+     -> Result<(), P::Error> {
+        if !inject.is_active() {
+            return send(port, &out);
+        }
+        for (due, out) in inject.outgoing(out, answer, Instant::now(), &counters.misbehaved) {
+            match due {
+                Some(at) => held.hold(at, out),
+                None => send(port, &out)?,
+            }
+        }
         Ok(())
     };
     while !stop.load(Ordering::Relaxed) {
@@ -229,8 +275,8 @@ pub(crate) fn run<S: Endpoint, P: Port>(
         if backlog == 0 || backlog >= DRAIN {
             backlog = 0;
             let (outs, next) = shared.poll();
-            for out in &outs {
-                send(port, out)?;
+            for out in outs {
+                leave(port, &mut held, &mut inject, out, false)?;
             }
             until += opts.idle;
             if let Some(next) = next {
@@ -250,24 +296,20 @@ pub(crate) fn run<S: Endpoint, P: Port>(
             };
             backlog += 1;
             counters.input(&input);
+            inject.heard(Instant::now());
             let outs = shared.input(input);
             if outs.is_empty() {
                 bump(&counters.unanswered);
             }
-            let late = !opts.reply_delay.is_zero();
             outs.into_iter()
-                .map(|o| (late && (opts.answers)(&input, &o), o))
+                .map(|o| ((opts.answers)(&input, &o), o))
                 .collect()
         };
         counters
             .oversized
             .store(port.oversized(), Ordering::Relaxed);
-        for (late, out) in outs {
-            if late {
-                held.hold(out);
-            } else {
-                send(port, &out)?;
-            }
+        for (answer, out) in outs {
+            leave(port, &mut held, &mut inject, out, answer)?;
         }
     }
     Ok(())
@@ -354,7 +396,8 @@ mod tests {
                 return Vec::new();
             }
             self.next = now + self.period;
-            self.n += 1;
+            // Wrapping: a timer due at every poll runs hundreds of times in the test's 30 ms.
+            self.n = self.n.wrapping_add(1);
             vec![Output::Frame(vec![self.n])]
         }
 
@@ -420,8 +463,16 @@ mod tests {
             start,
         );
         let counters = Counters::default();
-        let opts = Options::new(Duration::from_millis(20))
-            .late(delay, |i, _| matches!(i, Input::Frame(_)));
+        let misbehave = if delay.is_zero() {
+            Misbehaviour::default()
+        } else {
+            Misbehaviour::late(delay)
+        };
+        let opts = Options::new(Duration::from_millis(20)).misbehaving(
+            misbehave,
+            |i, _| matches!(i, Input::Frame(_)),
+            |_, _| None,
+        );
         run(&shared, &mut port, &opts, &counters, &stop).unwrap();
         (port, counters.snapshot())
     }

@@ -1,30 +1,29 @@
-//! What a device served late on purpose (`harness serve <bus> --reply-delay MS`) holds back:
-//! each answer leaves its delay after the device made it, in order, while the device goes on
-//! serving (a served device late on purpose, to test that the harness fails it and does not
-//! blame its own host).
+//! What a device served late on purpose (`harness serve <bus> --misbehave late=…`) holds back:
+//! each answer leaves when its delay is over, in the order made (a jittered delay never lets a
+//! later answer overtake an earlier one), while the device goes on serving (a served device
+//! late on purpose, to test that the harness fails it and does not blame its own host).
 
 use std::collections::VecDeque;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Answers held back by a delay.
 #[derive(Debug)]
 pub(crate) struct Held<T> {
-    delay: Duration,
     queue: VecDeque<(Instant, T)>,
 }
 
 impl<T> Held<T> {
-    /// Holds each answer back by `delay` (none: each leaves at once).
-    pub(crate) fn new(delay: Duration) -> Held<T> {
+    /// Nothing held yet.
+    pub(crate) fn new() -> Held<T> {
         Held {
-            delay,
             queue: VecDeque::new(),
         }
     }
 
-    /// Holds `answer`, made now.
-    pub(crate) fn hold(&mut self, answer: T) {
-        self.queue.push_back((Instant::now() + self.delay, answer));
+    /// Holds `answer` until `at`, or until the answer held before it leaves if that is later.
+    pub(crate) fn hold(&mut self, at: Instant, answer: T) {
+        let at = self.queue.back().map_or(at, |(last, _)| at.max(*last));
+        self.queue.push_back((at, answer));
     }
 
     /// The next answer whose time has come.
@@ -45,14 +44,15 @@ impl<T> Held<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::time::Duration;
 
     #[test]
     fn answers_leave_their_delay_late_in_order() {
         let delay = Duration::from_millis(200);
-        let mut h = Held::new(delay);
+        let mut h = Held::new();
         let start = Instant::now();
-        h.hold(1);
-        h.hold(2);
+        h.hold(Instant::now() + delay, 1);
+        h.hold(Instant::now() + delay, 2);
         let held = Instant::now();
         // Nothing leaves before its delay — unless a loaded host held this thread back for
         // most of it, when the check says nothing.
@@ -68,8 +68,18 @@ mod tests {
 
     #[test]
     fn without_a_delay_an_answer_leaves_at_once() {
-        let mut h = Held::new(Duration::ZERO);
-        h.hold("a");
+        let mut h = Held::new();
+        h.hold(Instant::now(), "a");
         assert_eq!(h.due(), Some("a"));
+    }
+
+    #[test]
+    fn a_shorter_delay_does_not_overtake_a_longer_one_held_before() {
+        let mut h = Held::new();
+        let now = Instant::now();
+        h.hold(now + Duration::from_secs(60), 1);
+        h.hold(now, 2);
+        assert_eq!(h.due(), None);
+        assert_eq!(h.queue[1].0, now + Duration::from_secs(60));
     }
 }

@@ -7,7 +7,10 @@ use std::net::{IpAddr, SocketAddr};
 use proto::nord::{Product, Protocol};
 use sim::device::DeviceConfig;
 
-/// `--iface --profile --inverters --seconds --reply-delay`, flattened into each bus's own arguments.
+use super::misbehave::{BusFaults, Misbehaviour, DEFAULT_SEED};
+
+/// `--iface --profile --inverters --seconds --misbehave --seed`, flattened into each bus's own
+/// arguments.
 #[derive(clap::Args, Debug)]
 pub(crate) struct RawServeArgs {
     /// The network interface, e.g. one end of a veth pair.
@@ -22,10 +25,35 @@ pub(crate) struct RawServeArgs {
     /// Stop after this many seconds (default: serve until killed).
     #[arg(long)]
     pub(crate) seconds: Option<u64>,
-    /// Answer every request this many milliseconds late: a device late on purpose, to test
-    /// that the harness fails it (and does not blame its own host).
-    #[arg(long, value_name = "MS", default_value_t = 0)]
-    pub(crate) reply_delay: u64,
+    #[command(flatten)]
+    pub(crate) misbehave: MisbehaveArgs,
+}
+
+/// `--misbehave SPEC --seed N`: every bus's device misbehaving on purpose (`docs/misbehave.md`).
+#[derive(clap::Args, Debug)]
+pub(crate) struct MisbehaveArgs {
+    /// Misbehave on purpose, to test that the harness names what the device did: modes
+    /// separated by commas, e.g. `late=500ms`, `late=100ms..900ms`, `drop=20%`,
+    /// `drop=every:3`, `dup`, `reorder`, `silent=2s` (from the first exchange) or
+    /// `silent=2s@5s`, `corrupt=FIELD`, `close` (see docs/misbehave.md).
+    #[arg(long, value_name = "SPEC")]
+    pub(crate) misbehave: Option<Misbehaviour>,
+    /// Where `--misbehave`'s random choices come from (a jittered delay, `drop=20%`): the
+    /// same spec and seed misbehave the same way.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_SEED)]
+    pub(crate) seed: u64,
+}
+
+impl MisbehaveArgs {
+    /// The misbehaviour asked for, if `bus` can do it; else the usage error's exit code, after
+    /// a line on stderr naming the mode at fault.
+    pub(crate) fn for_bus(&self, bus: &BusFaults) -> Result<Misbehaviour, i32> {
+        let m = self.misbehave.unwrap_or_default().with_seed(self.seed);
+        m.check(bus).map(|()| m).map_err(|e| {
+            eprintln!("error: --misbehave {e}");
+            crate::exit::EXIT_USAGE
+        })
+    }
 }
 
 /// `--system-bus ADDR`, for the raw-Ethernet buses whose bus modules are gateways onto the

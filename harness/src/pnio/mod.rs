@@ -6,6 +6,7 @@ pub mod bench_support;
 mod binding;
 mod controller;
 mod effect;
+mod faults;
 mod generic;
 mod gsdml;
 mod link;

@@ -19,8 +19,9 @@
 //! alarms, the drive model); what they send goes out at once, the device's own RPC calls from
 //! its RPC port.
 //!
-//! With a reply delay (`--reply-delay MS`) the device's RPC answers and DCP responses leave
-//! that much later than the device made them, held back while the cyclic frames go on.
+//! Misbehaving on purpose (`--misbehave`, [`crate::net::misbehave`]), `late=` holds the
+//! device's RPC answers and DCP responses back while the cyclic frames go on, and `corrupt=`
+//! knows the cyclic frames' cycle counter and data status ([`super::faults`]).
 
 use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
 use std::sync::Arc;
@@ -33,7 +34,9 @@ use proto::pnio::RPC_PORT;
 use sim::endpoint::{Input, Output};
 use sim::pnio::{IoConfig, IoDevice};
 
+use super::faults;
 use crate::net::driver::{Options, Serving, Shared};
+use crate::net::misbehave::Misbehaviour;
 use crate::net::raw_port::RawPort;
 use crate::net::serve_args::{RawServeArgs, SystemBusArg};
 use crate::net::udp::ipv4_of;
@@ -56,9 +59,9 @@ pub struct ServeOptions {
     pub name: String,
     /// Inverters behind the interface (`--inverters`; default the product's maximum).
     pub inverters: Option<u8>,
-    /// How much later than made RPC answers and DCP responses leave (`--reply-delay`; none by
-    /// default).
-    pub reply_delay: Duration,
+    /// What the device does wrong on purpose (`--misbehave`; nothing by default): `late=`
+    /// holds its RPC answers and DCP responses back.
+    pub misbehave: Misbehaviour,
 }
 
 impl ServeOptions {
@@ -70,7 +73,7 @@ impl ServeOptions {
             profile: "sk550p".into(),
             name: String::new(),
             inverters: None,
-            reply_delay: Duration::ZERO,
+            misbehave: Misbehaviour::default(),
         }
     }
 }
@@ -197,7 +200,7 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
             format!("pnio-device-{}", opts.iface),
             device.clone(),
             port,
-            Options::new(STOP_CHECK).late(opts.reply_delay, late),
+            Options::new(STOP_CHECK).misbehaving(opts.misbehave, late, faults::corrupt),
         )
         .map_err(|e| ServeError::Panicked(format!("cannot start a thread: {e}")))?;
     Ok(Served {
@@ -208,7 +211,7 @@ pub fn start(opts: &ServeOptions) -> Result<Served, ServeError> {
     })
 }
 
-/// What `--reply-delay` holds back: DCP responses and the answers to RPC calls (not the
+/// What `late=` holds back: DCP responses and the answers to RPC calls (not the
 /// device's own calls, ApplicationReady).
 fn late(input: &Input<'_>, out: &Output) -> bool {
     match out {
@@ -258,6 +261,7 @@ fn serve(
         served.mac()
     );
     crate::can::announce_relay(relay.as_ref());
+    crate::net::misbehave::announce(&opts.misbehave);
     if served.rpc_addr().is_none() {
         eprintln!(
             "note: {} has no IPv4 address: serving DCP and RT only; give it an address (the \
@@ -266,7 +270,9 @@ fn serve(
         );
     }
     serve_for(duration, STOP_CHECK * 10, || served.is_running());
-    served.stop().map(|_| ())
+    let stats = served.stop()?;
+    crate::net::misbehave::summarize(&opts.misbehave, stats.misbehaved);
+    Ok(())
 }
 
 /// `harness serve pnio` arguments.
@@ -291,12 +297,16 @@ pub(crate) fn command(args: &[String]) -> Result<i32, crate::net::serve_error::S
         Ok(a) => a,
         Err(code) => return Ok(code),
     };
+    let misbehave = match a.common.misbehave.for_bus(&faults::FAULTS) {
+        Ok(m) => m,
+        Err(code) => return Ok(code),
+    };
     let opts = ServeOptions {
         iface: a.common.iface,
         profile: a.common.profile,
         name: a.name,
         inverters: a.common.inverters,
-        reply_delay: Duration::from_millis(a.common.reply_delay),
+        misbehave,
     };
     let seconds = a.common.seconds.map(Duration::from_secs);
     serve(&opts, seconds, a.system_bus.system_bus.as_deref())

@@ -1,0 +1,130 @@
+//! What `harness serve enip --misbehave` can do on EtherNet/IP ([`crate::net::misbehave`]):
+//! `close` (each TCP connection closed, unanswered, at its first request after
+//! RegisterSession: [`super::serve_tcp`]) and one field to send wrong, `status`: the CIP general
+//! status of every explicit reply (SendRRData's unconnected, SendUnitData's connected data)
+//! becomes 08h "service not supported", parsed and emitted anew with the encapsulation, CPF
+//! and message-router codecs.
+
+use proto::enip::cip::{GeneralStatus, MrResponse};
+use proto::enip::cpf::Item;
+use proto::enip::encap::{Command, EncapRepr, SendData};
+use sim::endpoint::Output;
+
+use crate::net::misbehave::{BusFaults, Field};
+
+/// What EtherNet/IP can do of a spec.
+pub(crate) const FAULTS: BusFaults = BusFaults {
+    bus: "EtherNet/IP",
+    fields: &[Field::GeneralStatus],
+    no_close: None,
+};
+
+/// Sets `field` wrong in `out` if it is an explicit reply; what it changed.
+pub(crate) fn corrupt(field: Field, out: &mut Output) -> Option<String> {
+    let (Field::GeneralStatus, Output::Message { bytes, .. }) = (field, &mut *out) else {
+        return None;
+    };
+    let mut encap = EncapRepr::parse(bytes).ok()?;
+    if !matches!(
+        Command(encap.command),
+        Command::SEND_RR_DATA | Command::SEND_UNIT_DATA
+    ) {
+        return None;
+    }
+    let mut send = SendData::parse(&encap.data).ok()?;
+    let (data, at) = send.cpf.items.iter_mut().find_map(|i| match i {
+        Item::UnconnectedData(d) => Some((d, 0)),
+        // Connected data starts with its 2-byte sequence count.
+        Item::ConnectedData(d) => Some((d, 2)),
+        _ => None,
+    })?;
+    let mut mr = MrResponse::parse(data.get(at..)?).ok()?;
+    let was = mr.general;
+    mr.general = GeneralStatus::SERVICE_NOT_SUPPORTED.0;
+    data.truncate(at);
+    data.extend(mr.emit());
+    encap.data = send.emit().ok()?;
+    *bytes = encap.emit().ok()?;
+    Some(format!("general status {was:02X}h → 08h"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proto::enip::cpf::Cpf;
+
+    /// A SendRRData reply: a null address item and an unconnected data item holding a
+    /// Get_Attribute_Single (0Eh) success reply with data 2Ah 00h.
+    fn reply(item: Item) -> Output {
+        let send = SendData {
+            interface: 0,
+            timeout: 0,
+            cpf: Cpf::new(vec![Item::Null, item]),
+        };
+        let encap = EncapRepr {
+            command: Command::SEND_RR_DATA.0,
+            session: 7,
+            data: send.emit().unwrap(),
+            ..EncapRepr::default()
+        };
+        Output::Message {
+            client: 1,
+            bytes: encap.emit().unwrap(),
+        }
+    }
+
+    fn mr(out: &Output, at: usize) -> MrResponse {
+        let Output::Message { bytes, .. } = out else {
+            panic!()
+        };
+        let send = SendData::parse(&EncapRepr::parse(bytes).unwrap().data).unwrap();
+        match &send.cpf.items[1] {
+            Item::UnconnectedData(d) | Item::ConnectedData(d) => {
+                MrResponse::parse(&d[at..]).unwrap()
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn an_explicit_reply_says_service_not_supported_and_keeps_its_data() {
+        let ok = MrResponse::ok(0x0E, vec![0x2A, 0]);
+        let mut out = reply(Item::UnconnectedData(ok.emit()));
+        assert_eq!(
+            corrupt(Field::GeneralStatus, &mut out).as_deref(),
+            Some("general status 00h → 08h")
+        );
+        assert_eq!(
+            mr(&out, 0),
+            MrResponse {
+                general: 0x08,
+                ..ok.clone()
+            }
+        );
+        // Connected: after the sequence count, which stays.
+        let mut data = vec![5, 0];
+        data.extend(ok.emit());
+        let mut out = reply(Item::ConnectedData(data));
+        assert!(corrupt(Field::GeneralStatus, &mut out).is_some());
+        assert_eq!(mr(&out, 2).general, 0x08);
+    }
+
+    #[test]
+    fn other_messages_and_fields_are_left_alone() {
+        let register = Output::Message {
+            client: 1,
+            bytes: EncapRepr {
+                command: Command::REGISTER_SESSION.0,
+                data: vec![1, 0, 0, 0],
+                ..EncapRepr::default()
+            }
+            .emit()
+            .unwrap(),
+        };
+        let mut out = register.clone();
+        assert_eq!(corrupt(Field::GeneralStatus, &mut out), None);
+        assert_eq!(out, register);
+        let mut out = reply(Item::UnconnectedData(MrResponse::ok(0x0E, vec![]).emit()));
+        assert_eq!(corrupt(Field::Wkc, &mut out), None);
+    }
+}

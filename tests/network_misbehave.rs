@@ -1,0 +1,341 @@
+//! The harness against devices that misbehave on purpose (`harness serve <bus> --misbehave`,
+//! `docs/misbehave.md`): the harness's own master, managing node, controller or scanner runs a
+//! case against the served device, and its verdict names what the device did — never a hang,
+//! a panic, a pass or "host late". Covered: EtherCAT `corrupt=wkc`, `corrupt=length`,
+//! `drop=every:2`, `silent`; POWERLINK `corrupt=state`, `silent`; PROFINET IO
+//! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `close`, `dup`,
+//! `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
+//! the POWERLINK binding's). The modes are those whose verdict does not hang on timing: a
+//! field wrong in every frame, a device silent from its first exchange on, the n-th answer of
+//! a master that asks one thing at a time; the harness's own limits decide, with their margins.
+//!
+//! The raw buses need root (network namespaces, raw sockets); without it those tests say so
+//! and skip on a developer's machine, and fail in strict mode. EtherNet/IP runs on loopback.
+
+use harness::misbehave::{Misbehaviour, Touched};
+
+#[allow(dead_code)] // what the other network tests share
+mod common;
+use common::netns::{require_root_or_skip, Netns};
+
+/// The served device's misbehaviour, parsed as `--misbehave` parses it.
+fn spec(s: &str) -> Misbehaviour {
+    s.parse().unwrap_or_else(|e| panic!("{s}: {e}"))
+}
+
+/// The first case of a run (its connection check's, when the run stopped there) must have
+/// `verdict` and a message that says each of `says`. A host too loaded for the device's limit
+/// (the two busy loops of `.ci/run` beside a debug build) may make a time-out inconclusive
+/// instead: the harness then says the host was late, and its last attempt must still name what
+/// the device did. Never a pass.
+fn check(cases: &[serde_json::Value], verdict: &str, says: &[&str]) {
+    let c = cases.first().expect("a case ran");
+    let message = c["message"].as_str().unwrap_or_default();
+    println!("{}: {}: {message}", c["id"], c["verdict"]);
+    if c["verdict"] == "inconclusive" && message.starts_with("host late by ") {
+        assert!(message.contains("(last attempt: "), "{message}");
+    } else {
+        assert_eq!(c["verdict"], verdict, "{message}");
+        assert!(!message.contains("host late"), "{message}");
+    }
+    for p in says {
+        assert!(message.contains(p), "{message:?} does not say {p:?}");
+    }
+}
+
+/// Runs the cases whose id contains `filter` for `profile` against `dut` from inside `ns`,
+/// then stops the served device (`stop`: what it touched), and checks the first case.
+fn judged(
+    ns: &Netns,
+    (profile, dut, filter): (&str, String, &str),
+    stop: impl FnOnce() -> Touched,
+    verdict: &str,
+    says: &[&str],
+) -> Touched {
+    let harness = ns.command(env!("CARGO_BIN_EXE_harness"));
+    let cases = common::cases_of_run(harness, profile, &dut, filter);
+    let touched = stop();
+    check(&cases, verdict, says);
+    touched
+}
+
+/// EtherCAT: `s` on a slave, the AL start-up case from the namespace; what the slave touched.
+fn ecat(tag: &str, s: &str, verdict: &str, says: &[&str]) -> Touched {
+    let ns = Netns::new(tag);
+    let options = harness::ecat_serve::ServeOptions {
+        misbehave: spec(s),
+        ..harness::ecat_serve::ServeOptions::new(ns.root_if())
+    };
+    let served = harness::ecat_serve::start(&options).expect("serve ecat");
+    let run = (
+        "sk550p@ecat",
+        format!("ecat://{}", ns.ns_if()),
+        "bu0620/ecat-al/start-up-sequence",
+    );
+    let stop = || {
+        served
+            .stop()
+            .expect("the slave served to the end")
+            .misbehaved
+    };
+    judged(&ns, run, stop, verdict, says)
+}
+
+#[test]
+fn ecat_a_slave_misbehaving_is_named_for_what_it_did() {
+    if !require_root_or_skip("serve ecat --misbehave over veth pairs") {
+        return;
+    }
+    // A working counter of 0 in every datagram: no slave processed the scan's read.
+    let t = ecat(
+        "mbwkc",
+        "corrupt=wkc",
+        "error",
+        &["the broadcast read counted no slave"],
+    );
+    assert!(t.corrupted > 0, "{t:?}");
+    let t = ecat(
+        "mblen",
+        "corrupt=length",
+        "error",
+        &["malformed EtherCAT frame came back: EtherCAT length: length 2047 but "],
+    );
+    assert!(t.corrupted > 0, "{t:?}");
+    // The master sends one frame at a time: the second is the one lost.
+    let no_answer = "a frame back: no answer within the device's limit of 50 ms";
+    let t = ecat("mbedrop", "drop=every:2", "error", &[no_answer]);
+    assert!(t.dropped > 0, "{t:?}");
+    let t = ecat("mbesil", "silent=600s", "error", &[no_answer]);
+    assert!(t.silenced > 0, "{t:?}");
+}
+
+/// POWERLINK: `s` on node 1, the NMT case `case` from the namespace as MN.
+fn epl(tag: &str, s: &str, case: &str, verdict: &str, says: &[&str]) -> Touched {
+    let ns = Netns::new(tag);
+    ns.add_ipv4("192.168.100.1/24", "192.168.100.240/24");
+    let options = harness::epl_serve::ServeOptions {
+        misbehave: spec(s),
+        ..harness::epl_serve::ServeOptions::new(ns.root_if())
+    };
+    let served = harness::epl_serve::start(&options).expect("serve epl");
+    let filter = format!("bu0620/epl-nmt/{case}");
+    let run = (
+        "sk550p@epl",
+        format!("epl://{}", ns.ns_if()),
+        filter.as_str(),
+    );
+    let stop = || {
+        served
+            .stop()
+            .expect("the node served to the end")
+            .misbehaved
+    };
+    judged(&ns, run, stop, verdict, says)
+}
+
+#[test]
+fn epl_a_node_misbehaving_is_named_for_what_it_did() {
+    if !require_root_or_skip("serve epl --misbehave over veth pairs") {
+        return;
+    }
+    // Every PRes says STOPPED (4Dh) where READY_TO_OPERATE (6Dh) is due.
+    let t = epl(
+        "mbstate",
+        "corrupt=state",
+        "ready-to-operate-sends-pres-by-mapping",
+        "fail",
+        &[
+            "expected text containing \"04 FF 01 6D",
+            "got \"04 FF 01 4D ",
+        ],
+    );
+    assert!(t.corrupted > 0, "{t:?}");
+    let t = epl(
+        "mbplsil",
+        "silent=600s",
+        "start-up-sequence",
+        "error",
+        &["no reply from node 1 to SoA IdentRequest within its limit of 2000 ms"],
+    );
+    assert!(t.silenced > 0, "{t:?}");
+}
+
+/// PROFINET IO: `s` on the device, the connect cases from the namespace as controller.
+fn pnio(tag: &str, s: &str, verdict: &str, says: &[&str]) -> Touched {
+    const NAME: &str = "nord-device";
+    let ns = Netns::new(tag);
+    ns.add_ipv4("192.168.22.200/24", "192.168.22.1/24");
+    let options = harness::pnio_serve::ServeOptions {
+        name: NAME.to_string(),
+        misbehave: spec(s),
+        ..harness::pnio_serve::ServeOptions::new(ns.root_if())
+    };
+    let served = harness::pnio_serve::start(&options).expect("serve pnio");
+    let run = (
+        "sk550p@pnio",
+        format!("pnio://{}/{NAME}", ns.ns_if()),
+        "pnio/connect/",
+    );
+    let stop = || {
+        served
+            .stop()
+            .expect("the device served to the end")
+            .misbehaved
+    };
+    judged(&ns, run, stop, verdict, says)
+}
+
+#[test]
+fn pnio_a_device_misbehaving_is_named_for_what_it_did() {
+    if !require_root_or_skip("serve pnio --misbehave over veth pairs") {
+        return;
+    }
+    // DataValid cleared in every input frame: 35h became 31h.
+    let t = pnio(
+        "mbdstat",
+        "corrupt=data-status",
+        "fail",
+        &["data_status: expected 53 (0035h), got 49 (0031h)"],
+    );
+    assert!(t.corrupted > 0, "{t:?}");
+    let t = pnio(
+        "mbpnsil",
+        "silent=600s",
+        "error",
+        &["no DCP Identify response from the device within its limit of 400 ms"],
+    );
+    assert!(t.silenced > 0, "{t:?}");
+}
+
+/// EtherNet/IP on loopback: `harness serve enip --misbehave SPEC`, the identity cases.
+fn enip(s: &str, verdict: &str, says: &[&str]) {
+    let listen = format!("{}:44818", common::addr::free_loopback());
+    let _server = common::serve_with(&listen, "tu3-eip", 120, &["--misbehave", s]);
+    let cases = common::cases_of_run(
+        std::process::Command::new(env!("CARGO_BIN_EXE_harness")),
+        "tu3-eip",
+        &format!("enip://{listen}"),
+        "bu2100/identity/",
+    );
+    check(&cases, verdict, says);
+}
+
+#[test]
+fn enip_an_adapter_whose_replies_say_service_not_supported_is_named_for_it() {
+    enip("corrupt=status", "fail", &["cip_status: expected 0, got 8"]);
+}
+
+#[test]
+fn enip_an_adapter_that_closes_mid_exchange_is_named_for_it() {
+    enip(
+        "close",
+        "fail",
+        &["the device closed the connection: the target closed the TCP connection"],
+    );
+}
+
+#[test]
+fn enip_an_adapter_that_sends_a_reply_twice_does_not_speak_the_protocol() {
+    // RegisterSession's reply, twice: the second stands where SendRRData's belongs.
+    enip(
+        "dup",
+        "error",
+        &["the reply to SendRRData is command 0065h"],
+    );
+}
+
+#[test]
+fn enip_an_adapter_that_drops_a_reply_is_named_for_the_request_unanswered() {
+    // Per connection the first reply (RegisterSession's) leaves, the second is lost.
+    enip(
+        "drop=every:2",
+        "fail",
+        &["Get_Attribute_Single: no answer within the device's limit of 2000 ms"],
+    );
+}
+
+/// A bad spec is a usage error naming the bad part, and what a bus cannot do is refused
+/// naming the bus, before anything is served.
+#[test]
+fn a_bad_spec_is_a_usage_error_naming_the_part() {
+    for (args, says) in [
+        (
+            vec!["serve", "enip", "--misbehave", "late=1s,drop=150%"],
+            "`drop=150%`: `150%` is not a percentage 1%…100%",
+        ),
+        (
+            vec!["serve", "ecat", "--iface", "lo", "--misbehave", "close"],
+            "`close`: EtherCAT has no session to close",
+        ),
+        (
+            vec![
+                "serve",
+                "epl",
+                "--iface",
+                "lo",
+                "--misbehave",
+                "corrupt=wkc",
+            ],
+            "`corrupt=wkc`: POWERLINK has no such field (its fields: state)",
+        ),
+        (
+            vec!["serve", "pnio", "--iface", "lo", "--misbehave", "explode"],
+            "`explode`: unknown mode",
+        ),
+    ] {
+        let out = common::cli::harness(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+    }
+}
+
+/// What the served device touched is on stderr, one line each, and counted in the summary
+/// on stdout when serving ends: an adapter that sends every reply twice, asked once.
+#[test]
+fn each_touched_reply_is_logged_and_counted_in_the_summary() {
+    use proto::enip::encap::{Command, EncapRepr};
+    use std::process::Stdio;
+    let ip = common::addr::free_loopback();
+    let listen = format!("{ip}:44818");
+    let server = std::process::Command::new(env!("CARGO_BIN_EXE_harness"))
+        .args(["serve", "enip", "--listen", &listen, "--misbehave", "dup"])
+        .args(["--seed", "7", "--seconds", "3"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("harness serve starts");
+    common::wait_listening(&listen, std::time::Duration::from_secs(10));
+    let udp = std::net::UdpSocket::bind((ip, 0)).unwrap();
+    udp.set_read_timeout(Some(std::time::Duration::from_secs(2)))
+        .unwrap();
+    let ask = EncapRepr {
+        command: Command::LIST_IDENTITY.0,
+        ..EncapRepr::default()
+    };
+    udp.send_to(&ask.emit().unwrap(), &listen).unwrap();
+    let mut buf = [0u8; 600];
+    let first = udp.recv(&mut buf).expect("the reply");
+    let second = udp.recv(&mut buf).expect("the reply again");
+    assert_eq!(first, second);
+    let out = server.wait_with_output().unwrap();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(
+        stdout.contains("misbehaving on purpose: dup (seed 7)"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("misbehaved: 1 duplicated"), "{stdout}");
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("misbehave "))
+        .collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(
+        lines[0].contains(" dup     datagram ") && lines[0].contains(&format!(" B to {ip}:")),
+        "{}",
+        lines[0]
+    );
+}
