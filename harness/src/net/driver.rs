@@ -33,6 +33,9 @@ use super::workers::Workers;
 pub(crate) struct Shared<S> {
     station: Mutex<S>,
     start: Instant,
+    /// The latest time handed to the device, in nanoseconds of its clock (written with the
+    /// lock held): [`Shared::poll_at`] never hands an earlier one.
+    handed: AtomicU64,
 }
 
 impl<S: Endpoint> Shared<S> {
@@ -47,6 +50,7 @@ impl<S: Endpoint> Shared<S> {
         Arc::new(Shared {
             station: Mutex::new(station),
             start,
+            handed: AtomicU64::new(0),
         })
     }
 
@@ -65,8 +69,18 @@ impl<S: Endpoint> Shared<S> {
     /// holding the lock left the device as it was: the others go on with it (the panic is
     /// reported when the threads are joined).
     pub(crate) fn lock(&self) -> (MutexGuard<'_, S>, Duration) {
+        self.lock_at(self.now())
+    }
+
+    /// [`Shared::lock`] with the time `at`, or the latest time the device was handed when that
+    /// is later.
+    fn lock_at(&self, at: Duration) -> (MutexGuard<'_, S>, Duration) {
         let guard = self.station.lock().unwrap_or_else(|p| p.into_inner());
-        (guard, self.now())
+        let latest = Duration::from_nanos(self.handed.load(Ordering::Relaxed));
+        let now = at.max(latest);
+        let nanos = u64::try_from(now.as_nanos()).unwrap_or(u64::MAX);
+        self.handed.store(nanos, Ordering::Relaxed);
+        (guard, now)
     }
 
     /// Hands `input` to the device now; what it sends.
@@ -78,7 +92,13 @@ impl<S: Endpoint> Shared<S> {
     /// Lets the device run what is due now; what it sends, and when it wants to be polled
     /// next (its clock).
     pub(crate) fn poll(&self) -> (Vec<Output>, Option<Duration>) {
-        let (mut s, now) = self.lock();
+        self.poll_at(self.now())
+    }
+
+    /// [`Shared::poll`] at `at`, a time at which every input that had come was handed over:
+    /// what came later is judged after the device's timers.
+    fn poll_at(&self, at: Duration) -> (Vec<Output>, Option<Duration>) {
+        let (mut s, now) = self.lock_at(at);
         let out = s.poll(now);
         (out, s.next_deadline())
     }
@@ -242,6 +262,11 @@ pub(crate) fn run<S: Endpoint, P: Port>(
     let mut inject = Injector::new(opts.misbehave, opts.corrupt, shared.start);
     // Inputs handed over since the last poll.
     let mut backlog = 0;
+    // When the port was last seen with nothing queued: the device's timers run at that time,
+    // not later. A thread held back between seeing the port empty and polling (a loaded host)
+    // must not have its device judge the inputs that came meanwhile missing (a POWERLINK node
+    // its MN's SoCs).
+    let mut empty_at = shared.now();
     let send = |port: &mut P, out: &Output| -> Result<(), P::Error> {
         let sent = port.send(out)?;
         counters.sent(out, sent);
@@ -273,8 +298,12 @@ pub(crate) fn run<S: Endpoint, P: Port>(
         // the port returns it or nothing at once).
         let mut until = Instant::now();
         if backlog == 0 || backlog >= DRAIN {
+            let (outs, next) = if backlog == 0 {
+                shared.poll_at(empty_at)
+            } else {
+                shared.poll()
+            };
             backlog = 0;
-            let (outs, next) = shared.poll();
             for out in outs {
                 leave(port, &mut held, &mut inject, out, false)?;
             }
@@ -287,8 +316,10 @@ pub(crate) fn run<S: Endpoint, P: Port>(
             }
         }
         let outs: Vec<(bool, Output)> = {
+            let looked = Instant::now().max(until);
             let Some(input) = port.recv(until)? else {
                 backlog = 0;
+                empty_at = looked.min(Instant::now()) - shared.start;
                 counters
                     .oversized
                     .store(port.oversized(), Ordering::Relaxed);
@@ -489,6 +520,69 @@ mod tests {
             (2, 0, 0)
         );
         assert_eq!(counts.frames_out as usize, frames.len());
+    }
+
+    /// A device that only records the times it is polled at.
+    struct Stamps(Vec<Duration>);
+
+    impl Endpoint for Stamps {
+        fn input(&mut self, _: Input<'_>, _: Duration) -> Vec<Output> {
+            Vec::new()
+        }
+        fn poll(&mut self, now: Duration) -> Vec<Output> {
+            self.0.push(now);
+            Vec::new()
+        }
+        fn next_deadline(&self) -> Option<Duration> {
+            None
+        }
+    }
+
+    /// A port that finds nothing at its deadline, then is held back 30 ms before it returns
+    /// (a loaded host), once; then it stops the loop.
+    struct Stalling {
+        looked: Option<Instant>,
+        stop: Arc<AtomicBool>,
+    }
+
+    impl Port for Stalling {
+        type Error = std::convert::Infallible;
+
+        fn recv(&mut self, deadline: Instant) -> Result<Option<Input<'_>>, Self::Error> {
+            if self.looked.is_some() {
+                self.stop.store(true, Ordering::Relaxed);
+                return Ok(None);
+            }
+            std::thread::sleep(deadline.saturating_duration_since(Instant::now()));
+            self.looked = Some(Instant::now());
+            std::thread::sleep(Duration::from_millis(30));
+            Ok(None)
+        }
+
+        fn send(&mut self, _: &Output) -> Result<bool, Self::Error> {
+            Ok(true)
+        }
+    }
+
+    #[test]
+    fn timers_run_at_the_time_the_port_was_seen_empty_not_after_a_stall() {
+        let stop = Arc::new(AtomicBool::new(false));
+        let shared = Shared::new(Stamps(Vec::new()));
+        let mut port = Stalling {
+            looked: None,
+            stop: stop.clone(),
+        };
+        let opts = Options::new(Duration::from_millis(5));
+        run(&shared, &mut port, &opts, &Counters::default(), &stop).unwrap();
+        let looked = port.looked.expect("looked") - shared.start;
+        let polls = shared.lock().0 .0.clone();
+        assert_eq!(polls.len(), 2, "{polls:?}");
+        // The second poll is at the look, though it ran 30 ms later.
+        assert!(
+            polls[1] <= looked + Duration::from_millis(1),
+            "{polls:?} {looked:?}"
+        );
+        assert!(shared.now() >= looked + Duration::from_millis(30));
     }
 
     #[test]
