@@ -16,6 +16,12 @@
 //!   bit pairs; [-02] FI 1..8 in bit pairs; a pair reads 00 offline, 01 unknown, 10 online,
 //!   11 lost.
 //!
+//! An inverter lost from the system bus (`inject: { error: lost }`) reads 11 "lost or switched
+//! off" in the modules' pairs (BU 2100 §7.1.3, BU 2200 §7.1.3), its bit 0 "not online" in the
+//! SK 550P's P872, and 00 "offline" on the SK TU3-PNT, whose table has no 11 (BU 0590 §5.1.3:
+//! 00 offline, 01 not supported, 10 online). No simulated inverter is of an unknown type, so no
+//! pair reads 01.
+//!
 //! The embedded link stands in for the field bus: its cyclic process data count as cyclic
 //! communication (and, for PROFINET, as an established application relation), and the
 //! TU3-PNT's bit 5 "Ethernet connection" is set, as every other bit of its list reads 1 = the
@@ -37,8 +43,10 @@ pub(crate) struct BusFlags {
     pub(crate) config_error: bool,
     /// An inverter's telegram monitoring (P513 / P151) has tripped (E10.3).
     pub(crate) telegram_timeout: bool,
-    /// Inverters on the system bus: FI 1..=online are online.
+    /// Inverters on the system bus: FI 1..=online are online, unless lost.
     pub(crate) online: u8,
+    /// Inverters lost from the system bus (bit n: FI n + 1).
+    pub(crate) lost: u8,
     /// The interface's CAN controller on the system bus is in "Bus Warning" (error counters
     /// past the warning limit).
     pub(crate) bus_warning: bool,
@@ -55,9 +63,20 @@ fn bus_bits(product: Product, f: BusFlags) -> i32 {
     }
 }
 
-/// A bit pair "10b = online" for each of FI 1..=`online` among the first `slots`, from `first`.
-fn online_pairs(online: u8, slots: u8, first: u32) -> i32 {
-    (0..u32::from(online.min(slots))).fold(0, |w, n| w | 0b10 << (first + 2 * n))
+/// The FI status bit pairs of the first `slots` inverters, from bit `first`: 11b "lost or
+/// switched off" for each FI in `lost`, 10b "online" for the others of FI 1..=`online`, 00b
+/// "offline" for the rest (BU 2100 §7.1.3, BU 2200 §7.1.3).
+fn fi_pairs(online: u8, lost: u8, slots: u8, first: u32) -> i32 {
+    (0..u32::from(slots)).fold(0, |w, n| {
+        let pair = if lost & 1 << n != 0 {
+            0b11
+        } else if n < u32::from(online) {
+            0b10
+        } else {
+            0b00
+        };
+        w | pair << (first + 2 * n)
+    })
 }
 
 /// The status parameters of `product` as (parameter, element, value).
@@ -73,7 +92,9 @@ pub(crate) fn status_parameters(
     // At most two words: no allocation, this runs for every process-data exchange.
     let words = match product {
         Product::Sk550p => {
-            let online = (0..f.online.min(8)).fold(0, |w, n| w | 1 << (8 + n));
+            let online = (0..f.online.min(8))
+                .filter(|n| f.lost & 1 << n == 0)
+                .fold(0, |w, n| w | 1 << (8 + n));
             [Some((872, 1, low | online)), None]
         }
         Product::Tu3Pnt => [
@@ -83,7 +104,7 @@ pub(crate) fn status_parameters(
                 i32::from(f.cyclic) << 1
                     | i32::from(f.telegram_timeout) << 3
                     | 1 << 5
-                    | online_pairs(f.online, 1, 8),
+                    | fi_pairs(f.online, 0, 1, 8),
             )),
             Some((170, 1, if f.telegram_timeout { 1020 } else { 0 })),
         ],
@@ -91,14 +112,14 @@ pub(crate) fn status_parameters(
             Some((
                 173,
                 1,
-                low | i32::from(f.config_error) << 5 | online_pairs(f.online, 4, 8),
+                low | i32::from(f.config_error) << 5 | fi_pairs(f.online, f.lost, 4, 8),
             )),
-            Some((173, 2, online_pairs(f.online, 8, 0))),
+            Some((173, 2, fi_pairs(f.online, f.lost, 8, 0))),
         ],
         // The SK xU4-EIP's P173 has no array: element 2 is ignored by their store.
         Product::Tu3Eip | Product::Tu4Eip | Product::Cu4Eip => [
-            Some((173, 1, low | online_pairs(f.online, 4, 8))),
-            Some((173, 2, online_pairs(f.online, 8, 0))),
+            Some((173, 1, low | fi_pairs(f.online, f.lost, 4, 8))),
+            Some((173, 2, fi_pairs(f.online, f.lost, 8, 0))),
         ],
     };
     words.into_iter().flatten()
@@ -175,6 +196,29 @@ mod tests {
         #[case] f: BusFlags,
         #[case] want: Vec<(u16, u8, i32)>,
     ) {
+        assert_eq!(status_parameters(product, f).collect::<Vec<_>>(), want);
+    }
+
+    #[rstest]
+    // BU 2200 §7.1.3 / BU 2100 §7.1.3: FI 2 lost reads 11b, FI 1, 3, 4 online 10b.
+    #[case(Product::Tu4Pol, 4, vec![(173, 1, 0xAE01), (173, 2, 0x00AE)])]
+    #[case(Product::Tu3Eip, 4, vec![(173, 1, 0xAE01), (173, 2, 0x00AE)])]
+    // FI 2 of 2 lost; FI 3…8 offline (00b).
+    #[case(Product::Cu4Eip, 2, vec![(173, 1, 0x0E01), (173, 2, 0x000E)])]
+    // BU 0620 §4.3: P872 bit 9 "FI 2 online" cleared.
+    #[case(Product::Sk550p, 3, vec![(872, 1, 0x0501)])]
+    // BU 0590 §5.1.3 has no 11b: the TU3-PNT's one FI is shown by `online` alone.
+    #[case(Product::Tu3Pnt, 1, vec![(173, 1, 0x0220), (170, 1, 0)])]
+    fn a_lost_inverter(
+        #[case] product: Product,
+        #[case] online: u8,
+        #[case] want: Vec<(u16, u8, i32)>,
+    ) {
+        let f = BusFlags {
+            online,
+            lost: 0b10,
+            ..BusFlags::default()
+        };
         assert_eq!(status_parameters(product, f).collect::<Vec<_>>(), want);
     }
 

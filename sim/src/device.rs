@@ -700,6 +700,7 @@ impl Device {
             fieldbus_timeout: self.fieldbus_timeout,
             config_error: self.config_error,
             online: self.online(),
+            lost: self.lost,
             bus_warning: self.can_state.warning,
             bus_off: self.can_state.off_since.is_some(),
             ..BusFlags::default()
@@ -1343,17 +1344,21 @@ impl Device {
         Ok(())
     }
 
-    /// FI `inverter` is lost from the system bus: the SK TU3-PNT's bus status no longer shows
-    /// its one FI online (BU 0590 §5.1.3 P173 bits 9–8 "00 FI is offline"). The others' bus
-    /// status counts the FIs online from FI 1 and is left as it was.
+    /// FI `inverter` is lost from the system bus (switched off, cable cut): the bus status
+    /// shows it by each product's manual (`bus_status`): 11 "lost or switched off" in the
+    /// modules' P173 pairs (BU 2100 §7.1.3, BU 2200 §7.1.3), "not online" in the SK 550P's
+    /// P872, 00 "FI is offline" in the SK TU3-PNT's P173 bits 9–8 (BU 0590 §5.1.3).
     pub fn lose(&mut self, inverter: Inverter) {
-        if self.config.product == Product::Tu3Pnt {
-            self.lost |= 1 << (inverter.get() - 1);
-        }
+        self.lost |= 1 << (inverter.get() - 1);
+        self.monitor(self.now);
     }
 
-    /// FI 1..=n online, up to the first one lost.
+    /// FI 1..=n on the system bus: the SK TU3-PNT's up to the first one lost (its one FI reads
+    /// "offline" then), the others' all configured ones (a lost one is shown by `lost`).
     fn online(&self) -> u8 {
+        if self.config.product != Product::Tu3Pnt {
+            return self.config.inverters;
+        }
         (0..self.config.inverters)
             .find(|n| self.lost & 1 << n != 0)
             .unwrap_or(self.config.inverters)
@@ -1368,6 +1373,7 @@ impl Device {
             config_error: refused,
             ..self.shown.unwrap_or(BusFlags {
                 online: self.online(),
+                lost: self.lost,
                 ..BusFlags::default()
             })
         };
@@ -1423,9 +1429,15 @@ impl Device {
 
     /// Raises an inverter error, as P700 shows it (`"10.0"`), or puts the interface's CAN
     /// controller on the system bus into "Bus Warning" (`bus-warning`) or "Bus Off" (`bus-off`:
-    /// no 24 V on the bus, wrong connections, BU 2200 §8.4).
+    /// no 24 V on the bus, wrong connections, BU 2200 §8.4), or drops the inverter off the
+    /// system bus (`lost`, see [`Device::lose`]).
     pub fn inject_fault(&mut self, inverter: Inverter, error: &str) -> Result<(), String> {
         match error {
+            "lost" => {
+                self.inverter_mut(inverter).map_err(|e| e.to_string())?;
+                self.lose(inverter);
+                return Ok(());
+            }
             "bus-warning" => {
                 self.can_state.warning = true;
                 self.monitor(self.now);
@@ -1673,6 +1685,27 @@ mod tests {
             (read_fi(&mut d, 1, 745, 7), read_fi(&mut d, 1, 745, 8)),
             (11, 1)
         );
+    }
+
+    #[test]
+    fn a_lost_inverter_reads_11_in_the_modules_p173() {
+        // BU 2200 §7.1.3 / BU 2100 §7.1.3: "1 1 Frequenzumrichter verloren oder ausgeschaltet".
+        for product in [Product::Tu4Pol, Product::Tu3Eip] {
+            let mut d = Device::new(DeviceConfig::new(product));
+            d.inject_fault(Inverter::new(2).unwrap(), "lost").unwrap();
+            assert_eq!(
+                read_interface(&mut d, 173, 1) & 0xFF00,
+                0xAE00,
+                "{product:?}"
+            );
+        }
+        // BU 0590 §5.1.3 has no 11: the SK TU3-PNT's one FI reads 00 "offline".
+        let mut d = Device::new(DeviceConfig::new(Product::Tu3Pnt));
+        d.inject_fault(Inverter::new(1).unwrap(), "lost").unwrap();
+        assert_eq!(read_interface(&mut d, 173, 1) & 0x0300, 0);
+        // An inverter the device does not have cannot be lost.
+        let mut d = Device::new(DeviceConfig::new(Product::Tu4Pol));
+        assert!(d.inject_fault(Inverter::new(5).unwrap(), "lost").is_err());
     }
 
     #[test]

@@ -207,8 +207,10 @@ impl Node {
     /// FI `fi` drops off the system bus (switched off, cable cut): its parameter objects answer
     /// 08000020h from now on (BU 2200 §5.2.4: an interface that cannot reach its inverter
     /// "kann keine Daten im Gerät speichern und antwortet mit einem Fehler").
+    /// The module's P173 shows it "lost or switched off" ([`Device::lose`]).
     pub fn lose_inverter(&mut self, fi: Inverter) {
         self.vars.lost |= 1 << (fi.get() - 1);
+        self.device.lose(fi);
     }
 
     /// The simulated device.
