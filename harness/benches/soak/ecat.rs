@@ -123,7 +123,10 @@ fn read(client: &mut Good) -> Option<(u16, Vec<u8>)> {
     let request = DatagramRepr::physical(Command::APRD, index, 0, TYPE, vec![0; IDENTIFICATION]);
     let frame = EcatFrameRepr::new(vec![request]).emit().ok()?;
     let deadline = Instant::now() + TIMEOUT;
-    if !client.socket.send(MacAddr::BROADCAST, ETHERTYPE_ECAT, &frame) {
+    if !client
+        .socket
+        .send(MacAddr::BROADCAST, ETHERTYPE_ECAT, &frame)
+    {
         return None;
     }
     let returned = client.socket.mac.with_locally_administered();

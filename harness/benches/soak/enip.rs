@@ -8,7 +8,6 @@
 use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpStream, UdpSocket};
 use std::ops::Range;
-use std::process::Command;
 use std::time::Duration;
 
 use proto::enip::cip::{class, MrRequest, Service};
@@ -45,21 +44,26 @@ pub(crate) struct Enip {
     expected: Vec<u8>,
 }
 
-/// Starts `harness serve enip` on `listen` (127.0.0.x:port) for `seconds` at most.
-pub(crate) fn serve(listen: SocketAddr, seconds: u64) -> Result<(Served, String, Enip), String> {
+/// Starts `harness serve enip` on `listen` (127.0.0.x:port) for `seconds` at most, with
+/// `start` (which runs `harness serve BUS ARGS…`).
+pub(crate) fn serve(
+    listen: SocketAddr,
+    seconds: u64,
+    start: impl FnOnce(&str, &[&str]) -> Result<(Served, String), String>,
+) -> Result<(Served, String, Enip), String> {
     let name = eip::identity(PRODUCT)
         .ok_or("the product has no EtherNet/IP identity")?
         .name;
-    let (served, line) = Served::start(
-        Command::new(env!("CARGO_BIN_EXE_harness")),
+    let (listen_arg, seconds) = (listen.to_string(), seconds.to_string());
+    let (served, line) = start(
         "enip",
         &[
             "--listen",
-            &listen.to_string(),
+            &listen_arg,
             "--profile",
             "tu3-eip",
             "--seconds",
-            &seconds.to_string(),
+            &seconds,
         ],
     )?;
     let bus = Enip {
@@ -249,7 +253,14 @@ fn good_messages(path: &EPath) -> Result<Vec<EncapRepr>, String> {
 fn emitted(messages: &[EncapRepr], session: u32) -> Vec<Vec<u8>> {
     messages
         .iter()
-        .filter_map(|m| EncapRepr { session, ..m.clone() }.emit().ok())
+        .filter_map(|m| {
+            EncapRepr {
+                session,
+                ..m.clone()
+            }
+            .emit()
+            .ok()
+        })
         .collect()
 }
 

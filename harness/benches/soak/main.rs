@@ -25,6 +25,7 @@
 //! the figures, since latency on a shared machine depends on it.
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
+use std::process::Command;
 use std::time::Duration;
 
 #[path = "../common/mod.rs"]
@@ -79,14 +80,18 @@ fn main() {
     // The device outlives the soak by a margin, and is killed when it is over.
     let seconds = total + 30;
     if runs("enip") {
-        match enip::serve(ENIP_LISTEN, seconds) {
+        match enip::serve(ENIP_LISTEN, seconds, |bus, args| {
+            serve(|p| Command::new(p), bus, args)
+        }) {
             Ok((served, line, bus)) => report("EtherNet/IP", &line, &bus, served.pid(), &plan),
             Err(e) => println!("EtherNet/IP: could not serve ({e})"),
         }
     }
     let raw = runs("ecat") || runs("pnio");
     if raw && !(peer::is_root() && peer::runs("ip", "-V")) {
-        println!("EtherCAT, PROFINET IO: skipped (a veth pair into a namespace needs root and `ip`)");
+        println!(
+            "EtherCAT, PROFINET IO: skipped (a veth pair into a namespace needs root and `ip`)"
+        );
         return;
     }
     if runs("ecat") {
@@ -100,11 +105,16 @@ fn main() {
         }
     }
     if runs("pnio") {
-        let r = soak_raw(&plan, seconds, ("PROFINET IO", "pnio", &["--name", "soak"]), |iface| {
-            let bus = pnio::Pnio::new(iface)?;
-            let said = bus.said();
-            Ok((bus, said))
-        });
+        let r = soak_raw(
+            &plan,
+            seconds,
+            ("PROFINET IO", "pnio", &["--name", "soak"]),
+            |iface| {
+                let bus = pnio::Pnio::new(iface)?;
+                let said = bus.said();
+                Ok((bus, said))
+            },
+        );
         if let Err(e) = r {
             println!("PROFINET IO: could not run ({e})");
         }
@@ -124,11 +134,34 @@ fn soak_raw<B: Bus>(
     let seconds = seconds.to_string();
     let mut all = vec!["--iface", ns.ns_if(), "--seconds", &seconds];
     all.extend(args);
-    let (served, line) = Served::start(ns.command(env!("CARGO_BIN_EXE_harness")), command, &all)?;
+    let (served, line) = serve(|p| ns.command(p), command, &all)?;
     let (bus, said) = bus(ns.root_if())?;
     let line = format!("{line}; clients on {}; {said}", ns.root_if());
     report(name, &line, &bus, served.pid(), plan);
     Ok(())
+}
+
+/// Starts `harness serve BUS ARGS…` through `wrap` (which makes the command that runs a
+/// program: here, or inside a namespace) at a real-time priority (`chrt -f 10`) where the
+/// machine allows, standing in for a device with a processor of its own, as the POWERLINK and
+/// PROFINET benches serve theirs (at normal priority a loaded host holds the device back long
+/// enough for its socket to overflow); else at normal priority. Its line says which.
+fn serve(
+    wrap: impl Fn(&str) -> Command,
+    bus: &str,
+    args: &[&str],
+) -> Result<(Served, String), String> {
+    let harness = env!("CARGO_BIN_EXE_harness");
+    if peer::runs("chrt", "--version") {
+        let mut command = wrap("chrt");
+        command.args(["-f", "10", harness]);
+        match Served::start(command, bus, args) {
+            Ok((served, line)) => return Ok((served, format!("{line}; at SCHED_FIFO 10"))),
+            Err(e) => eprintln!("serving at a real-time priority failed ({e}): normal priority"),
+        }
+    }
+    let (served, line) = Served::start(wrap(harness), bus, args)?;
+    Ok((served, format!("{line}; at normal priority")))
 }
 
 /// The plan and the buses named on the command line (`cargo bench` adds `--bench`, which is
@@ -195,13 +228,18 @@ fn report<B: Bus>(name: &str, line: &str, bus: &B, pid: u32, plan: &Plan) {
         s.idle.wrong + s.mixed.wrong,
         met(lost == 0)
     );
-    for said in s.idle.said.iter().chain(&s.mixed.said) {
-        println!("{name}:   {said}");
+    for (phase, said) in [("idle", &s.idle.said), ("mixed", &s.mixed.said)] {
+        for said in said {
+            println!("{name}:   {phase}: {said}");
+        }
     }
+    let share = |cpu: Duration, over: Duration| 100.0 * cpu.as_secs_f64() / over.as_secs_f64();
     println!(
-        "{name}: broken frames sent {}; served process {}",
+        "{name}: broken frames sent {}; served process {}, its processor time {:.1} % idle, {:.1} % mixed",
         s.fuzzed,
-        if s.alive { "alive at the end" } else { "GONE" }
+        if s.alive { "alive at the end" } else { "GONE" },
+        share(s.cpu.0, s.mixed_from),
+        share(s.cpu.1, s.mixed_for)
     );
     let pass = memory && latency && lost == 0 && s.alive;
     println!("{name}: soak {}", if pass { "PASSED" } else { "FAILED" });
@@ -214,8 +252,8 @@ fn memory(name: &str, s: &Soaked) -> bool {
     let kib = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.0}"));
     let growth = judged.last().zip(judged.first()).map(|(l, f)| l - f);
     let slope = judged.slope();
-    let flat = growth.is_some_and(|g| g <= RSS_GROWTH_KIB)
-        && slope.is_some_and(|v| v < RSS_SLOPE_KIB_S);
+    let flat =
+        growth.is_some_and(|g| g <= RSS_GROWTH_KIB) && slope.is_some_and(|v| v < RSS_SLOPE_KIB_S);
     println!(
         "{name}: RSS (KiB, {} samples): start {}, max {}, end {}; from {:.0} s on: {} → {}, growth {}, slope {} KiB/s (flat: growth ≤ {RSS_GROWTH_KIB:.0} KiB and slope < {RSS_SLOPE_KIB_S} KiB/s: {})",
         s.rss.0.len(),

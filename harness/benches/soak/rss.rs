@@ -1,5 +1,6 @@
 //! The served process's resident memory, sampled from `/proc/PID/status` (`VmRSS`) while the
-//! soak runs: what "memory stays flat" is judged on.
+//! soak runs: what "memory stays flat" is judged on; and the processor time it used
+//! (`/proc/PID/stat`), which tells a device that cannot keep up from a busy host.
 
 use std::time::{Duration, Instant};
 
@@ -12,6 +13,17 @@ pub(crate) fn rss_kib(pid: u32) -> Option<u64> {
         .lines()
         .find_map(|l| l.strip_prefix("VmRSS:"))
         .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+}
+
+/// The processor time the served process has used so far (user and system), `None` once it
+/// has ended. Counted in the kernel's clock ticks, 100 a second on Linux.
+pub(crate) fn cpu_time(pid: u32) -> Option<Duration> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // The command name in parentheses may hold spaces: the fields are counted after it.
+    let fields: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
+    // utime and stime are fields 14 and 15, the 12th and 13th after the name and state.
+    let ticks: u64 = fields.get(11)?.parse::<u64>().ok()? + fields.get(12)?.parse::<u64>().ok()?;
+    Some(Duration::from_millis(ticks * 10))
 }
 
 /// Samples taken: seconds since the soak began, and KiB.

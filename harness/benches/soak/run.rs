@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use harness::stats::percentile;
 
-use super::rss::Samples;
+use super::rss::{cpu_time, Samples};
 
 /// What a good request got.
 pub(crate) enum Answer {
@@ -122,6 +122,8 @@ pub(crate) struct Soaked {
     pub(crate) fuzzed: u64,
     /// Whether the served process was still there at the end.
     pub(crate) alive: bool,
+    /// The processor time the served process used in the idle and the mixed phase.
+    pub(crate) cpu: (Duration, Duration),
 }
 
 const IDLE: u8 = 0;
@@ -169,11 +171,14 @@ pub(crate) fn soak<B: Bus>(bus: &B, pid: u32, plan: &Plan) -> Result<Soaked, Str
         }
 
         let start = Instant::now();
+        let cpu_start = cpu_time(pid).unwrap_or_default();
+        let mut cpu_mixed = None;
         let mut rss = Samples::default();
         let mut alive = true;
         let end = plan.idle + plan.mixed;
         while start.elapsed() < end && alive {
-            if start.elapsed() >= plan.idle {
+            if start.elapsed() >= plan.idle && cpu_mixed.is_none() {
+                cpu_mixed = cpu_time(pid);
                 phase.store(MIXED, Ordering::Release);
             }
             alive = rss.take(pid, start);
@@ -182,7 +187,9 @@ pub(crate) fn soak<B: Bus>(bus: &B, pid: u32, plan: &Plan) -> Result<Soaked, Str
         if alive {
             alive = rss.take(pid, start);
         }
+        let cpu_end = cpu_time(pid).unwrap_or_default();
         phase.store(STOP, Ordering::Release);
+        let cpu_mixed = cpu_mixed.unwrap_or(cpu_end);
 
         let (mut idle, mut mixed) = (Phase::default(), Phase::default());
         for t in good_threads {
@@ -202,6 +209,10 @@ pub(crate) fn soak<B: Bus>(bus: &B, pid: u32, plan: &Plan) -> Result<Soaked, Str
             mixed_for: plan.mixed,
             fuzzed: 0,
             alive,
+            cpu: (
+                cpu_mixed.saturating_sub(cpu_start),
+                cpu_end.saturating_sub(cpu_mixed),
+            ),
         })
     })
     .map(|s| Soaked {
