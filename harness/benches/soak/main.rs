@@ -16,7 +16,9 @@
 //!   settle in as the fuzzed clients start), RSS grows by at most [`RSS_GROWTH_KIB`] and its
 //!   least-squares slope stays below [`RSS_SLOPE_KIB_S`];
 //! - the good clients' p99 in the mixed phase at most [`P99_RATIO`]× the idle phase's;
-//! - nothing lost: every good request got its known answer.
+//! - nothing lost: every good request got its known answer, and a good client made after
+//!   the soak gets it too (a device that leaked sessions or connections to the fuzzed
+//!   clients would refuse it).
 //!
 //! The buses: EtherNet/IP over loopback (TCP and UDP); EtherCAT and PROFINET IO over a veth
 //! pair into a network namespace (made and removed here; needs root, else skipped).
@@ -46,7 +48,7 @@ mod run;
 use common::met;
 use common::served::Served;
 use netns::Netns;
-use run::{Bus, Plan, Soaked};
+use run::{Answer, Bus, Plan, Soaked};
 
 /// Memory may grow this much over the mixed phase after its first quarter.
 const RSS_GROWTH_KIB: f64 = 1024.0;
@@ -241,7 +243,19 @@ fn report<B: Bus>(name: &str, line: &str, bus: &B, pid: u32, plan: &Plan) {
         share(s.cpu.0, s.mixed_from),
         share(s.cpu.1, s.mixed_for)
     );
-    let pass = memory && latency && lost == 0 && s.alive;
+    let fresh = match &s.fresh {
+        Ok(Answer::Right) => Ok(()),
+        Ok(Answer::Wrong(e) | Answer::Lost(e)) => Err(e.clone()),
+        Err(e) => Err(format!("could not connect: {e}")),
+    };
+    println!(
+        "{name}: a new good client after the soak: {}",
+        match &fresh {
+            Ok(()) => "answered right".to_string(),
+            Err(e) => format!("NOT answered right ({e})"),
+        }
+    );
+    let pass = memory && latency && lost == 0 && s.alive && fresh.is_ok();
     println!("{name}: soak {}", if pass { "PASSED" } else { "FAILED" });
 }
 

@@ -12,6 +12,7 @@ use harness::stats::percentile;
 use super::rss::{cpu_time, Samples};
 
 /// What a good request got.
+#[derive(Debug)]
 pub(crate) enum Answer {
     /// The known answer.
     Right,
@@ -124,6 +125,9 @@ pub(crate) struct Soaked {
     pub(crate) alive: bool,
     /// The processor time the served process used in the idle and the mixed phase.
     pub(crate) cpu: (Duration, Duration),
+    /// What a good client made after the soak got (a device that leaked sessions or
+    /// connections to the fuzzed clients refuses a new one); `Err` when it could not connect.
+    pub(crate) fresh: Result<Answer, String>,
 }
 
 const IDLE: u8 = 0;
@@ -201,6 +205,9 @@ pub(crate) fn soak<B: Bus>(bus: &B, pid: u32, plan: &Plan) -> Result<Soaked, Str
         }
         idle.times.sort_unstable();
         mixed.times.sort_unstable();
+        let fresh = bus
+            .good(plan.good_clients)
+            .map(|mut client| bus.ask(&mut client));
         Ok(Soaked {
             idle,
             mixed,
@@ -213,6 +220,7 @@ pub(crate) fn soak<B: Bus>(bus: &B, pid: u32, plan: &Plan) -> Result<Soaked, Str
                 cpu_mixed.saturating_sub(cpu_start),
                 cpu_end.saturating_sub(cpu_mixed),
             ),
+            fresh,
         })
     })
     .map(|s| Soaked {
