@@ -93,19 +93,7 @@ impl Client {
 
     /// An unconnected request (SendRRData) and its message-router reply.
     fn request(&mut self, req: &MrRequest) -> Result<MrResponse, String> {
-        let data = SendData {
-            interface: 0,
-            timeout: 0,
-            cpf: Cpf::new(vec![Item::Null, Item::UnconnectedData(req.emit())]),
-        }
-        .emit()
-        .map_err(|e| e.to_string())?;
-        let reply = self.exchange(&EncapRepr {
-            command: EncapCommand::SEND_RR_DATA.0,
-            session: self.session,
-            data,
-            ..EncapRepr::default()
-        })?;
+        let reply = self.exchange(&send_rr_data(req, self.session)?)?;
         if reply.status != 0 {
             return Err(format!("SendRRData status {:#x}", reply.status));
         }
@@ -193,6 +181,24 @@ impl Client {
         })
         .map(|_| ())
     }
+}
+
+/// `req` as an unconnected request (SendRRData: a null address item and the request) in
+/// `session`.
+pub(crate) fn send_rr_data(req: &MrRequest, session: u32) -> Result<EncapRepr, String> {
+    let data = SendData {
+        interface: 0,
+        timeout: 0,
+        cpf: Cpf::new(vec![Item::Null, Item::UnconnectedData(req.emit())]),
+    }
+    .emit()
+    .map_err(|e| e.to_string())?;
+    Ok(EncapRepr {
+        command: EncapCommand::SEND_RR_DATA.0,
+        session,
+        data,
+        ..EncapRepr::default()
+    })
 }
 
 impl Drop for Client {

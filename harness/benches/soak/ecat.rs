@@ -17,7 +17,7 @@ use proto::ecat::register::{AL_CONTROL, AL_STATUS, STATION_ADDRESS, TYPE};
 use proto::eth::{MacAddr, ETHERTYPE_ECAT};
 
 use super::mutate::Mutator;
-use super::raw::RawSocket;
+use super::raw::{client_mac, RawSocket};
 use super::run::{Answer, Bus};
 
 /// Bytes read from [`TYPE`] on: up to and including the features register (0008h–0009h).
@@ -108,11 +108,6 @@ impl Bus for Ecat {
         let m = f.mutator.mutate(&f.frames, &LENGTHS, MAX_LEN);
         u64::from(f.socket.send(MacAddr::BROADCAST, ETHERTYPE_ECAT, &m))
     }
-}
-
-/// A client's address: `00:4E:53:4B:kind:n` (`kind` G for good, F for fuzzed).
-fn client_mac(kind: u8, n: u8) -> MacAddr {
-    MacAddr([0x00, 0x4E, 0x53, 0x4B, kind, n])
 }
 
 /// One APRD of the identification registers: the working counter and data of the answer,

@@ -11,14 +11,13 @@ use std::ops::Range;
 use std::time::Duration;
 
 use proto::enip::cip::{class, MrRequest, Service};
-use proto::enip::cpf::{Cpf, Item};
-use proto::enip::encap::{Command as EncapCommand, EncapRepr, RegisterSession, SendData};
+use proto::enip::encap::{Command as EncapCommand, EncapRepr, RegisterSession};
 use proto::enip::epath::EPath;
 use proto::enip::identity::short_string;
 use proto::enip::io::IoFrame;
 use proto::nord::{eip, Product};
 
-use super::common::enip_client::Client;
+use super::common::enip_client::{send_rr_data, Client};
 use super::common::served::Served;
 use super::mutate::Mutator;
 use super::run::{Answer, Bus};
@@ -233,18 +232,7 @@ fn good_messages(path: &EPath) -> Result<Vec<EncapRepr>, String> {
             path,
             data: Vec::new(),
         };
-        let data = SendData {
-            interface: 0,
-            timeout: 0,
-            cpf: Cpf::new(vec![Item::Null, Item::UnconnectedData(req.emit())]),
-        }
-        .emit()
-        .map_err(|e| e.to_string())?;
-        out.push(EncapRepr {
-            command: EncapCommand::SEND_RR_DATA.0,
-            data,
-            ..EncapRepr::default()
-        });
+        out.push(send_rr_data(&req, 0)?);
     }
     Ok(out)
 }

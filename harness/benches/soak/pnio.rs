@@ -16,7 +16,7 @@ use proto::pnio::dcp::{
 use proto::pnio::MULTICAST_DCP_IDENTIFY;
 
 use super::mutate::Mutator;
-use super::raw::RawSocket;
+use super::raw::{client_mac, RawSocket};
 use super::run::{Answer, Bus};
 
 /// How long a good client waits for its answer.
@@ -124,11 +124,6 @@ impl Bus for Pnio {
         };
         u64::from(f.socket.send(dst, ETHERTYPE_PROFINET, &m))
     }
-}
-
-/// A client's address: `00:4E:53:4B:kind:n` (`kind` G for good, F for fuzzed).
-fn client_mac(kind: u8, n: u8) -> MacAddr {
-    MacAddr([0x00, 0x4E, 0x53, 0x4B, kind, n])
 }
 
 /// One DCP Get of the DeviceID: the answer's data, `None` when none came in time.

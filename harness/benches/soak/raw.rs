@@ -11,6 +11,12 @@ use proto::eth::{EthernetFrame, EthernetRepr, MacAddr};
 /// How long a receive waits at most before the deadline is looked at again.
 const POLL: Duration = Duration::from_millis(5);
 
+/// A client's address: `00:4E:53:4B:kind:n` (`kind` G for good, F for fuzzed), so that each
+/// client tells its own answers from the others'.
+pub(crate) fn client_mac(kind: u8, n: u8) -> MacAddr {
+    MacAddr([0x00, 0x4E, 0x53, 0x4B, kind, n])
+}
+
 /// A packet socket on one interface.
 pub(crate) struct RawSocket {
     tx: Box<dyn DataLinkSender>,
