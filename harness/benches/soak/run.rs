@@ -120,6 +120,7 @@ pub(crate) struct Soaked {
     pub(crate) mixed_from: Duration,
     /// How long it lasted.
     pub(crate) mixed_for: Duration,
+    /// Broken frames sent.
     pub(crate) fuzzed: u64,
     /// Whether the served process was still there at the end.
     pub(crate) alive: bool,
@@ -161,11 +162,13 @@ pub(crate) fn soak<B: Bus>(bus: &B, pid: u32, plan: &Plan) -> Result<Soaked, Str
                     thread::sleep(Duration::from_millis(5));
                 }
                 let start = Instant::now();
-                let mut sent = 0u64;
+                let (mut steps, mut sent) = (0u64, 0u64);
                 while phase.load(Ordering::Acquire) == MIXED {
                     sent += bus.fuzz(&mut client);
-                    // Never ahead of the rate.
-                    let due = Duration::from_secs_f64(sent as f64 / per_fuzzer);
+                    // Never ahead of the rate, counting steps that sent nothing too (a
+                    // connection refused), so that such a step does not spin.
+                    steps += 1;
+                    let due = Duration::from_secs_f64(steps as f64 / per_fuzzer);
                     if let Some(wait) = due.checked_sub(start.elapsed()) {
                         thread::sleep(wait);
                     }
