@@ -24,12 +24,12 @@ use super::run::{Answer, Bus};
 
 /// The product served.
 const PRODUCT: Product = Product::Tu3Eip;
-/// Product name: Identity object attribute 7 (CIP Vol. 1 §5A-2).
+/// Product name: attribute 7 of the Identity object (`proto::enip::identity::Identity`).
 const PRODUCT_NAME: u16 = 7;
 /// TCP connections each fuzzed client keeps at most.
 const CONNECTIONS: usize = 8;
-/// Where the encapsulation length lies (bytes 2–3 of the header, CIP Vol. 2 §2-3).
-const LENGTHS: [Range<usize>; 1] = [2..4];
+/// Where the encapsulation length lies: bytes 2–3 of the header (`proto::enip::encap`).
+const LENGTH: Range<usize> = 2..4;
 /// Broken messages are at most this long.
 const MAX_LEN: usize = 600;
 /// How long a fuzzed client waits on a connection, a registration or a write.
@@ -118,7 +118,9 @@ impl Bus for Enip {
             0..=7 => self.fuzz_tcp(f),
             8 => {
                 let msgs = emitted(&f.messages, 0);
-                let m = f.mutator.mutate(&msgs, &LENGTHS, MAX_LEN);
+                let m = f
+                    .mutator
+                    .mutate(&msgs, std::slice::from_ref(&LENGTH), MAX_LEN);
                 let _ = f.udp.send_to(&m, self.listen);
                 drain_udp(&f.udp);
                 1
@@ -146,7 +148,9 @@ impl Enip {
             return 0;
         };
         let msgs = emitted(&f.messages, *session);
-        let m = f.mutator.mutate(&msgs, &LENGTHS, MAX_LEN);
+        let m = f
+            .mutator
+            .mutate(&msgs, std::slice::from_ref(&LENGTH), MAX_LEN);
         let alive = tcp.write_all(&m).is_ok() && drain_tcp(tcp);
         if !alive || f.mutator.rng().u8(..8) == 0 {
             f.tcp[slot] = None;

@@ -37,7 +37,6 @@ mod enip;
 mod mutate;
 #[path = "../../../tests/common/netns.rs"]
 mod netns;
-#[allow(dead_code)] // the skip-or-fail rule netns.rs uses
 #[path = "../../../tests/common/peer.rs"]
 mod peer;
 mod pnio;
