@@ -1,6 +1,7 @@
 //! Figures of the speed benches, the same for every bus (`harness/benches/`): rates, medians of
-//! rounds, and the jitter of a periodic stream (EtherNet/IP T→O data at its RPI, EtherCAT
-//! process data at its cycle time) from its arrival times and sequence numbers.
+//! rounds, the jitter of a periodic stream (EtherNet/IP T→O data at its RPI, EtherCAT
+//! process data at its cycle time) from its arrival times and sequence numbers, and the trend
+//! of a sampled quantity (the soak's resident memory).
 //!
 //! Pure functions over numbers the benches measured; nothing here reads a clock.
 
@@ -92,6 +93,17 @@ pub fn jitter(arrivals: &[(u32, Duration)], period: Duration) -> Option<Jitter> 
     })
 }
 
+/// The least-squares slope of `samples` ((x, y) pairs: seconds and KiB, for the soak's
+/// memory), in y per x; `None` with fewer than two distinct x.
+pub fn slope(samples: &[(f64, f64)]) -> Option<f64> {
+    let n = samples.len() as f64;
+    let mean = |f: fn(&(f64, f64)) -> f64| samples.iter().map(f).sum::<f64>() / n;
+    let (mx, my) = (mean(|s| s.0), mean(|s| s.1));
+    let sxx: f64 = samples.iter().map(|(x, _)| (x - mx).powi(2)).sum();
+    let sxy: f64 = samples.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
 /// The `p`th percentile (nearest rank) of ascending `sorted`; `None` when empty.
 pub fn percentile(sorted: &[Duration], p: f64) -> Option<Duration> {
     if sorted.is_empty() {
@@ -135,6 +147,18 @@ mod tests {
             .per_sec(),
             0.0
         );
+    }
+
+    #[test]
+    fn slope_is_the_least_squares_trend() {
+        // Flat, rising by 2 per second, and rising with noise around 1 per second.
+        assert_eq!(slope(&[(0.0, 5.0), (1.0, 5.0), (2.0, 5.0)]), Some(0.0));
+        assert_eq!(slope(&[(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)]), Some(2.0));
+        let noisy = slope(&[(0.0, 0.0), (1.0, 2.0), (2.0, 1.0), (3.0, 3.0)]).unwrap();
+        assert!((noisy - 0.8).abs() < 1e-9, "{noisy}");
+        // No trend without two distinct times.
+        assert_eq!(slope(&[]), None);
+        assert_eq!(slope(&[(1.0, 1.0), (1.0, 9.0)]), None);
     }
 
     #[test]

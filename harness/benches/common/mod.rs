@@ -1,9 +1,9 @@
 //! What the speed benches share (each bench target includes this file as its `common`
 //! module): the interop venv's Python and its bench scripts, clients run concurrently, the
 //! wording of a target met, the served device (`served`: the bench driver's `harness serve
-//! BUS`), and the second network namespace the raw-Ethernet benches put
-//! their clients in (so that neither end of their veth pair has an address in the root
-//! namespace, where a test running meanwhile may use the same subnet). The figures themselves
+//! BUS`), the minimal EtherNet/IP client (`enip_client`), and the second network namespace the
+//! raw-Ethernet benches put their clients in (so that neither end of their veth pair has an
+//! address in the root namespace, where a test running meanwhile may use the same subnet). The figures themselves
 //! are in `harness::stats`.
 
 // Each bench uses part of this.
@@ -18,6 +18,7 @@ use std::time::{Duration, Instant};
 
 use harness::stats::Rate;
 
+pub(crate) mod enip_client;
 pub(crate) mod served;
 
 /// `met` or `NOT met`: a bench prints whether a target was met, it does not fail.

@@ -57,6 +57,13 @@ impl Served {
     }
 }
 
+impl Served {
+    /// The process id, to sample its memory from `/proc/PID/status` (the soak).
+    pub(crate) fn pid(&self) -> u32 {
+        self.0.id()
+    }
+}
+
 impl Drop for Served {
     fn drop(&mut self) {
         let _ = self.0.kill();

@@ -11,7 +11,7 @@ use nix::sys::resource::{getrlimit, setrlimit, Resource};
 use proto::enip::encap::{frame_len, Command, EncapRepr};
 use proto::enip::epath::EPath;
 
-use super::client::Client;
+use super::common::enip_client::Client;
 use super::Settings;
 
 /// A good client's latency and rate.

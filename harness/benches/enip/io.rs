@@ -16,7 +16,7 @@ use nix::sys::time::TimeSpec;
 use proto::enip::io::{IoFrame, IO_PORT};
 use proto::nord::eip::{self, Direction};
 
-use super::client::Client;
+use super::common::enip_client::Client;
 use super::{Settings, PRODUCT};
 
 /// T→O arrival jitter of an Exclusive Owner connection: O→T every RPI from one thread, T→O

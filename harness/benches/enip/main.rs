@@ -41,13 +41,12 @@ use proto::nord::eip;
 use proto::nord::{Inverter, ParamNumber, Product};
 use sim::device::DeviceConfig;
 
-mod client;
 #[path = "../common/mod.rs"]
 mod common;
 mod idle;
 mod io;
 
-use client::Client;
+use common::enip_client::Client;
 use common::{concurrent, met, run_script, Script};
 use io::io_jitter;
 
@@ -61,14 +60,8 @@ const TARGET_P99: Duration = Duration::from_micros(200);
 const PRODUCT: Product = Product::Sk550p;
 /// The parameter read: P102 (BU 0620 §2.3.5: class 100 + FI, instance 0 = set 1).
 const PARAM: u16 = 102;
-/// Originator vendor id and serial number of the bench's own Forward_Open.
-const VENDOR: u16 = 0x4E48;
-const ORIGINATOR_SERIAL: u32 = 0x4E48_4245;
 /// Requests each client makes before it is timed.
 const WARM_UP: u32 = 100;
-/// Timeout multiplier of the I/O connection: ×64, so an O→T frame that a busy host sends a
-/// few RPIs late does not end the measurement; the jitter measured is the T→O side.
-const IO_MULTIPLIER: u8 = 4;
 
 fn main() {
     let script =

@@ -279,7 +279,7 @@ async fn client(mut stream: TcpStream, peer: SocketAddr, slot: Slot) {
                         match out {
                             Output::Message { bytes, .. } => {
                                 if let Some(due) = due {
-                                    sleep_until(Instant::from_std(due)).await;
+                                    sleep_until_due(Instant::from_std(due)).await;
                                 }
                                 match timeout(STALL, stream.write_all(&bytes)).await {
                                     Ok(Ok(())) => {}
@@ -310,6 +310,16 @@ fn misbehaved_close(slot: &Slot, peer: SocketAddr) {
     eprintln!("misbehave {t:9.3}s close   TCP connection of {peer} at its second request");
 }
 
+/// Waits until `due`, and not at all when it has passed. Tokio rounds a timer's deadline up
+/// to the next whole millisecond of its clock, so a sleep until a time already passed still
+/// waits for the timer's next tick: every reply of an adapter not late on purpose left up to
+/// 1–2 ms late (found by the soak, `harness/benches/soak/`: a good client's p50 of 1.2 ms).
+async fn sleep_until_due(due: Instant) {
+    if due > Instant::now() {
+        sleep_until(due).await;
+    }
+}
+
 /// One message through the adapter: its reply, and its close when the adapter ends the
 /// connection. Wakes the I/O thread when something became due sooner (a Forward_Open) and
 /// tells every client when the inactivity timeout changed.
@@ -337,4 +347,24 @@ fn handle(slot: &Slot, peer: SocketAddr, msg: &[u8]) -> Vec<Output> {
         changed
     });
     r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[tokio::test(start_paused = true)]
+    async fn a_reply_due_now_does_not_wait_for_the_timers_next_tick() {
+        // Half-way through a millisecond of the (paused) clock, where the rounding bites: a
+        // timer until now would let the idle runtime move the clock on to the next tick.
+        tokio::time::advance(Duration::from_micros(500)).await;
+        let due = Instant::now();
+        sleep_until_due(due).await;
+        assert_eq!(Instant::now(), due, "the reply waited for the timer's tick");
+        // A reply late on purpose (`--reply-delay`) still waits for its time (and the tick
+        // after it).
+        let late = due + Duration::from_millis(3);
+        sleep_until_due(late).await;
+        assert!(Instant::now() >= late);
+    }
 }

@@ -1,6 +1,6 @@
-//! The bench's minimal EtherNet/IP client: encode, send, receive, decode and nothing else,
-//! which shows what the simulator and loopback allow a client; and the Forward_Open of the
-//! jitter figure's I/O connection.
+//! The benches' minimal EtherNet/IP client: encode, send, receive, decode and nothing else,
+//! which shows what the simulator and loopback allow a client (the EtherNet/IP bench) and is
+//! the soak's good client; and the Forward_Open of the EtherNet/IP bench's I/O connection.
 
 use std::net::{SocketAddr, TcpStream};
 use std::time::Duration;
@@ -15,27 +15,32 @@ use proto::enip::epath::EPath;
 
 use harness::poll::{PollingStream, REPLY_POLL};
 
-use super::{IO_MULTIPLIER, ORIGINATOR_SERIAL, VENDOR};
+/// Originator vendor id and serial number of the client's Forward_Open.
+const VENDOR: u16 = 0x4E48;
+const ORIGINATOR_SERIAL: u32 = 0x4E48_4245;
+/// Timeout multiplier of the I/O connection: ×64, so an O→T frame that a busy host sends a
+/// few RPIs late does not end the measurement; the jitter measured is the T→O side.
+const IO_MULTIPLIER: u8 = 4;
 
 /// How long it waits for a reply at all.
 const TIMEOUT: Duration = Duration::from_secs(2);
 
 /// The bench's minimal explicit client: one session, unconnected requests.
-pub(super) struct Client {
+pub(crate) struct Client {
     tcp: PollingStream,
     session: u32,
     buf: Vec<u8>,
 }
 
 /// An open I/O connection, as the Forward_Open reply gave it.
-pub(super) struct IoConnection {
-    pub(super) o_t_id: u32,
-    pub(super) t_o_id: u32,
-    pub(super) serial: u16,
+pub(crate) struct IoConnection {
+    pub(crate) o_t_id: u32,
+    pub(crate) t_o_id: u32,
+    pub(crate) serial: u16,
 }
 
 impl Client {
-    pub(super) fn connect(target: SocketAddr) -> Result<Client, String> {
+    pub(crate) fn connect(target: SocketAddr) -> Result<Client, String> {
         let tcp = TcpStream::connect_timeout(&target, Duration::from_secs(2))
             .map_err(|e| format!("cannot connect to {target}: {e}"))?;
         tcp.set_nodelay(true).map_err(|e| e.to_string())?;
@@ -61,7 +66,7 @@ impl Client {
     }
 
     /// The local address of the client's TCP connection, where T→O data is sent.
-    pub(super) fn local_addr(&self) -> std::io::Result<SocketAddr> {
+    pub(crate) fn local_addr(&self) -> std::io::Result<SocketAddr> {
         self.tcp.get().local_addr()
     }
 
@@ -88,19 +93,7 @@ impl Client {
 
     /// An unconnected request (SendRRData) and its message-router reply.
     fn request(&mut self, req: &MrRequest) -> Result<MrResponse, String> {
-        let data = SendData {
-            interface: 0,
-            timeout: 0,
-            cpf: Cpf::new(vec![Item::Null, Item::UnconnectedData(req.emit())]),
-        }
-        .emit()
-        .map_err(|e| e.to_string())?;
-        let reply = self.exchange(&EncapRepr {
-            command: EncapCommand::SEND_RR_DATA.0,
-            session: self.session,
-            data,
-            ..EncapRepr::default()
-        })?;
+        let reply = self.exchange(&send_rr_data(req, self.session)?)?;
         if reply.status != 0 {
             return Err(format!("SendRRData status {:#x}", reply.status));
         }
@@ -121,7 +114,7 @@ impl Client {
     }
 
     /// Get_Attribute_Single of `path`.
-    pub(super) fn get(&mut self, path: &EPath) -> Result<Vec<u8>, String> {
+    pub(crate) fn get(&mut self, path: &EPath) -> Result<Vec<u8>, String> {
         self.request(&MrRequest {
             service: Service::GET_ATTRIBUTE_SINGLE.0,
             path: path.clone(),
@@ -132,7 +125,7 @@ impl Client {
 
     /// Forward_Open of a class-1 cyclic point-to-point connection to assembly points `o_t`
     /// and `t_o` with connection sizes `o_t_size` and `t_o_size`, RPI `rpi_us` both ways.
-    pub(super) fn forward_open(
+    pub(crate) fn forward_open(
         &mut self,
         o_t: u16,
         t_o: u16,
@@ -172,7 +165,7 @@ impl Client {
         })
     }
 
-    pub(super) fn forward_close(&mut self, serial: u16) -> Result<(), String> {
+    pub(crate) fn forward_close(&mut self, serial: u16) -> Result<(), String> {
         let fc = ForwardClose {
             priority_tick: 0x0A,
             timeout_ticks: 0x0E,
@@ -188,6 +181,24 @@ impl Client {
         })
         .map(|_| ())
     }
+}
+
+/// `req` as an unconnected request (SendRRData: a null address item and the request) in
+/// `session`.
+pub(crate) fn send_rr_data(req: &MrRequest, session: u32) -> Result<EncapRepr, String> {
+    let data = SendData {
+        interface: 0,
+        timeout: 0,
+        cpf: Cpf::new(vec![Item::Null, Item::UnconnectedData(req.emit())]),
+    }
+    .emit()
+    .map_err(|e| e.to_string())?;
+    Ok(EncapRepr {
+        command: EncapCommand::SEND_RR_DATA.0,
+        session,
+        data,
+        ..EncapRepr::default()
+    })
 }
 
 impl Drop for Client {
