@@ -312,3 +312,54 @@ pub fn device_can(data: &[u8]) {
         |out| matches!(out, Output::Can(f) if (0x701..=0x77F).contains(&f.id()) && f.data() == [0]),
     );
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A device that never sends anything.
+    struct Silent;
+
+    impl Endpoint for Silent {
+        fn input(&mut self, _: Input<'_>, _: Duration) -> Vec<Output> {
+            Vec::new()
+        }
+        fn poll(&mut self, _: Duration) -> Vec<Output> {
+            Vec::new()
+        }
+        fn next_deadline(&self) -> Option<Duration> {
+            None
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "the device no longer answers a ping after the session")]
+    fn a_device_that_does_not_answer_the_good_request_is_a_crash() {
+        let mut d = Driver::new(Silent, &[], false);
+        d.must_answer(Step::Frame(&[0; 60]), 2, "a ping", |_| true);
+    }
+
+    #[test]
+    fn every_device_answers_its_good_request_after_an_empty_session() {
+        for target in [
+            device_ecat,
+            device_epl,
+            device_pnio,
+            device_enip,
+            device_can,
+        ] {
+            target(&[]);
+        }
+    }
+
+    #[test]
+    fn an_advance_ends_at_its_end_with_the_device_polled_up_to_it() {
+        let io = IoDevice::new(device(), IoConfig::new(PRODUCT)).unwrap();
+        let mut d = Driver::new(io, &[RPC_PORT], false);
+        // The IO device wants a poll every millisecond: 1 s is 1000 deadlines, 64 are polled,
+        // then one at the end.
+        d.advance(Duration::from_secs(1));
+        assert_eq!(d.now, Duration::from_secs(1));
+        assert!(d.device.next_deadline() > Some(d.now));
+    }
+}

@@ -2,7 +2,7 @@
 //! device of `sim` driven as a session with time passing, and the harness's suite loader and
 //! device-description readers.
 //!
-//! Each target is a plain function of the fuzzer's bytes ([`targets::TARGETS`]); a crash is a
+//! Each target is a plain function of the fuzzer's bytes ([`targets::all`]); a crash is a
 //! panic (overflow included: the instrumented build has debug assertions), an allocation past
 //! the fuzzer's limit, a hang past its timeout, or a device that no longer answers a good
 //! request after the session ([`devices`]). The libFuzzer binaries (`fuzz_targets/`, feature
@@ -14,4 +14,5 @@ pub mod devices;
 pub mod parsers;
 pub mod session;
 pub mod targets;
+#[cfg(feature = "texts")]
 pub mod texts;

@@ -1,7 +1,7 @@
 //! Every fuzz target by name: the name of its libFuzzer binary (`fuzz_targets/<name>.rs`) and
 //! of its corpus folder (`corpus/<name>/`).
 
-use crate::{devices, parsers, texts};
+use crate::{devices, parsers};
 
 /// A fuzz target: its name and the function it runs on the fuzzer's bytes.
 #[derive(Debug, Clone, Copy)]
@@ -12,8 +12,8 @@ pub struct Target {
     pub run: fn(&[u8]),
 }
 
-/// Every target: the codecs, the devices, the text readers.
-pub const TARGETS: &[Target] = &[
+/// The targets of the codecs and the devices.
+pub const CODECS_AND_DEVICES: &[Target] = &[
     Target {
         name: "ecat",
         run: parsers::ecat,
@@ -70,17 +70,30 @@ pub const TARGETS: &[Target] = &[
         name: "device_can",
         run: devices::device_can,
     },
+];
+
+/// The targets of the harness's readers (feature `texts`).
+#[cfg(feature = "texts")]
+pub const TEXTS: &[Target] = &[
     Target {
         name: "suite",
-        run: texts::suite,
+        run: crate::texts::suite,
     },
     Target {
         name: "description",
-        run: texts::description,
+        run: crate::texts::description,
     },
 ];
+/// The targets of the harness's readers: none without feature `texts`.
+#[cfg(not(feature = "texts"))]
+pub const TEXTS: &[Target] = &[];
+
+/// Every target built: the codecs, the devices and the readers.
+pub fn all() -> impl Iterator<Item = &'static Target> {
+    CODECS_AND_DEVICES.iter().chain(TEXTS)
+}
 
 /// The target of that name.
 pub fn by_name(name: &str) -> Option<&'static Target> {
-    TARGETS.iter().find(|t| t.name == name)
+    all().find(|t| t.name == name)
 }

@@ -23,8 +23,7 @@ pub(crate) const RUSTFLAGS: &str = "-Cpasses=sancov-module \
      -Cllvm-args=-sanitizer-coverage-inline-8bit-counters \
      -Cllvm-args=-sanitizer-coverage-pc-table \
      -Cllvm-args=-sanitizer-coverage-trace-compares \
-     -Cllvm-args=-sanitizer-coverage-stack-depth \
-     --cfg fuzzing -Cdebug-assertions";
+     --cfg fuzzing -Cllvm-args=-sanitizer-coverage-stack-depth -Cdebug-assertions";
 
 /// The host's target triple (the instrumented build names it so that RUSTFLAGS skip the
 /// build scripts).
@@ -38,6 +37,24 @@ const RSS_LIMIT_MB: u32 = 2048;
 /// A single allocation past this is a crash.
 const MALLOC_LIMIT_MB: u32 = 512;
 
+/// The targets of the harness's readers, built only with the `fuzz` crate's feature `texts`
+/// (their `required-features` in `fuzz/Cargo.toml`): the harness is most of the
+/// instrumented build, which the smoke leaves out (`--no-texts`).
+const TEXT_TARGETS: [&str; 2] = ["description", "suite"];
+
+/// The longest input of a target (`-max_len`; libFuzzer's default, the longest corpus input,
+/// for the others): a device session or a suite or description text past this adds little
+/// coverage and makes the corpus kept in the repository big and every execution slow.
+fn max_len(target: &str) -> Option<usize> {
+    if TEXT_TARGETS.contains(&target) {
+        Some(4 * 1024)
+    } else if target.starts_with("device_") {
+        Some(2 * 1024)
+    } else {
+        None
+    }
+}
+
 /// What `cargo xtask fuzz` is asked.
 #[derive(Debug, PartialEq, Eq)]
 pub(crate) struct FuzzOptions {
@@ -45,6 +62,8 @@ pub(crate) struct FuzzOptions {
     pub(crate) seconds: u32,
     /// Minimise each target's corpus after its run (`-merge=1`) and write it back.
     pub(crate) merge: bool,
+    /// Build and run the targets of the harness's readers too (not `--no-texts`).
+    pub(crate) texts: bool,
     /// The targets; empty: all.
     pub(crate) targets: Vec<String>,
 }
@@ -54,6 +73,7 @@ pub(crate) fn parse(args: &[String]) -> Result<FuzzOptions, String> {
     let mut options = FuzzOptions {
         seconds: 60,
         merge: false,
+        texts: true,
         targets: Vec::new(),
     };
     let mut args = args.iter();
@@ -68,6 +88,7 @@ pub(crate) fn parse(args: &[String]) -> Result<FuzzOptions, String> {
                     .ok_or(format!("--seconds {n}: a whole number of seconds above 0"))?;
             }
             "--merge" => options.merge = true,
+            "--no-texts" => options.texts = false,
             other if other.starts_with('-') => return Err(format!("unknown option `{other}`")),
             target => options.targets.push(target.to_string()),
         }
@@ -131,8 +152,8 @@ fn all_targets(root: &Path) -> Result<Vec<String>, String> {
     Ok(names)
 }
 
-/// Builds the instrumented targets into `target`; whether it built.
-fn build(root: &Path, target: &Path) -> bool {
+/// Builds the instrumented `targets` into `target`; whether they built.
+fn build(root: &Path, target: &Path, targets: &[String], texts: bool) -> bool {
     eprintln!("xtask: building the instrumented fuzz targets ({HOST}, {target:?})");
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     Command::new(cargo)
@@ -145,7 +166,13 @@ fn build(root: &Path, target: &Path) -> bool {
             "--features",
             "libfuzzer",
         ])
-        .args(["--bins", "--target", HOST])
+        .args(if texts {
+            None
+        } else {
+            Some("--no-default-features")
+        })
+        .args(targets.iter().flat_map(|t| ["--bin", t]))
+        .args(["--target", HOST])
         .env("CARGO_TARGET_DIR", target)
         .env("RUSTFLAGS", RUSTFLAGS)
         .status()
@@ -166,12 +193,15 @@ fn libfuzzer(bin: &Path, args: &[String]) -> Result<(bool, String), String> {
 
 /// Runs `cargo xtask fuzz`; whether no target crashed.
 pub(crate) fn run(root: &Path, target: &Path, options: &FuzzOptions) -> Result<bool, String> {
-    let targets = if options.targets.is_empty() {
+    let mut targets = if options.targets.is_empty() {
         all_targets(root)?
     } else {
         options.targets.clone()
     };
-    if !build(root, target) {
+    if !options.texts {
+        targets.retain(|t| !TEXT_TARGETS.contains(&t.as_str()));
+    }
+    if !build(root, target, &targets, options.texts) {
         return Err("the instrumented build failed (above)".into());
     }
     let bins = target.join(HOST).join("release");
@@ -192,17 +222,17 @@ pub(crate) fn run(root: &Path, target: &Path, options: &FuzzOptions) -> Result<b
             std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         }
         let path = |p: &PathBuf| p.display().to_string();
-        let args = vec![
+        let mut args = vec![
             format!("-max_total_time={}", options.seconds),
             format!("-timeout={TIMEOUT_SECS}"),
             format!("-rss_limit_mb={RSS_LIMIT_MB}"),
             format!("-malloc_limit_mb={MALLOC_LIMIT_MB}"),
             "-print_final_stats=1".into(),
             format!("-artifact_prefix={}/", path(&artifacts)),
-            // New inputs go to the scratch folder; the repository's corpus is only read.
-            path(&scratch),
-            path(&corpus),
         ];
+        args.extend(max_len(name).map(|n| format!("-max_len={n}")));
+        // New inputs go to the scratch folder; the repository's corpus is only read.
+        args.extend([path(&scratch), path(&corpus)]);
         let (ok, log) = libfuzzer(&bins.join(name), &args)?;
         let f = figures(&log);
         let crash = !ok || f.crashed;
@@ -228,7 +258,7 @@ pub(crate) fn run(root: &Path, target: &Path, options: &FuzzOptions) -> Result<b
             continue;
         }
         if options.merge {
-            merge(&bins.join(name), &corpus, &scratch)?;
+            merge(&bins.join(name), name, &corpus, &scratch)?;
         }
     }
     if !crashed.is_empty() {
@@ -239,17 +269,13 @@ pub(crate) fn run(root: &Path, target: &Path, options: &FuzzOptions) -> Result<b
 
 /// Replaces `corpus` by the smallest set of its and `scratch`'s inputs with the same
 /// coverage (`-merge=1`).
-fn merge(bin: &Path, corpus: &Path, scratch: &Path) -> Result<(), String> {
+fn merge(bin: &Path, name: &str, corpus: &Path, scratch: &Path) -> Result<(), String> {
     let merged = corpus.with_extension("merged");
     let _ = std::fs::remove_dir_all(&merged);
     std::fs::create_dir_all(&merged).map_err(|e| format!("{}: {e}", merged.display()))?;
-    let args = [
-        "-merge=1".to_string(),
-        format!("-timeout={TIMEOUT_SECS}"),
-        merged.display().to_string(),
-        corpus.display().to_string(),
-        scratch.display().to_string(),
-    ];
+    let mut args = vec!["-merge=1".to_string(), format!("-timeout={TIMEOUT_SECS}")];
+    args.extend(max_len(name).map(|n| format!("-max_len={n}")));
+    args.extend([&merged, corpus, scratch].map(|p| p.display().to_string()));
     let (ok, log) = libfuzzer(bin, &args)?;
     if !ok {
         return Err(format!("merging into {} failed:\n{log}", merged.display()));
@@ -275,8 +301,13 @@ mod tests {
             Ok(FuzzOptions {
                 seconds: 5,
                 merge: true,
+                texts: true,
                 targets: args("ecat suite")
             })
+        );
+        assert_eq!(
+            parse(&args("--no-texts")).map(|o| (o.texts, o.targets)),
+            Ok((false, vec![]))
         );
         assert_eq!(parse(&[]).map(|o| o.seconds), Ok(60));
         assert!(parse(&args("--seconds 0")).is_err());

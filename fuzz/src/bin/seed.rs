@@ -31,7 +31,7 @@ use proto::eth::{
 use proto::pnio::RPC_PORT;
 
 /// A session seed is cut after this many bytes (libFuzzer's inputs stay small and fast).
-const SESSION_BYTES: usize = 8 * 1024;
+const SESSION_BYTES: usize = 2 * 1024;
 
 /// The time between two steps of a session is cut at this (the run's pauses between cases
 /// add no coverage, only wall time).
