@@ -46,6 +46,8 @@ pub use pnio::serve as pnio_serve;
 mod enip;
 mod epl;
 mod exit;
+/// The suite loader and description readers for the fuzz targets (`fuzz/`).
+pub mod fuzz_support;
 /// What the EtherNet/IP speed bench (`harness/benches/enip/`) needs of the library: the
 /// simulator served as an adapter, the harness scanner reading a parameter.
 pub use enip::bench_support as enip_bench;

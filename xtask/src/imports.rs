@@ -2,7 +2,7 @@
 //! the `crate::` paths its non-test code names, and the cycles in it. A shared module that
 //! reaches up into the modules built on it (a registry read by the loader, a bus folder importing
 //! the CLI) makes every change ripple through all of them: the tests below keep the harness,
-//! the simulator and the codecs free of such cycles.
+//! the simulator, the codecs and the fuzz targets free of such cycles.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -289,6 +289,11 @@ mod tests {
     fn the_simulator_and_the_codecs_import_without_cycles() {
         assert_acyclic("sim");
         assert_acyclic("proto");
+    }
+
+    #[test]
+    fn the_fuzz_targets_import_without_cycles() {
+        assert_acyclic("fuzz");
     }
 
     #[test]

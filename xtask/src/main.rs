@@ -1,7 +1,8 @@
 //! `cargo xtask test`, the README's test command: installs what the tests need
 //! (`.ci/interop-setup`), runs every test binary of the workspace whatever fails
-//! (`cargo test --workspace --release --no-fail-fast`), lists at the end each test that
-//! skipped and why, and exits with cargo's status.
+//! (`cargo test --workspace --release --no-fail-fast`), runs every fuzz target briefly (a
+//! smoke: a crash fails), lists at the end each test that skipped and why, and exits with
+//! cargo's status. `cargo xtask fuzz` runs the fuzz targets for longer ([`fuzz`]).
 //!
 //! The tests skip through one rule (`tests/common/skip.rs`, included here): each skip is
 //! appended to the skip log this command names in `NORD_TEST_SKIP_LOG`, and in strict mode
@@ -14,21 +15,38 @@ use std::process::{Command, ExitCode};
 #[path = "../../tests/common/skip.rs"]
 mod skip;
 
+mod fuzz;
 /// The import graph of the crates' top-level modules, checked acyclic by its tests.
 #[cfg(test)]
 mod imports;
 
-const USAGE: &str = "\
-usage: cargo xtask test [--strict] [--no-setup] [-- ARGS...]
+/// Seconds each fuzz target runs in `cargo xtask test`'s smoke.
+const SMOKE_SECONDS: u32 = 2;
 
-Installs what the tests need (.ci/interop-setup: tshark, chromium, xmllint, iproute2 and the
-interop venv in the build folder; Debian packages need root or sudo), runs
-`cargo test --workspace --release --no-fail-fast [ARGS...]`, and lists every skipped test and
-why. Exits with cargo's status.
+const USAGE: &str = "\
+usage: cargo xtask test [--strict] [--no-setup] [--no-fuzz] [-- ARGS...]
+       cargo xtask fuzz [--seconds N] [--merge] [--no-texts] [TARGET...]
+
+test: installs what the tests need (.ci/interop-setup: tshark, chromium, xmllint, iproute2 and
+the interop venv in the build folder; Debian packages need root or sudo), runs
+`cargo test --workspace --release --no-fail-fast [ARGS...]` (which replays the fuzz corpus),
+then every fuzz target of the codecs and devices for 2 s (built instrumented; the readers'
+targets need the harness instrumented, too long for CI), and lists every skipped test and why.
+Exits with cargo's status, or 1 if a fuzz target crashed.
 
   --strict    a test that would skip fails instead (NORD_TEST_STRICT=1); also on when CI,
               JENKINS_URL or GITLAB_CI is set
-  --no-setup  do not run .ci/interop-setup";
+  --no-setup  do not run .ci/interop-setup
+  --no-fuzz   do not run the fuzz smoke
+
+fuzz: builds the fuzz targets (fuzz/) instrumented and runs each (or each TARGET) for N
+seconds (default 60) on its corpus (fuzz/corpus/TARGET), printing exec/s, executions,
+coverage (cov, ft) and crashes; exits 1 if one crashed (its input is kept under
+<target>/fuzz/artifacts/TARGET/). docs/fuzzing.md has the figures and how to run a campaign.
+
+  --seconds N  seconds each target runs
+  --merge      then minimise each corpus with what the run found (-merge=1) and write it back
+  --no-texts   leave out the targets of the suite and description readers (the CI smoke)";
 
 /// What the command line asks for.
 #[derive(Debug, PartialEq, Eq)]
@@ -37,6 +55,8 @@ struct Options {
     strict: bool,
     /// Not `--no-setup`.
     setup: bool,
+    /// Not `--no-fuzz`.
+    fuzz: bool,
     /// After `--`: passed on to `cargo test`.
     cargo_args: Vec<String>,
 }
@@ -52,12 +72,14 @@ fn parse(args: &[String]) -> Result<Options, String> {
     let mut options = Options {
         strict: false,
         setup: true,
+        fuzz: true,
         cargo_args: Vec::new(),
     };
     for (i, arg) in rest.iter().enumerate() {
         match arg.as_str() {
             "--strict" => options.strict = true,
             "--no-setup" => options.setup = false,
+            "--no-fuzz" => options.fuzz = false,
             "--" => {
                 options.cargo_args = rest[i + 1..].to_vec();
                 break;
@@ -109,6 +131,26 @@ fn main() -> ExitCode {
         println!("{USAGE}");
         return ExitCode::SUCCESS;
     }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask/ is in the workspace");
+    if let Some(("fuzz", rest)) = args.split_first().map(|(c, r)| (c.as_str(), r)) {
+        let options = match fuzz::parse(rest) {
+            Ok(options) => options,
+            Err(e) => {
+                eprintln!("xtask: {e}\n\n{USAGE}");
+                return ExitCode::from(2);
+            }
+        };
+        return match fuzz::run(root, &target_dir(), &options) {
+            Ok(true) => ExitCode::SUCCESS,
+            Ok(false) => ExitCode::FAILURE,
+            Err(e) => {
+                eprintln!("xtask: {e}");
+                ExitCode::FAILURE
+            }
+        };
+    }
     let options = match parse(&args) {
         Ok(options) => options,
         Err(e) => {
@@ -116,9 +158,6 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("xtask/ is in the workspace");
     let target = target_dir();
     let venv = std::env::var_os("INTEROP_VENV")
         .filter(|v| !v.is_empty())
@@ -170,6 +209,8 @@ fn main() -> ExitCode {
         }
     };
 
+    let fuzzed = !options.fuzz || smoke(root, &target);
+
     let list = skip_list(&std::fs::read_to_string(&log).unwrap_or_default());
     println!();
     for line in &list {
@@ -181,11 +222,37 @@ fn main() -> ExitCode {
         n => println!("xtask: {n} tests could not run here (above)"),
     }
     match status.code() {
+        Some(0) if !fuzzed => ExitCode::FAILURE,
         Some(0) => ExitCode::SUCCESS,
         Some(code) => ExitCode::from(u8::try_from(code).unwrap_or(1)),
         None => {
             println!("xtask: cargo test ended by a signal");
             ExitCode::FAILURE
+        }
+    }
+}
+
+/// Runs every fuzz target for [`SMOKE_SECONDS`]; whether none crashed.
+fn smoke(root: &Path, target: &Path) -> bool {
+    eprintln!(
+        "xtask: fuzz smoke: the codec and device targets for {SMOKE_SECONDS} s each (--no-fuzz \
+         skips this)"
+    );
+    let options = fuzz::FuzzOptions {
+        seconds: SMOKE_SECONDS,
+        merge: false,
+        texts: false,
+        targets: Vec::new(),
+    };
+    match fuzz::run(root, target, &options) {
+        Ok(true) => true,
+        Ok(false) => {
+            println!("xtask: a fuzz target crashed (above)");
+            false
+        }
+        Err(e) => {
+            println!("xtask: the fuzz smoke did not run: {e}");
+            false
         }
     }
 }
@@ -205,16 +272,18 @@ mod tests {
             Ok(Options {
                 strict: false,
                 setup: true,
+                fuzz: true,
                 cargo_args: vec![]
             })
         );
         assert_eq!(
             parse(&args(
-                "test --no-setup --strict -- --test network_dut --strict"
+                "test --no-setup --no-fuzz --strict -- --test network_dut --strict"
             )),
             Ok(Options {
                 strict: true,
                 setup: false,
+                fuzz: false,
                 cargo_args: args("--test network_dut --strict")
             })
         );

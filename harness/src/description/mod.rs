@@ -114,12 +114,7 @@ impl Description {
             file: file.clone(),
             source,
         })?;
-        // EDS files are often Latin-1: take them byte for byte.
-        let text = match String::from_utf8(bytes) {
-            Ok(t) => t,
-            Err(e) => e.into_bytes().iter().map(|&b| char::from(b)).collect(),
-        };
-        Description::parse(&text, &file)
+        Description::parse(&text_of(bytes), &file)
     }
 
     /// Tells the format by content and reads it.
@@ -162,6 +157,15 @@ impl Description {
                 bus,
             })
         }
+    }
+}
+
+/// A description file's bytes as text: UTF-8, or else Latin-1 byte for byte (EDS files often
+/// are).
+pub(crate) fn text_of(bytes: Vec<u8>) -> String {
+    match String::from_utf8(bytes) {
+        Ok(t) => t,
+        Err(e) => e.into_bytes().iter().map(|&b| char::from(b)).collect(),
     }
 }
 

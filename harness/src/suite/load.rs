@@ -157,7 +157,6 @@ fn parse(text: &str) -> Parsed {
 }
 
 /// Loads one file's text. Cases with errors are dropped and reported; the others load.
-#[cfg(test)]
 pub(crate) fn load_text(
     vocabulary: &Vocabulary,
     file: &Path,

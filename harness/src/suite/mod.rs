@@ -12,14 +12,14 @@ mod vocabulary;
 
 pub(crate) use bus_step::BusStep;
 pub(crate) use case::{parse_duration, Action, Case, OrderSpec, Run, Step, Target};
-pub(crate) use load::{load_dir, Loaded};
+pub(crate) use load::{load_dir, load_text, Loaded};
 pub(crate) use vocabulary::{ParseStep, Vocabulary};
 
 /// Loads suite text for tests in other modules.
 #[cfg(test)]
 pub(crate) fn load_text_for_tests(text: &str) -> Loaded {
     let mut loaded = Loaded::default();
-    load::load_text(
+    load_text(
         &crate::buses::vocabulary(),
         std::path::Path::new("test.yaml"),
         "test",

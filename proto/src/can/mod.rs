@@ -11,8 +11,7 @@
 //! returns `Err` naming the field on malformed input and never panics on any byte sequence.
 
 pub mod frame;
-#[cfg(test)]
-pub(crate) mod no_panic;
+pub mod no_panic;
 pub mod socketcan;
 pub mod socketcand;
 

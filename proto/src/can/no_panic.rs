@@ -1,12 +1,18 @@
 //! Every parser of `proto::can` against mutated and random input: each returns `Ok` or a
 //! typed `Err`, none panics (the promise of the module documentation).
 
-use super::socketcan::{ErrorClass, ErrorFrame, SocketCanFrame, SocketCanRepr};
-use super::socketcand::{Framed, Message, Timestamp};
-use super::CanFrame;
+use super::socketcan::{SocketCanFrame, SocketCanRepr};
+use super::socketcand::{Framed, Message};
+#[cfg(test)]
+use super::{
+    socketcan::{ErrorClass, ErrorFrame},
+    socketcand::Timestamp,
+    CanFrame,
+};
 
 /// `count` pseudo-random byte strings of 0..`max_len` bytes from `seed` (a 64-bit LCG whose
 /// high bytes are taken), reproducible run after run.
+#[cfg(test)]
 pub(crate) fn random_inputs(seed: u64, count: usize, max_len: usize) -> Vec<Vec<u8>> {
     let mut x = seed;
     let mut byte = move || {
@@ -25,6 +31,7 @@ pub(crate) fn random_inputs(seed: u64, count: usize, max_len: usize) -> Vec<Vec<
 
 /// Every prefix of each valid message, the message with a byte appended, and the message with
 /// one byte's bits flipped by each of a set of masks at each position.
+#[cfg(test)]
 pub(crate) fn mutations(valid: &[Vec<u8>]) -> Vec<Vec<u8>> {
     let mut out = vec![];
     for m in valid {
@@ -41,7 +48,10 @@ pub(crate) fn mutations(valid: &[Vec<u8>]) -> Vec<Vec<u8>> {
     out
 }
 
-fn parse_all(b: &[u8]) {
+/// Runs the SocketCAN frame and socketcand parsers on `b` (a whole stream of socketcand
+/// messages, cut one after another); what parses emits and parses back the same. The fuzz
+/// target `can` (`fuzz/`) runs it on its inputs.
+pub fn parse_all(b: &[u8]) {
     if let Ok(f) = SocketCanFrame::new_checked(b) {
         let _ = (f.can_id(), f.data_len(), f.data().len());
         if let Ok(r) = SocketCanRepr::parse(&f) {
@@ -62,6 +72,7 @@ fn parse_all(b: &[u8]) {
     }
 }
 
+#[cfg(test)]
 fn valid_messages() -> Vec<Vec<u8>> {
     let f = CanFrame::new(0x605, &[0x40, 0x00, 0x10, 0, 0, 0, 0, 0]).unwrap();
     let e = ErrorFrame {

@@ -26,8 +26,7 @@ pub mod crc;
 pub mod emcy;
 pub mod message;
 pub mod nmt;
-#[cfg(test)]
-mod no_panic;
+pub mod no_panic;
 pub mod sdo;
 pub mod sync;
 

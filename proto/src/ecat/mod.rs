@@ -23,8 +23,7 @@ pub mod register;
 pub mod sii;
 mod wire;
 
-#[cfg(test)]
-mod no_panic;
+pub mod no_panic;
 
 pub use datagram::{Command, Datagram, DatagramRepr};
 pub use frame::{EcatFrame, EcatFrameRepr, ECAT_UDP_PORT};

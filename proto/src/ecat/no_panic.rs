@@ -2,18 +2,24 @@
 //! returns `Ok` or a typed `Err`, none panics (the promise of the module documentation).
 
 use super::al;
-use super::coe::{CoeMessage, Emergency, SdoData, SdoInfo, SdoRequest, SdoResponse};
-use super::datagram::{Command, DatagramRepr};
+use super::coe::{CoeMessage, Emergency, SdoInfo, SdoRequest, SdoResponse};
+use super::datagram::DatagramRepr;
 use super::frame::{EcatFrame, EcatFrameRepr};
-use super::mailbox::{MailboxError, MailboxRepr, MailboxType};
+use super::mailbox::{MailboxError, MailboxRepr};
 use super::register::{FmmuRepr, SmRepr};
 use super::sii::{Category, CategoryType, General, SiiHeader, SiiRepr};
-use crate::eth::{EthernetFrame, EthernetRepr, MacAddr};
-use crate::wire::Error;
+use crate::eth::{EthernetFrame, EthernetRepr};
+#[cfg(test)]
+use {
+    super::coe::SdoData, super::datagram::Command, super::mailbox::MailboxType,
+    crate::eth::MacAddr, crate::wire::Error,
+};
 
 /// A small deterministic generator (xorshift).
+#[cfg(test)]
 struct Rng(u64);
 
+#[cfg(test)]
 impl Rng {
     fn next(&mut self) -> u64 {
         self.0 ^= self.0 << 13;
@@ -27,7 +33,7 @@ impl Rng {
 }
 
 /// Runs every parser on `b`, including the in-place paths a slave takes.
-fn parse_all(b: &[u8]) {
+pub fn parse_all(b: &[u8]) {
     if let Ok(e) = EthernetFrame::new_checked(b) {
         let _ = EthernetRepr::parse(&e);
         let _ = (e.inner_ethertype(), e.inner_payload().len(), e.vlan_tci());
@@ -77,6 +83,7 @@ fn parse_all(b: &[u8]) {
     let _ = General::parse(b);
 }
 
+#[cfg(test)]
 fn valid_messages() -> Vec<Vec<u8>> {
     let frame = EcatFrameRepr::new(vec![
         DatagramRepr::physical(Command::BRD, 1, 0, 0x0130, vec![0; 2]),

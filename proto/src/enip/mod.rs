@@ -12,4 +12,5 @@ pub mod encap;
 pub mod epath;
 pub mod identity;
 pub mod io;
+pub mod no_panic;
 mod wire;

@@ -23,8 +23,7 @@
 pub mod asnd;
 pub mod frame;
 pub mod nmt;
-#[cfg(test)]
-mod no_panic;
+pub mod no_panic;
 pub mod sdo;
 
 pub use frame::{EplFrame, EplRepr, MessageType};

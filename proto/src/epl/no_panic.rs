@@ -6,8 +6,10 @@ use super::frame::{Body, EplFrame, EplRepr};
 use super::sdo::SdoFrame;
 
 /// A small deterministic generator (xorshift).
+#[cfg(test)]
 struct Rng(u64);
 
+#[cfg(test)]
 impl Rng {
     fn next(&mut self) -> u64 {
         self.0 ^= self.0 << 13;
@@ -17,7 +19,10 @@ impl Rng {
     }
 }
 
-fn parse_all(b: &[u8]) {
+/// Runs the frame parser on `b`, each ASnd service's parser on what an ASnd frame carries, and
+/// the SDO parsers (over ASnd and over UDP). The fuzz target `epl` (`fuzz/`) runs it on its
+/// inputs.
+pub fn parse_all(b: &[u8]) {
     if let Ok(f) = EplFrame::new_checked(b) {
         if let Ok(r) = EplRepr::parse(&f) {
             let _ = r.emit();

@@ -19,6 +19,7 @@ pub mod errors;
 pub mod led;
 pub mod mutant;
 pub mod nmt;
+pub mod no_panic;
 pub mod params;
 pub mod pkw;
 pub mod pnio;

@@ -41,8 +41,7 @@ use crate::wire::{Error, Reader};
 
 mod codes;
 mod connect;
-#[cfg(test)]
-mod no_panic;
+pub mod no_panic;
 mod record;
 #[cfg(test)]
 mod vectors;

@@ -25,8 +25,7 @@ pub mod block;
 pub mod dcp;
 pub mod frame;
 pub mod im0;
-#[cfg(test)]
-mod no_panic;
+pub mod no_panic;
 pub mod plan;
 pub mod rpc;
 pub mod rt;

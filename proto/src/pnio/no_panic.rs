@@ -8,8 +8,10 @@ use super::frame::PnRepr;
 use super::rt::RtRepr;
 
 /// A small deterministic generator (xorshift).
+#[cfg(test)]
 struct Rng(u64);
 
+#[cfg(test)]
 impl Rng {
     fn next(&mut self) -> u64 {
         self.0 ^= self.0 << 13;
@@ -19,7 +21,9 @@ impl Rng {
     }
 }
 
-fn parse_all(b: &[u8]) {
+/// Runs the frame, DCP, RT and alarm parsers on `b`. The fuzz target `pnio` (`fuzz/`) runs it
+/// on its inputs.
+pub fn parse_all(b: &[u8]) {
     if let Ok(r) = PnRepr::parse(b) {
         let _ = r.emit();
     }
@@ -54,6 +58,7 @@ fn parse_all(b: &[u8]) {
 }
 
 /// Valid frames of each kind, to mutate.
+#[cfg(test)]
 fn seeds() -> Vec<Vec<u8>> {
     use super::alarm::*;
     use super::dcp::*;

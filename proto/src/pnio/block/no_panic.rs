@@ -6,8 +6,10 @@ use super::*;
 use crate::pnio::rpc::{Drep, NcaStatus, NdrRequest, NdrResponse, RpcPacket, RpcRepr};
 
 /// A small deterministic generator (xorshift).
+#[cfg(test)]
 struct Rng(u64);
 
+#[cfg(test)]
 impl Rng {
     fn next(&mut self) -> u64 {
         self.0 ^= self.0 << 13;
@@ -17,7 +19,8 @@ impl Rng {
     }
 }
 
-fn blocks(b: &[u8]) {
+/// Runs the block parsers (the checked view and the whole list of blocks) on `b`.
+pub fn blocks(b: &[u8]) {
     if let Ok(v) = BlockView::new_checked(b) {
         let _ = (v.header(), v.body());
     }
@@ -27,7 +30,9 @@ fn blocks(b: &[u8]) {
     }
 }
 
-fn rpc(b: &[u8]) {
+/// Runs the DCE/RPC and NDR parsers on `b`, and the block parsers on what an NDR request
+/// carries. The fuzz target `pnio_rpc` (`fuzz/`) runs it on its inputs.
+pub fn rpc(b: &[u8]) {
     if let Ok(p) = RpcPacket::new_checked(b) {
         let _ = (p.object(), p.interface(), p.activity(), p.opnum(), p.body());
         let _ = (p.sequence_number(), p.flags1(), p.packet_type());
@@ -50,6 +55,7 @@ fn rpc(b: &[u8]) {
 }
 
 /// Valid bodies to mutate: a connect request's blocks, a write request, control blocks.
+#[cfg(test)]
 fn seeds() -> Vec<Vec<u8>> {
     let ar = Uuid::pnio_object(1, 2, 3);
     let mut connect = Vec::new();

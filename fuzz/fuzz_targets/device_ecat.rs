@@ -1,0 +1,6 @@
+//! libFuzzer binary of the fuzz target `device_ecat` (`fuzz::targets::TARGETS`).
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    (fuzz::targets::by_name("device_ecat").expect("a target").run)(data)
+});
