@@ -656,7 +656,7 @@ fn attempt(
     };
     let reopen = channel.as_ref().is_some_and(|d| d.finish_closes());
     if let (Some(step), true) = (&recovery, reopen) {
-        // The recovery's cleanup also closed what the opening set up (a PROFINET AR): the
+        // The recovery's cleanup also closed what the opening set up (a bus's connection): the
         // case starts from an opening of its own.
         drop(channel.take());
         match factory.open(profile, opts.retries) {
@@ -822,7 +822,7 @@ fn excuse(n: usize, timed: Timed, window: (Instant, Instant)) -> Option<String> 
 /// Why step `n`'s outcome, a state the device reached through the bus's cycles (a bus step's,
 /// or process data's), says nothing of the device: the host stalled at some time in `span`,
 /// since the case's first step, long enough to stop the cycles the state came from
-/// ([`crate::timing::STALL_EXCUSE`]). A node that lost its MN's SoCs during an earlier step, or
+/// ([`crate::timing::STALL_EXCUSE`]). A device that lost the cycles during an earlier step, or
 /// between two steps, shows it only in a later one.
 fn stalled(n: usize, timed: Timed, span: (Instant, Instant)) -> Option<String> {
     if matches!(timed, Timed::Limit(_)) {
@@ -1375,7 +1375,7 @@ cases:
         outcome: Result<(), CleanupError>,
         exchanged: bool,
         finished: bool,
-        /// Its cleanup undoes its opening (as a PROFINET binding's releases the AR).
+        /// Its cleanup undoes its opening (a binding that releases the connection it opened).
         closes: bool,
     }
 
@@ -1723,7 +1723,7 @@ cases:
                 return Ok(crate::binding::process_fields(0x0B40, &[0, 0, 0]).into());
             }
             if matches!(action, Action::Bus(_)) {
-                // A POWERLINK node whose SoCs stopped: back in PRE_OPERATIONAL_2.
+                // A node whose bus cycles stopped: back in a state short of the one asked.
                 return Ok(serde_json::json!({ "state": "PRE_OPERATIONAL_2" }).into());
             }
             Err(StepError::Late {
@@ -1833,7 +1833,8 @@ cases:
         assert_eq!(c.verdict, Verdict::Fail, "{}", c.message);
     }
 
-    /// A bus's own step: a POWERLINK NMT command whose answer is judged by the node's state.
+    /// A bus's own step, whose answer is judged by the node's state (one bus's suite: any bus's
+    /// step would do).
     const BUS_SUITE: &str = r#"
 doc: BU 0620
 edition: "2020-03 en"
