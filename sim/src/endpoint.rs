@@ -92,4 +92,24 @@ pub trait Endpoint {
     /// When [`Endpoint::poll`] has something to do next (time since the driver started);
     /// `None` when nothing is scheduled.
     fn next_deadline(&self) -> Option<Duration>;
+
+    /// Raises, at `now`, what the device reports on its own when a fault appears (a PROFINET
+    /// alarm, a POWERLINK or CANopen emergency), though nothing is wrong: for a served device
+    /// that misbehaves on purpose (`harness serve --misbehave alarm=`). What it raised, and
+    /// what to send now (nothing when the report waits for the master to fetch it, as an
+    /// EtherCAT mailbox or a POWERLINK StatusResponse does); `None` when the device has nowhere
+    /// to raise one yet (no connection to an IO controller) or has no such reports.
+    fn raise_alarm(&mut self, now: Duration) -> Option<Raised> {
+        let _ = now;
+        None
+    }
+}
+
+/// What [`Endpoint::raise_alarm`] raised.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Raised {
+    /// What it is, for the log ("process alarm on slot 1, sequence 3").
+    pub what: String,
+    /// What to send now.
+    pub outputs: Vec<Output>,
 }

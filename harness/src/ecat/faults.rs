@@ -15,6 +15,7 @@ pub(crate) const FAULTS: BusFaults = BusFaults {
     bus: "EtherCAT",
     fields: &[Field::Wkc, Field::Length],
     no_close: Some("has no session to close (raw Ethernet frames): use silent= or drop="),
+    no_alarm: Some("raises no emergency yet (not built)"),
 };
 
 /// Sets `field` wrong in `out`, an EtherCAT frame; what it changed (`None`: not a frame that

@@ -15,13 +15,16 @@ use crate::net::misbehave::{BusFaults, Field};
 /// What EtherNet/IP can do of a spec.
 pub(crate) const FAULTS: BusFaults = BusFaults {
     bus: "EtherNet/IP",
-    fields: &[Field::GeneralStatus],
+    fields: &[Field::Status],
     no_close: None,
+    no_alarm: Some(
+        "sends nothing unasked: explicit messaging only answers, and class-1 I/O carries no alarm",
+    ),
 };
 
 /// Sets `field` wrong in `out` if it is an explicit reply; what it changed.
 pub(crate) fn corrupt(field: Field, out: &mut Output) -> Option<String> {
-    let (Field::GeneralStatus, Output::Message { bytes, .. }) = (field, &mut *out) else {
+    let (Field::Status, Output::Message { bytes, .. }) = (field, &mut *out) else {
         return None;
     };
     let mut encap = EncapRepr::parse(bytes).ok()?;
@@ -91,7 +94,7 @@ mod tests {
         let ok = MrResponse::ok(0x0E, vec![0x2A, 0]);
         let mut out = reply(Item::UnconnectedData(ok.emit()));
         assert_eq!(
-            corrupt(Field::GeneralStatus, &mut out).as_deref(),
+            corrupt(Field::Status, &mut out).as_deref(),
             Some("general status 00h → 08h")
         );
         assert_eq!(
@@ -105,7 +108,7 @@ mod tests {
         let mut data = vec![5, 0];
         data.extend(ok.emit());
         let mut out = reply(Item::ConnectedData(data));
-        assert!(corrupt(Field::GeneralStatus, &mut out).is_some());
+        assert!(corrupt(Field::Status, &mut out).is_some());
         assert_eq!(mr(&out, 2).general, 0x08);
     }
 
@@ -122,7 +125,7 @@ mod tests {
             .unwrap(),
         };
         let mut out = register.clone();
-        assert_eq!(corrupt(Field::GeneralStatus, &mut out), None);
+        assert_eq!(corrupt(Field::Status, &mut out), None);
         assert_eq!(out, register);
         let mut out = reply(Item::UnconnectedData(MrResponse::ok(0x0E, vec![]).emit()));
         assert_eq!(corrupt(Field::Wkc, &mut out), None);

@@ -18,6 +18,7 @@ pub(crate) const FAULTS: BusFaults = BusFaults {
     no_close: Some(
         "has no session to close (raw Ethernet frames, SDO over UDP): use silent= or drop=",
     ),
+    no_alarm: Some("raises no emergency yet (not built)"),
 };
 
 /// Sets `field` wrong in `out` if it is a PRes; what it changed.

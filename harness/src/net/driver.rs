@@ -95,6 +95,12 @@ impl<S: Endpoint> Shared<S> {
         self.poll_at(self.now())
     }
 
+    /// Asks the device to raise a spurious alarm now ([`Endpoint::raise_alarm`]).
+    pub(crate) fn raise_alarm(&self) -> Option<sim::endpoint::Raised> {
+        let (mut s, now) = self.lock();
+        s.raise_alarm(now)
+    }
+
     /// [`Shared::poll`] at `at`, a time at which every input that had come was handed over:
     /// what came later is judged after the device's timers.
     fn poll_at(&self, at: Duration) -> (Vec<Output>, Option<Duration>) {
@@ -294,6 +300,18 @@ pub(crate) fn run<S: Endpoint, P: Port>(
         while let Some(out) = held.due() {
             send(port, &out)?;
         }
+        let now = Instant::now();
+        if inject.alarm_due(now) {
+            let raised = shared.raise_alarm();
+            inject.raised(
+                raised.as_ref().map(|r| r.what.as_str()),
+                now,
+                &counters.misbehaved,
+            );
+            for out in raised.into_iter().flat_map(|r| r.outputs) {
+                leave(port, &mut held, &mut inject, out, false)?;
+            }
+        }
         // After an input, whatever else is already queued goes first (`until` has passed:
         // the port returns it or nothing at once).
         let mut until = Instant::now();
@@ -312,6 +330,9 @@ pub(crate) fn run<S: Endpoint, P: Port>(
                 until = until.min(shared.start + next);
             }
             if let Some(next) = held.next() {
+                until = until.min(next);
+            }
+            if let Some(next) = inject.next_alarm() {
                 until = until.min(next);
             }
         }

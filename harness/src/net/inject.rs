@@ -25,6 +25,7 @@ pub(crate) enum Mode {
     Silent,
     Corrupt,
     Close,
+    Alarm,
 }
 
 impl Mode {
@@ -37,13 +38,14 @@ impl Mode {
             Mode::Silent => "silent",
             Mode::Corrupt => "corrupt",
             Mode::Close => "close",
+            Mode::Alarm => "alarm",
         }
     }
 }
 
 /// The touched outputs counted by every thread serving one device.
 #[derive(Debug, Default)]
-pub(crate) struct Tally([AtomicU64; 7]);
+pub(crate) struct Tally([AtomicU64; 8]);
 
 impl Tally {
     fn bump(&self, mode: Mode) {
@@ -66,6 +68,7 @@ impl Tally {
             silenced: get(Mode::Silent),
             corrupted: get(Mode::Corrupt),
             closed: get(Mode::Close),
+            alarms: get(Mode::Alarm),
         }
     }
 }
@@ -83,6 +86,8 @@ pub(crate) struct Injector {
     silent_from: Option<Instant>,
     /// An output held back by `reorder` until the next one has left, and when it was due.
     reordered: Option<(Option<Instant>, Output)>,
+    /// When the next spurious alarm is due, once the first exchange has set it (`alarm=`).
+    alarm_at: Option<Instant>,
 }
 
 impl Injector {
@@ -96,6 +101,7 @@ impl Injector {
             seen: [0; 3],
             start,
             reordered: None,
+            alarm_at: None,
         }
     }
 
@@ -109,6 +115,37 @@ impl Injector {
         if self.spec.silent.is_some() && self.silent_from.is_none() {
             self.silent_from = Some(now);
         }
+        if let (Some(a), None) = (self.spec.alarm, self.alarm_at) {
+            self.alarm_at = Some(now + a.after);
+        }
+    }
+
+    /// When the next spurious alarm is due (`None`: none is, or none yet).
+    pub(crate) fn next_alarm(&self) -> Option<Instant> {
+        self.alarm_at
+    }
+
+    /// Whether a spurious alarm is due at `now` (the driver then asks the device to raise one
+    /// and tells [`Injector::raised`] what it did).
+    pub(crate) fn alarm_due(&self, now: Instant) -> bool {
+        self.alarm_at.is_some_and(|at| now >= at)
+    }
+
+    /// What the device raised when an alarm was due at `now` (`None`: it had nowhere to raise
+    /// one yet, and is asked again a period later): logged and counted; the next one is set
+    /// when they repeat.
+    pub(crate) fn raised(&mut self, what: Option<&str>, now: Instant, tally: &Tally) {
+        let Some(a) = self.spec.alarm else {
+            return;
+        };
+        let Some(what) = what else {
+            self.alarm_at = Some(now + a.after);
+            return;
+        };
+        self.alarm_at = a.repeat.then(|| now + a.after);
+        tally.bump(Mode::Alarm);
+        let t = now.saturating_duration_since(self.start).as_secs_f64();
+        eprintln!("misbehave {t:9.3}s {:<7} {what}", Mode::Alarm.name());
     }
 
     /// What leaves of `out`, made now, each with the time it is due (`None`: at once).
@@ -335,6 +372,30 @@ mod tests {
             1
         );
         assert_eq!(tally.snapshot().silenced, 2);
+    }
+
+    #[test]
+    fn alarms_fall_due_after_the_first_input_and_repeat_only_with_every() {
+        let tally = Tally::default();
+        let start = Instant::now();
+        let at = |ms: u64| start + Duration::from_millis(ms);
+        let mut once = Injector::new("alarm=2s".parse().unwrap(), |_, _| None, start);
+        assert!(!once.alarm_due(at(5000)), "nothing heard yet");
+        once.heard(at(1000));
+        once.heard(at(1500));
+        assert_eq!(once.next_alarm(), Some(at(3000)), "from the first input");
+        assert!(!once.alarm_due(at(2999)) && once.alarm_due(at(3000)));
+        // A device with nowhere to raise it is asked again a period later.
+        once.raised(None, at(3000), &tally);
+        assert_eq!(once.next_alarm(), Some(at(5000)));
+        once.raised(Some("process alarm"), at(5000), &tally);
+        assert_eq!(once.next_alarm(), None);
+        assert!(!once.alarm_due(at(60_000)));
+        let mut every = Injector::new("alarm=every:2s".parse().unwrap(), |_, _| None, start);
+        every.heard(at(0));
+        every.raised(Some("emergency"), at(2100), &tally);
+        assert_eq!(every.next_alarm(), Some(at(4100)));
+        assert_eq!(tally.snapshot().alarms, 2);
     }
 
     #[test]

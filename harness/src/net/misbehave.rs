@@ -5,7 +5,8 @@
 //!
 //! The spec is modes separated by commas, each at most once (`docs/misbehave.md`):
 //! `late=500ms`, `late=100ms..900ms`, `drop=20%`, `drop=every:3`, `dup`, `dup=every:2`,
-//! `reorder`, `silent=2s`, `silent=2s@5s`, `corrupt=FIELD`, `close`. The random choices
+//! `reorder`, `silent=2s`, `silent=2s@5s`, `corrupt=FIELD`, `close`, `alarm=2s`,
+//! `alarm=every:2s`. The random choices
 //! (a jittered delay, `drop=20%`) come from `--seed`, so that one spec and seed make the same
 //! run twice. What a mode does per bus is the driver's ([`super::inject`]) and the bus's
 //! (which answers are held late, which fields it can corrupt).
@@ -48,6 +49,15 @@ pub struct Silent {
     pub at: Option<Duration>,
 }
 
+/// When the device raises spurious alarms or emergencies (`alarm=`), from its first exchange.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Alarm {
+    /// After the first exchange, and between two when it repeats.
+    pub after: Duration,
+    /// `every:`: again and again; else once.
+    pub repeat: bool,
+}
+
 /// A field the device can send wrong (`corrupt=FIELD`); each bus says which it has.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Field {
@@ -61,18 +71,22 @@ pub enum Field {
     Cycle,
     /// PROFINET IO: the input CR's data status says the data is not valid.
     DataStatus,
-    /// EtherNet/IP: the CIP general status of explicit replies 08h (service not supported).
-    GeneralStatus,
+    /// A status code of the answers bad (EtherNet/IP: the CIP general status of explicit
+    /// replies 08h, service not supported).
+    Status,
+    /// A sequence number wrong.
+    Sequence,
 }
 
 impl Field {
-    const ALL: [Field; 6] = [
+    const ALL: [Field; 7] = [
         Field::Wkc,
         Field::Length,
         Field::State,
         Field::Cycle,
         Field::DataStatus,
-        Field::GeneralStatus,
+        Field::Status,
+        Field::Sequence,
     ];
 
     /// Its name in a spec.
@@ -83,7 +97,8 @@ impl Field {
             Field::State => "state",
             Field::Cycle => "cycle",
             Field::DataStatus => "data-status",
-            Field::GeneralStatus => "status",
+            Field::Status => "status",
+            Field::Sequence => "sequence",
         }
     }
 }
@@ -106,6 +121,8 @@ pub struct Misbehaviour {
     pub corrupt: Option<Field>,
     /// `close`: sessions closed mid-exchange (EtherNet/IP's TCP; refused on raw buses).
     pub close: bool,
+    /// `alarm=`: spurious alarms or emergencies.
+    pub alarm: Option<Alarm>,
     /// `--seed`: where the random choices come from.
     pub seed: u64,
 }
@@ -120,6 +137,7 @@ impl Default for Misbehaviour {
             silent: None,
             corrupt: None,
             close: false,
+            alarm: None,
             seed: DEFAULT_SEED,
         }
     }
@@ -142,6 +160,8 @@ pub struct Touched {
     pub corrupted: u64,
     /// Sessions closed on purpose.
     pub closed: u64,
+    /// Spurious alarms or emergencies raised.
+    pub alarms: u64,
 }
 
 impl fmt::Display for Touched {
@@ -154,6 +174,7 @@ impl fmt::Display for Touched {
             ("silenced", self.silenced),
             ("corrupted", self.corrupted),
             ("closed", self.closed),
+            ("alarms raised", self.alarms),
         ];
         let parts: Vec<String> = all
             .iter()
@@ -188,6 +209,8 @@ pub(crate) struct BusFaults {
     pub(crate) fields: &'static [Field],
     /// Why `close` means nothing on it (`None`: it has sessions and closes them).
     pub(crate) no_close: Option<&'static str>,
+    /// Why `alarm=` means nothing on it (`None`: its device raises alarms or emergencies).
+    pub(crate) no_alarm: Option<&'static str>,
 }
 
 impl Misbehaviour {
@@ -231,9 +254,15 @@ impl Misbehaviour {
                 });
             }
         }
-        match (self.close, bus.no_close) {
-            (true, Some(why)) => Err(SpecError {
+        if let (true, Some(why)) = (self.close, bus.no_close) {
+            return Err(SpecError {
                 part: "close".into(),
+                why: format!("{} {why}", bus.bus),
+            });
+        }
+        match (self.alarm, bus.no_alarm) {
+            (Some(a), Some(why)) => Err(SpecError {
+                part: alarm_spec(a),
                 why: format!("{} {why}", bus.bus),
             }),
             _ => Ok(()),
@@ -275,18 +304,17 @@ impl FromStr for Misbehaviour {
                 ("corrupt", Some(v)) => m.corrupt = Some(field(v).map_err(err)?),
                 ("close", None) => m.close = true,
                 ("close", Some(_)) => return Err(err("`close` takes no value".into())),
-                ("late" | "drop" | "silent" | "corrupt", None) => {
+                ("alarm", Some(v)) => m.alarm = Some(alarm(v).map_err(err)?),
+                ("late" | "drop" | "silent" | "corrupt" | "alarm", None) => {
                     return Err(err(format!(
                         "`{mode}` needs a value, e.g. {}",
                         example(mode)
                     )))
                 }
-                _ => {
-                    return Err(err(
-                        "unknown mode (modes: late, drop, dup, reorder, silent, corrupt, close)"
-                            .into(),
-                    ))
-                }
+                _ => return Err(err(
+                    "unknown mode (modes: late, drop, dup, reorder, silent, corrupt, close, alarm)"
+                        .into(),
+                )),
             }
         }
         Ok(m)
@@ -298,6 +326,7 @@ fn example(mode: &str) -> &'static str {
         "late" => "late=500ms or late=100ms..900ms",
         "drop" => "drop=20% or drop=every:3",
         "silent" => "silent=2s or silent=2s@5s",
+        "alarm" => "alarm=2s or alarm=every:2s",
         _ => "corrupt=wkc",
     }
 }
@@ -349,6 +378,23 @@ fn silent(v: &str) -> Result<Silent, String> {
         return Err("a silence of 0 is none".into());
     }
     Ok(Silent { length, at })
+}
+
+fn alarm(v: &str) -> Result<Alarm, String> {
+    let (after, repeat) = match v.strip_prefix("every:") {
+        Some(d) => (duration(d)?, true),
+        None => (duration(v)?, false),
+    };
+    if after.is_zero() && repeat {
+        return Err("alarms every 0 s would be endless".into());
+    }
+    Ok(Alarm { after, repeat })
+}
+
+/// `alarm=` as a spec writes it.
+fn alarm_spec(a: Alarm) -> String {
+    let every = if a.repeat { "every:" } else { "" };
+    format!("alarm={every}{}", humantime::format_duration(a.after))
 }
 
 fn field(v: &str) -> Result<Field, String> {
@@ -405,6 +451,9 @@ impl fmt::Display for Misbehaviour {
         }
         if self.close {
             parts.push("close".into());
+        }
+        if let Some(a) = self.alarm {
+            parts.push(alarm_spec(a));
         }
         write!(f, "{} (seed {})", parts.join(","), self.seed)
     }
@@ -483,7 +532,8 @@ mod tests {
     fn a_spec_prints_as_it_parses() {
         for spec in [
             "late=100ms..900ms,drop=20%,dup,reorder=every:2,silent=2s@5s,corrupt=wkc,close",
-            "late=500ms,drop=every:3,silent=1s",
+            "late=500ms,drop=every:3,silent=1s,alarm=every:2s",
+            "corrupt=sequence,alarm=1s 500ms",
         ] {
             let m = parse(spec).unwrap().with_seed(9);
             assert_eq!(m.to_string(), format!("{spec} (seed 9)"));
@@ -506,13 +556,16 @@ mod tests {
             ("late=1s,late=2s", "`late=2s`: `late` is given twice"),
             ("close=now", "`close=now`: `close` takes no value"),
             ("silent=0s", "`silent=0s`: a silence of 0 is none"),
+            ("alarm", "`alarm`: `alarm` needs a value, e.g. alarm=2s or alarm=every:2s"),
+            ("alarm=every:0s", "`alarm=every:0s`: alarms every 0 s would be endless"),
+            ("alarm=every:2", "`alarm=every:2`: `2` needs a unit, e.g. 2ms"),
             (
                 "corrupt=crc",
-                "`corrupt=crc`: unknown field (fields: wkc, length, state, cycle, data-status, status)",
+                "`corrupt=crc`: unknown field (fields: wkc, length, state, cycle, data-status, status, sequence)",
             ),
             (
                 "late=1s,explode",
-                "`explode`: unknown mode (modes: late, drop, dup, reorder, silent, corrupt, close)",
+                "`explode`: unknown mode (modes: late, drop, dup, reorder, silent, corrupt, close, alarm)",
             ),
         ] {
             assert_eq!(parse(spec).unwrap_err(), want, "{spec}");
@@ -528,6 +581,13 @@ mod tests {
             bus: "EtherCAT",
             fields: &[Field::Wkc, Field::Length],
             no_close: Some("has no session to close (raw Ethernet): use silent= or drop="),
+            no_alarm: None,
+        };
+        let enip = BusFaults {
+            bus: "EtherNet/IP",
+            fields: &[Field::Status],
+            no_close: None,
+            no_alarm: Some("sends nothing unasked"),
         };
         assert!(parse("corrupt=wkc,drop=5%").unwrap().check(&ecat).is_ok());
         assert_eq!(
@@ -545,6 +605,22 @@ mod tests {
                 .unwrap_err()
                 .to_string(),
             "`close`: EtherCAT has no session to close (raw Ethernet): use silent= or drop="
+        );
+        assert!(parse("alarm=every:2s").unwrap().check(&ecat).is_ok());
+        assert_eq!(
+            parse("alarm=every:2s")
+                .unwrap()
+                .check(&enip)
+                .unwrap_err()
+                .to_string(),
+            "`alarm=every:2s`: EtherNet/IP sends nothing unasked"
+        );
+        assert_eq!(
+            parse("alarm=every:2s,corrupt=sequence").unwrap().alarm,
+            Some(Alarm {
+                after: ms(2000),
+                repeat: true
+            })
         );
     }
 }

@@ -18,6 +18,7 @@ pub(crate) const FAULTS: BusFaults = BusFaults {
     no_close: Some(
         "has no session to close (cyclic frames on raw Ethernet, RPC over UDP): use silent= or drop=",
     ),
+    no_alarm: Some("raises no alarm yet (not built)"),
 };
 
 /// Sets `field` wrong in `out` if it is a cyclic (RT) frame; what it changed.
