@@ -1,5 +1,5 @@
 //! The soak (issue 24, item 5): `cargo bench -p harness --bench soak -- [--seconds N]
-//! [--seed S] [--fuzz-rate R] [enip] [ecat] [pnio]` (the buses named, all when none is).
+//! [--seed S] [--fuzz-rate R] [enip] [ecat] [pnio] [epl]` (the buses named, all when none is).
 //!
 //! A served device, `harness serve BUS` as a process of its own, under good clients and fuzzed
 //! clients for a bounded time: first the good clients alone (the idle phase, a quarter of
@@ -20,9 +20,9 @@
 //!   the soak gets it too (a device that leaked sessions or connections to the fuzzed
 //!   clients would refuse it).
 //!
-//! The buses: EtherNet/IP over loopback (TCP and UDP); EtherCAT and PROFINET IO over a veth
-//! pair into a network namespace (made and removed here; needs root, else skipped).
-//! POWERLINK is not soaked yet. A bench, not a test: bounded in time (`--seconds`, 60 by
+//! The buses: EtherNet/IP over loopback (TCP and UDP); EtherCAT, PROFINET IO and POWERLINK
+//! over a veth pair into a network namespace (made and removed here; needs root, else
+//! skipped). A bench, not a test: bounded in time (`--seconds`, 60 by
 //! default, per bus) and in rate, nothing asserts; the host's load average is printed beside
 //! the figures, since latency on a shared machine depends on it.
 
@@ -34,6 +34,7 @@ use std::time::Duration;
 mod common;
 mod ecat;
 mod enip;
+mod epl;
 mod mutate;
 #[path = "../../../tests/common/netns.rs"]
 mod netns;
@@ -88,15 +89,15 @@ fn main() {
             Err(e) => println!("EtherNet/IP: could not serve ({e})"),
         }
     }
-    let raw = runs("ecat") || runs("pnio");
+    let raw = runs("ecat") || runs("pnio") || runs("epl");
     if raw && !(peer::is_root() && peer::runs("ip", "-V")) {
         println!(
-            "EtherCAT, PROFINET IO: skipped (a veth pair into a namespace needs root and `ip`)"
+            "EtherCAT, PROFINET IO, POWERLINK: skipped (a veth pair into a namespace needs root and `ip`)"
         );
         return;
     }
     if runs("ecat") {
-        let r = soak_raw(&plan, seconds, ("EtherCAT", "ecat", &[]), |iface| {
+        let r = soak_raw(&plan, seconds, ("EtherCAT", "ecat", &[]), None, |iface| {
             let bus = ecat::Ecat::new(iface)?;
             let said = format!("known answer {:02x?}", bus.expected());
             Ok((bus, said))
@@ -110,6 +111,7 @@ fn main() {
             &plan,
             seconds,
             ("PROFINET IO", "pnio", &["--name", "soak"]),
+            None,
             |iface| {
                 let bus = pnio::Pnio::new(iface)?;
                 let said = bus.said();
@@ -120,18 +122,46 @@ fn main() {
             println!("PROFINET IO: could not run ({e})");
         }
     }
+    if runs("epl") {
+        let node = format!("{}/24", proto::nord::epl::ip_address(1));
+        let r = soak_raw(
+            &plan,
+            seconds,
+            ("POWERLINK", "epl", &[]),
+            Some(&node),
+            |iface| {
+                let bus = epl::Epl::new(iface)?;
+                let said = bus.said();
+                Ok((bus, said))
+            },
+        );
+        if let Err(e) = r {
+            println!("POWERLINK: could not run ({e})");
+        }
+    }
 }
 
 /// A raw-Ethernet bus's soak: the device served (`harness serve BUS ARGS…`) in a namespace of
-/// its own, the clients on the root end of the veth pair; `bus` makes the bus's clients on
-/// that interface and says what it found.
+/// its own, its end given the IPv4 address `address` (CIDR) first when it serves UDP too, the
+/// clients on the root end of the veth pair; `bus` makes the bus's clients on that interface
+/// and says what it found.
 fn soak_raw<B: Bus>(
     plan: &Plan,
     seconds: u64,
     (name, command, args): (&str, &str, &[&str]),
+    address: Option<&str>,
     bus: impl FnOnce(&str) -> Result<(B, String), String>,
 ) -> Result<(), String> {
     let ns = Netns::new(&format!("soak-{command}"));
+    if let Some(a) = address {
+        let out = ns.exec(&["ip", "addr", "add", a, "dev", ns.ns_if()]);
+        if !out.status.success() {
+            return Err(format!(
+                "ip addr add {a}: {}",
+                String::from_utf8_lossy(&out.stderr).trim()
+            ));
+        }
+    }
     let seconds = seconds.to_string();
     let mut all = vec!["--iface", ns.ns_if(), "--seconds", &seconds];
     all.extend(args);
@@ -183,7 +213,7 @@ fn plan(mut args: impl Iterator<Item = String>) -> Result<(Plan, Vec<String>), S
             "--seed" => seed = value("--seed")?,
             "--fuzz-rate" => fuzz_rate = value("--fuzz-rate")?.max(1),
             "--bench" => {}
-            bus @ ("enip" | "ecat" | "pnio") => only.push(bus.to_string()),
+            bus @ ("enip" | "ecat" | "pnio" | "epl") => only.push(bus.to_string()),
             other => return Err(format!("unknown argument {other}")),
         }
     }
