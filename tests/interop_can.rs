@@ -39,7 +39,7 @@ fn python_canopen_reads_and_writes_p102_of_fi_3_gets_cia_301_aborts_runs_pdos_an
         return;
     };
     let listen = format!("{}:29536", free_loopback());
-    let _server = serve_can(&listen);
+    let _server = serve_can(&listen, &[]);
     let eds = std::env::temp_dir().join(format!("nord-fi3-{}.eds", std::process::id()));
     let described = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args(["describe", "eds", "--bus", "can", "--profile", "sk550p"])
@@ -224,7 +224,7 @@ fn the_harness_tests_a_python_canopen_local_node_as_any_makers_node() {
         return;
     };
     let listen = format!("{}:29536", free_loopback());
-    let _server = serve_can(&listen);
+    let _server = serve_can(&listen, &[]);
     let eds = std::env::temp_dir().join(format!("nord-any-{}.eds", std::process::id()));
     let described = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args(["describe", "eds", "--bus", "can", "--profile", "sk550p"])

@@ -4,7 +4,8 @@
 //! system-bus cases as the embedded run; what a case wrote is written back afterwards, and
 //! process data run in real time and end with the drives and nodes as the case found them; a
 //! served EtherNet/IP module's system bus is tapped during a run over EtherNet/IP. A
-//! missing bus name and a refused channel are clear errors. Loopback only: no peer to skip for.
+//! missing bus name and a refused channel are clear errors; a segment served misbehaving on
+//! purpose is named for what it did. Loopback only: no peer to skip for.
 
 use std::process::Command;
 
@@ -18,7 +19,7 @@ use common::{case_verdict, serve_can, serve_with, wait_listening};
 #[test]
 fn the_system_bus_cases_pass_over_socketcand_and_leave_the_parameters_as_found() {
     let listen = format!("{}:29536", free_loopback());
-    let _server = serve_can(&listen);
+    let _server = serve_can(&listen, &[]);
     let out_dir = std::env::temp_dir().join(format!("nord-can-dut-{}", std::process::id()));
     let run_with = |filter: &str, extra: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_harness"))
@@ -83,7 +84,7 @@ fn the_system_bus_cases_pass_over_socketcand_and_leave_the_parameters_as_found()
 #[test]
 fn a_socketcand_url_without_a_bus_or_with_an_unknown_one_is_a_clear_error() {
     let listen = format!("{}:29536", free_loopback());
-    let _server = serve_can(&listen);
+    let _server = serve_can(&listen, &[]);
     let no_bus = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args([
             "run",
@@ -127,6 +128,40 @@ fn a_socketcand_url_without_a_bus_or_with_an_unknown_one_is_a_clear_error() {
         "{said}"
     );
     let _ = std::fs::remove_dir_all(&out_dir);
+}
+
+/// `harness serve can --misbehave SPEC` (`docs/misbehave.md`): the harness's SDO client names
+/// what the segment did wrong when the connection check asks FI 1's node who it is (1008h,
+/// a segmented upload): a toggle bit not alternated (the transfer aborted with 05030000h, as
+/// CiA 301 §7.2.4.3.5 has the client do), a size announced that the segments do not carry, a
+/// bus gone silent; an error that stops the run, never a hang or a pass.
+#[test]
+fn a_misbehaving_segment_is_named_for_what_it_did() {
+    for (spec, says) in [
+        (
+            "corrupt=sequence",
+            "upload segment of 1008h:00h with toggle bit 1, expected 0: aborted with 05030000h (Toggle bit not alternated)",
+        ),
+        (
+            "corrupt=length",
+            "6 bytes of 1008h:00h uploaded, 106 announced",
+        ),
+        ("silent=600s", "no SDO answer from node 32"),
+    ] {
+        let listen = format!("{}:29536", free_loopback());
+        let _server = serve_can(&listen, &["--misbehave", spec]);
+        let cases = common::cases_of_run(
+            Command::new(env!("CARGO_BIN_EXE_harness")),
+            "sk550p",
+            &format!("socketcand://{listen}/can0"),
+            "can/sdo/expedited-read-and-write",
+        );
+        let first = &cases[0];
+        let message = first["message"].as_str().unwrap_or_default();
+        assert_eq!(first["id"], "harness/connection-check", "{spec}: {message}");
+        assert_eq!(first["verdict"], "error", "{spec}: {message}");
+        assert!(message.contains(says), "{spec}: {message:?} does not say {says:?}");
+    }
 }
 
 /// Both sides of a served bus module's gateway: `harness serve enip --system-bus` publishes the

@@ -449,7 +449,24 @@ fn connection_check(
                     Verdict::Error,
                 ))
             }
-            Err(_) => {}
+            // An answer that breaks the protocol (a toggle bit not alternated, a size that
+            // lies, bytes that do not parse) is the device's, whatever the cases would ask.
+            Err(
+                e @ (StepError::Protocol(_)
+                | StepError::Malformed { .. }
+                | StepError::Garbage(_)
+                | StepError::Unanswered { .. }),
+            ) => return Err(unreachable(format!("asked who it is: {e}"), Verdict::Error)),
+            // Refused (an object a device need not have): no identity, and why.
+            Err(e) => {
+                identities.insert(
+                    profile.name().to_string(),
+                    Identity {
+                        source: format!("none: {e}"),
+                        ..Identity::default()
+                    },
+                );
+            }
         }
         dut.take_exchanges();
         let _ = dut.finish();

@@ -175,9 +175,10 @@ pub(crate) fn check_tap_runs(
     let _ = std::fs::remove_dir_all(&out_dir);
 }
 
-/// `harness serve can --socketcand LISTEN --profile sk550p` for two minutes at most, once it
-/// listens: the SK 550P's simulated system bus for the tests that reach it over socketcand.
-pub(crate) fn serve_can(listen: &str) -> Server {
+/// `harness serve can --socketcand LISTEN --profile sk550p EXTRA…` for two minutes at most,
+/// once it listens: the SK 550P's simulated system bus for the tests that reach it over
+/// socketcand.
+pub(crate) fn serve_can(listen: &str, extra: &[&str]) -> Server {
     let child = Command::new(env!("CARGO_BIN_EXE_harness"))
         .args([
             "serve",
@@ -188,6 +189,7 @@ pub(crate) fn serve_can(listen: &str) -> Server {
             "sk550p",
         ])
         .args(["--seconds", "120"])
+        .args(extra)
         .stdout(Stdio::null())
         .spawn()
         .expect("harness serve can starts");

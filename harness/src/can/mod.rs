@@ -14,6 +14,7 @@
 
 pub mod bench_support;
 mod binding;
+mod faults;
 mod link;
 mod process;
 mod sdo;

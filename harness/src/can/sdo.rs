@@ -5,7 +5,8 @@ use std::time::Duration;
 
 use proto::can::CanFrame;
 use proto::canopen::{
-    Expedited, Function, InitiateData, Message, SdoAbortCode, SdoRequest, SdoResponse, SegmentData,
+    Abort, Expedited, Function, InitiateData, Message, SdoAbortCode, SdoRequest, SdoResponse,
+    SegmentData,
 };
 
 use super::link::{CanLink, CanLinkError};
@@ -153,6 +154,17 @@ impl<L: CanLink> Client<L> {
                         break;
                     }
                 }
+                // CiA 301 §7.2.4.3.5: the client aborts a transfer whose toggle bit did not
+                // alternate.
+                SdoResponse::UploadSegment { .. } => {
+                    let code = SdoAbortCode::TOGGLE_BIT;
+                    self.abort(node, index, sub, code)?;
+                    return Err(protocol(format!(
+                        "upload segment of {index:04X}h:{sub:02X}h with toggle bit {}, expected {}: aborted with {code}",
+                        u8::from(!toggle),
+                        u8::from(toggle)
+                    )));
+                }
                 other => return Err(protocol(format!("{other:?} to an upload segment"))),
             }
             toggle = !toggle;
@@ -162,11 +174,28 @@ impl<L: CanLink> Client<L> {
         }
         match size {
             Some(n) if n as usize != data.len() => Err(protocol(format!(
-                "{} bytes uploaded, {n} announced",
+                "{} bytes of {index:04X}h:{sub:02X}h uploaded, {n} announced",
                 data.len()
             ))),
             _ => Ok(data),
         }
+    }
+
+    /// Aborts the transfer of `index`:`sub` with `code` (no answer comes to an abort).
+    fn abort(&mut self, node: u8, index: u16, sub: u8, code: SdoAbortCode) -> Result<(), SdoError> {
+        let request = SdoRequest::Abort(Abort { index, sub, code });
+        let frame = request.to_can(node).map_err(|e| SdoError::Protocol {
+            node,
+            what: format!("cannot address it: {e}"),
+        })?;
+        self.link.send(&frame)?;
+        self.exchanges.push(Exchange {
+            sent_hex: can_frame(&frame),
+            sent: describe(&frame),
+            received_hex: String::new(),
+            received: "(an abort is not answered)".into(),
+        });
+        Ok(())
     }
 
     /// Writes `data` to `index`:`sub` of `node`: expedited up to 4 bytes, else segmented.

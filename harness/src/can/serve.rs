@@ -9,14 +9,17 @@
 //! is refused as socketcand refuses an interface it does not have) and switches to raw mode;
 //! then `< send … >` puts a frame on the bus and `< frame … >` brings each frame of the bus.
 //!
-//! Threads: one accepting clients, one per client reading its messages and handing its frames
-//! to the segment, one the serve driver's ([`crate::net::driver`]) running the segment's timers
-//! (the nodes' heartbeats). The sans-IO segment sits behind the driver's mutex; its clock is
-//! the real time since the start.
+//! Threads: one accepting clients, one per client reading its messages, putting its frames on
+//! the bus for the others and handing them to the segment's thread, which the serve driver
+//! ([`crate::net::driver`]) runs: every frame of the nodes, answers and what they send on their
+//! own (boot-up, heartbeats, EMCY), leaves through it, so `--misbehave` touches them all
+//! (`docs/misbehave.md`; the fields and alarms in [`super::faults`]). The sans-IO segment sits
+//! behind the driver's mutex; its clock is the real time since the start.
 
 use std::io::{Read, Write};
 use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
@@ -28,8 +31,11 @@ use sim::can::Segment;
 use sim::device::DeviceConfig;
 use sim::endpoint::{Endpoint, Input, Output};
 
+use super::faults;
 use super::link::{CanLink, CanLinkError};
 use crate::net::driver::{self, Counters, Options, Port, Serving, Shared};
+use crate::net::misbehave::{Misbehaviour, Touched};
+use crate::net::serve_args::MisbehaveArgs;
 use crate::net::serve_error::ServeError;
 
 /// socketcand's own default port.
@@ -73,6 +79,8 @@ struct ServeArgs {
     /// Stop after this many seconds (default: serve until killed).
     #[arg(long)]
     seconds: Option<u64>,
+    #[command(flatten)]
+    misbehave: MisbehaveArgs,
 }
 
 /// `harness serve can ARGS…`; returns the exit code.
@@ -82,19 +90,24 @@ pub(super) fn command(args: &[String]) -> Result<i32, ServeError> {
         Err(code) => return Ok(code),
     };
     let product = crate::profile::product_named(&a.profile).map_err(ServeError::Profile)?;
+    let misbehave = match a.misbehave.for_bus(&faults::FAULTS) {
+        Ok(m) => m,
+        Err(code) => return Ok(code),
+    };
     let (Some(socketcand), None) = (&a.socketcand, &a.iface) else {
         let iface = a.iface.as_deref().unwrap_or_default();
         return serve_iface(
             iface,
             config(product, a.inverters),
             a.seconds.map(Duration::from_secs),
+            misbehave,
         )
         .map(|()| crate::exit::EXIT_PASS);
     };
     let addr = crate::net::serve_args::socket_addr(socketcand, DEFAULT_PORT)
         .map_err(ServeError::Address)?;
     let listener = TcpListener::bind(addr).map_err(ServeError::socket("listen on", addr))?;
-    let served = Served::start(listener, config(product, a.inverters), a.channel)?;
+    let served = Served::start(listener, config(product, a.inverters), a.channel, misbehave)?;
     // On stdout, once the socket is bound: what a test or a script waits for.
     outln!(
         "serving the system bus of {} ({} inverters, nodes {}) over socketcand on {}, channel {}",
@@ -118,13 +131,15 @@ pub(super) fn command(args: &[String]) -> Result<i32, ServeError> {
         f64::from(cycle) / 1000.0,
         proto::nord::can::MIN_CYCLE_US.get() / 1000
     );
+    crate::net::misbehave::announce(&misbehave);
     match a.seconds {
         Some(s) => thread::sleep(Duration::from_secs(s)),
         None => loop {
             thread::park();
         },
     }
-    served.stop();
+    let touched = served.stop();
+    crate::net::misbehave::summarize(&misbehave, touched);
     Ok(crate::exit::EXIT_PASS)
 }
 
@@ -146,6 +161,7 @@ fn serve_iface(
     iface: &str,
     config: DeviceConfig,
     duration: Option<Duration>,
+    misbehave: Misbehaviour,
 ) -> Result<(), ServeError> {
     let link = super::socketcan::SocketCan::open(iface).map_err(ServeError::bus)?;
     let segment = Segment::new(config).map_err(ServeError::bus)?;
@@ -159,6 +175,7 @@ fn serve_iface(
             .collect::<Vec<_>>()
             .join(", ")
     );
+    crate::net::misbehave::announce(&misbehave);
     let mut serving = Serving::<IfaceError>::new();
     let port = Channel { link, frame: None };
     serving
@@ -166,17 +183,29 @@ fn serve_iface(
             format!("can-{iface}"),
             Shared::new(segment),
             port,
-            Options::new(IDLE),
+            options(misbehave),
         )
         .map_err(|source| ServeError::Thread {
             what: "the system bus's thread",
             source,
         })?;
     crate::net::workers::serve_for(duration, IDLE, || serving.is_running());
-    serving
+    let counts = serving
         .stop(IfaceError::Panicked)
-        .map(|_| ())
-        .map_err(ServeError::bus)
+        .map_err(ServeError::bus)?;
+    crate::net::misbehave::summarize(&misbehave, counts.misbehaved);
+    Ok(())
+}
+
+/// How the segment's thread serves, misbehaving as `misbehave` says: `late=` holds back the
+/// nodes' answers (what they sent for a frame of the bus: SDO answers, boot-up after a reset),
+/// not what they send on their own.
+fn options(misbehave: Misbehaviour) -> Options {
+    Options::new(IDLE).misbehaving(
+        misbehave,
+        |input, _| matches!(input, Input::Can(_)),
+        faults::corrupt,
+    )
 }
 
 /// A CAN interface of this host as the driver's port: frames in and out.
@@ -230,9 +259,10 @@ struct Client {
     raw: bool,
 }
 
-/// What the threads share: the segment (none on a relay, [`Served::relay`]) and the clients.
+/// What the threads share: the way to the segment's thread (none on a relay,
+/// [`Served::relay`]) and the clients.
 struct Hub {
-    segment: Option<Arc<Shared<Segment>>>,
+    to_segment: Option<Mutex<Sender<CanFrame>>>,
     clients: Mutex<Vec<Client>>,
     start: Instant,
     channel: String,
@@ -298,44 +328,50 @@ impl Hub {
         });
     }
 
-    /// A client put `frame` on the bus: the others see it, the nodes take it and answer.
+    /// A client put `frame` on the bus: the others see it, and the nodes take it (their
+    /// answers come from the segment's thread).
     fn transmit(&self, from: u64, frame: &CanFrame, text: &mut String) {
         self.broadcast(std::slice::from_ref(frame), Some(from), text);
-        let Some(segment) = &self.segment else {
-            return;
-        };
-        let answers = segment.input(Input::Can(frame));
-        let frames = answers.iter().filter_map(|o| match o {
-            Output::Can(f) => Some(f),
-            _ => None,
-        });
-        self.broadcast(frames, None, text);
+        if let Some(to) = &self.to_segment {
+            // The segment's thread gone (the server stopping): the frame has no one to take it.
+            let _ = to.lock().unwrap_or_else(|p| p.into_inner()).send(*frame);
+        }
     }
 }
 
-/// The socketcand server as the port of the thread that runs the segment's timers: what the
-/// nodes send on their own goes to every client; nothing comes in (the clients' threads hand
-/// their frames over themselves).
-struct Clients(Arc<Hub>, String);
+/// The socketcand server as the port of the segment's thread: the clients' frames come in
+/// from their threads; what the nodes send goes to every client.
+struct Clients {
+    hub: Arc<Hub>,
+    inbox: Receiver<CanFrame>,
+    /// The frame being handed over (the input borrows it).
+    frame: Option<CanFrame>,
+    text: String,
+}
 
 impl Port for Clients {
     type Error = std::convert::Infallible;
 
     fn recv(&mut self, deadline: Instant) -> Result<Option<Input<'_>>, Self::Error> {
-        thread::sleep(
-            deadline
-                .saturating_duration_since(Instant::now())
-                .max(MIN_WAIT),
-        );
-        Ok(None)
+        let wait = deadline.saturating_duration_since(Instant::now());
+        self.frame = match self.inbox.recv_timeout(wait) {
+            Ok(f) => Some(f),
+            Err(RecvTimeoutError::Timeout) => None,
+            // Every client thread and the hub's sender gone: the server is stopping.
+            Err(RecvTimeoutError::Disconnected) => {
+                thread::sleep(wait.max(MIN_WAIT));
+                None
+            }
+        };
+        Ok(self.frame.as_ref().map(Input::Can))
     }
 
     fn send(&mut self, out: &Output) -> Result<bool, Self::Error> {
         let Output::Can(frame) = out else {
             return Ok(false);
         };
-        self.0
-            .broadcast(std::slice::from_ref(frame), None, &mut self.1);
+        self.hub
+            .broadcast(std::slice::from_ref(frame), None, &mut self.text);
         Ok(true)
     }
 }
@@ -349,25 +385,42 @@ pub(crate) struct Served {
     pub(crate) channel: String,
     /// The CANopen node ids of the inverters.
     pub(crate) nodes: Vec<u8>,
+    /// What the segment's thread counted (what `--misbehave` touched).
+    counters: Arc<Counters>,
 }
 
 impl Served {
-    /// Serves the segment of `config` to the clients of `listener`.
+    /// Serves the segment of `config` to the clients of `listener`, misbehaving as
+    /// `misbehave` says.
     pub(crate) fn start(
         listener: TcpListener,
         config: DeviceConfig,
         channel: String,
+        misbehave: Misbehaviour,
     ) -> Result<Served, ServeError> {
         let segment = Segment::new(config).map_err(ServeError::bus)?;
-        let served = Served::hub(listener, Some(segment), channel)?;
-        let h = served.hub.clone();
+        let nodes = segment.nodes();
+        let (to, inbox) = mpsc::channel();
+        let mut served = Served::hub(listener, Some(to), channel)?;
+        served.nodes = nodes;
+        let hub = served.hub.clone();
+        // The socketcand timestamps and the segment's time run on one clock.
+        let segment = Shared::since(segment, hub.start);
+        let counters = served.counters.clone();
         thread::spawn(move || {
-            let Some(segment) = h.segment.clone() else {
-                return;
+            let mut port = Clients {
+                hub: hub.clone(),
+                inbox,
+                frame: None,
+                text: String::new(),
             };
-            let counters = Counters::default();
-            let mut port = Clients(h.clone(), String::new());
-            let Ok(()) = driver::run(&segment, &mut port, &Options::new(IDLE), &counters, &h.stop);
+            let Ok(()) = driver::run(
+                &segment,
+                &mut port,
+                &options(misbehave),
+                &counters,
+                &hub.stop,
+            );
         });
         Ok(served)
     }
@@ -381,16 +434,15 @@ impl Served {
 
     fn hub(
         listener: TcpListener,
-        segment: Option<Segment>,
+        to_segment: Option<Sender<CanFrame>>,
         channel: String,
     ) -> Result<Served, ServeError> {
         let addr = listener
             .local_addr()
             .map_err(ServeError::socket("read the address of", "the listener"))?;
-        let nodes = segment.as_ref().map(Segment::nodes).unwrap_or_default();
         let start = Instant::now();
         let hub = Arc::new(Hub {
-            segment: segment.map(|s| Shared::since(s, start)),
+            to_segment: to_segment.map(Mutex::new),
             clients: Mutex::new(Vec::new()),
             start,
             channel: channel.clone(),
@@ -403,18 +455,20 @@ impl Served {
             hub,
             addr,
             channel,
-            nodes,
+            nodes: Vec::new(),
+            counters: Arc::default(),
         })
     }
 
-    /// Stops serving: the clients are disconnected.
-    pub(crate) fn stop(&self) {
+    /// Stops serving: the clients are disconnected. What `--misbehave` touched.
+    pub(crate) fn stop(&self) -> Touched {
         self.hub.stop.store(true, Ordering::Relaxed);
         for c in self.hub.clients().drain(..) {
             let _ = c.stream.shutdown(Shutdown::Both);
         }
         // Wakes the acceptor, which then sees the stop.
         let _ = TcpStream::connect_timeout(&self.addr, Duration::from_millis(200));
+        self.counters.snapshot().misbehaved
     }
 }
 
@@ -571,8 +625,13 @@ mod tests {
     #[test]
     fn an_error_frame_from_a_client_is_refused_and_the_segment_serves_on() {
         let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-        let served =
-            Served::start(listener, config(Product::Sk550p, Some(2)), "can0".into()).unwrap();
+        let served = Served::start(
+            listener,
+            config(Product::Sk550p, Some(2)),
+            "can0".into(),
+            Misbehaviour::default(),
+        )
+        .unwrap();
         let mut s = TcpStream::connect(served.addr).unwrap();
         s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
         let mut buf = Vec::new();

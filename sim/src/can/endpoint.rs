@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use super::Segment;
-use crate::endpoint::{Endpoint, Input, Output};
+use crate::endpoint::{Endpoint, Input, Output, Raised};
 
 impl Endpoint for Segment {
     fn input(&mut self, input: Input<'_>, now: Duration) -> Vec<Output> {
@@ -26,6 +26,14 @@ impl Endpoint for Segment {
 
     fn next_deadline(&self) -> Option<Duration> {
         self.next_due()
+    }
+
+    fn raise_alarm(&mut self, now: Duration) -> Option<Raised> {
+        let (what, frames) = self.spurious_emergency(now)?;
+        Some(Raised {
+            what,
+            outputs: frames.into_iter().map(Output::Can).collect(),
+        })
     }
 }
 
@@ -59,5 +67,32 @@ mod tests {
         assert!(by_trait
             .input(Input::Frame(&[0; 60]), Duration::ZERO)
             .is_empty());
+    }
+
+    #[test]
+    fn a_raised_alarm_is_an_emcy_of_an_error_the_inverter_does_not_have() {
+        let mut segment = Segment::new(DeviceConfig::new(Product::Sk550p)).unwrap();
+        // In Initialisation no node may send EMCY.
+        assert_eq!(segment.raise_alarm(Duration::ZERO), None);
+        let now = Duration::from_secs(1);
+        segment.poll(now);
+        let raised = segment
+            .raise_alarm(now)
+            .expect("pre-operational nodes send EMCY");
+        assert_eq!(
+            raised.outputs,
+            vec![Output::Can(
+                CanFrame::new(0x0A0, &[0x80, 0x75, 0x11, 100, 0, 1, 0, 0]).unwrap()
+            )]
+        );
+        assert!(
+            raised.what.starts_with("EMCY 7580h from node 32"),
+            "{}",
+            raised.what
+        );
+        // The node's error register says so: 1001h reads 11h.
+        let read = CanFrame::new(0x620, &[0x40, 0x01, 0x10, 0x00, 0, 0, 0, 0]).unwrap();
+        let answer = segment.receive(&read, now);
+        assert_eq!(answer[0].data()[..5], [0x4F, 0x01, 0x10, 0x00, 0x11]);
     }
 }

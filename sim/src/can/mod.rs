@@ -325,6 +325,29 @@ impl Segment {
         }
     }
 
+    /// An EMCY of an error no inverter has, from the first node that takes part and may send
+    /// one (not Stopped or Initialisation, CiA 301 §7.3.2.2), through its controller: the
+    /// manuals' first communication error (BU 0620 §5.3, P700 100, 7580h "CAN /CANopen
+    /// connection error"), its error register set as the EMCY says. For a served segment that
+    /// misbehaves on purpose (`harness serve can --misbehave alarm=`); what was sent, and the
+    /// frames (`None`: no node may send one now).
+    pub fn spurious_emergency(&mut self, now: Duration) -> Option<(String, Vec<CanFrame>)> {
+        let row = proto::nord::errors::COMM_ERRORS.iter().next()?;
+        let i = (0..self.nodes.len()).find(|&i| self.takes_part(i))?;
+        let emcy = self.nodes[i].emergency(i32::from(row.p700), Some(row.ds402))?;
+        let mut out = Vec::new();
+        self.transmit(i, vec![emcy], now, &mut out);
+        self.overheard(&out, now);
+        let what = format!(
+            "EMCY {:04X}h from node {} (P700 {}: {}) though its inverter has no error",
+            row.ds402,
+            self.nodes[i].id(),
+            row.p700,
+            row.text
+        );
+        Some((what, out))
+    }
+
     /// Every node hears what the others sent, as on a real bus.
     fn overheard(&mut self, frames: &[CanFrame], now: Duration) {
         for frame in frames {
