@@ -5,7 +5,8 @@
 //! process data run in real time and end with the drives and nodes as the case found them; a
 //! served EtherNet/IP module's system bus is tapped during a run over EtherNet/IP. A
 //! missing bus name and a refused channel are clear errors; a segment served misbehaving on
-//! purpose is named for what it did. Loopback only: no peer to skip for.
+//! purpose is named for what it did (a toggle bit, a size, silence, an EMCY of an error the
+//! inverter does not have). Loopback only: no peer to skip for.
 
 use std::process::Command;
 
@@ -162,6 +163,30 @@ fn a_misbehaving_segment_is_named_for_what_it_did() {
         assert_eq!(first["verdict"], "error", "{spec}: {message}");
         assert!(message.contains(says), "{spec}: {message:?} does not say {says:?}");
     }
+}
+
+/// `harness serve can --misbehave alarm=`: FI 1's node sends EMCY 7580h (P700 100) though its
+/// inverter has no error; the process step that hears it reads P700 and P701 and fails naming
+/// it (`crate::binding::emergency`), a case that would pass otherwise.
+#[test]
+fn a_spurious_emcy_fails_the_step_that_hears_it() {
+    let listen = format!("{}:29536", free_loopback());
+    let _server = serve_can(&listen, &["--misbehave", "alarm=every:200ms"]);
+    let cases = common::cases_of_run(
+        Command::new(env!("CARGO_BIN_EXE_harness")),
+        "sk550p",
+        &format!("socketcand://{listen}/can0"),
+        "bu0620/drive-bits/enable-pulses-bit-4",
+    );
+    let case = &cases[0];
+    let message = case["message"].as_str().unwrap_or_default();
+    assert_eq!(case["verdict"], "fail", "{message}");
+    assert!(
+        message.contains(
+            "node 32's EMCY 7580h (error register 11h) reports error 100 (P700) on FI 1, but P700 [-01] reads 0 and P701 (the last 5 errors) does not hold it"
+        ),
+        "{message}"
+    );
 }
 
 /// Both sides of a served bus module's gateway: `harness serve enip --system-bus` publishes the

@@ -8,6 +8,7 @@
 //! [`channel::Channel`] holding the parameter-channel logic above it.
 
 pub(crate) mod channel;
+pub(crate) mod emergency;
 pub(crate) mod ledger;
 pub(crate) mod objects;
 pub(crate) mod settle;

@@ -15,7 +15,7 @@ use std::time::Duration;
 
 use proto::canopen::SdoAbortCode;
 use proto::nord::can::parameter_sdo;
-use proto::nord::{Inverter, ParamAddress, Product};
+use proto::nord::{ArrayElement, Inverter, ParamAddress, ParamNumber, Product};
 use serde_json::{json, Value};
 
 use super::link::CanLink;
@@ -509,18 +509,9 @@ impl<L: CanLink> CanBinding<L> {
             .segment()
             .ok_or_else(|| StepError::NotApplicable("only the simulator can be looked into".into()))
     }
-}
 
-impl<L: CanLink> Binding for CanBinding<L> {
-    fn describe(&self) -> String {
-        self.what.clone()
-    }
-
-    fn capabilities(&self) -> &[Capability] {
-        self.capabilities
-    }
-
-    fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+    /// One step of a case.
+    fn step(&mut self, action: &Action) -> Result<Observation, StepError> {
         let fields: Value = match action {
             Action::Compute { .. } => {
                 return Err(StepError::Suite("compute is not a DUT step".into()))
@@ -563,6 +554,60 @@ impl<L: CanLink> Binding for CanBinding<L> {
             }
         };
         Ok(fields.into())
+    }
+}
+
+impl<L: CanLink> Binding for CanBinding<L> {
+    fn describe(&self) -> String {
+        self.what.clone()
+    }
+
+    fn capabilities(&self) -> &[Capability] {
+        self.capabilities
+    }
+
+    /// The step, then the EMCYs it heard that the case did not ask for
+    /// ([`crate::binding::emergency`]): one for an error the inverter does not have fails the
+    /// step. A `can:` step looks at the bus's frames itself: what it heard is its own.
+    fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+        let observed = self.step(action);
+        let heard = self.client.take_emergencies();
+        let observed = observed?;
+        if matches!(action, Action::Bus(_)) {
+            return Ok(observed);
+        }
+        let Some(product) = self.product else {
+            return Ok(observed);
+        };
+        for (node, e) in heard.into_iter().take(crate::binding::emergency::AT_MOST) {
+            let client = &mut self.client;
+            let read = |fi, number, element| -> Result<Option<i16>, StepError> {
+                let (Ok(number), Ok(element)) =
+                    (ParamNumber::new(number), ArrayElement::new(element))
+                else {
+                    return Ok(None);
+                };
+                let at = ParamAddress {
+                    inverter: fi,
+                    number,
+                    set: None,
+                    element: Some(element),
+                };
+                let Ok((node, sdo)) = parameter_sdo(product, at) else {
+                    return Ok(None);
+                };
+                match client.upload(node.get(), sdo.index, sdo.subindex) {
+                    Ok(d) if d.len() >= 2 => Ok(Some(i16::from_le_bytes([d[0], d[1]]))),
+                    Ok(_) | Err(SdoError::Abort(_)) => Ok(None),
+                    Err(e) => Err(step_error(e)),
+                }
+            };
+            let what = format!("node {node}'s EMCY");
+            if let Some(spurious) = crate::binding::emergency::judge(&e, &what, read)? {
+                return Err(StepError::Spurious(spurious.into()));
+            }
+        }
+        Ok(observed)
     }
 
     fn take_exchanges(&mut self) -> Vec<Exchange> {

@@ -213,6 +213,7 @@ impl Pdos {
             let Some(f) = client.link.recv(left)? else {
                 break;
             };
+            client.overheard(&f);
             if matches!(
                 Cob::classify(f.id()),
                 Some(Cob {

@@ -5,8 +5,8 @@ use std::time::Duration;
 
 use proto::can::CanFrame;
 use proto::canopen::{
-    Abort, Expedited, Function, InitiateData, Message, SdoAbortCode, SdoRequest, SdoResponse,
-    SegmentData,
+    Abort, Cob, Emergency, Expedited, Function, InitiateData, Message, SdoAbortCode, SdoRequest,
+    SdoResponse, SegmentData,
 };
 
 use super::link::{CanLink, CanLinkError};
@@ -48,7 +48,13 @@ pub(crate) struct Client<L> {
     /// How long a node may take to answer one request.
     pub(crate) limit: Duration,
     exchanges: Vec<Exchange>,
+    /// The EMCYs heard while waiting for something else (node, message), for the binding to
+    /// judge (`crate::binding::emergency`); the latest [`KEPT_EMERGENCIES`].
+    emergencies: Vec<(u8, Emergency)>,
 }
+
+/// EMCYs set aside at most between two looks (a babbling node cannot grow them unbounded).
+const KEPT_EMERGENCIES: usize = 64;
 
 /// A frame decoded as CANopen, for the transcript.
 pub(crate) fn describe(f: &CanFrame) -> String {
@@ -64,6 +70,7 @@ impl<L: CanLink> Client<L> {
             link,
             limit,
             exchanges: Vec::new(),
+            emergencies: Vec::new(),
         }
     }
 
@@ -75,6 +82,32 @@ impl<L: CanLink> Client<L> {
     /// The exchanges since the last call.
     pub(crate) fn take_exchanges(&mut self) -> Vec<Exchange> {
         std::mem::take(&mut self.exchanges)
+    }
+
+    /// A frame heard while waiting for another: an EMCY is set aside.
+    pub(crate) fn overheard(&mut self, f: &CanFrame) {
+        let Some(Cob {
+            function: Function::Emcy,
+            node,
+        }) = Cob::classify(f.id())
+        else {
+            return;
+        };
+        if f.is_remote() {
+            return;
+        }
+        let Ok(e) = Emergency::parse(f.data()) else {
+            return;
+        };
+        if self.emergencies.len() == KEPT_EMERGENCIES {
+            self.emergencies.remove(0);
+        }
+        self.emergencies.push((node, e));
+    }
+
+    /// The EMCYs set aside since the last look.
+    pub(crate) fn take_emergencies(&mut self) -> Vec<(u8, Emergency)> {
+        std::mem::take(&mut self.emergencies)
     }
 
     /// Sends `request` to `node` and waits for its SDO answer; other frames on the bus pass.
@@ -92,7 +125,10 @@ impl<L: CanLink> Client<L> {
             // The link's clock passes only while it waits; bound the frames of others.
             match self.link.recv(self.limit.saturating_sub(waited))? {
                 Some(f) if f.id() == answer_id => break Some(f),
-                Some(_) => waited += Duration::from_micros(500),
+                Some(f) => {
+                    self.overheard(&f);
+                    waited += Duration::from_micros(500);
+                }
                 None => break None,
             }
             if waited >= self.limit {
