@@ -35,7 +35,8 @@ pub(crate) struct MisbehaveArgs {
     /// Misbehave on purpose, to test that the harness names what the device did: modes
     /// separated by commas, e.g. `late=500ms`, `late=100ms..900ms`, `drop=20%`,
     /// `drop=every:3`, `dup`, `reorder`, `silent=2s` (from the first exchange) or
-    /// `silent=2s@5s`, `corrupt=FIELD`, `close` (see docs/misbehave.md).
+    /// `silent=2s@5s`, `corrupt=FIELD`, `close`, `alarm=2s` or `alarm=every:2s` (see
+    /// docs/misbehave.md).
     #[arg(long, value_name = "SPEC")]
     pub(crate) misbehave: Option<Misbehaviour>,
     /// Where `--misbehave`'s random choices come from (a jittered delay, `drop=20%`): the
