@@ -115,6 +115,11 @@ impl<E: Endpoint> Driver<E> {
             Step::Closed(client) => out = self.close(client),
             Step::Advance(by) => out = self.advance(by),
             Step::Poll => out = self.poll(),
+            Step::Alarm => {
+                if let Some(raised) = self.device.raise_alarm(self.now) {
+                    out = raised.outputs;
+                }
+            }
         }
         out
     }

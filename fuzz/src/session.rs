@@ -13,7 +13,8 @@
 //! | 2 | [`Step::Stream`]: bytes on a TCP connection | client |
 //! | 3 | [`Step::Closed`]: the TCP client goes away | client |
 //! | 4 | [`Step::Advance`]: time passes, 16-bit LE count of 100 µs | — |
-//! | 5–7 | [`Step::Poll`]: the driver polls without time passing | — |
+//! | 5–6 | [`Step::Poll`]: the driver polls without time passing | — |
+//! | 7 | [`Step::Alarm`]: the device raises a spurious alarm or emergency (`--misbehave alarm=`) | — |
 
 use std::time::Duration;
 
@@ -33,6 +34,9 @@ pub enum Step<'a> {
     Advance(Duration),
     /// The driver polls the device now.
     Poll,
+    /// The device is asked to raise an alarm or emergency now
+    /// (`sim::endpoint::Endpoint::raise_alarm`, what `harness serve --misbehave alarm=` does).
+    Alarm,
 }
 
 /// The unit of [`Step::Advance`].
@@ -63,6 +67,7 @@ pub fn decode(mut data: &[u8]) -> Vec<Step<'_>> {
                 };
                 (Step::Advance(TICK * u32::from(ticks)), rest)
             }
+            7 => (Step::Alarm, rest),
             _ => (Step::Poll, rest),
         };
         steps.push(step);
@@ -93,6 +98,7 @@ pub fn encode(steps: &[Step<'_>]) -> Vec<u8> {
                 out.extend((ticks as u16).to_le_bytes());
             }
             Step::Poll => out.push(5),
+            Step::Alarm => out.push(7),
         }
     }
     out
@@ -116,6 +122,7 @@ mod tests {
             Step::Closed(3),
             Step::Advance(Duration::from_millis(250)),
             Step::Poll,
+            Step::Alarm,
         ];
         assert_eq!(decode(&encode(&steps)), steps);
     }
@@ -130,5 +137,6 @@ mod tests {
         );
         assert_eq!(decode(&[4, 1]), []);
         assert_eq!(decode(&[0x2D]), [Step::Poll]);
+        assert_eq!(decode(&[0x2F]), [Step::Alarm]);
     }
 }
