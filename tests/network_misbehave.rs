@@ -2,7 +2,7 @@
 //! `docs/misbehave.md`): the harness's own master, managing node, controller or scanner runs a
 //! case against the served device, and its verdict names what the device did — never a hang,
 //! a panic, a pass or "host late". Covered: EtherCAT `corrupt=wkc`, `corrupt=length`,
-//! `drop=every:2`, `silent`; POWERLINK `corrupt=state`, `silent`; PROFINET IO
+//! `drop=every:2`, `silent`, `alarm=every:2ms`; POWERLINK `corrupt=state`, `silent`; PROFINET IO
 //! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `close`, `dup`,
 //! `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
 //! the POWERLINK binding's). The modes are those whose verdict does not hang on timing: a
@@ -61,17 +61,18 @@ fn judged(
 
 /// EtherCAT: `s` on a slave, the AL start-up case from the namespace; what the slave touched.
 fn ecat(tag: &str, s: &str, verdict: &str, says: &[&str]) -> Touched {
+    ecat_case(tag, s, "bu0620/ecat-al/start-up-sequence", verdict, says)
+}
+
+/// EtherCAT: `s` on a slave, the cases whose id contains `case` from the namespace.
+fn ecat_case(tag: &str, s: &str, case: &str, verdict: &str, says: &[&str]) -> Touched {
     let ns = Netns::new(tag);
     let options = harness::ecat_serve::ServeOptions {
         misbehave: spec(s),
         ..harness::ecat_serve::ServeOptions::new(ns.root_if())
     };
     let served = harness::ecat_serve::start(&options).expect("serve ecat");
-    let run = (
-        "sk550p@ecat",
-        format!("ecat://{}", ns.ns_if()),
-        "bu0620/ecat-al/start-up-sequence",
-    );
+    let run = ("sk550p@ecat", format!("ecat://{}", ns.ns_if()), case);
     let stop = || {
         served
             .stop()
@@ -107,6 +108,27 @@ fn ecat_a_slave_misbehaving_is_named_for_what_it_did() {
     assert!(t.dropped > 0, "{t:?}");
     let t = ecat("mbesil", "silent=600s", "error", &[no_answer]);
     assert!(t.silenced > 0, "{t:?}");
+}
+
+#[test]
+fn ecat_a_slave_raising_an_emergency_for_no_error_is_named_for_it() {
+    if !require_root_or_skip("serve ecat --misbehave over veth pairs") {
+        return;
+    }
+    // E10.2 on FI 1 in the send mailbox every 2 ms from Pre-Operational on (the queue keeps
+    // the last 16), so that one waits there whenever the case's 16 SDO uploads begin: the
+    // master sets it aside while it waits for its answer, then asks P700/P701.
+    let t = ecat_case(
+        "mbealarm",
+        "alarm=every:2ms",
+        "bu0620/ecat-pdo/mapping-object-of-every-inverter",
+        "fail",
+        &[
+            "the device reported what is not so: CoE emergency 7591h (error register 11h) \
+             reports error 102 (P700) on FI 1, but P700 [-01] reads 0",
+        ],
+    );
+    assert!(t.alarms > 0, "{t:?}");
 }
 
 /// POWERLINK: `s` on node 1, the NMT case `case` from the namespace as MN.

@@ -83,6 +83,10 @@ pub(crate) enum StepError {
         /// How long the harness waited, the host's lost time included.
         waited: std::time::Duration,
     },
+    /// The device reported on its own something that is not so (an emergency for an error
+    /// the inverter does not have).
+    #[error("the device reported what is not so: {0}")]
+    Spurious(#[source] Cause),
     /// The DUT answered with something that is not the protocol at all.
     #[error("the DUT does not speak the protocol: {0}")]
     Garbage(#[source] Cause),
@@ -114,7 +118,8 @@ impl StepError {
             | StepError::Protocol(_)
             | StepError::Malformed { .. }
             | StepError::Late { .. }
-            | StepError::Closed(_) => Verdict::Fail,
+            | StepError::Closed(_)
+            | StepError::Spurious(_) => Verdict::Fail,
             StepError::Silent { .. }
             | StepError::Refused(_)
             | StepError::Suite(_)

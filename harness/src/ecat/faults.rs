@@ -2,7 +2,9 @@
 //! session to close (raw Ethernet), and two fields to send wrong, set through the frame's
 //! checked views ([`proto::ecat::EcatFrame`], [`proto::ecat::Datagram`]) as negative tests break
 //! frames: `wkc` (every datagram's working counter 0: as if no slave had processed it) and
-//! `length` (the EtherCAT header's length 2047, past the frame's end).
+//! `length` (the EtherCAT header's length 2047, past the frame's end). `alarm=` puts a CoE
+//! emergency for an error the inverter does not have into the slave's send mailbox
+//! (`sim::ecat::Slave::raise_spurious_emergency`).
 
 use proto::ecat::EcatFrame;
 use proto::eth::EthernetFrame;
@@ -15,7 +17,7 @@ pub(crate) const FAULTS: BusFaults = BusFaults {
     bus: "EtherCAT",
     fields: &[Field::Wkc, Field::Length],
     no_close: Some("has no session to close (raw Ethernet frames): use silent= or drop="),
-    no_alarm: Some("raises no emergency yet (not built)"),
+    no_alarm: None,
 };
 
 /// Sets `field` wrong in `out`, an EtherCAT frame; what it changed (`None`: not a frame that

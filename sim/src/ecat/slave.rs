@@ -421,7 +421,11 @@ impl Slave {
              does not have) queued as mailbox #{counter}",
             e.code,
             e.register,
-            e.data.iter().map(|b| format!("{b:02X}")).collect::<Vec<_>>().join(" "),
+            e.data
+                .iter()
+                .map(|b| format!("{b:02X}"))
+                .collect::<Vec<_>>()
+                .join(" "),
         ))
     }
 

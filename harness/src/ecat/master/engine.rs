@@ -251,6 +251,11 @@ impl<S: Segment> Master<S> {
         self.port.recorder.set_on(on);
     }
 
+    /// CoE emergencies set aside and not taken yet, oldest first.
+    pub(crate) fn pending_emergencies(&self) -> &[Emergency] {
+        &self.emergencies
+    }
+
     /// CoE emergencies that arrived since the last call.
     pub(crate) fn take_emergencies(&mut self) -> Vec<Emergency> {
         std::mem::take(&mut self.emergencies)

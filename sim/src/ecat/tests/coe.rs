@@ -303,10 +303,15 @@ fn a_spurious_emergency_waits_in_the_send_mailbox() {
     let mut m = Master::new(1);
     assert_eq!(m.slave.raise_alarm(ms(0)), None, "Init: no mailbox yet");
     m.preop();
-    let raised = m.slave.raise_alarm(ms(1)).expect("raised in Pre-Operational");
+    let raised = m
+        .slave
+        .raise_alarm(ms(1))
+        .expect("raised in Pre-Operational");
     assert!(raised.outputs.is_empty(), "the master fetches it");
     assert!(
-        raised.what.contains("CoE emergency 7591h, error register 11h, data 66 00 01 00 00")
+        raised
+            .what
+            .contains("CoE emergency 7591h, error register 11h, data 66 00 01 00 00")
             && raised.what.ends_with("mailbox #1"),
         "{}",
         raised.what
