@@ -108,6 +108,19 @@ fn ecat_a_slave_misbehaving_is_named_for_what_it_did() {
     assert!(t.dropped > 0, "{t:?}");
     let t = ecat("mbesil", "silent=600s", "error", &[no_answer]);
     assert!(t.silenced > 0, "{t:?}");
+    // Every answer from the send mailbox #1: from the second on, a repeat of the one before
+    // (the AL case has no mailbox: the CoE case's five uploads).
+    let t = ecat_case(
+        "mbeseq",
+        "corrupt=sequence",
+        "bu0620/ecat-coe/identity-object",
+        "fail",
+        &[
+            "mailbox counter 1 repeated: 1 answer(s) with the counter of the message before \
+           discarded as a repeat, and no new one within ",
+        ],
+    );
+    assert!(t.corrupted > 0, "{t:?}");
 }
 
 #[test]
