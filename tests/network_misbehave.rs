@@ -3,8 +3,8 @@
 //! case against the served device, and its verdict names what the device did — never a hang,
 //! a panic, a pass or "host late". Covered: EtherCAT `corrupt=wkc`, `corrupt=length`,
 //! `drop=every:2`, `silent`, `alarm=every:2ms`; POWERLINK `corrupt=state`, `silent`; PROFINET IO
-//! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `close`, `dup`,
-//! `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
+//! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `corrupt=length`, `close`,
+//! `dup`, `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
 //! the POWERLINK binding's). The modes are those whose verdict does not hang on timing: a
 //! field wrong in every frame, a device silent from its first exchange on, the n-th answer of
 //! a master that asks one thing at a time; the harness's own limits decide, with their margins.
@@ -258,6 +258,18 @@ fn enip(s: &str, verdict: &str, says: &[&str]) {
 #[test]
 fn enip_an_adapter_whose_replies_say_service_not_supported_is_named_for_it() {
     enip("corrupt=status", "fail", &["cip_status: expected 0, got 8"]);
+}
+
+#[test]
+fn enip_an_adapter_whose_reply_lengths_run_past_the_bytes_is_named_for_it() {
+    // Get_Attribute_Single's reply (SendRRData, 22 data bytes) says 534: the scanner waits its
+    // limit for the rest, then closes the connection, the stream's framing lost.
+    enip(
+        "corrupt=length",
+        "fail",
+        &["the reply's encapsulation header says length 534 but 22 bytes followed within 2000 ms: \
+           the scanner closed the connection"],
+    );
 }
 
 #[test]
