@@ -3,8 +3,8 @@
 //! case against the served device, and its verdict names what the device did — never a hang,
 //! a panic, a pass or "host late". Covered: EtherCAT `corrupt=wkc`, `corrupt=length`,
 //! `drop=every:2`, `silent`, `alarm=every:2ms`; POWERLINK `corrupt=state`, `silent`; PROFINET IO
-//! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `corrupt=length`, `close`,
-//! `dup`, `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
+//! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `corrupt=length`,
+//! `corrupt=sequence`, `close`, `dup`, `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
 //! the POWERLINK binding's). The modes are those whose verdict does not hang on timing: a
 //! field wrong in every frame, a device silent from its first exchange on, the n-th answer of
 //! a master that asks one thing at a time; the harness's own limits decide, with their margins.
@@ -244,13 +244,19 @@ fn pnio_a_device_misbehaving_is_named_for_what_it_did() {
 
 /// EtherNet/IP on loopback: `harness serve enip --misbehave SPEC`, the identity cases.
 fn enip(s: &str, verdict: &str, says: &[&str]) {
+    enip_case(s, "bu2100/identity/", verdict, says);
+}
+
+/// EtherNet/IP on loopback: `harness serve enip --misbehave SPEC`, the cases whose id
+/// contains `case`.
+fn enip_case(s: &str, case: &str, verdict: &str, says: &[&str]) {
     let listen = format!("{}:44818", common::addr::free_loopback());
     let _server = common::serve_with(&listen, "tu3-eip", 120, &["--misbehave", s]);
     let cases = common::cases_of_run(
         std::process::Command::new(env!("CARGO_BIN_EXE_harness")),
         "tu3-eip",
         &format!("enip://{listen}"),
-        "bu2100/identity/",
+        case,
     );
     check(&cases, verdict, says);
 }
@@ -269,6 +275,21 @@ fn enip_an_adapter_whose_reply_lengths_run_past_the_bytes_is_named_for_it() {
         "fail",
         &["the reply's encapsulation header says length 534 but 22 bytes followed within 2000 ms: \
            the scanner closed the connection"],
+    );
+}
+
+#[test]
+fn enip_an_adapter_whose_t_o_sequence_stands_still_times_out_its_connection() {
+    // Every T→O frame numbered 1: the first is taken, the others discarded as not new, and
+    // after the connection's timeout of nothing new the scanner names them.
+    enip_case(
+        "corrupt=sequence",
+        "bu2100/drive-bits/enable-pulses-bit-4",
+        "fail",
+        &[
+            "frames discarded: their sequence number 1 did not advance past 1, CIP Vol 2): \
+             no answer within the device's limit of ",
+        ],
     );
 }
 
