@@ -2,9 +2,9 @@
 //! `docs/misbehave.md`): the harness's own master, managing node, controller or scanner runs a
 //! case against the served device, and its verdict names what the device did — never a hang,
 //! a panic, a pass or "host late". Covered: EtherCAT `corrupt=wkc`, `corrupt=length`,
-//! `drop=every:2`, `silent`; POWERLINK `corrupt=state`, `silent`; PROFINET IO
-//! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `close`, `dup`,
-//! `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
+//! `drop=every:2`, `silent`, `alarm=every:2ms`; POWERLINK `corrupt=state`, `silent`; PROFINET IO
+//! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `corrupt=length`,
+//! `corrupt=sequence`, `close`, `dup`, `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
 //! the POWERLINK binding's). The modes are those whose verdict does not hang on timing: a
 //! field wrong in every frame, a device silent from its first exchange on, the n-th answer of
 //! a master that asks one thing at a time; the harness's own limits decide, with their margins.
@@ -61,17 +61,18 @@ fn judged(
 
 /// EtherCAT: `s` on a slave, the AL start-up case from the namespace; what the slave touched.
 fn ecat(tag: &str, s: &str, verdict: &str, says: &[&str]) -> Touched {
+    ecat_case(tag, s, "bu0620/ecat-al/start-up-sequence", verdict, says)
+}
+
+/// EtherCAT: `s` on a slave, the cases whose id contains `case` from the namespace.
+fn ecat_case(tag: &str, s: &str, case: &str, verdict: &str, says: &[&str]) -> Touched {
     let ns = Netns::new(tag);
     let options = harness::ecat_serve::ServeOptions {
         misbehave: spec(s),
         ..harness::ecat_serve::ServeOptions::new(ns.root_if())
     };
     let served = harness::ecat_serve::start(&options).expect("serve ecat");
-    let run = (
-        "sk550p@ecat",
-        format!("ecat://{}", ns.ns_if()),
-        "bu0620/ecat-al/start-up-sequence",
-    );
+    let run = ("sk550p@ecat", format!("ecat://{}", ns.ns_if()), case);
     let stop = || {
         served
             .stop()
@@ -107,6 +108,40 @@ fn ecat_a_slave_misbehaving_is_named_for_what_it_did() {
     assert!(t.dropped > 0, "{t:?}");
     let t = ecat("mbesil", "silent=600s", "error", &[no_answer]);
     assert!(t.silenced > 0, "{t:?}");
+    // Every answer from the send mailbox #1: from the second on, a repeat of the one before
+    // (the AL case has no mailbox: the CoE case's five uploads).
+    let t = ecat_case(
+        "mbeseq",
+        "corrupt=sequence",
+        "bu0620/ecat-coe/identity-object",
+        "fail",
+        &[
+            "mailbox counter 1 repeated: 1 answer(s) with the counter of the message before \
+           discarded as a repeat, and no new one within ",
+        ],
+    );
+    assert!(t.corrupted > 0, "{t:?}");
+}
+
+#[test]
+fn ecat_a_slave_raising_an_emergency_for_no_error_is_named_for_it() {
+    if !require_root_or_skip("serve ecat --misbehave over veth pairs") {
+        return;
+    }
+    // E10.2 on FI 1 in the send mailbox every 2 ms from Pre-Operational on (the queue keeps
+    // the last 16), so that one waits there whenever the case's 16 SDO uploads begin: the
+    // master sets it aside while it waits for its answer, then asks P700/P701.
+    let t = ecat_case(
+        "mbealarm",
+        "alarm=every:2ms",
+        "bu0620/ecat-pdo/mapping-object-of-every-inverter",
+        "fail",
+        &[
+            "the device reported what is not so: CoE emergency 7591h (error register 11h) \
+             reports error 102 (P700) on FI 1, but P700 [-01] reads 0",
+        ],
+    );
+    assert!(t.alarms > 0, "{t:?}");
 }
 
 /// POWERLINK: `s` on node 1, the NMT case `case` from the namespace as MN.
@@ -209,13 +244,19 @@ fn pnio_a_device_misbehaving_is_named_for_what_it_did() {
 
 /// EtherNet/IP on loopback: `harness serve enip --misbehave SPEC`, the identity cases.
 fn enip(s: &str, verdict: &str, says: &[&str]) {
+    enip_case(s, "bu2100/identity/", verdict, says);
+}
+
+/// EtherNet/IP on loopback: `harness serve enip --misbehave SPEC`, the cases whose id
+/// contains `case`.
+fn enip_case(s: &str, case: &str, verdict: &str, says: &[&str]) {
     let listen = format!("{}:44818", common::addr::free_loopback());
     let _server = common::serve_with(&listen, "tu3-eip", 120, &["--misbehave", s]);
     let cases = common::cases_of_run(
         std::process::Command::new(env!("CARGO_BIN_EXE_harness")),
         "tu3-eip",
         &format!("enip://{listen}"),
-        "bu2100/identity/",
+        case,
     );
     check(&cases, verdict, says);
 }
@@ -223,6 +264,33 @@ fn enip(s: &str, verdict: &str, says: &[&str]) {
 #[test]
 fn enip_an_adapter_whose_replies_say_service_not_supported_is_named_for_it() {
     enip("corrupt=status", "fail", &["cip_status: expected 0, got 8"]);
+}
+
+#[test]
+fn enip_an_adapter_whose_reply_lengths_run_past_the_bytes_is_named_for_it() {
+    // Get_Attribute_Single's reply (SendRRData, 22 data bytes) says 534: the scanner waits its
+    // limit for the rest, then closes the connection, the stream's framing lost.
+    enip(
+        "corrupt=length",
+        "fail",
+        &["the reply's encapsulation header says length 534 but 22 bytes followed within 2000 ms: \
+           the scanner closed the connection"],
+    );
+}
+
+#[test]
+fn enip_an_adapter_whose_t_o_sequence_stands_still_times_out_its_connection() {
+    // Every T→O frame numbered 1: the first is taken, the others discarded as not new, and
+    // after the connection's timeout of nothing new the scanner names them.
+    enip_case(
+        "corrupt=sequence",
+        "bu2100/drive-bits/enable-pulses-bit-4",
+        "fail",
+        &[
+            "frames discarded: their sequence number 1 did not advance past 1, CIP Vol 2): \
+             no answer within the device's limit of ",
+        ],
+    );
 }
 
 #[test]

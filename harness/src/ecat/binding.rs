@@ -85,6 +85,9 @@ pub(crate) struct EcatBinding<S> {
     pending: Vec<Exchange>,
     /// The inverters the case sent control words.
     commanded: Vec<Inverter>,
+    /// The emergencies set aside that were checked against the inverter already
+    /// ([`super::emergency`]).
+    emergencies_checked: usize,
 }
 
 impl<S: DutSegment> EcatBinding<S> {
@@ -143,6 +146,7 @@ impl<S: DutSegment> EcatBinding<S> {
             ledger: persistent.then(Ledger::default),
             pending: Vec::new(),
             commanded: Vec::new(),
+            emergencies_checked: 0,
         })
     }
 
@@ -669,7 +673,45 @@ impl<S: DutSegment> Binding for EcatBinding<S> {
         self.capabilities
     }
 
+    /// The step, then the emergencies it met that the case did not ask for
+    /// ([`super::emergency`]): one for an error the inverter does not have fails the step.
     fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+        let observed = self.step(action)?;
+        if let Action::Bus(step) = action {
+            if let Some(EcatStep::Emergencies) = step.as_ref().as_any().downcast_ref::<EcatStep>() {
+                // It took them all: asked for, not checked.
+                self.emergencies_checked = 0;
+                return Ok(observed);
+            }
+        }
+        let Some(product) = self.product else {
+            return Ok(observed);
+        };
+        let from = self.emergencies_checked;
+        match super::emergency::check(&mut self.master, self.station, product, from) {
+            Ok(Ok(checked)) => {
+                self.emergencies_checked = checked;
+                Ok(observed)
+            }
+            Ok(Err(spurious)) => Err(StepError::Spurious(spurious.into())),
+            Err(e) => Err(step_error(e)),
+        }
+    }
+
+    fn take_exchanges(&mut self) -> Vec<Exchange> {
+        let mut v = std::mem::take(&mut self.pending);
+        v.extend(self.master.take_exchanges());
+        v
+    }
+
+    fn finish(&mut self) -> Result<(), CleanupError> {
+        self.restore().map_err(CleanupError)
+    }
+}
+
+impl<S: DutSegment> EcatBinding<S> {
+    /// One step of a case.
+    fn step(&mut self, action: &Action) -> Result<Observation, StepError> {
         let fields = match action {
             Action::Compute { .. } => {
                 return Err(StepError::Suite("compute is not a DUT step".into()))
@@ -703,16 +745,6 @@ impl<S: DutSegment> Binding for EcatBinding<S> {
             }
         };
         Ok(fields.into())
-    }
-
-    fn take_exchanges(&mut self) -> Vec<Exchange> {
-        let mut v = std::mem::take(&mut self.pending);
-        v.extend(self.master.take_exchanges());
-        v
-    }
-
-    fn finish(&mut self) -> Result<(), CleanupError> {
-        self.restore().map_err(CleanupError)
     }
 }
 

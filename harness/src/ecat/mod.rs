@@ -4,6 +4,7 @@
 pub mod bench_support;
 mod binding;
 mod effect;
+mod emergency;
 mod esi;
 mod faults;
 pub(crate) mod master;

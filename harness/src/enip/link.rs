@@ -31,14 +31,27 @@ pub(crate) enum LinkError {
         /// Bytes of an unfinished reply that had arrived when it closed.
         pending: Option<usize>,
     },
-    /// The request's time ran out within a reply: its header announced more than arrived.
-    #[error("incomplete reply: the header announces {announced} bytes, {arrived} arrived")]
+    /// The request's time ran out within a reply: its encapsulation header's length is
+    /// past the bytes that followed. The length is a TCP stream's only framing (CIP Vol 2
+    /// §2-3), so the scanner cannot tell where the next reply would begin: it closes the
+    /// connection rather than read the next reply from the middle of this one.
+    #[error(
+        "the reply's encapsulation header says length {length} but {followed} bytes followed \
+         within {}: the scanner closed the connection, a TCP stream having no other framing to \
+         find the next reply by",
+        crate::timing::ms(*limit)
+    )]
     Incomplete {
-        /// The reply's length by its encapsulation header.
-        announced: usize,
-        /// Bytes that arrived.
-        arrived: usize,
+        /// The header's length field.
+        length: usize,
+        /// Data bytes that followed the header.
+        followed: usize,
+        /// How long the scanner waited for the rest (the device's limit).
+        limit: Duration,
     },
+    /// A request on a connection the scanner closed after a reply it could not frame.
+    #[error("the scanner closed the TCP connection after a reply whose length it could not frame")]
+    Abandoned,
     /// A socket operation failed (connect, send, receive, bind).
     #[error("{what}: {source}")]
     Io {
@@ -75,6 +88,8 @@ impl From<LinkError> for StepError {
         };
         match &e {
             LinkError::Closed { .. } => StepError::Closed(e.into()),
+            // The device's reply broke the stream's framing: the device's fault.
+            LinkError::Incomplete { .. } => StepError::Protocol(e.into()),
             LinkError::Io { source, .. } if reset(source) => StepError::Closed(e.into()),
             _ => StepError::Link(e.into()),
         }
@@ -478,6 +493,8 @@ struct Stream {
     stale: Vec<[u8; 8]>,
     /// Its record: bytes as they were sent and as they arrived, with the real addresses.
     recorded: Option<Connection>,
+    /// The scanner closed it, its framing lost ([`LinkError::Incomplete`]).
+    abandoned: bool,
 }
 
 impl Stream {
@@ -498,6 +515,7 @@ impl Stream {
             buf: Vec::new(),
             stale: Vec::new(),
             recorded: None,
+            abandoned: false,
         };
         if let Some(r) = recorder {
             stream.record(r)?;
@@ -542,14 +560,13 @@ impl Stream {
                 // and the second leaves as another.
                 std::thread::sleep(gap);
             }
-            let tcp = self.tcp.as_mut().ok_or(LinkError::CLOSED)?;
+            let tcp = self.open()?;
             tcp.write_all(part, wait.remaining())
                 .map_err(LinkError::io("TCP send failed"))?;
             if let Some(c) = &self.recorded {
                 c.tcp(true, part);
             }
         }
-        let tcp = self.tcp.as_mut().ok_or(LinkError::CLOSED)?;
         let context = sender_context(msg);
         let mut chunk = [0u8; 4096];
         loop {
@@ -568,10 +585,13 @@ impl Stream {
             }
             let left = wait.remaining();
             if left.is_zero() {
-                if self.buf.len() >= HEADER_LEN {
+                if let Some(n) = frame_len(&self.buf) {
+                    let followed = self.buf.len() - HEADER_LEN;
+                    self.abandon();
                     return Err(LinkError::Incomplete {
-                        announced: frame_len(&self.buf).unwrap_or(0),
-                        arrived: self.buf.len(),
+                        length: n - HEADER_LEN,
+                        followed,
+                        limit: wait.limit(),
                     });
                 }
                 if let Some(c) = context {
@@ -582,7 +602,7 @@ impl Stream {
                 }
                 return Ok(None);
             }
-            match tcp.read(&mut chunk, left) {
+            match self.open()?.read(&mut chunk, left) {
                 Ok(0) => {
                     self.tcp = None;
                     if let Some(c) = &mut self.recorded {
@@ -609,6 +629,29 @@ impl Stream {
                 }
             }
         }
+    }
+}
+
+impl Stream {
+    /// The connection, unless it was closed.
+    fn open(&mut self) -> Result<&mut PollingStream, LinkError> {
+        match &mut self.tcp {
+            Some(tcp) => Ok(tcp),
+            None if self.abandoned => Err(LinkError::Abandoned),
+            None => Err(LinkError::CLOSED),
+        }
+    }
+
+    /// Closes the connection from the scanner's side, its framing lost.
+    fn abandon(&mut self) {
+        if let Some(tcp) = self.tcp.take() {
+            let _ = tcp.get().shutdown(std::net::Shutdown::Both);
+        }
+        if let Some(c) = &mut self.recorded {
+            c.close(false);
+        }
+        self.buf.clear();
+        self.abandoned = true;
     }
 }
 
@@ -870,6 +913,40 @@ mod tests {
         assert!(apart >= gap - Duration::from_millis(5), "{apart:?} apart");
         assert_eq!(reply.as_deref(), Some(&LIST_IDENTITY[..]));
         assert!(link.split.is_none());
+    }
+
+    /// A reply whose header says 4 bytes more than follow: the scanner waits out its limit,
+    /// names the length and the bytes, and closes the connection; the next request on it
+    /// says so rather than read from the middle of the broken reply.
+    #[test]
+    fn a_reply_longer_by_its_header_than_its_bytes_ends_the_connection() {
+        let listener = TcpListener::bind("127.0.0.14:0").unwrap();
+        let target = listener.local_addr().unwrap();
+        let server = std::thread::spawn(move || {
+            let (mut tcp, _) = listener.accept().unwrap();
+            let mut got = [0u8; 24];
+            tcp.read_exact(&mut got).unwrap();
+            // The request's header back, its length 4 with no data after it.
+            got[2] = 4;
+            tcp.write_all(&got).unwrap();
+            // Until the scanner closes.
+            let mut rest = [0u8; 64];
+            while tcp.read(&mut rest).is_ok_and(|n| n > 0) {}
+        });
+        let mut link = Network::connect(target, None, Duration::from_secs(2)).unwrap();
+        let wait = Deadline::after(Duration::from_millis(100));
+        let e = link.request(1, &LIST_IDENTITY, &wait).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the reply's encapsulation header says length 4 but 0 bytes followed within 100 ms: \
+             the scanner closed the connection, a TCP stream having no other framing to find \
+             the next reply by"
+        );
+        assert!(matches!(StepError::from(e), StepError::Protocol(_)));
+        server.join().unwrap();
+        let again = Deadline::after(Duration::from_millis(100));
+        let e = link.request(1, &LIST_IDENTITY, &again).unwrap_err();
+        assert!(matches!(e, LinkError::Abandoned), "{e}");
     }
 
     #[test]

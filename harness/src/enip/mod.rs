@@ -4,6 +4,7 @@
 /// What the EtherNet/IP speed bench needs of the library (`harness::enip_bench`).
 pub mod bench_support;
 mod cleanup;
+mod consumer;
 mod eds;
 mod effect;
 mod faults;

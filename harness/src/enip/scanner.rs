@@ -27,6 +27,7 @@ use sim::device::Device;
 use sim::enip::Adapter;
 
 use super::cleanup;
+use super::consumer::Consumer;
 use super::link::{self, EnipLink, LinkError, Network};
 use super::serials::{self, Serials};
 use super::step::EnipStep;
@@ -66,6 +67,8 @@ pub(super) struct IoConn {
     /// The scanner's limit as consumer of the T→O data: the connection's timeout, RPI × the
     /// timeout multiplier of the Forward_Open (CIP Vol 1 §3-5.4.1.4, `4 << multiplier`).
     pub(super) timeout: Duration,
+    /// The T→O frames taken and discarded by their sequence numbers.
+    pub(super) consumer: Consumer,
 }
 
 /// The scanner.
@@ -549,6 +552,7 @@ impl Scanner {
                 count: 0,
                 // One RPI both ways: the O→T timeout is the T→O one.
                 timeout: Duration::from_micros(fo.timeout_us()),
+                consumer: Consumer::default(),
             });
         }
         Ok((resp, Some(reply)))
@@ -595,22 +599,40 @@ impl Scanner {
             .link
             .io_cycle(Some(&bytes), RPI)
             .map_err(StepError::from)?;
-        let mine: Vec<IoFrame> = received
+        let io = self
+            .io
+            .as_mut()
+            .ok_or_else(|| StepError::Suite("no I/O connection".into()))?;
+        let mut last = None;
+        let mut discarded = None;
+        for f in received
             .iter()
             .filter_map(|d| IoFrame::parse(d, false).ok())
             .filter(|f| f.connection == t_o_id)
-            .collect();
-        let last = mine.last();
+        {
+            if io.consumer.take(f.sequence, io.timeout) {
+                last = Some(f);
+            } else {
+                discarded = Some(f.sequence);
+            }
+        }
+        let checked = io.consumer.check(t_o_id);
+        let stale = io.consumer.discarded();
         self.exchanges.push(Exchange {
             sent_hex: hex(&bytes),
             sent: format!("I/O O→T count {} ({} bytes)", frame.count, frame.data.len()),
             received_hex: received.last().map(|d| hex(d)).unwrap_or_default(),
-            received: match last {
-                Some(f) => format!("I/O T→O count {} ({} bytes)", f.count, f.data.len()),
-                None => "(nothing)".into(),
+            received: match (&last, discarded) {
+                (Some(f), _) => format!("I/O T→O count {} ({} bytes)", f.count, f.data.len()),
+                (None, Some(s)) => format!(
+                    "I/O T→O sequence number {s} discarded: not past the last taken ({stale} \
+                     so far)"
+                ),
+                (None, None) => "(nothing)".into(),
             },
         });
-        Ok(last.map(|f| f.data.clone()))
+        checked?;
+        Ok(last.map(|f| f.data))
     }
 
     pub(super) fn run_process(

@@ -176,6 +176,19 @@ impl<T: AsRef<[u8]>> EncapFrame<T> {
     pub fn data(&self) -> &[u8] {
         &self.b()[HEADER_LEN..]
     }
+    /// The header's length field (the data's length, once checked).
+    pub fn length(&self) -> u16 {
+        u16::from_le_bytes([self.b()[2], self.b()[3]])
+    }
+}
+
+impl<T: AsRef<[u8]> + AsMut<[u8]>> EncapFrame<T> {
+    /// Sets the header's length field, for a message that lies about its length (a negative
+    /// test, a misbehaving device): on TCP it moves where a reader takes the next message to
+    /// begin.
+    pub fn set_length(&mut self, length: u16) {
+        self.buffer.as_mut()[2..4].copy_from_slice(&length.to_le_bytes());
+    }
 }
 
 /// How long the message at the front of `buf` is, once its header has arrived (TCP framing).
@@ -336,6 +349,27 @@ mod tests {
         assert_eq!(m.emit().unwrap(), REGISTER);
         assert_eq!(frame_len(&REGISTER[..24]), Some(28));
         assert_eq!(frame_len(&REGISTER[..23]), None);
+    }
+
+    #[test]
+    fn the_length_field_is_read_and_set_through_the_view() {
+        let mut b = REGISTER;
+        let mut f = EncapFrame::new_checked(&mut b[..]).unwrap();
+        assert_eq!(f.length(), 4);
+        f.set_length(516);
+        // Bytes 2–3, little-endian; nothing else moves.
+        assert_eq!(b[2..4], [0x04, 0x02]);
+        assert_eq!(b[..2], REGISTER[..2]);
+        assert_eq!(b[4..], REGISTER[4..]);
+        assert_eq!(frame_len(&b), Some(24 + 516));
+        assert!(matches!(
+            EncapFrame::new_checked(&b[..]),
+            Err(Error::Length {
+                value: 516,
+                available: 4,
+                ..
+            })
+        ));
     }
 
     #[test]

@@ -6,7 +6,7 @@
 use std::time::Duration;
 
 use super::Slave;
-use crate::endpoint::{Endpoint, Input, Output};
+use crate::endpoint::{Endpoint, Input, Output, Raised};
 
 impl Endpoint for Slave {
     fn input(&mut self, input: Input<'_>, now: Duration) -> Vec<Output> {
@@ -28,6 +28,16 @@ impl Endpoint for Slave {
 
     fn next_deadline(&self) -> Option<Duration> {
         self.next_poll
+    }
+
+    /// A CoE emergency in the send mailbox ([`Slave::raise_spurious_emergency`]): the master
+    /// fetches it, so nothing leaves now.
+    fn raise_alarm(&mut self, now: Duration) -> Option<Raised> {
+        let _ = now;
+        self.raise_spurious_emergency().map(|what| Raised {
+            what,
+            outputs: Vec::new(),
+        })
     }
 }
 

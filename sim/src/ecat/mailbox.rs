@@ -61,6 +61,11 @@ impl Mailbox {
         }
     }
 
+    /// The counter of the message queued last (0: none yet).
+    pub(crate) fn counter(&self) -> u8 {
+        self.counter
+    }
+
     /// The next message for the send mailbox.
     pub(crate) fn next(&mut self) -> Option<Vec<u8>> {
         self.queue.pop_front()

@@ -400,6 +400,35 @@ impl Slave {
         }
     }
 
+    /// Puts a CoE emergency for an inverter error that is not there into the send mailbox, as
+    /// [`Slave::emergencies`] does for one that appeared: E10.2 "telegram time-out" of FI 1
+    /// (BU 0620 §5.3: 7591h, error register 11h, P700 102 and the FI in the manufacturer
+    /// field), numbered with the mailbox's next counter (ETG.1000.6 §5.6: 1..7). The master
+    /// fetches it (SM1 status "mailbox full"); nothing is sent unasked. `None` while the
+    /// mailbox does not run (Init), or runs without CoE (Bootstrap): a slave then has nowhere
+    /// to put one. What it raised, for the log.
+    pub fn raise_spurious_emergency(&mut self) -> Option<String> {
+        if matches!(self.al.state, EcState::Init | EcState::Bootstrap) {
+            return None;
+        }
+        let fi = proto::nord::Inverter::new(1).ok()?;
+        let e = crate::objects::emergency_of(102, None, fi);
+        self.mailbox.send(MailboxType::COE, e.emit_coe());
+        let counter = self.mailbox.counter();
+        self.fill_mailbox();
+        Some(format!(
+            "CoE emergency {:04X}h, error register {:02X}h, data {} (E10.2 on FI 1, which it \
+             does not have) queued as mailbox #{counter}",
+            e.code,
+            e.register,
+            e.data
+                .iter()
+                .map(|b| format!("{b:02X}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+        ))
+    }
+
     /// Runs the timers due at `now`; returns when to call again at the latest (`None`: nothing
     /// pending).
     pub fn poll(&mut self, now: Duration) -> Option<Duration> {

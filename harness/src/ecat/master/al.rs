@@ -83,6 +83,12 @@ impl<S: Segment> Master<S> {
     pub(crate) fn request_state(&mut self, station: u16, control: u16) -> Result<AlReading> {
         self.write_register(station, AL_CONTROL, &control.to_le_bytes())?;
         let want = (control & 0x0F) as u8;
+        if want == EcState::Init.code() {
+            // Its mailbox stops: the next one counts from 1 again.
+            if let Some(s) = self.slave_mut(station) {
+                s.received = None;
+            }
+        }
         self.poll(al_limit(want), Awaited::AlState, |m| {
             let s = m.al_status(station)?;
             Ok((s.state_bits() == want || s.error()).then_some(s))

@@ -132,6 +132,9 @@ pub(crate) struct SlaveInfo {
     pub(crate) process: Option<ProcessSetup>,
     /// The master's mailbox counter, 1..7 (0 before the first message).
     pub(crate) counter: u8,
+    /// The counter of the last message read from the slave's send mailbox (`None`: none
+    /// since its mailbox started): one that comes again is a repeat (ETG.1000.6 §5.6).
+    pub(crate) received: Option<u8>,
 }
 
 impl SlaveInfo {
@@ -171,6 +174,8 @@ pub(crate) struct Master<S> {
     pub(super) cyclic: Cyclic,
     /// CoE emergencies read from the mailbox while waiting for something else.
     pub(super) emergencies: Vec<Emergency>,
+    /// Messages of the exchange under way discarded as repeats: their counter and how many.
+    pub(super) repeats: Option<(u8, u32)>,
 }
 
 impl<S: Segment> Master<S> {
@@ -182,6 +187,7 @@ impl<S: Segment> Master<S> {
             slaves: Vec::new(),
             cyclic: Cyclic::default(),
             emergencies: Vec::new(),
+            repeats: None,
         }
     }
 
@@ -249,6 +255,11 @@ impl<S: Segment> Master<S> {
     /// that runs while the master waits is never recorded).
     pub(crate) fn set_recording(&mut self, on: bool) {
         self.port.recorder.set_on(on);
+    }
+
+    /// CoE emergencies set aside and not taken yet, oldest first.
+    pub(crate) fn pending_emergencies(&self) -> &[Emergency] {
+        &self.emergencies
     }
 
     /// CoE emergencies that arrived since the last call.

@@ -178,6 +178,21 @@ pub(crate) enum ProtocolError {
         /// Words read.
         words: usize,
     },
+    /// The slave's answers came with the counter of the message it sent before, each
+    /// discarded as a repeat (ETG.1000.6 §5.6, mailbox header "Cnt"), and no new one came.
+    #[error(
+        "mailbox counter {counter} repeated: {discarded} answer(s) with the counter of the \
+         message before discarded as a repeat, and no new one within {}",
+        crate::timing::ms(*limit)
+    )]
+    RepeatedCounter {
+        /// The counter that came again.
+        counter: u8,
+        /// Messages discarded.
+        discarded: u32,
+        /// How long the master waited for a new one.
+        limit: Duration,
+    },
     /// A mailbox message from the slave cannot be parsed.
     #[error("mailbox reply: {0}")]
     Mailbox(proto::wire::Error),

@@ -9,6 +9,12 @@
 //! writes the request and tries to read the reply at once; a slave that needs longer is
 //! polled. CoE emergencies that arrive meanwhile are kept ([`Master::take_emergencies`]).
 //! A mailbox error reply (type 0) is the slave's refusal ([`Refusal::Mailbox`]).
+//!
+//! The slave numbers its messages the same way, and a message with the counter of the one it
+//! sent before is a repeat (ETG.1000.6 §5.6 "Cnt"; ETG.1000.4 §6.7.3, the repeat the master
+//! asks for after a lost read): discarded, it is no answer. An exchange that meets only
+//! repeats ends as [`ProtocolError::RepeatedCounter`], naming the counter. The slave starts
+//! counting again when its mailbox starts (Init → Pre-Operational).
 
 use proto::ecat::coe::{CoeHeader, CoeMessage, CoeService, Emergency, SdoRequest, SdoResponse};
 use proto::ecat::mailbox::{self, MailboxError, MailboxRepr, MailboxType};
@@ -171,6 +177,7 @@ impl<S: Segment> Master<S> {
         self.write_register(station, register::sm(0), &regs)?;
         if let Some(s) = self.slave_mut(station) {
             s.mailbox = Some((out, inn));
+            s.received = None;
         }
         Ok((out, inn))
     }
@@ -256,9 +263,10 @@ impl<S: Segment> Master<S> {
             Err(_) => format!("mailbox {} bytes as given", msg.len()),
         };
         self.port.recorder.note_next(note);
+        self.repeats = None;
         let r = self.exchange(&[read.clone(), write.clone(), read.clone()])?;
         if r[0].wkc == 1 {
-            self.set_aside(&r[0].data);
+            self.set_aside(station, &r[0].data);
         }
         if r[1].wkc == 0 {
             // The receive mailbox is still full: wait for room.
@@ -270,14 +278,14 @@ impl<S: Segment> Master<S> {
         } else {
             check_wkc(access, &r[1], 1)?;
             if r[2].wkc == 1 {
-                if let Some(reply) = self.keep_reply(&r[2].data) {
+                if let Some(reply) = self.keep_reply(station, &r[2].data) {
                     return Ok(reply);
                 }
             }
         }
         let timeout = self.config.mailbox_response;
         let status = register::sm(1) + 5;
-        self.poll(timeout, Awaited::MailboxReply, |m| {
+        let reply = self.poll(timeout, Awaited::MailboxReply, |m| {
             let s = m.one(wire::read(Command::FPRD, station, status, 1))?;
             if s.wkc != 1 || s.data[0] & sm_status::MAILBOX_FULL == 0 {
                 return Ok(None);
@@ -286,14 +294,51 @@ impl<S: Segment> Master<S> {
             if r.wkc != 1 {
                 return Ok(None);
             }
-            Ok(m.keep_reply(&r.data))
-        })
+            Ok(m.keep_reply(station, &r.data))
+        });
+        match (reply, self.repeats.take()) {
+            (
+                Err(MasterError::Link(LinkFailure::Timeout {
+                    awaited: Awaited::MailboxReply,
+                    limit,
+                    ..
+                })),
+                Some((counter, discarded)),
+            ) => Err(ProtocolError::RepeatedCounter {
+                counter,
+                discarded,
+                limit,
+            }
+            .into()),
+            (reply, _) => reply,
+        }
     }
 
-    /// A message read from SM1 while looking for a reply: an emergency is set aside (`None`),
-    /// anything else is the reply.
-    fn keep_reply(&mut self, buf: &[u8]) -> Option<Vec<u8>> {
+    /// Whether `m`, read from `station`'s send mailbox, is new: a counter (1..7) equal to the
+    /// last one read is a repeat, discarded and counted in [`Master::repeats`].
+    fn fresh(&mut self, station: u16, m: &MailboxRepr) -> bool {
+        let Some(s) = self.slave_mut(station) else {
+            return true;
+        };
+        let last = s.received;
+        if m.counter != 0 {
+            s.received = Some(m.counter);
+        }
+        if m.counter == 0 || last != Some(m.counter) {
+            return true;
+        }
+        let n = self.repeats.map_or(0, |(_, n)| n) + 1;
+        self.repeats = Some((m.counter, n));
+        let line = format!("discarded as a repeat: {}", describe(m));
+        self.port.recorder.annotate("", &line);
+        false
+    }
+
+    /// A message read from SM1 while looking for a reply: a repeat is discarded and an
+    /// emergency set aside (`None`), anything else is the reply.
+    fn keep_reply(&mut self, station: u16, buf: &[u8]) -> Option<Vec<u8>> {
         match MailboxRepr::parse_bytes(buf) {
+            Ok(m) if !self.fresh(station, &m) => None,
             Ok(m) => match emergency(&m) {
                 Some(e) => {
                     let line = format!("set aside: {}", describe(&m));
@@ -310,8 +355,6 @@ impl<S: Segment> Master<S> {
         }
     }
 
-    /// A message left in SM1 before the request went out: emergencies are kept, anything
-    /// else (a stale reply) is dropped.
     /// The CoE emergencies `station` sent since the last call: those set aside during
     /// mailbox transfers, and one waiting in its send mailbox now (read once).
     pub(crate) fn collect_emergencies(&mut self, station: u16) -> Result<Vec<Emergency>> {
@@ -319,17 +362,18 @@ impl<S: Segment> Master<S> {
         let read = wire::read(Command::FPRD, station, inn.start, usize::from(inn.len));
         let r = self.one(read)?;
         if r.wkc == 1 {
-            self.set_aside(&r.data);
+            self.set_aside(station, &r.data);
         }
         Ok(self.take_emergencies())
     }
 
-    fn set_aside(&mut self, buf: &[u8]) {
-        if let Some(e) = MailboxRepr::parse_bytes(buf)
-            .ok()
-            .as_ref()
-            .and_then(emergency)
-        {
+    /// A message left in SM1 before the request went out: a new emergency is kept, anything
+    /// else (a stale reply, a repeat) is dropped.
+    fn set_aside(&mut self, station: u16, buf: &[u8]) {
+        let Ok(m) = MailboxRepr::parse_bytes(buf) else {
+            return;
+        };
+        if let (true, Some(e)) = (self.fresh(station, &m), emergency(&m)) {
             self.emergencies.push(e);
         }
     }

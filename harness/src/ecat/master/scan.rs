@@ -70,6 +70,7 @@ impl<S: Segment> Master<S> {
                 mailbox: None,
                 process: None,
                 counter: 0,
+                received: None,
             });
         }
         for position in 0..n {

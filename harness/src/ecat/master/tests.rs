@@ -446,3 +446,69 @@ fn corrupted_answers_never_panic_or_hang() {
         );
     }
 }
+
+/// The served slave's `corrupt=sequence` between the master and the embedded slave: every
+/// message read from the send mailbox comes with counter 1.
+struct Repeating(EmbeddedSegment);
+
+impl Segment for Repeating {
+    fn now(&self) -> Duration {
+        self.0.now()
+    }
+    fn real_time(&self) -> bool {
+        false
+    }
+    fn send(&mut self, frame: &[u8]) -> Result<(), SegmentError> {
+        self.0.send(frame)
+    }
+    fn recv(
+        &mut self,
+        buf: &mut [u8],
+        deadline: Duration,
+    ) -> Result<Option<segment::Arrival>, SegmentError> {
+        use crate::net::misbehave::Field;
+        use sim::endpoint::Output;
+        let got = self.0.recv(buf, deadline)?;
+        if let Some(a) = got {
+            let mut out = Output::Frame(buf[..a.len].to_vec());
+            if crate::ecat::faults::corrupt(Field::Sequence, &mut out).is_some() {
+                let Output::Frame(f) = out else {
+                    unreachable!()
+                };
+                buf[..a.len].copy_from_slice(&f);
+            }
+        }
+        Ok(got)
+    }
+    fn wait_until(&mut self, until: Duration) {
+        self.0.wait_until(until)
+    }
+}
+
+#[test]
+fn a_mailbox_counter_that_stands_still_is_a_repeat_named_not_an_answer() {
+    let mut m = Master::new(
+        Repeating(EmbeddedSegment::new(slave(3, 0))),
+        MasterConfig::default(),
+    );
+    m.bring_up(EcState::PreOperational).unwrap();
+    // The first answer is #1 anyway: new.
+    assert_eq!(m.sdo_upload(STATION, P102_FI3, 1, false).unwrap(), [200, 0]);
+    // The second is #2 sent as #1: the counter of the one before, discarded; no other comes.
+    let start = m.now();
+    let e = m.sdo_upload(STATION, P102_FI3, 1, false).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "mailbox counter 1 repeated: 1 answer(s) with the counter of the message before \
+             discarded as a repeat, and no new one within {}",
+            crate::timing::ms(MasterConfig::default().mailbox_response)
+        )
+    );
+    assert_eq!(e.kind(), ErrorKind::Protocol);
+    assert!(m.now() - start <= MasterConfig::default().mailbox_response * 2);
+    // Init restarts the slave's counting: its next first answer is new again.
+    m.set_state(STATION, EcState::Init).unwrap();
+    m.bring_up(EcState::PreOperational).unwrap();
+    assert_eq!(m.sdo_upload(STATION, P102_FI3, 1, false).unwrap(), [200, 0]);
+}

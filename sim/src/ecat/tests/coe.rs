@@ -294,6 +294,41 @@ fn an_inverter_fault_sends_an_emergency() {
     assert_eq!(r[6..15], [0x00, 0x10, 0x92, 0x75, 0x11, 103, 0, 2, 0]);
 }
 
+/// `serve ecat --misbehave alarm=`: an emergency for an error the inverter does not have
+/// waits in the send mailbox with the slave's next counter, as a real one does; in Init, with
+/// no mailbox, there is nowhere to put it; the inverter's P700 stays 0.
+#[test]
+fn a_spurious_emergency_waits_in_the_send_mailbox() {
+    use crate::endpoint::Endpoint;
+    let mut m = Master::new(1);
+    assert_eq!(m.slave.raise_alarm(ms(0)), None, "Init: no mailbox yet");
+    m.preop();
+    let raised = m
+        .slave
+        .raise_alarm(ms(1))
+        .expect("raised in Pre-Operational");
+    assert!(raised.outputs.is_empty(), "the master fetches it");
+    assert!(
+        raised
+            .what
+            .contains("CoE emergency 7591h, error register 11h, data 66 00 01 00 00")
+            && raised.what.ends_with("mailbox #1"),
+        "{}",
+        raised.what
+    );
+    // SM1 status (080Dh) bit 3: mailbox full.
+    assert_eq!(m.fprd(0x080D, 1).data[0] & 0x08, 0x08);
+    let r = m.mbx_read().expect("the emergency");
+    // Mailbox header: length 10, address 0, channel/priority 0, type 3 (CoE), counter 1 in
+    // bits 4..6 (ETG.1000.6 §5.6); CoE service 1 (emergency), 7591h, register 11h, P700 102
+    // (66h 00h), FI 1 (BU 0620 §5.3).
+    assert_eq!(r[..6], [10, 0, 0, 0, 0, 0x13]);
+    assert_eq!(r[6..16], [0x00, 0x10, 0x91, 0x75, 0x11, 102, 0, 1, 0, 0]);
+    assert_eq!(m.upload(0x22BC, 1), Ok(vec![0, 0]), "P700 [-01]: no error");
+    // The next one counts on: #2 is the SDO answer above, #3 this one.
+    assert!(m.slave.raise_alarm(ms(2)).unwrap().what.ends_with("#3"));
+}
+
 /// Behind the SK 550P, FI 2…8 are on the system bus: a CoE transfer of FI 3's P102 is an SDO
 /// transfer with FI 3's node, whose abort comes back as the CoE abort; FI 1's own parameters
 /// (2066h) are the device's, no node's.

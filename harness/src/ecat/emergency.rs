@@ -1,0 +1,214 @@
+//! CoE emergencies a case did not ask for. ETG.1000.6 lets a slave send an emergency at any
+//! time, and the master sets each aside while it waits for its own answer (`master::mailbox`):
+//! never mistaken for an SDO response. But an emergency reports an error (CiA 301 §7.2.7), and
+//! NORD's carries which one: P700 [-01] in the manufacturer field's first two bytes and the FI
+//! in the third (BU 0620 §5.3, "Error messages … are depicted with parameters P700 and P701").
+//! So the master asks the inverter: an error that P700 does not show now and P701 ("last
+//! error", the five latest) never held is one the inverter does not have — the slave reported
+//! a fault that is not there, and the case fails naming it. An emergency of code 0000h
+//! ("error reset or no error") reports none.
+//!
+//! Any maker's slave (profile `any@ecat`) has no P700 to ask: its emergencies stay in the
+//! transcript ("set aside: …") and are not judged.
+
+use proto::ecat::coe::Emergency;
+use proto::nord::{addr, ArrayElement, Inverter, ParamAddress, ParamNumber, Product};
+
+use super::master::{Master, MasterError, Segment};
+
+/// P700 "Present error" [-01] and P701 "Last error" (BU 0620 §4.5).
+const P700: i64 = 700;
+const P701: i64 = 701;
+/// Elements of P701 (the latest error first).
+const LAST_ERRORS: i64 = 5;
+/// Emergencies looked at per step at most: the reads that check one may set aside more.
+const AT_MOST: usize = 16;
+
+/// Checks the emergencies `master` set aside from `from` on (those before were checked after
+/// an earlier step) against `station`'s P700/P701. `Ok(Err(text))` names the first that
+/// reports an error the inverter does not have; `Ok(Ok(n))`: the emergencies set aside now,
+/// all checked. A read that fails is the master's error.
+pub(crate) fn check<S: Segment>(
+    master: &mut Master<S>,
+    station: u16,
+    product: Product,
+    from: usize,
+) -> Result<Result<usize, String>, MasterError> {
+    let mut next = from;
+    while next < master.pending_emergencies().len() && next < from + AT_MOST {
+        let e = master.pending_emergencies()[next];
+        next += 1;
+        if let Some(spurious) = judge(master, station, product, &e)? {
+            return Ok(Err(spurious));
+        }
+    }
+    Ok(Ok(next))
+}
+
+/// What is wrong with `e`, if anything.
+fn judge<S: Segment>(
+    master: &mut Master<S>,
+    station: u16,
+    product: Product,
+    e: &Emergency,
+) -> Result<Option<String>, MasterError> {
+    if e.code == 0 {
+        return Ok(None);
+    }
+    let error = i16::from_le_bytes([e.data[0], e.data[1]]);
+    let what = format!(
+        "CoE emergency {:04X}h (error register {:02X}h) reports error {error} (P700) on FI {}",
+        e.code, e.register, e.data[2]
+    );
+    let Ok(fi) = Inverter::new(i64::from(e.data[2])) else {
+        return Ok(Some(format!("{what}, an inverter there is none of")));
+    };
+    let Some(present) = read(master, station, product, fi, P700, 1)? else {
+        return Ok(Some(format!(
+            "{what}, an inverter the slave has no P700 of"
+        )));
+    };
+    if present == error {
+        return Ok(None);
+    }
+    for n in 1..=LAST_ERRORS {
+        match read(master, station, product, fi, P701, n)? {
+            Some(last) if last == error => return Ok(None),
+            Some(_) => {}
+            None => break,
+        }
+    }
+    Ok(Some(format!(
+        "{what}, but P700 [-01] reads {present} and P701 (the last {LAST_ERRORS} errors) does \
+         not hold it: the slave reported an error the inverter does not have (BU 0620 §5.3)"
+    )))
+}
+
+/// Parameter `number` [`element`] of `fi` over CoE (§2.2.7); `None` when the slave has no
+/// such object or refuses it.
+fn read<S: Segment>(
+    master: &mut Master<S>,
+    station: u16,
+    product: Product,
+    fi: Inverter,
+    number: i64,
+    element: i64,
+) -> Result<Option<i16>, MasterError> {
+    let (Ok(number), Ok(element)) = (ParamNumber::new(number), ArrayElement::new(element)) else {
+        return Ok(None);
+    };
+    let at = ParamAddress {
+        inverter: fi,
+        number,
+        set: None,
+        element: Some(element),
+    };
+    let Ok(object) = addr::coe(product, at) else {
+        return Ok(None);
+    };
+    match master.sdo_upload(station, object.index, object.subindex, false) {
+        Ok(d) if d.len() >= 2 => Ok(Some(i16::from_le_bytes([d[0], d[1]]))),
+        Ok(_) => Ok(None),
+        Err(e) if e.refusal().is_some() => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ecat::master::{EmbeddedSegment, Faulty, MasterConfig};
+    use proto::nord::nmt::EcState;
+    use sim::device::{Device, DeviceConfig};
+    use sim::ecat::Slave;
+
+    const STATION: u16 = 0x1001;
+
+    /// A master with the simulated SK 550P in Pre-Operational.
+    fn master() -> Master<Faulty<EmbeddedSegment>> {
+        let device = Device::new(DeviceConfig::new(Product::Sk550p));
+        let segment = Faulty::new(EmbeddedSegment::new(Slave::new(device).unwrap()));
+        let mut m = Master::new(segment, MasterConfig::default());
+        m.bring_up(EcState::PreOperational).unwrap();
+        m
+    }
+
+    fn slave(m: &mut Master<Faulty<EmbeddedSegment>>) -> &mut Slave {
+        m.segment_mut().inner_mut().slave_mut()
+    }
+
+    /// P102 of FI 1 (2066h:01h), a read that meets what waits in the send mailbox.
+    fn read_p102(m: &mut Master<Faulty<EmbeddedSegment>>) {
+        assert_eq!(m.sdo_upload(STATION, 0x2066, 1, false).unwrap(), [200, 0]);
+    }
+
+    #[test]
+    fn an_emergency_for_an_error_the_inverter_does_not_have_is_named() {
+        let mut m = master();
+        slave(&mut m).raise_spurious_emergency().unwrap();
+        read_p102(&mut m);
+        assert_eq!(
+            m.pending_emergencies().len(),
+            1,
+            "set aside, not the answer"
+        );
+        let said = check(&mut m, STATION, Product::Sk550p, 0)
+            .unwrap()
+            .unwrap_err();
+        assert_eq!(
+            said,
+            "CoE emergency 7591h (error register 11h) reports error 102 (P700) on FI 1, but \
+             P700 [-01] reads 0 and P701 (the last 5 errors) does not hold it: the slave \
+             reported an error the inverter does not have (BU 0620 §5.3)"
+        );
+    }
+
+    #[test]
+    fn an_emergency_for_a_real_error_passes_and_is_checked_once() {
+        let mut m = master();
+        let fi1 = Inverter::new(1).unwrap();
+        slave(&mut m)
+            .device_mut()
+            .inject_fault(fi1, "10.2")
+            .unwrap();
+        read_p102(&mut m);
+        assert_eq!(m.pending_emergencies().len(), 1);
+        assert_eq!(check(&mut m, STATION, Product::Sk550p, 0).unwrap(), Ok(1));
+        // Gone from P700 (as once acknowledged), but P701 [-01] remembers it.
+        let unit = sim::link::Unit::Inverter(fi1);
+        slave(&mut m)
+            .device_mut()
+            .store(unit)
+            .unwrap()
+            .set_info(700, 1, 0);
+        assert_eq!(m.sdo_upload(STATION, 0x22BC, 1, false).unwrap(), [0, 0]);
+        assert_eq!(check(&mut m, STATION, Product::Sk550p, 0).unwrap(), Ok(1));
+        // From 1 on there is nothing to check: no read goes out.
+        m.take_exchanges();
+        assert_eq!(check(&mut m, STATION, Product::Sk550p, 1).unwrap(), Ok(1));
+        assert!(m.take_exchanges().is_empty());
+    }
+
+    #[test]
+    fn an_error_reset_and_an_emergency_of_no_inverter_are_told_apart() {
+        let mut m = master();
+        let reset = Emergency::default();
+        assert_eq!(
+            judge(&mut m, STATION, Product::Sk550p, &reset).unwrap(),
+            None
+        );
+        let nobody = Emergency {
+            code: 0x7591,
+            register: 0x11,
+            data: [102, 0, 0, 0, 0],
+        };
+        let said = judge(&mut m, STATION, Product::Sk550p, &nobody).unwrap();
+        assert_eq!(
+            said.as_deref(),
+            Some(
+                "CoE emergency 7591h (error register 11h) reports error 102 (P700) on FI 0, an \
+                 inverter there is none of"
+            )
+        );
+    }
+}
