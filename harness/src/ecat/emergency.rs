@@ -1,12 +1,8 @@
 //! CoE emergencies a case did not ask for. ETG.1000.6 lets a slave send an emergency at any
 //! time, and the master sets each aside while it waits for its own answer (`master::mailbox`):
-//! never mistaken for an SDO response. But an emergency reports an error (CiA 301 §7.2.7), and
-//! NORD's carries which one: P700 [-01] in the manufacturer field's first two bytes and the FI
-//! in the third (BU 0620 §5.3, "Error messages … are depicted with parameters P700 and P701").
-//! So the master asks the inverter: an error that P700 does not show now and P701 ("last
-//! error", the five latest) never held is one the inverter does not have — the slave reported
-//! a fault that is not there, and the case fails naming it. An emergency of code 0000h
-//! ("error reset or no error") reports none.
+//! never mistaken for an SDO response. After each step the binding has them judged against
+//! the inverter they name ([`crate::binding::emergency`]): one for an error the inverter does
+//! not have fails the step.
 //!
 //! Any maker's slave (profile `any@ecat`) has no P700 to ask: its emergencies stay in the
 //! transcript ("set aside: …") and are not judged.
@@ -16,13 +12,7 @@ use proto::nord::{addr, ArrayElement, Inverter, ParamAddress, ParamNumber, Produ
 
 use super::master::{Master, MasterError, Segment};
 
-/// P700 "Present error" [-01] and P701 "Last error" (BU 0620 §4.5).
-const P700: i64 = 700;
-const P701: i64 = 701;
-/// Elements of P701 (the latest error first).
-const LAST_ERRORS: i64 = 5;
-/// Emergencies looked at per step at most: the reads that check one may set aside more.
-const AT_MOST: usize = 16;
+use crate::binding::emergency::AT_MOST;
 
 /// Checks the emergencies `master` set aside from `from` on (those before were checked after
 /// an earlier step) against `station`'s P700/P701. `Ok(Err(text))` names the first that
@@ -45,43 +35,17 @@ pub(crate) fn check<S: Segment>(
     Ok(Ok(next))
 }
 
-/// What is wrong with `e`, if anything.
+/// What is wrong with `e`, if anything ([`crate::binding::emergency::judge`], the inverter
+/// read over CoE).
 fn judge<S: Segment>(
     master: &mut Master<S>,
     station: u16,
     product: Product,
     e: &Emergency,
 ) -> Result<Option<String>, MasterError> {
-    if e.code == 0 {
-        return Ok(None);
-    }
-    let error = i16::from_le_bytes([e.data[0], e.data[1]]);
-    let what = format!(
-        "CoE emergency {:04X}h (error register {:02X}h) reports error {error} (P700) on FI {}",
-        e.code, e.register, e.data[2]
-    );
-    let Ok(fi) = Inverter::new(i64::from(e.data[2])) else {
-        return Ok(Some(format!("{what}, an inverter there is none of")));
-    };
-    let Some(present) = read(master, station, product, fi, P700, 1)? else {
-        return Ok(Some(format!(
-            "{what}, an inverter the slave has no P700 of"
-        )));
-    };
-    if present == error {
-        return Ok(None);
-    }
-    for n in 1..=LAST_ERRORS {
-        match read(master, station, product, fi, P701, n)? {
-            Some(last) if last == error => return Ok(None),
-            Some(_) => {}
-            None => break,
-        }
-    }
-    Ok(Some(format!(
-        "{what}, but P700 [-01] reads {present} and P701 (the last {LAST_ERRORS} errors) does \
-         not hold it: the slave reported an error the inverter does not have (BU 0620 §5.3)"
-    )))
+    crate::binding::emergency::judge(e, "CoE emergency", |fi, number, element| {
+        read(master, station, product, fi, number, element)
+    })
 }
 
 /// Parameter `number` [`element`] of `fi` over CoE (§2.2.7); `None` when the slave has no
@@ -158,7 +122,7 @@ mod tests {
         assert_eq!(
             said,
             "CoE emergency 7591h (error register 11h) reports error 102 (P700) on FI 1, but \
-             P700 [-01] reads 0 and P701 (the last 5 errors) does not hold it: the slave \
+             P700 [-01] reads 0 and P701 (the last 5 errors) does not hold it: the device \
              reported an error the inverter does not have (BU 0620 §5.3)"
         );
     }
