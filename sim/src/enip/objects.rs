@@ -582,7 +582,12 @@ mod tests {
         let errors = AccessError::ALL;
         for def in proto::nord::params::CATALOGUE.iter() {
             for e in errors {
-                for value in [def.min - 1, def.min, def.max, def.max + 1] {
+                for value in [
+                    def.min.saturating_sub(1),
+                    def.min,
+                    def.max,
+                    def.max.saturating_add(1),
+                ] {
                     let code = abort_of(e, value, Some(def));
                     assert_eq!(abort_status(code), access_status(e), "{e:?} as {code:?}");
                     let r = Refused {
