@@ -198,6 +198,26 @@ fn pnio_a_device_misbehaving_is_named_for_what_it_did() {
         &["data_status: expected 53 (0035h), got 49 (0031h)"],
     );
     assert!(t.corrupted > 0, "{t:?}");
+    // The input CR's cycle counter stands at 0: the first frame is new, none after it, and
+    // the data hold time (100 cycles of 1 ms) runs out on frames that keep coming.
+    let t = pnio(
+        "mbcycle",
+        "corrupt=cycle",
+        "fail",
+        &[
+            "cycle counter stood at 0 for ",
+            "(data hold time 100 ms expired)",
+        ],
+    );
+    assert!(t.corrupted > 0, "{t:?}");
+    // Every RPC response refused "state conflict": the Connect of the opening first.
+    let t = pnio(
+        "mbpstat",
+        "corrupt=status",
+        "error",
+        &["Connect response PNIO status DB 81 40 06: IODConnectRes, PNIO: CMRPC: state conflict"],
+    );
+    assert!(t.corrupted > 0, "{t:?}");
     let t = pnio(
         "mbpnsil",
         "silent=600s",

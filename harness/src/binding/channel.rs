@@ -307,7 +307,7 @@ impl Channel {
             payload: ppo.emit(self.ppo),
         };
         let sent_bytes = frame.emit();
-        let answer = self.dut.cycle(&sent_bytes);
+        let answer = self.dut.cycle(&sent_bytes)?;
         let decoded = answer.as_deref().map(|b| decode_answer(b, unit, self.ppo));
         if !self.recording && !matches!(decoded, Some(Err(_))) {
             return decoded.transpose().map_err(StepError::Protocol);

@@ -96,7 +96,7 @@ fn refused(status: PnioStatus, mut fields: Value) -> Observation {
         Refusal {
             kind: "PNIO status".into(),
             code: u32::from_be_bytes([status.code, status.decode, status.code1, status.code2]),
-            text: status_hex(status),
+            text: status.meaning(),
         },
     )
 }
@@ -125,7 +125,11 @@ pub(super) fn step_error(e: PnioError) -> StepError {
         // A PROFINET answer that breaks its own rules (an RPC response without its PNIO
         // status) is the device's departure, judged; open_error keeps garbage at bring-up an
         // error.
-        e @ PnioError::Malformed { .. } => StepError::Protocol(e.into()),
+        // As is an input CR whose cycle counter stood still past the data hold time: the
+        // frames came, stamped on arrival, and none was new.
+        e @ (PnioError::Malformed { .. } | PnioError::StoodStill(_)) => {
+            StepError::Protocol(e.into())
+        }
         e @ (PnioError::Nca { .. } | PnioError::NotConnected) => StepError::Refused(e.into()),
     }
 }
@@ -223,7 +227,10 @@ pub(super) fn bring_to_data_exchange<L: Link>(
     })?;
     ctl.set_patience(1);
     if !c.ready {
-        return Err(OpenError::BringUp(format!("the AR did not come up: {c:?}")));
+        return Err(OpenError::BringUp(format!(
+            "the AR did not come up: {}",
+            c.why_not_running()
+        )));
     }
     ctl.take_exchanges();
     ctl.take_cycles();
@@ -923,6 +930,16 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
     }
 }
 
+/// A cycle's frame of the channel, its outputs provided and its order answered, for the
+/// answer once the cycle ran.
+struct Provided {
+    unit: Unit,
+    ppo_type: u8,
+    ppo: PpoType,
+    pkw: Option<PkwRepr>,
+    module: Option<(u16, PpoType)>,
+}
+
 /// The channel's DUT: one bus cycle carries the PKW order in the unit's record and the
 /// process words in the output CR.
 struct PnioDut<L> {
@@ -982,22 +999,10 @@ impl<L: Link> PnioDut<L> {
         self.pending = None;
         PkwRepr::parse(&data).ok()
     }
-}
 
-impl<L: Link> Dut for PnioDut<L> {
-    fn describe(&self) -> String {
-        format!("PROFINET IO device ({})", self.product.name())
-    }
-
-    fn capabilities(&self) -> &[Capability] {
-        &EMBEDDED_CAPABILITIES
-    }
-
-    fn cycle_time(&self) -> Duration {
-        self.ctl.borrow().cycle()
-    }
-
-    fn cycle(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+    /// Provides the channel's `frame` to the inverter's module (and runs its PKW order);
+    /// `None` for a frame that is not the channel's or a module not connected.
+    fn provide(&mut self, frame: &[u8]) -> Option<Provided> {
         let link = LinkRepr::parse(frame).ok()?;
         let ppo = PpoType::new(link.ppo_type).ok()?;
         let sent = PpoRepr::parse(&link.payload, ppo).ok()?;
@@ -1021,23 +1026,56 @@ impl<L: Link> Dut for PnioDut<L> {
             Some(o) if o != PkwRepr::default() => Some(self.order(link.unit, o)?),
             other => other,
         };
-        let mut ctl = self.ctl.borrow_mut();
-        if !ctl.exchange_cycle().ok()? {
-            return None;
-        }
-        let mut pzd = match module {
+        Some(Provided {
+            unit: link.unit,
+            ppo_type: link.ppo_type,
+            ppo,
+            pkw,
+            module,
+        })
+    }
+
+    /// The channel's answer to `sent` from the cycle's input frame.
+    fn answer(&self, sent: Provided) -> Option<Vec<u8>> {
+        let ctl = self.ctl.borrow();
+        let mut pzd = match sent.module {
             Some((slot, t)) => module_pzd(t, &ctl.input(slot)?.0)?,
             None => Vec::new(),
         };
-        pzd.resize(ppo.pzd_words(), 0);
+        pzd.resize(sent.ppo.pzd_words(), 0);
         Some(
             LinkRepr {
-                unit: link.unit,
-                ppo_type: link.ppo_type,
-                payload: PpoRepr { pkw, pzd }.emit(ppo),
+                unit: sent.unit,
+                ppo_type: sent.ppo_type,
+                payload: PpoRepr { pkw: sent.pkw, pzd }.emit(sent.ppo),
             }
             .emit(),
         )
+    }
+}
+
+impl<L: Link> Dut for PnioDut<L> {
+    fn describe(&self) -> String {
+        format!("PROFINET IO device ({})", self.product.name())
+    }
+
+    fn capabilities(&self) -> &[Capability] {
+        &EMBEDDED_CAPABILITIES
+    }
+
+    fn cycle_time(&self) -> Duration {
+        self.ctl.borrow().cycle()
+    }
+
+    fn cycle(&mut self, frame: &[u8]) -> Result<Option<Vec<u8>>, StepError> {
+        let Some(sent) = self.provide(frame) else {
+            return Ok(None);
+        };
+        // The consumer's time-out (the input CR's data hold time) is the verdict, not silence.
+        if !self.ctl.borrow_mut().exchange_cycle().map_err(step_error)? {
+            return Ok(None);
+        }
+        Ok(self.answer(sent))
     }
 
     fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), DutError> {

@@ -37,6 +37,7 @@ use proto::pnio::rt::{DataStatus, Iox, RtRepr};
 use proto::pnio::status::cm;
 use proto::pnio::{FrameId, FrameKind, PnioStatus, MULTICAST_DCP_IDENTIFY};
 
+use super::consumer::{Consumer, StoodStill};
 use super::link::Link;
 use crate::hex::hex;
 use crate::net::wait::Wait;
@@ -119,6 +120,10 @@ pub(crate) enum PnioError {
     /// The call needs an AR and there is none.
     #[error("no application relation is up (connect first)")]
     NotConnected,
+    /// The input CR's data hold time expired on frames whose cycle counter did not move: the
+    /// consumer's time-out, which ended the AR.
+    #[error(transparent)]
+    StoodStill(#[from] StoodStill),
 }
 
 /// A device as DCP Identify found it.
@@ -182,8 +187,10 @@ struct Ar {
     device_alarm_ref: u16,
     /// The output C_SDU sent every cycle.
     outputs: Vec<u8>,
-    /// The last input frame.
+    /// The last input frame with new data.
     inputs: Option<RtRepr>,
+    /// Which input frames carry new data.
+    consumer: Consumer,
     /// ApplicationReady came and was answered.
     ready: bool,
     /// The next alarm PDU's SendSeqNum, and the last one received.
@@ -425,7 +432,7 @@ impl<L: Link> Controller<L> {
                 }));
             }
             let payload = payload.to_vec();
-            self.cyclic_or_alarm(&payload)?;
+            self.cyclic_or_alarm(&payload, stamp)?;
         }
     }
 
@@ -506,38 +513,59 @@ impl<L: Link> Controller<L> {
         while let Some(Got::Frame { payload, stamp, .. }) =
             self.pump_within(&wait, &is_input, None)?
         {
-            self.cyclic_or_alarm(&payload)?;
+            let new = self.cyclic_or_alarm(&payload, stamp)?;
             let fresh = match stamp {
                 Some(at) => at >= sent_wall + FRESH,
                 None => self.link.now() >= sent_at + FRESH,
             };
-            if fresh {
+            if new && fresh {
                 return Ok(true);
             }
         }
         Ok(false)
     }
 
-    /// Input frames and alarms; anything else is dropped.
-    fn cyclic_or_alarm(&mut self, payload: &[u8]) -> Result<(), PnioError> {
+    /// Input frames and alarms, the frame received at `stamp` (the kernel's, where the link
+    /// has one); anything else is dropped. Whether it was an input frame with new data. An
+    /// input frame that finds the data hold time expired ends the AR, as a consumer's
+    /// time-out does (IEC 61158-6-10: the CPM's DHT expiry aborts the AR).
+    fn cyclic_or_alarm(
+        &mut self,
+        payload: &[u8],
+        stamp: Option<Duration>,
+    ) -> Result<bool, PnioError> {
         let Some(id) = frame_id(payload) else {
-            return Ok(());
+            return Ok(false);
         };
         match id.kind() {
             FrameKind::Rt => {
-                if let Some(ar) = self.ar.as_mut().filter(|a| a.input_frame_id == id.0) {
-                    let len = usize::from(ar.plan.input.data_length);
-                    if let Ok(rt) = RtRepr::parse(payload, Some(len)) {
+                // When it came, on the link's clock.
+                let now = self.link.now();
+                let at = stamp.map_or(now, |s| now.saturating_sub(wall_clock().saturating_sub(s)));
+                let Some(ar) = self.ar.as_mut().filter(|a| a.input_frame_id == id.0) else {
+                    return Ok(false);
+                };
+                let len = usize::from(ar.plan.input.data_length);
+                let Ok(rt) = RtRepr::parse(payload, Some(len)) else {
+                    return Ok(false);
+                };
+                self.cycles.received += 1;
+                self.cycles.last_received = payload.to_vec();
+                match ar.consumer.take(rt.cycle_counter, at) {
+                    Ok(true) => {
                         ar.inputs = Some(rt);
-                        self.cycles.received += 1;
-                        self.cycles.last_received = payload.to_vec();
+                        Ok(true)
+                    }
+                    Ok(false) => Ok(false),
+                    Err(e) => {
+                        self.ar = None;
+                        Err(e.into())
                     }
                 }
             }
-            FrameKind::Alarm { .. } => self.alarm_pdu(payload)?,
-            _ => {}
+            FrameKind::Alarm { .. } => self.alarm_pdu(payload).map(|()| false),
+            _ => Ok(false),
         }
-        Ok(())
     }
 
     /// The output frame now, and the next on the send clock: one cycle after this one, or
@@ -1012,6 +1040,7 @@ impl<L: Link> Controller<L> {
             device_alarm_ref,
             outputs,
             inputs: None,
+            consumer: Consumer::new(input_frame_id, self.data_hold()),
             ready: false,
             alarm_seq: 0,
             alarm_received: 0xFFFE,
@@ -1307,6 +1336,20 @@ pub(crate) struct Connected {
     pub(crate) prm_end: Option<PnioStatus>,
     /// Whether ApplicationReady came: data exchange.
     pub(crate) ready: bool,
+}
+
+impl Connected {
+    /// Why the AR did not reach data exchange, for a verdict: the refusal (its PNIO status
+    /// decoded) or the call that did not come.
+    pub(crate) fn why_not_running(&self) -> String {
+        match self.prm_end {
+            _ if !self.status.is_ok() => {
+                format!("Connect response PNIO status {}", self.status.meaning())
+            }
+            Some(s) if !s.is_ok() => format!("Control PrmEnd response PNIO status {}", s.meaning()),
+            _ => "the device did not call ApplicationReady".into(),
+        }
+    }
 }
 
 /// How long after an output frame an input frame must arrive to carry the device's answer to
