@@ -218,6 +218,19 @@ fn pnio_a_device_misbehaving_is_named_for_what_it_did() {
         &["Connect response PNIO status DB 81 40 06: IODConnectRes, PNIO: CMRPC: state conflict"],
     );
     assert!(t.corrupted > 0, "{t:?}");
+    // A process alarm every 20 ms while an AR runs (each case opens its own, and runs it
+    // longer than that): acknowledged, and the step it came by fails (one that came while
+    // the case opened fails its first step).
+    let t = pnio(
+        "mbpalarm",
+        "alarm=every:20ms",
+        "fail",
+        &[
+            "the device raised a Process alarm (AlarmType 0002h) from slot 3 subslot 1",
+            "its manual names diagnosis alarms only",
+        ],
+    );
+    assert!(t.alarms > 0, "{t:?}");
     let t = pnio(
         "mbpnsil",
         "silent=600s",

@@ -83,6 +83,11 @@ pub(crate) enum StepError {
         /// How long the harness waited, the host's lost time included.
         waited: std::time::Duration,
     },
+    /// The DUT did on its own what its manual or the standard rules out, seen on the bus
+    /// rather than in an answer: a PROFINET input CR whose cycle counter stood still past the
+    /// data hold time, an alarm of a type the manual does not name.
+    #[error("the DUT departed from the protocol: {0}")]
+    Departed(#[source] Cause),
     /// The DUT answered with something that is not the protocol at all.
     #[error("the DUT does not speak the protocol: {0}")]
     Garbage(#[source] Cause),
@@ -114,7 +119,8 @@ impl StepError {
             | StepError::Protocol(_)
             | StepError::Malformed { .. }
             | StepError::Late { .. }
-            | StepError::Closed(_) => Verdict::Fail,
+            | StepError::Closed(_)
+            | StepError::Departed(_) => Verdict::Fail,
             StepError::Silent { .. }
             | StepError::Refused(_)
             | StepError::Suite(_)

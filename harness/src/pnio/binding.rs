@@ -21,7 +21,7 @@ use proto::nord::pkw::PkwRepr;
 use proto::nord::pnio::{self as def, ModuleKind, RecordTarget};
 use proto::nord::ppo::{PpoRepr, PpoType};
 use proto::nord::{Inverter, Product};
-use proto::pnio::alarm::AlarmItem;
+use proto::pnio::alarm::{AlarmItem, AlarmNotification};
 use proto::pnio::dcp::{BlockQualifier, BlockValue, DcpBlock, IpParameter};
 use proto::pnio::plan::ExpectedSub;
 use proto::pnio::rpc::{Opnum, Uuid};
@@ -88,6 +88,27 @@ struct Persistent {
     found: Station,
 }
 
+/// The verdict on an alarm of a type the device's manual does not name, which the controller
+/// acknowledged: the device departed from its manual (BU 0620 §5.4.2 and BU 0590 §6.1 name the
+/// diagnostic alarm, incoming and outgoing, on an error). A failure rather than a note: a
+/// controller of these devices acts on their alarms, and one raised for nothing is as wrong
+/// as a wrong answer.
+fn unasked_alarm(n: &AlarmNotification) -> StepError {
+    let name = n.alarm_type.name().unwrap_or("unknown");
+    StepError::Departed(
+        format!(
+            "the device raised a {name} alarm (AlarmType {:04X}h) from slot {} subslot {}, \
+             AlarmSpecifier sequence {}, acknowledged: its manual names diagnosis alarms only \
+             (BU 0620 §5.4.2, BU 0590 §6.1)",
+            n.alarm_type.0,
+            n.slot,
+            n.subslot,
+            n.specifier.sequence()
+        )
+        .into(),
+    )
+}
+
 /// The refusal of a PNIO status.
 fn refused(status: PnioStatus, mut fields: Value) -> Observation {
     fields["status"] = json!(status_hex(status));
@@ -125,11 +146,10 @@ pub(super) fn step_error(e: PnioError) -> StepError {
         // A PROFINET answer that breaks its own rules (an RPC response without its PNIO
         // status) is the device's departure, judged; open_error keeps garbage at bring-up an
         // error.
-        // As is an input CR whose cycle counter stood still past the data hold time: the
-        // frames came, stamped on arrival, and none was new.
-        e @ (PnioError::Malformed { .. } | PnioError::StoodStill(_)) => {
-            StepError::Protocol(e.into())
-        }
+        e @ PnioError::Malformed { .. } => StepError::Protocol(e.into()),
+        // An input CR whose cycle counter stood still past the data hold time: the frames
+        // came, stamped on arrival, and none was new.
+        e @ PnioError::StoodStill(_) => StepError::Departed(e.into()),
         e @ (PnioError::Nca { .. } | PnioError::NotConnected) => StepError::Refused(e.into()),
     }
 }
@@ -352,6 +372,63 @@ impl<L: Link + 'static> PnioBinding<L> {
             device_access: true,
         };
         bus_step(&mut self.ctl.borrow_mut(), step, &plan)
+    }
+
+    /// One action of a case.
+    fn act(&mut self, action: &Action) -> Result<Observation, StepError> {
+        match action {
+            Action::Bus(step) => {
+                let step = step
+                    .as_any()
+                    .downcast_ref::<PnioStep>()
+                    .ok_or_else(|| StepError::NotApplicable(format!("a `{}:` step", step.bus())))?;
+                self.pnio_step(step)
+            }
+            Action::Write(o) if self.persistent.is_some() => self.write(action, o),
+            Action::Process {
+                inverter,
+                control,
+                setpoints,
+                run: Run::For(d),
+            } => {
+                self.note_commanded(*inverter);
+                let one = Action::Process {
+                    inverter: *inverter,
+                    control: *control,
+                    setpoints: setpoints.clone(),
+                    run: Run::Cycles(1),
+                };
+                self.for_time(&one, *d)
+            }
+            Action::Process {
+                inverter,
+                control,
+                setpoints,
+                run: Run::Cycles(n),
+            } => {
+                self.note_commanded(*inverter);
+                let step = |n| Action::Process {
+                    inverter: *inverter,
+                    control: *control,
+                    setpoints: setpoints.clone(),
+                    run: Run::Cycles(n),
+                };
+                self.channel.perform(&step(*n))?;
+                // The status comes from one cycle more: a device that took the last output
+                // late (a loaded host) has answered it by then.
+                self.channel.perform(&step(1))
+            }
+            Action::Wait(d) => {
+                let cycle = self.ctl.borrow().cycle();
+                self.for_time(&Action::Wait(cycle), *d)
+            }
+            other => {
+                if let Action::Process { inverter, .. } = other {
+                    self.note_commanded(*inverter);
+                }
+                self.channel.perform(other)
+            }
+        }
     }
 
     /// A parameter write on a persistent device, through the ledger: the value before is read
@@ -845,59 +922,13 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
         self.capabilities
     }
 
+    /// The action, then whether an alarm the device's manual does not name came meanwhile
+    /// (or since the opening): that fails the step it came by, whatever the step did.
     fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
-        match action {
-            Action::Bus(step) => {
-                let step = step
-                    .as_any()
-                    .downcast_ref::<PnioStep>()
-                    .ok_or_else(|| StepError::NotApplicable(format!("a `{}:` step", step.bus())))?;
-                self.pnio_step(step)
-            }
-            Action::Write(o) if self.persistent.is_some() => self.write(action, o),
-            Action::Process {
-                inverter,
-                control,
-                setpoints,
-                run: Run::For(d),
-            } => {
-                self.note_commanded(*inverter);
-                let one = Action::Process {
-                    inverter: *inverter,
-                    control: *control,
-                    setpoints: setpoints.clone(),
-                    run: Run::Cycles(1),
-                };
-                self.for_time(&one, *d)
-            }
-            Action::Process {
-                inverter,
-                control,
-                setpoints,
-                run: Run::Cycles(n),
-            } => {
-                self.note_commanded(*inverter);
-                let step = |n| Action::Process {
-                    inverter: *inverter,
-                    control: *control,
-                    setpoints: setpoints.clone(),
-                    run: Run::Cycles(n),
-                };
-                self.channel.perform(&step(*n))?;
-                // The status comes from one cycle more: a device that took the last output
-                // late (a loaded host) has answered it by then.
-                self.channel.perform(&step(1))
-            }
-            Action::Wait(d) => {
-                let cycle = self.ctl.borrow().cycle();
-                self.for_time(&Action::Wait(cycle), *d)
-            }
-            other => {
-                if let Action::Process { inverter, .. } = other {
-                    self.note_commanded(*inverter);
-                }
-                self.channel.perform(other)
-            }
+        let done = self.act(action)?;
+        match self.ctl.borrow_mut().take_unasked_alarm() {
+            Some(n) => Err(unasked_alarm(&n)),
+            None => Ok(done),
         }
     }
 

@@ -232,6 +232,12 @@ pub(crate) struct Controller<L> {
     session_key: u16,
     /// Alarm notifications received and not yet acknowledged.
     alarms: VecDeque<AlarmNotification>,
+    /// The alarm types the device's manual says it raises (`None`: any, for another maker's
+    /// device); [`Controller::take_unasked_alarm`].
+    alarm_types: Option<&'static [u16]>,
+    /// The first alarm of a type [`Controller::alarm_types`] does not hold since the last
+    /// look, acknowledged at once.
+    unasked: Option<AlarmNotification>,
     exchanges: Vec<Exchange>,
     cycles: CycleLog,
     recording: bool,
@@ -285,6 +291,8 @@ impl<L: Link> Controller<L> {
             calls: 0,
             session_key: 0,
             alarms: VecDeque::new(),
+            alarm_types: Some(&proto::nord::pnio::ALARM_TYPES),
+            unasked: None,
             exchanges: Vec::new(),
             cycles: CycleLog::default(),
             recording: true,
@@ -298,6 +306,11 @@ impl<L: Link> Controller<L> {
     /// The DAP's submodules a Connect expects from now on.
     pub(crate) fn set_dap(&mut self, dap: Vec<ExpectedSub>) {
         self.dap = dap;
+    }
+
+    /// The alarm types the device raises from now on (`None`: any).
+    pub(crate) fn set_alarm_types(&mut self, types: Option<&'static [u16]>) {
+        self.alarm_types = types;
     }
 
     /// The link, for the embedded device behind it.
@@ -1256,10 +1269,55 @@ impl<L: Link> Controller<L> {
         let bytes = ack.emit().map_err(malformed("alarm ACK"))?;
         let frame = self.ethernet(dst, &bytes);
         self.link.send(&frame)?;
-        if let (false, RtaBody::Notification(n)) = (repeated, pdu.body) {
-            self.record(&[], "(the device's alarm)".into(), payload, alarm_text(&n));
+        let (false, RtaBody::Notification(n)) = (repeated, pdu.body) else {
+            return Ok(());
+        };
+        self.record(&[], "(the device's alarm)".into(), payload, alarm_text(&n));
+        let expected = self
+            .alarm_types
+            .is_none_or(|types| types.contains(&n.alarm_type.0));
+        if expected {
+            // A case's `alarm:` step takes and acknowledges it.
             self.alarms.push_back(n);
+        } else {
+            // Acknowledged at once (IEC 61158-6-10: the controller answers every notification
+            // with an AlarmAck), and kept for the verdict.
+            self.send_alarm_ack(&n)?;
+            self.unasked.get_or_insert(n);
         }
+        Ok(())
+    }
+
+    /// The first alarm since the last call of a type the device's manual does not name
+    /// ([`Controller::set_alarm_types`]), already acknowledged.
+    pub(crate) fn take_unasked_alarm(&mut self) -> Option<AlarmNotification> {
+        self.unasked.take()
+    }
+
+    /// The AlarmAck (status OK) of notification `n`, as a DATA PDU with the controller's next
+    /// SendSeqNum.
+    fn send_alarm_ack(&mut self, n: &AlarmNotification) -> Result<(), PnioError> {
+        let (Some(ar), Some(dst)) = (self.ar.as_mut(), self.station.as_ref().map(|s| s.mac)) else {
+            return Err(PnioError::NotConnected);
+        };
+        let seq = ar.alarm_seq;
+        ar.alarm_seq = (ar.alarm_seq + 1) & 0x7FFF;
+        let pdu = AlarmRepr::data(
+            ar.device_alarm_ref,
+            ALARM_REF,
+            seq,
+            ar.alarm_received,
+            RtaBody::Ack(AlarmAck::of(n, PnioStatus::OK)),
+        );
+        let bytes = pdu.emit().map_err(malformed("AlarmAck"))?;
+        let frame = self.ethernet(dst, &bytes);
+        self.link.send(&frame)?;
+        self.record(
+            &bytes,
+            format!("AlarmAck of {}", alarm_text(n)),
+            &[],
+            String::new(),
+        );
         Ok(())
     }
 
@@ -1277,27 +1335,7 @@ impl<L: Link> Controller<L> {
         let Some(n) = self.alarms.pop_front() else {
             return Ok(None);
         };
-        let (Some(ar), Some(dst)) = (self.ar.as_mut(), self.station.as_ref().map(|s| s.mac)) else {
-            return Err(PnioError::NotConnected);
-        };
-        let seq = ar.alarm_seq;
-        ar.alarm_seq = (ar.alarm_seq + 1) & 0x7FFF;
-        let pdu = AlarmRepr::data(
-            ar.device_alarm_ref,
-            ALARM_REF,
-            seq,
-            ar.alarm_received,
-            RtaBody::Ack(AlarmAck::of(&n, PnioStatus::OK)),
-        );
-        let bytes = pdu.emit().map_err(malformed("AlarmAck"))?;
-        let frame = self.ethernet(dst, &bytes);
-        self.link.send(&frame)?;
-        self.record(
-            &bytes,
-            format!("AlarmAck of {}", alarm_text(&n)),
-            &[],
-            String::new(),
-        );
+        self.send_alarm_ack(&n)?;
         // The device's transport ACK comes with the cycle.
         self.run_for(self.cycle())?;
         Ok(Some(n))
@@ -1403,4 +1441,73 @@ pub(crate) fn alarm_text(n: &AlarmNotification) -> String {
         n.specifier.sequence(),
         n.items
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::net::peer::Link as _;
+    use crate::pnio::link::{EmbeddedLink, EMBEDDED_PEER};
+    use proto::nord::pnio::{self as def, ModuleKind};
+    use proto::nord::ppo::PpoType;
+    use proto::nord::{Inverter, Product};
+    use proto::pnio::alarm::AlarmType;
+    use sim::device::{Device, DeviceConfig};
+    use sim::endpoint::Endpoint;
+    use sim::pnio::{IoConfig, IoDevice};
+
+    /// The embedded SK 550P in data exchange with PPO 4 in FI 1's slot.
+    fn running() -> Controller<EmbeddedLink> {
+        let product = Product::Sk550p;
+        let config = IoConfig {
+            name: "nord-device".into(),
+            ..IoConfig::new(product)
+        };
+        let io = IoDevice::new(Device::new(DeviceConfig::new(product)), config).unwrap();
+        let link = EmbeddedLink::new(io, EMBEDDED_PEER);
+        let mac = MacAddr([0x02, 0, 0, 0, 0, 0xC1]);
+        let mut ctl = Controller::new(link, mac, Duration::from_millis(500), false);
+        ctl.locate(Some("nord-device")).unwrap();
+        let slot = def::inverter_slot(product, Inverter::new(1).unwrap()).unwrap();
+        let ppo4 = def::module(product, ModuleKind::Ppo(PpoType::TYPE_4)).unwrap();
+        let c = ctl.connect(&[def::expected_module(slot, &ppo4)]).unwrap();
+        assert!(c.ready, "{c:?}");
+        ctl
+    }
+
+    #[test]
+    fn an_alarm_the_manual_does_not_name_is_acknowledged_at_once_and_kept_for_the_verdict() {
+        let mut ctl = running();
+        let (io, now) = ctl.link_mut().device().unwrap();
+        // Raised, its first PDU lost: the device repeats it after its RTA time-out (100 ms).
+        io.raise_alarm(now).expect("an AR to raise it in");
+        ctl.run_for(Duration::from_millis(150)).unwrap();
+        let n = ctl.take_unasked_alarm().expect("the process alarm");
+        assert_eq!(
+            (n.alarm_type, n.slot, n.subslot),
+            (AlarmType::PROCESS, 3, 1)
+        );
+        assert_eq!(ctl.take_unasked_alarm(), None, "taken once");
+        // Not left for an `alarm:` step: that one waits for a diagnosis alarm.
+        assert_eq!(
+            ctl.acknowledge_alarm(Duration::from_millis(10)).unwrap(),
+            None
+        );
+        // The AlarmAck cleared it: the device no longer reports a problem in its inputs, and
+        // raises the next one at once.
+        assert!(ctl.input_status().unwrap().station_ok());
+        let (io, now) = ctl.link_mut().device().unwrap();
+        assert!(!io.raise_alarm(now).unwrap().outputs.is_empty());
+    }
+
+    #[test]
+    fn any_makers_device_may_raise_any_alarm_for_a_step_to_take() {
+        let mut ctl = running();
+        ctl.set_alarm_types(None);
+        let (io, now) = ctl.link_mut().device().unwrap();
+        io.raise_alarm(now).unwrap();
+        let n = ctl.acknowledge_alarm(Duration::from_millis(150)).unwrap();
+        assert_eq!(n.map(|n| n.alarm_type), Some(AlarmType::PROCESS));
+        assert_eq!(ctl.take_unasked_alarm(), None);
+    }
 }

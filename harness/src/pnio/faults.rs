@@ -6,7 +6,8 @@
 //! its RPC responses ([`proto::pnio::rpc::NdrResponse`]): `status` (the PNIO status of every
 //! Connect, Release, Control, Read and Write response an error: its service's ErrorCode, then
 //! 81 40 06, "PNIO, CMRPC: state conflict", as a device refuses a call its state does not
-//! allow).
+//! allow). `alarm=` raises a process alarm on the alarm CR (`sim::pnio::IoDevice`'s
+//! `Endpoint::raise_alarm`), which NORD's manuals never have the device send.
 
 use proto::pnio::rpc::{NdrResponse, Opnum, PacketType, RpcRepr};
 use proto::pnio::rt::{DataStatus, RtRepr};
@@ -24,7 +25,7 @@ pub(crate) const FAULTS: BusFaults = BusFaults {
     no_close: Some(
         "has no session to close (cyclic frames on raw Ethernet, RPC over UDP): use silent= or drop=",
     ),
-    no_alarm: Some("raises no alarm yet (not built)"),
+    no_alarm: None,
 };
 
 /// Sets `field` wrong in `out` if it is a cyclic (RT) frame, or for `status` an RPC
