@@ -3,7 +3,8 @@
 //! case against the served device, and its verdict names what the device did — never a hang,
 //! a panic, a pass or "host late". Covered: EtherCAT `corrupt=wkc`, `corrupt=length`,
 //! `drop=every:2`, `silent`; POWERLINK `corrupt=state`, `silent`; PROFINET IO
-//! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `close`, `dup`,
+//! `corrupt=data-status`, `corrupt=cycle`, `corrupt=status`, `alarm=every:20ms`, that with
+//! `corrupt=sequence`, `silent`; EtherNet/IP `corrupt=status`, `close`, `dup`,
 //! `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
 //! the POWERLINK binding's). The modes are those whose verdict does not hang on timing: a
 //! field wrong in every frame, a device silent from its first exchange on, the n-th answer of
@@ -231,6 +232,14 @@ fn pnio_a_device_misbehaving_is_named_for_what_it_did() {
         ],
     );
     assert!(t.alarms > 0, "{t:?}");
+    // The same alarms, each DATA PDU's SendSeqNum one ahead: the first comes as 1, not 0.
+    let t = pnio(
+        "mbpseq",
+        "alarm=every:20ms,corrupt=sequence",
+        "fail",
+        &["alarm DATA-RTA-PDU came with SendSeqNum 1 where 0 was due"],
+    );
+    assert!(t.alarms > 0 && t.corrupted > 0, "{t:?}");
     let t = pnio(
         "mbpnsil",
         "silent=600s",

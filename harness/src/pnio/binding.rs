@@ -21,7 +21,7 @@ use proto::nord::pkw::PkwRepr;
 use proto::nord::pnio::{self as def, ModuleKind, RecordTarget};
 use proto::nord::ppo::{PpoRepr, PpoType};
 use proto::nord::{Inverter, Product};
-use proto::pnio::alarm::{AlarmItem, AlarmNotification};
+use proto::pnio::alarm::AlarmItem;
 use proto::pnio::dcp::{BlockQualifier, BlockValue, DcpBlock, IpParameter};
 use proto::pnio::plan::ExpectedSub;
 use proto::pnio::rpc::{Opnum, Uuid};
@@ -86,27 +86,6 @@ struct Persistent {
     ledger: Ledger<Param>,
     commanded: Vec<Inverter>,
     found: Station,
-}
-
-/// The verdict on an alarm of a type the device's manual does not name, which the controller
-/// acknowledged: the device departed from its manual (BU 0620 §5.4.2 and BU 0590 §6.1 name the
-/// diagnostic alarm, incoming and outgoing, on an error). A failure rather than a note: a
-/// controller of these devices acts on their alarms, and one raised for nothing is as wrong
-/// as a wrong answer.
-fn unasked_alarm(n: &AlarmNotification) -> StepError {
-    let name = n.alarm_type.name().unwrap_or("unknown");
-    StepError::Departed(
-        format!(
-            "the device raised a {name} alarm (AlarmType {:04X}h) from slot {} subslot {}, \
-             AlarmSpecifier sequence {}, acknowledged: its manual names diagnosis alarms only \
-             (BU 0620 §5.4.2, BU 0590 §6.1)",
-            n.alarm_type.0,
-            n.slot,
-            n.subslot,
-            n.specifier.sequence()
-        )
-        .into(),
-    )
 }
 
 /// The refusal of a PNIO status.
@@ -922,12 +901,15 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
         self.capabilities
     }
 
-    /// The action, then whether an alarm the device's manual does not name came meanwhile
-    /// (or since the opening): that fails the step it came by, whatever the step did.
+    /// The action, then whether the device departed from its manual or the standard on its
+    /// own meanwhile (or since the opening): an alarm of a type its manual does not name, an
+    /// alarm PDU out of sequence. That fails the step it came by, whatever the step did: a
+    /// failure rather than a note, as a controller of these devices acts on their alarms, and
+    /// one raised for nothing is as wrong as a wrong answer.
     fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
         let done = self.act(action)?;
-        match self.ctl.borrow_mut().take_unasked_alarm() {
-            Some(n) => Err(unasked_alarm(&n)),
+        match self.ctl.borrow_mut().take_departure() {
+            Some(d) => Err(StepError::Departed(d.into())),
             None => Ok(done),
         }
     }

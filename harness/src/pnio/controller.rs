@@ -46,6 +46,8 @@ use crate::outcome::Exchange;
 
 /// The controller's alarm reference.
 const ALARM_REF: u16 = 0x0003;
+/// AckSeqNum before any alarm PDU came (IEC 61158-6-10); the first SendSeqNum due is 0.
+const NOTHING_RECEIVED: u16 = 0xFFFE;
 /// The frame ids of the controller's CRs, which declare RT_CLASS_2 in their IOCRProperties:
 /// unicast RT_CLASS_2 ids, 8000h–BBFFh (IEC 61158-6-10, the FrameID table; C000h–F7FFh would
 /// be RT_CLASS_1's, which a device refuses under RT_CLASS_2). The input CR's is the one its
@@ -233,11 +235,11 @@ pub(crate) struct Controller<L> {
     /// Alarm notifications received and not yet acknowledged.
     alarms: VecDeque<AlarmNotification>,
     /// The alarm types the device's manual says it raises (`None`: any, for another maker's
-    /// device); [`Controller::take_unasked_alarm`].
+    /// device); [`Controller::take_departure`].
     alarm_types: Option<&'static [u16]>,
-    /// The first alarm of a type [`Controller::alarm_types`] does not hold since the last
-    /// look, acknowledged at once.
-    unasked: Option<AlarmNotification>,
+    /// The first thing since the last look that the device did on its own and its manual or
+    /// the standard rules out ([`Controller::take_departure`]).
+    departure: Option<Departure>,
     exchanges: Vec<Exchange>,
     cycles: CycleLog,
     recording: bool,
@@ -292,7 +294,7 @@ impl<L: Link> Controller<L> {
             session_key: 0,
             alarms: VecDeque::new(),
             alarm_types: Some(&proto::nord::pnio::ALARM_TYPES),
-            unasked: None,
+            departure: None,
             exchanges: Vec::new(),
             cycles: CycleLog::default(),
             recording: true,
@@ -1056,7 +1058,7 @@ impl<L: Link> Controller<L> {
             consumer: Consumer::new(input_frame_id, self.data_hold()),
             ready: false,
             alarm_seq: 0,
-            alarm_received: 0xFFFE,
+            alarm_received: NOTHING_RECEIVED,
         });
         self.next_send = self.link.now();
         let prm_end = self.call_blocks(
@@ -1258,6 +1260,32 @@ impl<L: Link> Controller<L> {
             return Ok(());
         }
         let repeated = pdu.send_seq == ar.alarm_received;
+        let due = match ar.alarm_received {
+            NOTHING_RECEIVED => 0,
+            last => (last + 1) & 0x7FFF,
+        };
+        if !repeated && pdu.send_seq != due {
+            // IEC 61158-6-10 APMR: a DATA PDU that is neither the one due nor a repeat of the
+            // last is not taken; it is answered with a NACK (as p-net's APMR does).
+            let nack = AlarmRepr {
+                pdu_type: RtaPduType::NACK,
+                ..AlarmRepr::ack(
+                    pdu.frame_id,
+                    ar.device_alarm_ref,
+                    ALARM_REF,
+                    ar.alarm_seq.wrapping_sub(1) & 0x7FFF,
+                    ar.alarm_received,
+                )
+            };
+            let bytes = nack.emit().map_err(malformed("alarm NACK"))?;
+            let frame = self.ethernet(dst, &bytes);
+            self.link.send(&frame)?;
+            self.departure.get_or_insert(Departure::Sequence {
+                got: pdu.send_seq,
+                due,
+            });
+            return Ok(());
+        }
         ar.alarm_received = pdu.send_seq;
         let ack = AlarmRepr::ack(
             pdu.frame_id,
@@ -1283,15 +1311,16 @@ impl<L: Link> Controller<L> {
             // Acknowledged at once (IEC 61158-6-10: the controller answers every notification
             // with an AlarmAck), and kept for the verdict.
             self.send_alarm_ack(&n)?;
-            self.unasked.get_or_insert(n);
+            self.departure.get_or_insert(Departure::Alarm(n));
         }
         Ok(())
     }
 
-    /// The first alarm since the last call of a type the device's manual does not name
-    /// ([`Controller::set_alarm_types`]), already acknowledged.
-    pub(crate) fn take_unasked_alarm(&mut self) -> Option<AlarmNotification> {
-        self.unasked.take()
+    /// The first departure since the last call: an alarm of a type the device's manual does
+    /// not name ([`Controller::set_alarm_types`]), already acknowledged, or an alarm PDU out
+    /// of sequence.
+    pub(crate) fn take_departure(&mut self) -> Option<Departure> {
+        self.departure.take()
     }
 
     /// The AlarmAck (status OK) of notification `n`, as a DATA PDU with the controller's next
@@ -1350,6 +1379,30 @@ impl<L: Link> Controller<L> {
         self.ar = ar;
         r.map(|_| ())
     }
+}
+
+/// What the device did on its own that its manual or the standard rules out, seen by the
+/// pump whatever the case was waiting for; the binding fails the step it came by.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub(crate) enum Departure {
+    /// An alarm of a type the device's manual does not name, acknowledged.
+    #[error(
+        "the device raised a {} alarm (AlarmType {:04X}h) from slot {} subslot {}, \
+         AlarmSpecifier sequence {}, acknowledged: its manual names diagnosis alarms only \
+         (BU 0620 §5.4.2, BU 0590 §6.1)",
+        .0.alarm_type.name().unwrap_or("unknown"),
+        .0.alarm_type.0,
+        .0.slot,
+        .0.subslot,
+        .0.specifier.sequence()
+    )]
+    Alarm(AlarmNotification),
+    /// An alarm DATA PDU whose SendSeqNum was neither the one due nor the last one again.
+    #[error(
+        "the device's alarm DATA-RTA-PDU came with SendSeqNum {got} where {due} was due \
+         (IEC 61158-6-10 RTA: neither the next nor a repeat), answered with a NACK"
+    )]
+    Sequence { got: u16, due: u16 },
 }
 
 /// Something the pump was asked for.
@@ -1482,12 +1535,14 @@ mod tests {
         // Raised, its first PDU lost: the device repeats it after its RTA time-out (100 ms).
         io.raise_alarm(now).expect("an AR to raise it in");
         ctl.run_for(Duration::from_millis(150)).unwrap();
-        let n = ctl.take_unasked_alarm().expect("the process alarm");
+        let Some(Departure::Alarm(n)) = ctl.take_departure() else {
+            panic!("the process alarm")
+        };
         assert_eq!(
             (n.alarm_type, n.slot, n.subslot),
             (AlarmType::PROCESS, 3, 1)
         );
-        assert_eq!(ctl.take_unasked_alarm(), None, "taken once");
+        assert_eq!(ctl.take_departure(), None, "taken once");
         // Not left for an `alarm:` step: that one waits for a diagnosis alarm.
         assert_eq!(
             ctl.acknowledge_alarm(Duration::from_millis(10)).unwrap(),
@@ -1508,6 +1563,6 @@ mod tests {
         io.raise_alarm(now).unwrap();
         let n = ctl.acknowledge_alarm(Duration::from_millis(150)).unwrap();
         assert_eq!(n.map(|n| n.alarm_type), Some(AlarmType::PROCESS));
-        assert_eq!(ctl.take_unasked_alarm(), None);
+        assert_eq!(ctl.take_departure(), None);
     }
 }

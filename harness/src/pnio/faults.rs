@@ -6,9 +6,11 @@
 //! its RPC responses ([`proto::pnio::rpc::NdrResponse`]): `status` (the PNIO status of every
 //! Connect, Release, Control, Read and Write response an error: its service's ErrorCode, then
 //! 81 40 06, "PNIO, CMRPC: state conflict", as a device refuses a call its state does not
-//! allow). `alarm=` raises a process alarm on the alarm CR (`sim::pnio::IoDevice`'s
+//! allow); and `sequence`, the SendSeqNum of every alarm DATA-RTA-PDU one ahead of the
+//! alarm CR's (as if a PDU were lost). `alarm=` raises a process alarm on the alarm CR (`sim::pnio::IoDevice`'s
 //! `Endpoint::raise_alarm`), which NORD's manuals never have the device send.
 
+use proto::pnio::alarm::{AlarmRepr, RtaPduType};
 use proto::pnio::rpc::{NdrResponse, Opnum, PacketType, RpcRepr};
 use proto::pnio::rt::{DataStatus, RtRepr};
 use proto::pnio::status::cm;
@@ -21,7 +23,12 @@ use crate::net::misbehave::{BusFaults, Field};
 /// What PROFINET IO can do of a spec.
 pub(crate) const FAULTS: BusFaults = BusFaults {
     bus: "PROFINET IO",
-    fields: &[Field::Cycle, Field::DataStatus, Field::Status],
+    fields: &[
+        Field::Cycle,
+        Field::DataStatus,
+        Field::Status,
+        Field::Sequence,
+    ],
     no_close: Some(
         "has no session to close (cyclic frames on raw Ethernet, RPC over UDP): use silent= or drop=",
     ),
@@ -33,6 +40,9 @@ pub(crate) const FAULTS: BusFaults = BusFaults {
 pub(crate) fn corrupt(field: Field, out: &mut Output) -> Option<String> {
     if field == Field::Status {
         return refuse(out);
+    }
+    if field == Field::Sequence {
+        return skip_sequence(out);
     }
     if !matches!(field, Field::Cycle | Field::DataStatus) {
         return None;
@@ -56,6 +66,24 @@ pub(crate) fn corrupt(field: Field, out: &mut Output) -> Option<String> {
             )
         };
         Some((rt.emit(), what))
+    })
+}
+
+/// Moves the SendSeqNum of an alarm DATA PDU one on (mod 8000h); what it changed.
+fn skip_sequence(out: &mut Output) -> Option<String> {
+    rewrite_payload(out, |payload| {
+        let id = FrameId(u16::from_be_bytes([*payload.first()?, *payload.get(1)?]));
+        if !matches!(id.kind(), FrameKind::Alarm { .. }) {
+            return None;
+        }
+        let mut pdu = AlarmRepr::parse(payload).ok()?;
+        if pdu.pdu_type != RtaPduType::DATA {
+            return None;
+        }
+        let was = pdu.send_seq;
+        pdu.send_seq = (was + 1) & 0x7FFF;
+        let what = format!("alarm SendSeqNum {was} → {}", pdu.send_seq);
+        Some((pdu.emit().ok()?, what))
     })
 }
 
@@ -246,6 +274,46 @@ mod tests {
             bytes,
         };
         assert_eq!(corrupt(Field::Status, &mut out), None);
+    }
+
+    #[test]
+    fn sequence_moves_an_alarm_data_pdus_send_seq_num_on_and_leaves_acks() {
+        use proto::pnio::alarm::{AlarmNotification, AlarmSpecifier, AlarmType, RtaBody};
+        let n = AlarmNotification {
+            high: false,
+            alarm_type: AlarmType::PROCESS,
+            api: 0,
+            slot: 3,
+            subslot: 1,
+            module_ident: 7,
+            submodule_ident: 7,
+            specifier: AlarmSpecifier(0),
+            items: Vec::new(),
+        };
+        let data = AlarmRepr::data(3, 1, 0x7FFF, 0xFFFE, RtaBody::Notification(n));
+        let mut out = frame(&data.emit().unwrap());
+        assert_eq!(
+            corrupt(Field::Sequence, &mut out).as_deref(),
+            Some("alarm SendSeqNum 32767 → 0")
+        );
+        let Output::Frame(b) = &out else { panic!() };
+        assert_eq!(
+            AlarmRepr::parse(&b[14..]).unwrap(),
+            AlarmRepr {
+                send_seq: 0,
+                ..data
+            }
+        );
+        let ack = frame(
+            &AlarmRepr::ack(FrameId::ALARM_LOW, 3, 1, 0, 0)
+                .emit()
+                .unwrap(),
+        );
+        let mut out = ack.clone();
+        assert_eq!(corrupt(Field::Sequence, &mut out), None);
+        assert_eq!(out, ack);
+        let mut out = frame(&rt().emit());
+        assert_eq!(corrupt(Field::Sequence, &mut out), None);
     }
 
     #[test]
