@@ -1264,39 +1264,36 @@ impl<L: Link> Controller<L> {
             NOTHING_RECEIVED => 0,
             last => (last + 1) & 0x7FFF,
         };
-        if !repeated && pdu.send_seq != due {
-            // IEC 61158-6-10 APMR: a DATA PDU that is neither the one due nor a repeat of the
-            // last is not taken; it is answered with a NACK (as p-net's APMR does).
-            let nack = AlarmRepr {
-                pdu_type: RtaPduType::NACK,
-                ..AlarmRepr::ack(
-                    pdu.frame_id,
-                    ar.device_alarm_ref,
-                    ALARM_REF,
-                    ar.alarm_seq.wrapping_sub(1) & 0x7FFF,
-                    ar.alarm_received,
-                )
-            };
-            let bytes = nack.emit().map_err(malformed("alarm NACK"))?;
-            let frame = self.ethernet(dst, &bytes);
-            self.link.send(&frame)?;
-            self.departure.get_or_insert(Departure::Sequence {
-                got: pdu.send_seq,
-                due,
-            });
-            return Ok(());
+        // IEC 61158-6-10 APMR: a DATA PDU that is neither the one due nor a repeat of the last
+        // is not taken; it is answered with a NACK (as p-net's APMR does), the others with an
+        // ACK.
+        let taken = repeated || pdu.send_seq == due;
+        let (pdu_type, ack_seq) = match taken {
+            true => (RtaPduType::ACK, pdu.send_seq),
+            false => (RtaPduType::NACK, ar.alarm_received),
+        };
+        if taken {
+            ar.alarm_received = pdu.send_seq;
         }
-        ar.alarm_received = pdu.send_seq;
-        let ack = AlarmRepr::ack(
-            pdu.frame_id,
-            ar.device_alarm_ref,
-            ALARM_REF,
-            ar.alarm_seq.wrapping_sub(1) & 0x7FFF,
-            pdu.send_seq,
-        );
-        let bytes = ack.emit().map_err(malformed("alarm ACK"))?;
+        let answer = AlarmRepr {
+            pdu_type,
+            ..AlarmRepr::ack(
+                pdu.frame_id,
+                ar.device_alarm_ref,
+                ALARM_REF,
+                ar.alarm_seq.wrapping_sub(1) & 0x7FFF,
+                ack_seq,
+            )
+        };
+        let bytes = answer.emit().map_err(malformed("alarm ACK"))?;
         let frame = self.ethernet(dst, &bytes);
         self.link.send(&frame)?;
+        if !taken {
+            let got = pdu.send_seq;
+            self.departure
+                .get_or_insert(Departure::Sequence { got, due });
+            return Ok(());
+        }
         let (false, RtaBody::Notification(n)) = (repeated, pdu.body) else {
             return Ok(());
         };

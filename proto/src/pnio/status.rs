@@ -278,26 +278,29 @@ mod tests {
 
     #[test]
     fn a_status_says_what_its_bytes_mean() {
-        let m = |b: [u8; 4]| PnioStatus::from_bytes(b).meaning();
-        assert_eq!(m([0, 0, 0, 0]), "00 00 00 00: OK");
-        assert_eq!(
-            m([0xDB, 0x81, 0x40, 0x06]),
-            "DB 81 40 06: IODConnectRes, PNIO: CMRPC: state conflict"
-        );
-        // A faulty block names the field by its number.
-        assert_eq!(
-            m([0xDB, 0x81, 0x02, 0x10]),
-            "DB 81 02 10: IODConnectRes, PNIO: faulty IOCRBlockReq: field 16"
-        );
-        assert_eq!(
-            m([0xDF, 0x80, 0xB0, 0x00]),
-            "DF 80 B0 00: IODWriteRes, PNIORW: invalid index"
-        );
-        // Values the tables here do not name stay hex.
-        assert_eq!(
-            m([0x12, 0x81, 0x77, 0x09]),
-            "12 81 77 09: 12h, PNIO: 77h: field 9"
-        );
-        assert_eq!(m([0xDE, 0x99, 0x01, 0x02]), "DE 99 01 02: IODReadRes, 99h");
+        for (bytes, says) in [
+            ([0, 0, 0, 0], "00 00 00 00: OK"),
+            (
+                [0xDB, 0x81, 0x40, 0x06],
+                "DB 81 40 06: IODConnectRes, PNIO: CMRPC: state conflict",
+            ),
+            // A faulty block names the field by its number.
+            (
+                [0xDB, 0x81, 0x02, 0x10],
+                "DB 81 02 10: IODConnectRes, PNIO: faulty IOCRBlockReq: field 16",
+            ),
+            (
+                [0xDF, 0x80, 0xB0, 0x00],
+                "DF 80 B0 00: IODWriteRes, PNIORW: invalid index",
+            ),
+            // Values the tables here do not name stay hex.
+            (
+                [0x12, 0x81, 0x77, 0x09],
+                "12 81 77 09: 12h, PNIO: 77h: field 9",
+            ),
+            ([0xDE, 0x99, 0x01, 0x02], "DE 99 01 02: IODReadRes, 99h"),
+        ] {
+            assert_eq!(PnioStatus::from_bytes(bytes).meaning(), says);
+        }
     }
 }
