@@ -2,9 +2,11 @@
 //! `docs/misbehave.md`): the harness's own master, managing node, controller or scanner runs a
 //! case against the served device, and its verdict names what the device did — never a hang,
 //! a panic, a pass or "host late". Covered: EtherCAT `corrupt=wkc`, `corrupt=length`,
-//! `drop=every:2`, `silent`, `alarm=every:2ms`; POWERLINK `corrupt=state`, `silent`; PROFINET IO
-//! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `corrupt=length`,
-//! `corrupt=sequence`, `close`, `dup`, `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
+//! `drop=every:2`, `silent`, `corrupt=sequence`, `alarm=every:2ms`; POWERLINK `corrupt=state`,
+//! `silent`; PROFINET IO `corrupt=data-status`, `corrupt=cycle`, `corrupt=status`,
+//! `alarm=every:20ms`, that with `corrupt=sequence`, `silent`; EtherNet/IP `corrupt=status`,
+//! `corrupt=length`, `corrupt=sequence`, `close`, `dup`, `drop=every:2`; `late=` has its own
+//! tests (`network_ecat`, `network_pnio`, `network_dut`,
 //! the POWERLINK binding's). The modes are those whose verdict does not hang on timing: a
 //! field wrong in every frame, a device silent from its first exchange on, the n-th answer of
 //! a master that asks one thing at a time; the harness's own limits decide, with their margins.
@@ -137,7 +139,7 @@ fn ecat_a_slave_raising_an_emergency_for_no_error_is_named_for_it() {
         "bu0620/ecat-pdo/mapping-object-of-every-inverter",
         "fail",
         &[
-            "the device reported what is not so: CoE emergency 7591h (error register 11h) \
+            "the DUT departed from the protocol: CoE emergency 7591h (error register 11h) \
              reports error 102 (P700) on FI 1, but P700 [-01] reads 0",
         ],
     );
@@ -233,6 +235,47 @@ fn pnio_a_device_misbehaving_is_named_for_what_it_did() {
         &["data_status: expected 53 (0035h), got 49 (0031h)"],
     );
     assert!(t.corrupted > 0, "{t:?}");
+    // The input CR's cycle counter stands at 0: the first frame is new, none after it, and
+    // the data hold time (100 cycles of 1 ms) runs out on frames that keep coming.
+    let t = pnio(
+        "mbcycle",
+        "corrupt=cycle",
+        "fail",
+        &[
+            "cycle counter stood at 0 for ",
+            "(data hold time 100 ms expired)",
+        ],
+    );
+    assert!(t.corrupted > 0, "{t:?}");
+    // Every RPC response refused "state conflict": the Connect of the opening first.
+    let t = pnio(
+        "mbpstat",
+        "corrupt=status",
+        "error",
+        &["Connect response PNIO status DB 81 40 06: IODConnectRes, PNIO: CMRPC: state conflict"],
+    );
+    assert!(t.corrupted > 0, "{t:?}");
+    // A process alarm every 20 ms while an AR runs (each case opens its own, and runs it
+    // longer than that): acknowledged, and the step it came by fails (one that came while
+    // the case opened fails its first step).
+    let t = pnio(
+        "mbpalarm",
+        "alarm=every:20ms",
+        "fail",
+        &[
+            "the device raised a Process alarm (AlarmType 0002h) from slot 3 subslot 1",
+            "its manual names diagnosis alarms only",
+        ],
+    );
+    assert!(t.alarms > 0, "{t:?}");
+    // The same alarms, each DATA PDU's SendSeqNum one ahead: the first comes as 1, not 0.
+    let t = pnio(
+        "mbpseq",
+        "alarm=every:20ms,corrupt=sequence",
+        "fail",
+        &["alarm DATA-RTA-PDU came with SendSeqNum 1 where 0 was due"],
+    );
+    assert!(t.alarms > 0 && t.corrupted > 0, "{t:?}");
     let t = pnio(
         "mbpnsil",
         "silent=600s",

@@ -1070,9 +1070,9 @@ mod tests {
         fn cycle_time(&self) -> Duration {
             self.inner.cycle_time()
         }
-        fn cycle(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
-            let answer = self.inner.cycle(frame);
-            match self.fault {
+        fn cycle(&mut self, frame: &[u8]) -> Result<Option<Vec<u8>>, StepError> {
+            let answer = self.inner.cycle(frame)?;
+            Ok(match self.fault {
                 Fault::Silent => None,
                 Fault::Garbage => Some(vec![0xDE, 0xAD]),
                 Fault::NeverAnswers => answer.map(|mut a| {
@@ -1082,7 +1082,7 @@ mod tests {
                     }
                     a
                 }),
-            }
+            })
         }
         fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), DutError> {
             self.inner.inject(inverter, error)

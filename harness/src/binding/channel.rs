@@ -83,10 +83,12 @@ pub(crate) enum StepError {
         /// How long the harness waited, the host's lost time included.
         waited: std::time::Duration,
     },
-    /// The device reported on its own something that is not so (an emergency for an error
-    /// the inverter does not have).
-    #[error("the device reported what is not so: {0}")]
-    Spurious(#[source] Cause),
+    /// The DUT did on its own what its manual or the standard rules out, seen on the bus
+    /// rather than in an answer: a PROFINET input CR whose cycle counter stood still past the
+    /// data hold time, an alarm of a type the manual does not name, an emergency for an error
+    /// the inverter does not have.
+    #[error("the DUT departed from the protocol: {0}")]
+    Departed(#[source] Cause),
     /// The DUT answered with something that is not the protocol at all.
     #[error("the DUT does not speak the protocol: {0}")]
     Garbage(#[source] Cause),
@@ -119,7 +121,7 @@ impl StepError {
             | StepError::Malformed { .. }
             | StepError::Late { .. }
             | StepError::Closed(_)
-            | StepError::Spurious(_) => Verdict::Fail,
+            | StepError::Departed(_) => Verdict::Fail,
             StepError::Silent { .. }
             | StepError::Refused(_)
             | StepError::Suite(_)
@@ -312,7 +314,7 @@ impl Channel {
             payload: ppo.emit(self.ppo),
         };
         let sent_bytes = frame.emit();
-        let answer = self.dut.cycle(&sent_bytes);
+        let answer = self.dut.cycle(&sent_bytes)?;
         let decoded = answer.as_deref().map(|b| decode_answer(b, unit, self.ppo));
         if !self.recording && !matches!(decoded, Some(Err(_))) {
             return decoded.transpose().map_err(StepError::Protocol);

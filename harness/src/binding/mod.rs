@@ -203,8 +203,10 @@ pub(crate) trait Dut {
     fn capabilities(&self) -> &[Capability];
     /// The bus cycle time.
     fn cycle_time(&self) -> Duration;
-    /// One bus cycle: sends `frame`, returns the frame the DUT answered within the cycle, if any.
-    fn cycle(&mut self, frame: &[u8]) -> Option<Vec<u8>>;
+    /// One bus cycle: sends `frame`, returns the frame the DUT answered within the cycle, if any;
+    /// an error when the bus itself found the DUT at fault meanwhile (a PROFINET input CR
+    /// whose data hold time expired), so that the verdict names that rather than silence.
+    fn cycle(&mut self, frame: &[u8]) -> Result<Option<Vec<u8>>, StepError>;
     /// Raises an inverter error (`fault-injection`).
     fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), DutError>;
     /// Shows internal state (`observe`).

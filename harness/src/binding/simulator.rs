@@ -8,7 +8,7 @@ use sim::device::{Device, DeviceConfig, Firmware};
 use sim::link::{mem_pair, MemEnd};
 use std::time::Duration;
 
-use super::{Dut, DutError, OpenError};
+use super::{Dut, DutError, OpenError, StepError};
 use crate::profile::{Capability, Profile};
 use proto::nord::Inverter;
 
@@ -98,7 +98,7 @@ impl Dut for Embedded {
         CYCLE
     }
 
-    fn cycle(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+    fn cycle(&mut self, frame: &[u8]) -> Result<Option<Vec<u8>>, StepError> {
         self.harness_end.send(frame.to_vec());
         // The device side of the link: answer every frame; drop what it cannot answer, as a
         // real device drops a malformed frame.
@@ -108,7 +108,7 @@ impl Dut for Embedded {
             }
         }
         self.clock.advance(CYCLE);
-        self.harness_end.recv()
+        Ok(self.harness_end.recv())
     }
 
     fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), DutError> {

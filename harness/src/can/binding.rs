@@ -604,7 +604,7 @@ impl<L: CanLink> Binding for CanBinding<L> {
             };
             let what = format!("node {node}'s EMCY");
             if let Some(spurious) = crate::binding::emergency::judge(&e, &what, read)? {
-                return Err(StepError::Spurious(spurious.into()));
+                return Err(StepError::Departed(spurious.into()));
             }
         }
         Ok(observed)

@@ -693,7 +693,7 @@ impl<S: DutSegment> Binding for EcatBinding<S> {
                 self.emergencies_checked = checked;
                 Ok(observed)
             }
-            Ok(Err(spurious)) => Err(StepError::Spurious(spurious.into())),
+            Ok(Err(spurious)) => Err(StepError::Departed(spurious.into())),
             Err(e) => Err(step_error(e)),
         }
     }

@@ -96,7 +96,7 @@ fn refused(status: PnioStatus, mut fields: Value) -> Observation {
         Refusal {
             kind: "PNIO status".into(),
             code: u32::from_be_bytes([status.code, status.decode, status.code1, status.code2]),
-            text: status_hex(status),
+            text: status.meaning(),
         },
     )
 }
@@ -126,6 +126,9 @@ pub(super) fn step_error(e: PnioError) -> StepError {
         // status) is the device's departure, judged; open_error keeps garbage at bring-up an
         // error.
         e @ PnioError::Malformed { .. } => StepError::Protocol(e.into()),
+        // An input CR whose cycle counter stood still past the data hold time: the frames
+        // came, stamped on arrival, and none was new.
+        e @ PnioError::StoodStill(_) => StepError::Departed(e.into()),
         e @ (PnioError::Nca { .. } | PnioError::NotConnected) => StepError::Refused(e.into()),
     }
 }
@@ -223,7 +226,10 @@ pub(super) fn bring_to_data_exchange<L: Link>(
     })?;
     ctl.set_patience(1);
     if !c.ready {
-        return Err(OpenError::BringUp(format!("the AR did not come up: {c:?}")));
+        return Err(OpenError::BringUp(format!(
+            "the AR did not come up: {}",
+            c.why_not_running()
+        )));
     }
     ctl.take_exchanges();
     ctl.take_cycles();
@@ -345,6 +351,63 @@ impl<L: Link + 'static> PnioBinding<L> {
             device_access: true,
         };
         bus_step(&mut self.ctl.borrow_mut(), step, &plan)
+    }
+
+    /// One action of a case.
+    fn act(&mut self, action: &Action) -> Result<Observation, StepError> {
+        match action {
+            Action::Bus(step) => {
+                let step = step
+                    .as_any()
+                    .downcast_ref::<PnioStep>()
+                    .ok_or_else(|| StepError::NotApplicable(format!("a `{}:` step", step.bus())))?;
+                self.pnio_step(step)
+            }
+            Action::Write(o) if self.persistent.is_some() => self.write(action, o),
+            Action::Process {
+                inverter,
+                control,
+                setpoints,
+                run: Run::For(d),
+            } => {
+                self.note_commanded(*inverter);
+                let one = Action::Process {
+                    inverter: *inverter,
+                    control: *control,
+                    setpoints: setpoints.clone(),
+                    run: Run::Cycles(1),
+                };
+                self.for_time(&one, *d)
+            }
+            Action::Process {
+                inverter,
+                control,
+                setpoints,
+                run: Run::Cycles(n),
+            } => {
+                self.note_commanded(*inverter);
+                let step = |n| Action::Process {
+                    inverter: *inverter,
+                    control: *control,
+                    setpoints: setpoints.clone(),
+                    run: Run::Cycles(n),
+                };
+                self.channel.perform(&step(*n))?;
+                // The status comes from one cycle more: a device that took the last output
+                // late (a loaded host) has answered it by then.
+                self.channel.perform(&step(1))
+            }
+            Action::Wait(d) => {
+                let cycle = self.ctl.borrow().cycle();
+                self.for_time(&Action::Wait(cycle), *d)
+            }
+            other => {
+                if let Action::Process { inverter, .. } = other {
+                    self.note_commanded(*inverter);
+                }
+                self.channel.perform(other)
+            }
+        }
     }
 
     /// A parameter write on a persistent device, through the ledger: the value before is read
@@ -838,59 +901,16 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
         self.capabilities
     }
 
+    /// The action, then whether the device departed from its manual or the standard on its
+    /// own meanwhile (or since the opening): an alarm of a type its manual does not name, an
+    /// alarm PDU out of sequence. That fails the step it came by, whatever the step did: a
+    /// failure rather than a note, as a controller of these devices acts on their alarms, and
+    /// one raised for nothing is as wrong as a wrong answer.
     fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
-        match action {
-            Action::Bus(step) => {
-                let step = step
-                    .as_any()
-                    .downcast_ref::<PnioStep>()
-                    .ok_or_else(|| StepError::NotApplicable(format!("a `{}:` step", step.bus())))?;
-                self.pnio_step(step)
-            }
-            Action::Write(o) if self.persistent.is_some() => self.write(action, o),
-            Action::Process {
-                inverter,
-                control,
-                setpoints,
-                run: Run::For(d),
-            } => {
-                self.note_commanded(*inverter);
-                let one = Action::Process {
-                    inverter: *inverter,
-                    control: *control,
-                    setpoints: setpoints.clone(),
-                    run: Run::Cycles(1),
-                };
-                self.for_time(&one, *d)
-            }
-            Action::Process {
-                inverter,
-                control,
-                setpoints,
-                run: Run::Cycles(n),
-            } => {
-                self.note_commanded(*inverter);
-                let step = |n| Action::Process {
-                    inverter: *inverter,
-                    control: *control,
-                    setpoints: setpoints.clone(),
-                    run: Run::Cycles(n),
-                };
-                self.channel.perform(&step(*n))?;
-                // The status comes from one cycle more: a device that took the last output
-                // late (a loaded host) has answered it by then.
-                self.channel.perform(&step(1))
-            }
-            Action::Wait(d) => {
-                let cycle = self.ctl.borrow().cycle();
-                self.for_time(&Action::Wait(cycle), *d)
-            }
-            other => {
-                if let Action::Process { inverter, .. } = other {
-                    self.note_commanded(*inverter);
-                }
-                self.channel.perform(other)
-            }
+        let done = self.act(action)?;
+        match self.ctl.borrow_mut().take_departure() {
+            Some(d) => Err(StepError::Departed(d.into())),
+            None => Ok(done),
         }
     }
 
@@ -921,6 +941,16 @@ impl<L: Link + 'static> Binding for PnioBinding<L> {
         ex.extend(self.cycles_exchange());
         ex
     }
+}
+
+/// A cycle's frame of the channel, its outputs provided and its order answered, for the
+/// answer once the cycle ran.
+struct Provided {
+    unit: Unit,
+    ppo_type: u8,
+    ppo: PpoType,
+    pkw: Option<PkwRepr>,
+    module: Option<(u16, PpoType)>,
 }
 
 /// The channel's DUT: one bus cycle carries the PKW order in the unit's record and the
@@ -982,22 +1012,10 @@ impl<L: Link> PnioDut<L> {
         self.pending = None;
         PkwRepr::parse(&data).ok()
     }
-}
 
-impl<L: Link> Dut for PnioDut<L> {
-    fn describe(&self) -> String {
-        format!("PROFINET IO device ({})", self.product.name())
-    }
-
-    fn capabilities(&self) -> &[Capability] {
-        &EMBEDDED_CAPABILITIES
-    }
-
-    fn cycle_time(&self) -> Duration {
-        self.ctl.borrow().cycle()
-    }
-
-    fn cycle(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
+    /// Provides the channel's `frame` to the inverter's module (and runs its PKW order);
+    /// `None` for a frame that is not the channel's or a module not connected.
+    fn provide(&mut self, frame: &[u8]) -> Option<Provided> {
         let link = LinkRepr::parse(frame).ok()?;
         let ppo = PpoType::new(link.ppo_type).ok()?;
         let sent = PpoRepr::parse(&link.payload, ppo).ok()?;
@@ -1021,23 +1039,56 @@ impl<L: Link> Dut for PnioDut<L> {
             Some(o) if o != PkwRepr::default() => Some(self.order(link.unit, o)?),
             other => other,
         };
-        let mut ctl = self.ctl.borrow_mut();
-        if !ctl.exchange_cycle().ok()? {
-            return None;
-        }
-        let mut pzd = match module {
+        Some(Provided {
+            unit: link.unit,
+            ppo_type: link.ppo_type,
+            ppo,
+            pkw,
+            module,
+        })
+    }
+
+    /// The channel's answer to `sent` from the cycle's input frame.
+    fn answer(&self, sent: Provided) -> Option<Vec<u8>> {
+        let ctl = self.ctl.borrow();
+        let mut pzd = match sent.module {
             Some((slot, t)) => module_pzd(t, &ctl.input(slot)?.0)?,
             None => Vec::new(),
         };
-        pzd.resize(ppo.pzd_words(), 0);
+        pzd.resize(sent.ppo.pzd_words(), 0);
         Some(
             LinkRepr {
-                unit: link.unit,
-                ppo_type: link.ppo_type,
-                payload: PpoRepr { pkw, pzd }.emit(ppo),
+                unit: sent.unit,
+                ppo_type: sent.ppo_type,
+                payload: PpoRepr { pkw: sent.pkw, pzd }.emit(sent.ppo),
             }
             .emit(),
         )
+    }
+}
+
+impl<L: Link> Dut for PnioDut<L> {
+    fn describe(&self) -> String {
+        format!("PROFINET IO device ({})", self.product.name())
+    }
+
+    fn capabilities(&self) -> &[Capability] {
+        &EMBEDDED_CAPABILITIES
+    }
+
+    fn cycle_time(&self) -> Duration {
+        self.ctl.borrow().cycle()
+    }
+
+    fn cycle(&mut self, frame: &[u8]) -> Result<Option<Vec<u8>>, StepError> {
+        let Some(sent) = self.provide(frame) else {
+            return Ok(None);
+        };
+        // The consumer's time-out (the input CR's data hold time) is the verdict, not silence.
+        if !self.ctl.borrow_mut().exchange_cycle().map_err(step_error)? {
+            return Ok(None);
+        }
+        Ok(self.answer(sent))
     }
 
     fn inject(&mut self, inverter: Inverter, error: &str) -> Result<(), DutError> {

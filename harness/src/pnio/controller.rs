@@ -37,6 +37,7 @@ use proto::pnio::rt::{DataStatus, Iox, RtRepr};
 use proto::pnio::status::cm;
 use proto::pnio::{FrameId, FrameKind, PnioStatus, MULTICAST_DCP_IDENTIFY};
 
+use super::consumer::{Consumer, StoodStill};
 use super::link::Link;
 use crate::hex::hex;
 use crate::net::wait::Wait;
@@ -45,6 +46,8 @@ use crate::outcome::Exchange;
 
 /// The controller's alarm reference.
 const ALARM_REF: u16 = 0x0003;
+/// AckSeqNum before any alarm PDU came (IEC 61158-6-10); the first SendSeqNum due is 0.
+const NOTHING_RECEIVED: u16 = 0xFFFE;
 /// The frame ids of the controller's CRs, which declare RT_CLASS_2 in their IOCRProperties:
 /// unicast RT_CLASS_2 ids, 8000h–BBFFh (IEC 61158-6-10, the FrameID table; C000h–F7FFh would
 /// be RT_CLASS_1's, which a device refuses under RT_CLASS_2). The input CR's is the one its
@@ -119,6 +122,10 @@ pub(crate) enum PnioError {
     /// The call needs an AR and there is none.
     #[error("no application relation is up (connect first)")]
     NotConnected,
+    /// The input CR's data hold time expired on frames whose cycle counter did not move: the
+    /// consumer's time-out, which ended the AR.
+    #[error(transparent)]
+    StoodStill(#[from] StoodStill),
 }
 
 /// A device as DCP Identify found it.
@@ -182,8 +189,10 @@ struct Ar {
     device_alarm_ref: u16,
     /// The output C_SDU sent every cycle.
     outputs: Vec<u8>,
-    /// The last input frame.
+    /// The last input frame with new data.
     inputs: Option<RtRepr>,
+    /// Which input frames carry new data.
+    consumer: Consumer,
     /// ApplicationReady came and was answered.
     ready: bool,
     /// The next alarm PDU's SendSeqNum, and the last one received.
@@ -225,6 +234,12 @@ pub(crate) struct Controller<L> {
     session_key: u16,
     /// Alarm notifications received and not yet acknowledged.
     alarms: VecDeque<AlarmNotification>,
+    /// The alarm types the device's manual says it raises (`None`: any, for another maker's
+    /// device); [`Controller::take_departure`].
+    alarm_types: Option<&'static [u16]>,
+    /// The first thing since the last look that the device did on its own and its manual or
+    /// the standard rules out ([`Controller::take_departure`]).
+    departure: Option<Departure>,
     exchanges: Vec<Exchange>,
     cycles: CycleLog,
     recording: bool,
@@ -278,6 +293,8 @@ impl<L: Link> Controller<L> {
             calls: 0,
             session_key: 0,
             alarms: VecDeque::new(),
+            alarm_types: Some(&proto::nord::pnio::ALARM_TYPES),
+            departure: None,
             exchanges: Vec::new(),
             cycles: CycleLog::default(),
             recording: true,
@@ -291,6 +308,11 @@ impl<L: Link> Controller<L> {
     /// The DAP's submodules a Connect expects from now on.
     pub(crate) fn set_dap(&mut self, dap: Vec<ExpectedSub>) {
         self.dap = dap;
+    }
+
+    /// The alarm types the device raises from now on (`None`: any).
+    pub(crate) fn set_alarm_types(&mut self, types: Option<&'static [u16]>) {
+        self.alarm_types = types;
     }
 
     /// The link, for the embedded device behind it.
@@ -425,7 +447,7 @@ impl<L: Link> Controller<L> {
                 }));
             }
             let payload = payload.to_vec();
-            self.cyclic_or_alarm(&payload)?;
+            self.cyclic_or_alarm(&payload, stamp)?;
         }
     }
 
@@ -506,38 +528,59 @@ impl<L: Link> Controller<L> {
         while let Some(Got::Frame { payload, stamp, .. }) =
             self.pump_within(&wait, &is_input, None)?
         {
-            self.cyclic_or_alarm(&payload)?;
+            let new = self.cyclic_or_alarm(&payload, stamp)?;
             let fresh = match stamp {
                 Some(at) => at >= sent_wall + FRESH,
                 None => self.link.now() >= sent_at + FRESH,
             };
-            if fresh {
+            if new && fresh {
                 return Ok(true);
             }
         }
         Ok(false)
     }
 
-    /// Input frames and alarms; anything else is dropped.
-    fn cyclic_or_alarm(&mut self, payload: &[u8]) -> Result<(), PnioError> {
+    /// Input frames and alarms, the frame received at `stamp` (the kernel's, where the link
+    /// has one); anything else is dropped. Whether it was an input frame with new data. An
+    /// input frame that finds the data hold time expired ends the AR, as a consumer's
+    /// time-out does (IEC 61158-6-10: the CPM's DHT expiry aborts the AR).
+    fn cyclic_or_alarm(
+        &mut self,
+        payload: &[u8],
+        stamp: Option<Duration>,
+    ) -> Result<bool, PnioError> {
         let Some(id) = frame_id(payload) else {
-            return Ok(());
+            return Ok(false);
         };
         match id.kind() {
             FrameKind::Rt => {
-                if let Some(ar) = self.ar.as_mut().filter(|a| a.input_frame_id == id.0) {
-                    let len = usize::from(ar.plan.input.data_length);
-                    if let Ok(rt) = RtRepr::parse(payload, Some(len)) {
+                // When it came, on the link's clock.
+                let now = self.link.now();
+                let at = stamp.map_or(now, |s| now.saturating_sub(wall_clock().saturating_sub(s)));
+                let Some(ar) = self.ar.as_mut().filter(|a| a.input_frame_id == id.0) else {
+                    return Ok(false);
+                };
+                let len = usize::from(ar.plan.input.data_length);
+                let Ok(rt) = RtRepr::parse(payload, Some(len)) else {
+                    return Ok(false);
+                };
+                self.cycles.received += 1;
+                self.cycles.last_received = payload.to_vec();
+                match ar.consumer.take(rt.cycle_counter, at) {
+                    Ok(true) => {
                         ar.inputs = Some(rt);
-                        self.cycles.received += 1;
-                        self.cycles.last_received = payload.to_vec();
+                        Ok(true)
+                    }
+                    Ok(false) => Ok(false),
+                    Err(e) => {
+                        self.ar = None;
+                        Err(e.into())
                     }
                 }
             }
-            FrameKind::Alarm { .. } => self.alarm_pdu(payload)?,
-            _ => {}
+            FrameKind::Alarm { .. } => self.alarm_pdu(payload).map(|()| false),
+            _ => Ok(false),
         }
-        Ok(())
     }
 
     /// The output frame now, and the next on the send clock: one cycle after this one, or
@@ -1012,9 +1055,10 @@ impl<L: Link> Controller<L> {
             device_alarm_ref,
             outputs,
             inputs: None,
+            consumer: Consumer::new(input_frame_id, self.data_hold()),
             ready: false,
             alarm_seq: 0,
-            alarm_received: 0xFFFE,
+            alarm_received: NOTHING_RECEIVED,
         });
         self.next_send = self.link.now();
         let prm_end = self.call_blocks(
@@ -1216,21 +1260,90 @@ impl<L: Link> Controller<L> {
             return Ok(());
         }
         let repeated = pdu.send_seq == ar.alarm_received;
-        ar.alarm_received = pdu.send_seq;
-        let ack = AlarmRepr::ack(
-            pdu.frame_id,
-            ar.device_alarm_ref,
-            ALARM_REF,
-            ar.alarm_seq.wrapping_sub(1) & 0x7FFF,
-            pdu.send_seq,
-        );
-        let bytes = ack.emit().map_err(malformed("alarm ACK"))?;
+        let due = match ar.alarm_received {
+            NOTHING_RECEIVED => 0,
+            last => (last + 1) & 0x7FFF,
+        };
+        // IEC 61158-6-10 APMR: a DATA PDU that is neither the one due nor a repeat of the last
+        // is not taken; it is answered with a NACK (as p-net's APMR does), the others with an
+        // ACK.
+        let taken = repeated || pdu.send_seq == due;
+        let (pdu_type, ack_seq) = match taken {
+            true => (RtaPduType::ACK, pdu.send_seq),
+            false => (RtaPduType::NACK, ar.alarm_received),
+        };
+        if taken {
+            ar.alarm_received = pdu.send_seq;
+        }
+        let answer = AlarmRepr {
+            pdu_type,
+            ..AlarmRepr::ack(
+                pdu.frame_id,
+                ar.device_alarm_ref,
+                ALARM_REF,
+                ar.alarm_seq.wrapping_sub(1) & 0x7FFF,
+                ack_seq,
+            )
+        };
+        let bytes = answer.emit().map_err(malformed("alarm ACK"))?;
         let frame = self.ethernet(dst, &bytes);
         self.link.send(&frame)?;
-        if let (false, RtaBody::Notification(n)) = (repeated, pdu.body) {
-            self.record(&[], "(the device's alarm)".into(), payload, alarm_text(&n));
-            self.alarms.push_back(n);
+        if !taken {
+            let got = pdu.send_seq;
+            self.departure
+                .get_or_insert(Departure::Sequence { got, due });
+            return Ok(());
         }
+        let (false, RtaBody::Notification(n)) = (repeated, pdu.body) else {
+            return Ok(());
+        };
+        self.record(&[], "(the device's alarm)".into(), payload, alarm_text(&n));
+        let expected = self
+            .alarm_types
+            .is_none_or(|types| types.contains(&n.alarm_type.0));
+        if expected {
+            // A case's `alarm:` step takes and acknowledges it.
+            self.alarms.push_back(n);
+        } else {
+            // Acknowledged at once (IEC 61158-6-10: the controller answers every notification
+            // with an AlarmAck), and kept for the verdict.
+            self.send_alarm_ack(&n)?;
+            self.departure.get_or_insert(Departure::Alarm(n));
+        }
+        Ok(())
+    }
+
+    /// The first departure since the last call: an alarm of a type the device's manual does
+    /// not name ([`Controller::set_alarm_types`]), already acknowledged, or an alarm PDU out
+    /// of sequence.
+    pub(crate) fn take_departure(&mut self) -> Option<Departure> {
+        self.departure.take()
+    }
+
+    /// The AlarmAck (status OK) of notification `n`, as a DATA PDU with the controller's next
+    /// SendSeqNum.
+    fn send_alarm_ack(&mut self, n: &AlarmNotification) -> Result<(), PnioError> {
+        let (Some(ar), Some(dst)) = (self.ar.as_mut(), self.station.as_ref().map(|s| s.mac)) else {
+            return Err(PnioError::NotConnected);
+        };
+        let seq = ar.alarm_seq;
+        ar.alarm_seq = (ar.alarm_seq + 1) & 0x7FFF;
+        let pdu = AlarmRepr::data(
+            ar.device_alarm_ref,
+            ALARM_REF,
+            seq,
+            ar.alarm_received,
+            RtaBody::Ack(AlarmAck::of(n, PnioStatus::OK)),
+        );
+        let bytes = pdu.emit().map_err(malformed("AlarmAck"))?;
+        let frame = self.ethernet(dst, &bytes);
+        self.link.send(&frame)?;
+        self.record(
+            &bytes,
+            format!("AlarmAck of {}", alarm_text(n)),
+            &[],
+            String::new(),
+        );
         Ok(())
     }
 
@@ -1248,27 +1361,7 @@ impl<L: Link> Controller<L> {
         let Some(n) = self.alarms.pop_front() else {
             return Ok(None);
         };
-        let (Some(ar), Some(dst)) = (self.ar.as_mut(), self.station.as_ref().map(|s| s.mac)) else {
-            return Err(PnioError::NotConnected);
-        };
-        let seq = ar.alarm_seq;
-        ar.alarm_seq = (ar.alarm_seq + 1) & 0x7FFF;
-        let pdu = AlarmRepr::data(
-            ar.device_alarm_ref,
-            ALARM_REF,
-            seq,
-            ar.alarm_received,
-            RtaBody::Ack(AlarmAck::of(&n, PnioStatus::OK)),
-        );
-        let bytes = pdu.emit().map_err(malformed("AlarmAck"))?;
-        let frame = self.ethernet(dst, &bytes);
-        self.link.send(&frame)?;
-        self.record(
-            &bytes,
-            format!("AlarmAck of {}", alarm_text(&n)),
-            &[],
-            String::new(),
-        );
+        self.send_alarm_ack(&n)?;
         // The device's transport ACK comes with the cycle.
         self.run_for(self.cycle())?;
         Ok(Some(n))
@@ -1283,6 +1376,30 @@ impl<L: Link> Controller<L> {
         self.ar = ar;
         r.map(|_| ())
     }
+}
+
+/// What the device did on its own that its manual or the standard rules out, seen by the
+/// pump whatever the case was waiting for; the binding fails the step it came by.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub(crate) enum Departure {
+    /// An alarm of a type the device's manual does not name, acknowledged.
+    #[error(
+        "the device raised a {} alarm (AlarmType {:04X}h) from slot {} subslot {}, \
+         AlarmSpecifier sequence {}, acknowledged: its manual names diagnosis alarms only \
+         (BU 0620 §5.4.2, BU 0590 §6.1)",
+        .0.alarm_type.name().unwrap_or("unknown"),
+        .0.alarm_type.0,
+        .0.slot,
+        .0.subslot,
+        .0.specifier.sequence()
+    )]
+    Alarm(AlarmNotification),
+    /// An alarm DATA PDU whose SendSeqNum was neither the one due nor the last one again.
+    #[error(
+        "the device's alarm DATA-RTA-PDU came with SendSeqNum {got} where {due} was due \
+         (IEC 61158-6-10 RTA: neither the next nor a repeat), answered with a NACK"
+    )]
+    Sequence { got: u16, due: u16 },
 }
 
 /// Something the pump was asked for.
@@ -1307,6 +1424,20 @@ pub(crate) struct Connected {
     pub(crate) prm_end: Option<PnioStatus>,
     /// Whether ApplicationReady came: data exchange.
     pub(crate) ready: bool,
+}
+
+impl Connected {
+    /// Why the AR did not reach data exchange, for a verdict: the refusal (its PNIO status
+    /// decoded) or the call that did not come.
+    pub(crate) fn why_not_running(&self) -> String {
+        match self.prm_end {
+            _ if !self.status.is_ok() => {
+                format!("Connect response PNIO status {}", self.status.meaning())
+            }
+            Some(s) if !s.is_ok() => format!("Control PrmEnd response PNIO status {}", s.meaning()),
+            _ => "the device did not call ApplicationReady".into(),
+        }
+    }
 }
 
 /// How long after an output frame an input frame must arrive to carry the device's answer to
@@ -1360,4 +1491,75 @@ pub(crate) fn alarm_text(n: &AlarmNotification) -> String {
         n.specifier.sequence(),
         n.items
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::net::peer::Link as _;
+    use crate::pnio::link::{EmbeddedLink, EMBEDDED_PEER};
+    use proto::nord::pnio::{self as def, ModuleKind};
+    use proto::nord::ppo::PpoType;
+    use proto::nord::{Inverter, Product};
+    use proto::pnio::alarm::AlarmType;
+    use sim::device::{Device, DeviceConfig};
+    use sim::endpoint::Endpoint;
+    use sim::pnio::{IoConfig, IoDevice};
+
+    /// The embedded SK 550P in data exchange with PPO 4 in FI 1's slot.
+    fn running() -> Controller<EmbeddedLink> {
+        let product = Product::Sk550p;
+        let config = IoConfig {
+            name: "nord-device".into(),
+            ..IoConfig::new(product)
+        };
+        let io = IoDevice::new(Device::new(DeviceConfig::new(product)), config).unwrap();
+        let link = EmbeddedLink::new(io, EMBEDDED_PEER);
+        let mac = MacAddr([0x02, 0, 0, 0, 0, 0xC1]);
+        let mut ctl = Controller::new(link, mac, Duration::from_millis(500), false);
+        ctl.locate(Some("nord-device")).unwrap();
+        let slot = def::inverter_slot(product, Inverter::new(1).unwrap()).unwrap();
+        let ppo4 = def::module(product, ModuleKind::Ppo(PpoType::TYPE_4)).unwrap();
+        let c = ctl.connect(&[def::expected_module(slot, &ppo4)]).unwrap();
+        assert!(c.ready, "{c:?}");
+        ctl
+    }
+
+    #[test]
+    fn an_alarm_the_manual_does_not_name_is_acknowledged_at_once_and_kept_for_the_verdict() {
+        let mut ctl = running();
+        let (io, now) = ctl.link_mut().device().unwrap();
+        // Raised, its first PDU lost: the device repeats it after its RTA time-out (100 ms).
+        io.raise_alarm(now).expect("an AR to raise it in");
+        ctl.run_for(Duration::from_millis(150)).unwrap();
+        let Some(Departure::Alarm(n)) = ctl.take_departure() else {
+            panic!("the process alarm")
+        };
+        assert_eq!(
+            (n.alarm_type, n.slot, n.subslot),
+            (AlarmType::PROCESS, 3, 1)
+        );
+        assert_eq!(ctl.take_departure(), None, "taken once");
+        // Not left for an `alarm:` step: that one waits for a diagnosis alarm.
+        assert_eq!(
+            ctl.acknowledge_alarm(Duration::from_millis(10)).unwrap(),
+            None
+        );
+        // The AlarmAck cleared it: the device no longer reports a problem in its inputs, and
+        // raises the next one at once.
+        assert!(ctl.input_status().unwrap().station_ok());
+        let (io, now) = ctl.link_mut().device().unwrap();
+        assert!(!io.raise_alarm(now).unwrap().outputs.is_empty());
+    }
+
+    #[test]
+    fn any_makers_device_may_raise_any_alarm_for_a_step_to_take() {
+        let mut ctl = running();
+        ctl.set_alarm_types(None);
+        let (io, now) = ctl.link_mut().device().unwrap();
+        io.raise_alarm(now).unwrap();
+        let n = ctl.acknowledge_alarm(Duration::from_millis(150)).unwrap();
+        assert_eq!(n.map(|n| n.alarm_type), Some(AlarmType::PROCESS));
+        assert_eq!(ctl.take_departure(), None);
+    }
 }

@@ -49,6 +49,8 @@ impl<L: Link + 'static> GenericPnio<L> {
     ) -> Result<GenericPnio<L>, OpenError> {
         let (found, what) = find(&mut ctl, name.as_deref(), &what)?;
         ctl.set_dap(layout.dap.clone());
+        // Any maker's device may raise any alarm its GSDML allows.
+        ctl.set_alarm_types(None);
         bring_to_data_exchange(&mut ctl, &layout.modules)?;
         Ok(GenericPnio {
             ctl,

@@ -4,6 +4,7 @@
 
 pub mod bench_support;
 mod binding;
+mod consumer;
 mod controller;
 mod effect;
 mod faults;

@@ -72,6 +72,61 @@ impl PnioStatus {
     pub fn is_ok(self) -> bool {
         self == PnioStatus::OK
     }
+
+    /// What the four bytes say, as far as IEC 61158-6-10's tables name them (ErrorCode,
+    /// ErrorDecode, then ErrorCode1 and ErrorCode2 as the decode reads them), for a verdict:
+    /// "DB 81 40 06: IODConnectRes, PNIO: CMRPC: state conflict". A value the tables here do
+    /// not name is left as its hex value.
+    pub fn meaning(self) -> String {
+        let [code, decode, code1, code2] = self.to_bytes();
+        let hex = format!("{code:02X} {decode:02X} {code1:02X} {code2:02X}");
+        if self.is_ok() {
+            return format!("{hex}: OK");
+        }
+        let named = |name: Option<&str>, v: u8| name.map_or(format!("{v:02X}h"), str::to_string);
+        let mut parts = vec![
+            named(error_code_name(code), code),
+            named(error_decode_name(decode), decode),
+        ];
+        match decode {
+            Self::DECODE_PNIO => {
+                parts.push(named(cm::code1_name(code1), code1));
+                if code1 == cm::CMRPC {
+                    parts.push(named(cm::cmrpc_name(code2), code2));
+                } else {
+                    parts.push(format!("field {code2}"));
+                }
+            }
+            Self::DECODE_PNIORW => parts.push(named(pniorw::name(code1), code1)),
+            _ => {}
+        }
+        format!("{hex}: {}", parts.join(": ").replacen(": ", ", ", 1))
+    }
+}
+
+/// The service an ErrorCode names (IEC 61158-6-10 "ErrorCode").
+fn error_code_name(code: u8) -> Option<&'static str> {
+    Some(match code {
+        PnioStatus::CODE_PNIO => "PNIO",
+        0xCF => "RTA error",
+        0xDA => "AlarmAck",
+        cm::CONNECT => "IODConnectRes",
+        cm::RELEASE => "IODReleaseRes",
+        cm::CONTROL => "IODControlRes",
+        PnioStatus::CODE_READ => "IODReadRes",
+        PnioStatus::CODE_WRITE => "IODWriteRes",
+        _ => return None,
+    })
+}
+
+/// What an ErrorDecode says ErrorCode1 and ErrorCode2 are.
+fn error_decode_name(decode: u8) -> Option<&'static str> {
+    Some(match decode {
+        PnioStatus::DECODE_PNIORW => "PNIORW",
+        PnioStatus::DECODE_PNIO => "PNIO",
+        0x82 => "manufacturer specific",
+        _ => return None,
+    })
 }
 
 impl std::fmt::Display for PnioStatus {
@@ -112,6 +167,25 @@ pub mod pniorw {
     pub const RESOURCE_BUSY: u8 = 0xC2;
     /// Class Ch, code 3: resource unavailable.
     pub const RESOURCE_UNAVAILABLE: u8 = 0xC3;
+
+    /// The name of an ErrorCode1 above.
+    pub(super) fn name(code1: u8) -> Option<&'static str> {
+        Some(match code1 {
+            READ_ERROR => "read error",
+            WRITE_ERROR => "write error",
+            FEATURE_NOT_SUPPORTED => "feature not supported",
+            INVALID_INDEX => "invalid index",
+            WRITE_LENGTH => "write length error",
+            INVALID_SLOT => "invalid slot/subslot",
+            STATE_CONFLICT => "state conflict",
+            ACCESS_DENIED => "access denied",
+            INVALID_RANGE => "invalid range",
+            INVALID_PARAMETER => "invalid parameter",
+            RESOURCE_BUSY => "resource busy",
+            RESOURCE_UNAVAILABLE => "resource unavailable",
+            _ => return None,
+        })
+    }
 }
 
 /// The PNIO status of the context-management services (IEC 61158-6-10 "ErrorCode",
@@ -152,6 +226,34 @@ pub mod cm {
     pub const CMRPC_AR_UNKNOWN: u8 = 5;
     /// CMRPC: state conflict.
     pub const CMRPC_STATE_CONFLICT: u8 = 6;
+
+    /// The name of an ErrorCode1 above (with ErrorDecode PNIO).
+    pub(super) fn code1_name(code1: u8) -> Option<&'static str> {
+        Some(match code1 {
+            FAULTY_AR_BLOCK => "faulty ARBlockReq",
+            FAULTY_IOCR_BLOCK => "faulty IOCRBlockReq",
+            FAULTY_EXPECTED_SUBMODULE_BLOCK => "faulty ExpectedSubmoduleBlockReq",
+            FAULTY_ALARM_CR_BLOCK => "faulty AlarmCRBlockReq",
+            FAULTY_CONTROL_BLOCK => "faulty IODControlReq",
+            FAULTY_RELEASE_BLOCK => "faulty IODReleaseReq",
+            CMRPC => "CMRPC",
+            _ => return None,
+        })
+    }
+
+    /// The name of a CMRPC ErrorCode2 above.
+    pub(super) fn cmrpc_name(code2: u8) -> Option<&'static str> {
+        Some(match code2 {
+            CMRPC_ARGS_LENGTH => "ArgsLength invalid",
+            CMRPC_UNKNOWN_BLOCKS => "unknown blocks",
+            CMRPC_IOCR_MISSING => "IOCR missing",
+            CMRPC_ALARM_CR_COUNT => "wrong AlarmCRBlock count",
+            CMRPC_OUT_OF_AR => "out of AR resources",
+            CMRPC_AR_UNKNOWN => "AR UUID unknown",
+            CMRPC_STATE_CONFLICT => "state conflict",
+            _ => return None,
+        })
+    }
 }
 
 #[cfg(test)]
@@ -172,5 +274,33 @@ mod tests {
             PnioStatus::cm(cm::CONNECT, cm::CMRPC, cm::CMRPC_OUT_OF_AR).to_bytes(),
             [0xDB, 0x81, 0x40, 0x04]
         );
+    }
+
+    #[test]
+    fn a_status_says_what_its_bytes_mean() {
+        for (bytes, says) in [
+            ([0, 0, 0, 0], "00 00 00 00: OK"),
+            (
+                [0xDB, 0x81, 0x40, 0x06],
+                "DB 81 40 06: IODConnectRes, PNIO: CMRPC: state conflict",
+            ),
+            // A faulty block names the field by its number.
+            (
+                [0xDB, 0x81, 0x02, 0x10],
+                "DB 81 02 10: IODConnectRes, PNIO: faulty IOCRBlockReq: field 16",
+            ),
+            (
+                [0xDF, 0x80, 0xB0, 0x00],
+                "DF 80 B0 00: IODWriteRes, PNIORW: invalid index",
+            ),
+            // Values the tables here do not name stay hex.
+            (
+                [0x12, 0x81, 0x77, 0x09],
+                "12 81 77 09: 12h, PNIO: 77h: field 9",
+            ),
+            ([0xDE, 0x99, 0x01, 0x02], "DE 99 01 02: IODReadRes, 99h"),
+        ] {
+            assert_eq!(PnioStatus::from_bytes(bytes).meaning(), says);
+        }
     }
 }

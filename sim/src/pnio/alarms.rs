@@ -284,27 +284,58 @@ impl IoDevice {
         Ok(())
     }
 
-    /// Queues an incoming (`appears`) or outgoing channel diagnosis with ChannelErrorType
-    /// `number` from FI `fi`'s module, when an AR is in data exchange with that module in it.
-    fn diagnosis(&mut self, fi: Inverter, appears: bool, number: u16) {
-        let Some(ar) = self.ar.as_mut().filter(|a| a.running()) else {
-            return;
-        };
-        let Ok((slot, subslot)) = def::alarm_location(self.product, AlarmSource::Inverter(fi))
-        else {
-            return;
-        };
-        let Some(sub) = ar
+    /// Where FI `fi`'s alarms come from, when an AR is in data exchange with its module in
+    /// it: the slot, subslot and the module's ident number.
+    fn alarm_source(&self, fi: Inverter) -> Option<(u16, u16, u32)> {
+        let ar = self.ar.as_ref().filter(|a| a.running())?;
+        let (slot, subslot) = def::alarm_location(self.product, AlarmSource::Inverter(fi)).ok()?;
+        let sub = ar
             .submodules
             .iter()
-            .find(|s| s.slot == slot && s.subslot == subslot && s.proper)
-        else {
-            return;
-        };
+            .find(|s| s.slot == slot && s.subslot == subslot && s.proper)?;
         let ident = sub
             .fi
             .and_then(|(_, t)| def::module(self.product, ModuleKind::Ppo(t)))
             .map_or(0, |m| m.ident);
+        Some((slot, subslot, ident))
+    }
+
+    /// A process alarm from FI 1's module though nothing happened (`harness serve pnio
+    /// --misbehave alarm=`): queued on the alarm CR as any alarm, sent when the one before it
+    /// is acknowledged; where it comes from, or `None` without an AR in data exchange. NORD's
+    /// devices raise diagnosis alarms only (BU 0620 §5.4.2, BU 0590 §6.1): a process alarm
+    /// is one their controller cannot expect. Its payload is a manufacturer specific item (USI
+    /// 0001h) of two zero bytes, as an application that raises one fills it.
+    pub fn spurious_alarm(&mut self) -> Option<(u16, u16)> {
+        let fi = Inverter::new(1).ok()?;
+        let (slot, subslot, ident) = self.alarm_source(fi)?;
+        let ar = self.ar.as_mut()?;
+        ar.alarm.queue.push_back(AlarmNotification {
+            high: false,
+            alarm_type: AlarmType::PROCESS,
+            api: 0,
+            slot,
+            subslot,
+            module_ident: ident,
+            submodule_ident: ident,
+            specifier: AlarmSpecifier(0),
+            items: vec![AlarmItem::Other {
+                usi: 0x0001,
+                data: vec![0, 0],
+            }],
+        });
+        Some((slot, subslot))
+    }
+
+    /// Queues an incoming (`appears`) or outgoing channel diagnosis with ChannelErrorType
+    /// `number` from FI `fi`'s module, when an AR is in data exchange with that module in it.
+    fn diagnosis(&mut self, fi: Inverter, appears: bool, number: u16) {
+        let Some((slot, subslot, ident)) = self.alarm_source(fi) else {
+            return;
+        };
+        let Some(ar) = self.ar.as_mut() else {
+            return;
+        };
         let (alarm_type, properties, flags) = if appears {
             (
                 AlarmType::DIAGNOSIS,

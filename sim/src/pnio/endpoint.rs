@@ -11,7 +11,7 @@ use std::time::Duration;
 use proto::pnio::RPC_PORT;
 
 use super::{IoDevice, Out, POLL_PERIOD};
-use crate::endpoint::{Endpoint, Input, Output};
+use crate::endpoint::{Endpoint, Input, Output, Raised};
 
 impl From<Out> for Output {
     fn from(out: Out) -> Output {
@@ -53,6 +53,22 @@ impl Endpoint for IoDevice {
 
     fn next_deadline(&self) -> Option<Duration> {
         Some(self.next_poll)
+    }
+
+    /// A process alarm on the alarm CR ([`IoDevice::spurious_alarm`]), sent now unless an
+    /// alarm before it awaits the controller's acknowledgement.
+    fn raise_alarm(&mut self, now: Duration) -> Option<Raised> {
+        let (slot, subslot) = self.spurious_alarm()?;
+        let outputs: Vec<Output> = self.alarms_due(now).into_iter().map(Output::from).collect();
+        let waits = if outputs.is_empty() {
+            " (queued behind an alarm not yet acknowledged)"
+        } else {
+            ""
+        };
+        Some(Raised {
+            what: format!("process alarm from slot {slot} subslot {subslot}{waits}"),
+            outputs,
+        })
     }
 }
 

@@ -452,6 +452,85 @@ fn an_inverter_error_raises_a_diagnosis_alarm_that_the_controller_acknowledges()
     assert!(io.in_data_exchange());
 }
 
+/// A spurious alarm (`Endpoint::raise_alarm`): nothing without an AR; in one, a process
+/// alarm from FI 1's slot as a DATA-RTA-PDU on FE01h with the alarm CR's sequence numbers, the
+/// next queued until the controller's AlarmAck for it came, then sent with the next number.
+#[test]
+fn a_spurious_alarm_is_a_process_alarm_on_the_alarm_cr() {
+    use crate::endpoint::{Endpoint, Output};
+    let mut io = io(Product::Sk550p, "sk550p-1");
+    assert_eq!(
+        io.raise_alarm(Duration::ZERO),
+        None,
+        "no AR: nowhere to raise it"
+    );
+    run_ar(&mut io, &[(3, ModuleKind::Ppo(PpoType::TYPE_3))]);
+    let pdus = |out: &[Output]| {
+        out.iter()
+            .filter_map(|o| match o {
+                Output::Frame(f) => AlarmRepr::parse(f.get(14..)?).ok(),
+                _ => None,
+            })
+            .collect::<Vec<_>>()
+    };
+    let now = Duration::from_millis(1);
+    let raised = io.raise_alarm(now).expect("an AR to raise it in");
+    assert_eq!(raised.what, "process alarm from slot 3 subslot 1");
+    let sent = pdus(&raised.outputs);
+    assert_eq!(sent.len(), 1);
+    let (pdu, n) = match &sent[0] {
+        AlarmRepr {
+            body: RtaBody::Notification(n),
+            ..
+        } => (&sent[0], n.clone()),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(pdu.frame_id, FrameId::ALARM_LOW);
+    assert_eq!(
+        (pdu.pdu_type, pdu.dst_endpoint, pdu.src_endpoint),
+        (RtaPduType::DATA, PLC_REF, 1)
+    );
+    // The alarm CR's first SendSeqNum; nothing received from the controller yet (FFFEh).
+    assert_eq!((pdu.send_seq, pdu.ack_seq), (0, 0xFFFE));
+    assert_eq!(
+        (n.alarm_type, n.slot, n.subslot, n.high),
+        (AlarmType::PROCESS, 3, 1, false)
+    );
+    assert_eq!(n.specifier.sequence(), 0);
+    // A second one waits for the first's AlarmAck.
+    let queued = io.raise_alarm(now).unwrap();
+    assert!(queued.outputs.is_empty());
+    assert!(queued
+        .what
+        .ends_with("(queued behind an alarm not yet acknowledged)"));
+    let ack = AlarmRepr::ack(FrameId::ALARM_LOW, 1, PLC_REF, 0xFFFF, 0);
+    io.frame(&eth(io.mac(), &ack.emit().unwrap()), now);
+    let data = AlarmRepr::data(
+        1,
+        PLC_REF,
+        0,
+        0,
+        RtaBody::Ack(AlarmAck::of(&n, PnioStatus::OK)),
+    );
+    let answered = io.frame(&eth(io.mac(), &data.emit().unwrap()), now);
+    let acks = frames(&answered)
+        .into_iter()
+        .filter_map(|f| AlarmRepr::parse(&f).ok())
+        .filter(|p| p.pdu_type == RtaPduType::ACK)
+        .count();
+    assert_eq!(
+        acks, 1,
+        "the device acknowledges the AlarmAck at transport level"
+    );
+    let next = pdus(&Endpoint::poll(&mut io, Duration::from_millis(2)));
+    let next: Vec<_> = next
+        .iter()
+        .filter(|p| p.pdu_type == RtaPduType::DATA)
+        .collect();
+    assert_eq!(next.len(), 1);
+    assert_eq!((next[0].send_seq, next[0].ack_seq), (1, 0));
+}
+
 /// Records over the AR: the P102 example of BU 0620 §2.5.6.4 written to record 101, then the
 /// answer read; an unknown index gets its PNIO status.
 #[test]

@@ -14,6 +14,13 @@ use crate::nord::types::Inverter;
 pub const ALARM_TYPE_DIAGNOSIS: u16 = 0x0001;
 /// USI of a channel diagnosis (IEC 61158-6-10 "ChannelDiagnosis").
 pub const USI_CHANNEL_DIAGNOSIS: u16 = 0x8000;
+/// AlarmType "Diagnosis disappears" (IEC 61158-6-10): the "outgoing event".
+pub const ALARM_TYPE_DIAGNOSIS_DISAPPEARS: u16 = 0x000C;
+/// The alarm types a NORD device raises: a diagnostic alarm as "incoming event" when an
+/// inverter (or the module) has an error, and as "outgoing event" when it is remedied (BU 0620
+/// §5.4.2 p. 98; BU 0590 §6.1 and P163 in §5.1.2). The manuals name no other: a process alarm,
+/// say, is none a controller of these devices can expect.
+pub const ALARM_TYPES: [u16; 2] = [ALARM_TYPE_DIAGNOSIS, ALARM_TYPE_DIAGNOSIS_DISAPPEARS];
 
 /// The alarm number (ChannelErrorType, BU 0590 P163 p. 35) of an inverter error: P700 + 100h
 /// (BU 0620 §5.4.2 p. 98: E10.3 → 359). Same as [`errors::profinet_alarm`].
