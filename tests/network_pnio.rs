@@ -143,9 +143,11 @@ fn a_silent_or_garbage_sending_device_is_an_error_verdict_within_the_timeout() {
                 "{impostor:?}: {c}"
             );
         }
-        // Each case is bounded by the 0.3 s timeout (plus process start).
+        // A bound against a hang, not a speed figure: each case ends at the 0.3 s timeout, and
+        // the rest is a debug process starting on a host that CI keeps busy (two busy loops
+        // beside the tests made it 4.3 s once), far below any wait a hang would reach.
         assert!(
-            took < std::time::Duration::from_secs(3 + cases.len() as u64),
+            took < std::time::Duration::from_secs(10 + cases.len() as u64),
             "{impostor:?}: {} cases took {took:?}",
             cases.len()
         );
