@@ -239,7 +239,7 @@ impl Message {
     /// is [`Error::SocketcandSyntax`]; error-frame data longer than 8 bytes is
     /// [`Error::CanDataLength`].
     pub fn emit(&self) -> Result<String, Error> {
-        Ok(match self {
+        let text = match self {
             Message::Hi => "< hi >".to_owned(),
             Message::Ok => "< ok >".to_owned(),
             Message::RawMode => "< rawmode >".to_owned(),
@@ -274,7 +274,18 @@ impl Message {
                 s
             }
             Message::Other { text } => format!("< {} >", plain("message", text)?),
-        })
+        };
+        // A reader takes a message whose `>` comes within MAX_MESSAGE_LEN bytes of its `<`
+        // ([`Message::parse`]); words read from a longer run of whitespace than the one space
+        // written between them can come back too long to be read.
+        if text.len() > MAX_MESSAGE_LEN + 1 {
+            return Err(Error::syntax(
+                "message",
+                text.get(..32).unwrap_or(&text),
+                "is longer than the 512 bytes a socketcand reader takes",
+            ));
+        }
+        Ok(text)
     }
 
     /// [`Message::emit`] appended to `out`: the same text, written without allocating for a
@@ -732,6 +743,36 @@ mod tests {
         let r = CanFrame::remote(0x705, 1).unwrap();
         assert!(Message::Send { frame: r }.emit_into(&mut out).is_err());
         assert_eq!(out, "x");
+    }
+
+    /// Found by the `can` fuzz target (fuzz/regressions/can/): words read across tabs and
+    /// vertical tabs (no whitespace to `split_ascii_whitespace`, so part of a word) came back
+    /// from `emit` with one space each side of them, two bytes past what a reader takes.
+    #[test]
+    fn a_message_read_near_the_limit_is_not_written_past_it() {
+        let mut read = b"<".to_vec();
+        read.push(b'\t');
+        read.resize(MAX_MESSAGE_LEN, b'w');
+        read.push(b'>');
+        let Ok(Framed::Complete { message, .. }) = Message::parse(&read) else {
+            panic!("a message whose `>` is at the limit is read");
+        };
+        let err = message.emit().unwrap_err().to_string();
+        assert!(err.contains("longer than the 512 bytes"), "{err}");
+        // One byte fewer, and what is written is read back the same.
+        let mut short = read[..read.len() - 3].to_vec();
+        short.push(b'>');
+        let Ok(Framed::Complete { message, .. }) = Message::parse(&short) else {
+            panic!("read");
+        };
+        let text = message.emit().unwrap();
+        assert_eq!(
+            Message::parse(text.as_bytes()),
+            Ok(Framed::Complete {
+                message,
+                consumed: text.len()
+            })
+        );
     }
 
     #[test]
