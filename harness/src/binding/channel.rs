@@ -83,6 +83,11 @@ pub(crate) enum StepError {
         /// How long the harness waited, the host's lost time included.
         waited: std::time::Duration,
     },
+    /// The bus's own error detection, as its standard has the master run it, found the
+    /// device at fault (POWERLINK's loss-of-PRes threshold reached): a failure, in the
+    /// standard's words.
+    #[error("{0}")]
+    Detected(#[source] Cause),
     /// The DUT answered with something that is not the protocol at all.
     #[error("the DUT does not speak the protocol: {0}")]
     Garbage(#[source] Cause),
@@ -114,6 +119,7 @@ impl StepError {
             | StepError::Protocol(_)
             | StepError::Malformed { .. }
             | StepError::Late { .. }
+            | StepError::Detected(_)
             | StepError::Closed(_) => Verdict::Fail,
             StepError::Silent { .. }
             | StepError::Refused(_)

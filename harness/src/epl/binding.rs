@@ -104,6 +104,7 @@ fn step_error(e: MnError) -> StepError {
             waited,
         },
         e @ MnError::Malformed { .. } => StepError::Garbage(e.into()),
+        e @ MnError::LossOfPres { .. } => StepError::Detected(e.into()),
         e @ MnError::State { .. } => StepError::Refused(e.into()),
         MnError::Abort(code) => StepError::Refused(format!("SDO abort {code:08X}h").into()),
     }
@@ -1001,8 +1002,10 @@ mod tests {
             binding(fault),
             Err(OpenError::Unreachable(e)) if e.contains("no reply")
         ));
-        // Silent after a good start: the node is late, a failure that names its limit (the
-        // SDO time, 200 ms on the virtual clock) and the time waited; garbage is an error.
+        // Silent after a good start: the SDO read runs the cycle, whose PRes stop coming; two
+        // lost in a row reach DS 301's loss-of-PRes threshold (8 + 8 ≥ 15), decided three
+        // cycles after the second: a failure in the standard's words, long before the SDO
+        // time (200 ms). Garbage is an error.
         for (f, verdict) in [
             (Fault::Silent, Verdict::Fail),
             (Fault::Garbage, Verdict::Error),
@@ -1016,14 +1019,14 @@ mod tests {
             assert_eq!(e.verdict(), verdict, "{f:?}: {e}");
             assert!(b.mn.now() - start <= Duration::from_millis(250), "{f:?}");
             if f == Fault::Silent {
-                assert!(
-                    matches!(&e, StepError::Late { limit, waited, .. }
-                        if *limit == Duration::from_millis(200) && *waited >= *limit),
-                    "{e:?}"
+                assert!(matches!(&e, StepError::Detected(_)), "{e:?}");
+                assert_eq!(
+                    e.to_string(),
+                    "no PRes from node 1 in 2 of 2 cycles: loss of PRes, threshold counter \
+                     (1C08h) 16 reached the threshold 15 (1C09h DLL_MNCNLossPResThreshold): \
+                     E_DLL_LOSS_PRES_TH"
                 );
-                let text = e.to_string();
-                assert!(text.starts_with("node 1, SDO"), "{text}");
-                assert!(text.contains("limit of 200 ms (waited 20"), "{text}");
+                assert!(b.mn.now() - start <= Duration::from_millis(10), "within 5 cycles");
             }
         }
     }

@@ -9,9 +9,10 @@
 
 mod describe;
 pub(crate) mod link;
+mod loss;
 
 use std::collections::VecDeque;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use proto::epl::asnd::{IdentResponse, NmtCommandFrame, StatusResponse};
 use proto::epl::frame::{Asnd, Body, Preq, Soa, Soc};
@@ -24,6 +25,7 @@ use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
 
 pub(crate) use describe::describe;
 use link::Link;
+use loss::{PresWatch, Reached};
 
 use crate::hex::hex;
 use crate::net::LinkError;
@@ -122,6 +124,21 @@ pub(crate) enum MnError {
     /// The node refused an SDO transfer.
     #[error("SDO abort {0:08X}h")]
     Abort(u32),
+    /// The node's PRes went missing until the MN's loss-of-PRes threshold counter reached its
+    /// threshold (EPSG DS 301 §4.7.4.1, E_DLL_LOSS_PRES_TH): an MN takes the node out of
+    /// the cycle.
+    #[error(
+        "no PRes from node {node} in {} of {} cycles: loss of PRes, threshold counter \
+         (1C08h) {} reached the threshold {} (1C09h DLL_MNCNLossPResThreshold): \
+         E_DLL_LOSS_PRES_TH",
+        reached.lost, reached.cycles, reached.count, reached.threshold
+    )]
+    LossOfPres {
+        /// The node.
+        node: u8,
+        /// The counts.
+        reached: Reached,
+    },
     /// The node did not reach the NMT state asked for.
     #[error("node {node} is in {state} after {what}, not {wanted}")]
     State {
@@ -216,6 +233,16 @@ pub(crate) struct Manager<L> {
     asnd_link: Option<Connection>,
     udp_link: Option<Connection>,
     transaction: u8,
+    /// The node's loss-of-PRes counters.
+    watch: PresWatch,
+    /// Whether the node answers PReq, as its last frame showed (a PRes; an ASnd in
+    /// PRE_OPERATIONAL_2, READY_TO_OPERATE or OPERATIONAL), and nothing since (an NMT stop or
+    /// reset, the MN's silence) made it stop: only then is a missing PRes watched.
+    answering: bool,
+    /// PRes of the node received and not yet matched to a cycle's window: late ones.
+    unmatched: u32,
+    /// When the MN last looked at how late the host ran (the real clock).
+    host_checked: Instant,
 }
 
 /// The least a wait moves for the host's lost time, however short its limit (a PRes's 500 µs),
@@ -261,6 +288,10 @@ impl<L: Link> Manager<L> {
             asnd_link: None,
             udp_link: None,
             transaction: 0,
+            watch: PresWatch::default(),
+            answering: false,
+            unmatched: 0,
+            host_checked: Instant::now(),
         }
     }
 
@@ -275,6 +306,8 @@ impl<L: Link> Manager<L> {
             self.config.node = node;
             self.node_state = None;
             self.drop_connections();
+            self.watch = PresWatch::default();
+            self.stop_watching();
         }
     }
 
@@ -471,10 +504,15 @@ impl<L: Link> Manager<L> {
                 Some(r) => {
                     self.node_mac = eth.src();
                     match &r.body {
-                        Body::Pres(p) => self.node_state = Some(p.state),
+                        Body::Pres(p) => {
+                            self.node_state = Some(p.state);
+                            self.answering = true;
+                            self.unmatched += 1;
+                        }
                         Body::Asnd(a) => {
                             if let Some(s) = asnd_state(a) {
                                 self.node_state = Some(s);
+                                self.answering = answers_preq(s);
                             }
                         }
                         _ => {}
@@ -544,9 +582,11 @@ impl<L: Link> Manager<L> {
                 self.record(&sent, None);
                 return self.asynchronous(service, node);
             }
+            let watching = self.answering;
             let w = self.wait(self.config.reply);
             let pres = self.wait_for(&w, |r| matches!(r.body, Body::Pres(_)))?;
             self.in_time = pres.is_some();
+            let (reached, note) = self.watch_pres(watching, pres.is_some());
             match &pres {
                 Some(p) => {
                     if let Some(EplRepr {
@@ -568,8 +608,82 @@ impl<L: Link> Manager<L> {
                 }
             }
             self.record(&sent, pres.as_ref());
+            if let (Some(note), true) = (note, self.recording) {
+                if let Some(e) = self.exchanges.last_mut() {
+                    if !e.received.is_empty() {
+                        e.received.push_str("; ");
+                    }
+                    e.received.push_str(&note);
+                }
+            }
+            if let Some(reached) = reached {
+                return Err(MnError::LossOfPres { node, reached });
+            }
         }
         self.asynchronous(service, node)
+    }
+
+    /// Stops watching for PRes until the node answers a PReq again: it stops answering on
+    /// purpose (NMT stop or reset, the MN's silence, another node id).
+    fn stop_watching(&mut self) {
+        self.answering = false;
+        self.watch.forget();
+    }
+
+    /// Notes how this cycle's PRes came (`got`: within its window) when `watching`, after the
+    /// node's late PRes and the host's lost time since the last look: the threshold reached,
+    /// if it was, and a note for the cycle's exchange (a PRes missing, a loss counted).
+    fn watch_pres(&mut self, watching: bool, got: bool) -> (Option<Reached>, Option<String>) {
+        if got {
+            self.unmatched = self.unmatched.saturating_sub(1);
+        }
+        let late = std::mem::take(&mut self.unmatched);
+        let now = Instant::now();
+        let lost = if self.is_virtual() {
+            Duration::ZERO
+        } else {
+            crate::timing::host_lost(self.host_checked, now)
+        };
+        self.host_checked = now;
+        if !watching {
+            return (None, None);
+        }
+        self.watch.came_late(late);
+        if lost >= self.config.cycle {
+            self.watch.host_late();
+        }
+        let before = (self.watch.cumulative(), self.watch.uncounted());
+        let reached = if got {
+            self.watch.in_time()
+        } else {
+            self.watch.missing()
+        };
+        let mut notes = Vec::new();
+        if !got {
+            notes.push(format!(
+                "no PRes within {}",
+                crate::timing::ms(self.config.reply)
+            ));
+        }
+        let (late, excused) = self.watch.uncounted();
+        if late != before.1 .0 {
+            notes.push("a missing PRes came late: no loss".into());
+        }
+        if excused != before.1 .1 {
+            notes.push("a missing PRes not counted lost: the host ran late meanwhile".into());
+        }
+        if self.watch.cumulative() != before.0 {
+            notes.push(format!(
+                "a PRes of node {} {} cycles back counted lost (1C07h {}, 1C08h {} of \
+                 threshold {})",
+                self.config.node,
+                loss::CONFIRM_CYCLES,
+                self.watch.cumulative(),
+                self.watch.count(),
+                loss::DEFAULT_THRESHOLD
+            ));
+        }
+        (reached, (!notes.is_empty()).then(|| notes.join("; ")))
     }
 
     /// The asynchronous phase of a cycle: the SoA inviting the MN itself to send what is
@@ -672,6 +786,7 @@ impl<L: Link> Manager<L> {
     /// Lets `d` pass without sending anything (the MN "fails", the cable is cut); the next
     /// cycle resumes as before, as an MN whose link comes back does.
     pub(crate) fn silence(&mut self, d: Duration) {
+        self.stop_watching();
         let until = self.link.now() + d;
         self.link.wait_until(until);
         self.next_cycle = until;
@@ -767,6 +882,16 @@ impl<L: Link> Manager<L> {
         }
         .emit();
         let before = self.node_state;
+        if matches!(
+            command,
+            NmtCommand::STOP_NODE
+                | NmtCommand::RESET_NODE
+                | NmtCommand::RESET_COMMUNICATION
+                | NmtCommand::RESET_CONFIGURATION
+                | NmtCommand::SW_RESET
+        ) {
+            self.stop_watching();
+        }
         self.queued.push_back((ServiceId::NMT_COMMAND, payload));
         self.cycle(RequestedService::NO_SERVICE)?;
         if matches!(
@@ -1249,6 +1374,15 @@ fn more_follows(sdo: &[u8]) -> bool {
                 Segmentation::Initiate | Segmentation::Segment
             ) && c.abort_code().is_none()
         })
+}
+
+/// Whether a node in `s` answers a PReq with a PRes (EPSG DS 301 §7.1.4: the isochronous
+/// phase of NMT_CS_PRE_OPERATIONAL_2, READY_TO_OPERATE and OPERATIONAL).
+fn answers_preq(s: NmtState) -> bool {
+    matches!(
+        s,
+        NmtState::PRE_OPERATIONAL_2 | NmtState::READY_TO_OPERATE | NmtState::OPERATIONAL
+    )
 }
 
 /// The NMT state an ASnd of the node carries (IdentResponse, StatusResponse).
