@@ -160,6 +160,24 @@ fn epl_a_node_misbehaving_is_named_for_what_it_did() {
     assert!(t.silenced > 0, "{t:?}");
 }
 
+#[test]
+fn epl_a_node_that_loses_pres_is_named_for_the_loss_of_pres_threshold() {
+    if !require_root_or_skip("serve epl --misbehave over veth pairs") {
+        return;
+    }
+    // Every third output of the node lost: in the case's SDO read and its 50 idle cycles
+    // mostly PRes, which DS 301's threshold counter (+8 per loss, −1 per good cycle) takes
+    // past the threshold 15 within a few losses (8, 7, 6, 14, 13, 12, 20).
+    let t = epl(
+        "mbpldrop",
+        "drop=every:3",
+        "pre-operational-2-parameters-only",
+        "fail",
+        &["no PRes from node 1 in ", "loss of PRes", "E_DLL_LOSS_PRES_TH"],
+    );
+    assert!(t.dropped > 0, "{t:?}");
+}
+
 /// PROFINET IO: `s` on the device, the connect cases from the namespace as controller.
 fn pnio(tag: &str, s: &str, verdict: &str, says: &[&str]) -> Touched {
     const NAME: &str = "nord-device";

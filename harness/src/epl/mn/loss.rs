@@ -10,10 +10,10 @@
 //! cycle whose PRes missed its window as *missing* and decides [`CONFIRM_CYCLES`] cycles
 //! later. A PRes of the node that comes after its own window (a node, or its host, running
 //! late) shows that the oldest missing one came after all; one still missing then is lost,
-//! unless the host lost at least a cycle's time meanwhile (the node shares the host, and its
-//! answer may have been held back with the MN), which the caller says as it finds it
-//! ([`PresWatch::host_late`]). Cycles are decided in the order they ran, so the counter moves
-//! as DS 301's does.
+//! unless the host ran late meanwhile (the node shares the host, and its answer may have been
+//! held back with the MN), which the caller judges when the cycle is decided, from when its
+//! PReq left (`T`, the caller's clock). Cycles are decided in the order they ran, so the
+//! counter moves as DS 301's does.
 
 use std::collections::VecDeque;
 
@@ -30,12 +30,11 @@ pub(crate) const CONFIRM_CYCLES: u32 = 3;
 
 /// How one cycle's PRes came.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Slot {
+enum Slot<T> {
     /// Within its window.
     InTime,
-    /// Not within its window: `age` cycles ago; `excused` when the host lost a cycle's time
-    /// meanwhile.
-    Missing { age: u32, excused: bool },
+    /// Not within its window: `age` cycles ago, its PReq having left at `sent`.
+    Missing { age: u32, sent: T },
     /// After its window (a later PRes of the node showed it).
     Late,
 }
@@ -53,9 +52,9 @@ pub(crate) struct Reached {
     pub(crate) threshold: u32,
 }
 
-/// One node's loss-of-PRes counters and its undecided cycles.
+/// One node's loss-of-PRes counters and its undecided cycles, each PReq's time `T`.
 #[derive(Debug, Clone)]
-pub(crate) struct PresWatch {
+pub(crate) struct PresWatch<T> {
     threshold: u32,
     /// DLL_MNCNLossPResCumCnt (1C07h): every PRes lost.
     cumulative: u32,
@@ -66,17 +65,17 @@ pub(crate) struct PresWatch {
     /// Losses the host excused, late PRes: recorded, not counted.
     excused: u32,
     late: u32,
-    open: VecDeque<Slot>,
+    open: VecDeque<Slot<T>>,
 }
 
-impl Default for PresWatch {
-    fn default() -> PresWatch {
+impl<T: Copy> Default for PresWatch<T> {
+    fn default() -> PresWatch<T> {
         PresWatch::new(DEFAULT_THRESHOLD)
     }
 }
 
-impl PresWatch {
-    pub(crate) fn new(threshold: u32) -> PresWatch {
+impl<T: Copy> PresWatch<T> {
+    pub(crate) fn new(threshold: u32) -> PresWatch<T> {
         PresWatch {
             threshold,
             cumulative: 0,
@@ -88,29 +87,18 @@ impl PresWatch {
         }
     }
 
-    /// Notes a cycle whose PRes came within its window.
-    pub(crate) fn in_time(&mut self) -> Option<Reached> {
+    /// Notes a cycle whose PRes came within its window, and decides what is due;
+    /// `excused(sent)`: whether the host ran late since a PReq left at `sent`.
+    pub(crate) fn in_time(&mut self, excused: impl Fn(T) -> bool) -> Option<Reached> {
         self.open.push_back(Slot::InTime);
-        self.decide()
+        self.decide(excused)
     }
 
-    /// Notes a cycle whose PRes did not come within its window.
-    pub(crate) fn missing(&mut self) -> Option<Reached> {
-        self.open.push_back(Slot::Missing {
-            age: 0,
-            excused: false,
-        });
-        self.decide()
-    }
-
-    /// The host lost a cycle's time just now: a PRes missing so far may have been held back
-    /// with the MN, and counts as no loss.
-    pub(crate) fn host_late(&mut self) {
-        for s in self.open.iter_mut() {
-            if let Slot::Missing { excused, .. } = s {
-                *excused = true;
-            }
-        }
+    /// Notes a cycle whose PRes did not come within its window, its PReq having left at
+    /// `sent`, and decides what is due.
+    pub(crate) fn missing(&mut self, sent: T, excused: impl Fn(T) -> bool) -> Option<Reached> {
+        self.open.push_back(Slot::Missing { age: 0, sent });
+        self.decide(excused)
     }
 
     /// `n` PRes of the node came outside any cycle's window: the oldest missing ones came late.
@@ -149,7 +137,7 @@ impl PresWatch {
     }
 
     /// Ages the missing cycles by the one just noted and decides the oldest, in order.
-    fn decide(&mut self) -> Option<Reached> {
+    fn decide(&mut self, excused: impl Fn(T) -> bool) -> Option<Reached> {
         let n = self.open.len();
         for (i, s) in self.open.iter_mut().enumerate() {
             if let Slot::Missing { age, .. } = s {
@@ -163,7 +151,7 @@ impl PresWatch {
         while let Some(&s) = self.open.front() {
             match s {
                 Slot::Missing { age, .. } if age < CONFIRM_CYCLES => break,
-                Slot::Missing { excused: true, .. } => self.excused += 1,
+                Slot::Missing { sent, .. } if excused(sent) => self.excused += 1,
                 Slot::Missing { .. } => {
                     reached = reached.or(self.lost());
                 }
@@ -213,22 +201,19 @@ impl PresWatch {
 mod tests {
     use super::*;
 
-    /// Runs `cycles` ('.' in time, 'x' missing, 'h' missing with the host late, 'l' a late
-    /// PRes after the cycle before) and returns the first threshold reached, with the cycle
-    /// it was reported in.
-    fn run(w: &mut PresWatch, cycles: &str) -> Option<(usize, Reached)> {
+    /// Runs `cycles` ('.' in time, 'x' missing, 'h' missing with the host late since, 'l' a
+    /// late PRes after the cycle before) and returns the first threshold reached, with the
+    /// cycle it was reported in. A cycle's time is whether the host ran late after it.
+    fn run(w: &mut PresWatch<bool>, cycles: &str) -> Option<(usize, Reached)> {
+        let late = |host_late: bool| host_late;
         for (i, c) in cycles.chars().enumerate() {
             let r = match c {
-                '.' => w.in_time(),
-                'x' => w.missing(),
-                'h' => {
-                    let r = w.missing();
-                    w.host_late();
-                    r
-                }
+                '.' => w.in_time(late),
+                'x' => w.missing(false, late),
+                'h' => w.missing(true, late),
                 'l' => {
                     w.came_late(1);
-                    w.in_time()
+                    w.in_time(late)
                 }
                 _ => unreachable!(),
             };
@@ -242,7 +227,7 @@ mod tests {
     #[test]
     fn two_losses_in_a_row_reach_the_default_threshold() {
         // 8, then 16 ≥ 15, decided three cycles after the second loss.
-        let mut w = PresWatch::default();
+        let mut w = PresWatch::<bool>::default();
         let (at, r) = run(&mut w, "xx....").unwrap();
         assert_eq!(at, 4);
         assert_eq!(
@@ -261,7 +246,7 @@ mod tests {
     #[test]
     fn a_loss_in_three_cycles_reaches_it_at_the_third_as_ds_301_counts() {
         // drop=every:3: 8, 7, 6, 14, 13, 12, 20.
-        let mut w = PresWatch::default();
+        let mut w = PresWatch::<bool>::default();
         let (at, r) = run(&mut w, "..x..x..x...").unwrap();
         assert_eq!(at, 8 + CONFIRM_CYCLES as usize);
         assert_eq!((r.lost, r.cycles, r.count), (3, 7, 20));
@@ -269,7 +254,7 @@ mod tests {
 
     #[test]
     fn losses_far_apart_are_counted_but_never_reach_it() {
-        let mut w = PresWatch::default();
+        let mut w = PresWatch::<bool>::default();
         assert_eq!(run(&mut w, &"x........".repeat(20)), None);
         assert_eq!(w.cumulative(), 20);
         assert_eq!(w.count(), 0);
@@ -277,7 +262,7 @@ mod tests {
 
     #[test]
     fn a_pres_that_comes_late_is_no_loss_nor_one_missing_while_the_host_was_late() {
-        let mut w = PresWatch::default();
+        let mut w = PresWatch::<bool>::default();
         // Each missing PRes comes in the next cycle, after that cycle's own.
         assert_eq!(run(&mut w, &"xl".repeat(20)), None);
         assert_eq!(run(&mut w, &"h".repeat(20)), None);
@@ -288,9 +273,9 @@ mod tests {
 
     #[test]
     fn a_threshold_of_0_switches_the_check_off_and_forgotten_cycles_count_nothing() {
-        let mut w = PresWatch::new(0);
+        let mut w = PresWatch::<bool>::new(0);
         assert_eq!(run(&mut w, &"x".repeat(10)), None);
-        let mut w = PresWatch::default();
+        let mut w = PresWatch::<bool>::default();
         assert_eq!(run(&mut w, "xx"), None);
         w.forget();
         assert_eq!(run(&mut w, "......"), None);

@@ -234,15 +234,13 @@ pub(crate) struct Manager<L> {
     udp_link: Option<Connection>,
     transaction: u8,
     /// The node's loss-of-PRes counters.
-    watch: PresWatch,
+    watch: PresWatch<Instant>,
     /// Whether the node answers PReq, as its last frame showed (a PRes; an ASnd in
     /// PRE_OPERATIONAL_2, READY_TO_OPERATE or OPERATIONAL), and nothing since (an NMT stop or
     /// reset, the MN's silence) made it stop: only then is a missing PRes watched.
     answering: bool,
     /// PRes of the node received and not yet matched to a cycle's window: late ones.
     unmatched: u32,
-    /// When the MN last looked at how late the host ran (the real clock).
-    host_checked: Instant,
 }
 
 /// The least a wait moves for the host's lost time, however short its limit (a PRes's 500 µs),
@@ -291,7 +289,6 @@ impl<L: Link> Manager<L> {
             watch: PresWatch::default(),
             answering: false,
             unmatched: 0,
-            host_checked: Instant::now(),
         }
     }
 
@@ -583,10 +580,11 @@ impl<L: Link> Manager<L> {
                 return self.asynchronous(service, node);
             }
             let watching = self.answering;
+            let sent_at = Instant::now();
             let w = self.wait(self.config.reply);
             let pres = self.wait_for(&w, |r| matches!(r.body, Body::Pres(_)))?;
             self.in_time = pres.is_some();
-            let (reached, note) = self.watch_pres(watching, pres.is_some());
+            let (reached, note) = self.watch_pres(watching, pres.is_some(), sent_at);
             match &pres {
                 Some(p) => {
                     if let Some(EplRepr {
@@ -630,33 +628,36 @@ impl<L: Link> Manager<L> {
         self.watch.forget();
     }
 
-    /// Notes how this cycle's PRes came (`got`: within its window) when `watching`, after the
-    /// node's late PRes and the host's lost time since the last look: the threshold reached,
-    /// if it was, and a note for the cycle's exchange (a PRes missing, a loss counted).
-    fn watch_pres(&mut self, watching: bool, got: bool) -> (Option<Reached>, Option<String>) {
+    /// Notes how this cycle's PRes came (`got`: within its window; its PReq left at `sent`)
+    /// when `watching`, after the node's late PRes: the
+    /// threshold reached, if it was, and a note for the cycle's exchange (a PRes missing, a
+    /// loss counted or not). A PRes still missing when decided is excused when the host lost
+    /// time enough since its PReq left to have held it back ([`crate::timing::excuses`],
+    /// over that span): never on the embedded node's virtual clock.
+    fn watch_pres(
+        &mut self,
+        watching: bool,
+        got: bool,
+        sent: Instant,
+    ) -> (Option<Reached>, Option<String>) {
         if got {
             self.unmatched = self.unmatched.saturating_sub(1);
         }
         let late = std::mem::take(&mut self.unmatched);
-        let now = Instant::now();
-        let lost = if self.is_virtual() {
-            Duration::ZERO
-        } else {
-            crate::timing::host_lost(self.host_checked, now)
-        };
-        self.host_checked = now;
         if !watching {
             return (None, None);
         }
         self.watch.came_late(late);
-        if lost >= self.config.cycle {
-            self.watch.host_late();
-        }
+        let real = !self.is_virtual();
+        let excused = |at: Instant| {
+            let now = Instant::now();
+            real && crate::timing::excuses(crate::timing::host_lost(at, now), now - at)
+        };
         let before = (self.watch.cumulative(), self.watch.uncounted());
         let reached = if got {
-            self.watch.in_time()
+            self.watch.in_time(excused)
         } else {
-            self.watch.missing()
+            self.watch.missing(sent, excused)
         };
         let mut notes = Vec::new();
         if !got {
