@@ -173,7 +173,11 @@ fn epl_a_node_that_loses_pres_is_named_for_the_loss_of_pres_threshold() {
         "drop=every:3",
         "pre-operational-2-parameters-only",
         "fail",
-        &["no PRes from node 1 in ", "loss of PRes", "E_DLL_LOSS_PRES_TH"],
+        &[
+            "no PRes from node 1 in ",
+            "loss of PRes",
+            "E_DLL_LOSS_PRES_TH",
+        ],
     );
     assert!(t.dropped > 0, "{t:?}");
 }

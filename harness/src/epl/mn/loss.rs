@@ -7,13 +7,12 @@
 //! the same way (the counter +8 per loss, the error at `count >= threshold`).
 //!
 //! A PRes is lost only when it never comes, not when the host made it late: the MN notes a
-//! cycle whose PRes missed its window as *missing* and decides [`CONFIRM_CYCLES`] cycles
-//! later. A PRes of the node that comes after its own window (a node, or its host, running
-//! late) shows that the oldest missing one came after all; one still missing then is lost,
-//! unless the host ran late meanwhile (the node shares the host, and its answer may have been
-//! held back with the MN), which the caller judges when the cycle is decided, from when its
-//! PReq left (`T`, the caller's clock). Cycles are decided in the order they ran, so the
-//! counter moves as DS 301's does.
+//! cycle whose PRes missed its window as *missing* and decides it [`CONFIRM_CYCLES`] cycles
+//! later at the earliest, when the caller says ([`Decision`]) from when its PReq left (`T`,
+//! the caller's clock): once the time a node on a loaded host may be held back has passed,
+//! and then as excused if the host ran late meanwhile (the node shares the host). A PRes of
+//! the node that comes after its own window shows that the oldest missing one came after all.
+//! Cycles are decided in the order they ran, so the counter moves as DS 301's does.
 
 use std::collections::VecDeque;
 
@@ -27,6 +26,17 @@ const STEP_UP: u32 = 8;
 /// Cycles after its own that a missing PRes may still come in, late, before it counts as
 /// lost: a node delayed by its host for up to this many cycles is late, not silent.
 pub(crate) const CONFIRM_CYCLES: u32 = 3;
+
+/// What the caller makes of a PRes still missing, from when its PReq left.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Decision {
+    /// Too soon to tell: it may still come.
+    Wait,
+    /// The host ran late meanwhile: no loss, not counted.
+    Excused,
+    /// Lost.
+    Lost,
+}
 
 /// How one cycle's PRes came.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -88,17 +98,17 @@ impl<T: Copy> PresWatch<T> {
     }
 
     /// Notes a cycle whose PRes came within its window, and decides what is due;
-    /// `excused(sent)`: whether the host ran late since a PReq left at `sent`.
-    pub(crate) fn in_time(&mut self, excused: impl Fn(T) -> bool) -> Option<Reached> {
+    /// `decide(sent)`: the caller's decision on a PRes missing since a PReq left at `sent`.
+    pub(crate) fn in_time(&mut self, decide: impl Fn(T) -> Decision) -> Option<Reached> {
         self.open.push_back(Slot::InTime);
-        self.decide(excused)
+        self.decide(decide)
     }
 
     /// Notes a cycle whose PRes did not come within its window, its PReq having left at
     /// `sent`, and decides what is due.
-    pub(crate) fn missing(&mut self, sent: T, excused: impl Fn(T) -> bool) -> Option<Reached> {
+    pub(crate) fn missing(&mut self, sent: T, decide: impl Fn(T) -> Decision) -> Option<Reached> {
         self.open.push_back(Slot::Missing { age: 0, sent });
-        self.decide(excused)
+        self.decide(decide)
     }
 
     /// `n` PRes of the node came outside any cycle's window: the oldest missing ones came late.
@@ -137,7 +147,7 @@ impl<T: Copy> PresWatch<T> {
     }
 
     /// Ages the missing cycles by the one just noted and decides the oldest, in order.
-    fn decide(&mut self, excused: impl Fn(T) -> bool) -> Option<Reached> {
+    fn decide(&mut self, decide: impl Fn(T) -> Decision) -> Option<Reached> {
         let n = self.open.len();
         for (i, s) in self.open.iter_mut().enumerate() {
             if let Slot::Missing { age, .. } = s {
@@ -151,10 +161,11 @@ impl<T: Copy> PresWatch<T> {
         while let Some(&s) = self.open.front() {
             match s {
                 Slot::Missing { age, .. } if age < CONFIRM_CYCLES => break,
-                Slot::Missing { sent, .. } if excused(sent) => self.excused += 1,
-                Slot::Missing { .. } => {
-                    reached = reached.or(self.lost());
-                }
+                Slot::Missing { sent, .. } => match decide(sent) {
+                    Decision::Wait => break,
+                    Decision::Excused => self.excused += 1,
+                    Decision::Lost => reached = reached.or(self.lost()),
+                },
                 Slot::InTime => self.good(),
                 Slot::Late => self.late += 1,
             }
@@ -205,7 +216,13 @@ mod tests {
     /// late PRes after the cycle before) and returns the first threshold reached, with the
     /// cycle it was reported in. A cycle's time is whether the host ran late after it.
     fn run(w: &mut PresWatch<bool>, cycles: &str) -> Option<(usize, Reached)> {
-        let late = |host_late: bool| host_late;
+        let late = |host_late: bool| {
+            if host_late {
+                Decision::Excused
+            } else {
+                Decision::Lost
+            }
+        };
         for (i, c) in cycles.chars().enumerate() {
             let r = match c {
                 '.' => w.in_time(late),
@@ -269,6 +286,40 @@ mod tests {
         assert_eq!(run(&mut w, "...."), None);
         assert_eq!(w.cumulative(), 0);
         assert_eq!(w.uncounted(), (20, 20));
+    }
+
+    #[test]
+    fn a_missing_pres_waits_while_the_caller_says_it_may_come_and_those_after_it_too() {
+        let mut w = PresWatch::<u32>::default();
+        // Cycle numbers as times: decided once ten cycles have passed (at cycle 12 and 13).
+        let mut now = 0;
+        let mut at = None;
+        for (i, c) in "xx............".chars().enumerate() {
+            now = i as u32;
+            let decide = |sent: u32| {
+                if now - sent < 10 {
+                    Decision::Wait
+                } else {
+                    Decision::Lost
+                }
+            };
+            let r = if c == 'x' {
+                w.missing(now, decide)
+            } else {
+                w.in_time(decide)
+            };
+            if r.is_some() && at.is_none() {
+                at = Some(i);
+                assert_eq!(w.cumulative(), 2);
+            }
+        }
+        assert_eq!((at, now), (Some(11), 13));
+        assert_eq!(
+            w.count(),
+            0,
+            "the cycles after decided in order: none left open"
+        );
+        assert!(w.open.is_empty());
     }
 
     #[test]

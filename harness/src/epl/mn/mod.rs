@@ -25,7 +25,7 @@ use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
 
 pub(crate) use describe::describe;
 use link::Link;
-use loss::{PresWatch, Reached};
+use loss::{Decision, PresWatch, Reached};
 
 use crate::hex::hex;
 use crate::net::LinkError;
@@ -234,7 +234,7 @@ pub(crate) struct Manager<L> {
     udp_link: Option<Connection>,
     transaction: u8,
     /// The node's loss-of-PRes counters.
-    watch: PresWatch<Instant>,
+    watch: PresWatch<(Instant, Duration)>,
     /// Whether the node answers PReq, as its last frame showed (a PRes; an ASnd in
     /// PRE_OPERATIONAL_2, READY_TO_OPERATE or OPERATIONAL), and nothing since (an NMT stop or
     /// reset, the MN's silence) made it stop: only then is a missing PRes watched.
@@ -580,7 +580,7 @@ impl<L: Link> Manager<L> {
                 return self.asynchronous(service, node);
             }
             let watching = self.answering;
-            let sent_at = Instant::now();
+            let sent_at = (Instant::now(), self.link.now());
             let w = self.wait(self.config.reply);
             let pres = self.wait_for(&w, |r| matches!(r.body, Body::Pres(_)))?;
             self.in_time = pres.is_some();
@@ -628,17 +628,19 @@ impl<L: Link> Manager<L> {
         self.watch.forget();
     }
 
-    /// Notes how this cycle's PRes came (`got`: within its window; its PReq left at `sent`)
-    /// when `watching`, after the node's late PRes: the
+    /// Notes how this cycle's PRes came (`got`: within its window; its PReq left at `sent`,
+    /// on the real clock and the link's) when `watching`, after the node's late PRes: the
     /// threshold reached, if it was, and a note for the cycle's exchange (a PRes missing, a
-    /// loss counted or not). A PRes still missing when decided is excused when the host lost
-    /// time enough since its PReq left to have held it back ([`crate::timing::excuses`],
-    /// over that span): never on the embedded node's virtual clock.
+    /// loss counted or not). A PRes still missing is decided [`MIN_LATE_ROOM`] after its PReq
+    /// on the link's clock (a node sharing a loaded host is held back that long, and its PRes
+    /// then comes late), and excused when the host lost time enough meanwhile to have held it
+    /// back longer ([`crate::timing::excuses`], over that span): never on the embedded node's
+    /// virtual clock.
     fn watch_pres(
         &mut self,
         watching: bool,
         got: bool,
-        sent: Instant,
+        sent: (Instant, Duration),
     ) -> (Option<Reached>, Option<String>) {
         if got {
             self.unmatched = self.unmatched.saturating_sub(1);
@@ -649,15 +651,21 @@ impl<L: Link> Manager<L> {
         }
         self.watch.came_late(late);
         let real = !self.is_virtual();
-        let excused = |at: Instant| {
-            let now = Instant::now();
-            real && crate::timing::excuses(crate::timing::host_lost(at, now), now - at)
+        let (now, link_now) = (Instant::now(), self.link.now());
+        let decide = |(at, link_at): (Instant, Duration)| {
+            if link_now.saturating_sub(link_at) < MIN_LATE_ROOM {
+                Decision::Wait
+            } else if real && crate::timing::excuses(crate::timing::host_lost(at, now), now - at) {
+                Decision::Excused
+            } else {
+                Decision::Lost
+            }
         };
         let before = (self.watch.cumulative(), self.watch.uncounted());
         let reached = if got {
-            self.watch.in_time(excused)
+            self.watch.in_time(decide)
         } else {
-            self.watch.missing(sent, excused)
+            self.watch.missing(sent, decide)
         };
         let mut notes = Vec::new();
         if !got {
@@ -675,10 +683,10 @@ impl<L: Link> Manager<L> {
         }
         if self.watch.cumulative() != before.0 {
             notes.push(format!(
-                "a PRes of node {} {} cycles back counted lost (1C07h {}, 1C08h {} of \
+                "a PRes of node {} missing for {} counted lost (1C07h {}, 1C08h {} of \
                  threshold {})",
                 self.config.node,
-                loss::CONFIRM_CYCLES,
+                crate::timing::ms(MIN_LATE_ROOM),
                 self.watch.cumulative(),
                 self.watch.count(),
                 loss::DEFAULT_THRESHOLD
