@@ -2,7 +2,7 @@
 //! `docs/misbehave.md`): the harness's own master, managing node, controller or scanner runs a
 //! case against the served device, and its verdict names what the device did — never a hang,
 //! a panic, a pass or "host late". Covered: EtherCAT `corrupt=wkc`, `corrupt=length`,
-//! `drop=every:2`, `silent`; POWERLINK `corrupt=state`, `silent`; PROFINET IO
+//! `drop=every:2`, `silent`; POWERLINK `corrupt=state`, `silent`, `drop=every:3`; PROFINET IO
 //! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `close`, `dup`,
 //! `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
 //! the POWERLINK binding's). The modes are those whose verdict does not hang on timing: a
@@ -138,15 +138,16 @@ fn epl_a_node_misbehaving_is_named_for_what_it_did() {
     if !require_root_or_skip("serve epl --misbehave over veth pairs") {
         return;
     }
-    // Every PRes says STOPPED (4Dh) where READY_TO_OPERATE (6Dh) is due.
+    // Every PRes says STOPPED (4Dh): the MN's cycle checks each PRes's NMT status against
+    // the state the node reported (its StatusResponse) as it boots the node, before any case.
     let t = epl(
         "mbstate",
         "corrupt=state",
-        "ready-to-operate-sends-pres-by-mapping",
-        "fail",
+        "start-up-sequence",
+        "error",
         &[
-            "expected text containing \"04 FF 01 6D",
-            "got \"04 FF 01 4D ",
+            "the DUT did not come up: node 1's PRes says NMT_CS_STOPPED (4Dh), expected \
+           NMT_CS_PRE_OPERATIONAL_2 (5Dh)",
         ],
     );
     assert!(t.corrupted > 0, "{t:?}");

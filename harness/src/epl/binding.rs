@@ -104,7 +104,9 @@ fn step_error(e: MnError) -> StepError {
             waited,
         },
         e @ MnError::Malformed { .. } => StepError::Garbage(e.into()),
-        e @ MnError::LossOfPres { .. } => StepError::Detected(e.into()),
+        e @ (MnError::LossOfPres { .. } | MnError::PresState { .. }) => {
+            StepError::Detected(e.into())
+        }
         e @ MnError::State { .. } => StepError::Refused(e.into()),
         MnError::Abort(code) => StepError::Refused(format!("SDO abort {code:08X}h").into()),
     }

@@ -8,6 +8,7 @@
 //! Everything it sends and receives is recorded as transcript exchanges, decoded.
 
 mod describe;
+mod expect;
 pub(crate) mod link;
 mod loss;
 
@@ -24,6 +25,7 @@ use proto::epl::{
 use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
 
 pub(crate) use describe::describe;
+use expect::StateWatch;
 use link::Link;
 use loss::{Decision, PresWatch, Reached};
 
@@ -124,6 +126,21 @@ pub(crate) enum MnError {
     /// The node refused an SDO transfer.
     #[error("SDO abort {0:08X}h")]
     Abort(u32),
+    /// A PRes of the node said another NMT state than the node reported or was commanded
+    /// into (EPSG DS 301 §4.6.1.1.4, PRes NMTStatus).
+    #[error(
+        "node {node}'s PRes says {}, expected {}",
+        expect::cs(*said),
+        expect::cs(*expected)
+    )]
+    PresState {
+        /// The node.
+        node: u8,
+        /// What its PRes said.
+        said: NmtState,
+        /// What the MN expected.
+        expected: NmtState,
+    },
     /// The node's PRes went missing until the MN's loss-of-PRes threshold counter reached its
     /// threshold (EPSG DS 301 §4.7.4.1, E_DLL_LOSS_PRES_TH): an MN takes the node out of
     /// the cycle.
@@ -239,6 +256,8 @@ pub(crate) struct Manager<L> {
     /// PRE_OPERATIONAL_2, READY_TO_OPERATE or OPERATIONAL), and nothing since (an NMT stop or
     /// reset, the MN's silence) made it stop: only then is a missing PRes watched.
     answering: bool,
+    /// The NMT state its PRes should say.
+    expect: StateWatch,
     /// PRes of the node received and not yet matched to a cycle's window: late ones.
     unmatched: u32,
 }
@@ -288,6 +307,7 @@ impl<L: Link> Manager<L> {
             transaction: 0,
             watch: PresWatch::default(),
             answering: false,
+            expect: StateWatch::default(),
             unmatched: 0,
         }
     }
@@ -305,6 +325,7 @@ impl<L: Link> Manager<L> {
             self.drop_connections();
             self.watch = PresWatch::default();
             self.stop_watching();
+            self.expect.forget();
         }
     }
 
@@ -510,6 +531,7 @@ impl<L: Link> Manager<L> {
                             if let Some(s) = asnd_state(a) {
                                 self.node_state = Some(s);
                                 self.answering = answers_preq(s);
+                                self.expect.reported(s);
                             }
                         }
                         _ => {}
@@ -585,6 +607,7 @@ impl<L: Link> Manager<L> {
             let pres = self.wait_for(&w, |r| matches!(r.body, Body::Pres(_)))?;
             self.in_time = pres.is_some();
             let (reached, note) = self.watch_pres(watching, pres.is_some(), sent_at);
+            let mut unexpected = None;
             match &pres {
                 Some(p) => {
                     if let Some(EplRepr {
@@ -593,6 +616,7 @@ impl<L: Link> Manager<L> {
                     }) = &p.repr
                     {
                         self.inputs = body.payload.clone();
+                        unexpected = self.expect.pres(body.state).err();
                     }
                     if let Some(s) = self.stamps.as_mut() {
                         s.push(p.stamp);
@@ -616,6 +640,13 @@ impl<L: Link> Manager<L> {
             }
             if let Some(reached) = reached {
                 return Err(MnError::LossOfPres { node, reached });
+            }
+            if let Some(u) = unexpected {
+                return Err(MnError::PresState {
+                    node,
+                    said: u.said,
+                    expected: u.expected,
+                });
             }
         }
         self.asynchronous(service, node)
@@ -796,6 +827,7 @@ impl<L: Link> Manager<L> {
     /// cycle resumes as before, as an MN whose link comes back does.
     pub(crate) fn silence(&mut self, d: Duration) {
         self.stop_watching();
+        self.expect.forget();
         let until = self.link.now() + d;
         self.link.wait_until(until);
         self.next_cycle = until;
@@ -891,25 +923,19 @@ impl<L: Link> Manager<L> {
         }
         .emit();
         let before = self.node_state;
-        if matches!(
-            command,
-            NmtCommand::STOP_NODE
-                | NmtCommand::RESET_NODE
-                | NmtCommand::RESET_COMMUNICATION
-                | NmtCommand::RESET_CONFIGURATION
-                | NmtCommand::SW_RESET
-        ) {
+        let reset = is_reset(command);
+        if reset || command == NmtCommand::STOP_NODE {
             self.stop_watching();
+        }
+        let expected = before.and_then(|b| command.next_state(b));
+        if reset {
+            self.expect.forget();
+        } else {
+            self.expect.commanded(before, expected);
         }
         self.queued.push_back((ServiceId::NMT_COMMAND, payload));
         self.cycle(RequestedService::NO_SERVICE)?;
-        if matches!(
-            command,
-            NmtCommand::RESET_NODE
-                | NmtCommand::RESET_COMMUNICATION
-                | NmtCommand::RESET_CONFIGURATION
-                | NmtCommand::SW_RESET
-        ) {
+        if reset {
             self.node_state = None;
             self.drop_connections();
             return Ok(None);
@@ -924,7 +950,6 @@ impl<L: Link> Manager<L> {
         }
         // The node acts on the command within a few cycles (at once, if it runs as fast as
         // the simulator): its state is read until it shows the command's effect, a few times.
-        let expected = before.and_then(|b| command.next_state(b));
         let mut state = self.status()?.state;
         for _ in 0..SETTLE_READS {
             if expected.is_none_or(|e| e == state) {
@@ -1383,6 +1408,17 @@ fn more_follows(sdo: &[u8]) -> bool {
                 Segmentation::Initiate | Segmentation::Segment
             ) && c.abort_code().is_none()
         })
+}
+
+/// Whether `c` resets the node, which then starts over in NOT_ACTIVE (DS 301 §7.1.3).
+fn is_reset(c: NmtCommand) -> bool {
+    matches!(
+        c,
+        NmtCommand::RESET_NODE
+            | NmtCommand::RESET_COMMUNICATION
+            | NmtCommand::RESET_CONFIGURATION
+            | NmtCommand::SW_RESET
+    )
 }
 
 /// Whether a node in `s` answers a PReq with a PRes (EPSG DS 301 §7.1.4: the isochronous
