@@ -2,8 +2,8 @@
 //! `docs/misbehave.md`): the harness's own master, managing node, controller or scanner runs a
 //! case against the served device, and its verdict names what the device did — never a hang,
 //! a panic, a pass or "host late". Covered: EtherCAT `corrupt=wkc`, `corrupt=length`,
-//! `drop=every:2`, `silent`; POWERLINK `corrupt=state`, `silent`, `drop=every:3`; PROFINET IO
-//! `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `close`, `dup`,
+//! `drop=every:2`, `silent`; POWERLINK `corrupt=state`, `silent`, `drop=every:3`, `alarm=`;
+//! PROFINET IO `corrupt=data-status`, `silent`; EtherNet/IP `corrupt=status`, `close`, `dup`,
 //! `drop=every:2`; `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
 //! the POWERLINK binding's). The modes are those whose verdict does not hang on timing: a
 //! field wrong in every frame, a device silent from its first exchange on, the n-th answer of
@@ -181,6 +181,27 @@ fn epl_a_node_that_loses_pres_is_named_for_the_loss_of_pres_threshold() {
         ],
     );
     assert!(t.dropped > 0, "{t:?}");
+}
+
+#[test]
+fn epl_a_node_that_signals_errors_unasked_is_named_for_the_entry() {
+    if !require_root_or_skip("serve epl --misbehave over veth pairs") {
+        return;
+    }
+    // An error entry and EN toggled every 50 ms: the MN fetches the StatusResponse (DS 301
+    // §6.5) and the case, which provoked no error, fails naming the entry; its first step
+    // that does not read the StatusResponse itself (the SDO read) sees one.
+    let t = epl(
+        "mbplalarm",
+        "alarm=every:50ms",
+        "pre-operational-2-parameters-only",
+        "fail",
+        &[
+            "node 1 signalled an error no step provoked (EN toggled; its StatusResponse lists \
+           entry 9000h External watchdog, \"1   12.0\"",
+        ],
+    );
+    assert!(t.alarms > 0, "{t:?}");
 }
 
 /// PROFINET IO: `s` on the device, the connect cases from the namespace as controller.

@@ -15,7 +15,7 @@ mod loss;
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use proto::epl::asnd::{IdentResponse, NmtCommandFrame, StatusResponse};
+use proto::epl::asnd::{ErrorEntry, IdentResponse, NmtCommandFrame, StatusResponse};
 use proto::epl::frame::{Asnd, Body, Preq, Soa, Soc};
 use proto::epl::sdo::{Command, Con, SdoFrame, Segmentation, Seq, SEQ_MODULO};
 use proto::epl::{
@@ -258,6 +258,16 @@ pub(crate) struct Manager<L> {
     answering: bool,
     /// The NMT state its PRes should say.
     expect: StateWatch,
+    /// EA: the last EN of the node the MN fetched the StatusResponse for (DS 301 §6.5.2: the
+    /// MN acknowledges a new error in its PReq).
+    ea: bool,
+    /// The node's EN differs from EA: its StatusResponse is fetched in the next free
+    /// asynchronous slot.
+    exception: bool,
+    /// The entries of the node's last StatusResponse (`None`: none read yet).
+    entries: Option<Vec<ErrorEntry>>,
+    /// Entries that were not in the StatusResponse before, for the binding to judge.
+    signalled: Vec<ErrorEntry>,
     /// PRes of the node received and not yet matched to a cycle's window: late ones.
     unmatched: u32,
 }
@@ -308,6 +318,10 @@ impl<L: Link> Manager<L> {
             watch: PresWatch::default(),
             answering: false,
             expect: StateWatch::default(),
+            ea: false,
+            exception: false,
+            entries: None,
+            signalled: Vec::new(),
             unmatched: 0,
         }
     }
@@ -587,6 +601,7 @@ impl<L: Link> Manager<L> {
                 dst: node,
                 src: MN_NODE_ID,
                 body: Body::Preq(Preq {
+                    ea: self.ea,
                     rd: self.ready,
                     pdo_version: 0x20,
                     payload: self.outputs.clone(),
@@ -617,6 +632,7 @@ impl<L: Link> Manager<L> {
                     {
                         self.inputs = body.payload.clone();
                         unexpected = self.expect.pres(body.state).err();
+                        self.exception |= body.en != self.ea;
                     }
                     if let Some(s) = self.stamps.as_mut() {
                         s.push(p.stamp);
@@ -747,6 +763,13 @@ impl<L: Link> Manager<L> {
             self.record(&sent, None);
             return Ok(None);
         }
+        // A new error of the node (EN toggled): its StatusResponse, in a slot nobody asked for.
+        let fetch = self.exception && service == RequestedService::NO_SERVICE;
+        let service = if fetch {
+            RequestedService::STATUS_REQUEST
+        } else {
+            service
+        };
         let sent = self.soa(service, node)?;
         let expects = service != RequestedService::NO_SERVICE;
         let answer = if expects {
@@ -761,7 +784,40 @@ impl<L: Link> Manager<L> {
         if expects {
             self.record(&sent, answer.as_ref());
         }
-        Ok(answer)
+        if let Some(Received {
+            repr:
+                Some(EplRepr {
+                    body: Body::Asnd(a),
+                    ..
+                }),
+            ..
+        }) = &answer
+        {
+            if a.service == ServiceId::STATUS_RESPONSE {
+                if let Ok(s) = StatusResponse::parse(&a.payload) {
+                    self.status_read(&s);
+                }
+            }
+        }
+        Ok(if fetch { None } else { answer })
+    }
+
+    /// Takes in a StatusResponse of the node: EA follows its EN (the new error is fetched),
+    /// and the entries it did not list before are signalled.
+    fn status_read(&mut self, s: &StatusResponse) {
+        self.ea = s.flags.en;
+        self.exception = false;
+        if let Some(before) = &self.entries {
+            let new = s.entries.iter().filter(|e| !before.contains(e)).copied();
+            self.signalled.extend(new);
+        }
+        self.entries = Some(s.entries.clone());
+    }
+
+    /// The error entries the node signalled (EN toggled, or a StatusResponse read) since the
+    /// last call: not in its StatusResponse before.
+    pub(crate) fn take_signalled(&mut self) -> Vec<ErrorEntry> {
+        std::mem::take(&mut self.signalled)
     }
 
     fn soa(&mut self, service: RequestedService, target: u8) -> Result<Vec<u8>, MnError> {
@@ -892,6 +948,7 @@ impl<L: Link> Manager<L> {
         };
         let s =
             StatusResponse::parse(&a.payload).map_err(|e| self.malformed("StatusRequest", e))?;
+        self.status_read(&s);
         self.node_state = Some(s.state);
         Ok(s)
     }
