@@ -72,7 +72,7 @@ pub(crate) struct EplBinding<L> {
     /// P164; P850…P852): settings the cleanup puts back are read in only by another restart.
     restarted: bool,
     /// The case did something after which the node may signal an error (an injected fault,
-    /// the MN's silence, a raw frame).
+    /// the MN's silence, a raw frame, a parameter written: P899 while controlled is E10.5).
     provoked: bool,
 }
 
@@ -799,8 +799,16 @@ impl<L: Link> Binding for EplBinding<L> {
             Action::Bus(step) => step.as_any().downcast_ref::<EplStep>(),
             _ => None,
         };
-        self.provoked |= matches!(action, Action::Inject { .. })
-            || matches!(step, Some(EplStep::Silence(_) | EplStep::Frame(_)));
+        self.provoked |= matches!(action, Action::Inject { .. } | Action::Write(_))
+            || matches!(
+                step,
+                Some(
+                    EplStep::Silence(_)
+                        | EplStep::Frame(_)
+                        | EplStep::Download { .. }
+                        | EplStep::Sdo { .. }
+                )
+            );
         let reads = matches!(step, Some(EplStep::Status));
         let r = self.act(action);
         let signalled = self.mn.take_signalled();
@@ -824,9 +832,9 @@ impl<L: Link> Binding for EplBinding<L> {
 /// The failure of a node that signalled `entries` (DS 301 §6.5: EN toggled, the MN fetched
 /// its StatusResponse) in a case that neither provoked an error nor reads them: an error the
 /// node reports though nothing in the case made one is a fault of the node's, and a case that
-/// passed over it would hide it. A case that provokes errors (an injected fault, the MN's
-/// silence, a raw frame) judges them itself from then on, and a step that reads the node's
-/// StatusResponse judges what it reads.
+/// passed over it would hide it. A case that may provoke errors (an injected fault, the MN's
+/// silence, a raw frame, a parameter written) judges them itself from then on, and a step
+/// that reads the node's StatusResponse judges what it reads.
 fn unasked_error(node: u8, entries: &[ErrorEntry]) -> Option<StepError> {
     let first = entries.first()?;
     let text = proto::nord::errors::powerlink_rows(first.code)
