@@ -3,10 +3,10 @@
 //! case against the served device, and its verdict names what the device did — never a hang,
 //! a panic, a pass or "host late". Covered: EtherCAT `corrupt=wkc`, `corrupt=length`,
 //! `drop=every:2`, `silent`, `corrupt=sequence`, `alarm=every:2ms`; POWERLINK `corrupt=state`,
-//! `silent`; PROFINET IO `corrupt=data-status`, `corrupt=cycle`, `corrupt=status`,
-//! `alarm=every:20ms`, that with `corrupt=sequence`, `silent`; EtherNet/IP `corrupt=status`,
-//! `corrupt=length`, `corrupt=sequence`, `close`, `dup`, `drop=every:2`; `late=` has its own
-//! tests (`network_ecat`, `network_pnio`, `network_dut`,
+//! `silent`, `drop=every:3`, `alarm=`; PROFINET IO `corrupt=data-status`, `corrupt=cycle`,
+//! `corrupt=status`, `alarm=every:20ms`, that with `corrupt=sequence`, `silent`; EtherNet/IP
+//! `corrupt=status`, `corrupt=length`, `corrupt=sequence`, `close`, `dup`, `drop=every:2`;
+//! `late=` has its own tests (`network_ecat`, `network_pnio`, `network_dut`,
 //! the POWERLINK binding's). The modes are those whose verdict does not hang on timing: a
 //! field wrong in every frame, a device silent from its first exchange on, the n-th answer of
 //! a master that asks one thing at a time; the harness's own limits decide, with their margins.
@@ -177,15 +177,18 @@ fn epl_a_node_misbehaving_is_named_for_what_it_did() {
     if !require_root_or_skip("serve epl --misbehave over veth pairs") {
         return;
     }
-    // Every PRes says STOPPED (4Dh) where READY_TO_OPERATE (6Dh) is due.
+    // Every PRes says STOPPED (4Dh): the MN's cycle checks each PRes's NMT status against
+    // the state the node reported (its StatusResponse) as it boots the node, before any case:
+    // PRE_OPERATIONAL_1 or 2, as the first PRes checked comes before or after the SoC that
+    // moves it on.
     let t = epl(
         "mbstate",
         "corrupt=state",
-        "ready-to-operate-sends-pres-by-mapping",
-        "fail",
+        "start-up-sequence",
+        "error",
         &[
-            "expected text containing \"04 FF 01 6D",
-            "got \"04 FF 01 4D ",
+            "the DUT did not come up: node 1's PRes says NMT_CS_STOPPED (4Dh), expected \
+           NMT_CS_PRE_OPERATIONAL_",
         ],
     );
     assert!(t.corrupted > 0, "{t:?}");
@@ -197,6 +200,49 @@ fn epl_a_node_misbehaving_is_named_for_what_it_did() {
         &["no reply from node 1 to SoA IdentRequest within its limit of 2000 ms"],
     );
     assert!(t.silenced > 0, "{t:?}");
+}
+
+#[test]
+fn epl_a_node_that_loses_pres_is_named_for_the_loss_of_pres_threshold() {
+    if !require_root_or_skip("serve epl --misbehave over veth pairs") {
+        return;
+    }
+    // Every third output of the node lost: in the case's SDO read and its 50 idle cycles
+    // mostly PRes, which DS 301's threshold counter (+8 per loss, −1 per good cycle) takes
+    // past the threshold 15 within a few losses (8, 7, 6, 14, 13, 12, 20).
+    let t = epl(
+        "mbpldrop",
+        "drop=every:3",
+        "pre-operational-2-parameters-only",
+        "fail",
+        &[
+            "no PRes from node 1 in ",
+            "loss of PRes",
+            "E_DLL_LOSS_PRES_TH",
+        ],
+    );
+    assert!(t.dropped > 0, "{t:?}");
+}
+
+#[test]
+fn epl_a_node_that_signals_errors_unasked_is_named_for_the_entry() {
+    if !require_root_or_skip("serve epl --misbehave over veth pairs") {
+        return;
+    }
+    // An error entry and EN toggled every 50 ms: the MN fetches the StatusResponse (DS 301
+    // §6.5) and the case, which provoked no error, fails naming the entry; its first step
+    // that does not read the StatusResponse itself (the SDO read) sees one.
+    let t = epl(
+        "mbplalarm",
+        "alarm=every:50ms",
+        "pre-operational-2-parameters-only",
+        "fail",
+        &[
+            "node 1 signalled an error no step provoked (EN toggled; its StatusResponse lists \
+           entry 9000h External watchdog, \"1   12.0\"",
+        ],
+    );
+    assert!(t.alarms > 0, "{t:?}");
 }
 
 /// PROFINET IO: `s` on the device, the connect cases from the namespace as controller.

@@ -86,7 +86,8 @@ pub(crate) enum StepError {
     /// The DUT did on its own what its manual or the standard rules out, seen on the bus
     /// rather than in an answer: a PROFINET input CR whose cycle counter stood still past the
     /// data hold time, an alarm of a type the manual does not name, an emergency for an error
-    /// the inverter does not have.
+    /// the inverter does not have, POWERLINK's loss-of-PRes threshold reached, an error a
+    /// node signalled that no step provoked.
     #[error("the DUT departed from the protocol: {0}")]
     Departed(#[source] Cause),
     /// The DUT answered with something that is not the protocol at all.

@@ -16,6 +16,7 @@
 
 use std::time::Duration;
 
+use proto::epl::asnd::ErrorEntry;
 use proto::epl::sdo::Command;
 use proto::epl::{MessageType, NmtCommand, NmtState};
 use proto::nord::epl::{self as def, Slot};
@@ -70,6 +71,9 @@ pub(crate) struct EplBinding<L> {
     /// The case restarted the node, which then read in its addressing parameters (P160,
     /// P164; P850…P852): settings the cleanup puts back are read in only by another restart.
     restarted: bool,
+    /// The case did something after which the node may signal an error (an injected fault,
+    /// the MN's silence, a raw frame, a parameter written: P899 while controlled is E10.5).
+    provoked: bool,
 }
 
 /// The refusal of an SDO abort code, with the manual's words for it.
@@ -104,6 +108,9 @@ fn step_error(e: MnError) -> StepError {
             waited,
         },
         e @ MnError::Malformed { .. } => StepError::Garbage(e.into()),
+        e @ (MnError::LossOfPres { .. } | MnError::PresState { .. }) => {
+            StepError::Departed(e.into())
+        }
         e @ MnError::State { .. } => StepError::Refused(e.into()),
         MnError::Abort(code) => StepError::Refused(format!("SDO abort {code:08X}h").into()),
     }
@@ -176,6 +183,7 @@ impl<L: Link> EplBinding<L> {
             node,
             feature_flags: id.feature_flags,
             restarted: false,
+            provoked: false,
         })
     }
 
@@ -784,7 +792,74 @@ impl<L: Link> Binding for EplBinding<L> {
         self.capabilities
     }
 
+    /// Performs the step; a node that signals an error the case neither provoked nor reads
+    /// fails it (see [`unasked_error`]).
     fn perform(&mut self, action: &Action) -> Result<Observation, StepError> {
+        let step = match action {
+            Action::Bus(step) => step.as_any().downcast_ref::<EplStep>(),
+            _ => None,
+        };
+        self.provoked |= matches!(action, Action::Inject { .. } | Action::Write(_))
+            || matches!(
+                step,
+                Some(
+                    EplStep::Silence(_)
+                        | EplStep::Frame(_)
+                        | EplStep::Download { .. }
+                        | EplStep::Sdo { .. }
+                )
+            );
+        let reads = matches!(step, Some(EplStep::Status));
+        let r = self.act(action);
+        let signalled = self.mn.take_signalled();
+        match unasked_error(self.node, &signalled) {
+            Some(e) if !self.provoked && !reads && r.is_ok() => Err(e),
+            _ => r,
+        }
+    }
+
+    fn take_exchanges(&mut self) -> Vec<Exchange> {
+        let mut v = std::mem::take(&mut self.pending);
+        v.extend(self.mn.take_exchanges());
+        v
+    }
+
+    fn finish(&mut self) -> Result<(), CleanupError> {
+        self.restore().map_err(CleanupError)
+    }
+}
+
+/// The failure of a node that signalled `entries` (DS 301 §6.5: EN toggled, the MN fetched
+/// its StatusResponse) in a case that neither provoked an error nor reads them: an error the
+/// node reports though nothing in the case made one is a fault of the node's, and a case that
+/// passed over it would hide it. A case that may provoke errors (an injected fault, the MN's
+/// silence, a raw frame, a parameter written) judges them itself from then on, and a step
+/// that reads the node's StatusResponse judges what it reads.
+fn unasked_error(node: u8, entries: &[ErrorEntry]) -> Option<StepError> {
+    let first = entries.first()?;
+    let text = proto::nord::errors::powerlink_rows(first.code)
+        .next()
+        .map_or(String::new(), |r| format!(" {}", r.text));
+    let info = String::from_utf8_lossy(&first.info.to_le_bytes())
+        .trim()
+        .to_string();
+    let more = match entries.len() {
+        1 => String::new(),
+        n => format!(" and {} more", n - 1),
+    };
+    Some(StepError::Departed(
+        format!(
+            "node {node} signalled an error no step provoked (EN toggled; its StatusResponse \
+             lists entry {:04X}h{text}, \"{info}\"{more})",
+            first.code
+        )
+        .into(),
+    ))
+}
+
+impl<L: Link> EplBinding<L> {
+    /// A step of the case, as the runner asks it.
+    fn act(&mut self, action: &Action) -> Result<Observation, StepError> {
         let fields = match action {
             Action::Compute { .. } => {
                 return Err(StepError::Suite("compute is not a DUT step".into()))
@@ -823,16 +898,6 @@ impl<L: Link> Binding for EplBinding<L> {
             }
         };
         Ok(fields.into())
-    }
-
-    fn take_exchanges(&mut self) -> Vec<Exchange> {
-        let mut v = std::mem::take(&mut self.pending);
-        v.extend(self.mn.take_exchanges());
-        v
-    }
-
-    fn finish(&mut self) -> Result<(), CleanupError> {
-        self.restore().map_err(CleanupError)
     }
 }
 
@@ -994,6 +1059,36 @@ mod tests {
     }
 
     #[test]
+    fn an_error_the_node_signals_unasked_fails_the_step_naming_its_entry() {
+        let mut b = binding(Rc::new(Cell::new(Fault::None))).unwrap();
+        let cycles = Action::Bus(Box::new(EplStep::Cycles(5)));
+        assert!(b.perform(&cycles).is_ok());
+        let raise = |b: &mut EplBinding<Faulty>| {
+            let (node, now) = crate::net::peer::Link::device(b.mn.link_mut()).unwrap();
+            node.raise_spurious(now).unwrap()
+        };
+        // EN toggles in the PRes; the MN fetches the StatusResponse in the next free slot.
+        assert_eq!(raise(&mut b).code, 0x9000);
+        let e = b.perform(&cycles).unwrap_err();
+        assert_eq!(e.verdict(), Verdict::Fail);
+        assert_eq!(
+            e.to_string(),
+            "the DUT departed from the protocol: node 1 signalled an error no step provoked (EN \
+             toggled; its StatusResponse lists entry 9000h External watchdog, \"1   12.0\")"
+        );
+        assert!(
+            b.perform(&cycles).is_ok(),
+            "acknowledged (EA), reported once"
+        );
+        // A step that reads the StatusResponse judges what it reads.
+        raise(&mut b);
+        let status = Action::Bus(Box::new(EplStep::Status));
+        let o = b.perform(&status).unwrap();
+        assert_eq!(o.fields["entry"]["code"], 0x9000);
+        assert!(b.perform(&cycles).is_ok());
+    }
+
+    #[test]
     fn a_silent_or_garbage_sending_node_is_an_error_within_the_time_out() {
         // Silent from the start: the node cannot be opened, within the MN's few cycles.
         let fault = Rc::new(Cell::new(Fault::Silent));
@@ -1001,8 +1096,10 @@ mod tests {
             binding(fault),
             Err(OpenError::Unreachable(e)) if e.contains("no reply")
         ));
-        // Silent after a good start: the node is late, a failure that names its limit (the
-        // SDO time, 200 ms on the virtual clock) and the time waited; garbage is an error.
+        // Silent after a good start: the SDO read runs the cycle, whose PRes stop coming; two
+        // lost in a row reach DS 301's loss-of-PRes threshold (8 + 8 ≥ 15), decided once 50 ms
+        // passed without them: a failure in the standard's words, before the SDO time (200
+        // ms). Garbage is an error.
         for (f, verdict) in [
             (Fault::Silent, Verdict::Fail),
             (Fault::Garbage, Verdict::Error),
@@ -1016,14 +1113,15 @@ mod tests {
             assert_eq!(e.verdict(), verdict, "{f:?}: {e}");
             assert!(b.mn.now() - start <= Duration::from_millis(250), "{f:?}");
             if f == Fault::Silent {
-                assert!(
-                    matches!(&e, StepError::Late { limit, waited, .. }
-                        if *limit == Duration::from_millis(200) && *waited >= *limit),
-                    "{e:?}"
+                assert!(matches!(&e, StepError::Departed(_)), "{e:?}");
+                assert_eq!(
+                    e.to_string(),
+                    "the DUT departed from the protocol: no PRes from node 1 in 2 of 2 cycles: \
+                     loss of PRes, threshold counter \
+                     (1C08h) 16 reached the threshold 15 (1C09h DLL_MNCNLossPResThreshold): \
+                     E_DLL_LOSS_PRES_TH"
                 );
-                let text = e.to_string();
-                assert!(text.starts_with("node 1, SDO"), "{text}");
-                assert!(text.contains("limit of 200 ms (waited 20"), "{text}");
+                assert!(b.mn.now() - start <= Duration::from_millis(55), "50 ms on");
             }
         }
     }

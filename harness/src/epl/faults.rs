@@ -2,7 +2,8 @@
 //! session to close (raw Ethernet frames and SDO over UDP without connections), and the PRes
 //! NMT status to send wrong (`corrupt=state`): every PRes says STOPPED (or PRE_OPERATIONAL_1
 //! when the node is stopped), a state the node is not in, parsed and emitted anew with
-//! [`proto::epl::EplRepr`].
+//! [`proto::epl::EplRepr`]. Its spurious emergencies (`alarm=`) are the node's own
+//! (`sim::epl::Node::raise_spurious`: an error entry and EN toggled, fetched by the MN).
 
 use proto::epl::frame::Body;
 use proto::epl::{EplRepr, NmtState};
@@ -18,7 +19,7 @@ pub(crate) const FAULTS: BusFaults = BusFaults {
     no_close: Some(
         "has no session to close (raw Ethernet frames, SDO over UDP): use silent= or drop=",
     ),
-    no_alarm: Some("raises no emergency yet (not built)"),
+    no_alarm: None,
 };
 
 /// Sets `field` wrong in `out` if it is a PRes; what it changed.

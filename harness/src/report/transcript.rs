@@ -34,8 +34,11 @@ use crate::outcome::{CaseResult, Exchange, StepResult};
 
 fn exchange(s: &mut String, x: &Exchange) {
     let _ = writeln!(s, "  -> {}\n     {}", x.sent_hex, x.sent);
-    if x.received_hex.is_empty() {
+    if x.received_hex.is_empty() && x.received.is_empty() {
         let _ = writeln!(s, "  <- (nothing received)");
+    } else if x.received_hex.is_empty() {
+        // What the harness made of the silence (POWERLINK: a PRes missing).
+        let _ = writeln!(s, "  <- (nothing received: {})", x.received);
     } else {
         let _ = writeln!(s, "  <- {}\n     {}", x.received_hex, x.received);
     }

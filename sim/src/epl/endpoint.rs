@@ -8,7 +8,7 @@ use std::time::Duration;
 use proto::epl::SDO_UDP_PORT;
 
 use super::{Node, POLL_PERIOD};
-use crate::endpoint::{Endpoint, Input, Output};
+use crate::endpoint::{Endpoint, Input, Output, Raised};
 
 impl Endpoint for Node {
     fn input(&mut self, input: Input<'_>, now: Duration) -> Vec<Output> {
@@ -42,6 +42,22 @@ impl Endpoint for Node {
     fn next_deadline(&self) -> Option<Duration> {
         Some(self.next_poll)
     }
+
+    /// What a CN does when an error occurs (DS 301 §6.5): a new entry in its StatusResponse
+    /// and EN toggled in its PRes; nothing leaves now, the MN fetches the entry with a SoA
+    /// StatusRequest when it sees EN change.
+    fn raise_alarm(&mut self, now: Duration) -> Option<Raised> {
+        let e = self.raise_spurious(now)?;
+        Some(Raised {
+            what: format!(
+                "error entry {:04X}h ({}) in the StatusResponse, EN toggled to {}",
+                e.code,
+                String::from_utf8_lossy(&e.info.to_le_bytes()).trim(),
+                u8::from(self.exception_new())
+            ),
+            outputs: Vec::new(),
+        })
+    }
 }
 
 #[cfg(test)]
@@ -65,6 +81,29 @@ mod tests {
         assert_eq!(n.next_deadline(), Some(t + POLL_PERIOD));
         Endpoint::poll(&mut n, t + POLL_PERIOD / 2);
         assert_eq!(n.next_deadline(), Some(t + POLL_PERIOD));
+    }
+
+    #[test]
+    fn a_spurious_emergency_is_an_entry_and_en_toggled_once_the_node_cycles() {
+        let mut n = node();
+        assert_eq!(
+            n.raise_alarm(Duration::ZERO),
+            None,
+            "NOT_ACTIVE: no MN to fetch it"
+        );
+        n.enter(proto::epl::NmtState::PRE_OPERATIONAL_2, Duration::ZERO);
+        let r = n.raise_alarm(Duration::from_millis(5)).unwrap();
+        assert_eq!(
+            r.what,
+            "error entry 9000h (1   12.0) in the StatusResponse, EN toggled to 1"
+        );
+        assert!(r.outputs.is_empty(), "fetched by the MN");
+        let s = n.status();
+        assert!(s.flags.en);
+        assert_eq!((s.entries[0].code, s.error_register), (0x9000, 1));
+        n.raise_alarm(Duration::from_millis(6)).unwrap();
+        assert!(!n.status().flags.en, "toggled again");
+        assert_eq!(n.status().entries.len(), 2);
     }
 
     #[test]

@@ -36,6 +36,10 @@ fn loss_of_soc(cycle_us: u32) -> Duration {
     Duration::from_micros(u64::from(cycle_us) * 10).max(Duration::from_millis(100))
 }
 
+/// The error a spurious emergency signals: P700 E12.0, "External watchdog" (BU 0620 §5.4.1.2:
+/// 9000h, error register 1).
+const SPURIOUS_ERROR: i32 = 120;
+
 /// DS 301 error code E_DLL_LOSS_SOC_TH: the loss of SoC passed its threshold.
 const LOSS_OF_SOC: u16 = 0x8245;
 /// P170 [-01] of the modules when the gateway (P164) is outside 192.168.100.1…240 at
@@ -396,7 +400,7 @@ impl Node {
 
     /// Enters `to`: resets pass through to NOT_ACTIVE (DS 301 NMT_GT2…GT8: the node
     /// re-initialises and then watches for POWERLINK frames again).
-    fn enter(&mut self, to: NmtState, now: Duration) {
+    pub(super) fn enter(&mut self, to: NmtState, now: Duration) {
         let from = self.vars.state;
         let to = match to {
             NmtState::RESET_APPLICATION
@@ -679,40 +683,61 @@ impl Node {
         }
     }
 
-    /// An error entry for each inverter error that appeared (P700 [-01] from 0 to a value):
-    /// the code of BU 0620 §5.4.1.2's allocation table (1000h with error index 1 where the
-    /// table has none), the FI id and the P700 value in ASCII as additional information
-    /// (§5.4.1.2 "FI-ID (ASCII)", "FI Error Code (ASCII)").
+    /// An error entry for each inverter error that appeared (P700 [-01] from 0 to a value).
     fn errors(&mut self, now: Duration) {
         for (fi, value) in self.device.fault_changes(&mut self.faults) {
-            if value == 0 {
-                continue;
+            if value != 0 {
+                self.signal(fi.get(), value, now);
             }
-            let (code, register) = proto::nord::errors::powerlink_error(value as u16)
-                .map_or((0x1000, 1), |e| (e.code, e.register));
-            let text = format!(
-                "{}{:>7}",
-                fi.get(),
-                format!("{}.{}", value / 10, value % 10)
-            );
-            let mut info = [0u8; 8];
-            info.copy_from_slice(&text.as_bytes()[..8]);
-            self.vars.history.insert(
-                0,
-                ErrorEntry {
-                    entry_type: ErrorEntry::MODE_HISTORY | 0x0001,
-                    code,
-                    time: now.as_micros() as u64,
-                    info: u64::from_le_bytes(info),
-                },
-            );
-            self.vars.history.truncate(HISTORY_LEN);
-            self.vars.error_register |= register;
-            self.en = !self.en;
         }
         if self.faults.iter().all(|&f| f == 0) {
             self.vars.error_register = 0;
         }
+    }
+
+    /// Signals FI `fi`'s error `value` (P700, tenths) as DS 301 has a CN signal a new error
+    /// (§6.5 error signalling): an entry first in its history (1003h), which the
+    /// StatusResponse lists, the error register's bits, and EN toggled in PRes and
+    /// StatusResponse so that the MN fetches it. The code is BU 0620 §5.4.1.2's allocation
+    /// table's (1000h with error index 1 where the table has none), the FI id and the P700
+    /// value in ASCII the additional information (§5.4.1.2 "FI-ID (ASCII)", "FI Error Code
+    /// (ASCII)"). Returns the entry.
+    fn signal(&mut self, fi: u8, value: i32, now: Duration) -> ErrorEntry {
+        let (code, register) = proto::nord::errors::powerlink_error(value as u16)
+            .map_or((0x1000, 1), |e| (e.code, e.register));
+        let text = format!("{fi}{:>7}", format!("{}.{}", value / 10, value % 10));
+        let mut info = [0u8; 8];
+        info.copy_from_slice(&text.as_bytes()[..8]);
+        let entry = ErrorEntry {
+            entry_type: ErrorEntry::MODE_HISTORY | 0x0001,
+            code,
+            time: now.as_micros() as u64,
+            info: u64::from_le_bytes(info),
+        };
+        self.vars.history.insert(0, entry);
+        self.vars.history.truncate(HISTORY_LEN);
+        self.vars.error_register |= register;
+        self.en = !self.en;
+        entry
+    }
+
+    /// Signals an error though none occurred (a served node that misbehaves on purpose,
+    /// `--misbehave alarm=`): FI 1's E12.0 "External watchdog" (§5.4.1.2: 9000h), which no
+    /// drive of the simulator raises on its own. `None` before the node takes part in the
+    /// cycle (NOT_ACTIVE, Basic Ethernet): no MN would fetch it.
+    pub fn raise_spurious(&mut self, now: Duration) -> Option<ErrorEntry> {
+        if matches!(
+            self.vars.state,
+            NmtState::NOT_ACTIVE | NmtState::BASIC_ETHERNET
+        ) {
+            return None;
+        }
+        Some(self.signal(1, SPURIOUS_ERROR, now))
+    }
+
+    /// EN as the node sends it in PRes and StatusResponse.
+    pub fn exception_new(&self) -> bool {
+        self.en
     }
 
     /// The interface's information parameters that say who the node is: SK 550P P870 = 4

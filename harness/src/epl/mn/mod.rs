@@ -8,12 +8,14 @@
 //! Everything it sends and receives is recorded as transcript exchanges, decoded.
 
 mod describe;
+mod expect;
 pub(crate) mod link;
+mod loss;
 
 use std::collections::VecDeque;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-use proto::epl::asnd::{IdentResponse, NmtCommandFrame, StatusResponse};
+use proto::epl::asnd::{ErrorEntry, IdentResponse, NmtCommandFrame, StatusResponse};
 use proto::epl::frame::{Asnd, Body, Preq, Soa, Soc};
 use proto::epl::sdo::{Command, Con, SdoFrame, Segmentation, Seq, SEQ_MODULO};
 use proto::epl::{
@@ -23,7 +25,9 @@ use proto::epl::{
 use proto::eth::{EthernetFrame, EthernetRepr, MacAddr, ETHERTYPE_POWERLINK};
 
 pub(crate) use describe::describe;
+use expect::StateWatch;
 use link::Link;
+use loss::{Decision, PresWatch, Reached};
 
 use crate::hex::hex;
 use crate::net::LinkError;
@@ -122,6 +126,36 @@ pub(crate) enum MnError {
     /// The node refused an SDO transfer.
     #[error("SDO abort {0:08X}h")]
     Abort(u32),
+    /// A PRes of the node said another NMT state than the node reported or was commanded
+    /// into (EPSG DS 301 §4.6.1.1.4, PRes NMTStatus).
+    #[error(
+        "node {node}'s PRes says {}, expected {}",
+        expect::cs(*said),
+        expect::cs(*expected)
+    )]
+    PresState {
+        /// The node.
+        node: u8,
+        /// What its PRes said.
+        said: NmtState,
+        /// What the MN expected.
+        expected: NmtState,
+    },
+    /// The node's PRes went missing until the MN's loss-of-PRes threshold counter reached its
+    /// threshold (EPSG DS 301 §4.7.4.1, E_DLL_LOSS_PRES_TH): an MN takes the node out of
+    /// the cycle.
+    #[error(
+        "no PRes from node {node} in {} of {} cycles: loss of PRes, threshold counter \
+         (1C08h) {} reached the threshold {} (1C09h DLL_MNCNLossPResThreshold): \
+         E_DLL_LOSS_PRES_TH",
+        reached.lost, reached.cycles, reached.count, reached.threshold
+    )]
+    LossOfPres {
+        /// The node.
+        node: u8,
+        /// The counts.
+        reached: Reached,
+    },
     /// The node did not reach the NMT state asked for.
     #[error("node {node} is in {state} after {what}, not {wanted}")]
     State {
@@ -216,6 +250,26 @@ pub(crate) struct Manager<L> {
     asnd_link: Option<Connection>,
     udp_link: Option<Connection>,
     transaction: u8,
+    /// The node's loss-of-PRes counters.
+    watch: PresWatch<(Instant, Duration)>,
+    /// Whether the node answers PReq, as its last frame showed (a PRes; an ASnd in
+    /// PRE_OPERATIONAL_2, READY_TO_OPERATE or OPERATIONAL), and nothing since (an NMT stop or
+    /// reset, the MN's silence) made it stop: only then is a missing PRes watched.
+    answering: bool,
+    /// The NMT state its PRes should say.
+    expect: StateWatch,
+    /// EA: the last EN of the node the MN fetched the StatusResponse for (DS 301 §6.5.2: the
+    /// MN acknowledges a new error in its PReq).
+    ea: bool,
+    /// The node's EN differs from EA: its StatusResponse is fetched in the next free
+    /// asynchronous slot.
+    exception: bool,
+    /// The entries of the node's last StatusResponse (`None`: none read yet).
+    entries: Option<Vec<ErrorEntry>>,
+    /// Entries that were not in the StatusResponse before, for the binding to judge.
+    signalled: Vec<ErrorEntry>,
+    /// PRes of the node received and not yet matched to a cycle's window: late ones.
+    unmatched: u32,
 }
 
 /// The least a wait moves for the host's lost time, however short its limit (a PRes's 500 µs),
@@ -261,6 +315,14 @@ impl<L: Link> Manager<L> {
             asnd_link: None,
             udp_link: None,
             transaction: 0,
+            watch: PresWatch::default(),
+            answering: false,
+            expect: StateWatch::default(),
+            ea: false,
+            exception: false,
+            entries: None,
+            signalled: Vec::new(),
+            unmatched: 0,
         }
     }
 
@@ -275,6 +337,9 @@ impl<L: Link> Manager<L> {
             self.config.node = node;
             self.node_state = None;
             self.drop_connections();
+            self.watch = PresWatch::default();
+            self.stop_watching();
+            self.expect.forget();
         }
     }
 
@@ -471,10 +536,16 @@ impl<L: Link> Manager<L> {
                 Some(r) => {
                     self.node_mac = eth.src();
                     match &r.body {
-                        Body::Pres(p) => self.node_state = Some(p.state),
+                        Body::Pres(p) => {
+                            self.node_state = Some(p.state);
+                            self.answering = true;
+                            self.unmatched += 1;
+                        }
                         Body::Asnd(a) => {
                             if let Some(s) = asnd_state(a) {
                                 self.node_state = Some(s);
+                                self.answering = answers_preq(s);
+                                self.expect.reported(s);
                             }
                         }
                         _ => {}
@@ -530,6 +601,7 @@ impl<L: Link> Manager<L> {
                 dst: node,
                 src: MN_NODE_ID,
                 body: Body::Preq(Preq {
+                    ea: self.ea,
                     rd: self.ready,
                     pdo_version: 0x20,
                     payload: self.outputs.clone(),
@@ -544,9 +616,13 @@ impl<L: Link> Manager<L> {
                 self.record(&sent, None);
                 return self.asynchronous(service, node);
             }
+            let watching = self.answering;
+            let sent_at = (Instant::now(), self.link.now());
             let w = self.wait(self.config.reply);
             let pres = self.wait_for(&w, |r| matches!(r.body, Body::Pres(_)))?;
             self.in_time = pres.is_some();
+            let (reached, note) = self.watch_pres(watching, pres.is_some(), sent_at);
+            let mut unexpected = None;
             match &pres {
                 Some(p) => {
                     if let Some(EplRepr {
@@ -555,6 +631,8 @@ impl<L: Link> Manager<L> {
                     }) = &p.repr
                     {
                         self.inputs = body.payload.clone();
+                        unexpected = self.expect.pres(body.state).err();
+                        self.exception |= body.en != self.ea;
                     }
                     if let Some(s) = self.stamps.as_mut() {
                         s.push(p.stamp);
@@ -568,8 +646,100 @@ impl<L: Link> Manager<L> {
                 }
             }
             self.record(&sent, pres.as_ref());
+            if let (Some(note), true) = (note, self.recording) {
+                if let Some(e) = self.exchanges.last_mut() {
+                    if !e.received.is_empty() {
+                        e.received.push_str("; ");
+                    }
+                    e.received.push_str(&note);
+                }
+            }
+            if let Some(reached) = reached {
+                return Err(MnError::LossOfPres { node, reached });
+            }
+            if let Some(u) = unexpected {
+                return Err(MnError::PresState {
+                    node,
+                    said: u.said,
+                    expected: u.expected,
+                });
+            }
         }
         self.asynchronous(service, node)
+    }
+
+    /// Stops watching for PRes until the node answers a PReq again: it stops answering on
+    /// purpose (NMT stop or reset, the MN's silence, another node id).
+    fn stop_watching(&mut self) {
+        self.answering = false;
+        self.watch.forget();
+    }
+
+    /// Notes how this cycle's PRes came (`got`: within its window; its PReq left at `sent`,
+    /// on the real clock and the link's) when `watching`, after the node's late PRes: the
+    /// threshold reached, if it was, and a note for the cycle's exchange (a PRes missing, a
+    /// loss counted or not). A PRes still missing is decided [`MIN_LATE_ROOM`] after its PReq
+    /// on the link's clock (a node sharing a loaded host is held back that long, and its PRes
+    /// then comes late), and excused when the host lost time enough meanwhile to have held it
+    /// back longer ([`crate::timing::excuses`], over that span): never on the embedded node's
+    /// virtual clock.
+    fn watch_pres(
+        &mut self,
+        watching: bool,
+        got: bool,
+        sent: (Instant, Duration),
+    ) -> (Option<Reached>, Option<String>) {
+        if got {
+            self.unmatched = self.unmatched.saturating_sub(1);
+        }
+        let late = std::mem::take(&mut self.unmatched);
+        if !watching {
+            return (None, None);
+        }
+        self.watch.came_late(late);
+        let real = !self.is_virtual();
+        let (now, link_now) = (Instant::now(), self.link.now());
+        let decide = |(at, link_at): (Instant, Duration)| {
+            if link_now.saturating_sub(link_at) < MIN_LATE_ROOM {
+                Decision::Wait
+            } else if real && crate::timing::excuses(crate::timing::host_lost(at, now), now - at) {
+                Decision::Excused
+            } else {
+                Decision::Lost
+            }
+        };
+        let before = (self.watch.cumulative(), self.watch.uncounted());
+        let reached = if got {
+            self.watch.in_time(decide)
+        } else {
+            self.watch.missing(sent, decide)
+        };
+        let mut notes = Vec::new();
+        if !got {
+            notes.push(format!(
+                "no PRes within {}",
+                crate::timing::ms(self.config.reply)
+            ));
+        }
+        let (late, excused) = self.watch.uncounted();
+        if late != before.1 .0 {
+            notes.push("a missing PRes came late: no loss".into());
+        }
+        if excused != before.1 .1 {
+            notes.push("a missing PRes not counted lost: the host ran late meanwhile".into());
+        }
+        if self.watch.cumulative() != before.0 {
+            notes.push(format!(
+                "a PRes of node {} missing for {} counted lost (1C07h {}, 1C08h {} of \
+                 threshold {})",
+                self.config.node,
+                crate::timing::ms(MIN_LATE_ROOM),
+                self.watch.cumulative(),
+                self.watch.count(),
+                loss::DEFAULT_THRESHOLD
+            ));
+        }
+        (reached, (!notes.is_empty()).then(|| notes.join("; ")))
     }
 
     /// The asynchronous phase of a cycle: the SoA inviting the MN itself to send what is
@@ -593,6 +763,13 @@ impl<L: Link> Manager<L> {
             self.record(&sent, None);
             return Ok(None);
         }
+        // A new error of the node (EN toggled): its StatusResponse, in a slot nobody asked for.
+        let fetch = self.exception && service == RequestedService::NO_SERVICE;
+        let service = if fetch {
+            RequestedService::STATUS_REQUEST
+        } else {
+            service
+        };
         let sent = self.soa(service, node)?;
         let expects = service != RequestedService::NO_SERVICE;
         let answer = if expects {
@@ -607,7 +784,40 @@ impl<L: Link> Manager<L> {
         if expects {
             self.record(&sent, answer.as_ref());
         }
-        Ok(answer)
+        if let Some(Received {
+            repr:
+                Some(EplRepr {
+                    body: Body::Asnd(a),
+                    ..
+                }),
+            ..
+        }) = &answer
+        {
+            if a.service == ServiceId::STATUS_RESPONSE {
+                if let Ok(s) = StatusResponse::parse(&a.payload) {
+                    self.status_read(&s);
+                }
+            }
+        }
+        Ok(if fetch { None } else { answer })
+    }
+
+    /// Takes in a StatusResponse of the node: EA follows its EN (the new error is fetched),
+    /// and the entries it did not list before are signalled.
+    fn status_read(&mut self, s: &StatusResponse) {
+        self.ea = s.flags.en;
+        self.exception = false;
+        if let Some(before) = &self.entries {
+            let new = s.entries.iter().filter(|e| !before.contains(e)).copied();
+            self.signalled.extend(new);
+        }
+        self.entries = Some(s.entries.clone());
+    }
+
+    /// The error entries the node signalled (EN toggled, or a StatusResponse read) since the
+    /// last call: not in its StatusResponse before.
+    pub(crate) fn take_signalled(&mut self) -> Vec<ErrorEntry> {
+        std::mem::take(&mut self.signalled)
     }
 
     fn soa(&mut self, service: RequestedService, target: u8) -> Result<Vec<u8>, MnError> {
@@ -672,6 +882,8 @@ impl<L: Link> Manager<L> {
     /// Lets `d` pass without sending anything (the MN "fails", the cable is cut); the next
     /// cycle resumes as before, as an MN whose link comes back does.
     pub(crate) fn silence(&mut self, d: Duration) {
+        self.stop_watching();
+        self.expect.forget();
         let until = self.link.now() + d;
         self.link.wait_until(until);
         self.next_cycle = until;
@@ -736,6 +948,7 @@ impl<L: Link> Manager<L> {
         };
         let s =
             StatusResponse::parse(&a.payload).map_err(|e| self.malformed("StatusRequest", e))?;
+        self.status_read(&s);
         self.node_state = Some(s.state);
         Ok(s)
     }
@@ -767,15 +980,19 @@ impl<L: Link> Manager<L> {
         }
         .emit();
         let before = self.node_state;
+        let reset = is_reset(command);
+        if reset || command == NmtCommand::STOP_NODE {
+            self.stop_watching();
+        }
+        let expected = before.and_then(|b| command.next_state(b));
+        if reset {
+            self.expect.forget();
+        } else {
+            self.expect.commanded(before, expected);
+        }
         self.queued.push_back((ServiceId::NMT_COMMAND, payload));
         self.cycle(RequestedService::NO_SERVICE)?;
-        if matches!(
-            command,
-            NmtCommand::RESET_NODE
-                | NmtCommand::RESET_COMMUNICATION
-                | NmtCommand::RESET_CONFIGURATION
-                | NmtCommand::SW_RESET
-        ) {
+        if reset {
             self.node_state = None;
             self.drop_connections();
             return Ok(None);
@@ -790,7 +1007,6 @@ impl<L: Link> Manager<L> {
         }
         // The node acts on the command within a few cycles (at once, if it runs as fast as
         // the simulator): its state is read until it shows the command's effect, a few times.
-        let expected = before.and_then(|b| command.next_state(b));
         let mut state = self.status()?.state;
         for _ in 0..SETTLE_READS {
             if expected.is_none_or(|e| e == state) {
@@ -1249,6 +1465,26 @@ fn more_follows(sdo: &[u8]) -> bool {
                 Segmentation::Initiate | Segmentation::Segment
             ) && c.abort_code().is_none()
         })
+}
+
+/// Whether `c` resets the node, which then starts over in NOT_ACTIVE (DS 301 §7.1.3).
+fn is_reset(c: NmtCommand) -> bool {
+    matches!(
+        c,
+        NmtCommand::RESET_NODE
+            | NmtCommand::RESET_COMMUNICATION
+            | NmtCommand::RESET_CONFIGURATION
+            | NmtCommand::SW_RESET
+    )
+}
+
+/// Whether a node in `s` answers a PReq with a PRes (EPSG DS 301 §7.1.4: the isochronous
+/// phase of NMT_CS_PRE_OPERATIONAL_2, READY_TO_OPERATE and OPERATIONAL).
+fn answers_preq(s: NmtState) -> bool {
+    matches!(
+        s,
+        NmtState::PRE_OPERATIONAL_2 | NmtState::READY_TO_OPERATE | NmtState::OPERATIONAL
+    )
 }
 
 /// The NMT state an ASnd of the node carries (IdentResponse, StatusResponse).
