@@ -10,7 +10,7 @@
 //! error") reports none.
 
 use proto::canopen::Emergency;
-use proto::nord::Inverter;
+use proto::nord::{ArrayElement, Inverter, ParamAddress, ParamNumber};
 
 /// P700 "Present error" and P701 "Last error" (BU 0620 §4.5).
 pub(crate) const P700: i64 = 700;
@@ -20,14 +20,29 @@ const LAST_ERRORS: i64 = 5;
 /// Emergencies judged per step at most: the reads that judge one may set aside more.
 pub(crate) const AT_MOST: usize = 16;
 
-/// What is wrong with `e` (called `what` in the message: "CoE emergency", "EMCY of node
-/// 32"), if anything. `read(fi, number, element)` reads parameter `number` [`element`] of
-/// inverter `fi` (`None`: the device has no such parameter, or refuses it).
+/// What is wrong with `e` (called `what` in the message: "CoE emergency", "node 32's
+/// EMCY"), if anything. `read(at)` reads the parameter at `at` over the bus: its bytes, `None`
+/// when the device has no such parameter or refuses it.
 pub(crate) fn judge<E>(
     e: &Emergency,
     what: &str,
-    mut read: impl FnMut(Inverter, i64, i64) -> Result<Option<i16>, E>,
+    mut read: impl FnMut(ParamAddress) -> Result<Option<Vec<u8>>, E>,
 ) -> Result<Option<String>, E> {
+    let mut read = |fi, number, element| -> Result<Option<i16>, E> {
+        let (Ok(number), Ok(element)) = (ParamNumber::new(number), ArrayElement::new(element))
+        else {
+            return Ok(None);
+        };
+        let at = ParamAddress {
+            inverter: fi,
+            number,
+            set: None,
+            element: Some(element),
+        };
+        Ok(read(at)?
+            .filter(|d| d.len() >= 2)
+            .map(|d| i16::from_le_bytes([d[0], d[1]])))
+    };
     if e.code == 0 {
         return Ok(None);
     }
@@ -70,16 +85,17 @@ mod tests {
         data: [100, 0, 1, 0, 0],
     };
 
-    /// A reader of an inverter whose P700 is `present` and P701 `last`, counting its reads.
+    /// A reader of an inverter whose P700 is `present` and P701 `last`.
     fn inverter(
         present: i16,
         last: [i16; 5],
-    ) -> impl FnMut(Inverter, i64, i64) -> Result<Option<i16>, ()> {
-        move |fi, number, element| {
-            assert_eq!(fi.get(), 1);
-            Ok(match number {
-                P700 => Some(present),
-                P701 => Some(last[element as usize - 1]),
+    ) -> impl FnMut(ParamAddress) -> Result<Option<Vec<u8>>, ()> {
+        move |at| {
+            assert_eq!(at.inverter.get(), 1);
+            let element = at.element.map_or(0, |e| e.get()) as usize;
+            Ok(match i64::from(at.number.get()) {
+                P700 => Some(present.to_le_bytes().to_vec()),
+                P701 => Some(last[element - 1].to_le_bytes().to_vec()),
                 _ => None,
             })
         }
@@ -107,7 +123,7 @@ mod tests {
         );
         let reset = Emergency::default();
         assert_eq!(
-            judge(&reset, "EMCY", |_, _, _| -> Result<Option<i16>, ()> {
+            judge(&reset, "EMCY", |_| -> Result<Option<Vec<u8>>, ()> {
                 panic!("an error reset needs no read")
             }),
             Ok(None)
@@ -124,14 +140,11 @@ mod tests {
             judge(&nobody, "EMCY", inverter(0, [0; 5])).unwrap().as_deref(),
             Some("EMCY 7580h (error register 11h) reports error 100 (P700) on FI 0, an inverter there is none of")
         );
-        assert!(judge(&EMCY, "EMCY", |_, _, _| Ok::<_, ()>(None))
+        assert!(judge(&EMCY, "EMCY", |_| Ok::<_, ()>(None))
             .unwrap()
             .unwrap()
             .ends_with("an inverter the device has no P700 of"));
         // A read that fails is the caller's error.
-        assert_eq!(
-            judge(&EMCY, "EMCY", |_, _, _| Err("link down")),
-            Err("link down")
-        );
+        assert_eq!(judge(&EMCY, "EMCY", |_| Err("link down")), Err("link down"));
     }
 }

@@ -15,7 +15,7 @@ use std::time::Duration;
 
 use proto::canopen::SdoAbortCode;
 use proto::nord::can::parameter_sdo;
-use proto::nord::{ArrayElement, Inverter, ParamAddress, ParamNumber, Product};
+use proto::nord::{Inverter, ParamAddress, Product};
 use serde_json::{json, Value};
 
 use super::link::CanLink;
@@ -581,24 +581,13 @@ impl<L: CanLink> Binding for CanBinding<L> {
         };
         for (node, e) in heard.into_iter().take(crate::binding::emergency::AT_MOST) {
             let client = &mut self.client;
-            let read = |fi, number, element| -> Result<Option<i16>, StepError> {
-                let (Ok(number), Ok(element)) =
-                    (ParamNumber::new(number), ArrayElement::new(element))
-                else {
-                    return Ok(None);
-                };
-                let at = ParamAddress {
-                    inverter: fi,
-                    number,
-                    set: None,
-                    element: Some(element),
-                };
+            let read = |at| -> Result<Option<Vec<u8>>, StepError> {
                 let Ok((node, sdo)) = parameter_sdo(product, at) else {
                     return Ok(None);
                 };
                 match client.upload(node.get(), sdo.index, sdo.subindex) {
-                    Ok(d) if d.len() >= 2 => Ok(Some(i16::from_le_bytes([d[0], d[1]]))),
-                    Ok(_) | Err(SdoError::Abort(_)) => Ok(None),
+                    Ok(d) => Ok(Some(d)),
+                    Err(SdoError::Abort(_)) => Ok(None),
                     Err(e) => Err(step_error(e)),
                 }
             };

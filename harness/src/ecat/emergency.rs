@@ -8,7 +8,7 @@
 //! transcript ("set aside: …") and are not judged.
 
 use proto::ecat::coe::Emergency;
-use proto::nord::{addr, ArrayElement, Inverter, ParamAddress, ParamNumber, Product};
+use proto::nord::{addr, Product};
 
 use super::master::{Master, MasterError, Segment};
 
@@ -43,39 +43,16 @@ fn judge<S: Segment>(
     product: Product,
     e: &Emergency,
 ) -> Result<Option<String>, MasterError> {
-    crate::binding::emergency::judge(e, "CoE emergency", |fi, number, element| {
-        read(master, station, product, fi, number, element)
+    crate::binding::emergency::judge(e, "CoE emergency", |at| {
+        let Ok(object) = addr::coe(product, at) else {
+            return Ok(None);
+        };
+        match master.sdo_upload(station, object.index, object.subindex, false) {
+            Ok(d) => Ok(Some(d)),
+            Err(e) if e.refusal().is_some() => Ok(None),
+            Err(e) => Err(e),
+        }
     })
-}
-
-/// Parameter `number` [`element`] of `fi` over CoE (§2.2.7); `None` when the slave has no
-/// such object or refuses it.
-fn read<S: Segment>(
-    master: &mut Master<S>,
-    station: u16,
-    product: Product,
-    fi: Inverter,
-    number: i64,
-    element: i64,
-) -> Result<Option<i16>, MasterError> {
-    let (Ok(number), Ok(element)) = (ParamNumber::new(number), ArrayElement::new(element)) else {
-        return Ok(None);
-    };
-    let at = ParamAddress {
-        inverter: fi,
-        number,
-        set: None,
-        element: Some(element),
-    };
-    let Ok(object) = addr::coe(product, at) else {
-        return Ok(None);
-    };
-    match master.sdo_upload(station, object.index, object.subindex, false) {
-        Ok(d) if d.len() >= 2 => Ok(Some(i16::from_le_bytes([d[0], d[1]]))),
-        Ok(_) => Ok(None),
-        Err(e) if e.refusal().is_some() => Ok(None),
-        Err(e) => Err(e),
-    }
 }
 
 #[cfg(test)]
@@ -83,6 +60,7 @@ mod tests {
     use super::*;
     use crate::ecat::master::{EmbeddedSegment, Faulty, MasterConfig};
     use proto::nord::nmt::EcState;
+    use proto::nord::Inverter;
     use sim::device::{Device, DeviceConfig};
     use sim::ecat::Slave;
 
